@@ -1,0 +1,109 @@
+"""The engine protocol and its registry.
+
+An engine turns (specimen, motion, effects) into a :class:`housner.Response`,
+whole record in, whole response out. ``Engine.simulate`` validates its inputs
+and calls ``_simulate``; subclasses implement only ``_simulate``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Sequence
+from typing import Any, ClassVar
+
+from housner.errors import unknown_choice
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+
+__all__ = ["ENGINES", "Engine", "get_engine", "register_engine"]
+
+#: Registry: engine name -> class, or "module:Class" imported on first use
+#: (so that `import engines` does not import MuJoCo or PyBullet).
+ENGINES: dict[str, Any] = {
+    "housner": "engines.analytic:HousnerEngine",
+    "mujoco": "engines.mujoco_engine:MujocoEngine",
+    "pybullet": "engines.pybullet_engine:PybulletEngine",
+}
+
+
+def register_engine(name: str) -> Callable[[type], type]:
+    """Class decorator that adds an engine to :data:`ENGINES` under ``name``."""
+
+    def deco(cls: type) -> type:
+        cls.name = name
+        ENGINES[name] = cls
+        return cls
+
+    return deco
+
+
+def engine_class(name: str) -> type:
+    """The engine class registered as ``name``; unknown names list the choices."""
+    try:
+        entry = ENGINES[name]
+    except KeyError:
+        raise unknown_choice("engine", name, ENGINES) from None
+    if isinstance(entry, str):
+        module, _, attr = entry.partition(":")
+        entry = getattr(importlib.import_module(module), attr)
+        ENGINES[name] = entry
+    return entry
+
+
+def get_engine(name: str, **settings: Any) -> Engine:
+    """Instantiate the engine registered as ``name`` with ``settings``."""
+    return engine_class(name)(**settings)
+
+
+class Engine:
+    """Base class of every engine.
+
+    Attributes
+    ----------
+    name : str
+        Registry name.
+    effects_supported : frozenset of str
+        Names of the physical effects this engine realises; others are refused by name.
+    """
+
+    name: ClassVar[str] = "engine"
+    effects_supported: ClassVar[frozenset[str]] = frozenset()
+
+    def simulate(self, specimen: Specimen, motion: GroundMotion, effects: Sequence[Any] = ()) -> Response:
+        """Simulate one record.
+
+        Parameters
+        ----------
+        specimen : Specimen
+        motion : GroundMotion
+            Ground acceleration [m/s^2] and the initial state (theta0 [rad], theta_dot0 [rad/s]).
+        effects : sequence of effects
+            Physical effects to add (each has a ``name``); an engine refuses those it cannot realise.
+        """
+        if not isinstance(specimen, Specimen):
+            raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
+        if not isinstance(motion, GroundMotion):
+            raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
+        effects = tuple(effects)
+        for e in effects:
+            ename = getattr(e, "name", type(e).__name__)
+            if ename not in self.effects_supported:
+                supported = ", ".join(sorted(self.effects_supported)) or "none"
+                raise ValueError(f"engine {self.name!r} cannot realise effect {ename!r} (it realises: {supported})")
+        return self._simulate(specimen, motion, effects)
+
+    def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
+        raise NotImplementedError
+
+    def settings(self) -> dict:
+        """The engine's settings as plain data (for reports and the result cache)."""
+        return {}
+
+    def version(self) -> str:
+        """Version of the underlying package (for provenance and the result cache)."""
+        return ""
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.settings().items())
+        return f"{type(self).__name__}({args})"

@@ -1,0 +1,1 @@
+"""Reports: statistics tables, figures, HTML pages and tolerance assertions for pytest."""

@@ -1,0 +1,1 @@
+"""Scenarios: ground-motion sources, the scenario catalogue, campaigns and the runner."""
