@@ -1,0 +1,315 @@
+"""The rocking specimen as a MuJoCo model (MJCF), generated from a :class:`housner.Specimen`.
+
+Every number in the generated XML is derived from the specimen and the contact
+settings; the XML carries the derivation in comments, and
+``engines/models/README.md`` walks through it step by step. The seed specimen's
+model is shipped as ``engines/models/eth_specimen.xml``; regenerate it with
+:func:`write_eth_specimen` (a test checks the shipped file equals the generator's
+output). Open any generated file in MuJoCo's own viewer with::
+
+    python -m mujoco.viewer --mjcf=engines/models/eth_specimen.xml
+
+Model layout (world frame: x horizontal in the plane of rocking, y out of plane,
+z up; the pivot line is z = 0):
+
+* ``ground``: an infinite plane, the only thing the strips touch.
+* ``block``: one body whose frame sits at the centre of mass (0, 0, H), with
+  three joints from the world in this order: ``x`` (slide along x), ``z``
+  (slide along z) and ``theta`` (hinge about +y, through the centre of mass).
+  A positive rotation about +y moves the top toward +x, so the hinge angle is
+  the suite's theta (theta > 0 leans toward +x, rocking on the +x pivot).
+* ``body``: the 2H x depth x 2B block, visual only (``contype`` =
+  ``conaffinity`` = 0, no mass: the mass is in the explicit ``<inertial>``).
+* ``pivot_pos`` / ``pivot_neg``: the two contact strips under the block,
+  ``strip_width`` wide, whose outer edges are at x = +B and x = -B.
+* ``dalembert``: a motor on the ``x`` slide. A generalised force on a slide
+  joint is a force along x through the joint anchor, which is the centre of
+  mass, so ``ctrl = -m ug''(t)`` is the d'Alembert force of the ground
+  acceleration in the ground's frame.
+
+References
+----------
+MuJoCo documentation, "Modeling" (MJCF reference) and "Computation"
+(soft contacts: solref, solimp), https://mujoco.readthedocs.io
+Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
+model. COMPDYN 2017, section 3.1 (specimen geometry, 2 mm contact strips).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+from housner.specimen import Specimen
+from housner.units import G
+
+__all__ = [
+    "ETH_SPECIMEN_PATH",
+    "MJCF_DEFAULTS",
+    "initial_qpos",
+    "mjcf_from_specimen",
+    "write_eth_specimen",
+    "write_mjcf",
+]
+
+#: Where the seed specimen's generated model is shipped.
+ETH_SPECIMEN_PATH = Path(__file__).resolve().parent / "models" / "eth_specimen.xml"
+
+#: Model settings used when a keyword is not given. The contact numbers are the
+#: tuned defaults of :class:`engines.mujoco_engine.MujocoEngine` (see there for
+#: how they were found); ``strip_width`` and ``strip_height`` are geometry [m].
+MJCF_DEFAULTS: dict = {
+    "timestep": 2.5e-4,
+    "solref": (0.001, 1.0),
+    "solimp": (0.99, 0.999, 0.0001, 0.5, 2.0),
+    "friction": 1.5,
+    "cone": "elliptic",
+    "impratio": 1.0,
+    "noslip_iterations": 0,
+    "iterations": 50,
+    "tolerance": 1e-10,
+    "strip_width": 0.002,
+    "strip_height": 0.002,
+}
+
+_CONES = ("pyramidal", "elliptic")
+
+
+def _num(x: float) -> str:
+    """Shortest decimal text that reads back as the same float."""
+    x = float(x)
+    if x == 0.0:
+        return "0"
+    return repr(x)
+
+
+def _vec(xs: Sequence[float]) -> str:
+    return " ".join(_num(x) for x in xs)
+
+
+def _check_settings(specimen: Specimen, s: dict) -> dict:
+    """Validate and normalise model settings; messages name the argument."""
+    if not isinstance(specimen, Specimen):
+        raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
+    out = dict(s)
+    for key in ("timestep", "friction", "impratio", "strip_width", "strip_height", "tolerance"):
+        v = out[key]
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"`{key}` must be a positive finite number, got {v!r}")
+        out[key] = float(v)
+    for key in ("noslip_iterations", "iterations"):
+        v = out[key]
+        if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
+            raise ValueError(f"`{key}` must be a non-negative integer, got {v!r}")
+    if out["iterations"] < 1:
+        raise ValueError(f"`iterations` must be at least 1, got {out['iterations']!r}")
+    solref = tuple(float(v) for v in out["solref"])
+    if len(solref) != 2 or not all(math.isfinite(v) for v in solref):
+        raise ValueError(f"`solref` must be two finite numbers (timeconst [s], dampratio [-]), got {out['solref']!r}")
+    if solref[0] > 0 and not solref[1] > 0:
+        raise ValueError(f"`solref` dampratio must be positive, got {out['solref']!r}")
+    out["solref"] = solref
+    solimp = tuple(float(v) for v in out["solimp"])
+    if len(solimp) != 5 or not all(math.isfinite(v) for v in solimp):
+        raise ValueError(f"`solimp` must be five finite numbers (dmin, dmax, width, midpoint, power), got {solimp!r}")
+    if not (0 < solimp[0] < 1 and 0 < solimp[1] < 1 and solimp[2] > 0):
+        raise ValueError(f"`solimp` needs 0 < dmin, dmax < 1 and width > 0, got {solimp!r}")
+    out["solimp"] = solimp
+    if out["cone"] not in _CONES:
+        raise ValueError(f"`cone` must be one of {_CONES}, got {out['cone']!r}")
+    if out["strip_width"] >= specimen.B:
+        raise ValueError(f"`strip_width` ({out['strip_width']} m) must be less than B = {specimen.B} m")
+    return out
+
+
+def block_inertia(specimen: Specimen) -> tuple[float, float, float]:
+    """Principal moments of inertia about the centre of mass (Ixx, Iyy, Izz) [kg m^2].
+
+    Iyy, the only one the planar model uses (its rotation is about y alone), is
+    I0 - m R^2 (parallel-axis theorem), so that p = sqrt(m g R / I0) is the
+    specimen's. Ixx is set equal to Iyy: the specimen's mass sits mostly in the
+    wedges and plates at its top and bottom, at about the same lever arm from
+    both horizontal axes. Izz is the solid-box value m (4B^2 + d^2) / 12,
+    capped at 2 Iyy so the three moments satisfy the triangle inequality that
+    MuJoCo checks.
+    """
+    iyy = specimen.centroidal_inertia
+    if not iyy > 0:
+        raise ValueError(
+            f"`specimen` has no centroidal inertia (I0 - m R^2 = {iyy:.3g} kg m^2); MuJoCo needs a positive one"
+        )
+    izz = min(specimen.mass * (specimen.width**2 + specimen.depth**2) / 12.0, 2.0 * iyy)
+    return iyy, iyy, izz
+
+
+def initial_qpos(specimen: Specimen, theta0: float) -> tuple[float, float, float]:
+    """Joint positions (x [m], z [m], theta [rad]) of the block at rest, rotated by ``theta0`` about a pivot.
+
+    The block is rotated about the +x pivot (B, 0) for ``theta0`` > 0 and about
+    the -x pivot for ``theta0`` < 0, touching the ground there. The centre of
+    mass, at (0, H) when upright, is then at
+    (s B (1 - cos theta0) + H sin theta0, B |sin theta0| + H cos theta0) with s = sgn(theta0);
+    the slides hold its offset from the upright position.
+    """
+    th = float(theta0)
+    s = math.copysign(1.0, th) if th != 0.0 else 0.0
+    B, H = specimen.B, specimen.H
+    x = s * B * (1.0 - math.cos(th)) + H * math.sin(th)
+    z = B * abs(math.sin(th)) + H * math.cos(th) - H
+    return x, z, th
+
+
+def mjcf_from_specimen(
+    specimen: Specimen,
+    *,
+    timestep: float = MJCF_DEFAULTS["timestep"],
+    solref: Sequence[float] = MJCF_DEFAULTS["solref"],
+    solimp: Sequence[float] = MJCF_DEFAULTS["solimp"],
+    friction: float = MJCF_DEFAULTS["friction"],
+    cone: str = MJCF_DEFAULTS["cone"],
+    impratio: float = MJCF_DEFAULTS["impratio"],
+    noslip_iterations: int = MJCF_DEFAULTS["noslip_iterations"],
+    iterations: int = MJCF_DEFAULTS["iterations"],
+    tolerance: float = MJCF_DEFAULTS["tolerance"],
+    strip_width: float = MJCF_DEFAULTS["strip_width"],
+    strip_height: float = MJCF_DEFAULTS["strip_height"],
+) -> str:
+    """The MJCF XML text of a planar rocking block, commented with each number's derivation.
+
+    Parameters
+    ----------
+    specimen : Specimen
+        Geometry (2H, 2B, depth [m]), mass [kg] and I0 [kg m^2].
+    timestep : float
+        Integration step [s]. The engine may shorten it so that it divides the
+        motion's sample step.
+    solref : (float, float)
+        Contact reference (timeconst [s], dampratio [-]) of the strips.
+    solimp : 5 floats
+        Contact impedance (dmin [-], dmax [-], width [m], midpoint [-], power [-]).
+    friction : float
+        Sliding friction coefficient mu [-] of the strips on the ground.
+    cone : {"pyramidal", "elliptic"}
+        Friction cone.
+    impratio : float
+        Ratio of frictional to normal constraint impedance [-].
+    noslip_iterations : int
+        Iterations of MuJoCo's no-slip post-solver (0 = off).
+    iterations, tolerance : int, float
+        Main constraint-solver iterations and tolerance [-].
+    strip_width, strip_height : float
+        Size of each contact strip in x and z [m]; its outer edge is at +-B.
+
+    Returns
+    -------
+    str
+        A standalone MJCF document (loads with ``mujoco.MjModel.from_xml_string``).
+
+    References
+    ----------
+    Bachmann, J. A. et al. (2017). COMPDYN 2017, eqs. 3-4, section 3.1.
+    """
+    s = _check_settings(
+        specimen,
+        dict(
+            timestep=timestep,
+            solref=solref,
+            solimp=solimp,
+            friction=friction,
+            cone=cone,
+            impratio=impratio,
+            noslip_iterations=noslip_iterations,
+            iterations=iterations,
+            tolerance=tolerance,
+            strip_width=strip_width,
+            strip_height=strip_height,
+        ),
+    )
+    H, B, D, m = specimen.H, specimen.B, specimen.depth, specimen.mass
+    ixx, iyy, izz = block_inertia(specimen)
+    w, hs = s["strip_width"], s["strip_height"]
+    strip_x = B - w / 2.0
+    strip_z = -H + hs / 2.0
+    name = specimen.name.replace("--", "- -")  # "--" may not appear inside an XML comment
+    return f"""<!--
+  Rocking block "{name}", generated by engines/mjcf.py from a housner.Specimen.
+  Do not edit by hand: regenerate it (see engines/models/README.md).
+  Open it with:  python -m mujoco.viewer --mjcf=THIS_FILE
+
+  Specimen: 2H = {_num(specimen.height)} m, 2B = {_num(specimen.width)} m, depth = {_num(D)} m, m = {_num(m)} kg,
+            I0 = {_num(specimen.inertia)} kg m^2 (about a pivot), p = {_num(specimen.p)} 1/s,
+            alpha = {_num(specimen.alpha)} rad, R = {_num(specimen.R)} m, r_housner = {_num(specimen.r_housner)}.
+-->
+<mujoco model="{_xml_attr(specimen.name)}">
+  <compiler angle="radian" autolimits="true"/>
+  <!-- (1) g = housner.units.G = 9.80665 m/s^2 downward. (2) timestep: engine setting [s].
+       (3) cone, impratio, noslip_iterations, iterations, tolerance: contact solver settings
+       (engines.mujoco_engine.MujocoEngine documents the tuned values). -->
+  <option timestep="{_num(s["timestep"])}" gravity="0 0 {_num(-G)}" integrator="Euler" cone="{s["cone"]}"
+          impratio="{_num(s["impratio"])}" noslip_iterations="{s["noslip_iterations"]}"
+          iterations="{s["iterations"]}" tolerance="{_num(s["tolerance"])}"/>
+  <visual>
+    <global offwidth="1280" offheight="720"/>
+  </visual>
+  <statistic center="0 0 {_num(H)}" extent="{_num(2.5 * H)}"/>
+  <asset>
+    <texture name="grid" type="2d" builtin="checker" rgb1=".85 .85 .85" rgb2=".7 .7 .7" width="256" height="256"/>
+    <material name="grid" texture="grid" texrepeat="20 20" texuniform="true"/>
+  </asset>
+  <worldbody>
+    <light pos="0 -2 3" dir="0 0.6 -0.8" directional="true"/>
+    <!-- (4) Pivot line z = 0 on an infinite ground plane (size 0 = infinite). -->
+    <geom name="ground" type="plane" size="0 0 1" material="grid"/>
+    <camera name="side" pos="0 {_num(-6 * H)} {_num(H)}" xyaxes="1 0 0 0 0 1"/>
+    <!-- (5) The body frame is the centre of mass, at height H = 2H / 2 = {_num(H)} m above the pivot line. -->
+    <body name="block" pos="0 0 {_num(H)}">
+      <!-- (6) Planar motion: slide x, slide z, hinge about +y through the centre of mass.
+           Hinge angle = theta of the suite (theta > 0: top toward +x, rocking on the +x pivot). -->
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <joint name="z" type="slide" axis="0 0 1"/>
+      <joint name="theta" type="hinge" axis="0 1 0"/>
+      <!-- (7) Mass m = {_num(m)} kg at the centre of mass. Iyy = I0 - m R^2
+           = {_num(specimen.inertia)} - {_num(m)} * {_num(specimen.R)}^2 = {_num(iyy)} kg m^2
+           (parallel axes), so p = sqrt(m g R / I0) = {_num(specimen.p)} 1/s.
+           Ixx = Iyy (mass mostly at top and bottom); Izz = min(m (4B^2 + d^2) / 12, 2 Iyy)
+           = {_num(izz)} kg m^2. Only Iyy enters the planar motion. -->
+      <inertial pos="0 0 0" mass="{_num(m)}" diaginertia="{_vec((ixx, iyy, izz))}"/>
+      <!-- (8) Visual block: half-sizes (B, depth/2, H) = ({_vec((B, D / 2, H))}) m; no contact, no mass. -->
+      <geom name="body" type="box" size="{_vec((B, D / 2, H))}" contype="0" conaffinity="0" mass="0"
+            rgba=".75 .78 .82 .6"/>
+      <!-- (9) Contact strips, {_num(w)} m wide and {_num(hs)} m tall, full depth; outer edges at x = +-B = +-{_num(B)} m,
+           so centres at x = +-(B - w/2) = +-{_num(strip_x)} m and z = -H + h/2 = {_num(strip_z)} m (bottom on the
+           pivot line). (10) friction mu = {_num(s["friction"])}; solref = (timeconst [s], dampratio [-]);
+           solimp = (dmin, dmax, width [m], midpoint, power): contact settings. -->
+      <geom name="pivot_pos" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((strip_x, 0, strip_z))}"
+            condim="3" friction="{_num(s["friction"])} 0 0" solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"
+            mass="0" rgba=".2 .3 .8 1"/>
+      <geom name="pivot_neg" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((-strip_x, 0, strip_z))}"
+            condim="3" friction="{_num(s["friction"])} 0 0" solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"
+            mass="0" rgba=".8 .3 .2 1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <!-- (11) d'Alembert force of the ground acceleration, ctrl = -m ug''(t) [N], along x through the
+         centre of mass (the slide joint's anchor); unlimited. -->
+    <motor name="dalembert" joint="x" gear="1"/>
+  </actuator>
+</mujoco>
+"""
+
+
+def _xml_attr(text: str) -> str:
+    return text.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def write_mjcf(specimen: Specimen, path: str | Path, **settings) -> Path:
+    """Write :func:`mjcf_from_specimen` (``settings`` as its keywords) to ``path`` and return the path."""
+    path = Path(path)
+    path.write_text(mjcf_from_specimen(specimen, **settings), encoding="utf-8")
+    return path
+
+
+def write_eth_specimen(path: str | Path = ETH_SPECIMEN_PATH) -> Path:
+    """Regenerate the shipped model of the seed specimen (``Specimen.bachmann2017()``, default settings)."""
+    return write_mjcf(Specimen.bachmann2017(), path)
