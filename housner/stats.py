@@ -61,6 +61,7 @@ __all__ = [
     "ks_2samp",
     "overturn_probability",
     "per_record_agreement",
+    "percentile_label",
     "percentile_table",
     "percentiles",
     "split_failed",
@@ -789,7 +790,7 @@ def percentile_table(
                 raise unknown_choice("engine", e, names)
         names = [reference] + [e for e in wanted if e != reference]
     qa = np.atleast_1d(np.asarray(q, dtype=np.float64))
-    index = pd.Index([_ordinal(x) for x in qa], name="percentile")
+    index = pd.Index([percentile_label(x) for x in qa], name="percentile")
 
     def pct(name: str) -> np.ndarray:
         v = ok.loc[ok["engine"].astype(str) == name, "theta_max_over_alpha"].to_numpy(np.float64)
@@ -819,7 +820,8 @@ def percentile_table(
     return table.map(fmt)
 
 
-def _ordinal(q: float) -> str:
+def percentile_label(q: float) -> str:
+    """The label of percentile level ``q`` [%]: "25th", "1st", "99.5th"."""
     s = f"{q:g}"
     if s.endswith(("11", "12", "13")) or "." in s:
         suffix = "th"
