@@ -250,9 +250,9 @@ class Scenario:
         motions = []
         for w, a in zip(W, A):
             if kind == "one_sine":
-                g = pulses.one_sine(a * a_up, w * p, dt=dt)
+                g = pulses.one_sine(a * a_up, w * p, dt=dt, p=p)
             else:
-                g = pulses.ricker(a * a_up, w * p, kind=kind.split("_")[0], dt=dt)
+                g = pulses.ricker(a * a_up, w * p, kind=kind.split("_")[0], dt=dt, p=p)
             motions.append(
                 GroundMotion(g.acc, g.dt, f"{kind} w/p={w:.3g} a/gtan={a:.3g}", g.provenance, g.theta0, g.theta_dot0)
             )

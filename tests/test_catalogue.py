@@ -46,7 +46,7 @@ def test_unknown_key_suggests_closest(tmp_path):
 
 def test_unknown_engine_lists_choices(tmp_path):
     p = write(tmp_path, BASE + '[engines]\nnames = ["mujoko"]\n')
-    with pytest.raises(ScenarioError, match=r"unknown engine 'mujoko'; did you mean 'mujoco'\?.*choices: housner"):
+    with pytest.raises(ScenarioError, match=r"unknown engine 'mujoko'; did you mean 'mujoco'\?.*choices:.*housner"):
         load_scenario(p)
 
 

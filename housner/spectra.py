@@ -1,0 +1,458 @@
+"""Rocking spectra: peak rotation of a block under analytical pulses (seed Figure 2).
+
+By dimensional analysis (seed eq. 6) the peak rotation of a rigid block under
+a pulse of given shape is theta_max / alpha = phi(alpha, omega_p / p,
+a_p / (g tan alpha)) (and r). A rocking spectrum is theta_max / alpha on a grid
+of omega_p / p and a_p / (g tan alpha) for one slenderness.
+
+Each grid point is one simulation of Housner's model (:mod:`housner.model`)
+over the pulse only; the rocking after the pulse is free, so its largest
+excursion follows in closed form from the state at the end of the pulse
+(energy conservation between impacts, energy ratio r at the impact; see
+:func:`free_rocking_peak`). No simulated time is spent waiting for the block to
+reach its last peak, however slowly it rocks near the overturning angle.
+
+References
+----------
+Housner, G. W. (1963). The behavior of inverted pendulum structures during
+earthquakes. BSSA 53(2), 403-417.
+Makris, N., Konstantinidis, D. (2003). The rocking spectrum and the limitations
+of practical design methodologies. Earthquake Eng. Struct. Dyn. 32(2), 265-289.
+Dimitrakopoulos, E. G., DeJong, M. J. (2012). Revisiting the rocking block:
+closed-form solutions and similarity laws. Proc. R. Soc. A 468, 2294-2318.
+Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
+model. COMPDYN 2017, eqs. 5-6 and Figure 2.
+"""
+
+from __future__ import annotations
+
+import math
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+import numpy as np
+
+from housner.errors import unknown_choice
+from housner.motion import GroundMotion
+from housner.specimen import Specimen
+from housner.units import G
+
+__all__ = [
+    "PULSES",
+    "RICKER_KINDS",
+    "RockingSpectrum",
+    "free_rocking_peak",
+    "pulse_motion",
+    "ricker_half_width",
+    "ricker_shape",
+    "rocking_spectrum",
+]
+
+RICKER_KINDS = ("symmetric", "antisymmetric")
+
+#: Pulse shapes of a spectrum (:mod:`scenarios.pulses` makes the same motions
+#: for the engines): name -> Ricker kind, or None for the one-sine pulse.
+PULSES: dict[str, str | None] = {
+    "symmetric_ricker": "symmetric",
+    "antisymmetric_ricker": "antisymmetric",
+    "one_sine": None,
+}
+
+#: The Ricker window is cut where the wavelet's envelope falls below this
+#: fraction of a_p for good; at 1e-6 the cut is far below any uplift threshold
+#: (a_p / (g tan alpha) would have to exceed 1e6) and the velocity left at the
+#: ends is ~1e-6 a_p / omega_p.
+RICKER_TAIL = 1e-6
+
+#: Peak of |(u^3 - 3u) exp(-u^2/2)|, at u^2 = 3 - sqrt(6): normalises the
+#: antisymmetric wavelet to peak a_p (the beta = 1.3801 of Vassiliou & Makris 2011).
+_BETA_ANTI = abs((lambda u: (u**3 - 3 * u) * math.exp(-0.5 * u * u))(math.sqrt(3.0 - math.sqrt(6.0))))
+
+#: Samples per period of the faster of the pulse (2 pi / omega_p) and the block
+#: (2 pi / p). The motion is linear between samples, so the pulse is
+#: represented to (2 pi / 128)^2 / 8 = 3e-4 of a_p; the solver's own RK4 step is
+#: set by p independently (p h <= 0.01).
+SAMPLES_PER_PERIOD = 128
+
+
+def free_rocking_peak(theta, theta_dot, alpha: float, p: float, r: float) -> tuple[np.ndarray, np.ndarray]:
+    """Largest |theta| still to come in free rocking from a given state, and whether it overturns.
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation at the start of the free rocking [rad].
+    theta_dot : array_like
+        Angular velocity there [rad/s].
+    alpha : float
+        Slenderness [rad].
+    p : float
+        Frequency parameter [1/s].
+    r : float
+        Kinetic-energy ratio at impact [-].
+
+    Returns
+    -------
+    peak : ndarray
+        Largest |theta| reached after that instant [rad] (pi/2 where it overturns).
+    overturned : ndarray of bool
+
+    Notes
+    -----
+    With no ground motion the energy over m g R, e = cos(alpha - |theta|) - cos(alpha)
+    + theta_dot^2 / (2 p^2), is conserved between impacts and multiplied by r
+    at each impact, so the excursions after the present one only get smaller:
+    * moving away from theta = 0 (theta theta_dot >= 0): the next peak is the
+      current excursion's, cos(alpha - theta_pk) = cos(alpha) + e; the block
+      overturns if e >= 1 - cos(alpha) (it passes theta = alpha);
+    * moving toward theta = 0: the current excursion's peak is past; after the
+      impact the energy is r e, giving the next peak the same way.
+    A block already beyond alpha and moving outward overturns; moving inward it
+    comes back only with e > 1 - cos(alpha).
+
+    References
+    ----------
+    Housner (1963); Bachmann et al. (2017), eqs. 2 and 4.
+    """
+    th = np.asarray(theta, dtype=float)
+    w = np.asarray(theta_dot, dtype=float)
+    a = np.abs(th)
+    e = np.cos(alpha - a) - math.cos(alpha) + w * w / (2.0 * p * p)
+    e_top = 1.0 - math.cos(alpha)
+    outward = th * w >= 0.0
+    beyond = a >= alpha
+    # energy of the next excursion that is still to come: this one if moving outward, else after the impact
+    e_next = np.where(outward, e, r * e)
+    c = np.clip(math.cos(alpha) + e_next, -1.0, 1.0)
+    over_inside = e_next >= e_top
+    # beyond alpha: outward it falls; inward it comes back over the top only with e > e_top, then
+    # impacts and the next excursion has r e
+    over_beyond = outward | (e <= e_top) | (r * e >= e_top)
+    over = np.where(beyond, over_beyond, over_inside)
+    peak = np.where(beyond, a, alpha - np.arccos(c))
+    return np.where(over, math.pi / 2, peak), over
+
+
+def ricker_shape(x, kind: str = "symmetric") -> np.ndarray:
+    """Unit Ricker wavelet at dimensionless time x = omega_p (t - t0) [-].
+
+    Parameters
+    ----------
+    x : array_like
+        omega_p (t - t0) [-].
+    kind : {"symmetric", "antisymmetric"}
+        ``"symmetric"``: (1 - x^2/2) exp(-x^2/4), the second derivative of the
+        Gaussian exp(-x^2/4) up to a factor; value 1 at x = 0.
+        ``"antisymmetric"``: (u^3 - 3u) exp(-u^2/2) / beta with u = x / sqrt(3)
+        (the third derivative of the Gaussian exp(-x^2/6) up to a factor),
+        beta = 1.3801 its peak; -1 at u = sqrt(3 - sqrt(6)) (x = 1.285) and +1 at x = -1.285.
+
+    Returns
+    -------
+    ndarray
+        The wavelet [-], with max |value| = 1.
+
+    Notes
+    -----
+    With these Gaussians the Fourier amplitude of either wavelet, |omega|^k
+    exp(-omega^2 s^2 / 2) with k = 2, s^2 = 2/omega_p^2 and k = 3, s^2 = 3/omega_p^2,
+    peaks at omega = omega_p, the convention of Vassiliou & Makris (2011).
+
+    References
+    ----------
+    Vassiliou, M. F., Makris, N. (2011). Estimating time scales and length
+    scales in pulselike earthquake acceleration records with wavelet analysis.
+    BSSA 101(2), 596-618.
+    """
+    x = np.asarray(x, dtype=float)
+    if kind == "symmetric":
+        return (1.0 - 0.5 * x * x) * np.exp(-0.25 * x * x)
+    if kind == "antisymmetric":
+        u = x / math.sqrt(3.0)
+        return (u**3 - 3.0 * u) * np.exp(-0.5 * u * u) / _BETA_ANTI
+    raise ValueError(f"`kind` must be one of {RICKER_KINDS}, got {kind!r}")
+
+
+def ricker_half_width(kind: str = "symmetric", tail: float = RICKER_TAIL) -> float:
+    """Dimensionless half-width x = omega_p t beyond which |ricker_shape(x)| < ``tail`` for good [-].
+
+    8.33 (symmetric) and 10.64 (antisymmetric) for the default tail 1e-6.
+    """
+    from scipy import optimize
+
+    if kind not in RICKER_KINDS:
+        raise ValueError(f"`kind` must be one of {RICKER_KINDS}, got {kind!r}")
+    if not (0.0 < tail < 0.1):
+        raise ValueError(f"`tail` must lie in (0, 0.1), got {tail!r}")
+    # beyond the last side lobe (x^2 = 6 symmetric, u^2 = 3 + sqrt(6) antisymmetric) |psi| only falls
+    x_lobe = math.sqrt(6.0) if kind == "symmetric" else math.sqrt(3.0 * (3.0 + math.sqrt(6.0)))
+    return optimize.brentq(lambda x: abs(float(ricker_shape(x, kind))) - tail, x_lobe, 80.0, xtol=1e-12)
+
+
+def _pulse_window(pulse: str, omega_p: float, p: float) -> tuple[float, float]:
+    """Sample step [s] and duration of the forcing window [s] of a pulse."""
+    dt = 2.0 * math.pi / (max(omega_p, p) * SAMPLES_PER_PERIOD)
+    if pulse == "one_sine":
+        Tp = 2.0 * math.pi / omega_p
+        n = max(1, math.ceil(Tp / dt - 1e-9))
+        return Tp / n, Tp  # the pulse ends exactly on a sample
+    return dt, 2.0 * ricker_half_width(PULSES[pulse]) / omega_p
+
+
+def pulse_motion(pulse: str, a_p: float, omega_p: float, p: float, *, duration: float | None = None) -> GroundMotion:
+    """The ground motion that :func:`rocking_spectrum` uses at one grid point.
+
+    Parameters
+    ----------
+    pulse : str
+        One of :data:`PULSES`.
+    a_p : float
+        Pulse amplitude [m/s^2] (peak |ug''|).
+    omega_p : float
+        Pulse frequency [rad/s].
+    p : float
+        Frequency parameter of the block [1/s] (sets the sample step).
+    duration : float, optional
+        Total duration [s]; default the forcing window only (the pulse's end).
+
+    Returns
+    -------
+    GroundMotion
+        The same samples as :func:`scenarios.pulses.ricker` (centre t0 at the
+        default half-width) or :func:`scenarios.pulses.one_sine` (phase 0) with this step.
+    """
+    if pulse not in PULSES:
+        raise unknown_choice("pulse", pulse, PULSES)
+    for key, v in (("a_p", a_p), ("omega_p", omega_p), ("p", p)):
+        if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v)):
+            raise ValueError(f"`{key}` must be a finite number, got {v!r}")
+    if omega_p <= 0 or p <= 0:
+        raise ValueError("`omega_p` and `p` must be positive")
+    dt, window = _pulse_window(pulse, omega_p, p)
+    total = window if duration is None else float(duration)
+    if not (math.isfinite(total) and total > 0):
+        raise ValueError(f"`duration` must be positive and finite, got {duration!r}")
+    t = np.arange(int(math.floor(total / dt + 1e-9)) + 1) * dt
+    kind = PULSES[pulse]
+    if kind is None:
+        acc = np.where(t <= window * (1.0 + 1e-12), a_p * np.sin(omega_p * t), 0.0)
+    else:
+        acc = a_p * ricker_shape(omega_p * (t - 0.5 * window), kind)
+    name = f"{pulse} a_p={a_p:.4g} omega_p={omega_p:.4g}"
+    return GroundMotion(acc, dt, name, f"housner.spectra.pulse_motion({pulse!r}, dt={dt!r})")
+
+
+@dataclass(frozen=True, eq=False)
+class RockingSpectrum:
+    """theta_max / alpha of one block under one pulse shape on a grid.
+
+    Attributes
+    ----------
+    pulse : str
+        Pulse shape (a key of :data:`PULSES`).
+    omega_ratio : ndarray, shape (n_w,)
+        omega_p / p [-] (x axis).
+    accel_ratio : ndarray, shape (n_a,)
+        a_p / (g tan alpha) [-] (y axis).
+    theta_max_over_alpha : ndarray, shape (n_a, n_w)
+        theta_max / alpha [-], row i for accel_ratio[i], column j for
+        omega_ratio[j]; +inf where the block overturned.
+    overturned : ndarray of bool, shape (n_a, n_w)
+    alpha : float
+        Slenderness [rad].
+    p : float
+        Frequency parameter [1/s].
+    r : float
+        Kinetic-energy ratio at impact used [-].
+    name : str
+        The specimen's name.
+    """
+
+    pulse: str
+    omega_ratio: np.ndarray
+    accel_ratio: np.ndarray
+    theta_max_over_alpha: np.ndarray
+    overturned: np.ndarray
+    alpha: float
+    p: float
+    r: float
+    name: str = ""
+
+    def min_overturn_accel(self) -> np.ndarray:
+        """Smallest a_p / (g tan alpha) of the grid that overturns the block, per omega_p / p [-] (NaN if none)."""
+        out = np.full(self.omega_ratio.size, np.nan)
+        for j in range(self.omega_ratio.size):
+            k = np.flatnonzero(self.overturned[:, j])
+            if k.size:
+                out[j] = self.accel_ratio[k[0]]
+        return out
+
+    def plot(self, ax=None, *, levels: int = 11, cmap: str = "viridis"):
+        """Contour plot like the seed's Figure 2.
+
+        Filled contours of theta_max / alpha in [0, 1] (values above 1 without
+        overturning take the top colour), the overturning region hatched in
+        dark grey with surviving grid points next to it drawn as dots, axes
+        omega_p / p and a_p / (g tan alpha).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure is made when omitted.
+        levels : int
+            Number of contour levels between 0 and 1.
+        cmap : str
+            Colour map of the filled contours.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        import matplotlib.pyplot as plt
+        from matplotlib.patches import Patch
+
+        if ax is None:
+            _, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+        W, A = np.meshgrid(self.omega_ratio, self.accel_ratio)
+        Z = np.where(self.overturned, np.nan, self.theta_max_over_alpha)
+        # theta_max > alpha without overturning happens (a late lobe of the pulse pushes the block back):
+        # such points take the top colour
+        cs = ax.contourf(W, A, np.minimum(Z, 1.0), levels=np.linspace(0.0, 1.0, levels), cmap=cmap)
+        ax.figure.colorbar(cs, ax=ax, label=r"$\theta_{max}/\alpha$")
+        if self.overturned.any():
+            ov = self.overturned.astype(float)
+            ax.contourf(W, A, ov, levels=[0.5, 1.5], colors=["0.25"], hatches=["//"], alpha=0.9)
+            ax.contour(W, A, ov, levels=[0.5], colors="k", linewidths=1.0)
+            # grid points that survive amid overturning ones (the "safe" islands of pulse spectra) have no
+            # neighbours to make a filled contour with: mark them individually
+            pad = np.pad(self.overturned, 1, constant_values=False)
+            near = pad[:-2, 1:-1] | pad[2:, 1:-1] | pad[1:-1, :-2] | pad[1:-1, 2:]
+            isl = near & ~self.overturned
+            if isl.any():
+                ax.scatter(W[isl], A[isl], c=np.minimum(Z[isl], 1.0), cmap=cmap, vmin=0.0, vmax=1.0, s=9,
+                           edgecolors="none", zorder=3)  # fmt: skip
+            ax.legend(handles=[Patch(facecolor="0.25", hatch="//", label="overturn")], loc="upper left")
+        ax.set_xlabel(r"$\omega_p / p$")
+        ax.set_ylabel(r"$a_p / (g \tan\alpha)$")
+        label = self.pulse.replace("_", " ")
+        ax.set_title(f"Rocking spectrum, {label}, tan(alpha) = {math.tan(self.alpha):.3g}, r = {self.r:.4g}")
+        return ax
+
+
+@contextmanager
+def _numba_threads(n: int | None):
+    if n is None:
+        yield
+        return
+    import numba
+
+    old = numba.get_num_threads()
+    numba.set_num_threads(max(1, min(int(n), numba.config.NUMBA_NUM_THREADS)))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(old)
+
+
+def _ratios(name: str, values) -> np.ndarray:
+    try:
+        a = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be an array of numbers, got {values!r}") from None
+    if a.ndim != 1 or a.size == 0:
+        raise ValueError(f"`{name}` must be a non-empty 1-D array, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"`{name}` must be finite")
+    return a
+
+
+def rocking_spectrum(
+    specimen: Specimen,
+    pulse: str = "symmetric_ricker",
+    omega_ratio=None,
+    accel_ratio=None,
+    *,
+    r: float | None = None,
+    n_jobs: int | None = None,
+) -> RockingSpectrum:
+    """theta_max / alpha of ``specimen`` under a pulse on a grid (seed Figure 2).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        The block (alpha [rad], p [1/s]).
+    pulse : {"symmetric_ricker", "antisymmetric_ricker", "one_sine"}
+        Pulse shape; see :mod:`scenarios.pulses`.
+    omega_ratio : array_like, optional
+        omega_p / p [-], positive; default 100 values from 1 to 12.
+    accel_ratio : array_like, optional
+        a_p / (g tan alpha) [-]; default 100 values from 0.5 to 12.
+    r : float, optional
+        Kinetic-energy ratio at impact [-]; default ``specimen.r_housner``.
+    n_jobs : int, optional
+        Threads for the compiled solver; default all of numba's.
+
+    Returns
+    -------
+    RockingSpectrum
+
+    Notes
+    -----
+    Each grid point simulates the pulse's forcing window only: the Ricker
+    wavelets until |psi| < 1e-6 (2 x 8.3/omega_p symmetric, 2 x 10.6/omega_p
+    antisymmetric), the one-sine pulse until 2 pi/omega_p. The peak of the free
+    rocking that follows comes from the end state in closed form
+    (:func:`free_rocking_peak`), which is exact for Housner's model and costs
+    nothing, where simulating it would need a time that grows without bound
+    near theta_max -> alpha. Samples: :data:`SAMPLES_PER_PERIOD` per period of
+    the faster of pulse and block.
+
+    References
+    ----------
+    Makris & Konstantinidis (2003); Bachmann et al. (2017), eq. 6 and Figure 2.
+    """
+    from housner.model import simulate_many
+
+    if not isinstance(specimen, Specimen):
+        raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
+    if pulse not in PULSES:
+        raise unknown_choice("pulse", pulse, PULSES)
+    W = _ratios("omega_ratio", np.linspace(1.0, 12.0, 100) if omega_ratio is None else omega_ratio)
+    A = _ratios("accel_ratio", np.linspace(0.5, 12.0, 100) if accel_ratio is None else accel_ratio)
+    if np.any(W <= 0):
+        raise ValueError("`omega_ratio` must be positive")
+    if n_jobs is not None and not (isinstance(n_jobs, (int, np.integer)) and n_jobs >= 1):
+        raise ValueError(f"`n_jobs` must be a positive integer, got {n_jobs!r}")
+    r_used = specimen.r_housner if r is None else float(r)
+    if not (math.isfinite(r_used) and 0.0 <= r_used <= 1.0):
+        raise ValueError(f"`r` must lie in [0, 1], got {r!r}")
+
+    alpha, p = specimen.alpha, specimen.p
+    a_up = G * specimen.tan_alpha
+    motions = []
+    for w in W:
+        shape = pulse_motion(pulse, 1.0, w * p, p)  # unit amplitude; every a_p is a multiple of it
+        for a in A:
+            motions.append(shape.scaled(amplitude=a * a_up))
+    with _numba_threads(n_jobs):
+        res = simulate_many(specimen, motions, r=r_used, parallel=n_jobs != 1)
+
+    theta_max = np.array([x.theta_max for x in res])
+    over = np.array([x.overturned for x in res])
+    th_end = np.array([x.theta[-1] for x in res])
+    thd_end = np.array([x.theta_dot[-1] for x in res])
+    after, over_after = free_rocking_peak(th_end, thd_end, alpha, p, r_used)
+    over = over | over_after
+    ratio = np.where(over, np.inf, np.maximum(theta_max, np.where(over, 0.0, after)) / alpha)
+    shape2 = (W.size, A.size)
+    return RockingSpectrum(
+        pulse=pulse,
+        omega_ratio=W,
+        accel_ratio=A,
+        theta_max_over_alpha=ratio.reshape(shape2).T.copy(),
+        overturned=over.reshape(shape2).T.copy(),
+        alpha=alpha,
+        p=p,
+        r=r_used,
+        name=specimen.name,
+    )

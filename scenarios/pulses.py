@@ -1,0 +1,231 @@
+"""Analytical pulse ground motions: Ricker wavelets, one-sine pulses, free-vibration releases.
+
+Pulses are the excitations of rocking spectra (seed Figure 2): a block's
+theta_max / alpha depends only on alpha, omega_p / p and a_p / (g tan alpha)
+(seed eq. 6). Every function returns a :class:`housner.GroundMotion` in m/s^2
+on a uniform grid, with its parameters in ``name`` and ``provenance``.
+
+Conventions
+-----------
+* ``a_p`` [m/s^2] is the peak ground acceleration of the pulse: max |ug''| = |a_p|.
+  A negative ``a_p`` mirrors the pulse.
+* ``omega_p`` [rad/s] is the pulse frequency. For both Ricker wavelets it is
+  the frequency at which the Fourier amplitude spectrum peaks; for the
+  one-sine pulse the sine's own frequency (period T_p = 2 pi / omega_p).
+* Positive ground acceleration tilts the block toward -x (theta < 0).
+
+References
+----------
+Housner, G. W. (1963). The behavior of inverted pendulum structures during
+earthquakes. BSSA 53(2), 403-417 (rectangular and sine pulses).
+Zhang, J., Makris, N. (2001). Rocking response of free-standing blocks under
+cycloidal pulses. J. Eng. Mech. 127(5), 473-483 (one-sine pulse).
+Vassiliou, M. F., Makris, N. (2011). Estimating time scales and length scales
+in pulselike earthquake acceleration records with wavelet analysis. BSSA
+101(2), 596-618 (symmetric and antisymmetric Ricker wavelets).
+Dimitrakopoulos, E. G., DeJong, M. J. (2012). Revisiting the rocking block:
+closed-form solutions and similarity laws. Proc. R. Soc. A 468, 2294-2318.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from housner.motion import GroundMotion
+from housner.spectra import RICKER_KINDS, ricker_half_width, ricker_shape
+
+__all__ = ["RICKER_KINDS", "free_vibration", "one_sine", "ricker", "ricker_shape"]
+
+#: Free rocking after the pulse, in units of 1/p, when the block's p is given:
+#: a free half-cycle of amplitude theta_i lasts 2 F(theta_i)/p with
+#: F ~ arccosh(1/(1 - theta_i/alpha)); 30/p covers the time to the next peak
+#: from any excursion below 0.9999 alpha (2 arccosh(1e4) = 19.8).
+_FREE_ROCKING_P = 30.0
+
+#: Free time after the pulse when p is not given [s]: 10 pulse periods, and at
+#: least this much (covers 30/p for blocks with p >= 3 1/s, i.e. R <~ 0.8 m).
+_FREE_ROCKING_MIN = 10.0
+
+
+def _positive(name: str, value) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
+    if not (math.isfinite(x) and x > 0):
+        raise ValueError(f"`{name}` must be positive and finite, got {value!r}")
+    return x
+
+
+def _finite(name: str, value) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"`{name}` must be finite, got {value!r}")
+    return x
+
+
+def _default_free_time(omega_p: float, p: float | None) -> float:
+    if p is not None:
+        return _FREE_ROCKING_P / _positive("p", p)
+    return max(10.0 * 2.0 * math.pi / omega_p, _FREE_ROCKING_MIN)
+
+
+def _grid(total: float, dt: float) -> np.ndarray:
+    n = int(math.floor(total / dt + 1e-9)) + 1
+    return np.arange(n) * dt
+
+
+def ricker(
+    a_p: float,
+    omega_p: float,
+    *,
+    kind: str = "symmetric",
+    dt: float,
+    duration: float | None = None,
+    t0: float | None = None,
+    p: float | None = None,
+) -> GroundMotion:
+    """Ricker-wavelet acceleration pulse (Vassiliou & Makris 2011).
+
+    ug''(t) = a_p psi(omega_p (t - t0)), with psi from :func:`ricker_shape`:
+
+    * symmetric: psi(x) = (1 - x^2/2) exp(-x^2/4), so ug''(t0) = a_p is the peak;
+    * antisymmetric: psi(x) = (u^3 - 3u) exp(-u^2/2) / beta, u = x/sqrt(3),
+      beta = 1.3801, so the two main lobes peak at -+a_p either side of t0.
+
+    Parameters
+    ----------
+    a_p : float
+        Peak ground acceleration of the pulse [m/s^2]; its sign sets the polarity.
+    omega_p : float
+        Frequency where the wavelet's Fourier amplitude peaks [rad/s].
+    kind : {"symmetric", "antisymmetric"}
+        Wavelet.
+    dt : float
+        Sample step [s]; resolve the pulse with about 50 or more samples per
+        2 pi / omega_p (the motion is linear between samples).
+    duration : float, optional
+        Total duration [s]. Default: the pulse window 2 t0 plus the free
+        rocking after it, 30/p when ``p`` is given, else the larger of ten
+        pulse periods and 10 s.
+    t0 : float, optional
+        Centre of the wavelet [s]. Default: the half-width beyond which
+        |psi| < 1e-6 for good (8.33/omega_p symmetric, 10.64/omega_p
+        antisymmetric), so the motion starts from ~zero.
+    p : float, optional
+        Frequency parameter of the block that will be shaken [1/s]; only used
+        for the default duration.
+
+    Returns
+    -------
+    GroundMotion
+        Accelerations [m/s^2] at t = k dt.
+
+    References
+    ----------
+    Vassiliou & Makris (2011); Dimitrakopoulos & DeJong (2012).
+    """
+    a_p = _finite("a_p", a_p)
+    omega_p = _positive("omega_p", omega_p)
+    dt = _positive("dt", dt)
+    if kind not in RICKER_KINDS:
+        raise ValueError(f"`kind` must be one of {RICKER_KINDS}, got {kind!r}")
+    t0 = ricker_half_width(kind) / omega_p if t0 is None else _finite("t0", t0)
+    total = 2.0 * max(t0, 0.0) + _default_free_time(omega_p, p) if duration is None else _positive("duration", duration)
+    t = _grid(total, dt)
+    acc = a_p * ricker_shape(omega_p * (t - t0), kind)
+    return GroundMotion(
+        acc=acc,
+        dt=dt,
+        name=f"{kind} Ricker a_p={a_p:.4g} m/s^2 omega_p={omega_p:.4g} rad/s",
+        provenance=(
+            f"scenarios.pulses.ricker(a_p={a_p!r}, omega_p={omega_p!r}, kind={kind!r}, dt={dt!r}, "
+            f"duration={total!r}, t0={t0!r}); Vassiliou & Makris (2011) wavelet, peak |ug''| = |a_p|"
+        ),
+    )
+
+
+def one_sine(
+    a_p: float,
+    omega_p: float,
+    *,
+    dt: float,
+    duration: float | None = None,
+    phase: float = 0.0,
+    p: float | None = None,
+) -> GroundMotion:
+    """One full cycle of sine acceleration, then rest (Housner 1963; Zhang & Makris 2001).
+
+    ug''(t) = a_p sin(omega_p t + phase) for 0 <= t <= T_p = 2 pi / omega_p, 0 after.
+
+    Parameters
+    ----------
+    a_p : float
+        Amplitude [m/s^2] (the peak of |ug''|).
+    omega_p : float
+        Circular frequency of the sine [rad/s].
+    dt : float
+        Sample step [s]. The grid is not adjusted: choose dt = T_p / N for a
+        pulse that ends on a sample.
+    duration : float, optional
+        Total duration [s]; default T_p plus the free rocking after it (30/p
+        when ``p`` is given, else the larger of ten pulse periods and 10 s).
+    phase : float
+        Phase of the sine at t = 0 [rad]. With phase 0 the ground velocity
+        returns to zero at T_p and the displacement ends at 2 pi a_p / omega_p^2;
+        Zhang & Makris (2001) take phase = asin(g tan(alpha) / a_p) so that the
+        block uplifts at t = 0.
+    p : float, optional
+        Frequency parameter of the block [1/s]; only used for the default duration.
+
+    Returns
+    -------
+    GroundMotion
+        Accelerations [m/s^2] at t = k dt.
+
+    References
+    ----------
+    Housner (1963); Zhang & Makris (2001).
+    """
+    a_p = _finite("a_p", a_p)
+    omega_p = _positive("omega_p", omega_p)
+    dt = _positive("dt", dt)
+    phase = _finite("phase", phase)
+    Tp = 2.0 * math.pi / omega_p
+    total = Tp + _default_free_time(omega_p, p) if duration is None else _positive("duration", duration)
+    t = _grid(total, dt)
+    acc = np.where(t <= Tp * (1.0 + 1e-12), a_p * np.sin(omega_p * t + phase), 0.0)
+    return GroundMotion(
+        acc=acc,
+        dt=dt,
+        name=f"one-sine a_p={a_p:.4g} m/s^2 omega_p={omega_p:.4g} rad/s",
+        provenance=(
+            f"scenarios.pulses.one_sine(a_p={a_p!r}, omega_p={omega_p!r}, dt={dt!r}, duration={total!r}, "
+            f"phase={phase!r}); one cycle of a_p sin(omega_p t + phase), then zero"
+        ),
+    )
+
+
+def free_vibration(theta0: float, duration: float, dt: float = 0.002) -> GroundMotion:
+    """No ground motion; the block is released from rest at ``theta0`` [rad].
+
+    Parameters
+    ----------
+    theta0 : float
+        Release angle [rad], |theta0| < alpha for a block that rocks back.
+    duration : float
+        Duration [s].
+    dt : float
+        Sample step [s] (500 Hz like the seed's optical measurements by default).
+
+    Returns
+    -------
+    GroundMotion
+        Zero accelerations with ``theta0`` set (:meth:`GroundMotion.free_vibration`).
+    """
+    return GroundMotion.free_vibration(_finite("theta0", theta0), _positive("duration", duration), _positive("dt", dt))

@@ -1,0 +1,450 @@
+"""The HTML report: one self-contained page whose figures and numbers agree with independent computations."""
+
+import base64
+import inspect
+import json
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats as sps
+
+from engines.analytic import HousnerEngine
+from engines.base import ENGINES, register_engine
+from housner import GroundMotion, Specimen
+from housner.errors import DataFileError
+from reports import figures, html
+from scenarios.runner import provenance, run_engines, write_run
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC = Specimen.bachmann2017()
+CHROMIUM = Path("/usr/bin/chromium")
+
+
+# ----------------------------------------------------------------------------
+# engines registered for these tests: the analytic model with another r, and one that fails on a record
+@register_engine("report-r80")
+class R80Engine(HousnerEngine):
+    """The analytic engine with r = 0.80 (a second engine whose results differ from the reference)."""
+
+    def __init__(self, r: float = 0.80, substeps=None):
+        super().__init__(r=r, substeps=substeps)
+
+
+@register_engine("report-flaky")
+class FlakyEngine(HousnerEngine):
+    """The analytic engine (same r as the reference), except that it fails on the motion named 'm3'."""
+
+    def _simulate(self, specimen, motion, effects):
+        if motion.name == "m3":
+            raise RuntimeError("solver diverged on purpose")
+        return super()._simulate(specimen, motion, effects)
+
+
+@pytest.fixture(autouse=True)
+def _keep_registry():
+    yield
+    ENGINES.setdefault("report-r80", R80Engine)
+    ENGINES.setdefault("report-flaky", FlakyEngine)
+
+
+def shaking(n=12, seed=7):
+    """Short windowed sines strong enough that some blocks rock, some overturn, some stay put."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 3.0, 0.002)
+    out = []
+    for i in range(n):
+        f, amp, ph = rng.uniform(1.0, 4.0), rng.uniform(1.0, 4.0), rng.uniform(0, 2 * np.pi)
+        a = amp * np.sin(2 * np.pi * f * t + ph) * np.exp(-(((t - 1.2) / 0.7) ** 2))
+        out.append(GroundMotion(a, 0.002, name=f"m{i}"))
+    return out
+
+
+SPREAD = {  # the layout of scenarios.analysis.seed_spread after run.json
+    "k": 3,
+    "seeds": [1, 2, 3],
+    "percentiles": {"25": [0.3, 0.35, 0.4], "50": [0.7, 0.75, 0.8], "75": ["inf", "inf", "inf"]},
+    "overturn_fraction": [0.3, 0.32, 0.35],
+    "overturn_fraction_range": [0.3, 0.32, 0.35],
+    "summary": {"25": [0.3, 0.35, 0.4], "50": [0.7, 0.75, 0.8], "75": ["inf", "inf", "inf"]},
+}
+
+
+def make_run(out: Path, motions, engines, *, motions_meta=None, analysis=None, extra=None, scenario=None) -> Path:
+    df, hist, info = run_engines(SPEC, motions, engines, jobs=1, use_cache=False, progress=False)
+    meta = {
+        "scenario": {"name": out.name, "description": "test run", "motions": {"source": "record"}, **(scenario or {})},
+        "specimen": SPEC.describe(),
+        "motions": motions_meta or {"source": "record", "S": 1.0},
+        "n_motions": len(motions),
+        "engines": info,
+        "analysis": analysis or {"reference": "housner"},
+        "failures": df[df.status != "ok"][["engine", "motion_id", "motion_name", "error"]].to_dict("records"),
+        "wall_s": {"total": 1.0},
+        "provenance": provenance(),
+        **(extra or {}),
+    }
+    write_run(out, df, hist, motions, meta)
+    return out
+
+
+class Page(HTMLParser):
+    """Tags, attributes, sections, images and tables (cell text) of a report."""
+
+    def __init__(self, text: str):
+        super().__init__(convert_charrefs=True)
+        self.attrs: list[tuple[str, str, str]] = []
+        self.sections: list[str] = []
+        self.images: dict[str, list[str]] = {}
+        self.tables: dict[str, list[list[list[str]]]] = {}
+        self.tags: set[str] = set()
+        self._section = ""
+        self._cell: list[str] | None = None
+        self.feed(text)
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.add(tag)
+        a = dict(attrs)
+        for k, v in attrs:
+            self.attrs.append((tag, k, v or ""))
+        if tag == "section":
+            self._section = a.get("id", "")
+            self.sections.append(self._section)
+        elif tag == "img":
+            self.images.setdefault(self._section, []).append(a.get("src", ""))
+        elif tag == "table":
+            self.tables.setdefault(self._section, []).append([])
+        elif tag == "tr":
+            self.tables[self._section][-1].append([])
+        elif tag in ("td", "th"):
+            self._cell = []
+        elif tag == "br" and self._cell is not None:
+            self._cell.append(" ")
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th") and self._cell is not None:
+            self.tables[self._section][-1][-1].append(" ".join("".join(self._cell).split()))
+            self._cell = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell.append(data)
+
+    def row(self, section: str, first_cell_startswith: str, table: int = 0) -> list[str]:
+        for r in self.tables[section][table]:
+            if r and r[0].startswith(first_cell_startswith):
+                return r
+        raise AssertionError(f"no row starting with {first_cell_startswith!r} in {section} table {table}")
+
+
+@pytest.fixture(scope="module")
+def shaken(tmp_path_factory):
+    """A run of three engines on 12 motions, one failed record, the paper's Table 2 and a seed spread."""
+    out = tmp_path_factory.mktemp("report") / "shaken"
+    make_run(
+        out,
+        shaking(),
+        {"housner": {}, "report-r80": {}, "report-flaky": {}},
+        analysis={"reference": "housner", "paper_percentiles": {"25": 0.37, "50": 0.77, "75": "overturn"}},
+        extra={"table2_spread": SPREAD},
+    )
+    path = html.write_report(out)
+    return out, path, Page(path.read_text(encoding="utf-8"))
+
+
+# ----------------------------------------------------------------------------
+def test_one_self_contained_file(shaken):
+    out, path, page = shaken
+    assert path == out / "report.html"
+    text = path.read_text(encoding="utf-8")
+    assert text.startswith("<!DOCTYPE html>")
+    # Nothing is fetched: no scripts, no external style sheets, every src/href is in-page or a data: URI.
+    assert "script" not in page.tags
+    for tag, key, value in page.attrs:
+        if key in ("src", "href"):
+            assert value.startswith(("#", "data:")), (tag, key, value[:80])
+    assert "url(" not in text.split("</style>")[0].split("<style>")[1]
+    assert "http://" not in text and "https://" not in text
+
+
+def test_sections_and_table_of_contents(shaken):
+    _, _, page = shaken
+    expected = ["verdict", "specimen", "ensemble", "distribution", "agreement", "failures", "provenance"]
+    assert page.sections == expected  # no pulse or free-vibration section for a record ensemble
+    toc = [v for tag, k, v in page.attrs if tag == "a" and k == "href" and v.startswith("#")]
+    assert all(f"#{s}" in toc for s in expected)
+
+
+def test_figures_are_embedded_pngs(shaken):
+    _, _, page = shaken
+    # CDF figure, agreement scatter and the time histories of the worst records.
+    assert len(page.images["distribution"]) == 1
+    assert len(page.images["agreement"]) == 2
+    for srcs in page.images.values():
+        for src in srcs:
+            head, _, data = src.partition(",")
+            assert head == "data:image/png;base64"
+            png = base64.b64decode(data, validate=True)
+            assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 5000
+
+
+def test_headline_numbers_agree_with_independent_computation(shaken):
+    out, _, page = shaken
+    df = pd.read_parquet(out / "results.parquet")
+    ok = df[df.status == "ok"]
+    ref = ok[ok.engine == "housner"]
+    big = 1e6  # any value above every finite peak stands for an overturn in a rank statistic
+    x_ref = np.where(ref.overturned, big, ref.theta_max_over_alpha)
+    for engine in ("report-r80", "report-flaky"):
+        mine = ok[ok.engine == engine]
+        x = np.where(mine.overturned, big, mine.theta_max_over_alpha)
+        row = page.row("verdict", engine)
+        # KS distance: scipy on the stand-in values (exactly the statistic with overturns at +inf).
+        ks = sps.ks_2samp(x, x_ref).statistic
+        assert row[2].startswith(f"{ks:.3f}")
+        # P[overturn] = k/n over the usable records, and its difference to the reference.
+        p, p_ref = mine.overturned.mean(), ref.overturned.mean()
+        assert row[3].startswith(f"{p:.2f}")
+        assert row[4] in (f"{p - p_ref:+.3f}", "+0.000")
+        # median of theta_max/alpha (numpy's linear percentile, inf for overturn)
+        med = np.percentile(x, 50)
+        assert row[5].startswith("overturn" if med > x[x < big].max(initial=0) else f"{med:.3f}")
+        assert row[1] == (f"{len(mine)} / {int((df.engine == engine).sum() - len(mine))}")
+
+
+def test_verdict_marks_failed_records(shaken):
+    _, path, page = shaken
+    # The flaky engine is the reference model itself, one record short: its KS distance to the reference
+    # is at most 1/12 (one record moves an ECDF of 12 by 1/12), so it meets the KS tolerance; it still
+    # fails, because a failed record fails the verdict (as in reports.assertions).
+    row = page.row("verdict", "report-flaky")
+    assert float(row[2].split()[0]) <= 1 / 12 + 1e-9
+    assert row[-1] == "FAIL"
+    assert row[1] == "11 / 1"
+    line = next(li for li in path.read_text().split("<li>") if "report-flaky</span>:" in li)
+    assert '<span class="ok">KS' in line
+    assert '<span class="bad">1 failed record</span>' in line
+
+
+def test_failed_records_are_listed(shaken):
+    _, _, page = shaken
+    rows = page.tables["failures"][0]
+    assert rows[0] == ["engine", "motion", "name", "error"]
+    assert len(rows) == 2
+    assert rows[1][:3] == ["report-flaky", "3", "m3"]
+    assert "RuntimeError: solver diverged on purpose" in rows[1][3]
+
+
+def test_percentile_tables_show_paper_and_spread(shaken):
+    out, _, page = shaken
+    tables = page.tables["distribution"]
+    header = tables[0][0]
+    assert header[:2] == ["percentile", "seed paper (numerical, Table 2)"]
+    assert page.row("distribution", "25th")[1] == "0.37"
+    assert page.row("distribution", "75th")[1] == "overturn"
+    # the reference's 25th percentile, numpy's linear rule on the usable records
+    df = pd.read_parquet(out / "results.parquet")
+    ref = df[(df.engine == "housner") & (df.status == "ok")]
+    v = np.where(ref.overturned, np.inf, ref.theta_max_over_alpha)
+    q25 = np.percentile(np.where(np.isinf(v), 1e6, v), 25)
+    assert page.row("distribution", "25th")[2].startswith(f"{q25:.2f}")
+    spread = tables[-1]
+    assert spread[0] == ["", "min", "median", "max"]
+    assert spread[1] == ["25th", "0.30", "0.35", "0.40"]
+    assert spread[3] == ["75th", "overturn", "overturn", "overturn"]
+
+
+def test_agreement_table_counts_records(shaken):
+    out, _, page = shaken
+    df = pd.read_parquet(out / "results.parquet")
+    wide = df[df.status == "ok"].pivot(index="motion_id", columns="engine", values="overturned")
+    both = wide[["report-r80", "housner"]].dropna()
+    same = float((both["report-r80"] == both["housner"]).mean())
+    row = page.row("agreement", "report-r80")
+    assert row[5] == str(len(both))
+    assert row[6] == f"{same:.0%}"
+
+
+def test_cdf_figure_stops_at_one_minus_overturn_probability():
+    samples = {"a": np.array([0.1, 0.4, 0.5, np.inf, np.inf]), "b": np.array([0.2, 0.3, 0.6, 0.9, np.inf])}
+    fig = figures.plot_cdfs(samples, reference="a")
+    curves = {ln.get_label().split(" ")[0]: ln for ln in fig.axes[0].get_lines() if "n=" in ln.get_label()}
+    # The empirical CDF over all records ends at 1 - k/n (seed Fig. 10): 3/5 and 4/5 here.
+    assert curves["a"].get_ydata()[-1] == pytest.approx(0.6, abs=1e-12)
+    assert curves["b"].get_ydata()[-1] == pytest.approx(0.8, abs=1e-12)
+    # and the steps sit at the finite values
+    assert list(curves["a"].get_xdata()[1:4]) == [0.1, 0.4, 0.5]
+
+
+def test_free_vibration_report_measures_each_engines_r(tmp_path):
+    releases = [0.3, 0.7]
+    motions = [GroundMotion.free_vibration(a * SPEC.alpha, 4.0, 0.002, name=f"release {a}") for a in releases]
+    out = make_run(
+        tmp_path / "fv",
+        motions,
+        {"housner": {}, "report-r80": {}},
+        motions_meta={"source": "free_vibration", "theta0_over_alpha": releases},
+    )
+    page = Page(html.render_report(out))
+    assert "free-vibration" in page.sections
+    assert len(page.images["free-vibration"]) == 2  # the histories and r per impact
+    # Housner's model loses exactly 1 - r of the energy at every impact (seed eq. 8): the report's fit
+    # from the stored histories must give back r_housner = 0.94652 and 0.80. The analytic solver locates
+    # impacts to ~1e-9 and histories are stored in float32 (relative 6e-8), so 4 decimals are exact.
+    for a in releases:
+        row = page.row("free-vibration", f"{a:.2f}")
+        assert row[1].startswith(f"r = {SPEC.r_housner:.4f}")
+        assert row[2].startswith("r = 0.8000")
+        # p from the exact half-cycle durations is the specimen's p
+        assert f"p = {SPEC.p:.4f} 1/s" in row[1]
+
+
+def test_pulse_report_draws_rocking_spectra(tmp_path):
+    from scenarios import pulses
+
+    w, a = np.meshgrid([2.0, 4.0, 8.0], [1.5, 3.0, 5.0], indexing="ij")
+    motions = []
+    for wi, ai in zip(w.ravel(), a.ravel(), strict=True):
+        g = pulses.ricker(ai * SPEC.uplift_acceleration, wi * SPEC.p, kind="symmetric", dt=0.002)
+        motions.append(GroundMotion(g.acc, g.dt, f"ricker {wi} {ai}"))
+    meta = {"source": "pulses", "pulse": "symmetric_ricker", "omega_ratio": w.ravel().tolist()}
+    meta["accel_ratio"] = a.ravel().tolist()
+    out = make_run(tmp_path / "pulses", motions, {"housner": {}, "report-r80": {}}, motions_meta=meta)
+    page = Page(html.render_report(out))
+    assert "rocking-spectra" in page.sections
+    assert len(page.images["rocking-spectra"]) == 1
+    df = pd.read_parquet(out / "results.parquet")
+    wide = df.pivot(index="motion_id", columns="engine", values="overturned")
+    differ = int((wide["housner"] != wide["report-r80"]).sum())
+    assert page.row("rocking-spectra", "report-r80") == ["report-r80", "9", str(differ)]
+
+
+def test_written_tables_from_any_engines(tmp_path, monkeypatch):
+    """Only results.parquet, unknown engine names, no run.json: the page still renders, with a stand-in reference."""
+    ref = np.linspace(0.05, 0.95, 20)
+    other = ref + 1.0  # every value beyond the reference's largest: the CDFs never overlap, KS = 1
+    rows = [
+        {"engine": e, "motion_id": i, "theta_max_over_alpha": float(v), "overturned": False, "status": "ok"}
+        for e, vals in (("alpha-engine", ref), ("beta-engine", other))
+        for i, v in enumerate(vals)
+    ]
+    out = tmp_path / "bare"
+    out.mkdir()
+    pd.DataFrame(rows).to_parquet(out / "results.parquet")
+    monkeypatch.setattr(html, "TUNING_DIR", tmp_path)
+    tuning = {
+        "engine": "beta-engine",
+        "target_r": 0.9465,
+        "rtol": 0.005,
+        "settings": {"stiffness": 1e6},
+        "met": False,
+        "worst_rel_error": 0.012,
+        "table": {"amplitude": [0.2, 0.5, 0.8], "r_engine": [0.95, 0.94, 0.935]},
+        "date": "2017-06-15",
+        "version": "9.9",
+    }
+    (tmp_path / "tuning-beta-engine.json").write_text(json.dumps(tuning))
+    text = html.render_report(out)
+    page = Page(text)
+    assert "not in this run" in text  # the requested reference "housner" is absent
+    row = page.row("verdict", "beta-engine")
+    assert row[2].startswith("1.000")
+    assert row[-1] == "FAIL"
+    assert page.row("verdict", "alpha-engine")[-1] == "reference"
+    # the tuning file is read: settings, verdict and the r(amplitude) figure
+    tuned = page.row("specimen", "beta-engine", table=-1)
+    assert tuned[1:5] == ["stiffness = 1000000.0", "0.9465", "1.20% (tolerance 0.50%)", "NOT MET"]
+    assert len(page.images["specimen"]) == 1
+
+
+def test_ensemble_spectra_get_the_prototype_motions(tmp_path, monkeypatch):
+    """motions.npz holds model-scale motions; the spectra figure is given them back at prototype scale."""
+    from reports import ground_figures
+
+    S = 10.0
+    model = [m.to_model_scale(S) for m in shaking(3)]
+    meta = {"source": "rdk", "S": S, "seed": 1, "record": {"name": "elcentro-peer1999", "dt": 0.01, "n": 4000}}
+    meta["rdk_params"] = {"Ia_m_s": 1.7, "D5_95_s": 24.1, "zeta_f": 0.125, "model": "Rezaeian & Der Kiureghian (2010)"}
+    scenario = {"motions": {"source": "rdk", "record": "elcentro"}}
+    out = make_run(tmp_path / "rdk", model, {"housner": {}}, motions_meta=meta, scenario=scenario)
+    seen = {}
+    real = ground_figures.plot_ensemble_spectra
+
+    def spy(record, motions, **kw):
+        seen.update(dt=[m.dt for m in motions], n=[m.n for m in motions], S=kw.get("S"), record=record.name)
+        return real(record, motions, **kw)
+
+    monkeypatch.setattr(ground_figures, "plot_ensemble_spectra", spy)
+    page = Page(html.render_report(out))
+    # time stretched back by sqrt(S) (seed eq. 9), samples untouched
+    assert seen["dt"] == pytest.approx([0.002] * 3, rel=1e-12)
+    assert seen["n"] == [m.n for m in model]
+    assert seen["S"] == S
+    assert seen["record"].startswith("elcentro")
+    assert len(page.images["ensemble"]) == 1
+    assert page.row("ensemble", "D", table=-1)[1:3] == ["24.1", "s"]
+    assert page.row("ensemble", "ζ", table=-1)[1:3] == ["0.125", "–"]
+
+
+def test_missing_run_directory_names_the_path(tmp_path):
+    with pytest.raises(DataFileError, match="results.parquet"):
+        html.render_report(tmp_path)
+    with pytest.raises(DataFileError, match="not a directory"):
+        html.render_report(tmp_path / "nowhere")
+
+
+def test_verdict_tolerances_are_those_of_the_assertions():
+    from reports.assertions import assert_cdf_agreement
+
+    params = inspect.signature(assert_cdf_agreement).parameters
+    assert html.DEFAULT_KS_MAX == params["ks_max"].default
+    assert html.DEFAULT_OVERTURN_TOL == params["overturn_tol"].default
+
+
+# ----------------------------------------------------------------------------
+# the page in a real browser
+SCRIPT = ROOT / "scripts" / "check_report_browser.py"
+
+
+@pytest.mark.browser
+@pytest.mark.skipif(not CHROMIUM.exists(), reason="needs Debian's chromium (apt-get install -y chromium)")
+def test_report_loads_in_chromium_without_console_errors(shaken, tmp_path):
+    _, path, _ = shaken
+    shot = tmp_path / "cdf.png"
+    res = subprocess.run(
+        [sys.executable, str(SCRIPT), str(path), "--screenshot", str(shot), "--section", "distribution"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "OK" in res.stdout
+    png = shot.read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    # the section photographed is at least as wide as the CDF figure (about 830 px at 110 dpi)
+    width = int.from_bytes(png[16:20], "big")
+    assert width >= 800
+
+
+@pytest.mark.browser
+@pytest.mark.skipif(not CHROMIUM.exists(), reason="needs Debian's chromium (apt-get install -y chromium)")
+def test_browser_check_fails_on_console_errors_and_broken_images(tmp_path):
+    bad = tmp_path / "bad.html"
+    bad.write_text(
+        "<!DOCTYPE html><html><head><title>bad</title></head><body>"
+        '<img src="missing.png" alt="missing figure">'
+        "<script>console.error('boom from the page')</script></body></html>"
+    )
+    res = subprocess.run([sys.executable, str(SCRIPT), str(bad)], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 1
+    assert "boom from the page" in res.stderr
+    assert "missing figure" in res.stderr  # the broken image is named by its alt text
+    res = subprocess.run(
+        [sys.executable, str(SCRIPT), str(tmp_path / "absent.html")], capture_output=True, text=True, timeout=60
+    )
+    assert res.returncode == 1
+    assert "page not found" in res.stderr
