@@ -60,13 +60,14 @@ ETH_SPECIMEN_PATH = Path(__file__).resolve().parent / "models" / "eth_specimen.x
 #: tuned defaults of :class:`engines.mujoco_engine.MujocoEngine` (see there for
 #: how they were found); ``strip_width`` and ``strip_height`` are geometry [m].
 MJCF_DEFAULTS: dict = {
-    "timestep": 2.5e-4,
-    "solref": (0.001, 1.0),
-    "solimp": (0.99, 0.999, 0.0001, 0.5, 2.0),
+    "timestep": 1.25e-4,
+    "solref": (2.5e-4, 1.0),
+    "solimp": (0.9, 0.95, 0.001, 0.5, 2.0),
     "friction": 1.5,
-    "cone": "elliptic",
-    "impratio": 1.0,
+    "cone": "pyramidal",
+    "impratio": 100.0,
     "noslip_iterations": 0,
+    "integrator": "Euler",
     "iterations": 50,
     "tolerance": 1e-10,
     "strip_width": 0.002,
@@ -74,6 +75,7 @@ MJCF_DEFAULTS: dict = {
 }
 
 _CONES = ("pyramidal", "elliptic")
+_INTEGRATORS = ("Euler", "implicitfast", "implicit", "RK4")
 
 
 def _num(x: float) -> str:
@@ -109,6 +111,9 @@ def _check_settings(specimen: Specimen, s: dict) -> dict:
         raise ValueError(f"`solref` must be two finite numbers (timeconst [s], dampratio [-]), got {out['solref']!r}")
     if solref[0] > 0 and not solref[1] > 0:
         raise ValueError(f"`solref` dampratio must be positive, got {out['solref']!r}")
+    if solref[0] <= 0 and solref[1] > 0:
+        # MuJoCo would warn "mixed solref format" and silently use its default
+        raise ValueError(f"`solref` must be (timeconst, dampratio) > 0 or (-stiffness, -damping) <= 0, got {solref!r}")
     out["solref"] = solref
     solimp = tuple(float(v) for v in out["solimp"])
     if len(solimp) != 5 or not all(math.isfinite(v) for v in solimp):
@@ -118,6 +123,8 @@ def _check_settings(specimen: Specimen, s: dict) -> dict:
     out["solimp"] = solimp
     if out["cone"] not in _CONES:
         raise ValueError(f"`cone` must be one of {_CONES}, got {out['cone']!r}")
+    if out["integrator"] not in _INTEGRATORS:
+        raise ValueError(f"`integrator` must be one of {_INTEGRATORS}, got {out['integrator']!r}")
     if out["strip_width"] >= specimen.B:
         raise ValueError(f"`strip_width` ({out['strip_width']} m) must be less than B = {specimen.B} m")
     return out
@@ -170,6 +177,7 @@ def mjcf_from_specimen(
     cone: str = MJCF_DEFAULTS["cone"],
     impratio: float = MJCF_DEFAULTS["impratio"],
     noslip_iterations: int = MJCF_DEFAULTS["noslip_iterations"],
+    integrator: str = MJCF_DEFAULTS["integrator"],
     iterations: int = MJCF_DEFAULTS["iterations"],
     tolerance: float = MJCF_DEFAULTS["tolerance"],
     strip_width: float = MJCF_DEFAULTS["strip_width"],
@@ -220,6 +228,7 @@ def mjcf_from_specimen(
             cone=cone,
             impratio=impratio,
             noslip_iterations=noslip_iterations,
+            integrator=integrator,
             iterations=iterations,
             tolerance=tolerance,
             strip_width=strip_width,
@@ -246,9 +255,13 @@ def mjcf_from_specimen(
   <!-- (1) g = housner.units.G = 9.80665 m/s^2 downward. (2) timestep: engine setting [s].
        (3) cone, impratio, noslip_iterations, iterations, tolerance: contact solver settings
        (engines.mujoco_engine.MujocoEngine documents the tuned values). -->
-  <option timestep="{_num(s["timestep"])}" gravity="0 0 {_num(-G)}" integrator="Euler" cone="{s["cone"]}"
+  <option timestep="{_num(s["timestep"])}" gravity="0 0 {_num(-G)}" integrator="{s["integrator"]}" cone="{s["cone"]}"
           impratio="{_num(s["impratio"])}" noslip_iterations="{s["noslip_iterations"]}"
-          iterations="{s["iterations"]}" tolerance="{_num(s["tolerance"])}"/>
+          iterations="{s["iterations"]}" tolerance="{_num(s["tolerance"])}">
+    <!-- (3a) Speed, same results: no constraint islands (one body), no mid-phase collision (two pairs),
+         no implicit joint damping (none to integrate); together about 15 % faster per step. -->
+    <flag island="disable" midphase="disable" eulerdamp="disable"/>
+  </option>
   <visual>
     <global offwidth="1280" offheight="720"/>
   </visual>
@@ -259,8 +272,9 @@ def mjcf_from_specimen(
   </asset>
   <worldbody>
     <light pos="0 -2 3" dir="0 0.6 -0.8" directional="true"/>
-    <!-- (4) Pivot line z = 0 on an infinite ground plane (size 0 = infinite). -->
-    <geom name="ground" type="plane" size="0 0 1" material="grid"/>
+    <!-- (4) Pivot line z = 0 on an infinite ground plane (size 0 = infinite), with the strips' friction
+         (MuJoCo takes the larger of the two geoms' coefficients). -->
+    <geom name="ground" type="plane" size="0 0 1" material="grid" friction="{_num(s["friction"])} 0 0"/>
     <camera name="side" pos="0 {_num(-6 * H)} {_num(H)}" xyaxes="1 0 0 0 0 1"/>
     <!-- (5) The body frame is the centre of mass, at height H = 2H / 2 = {_num(H)} m above the pivot line. -->
     <body name="block" pos="0 0 {_num(H)}">
@@ -278,9 +292,10 @@ def mjcf_from_specimen(
       <!-- (8) Visual block: half-sizes (B, depth/2, H) = ({_vec((B, D / 2, H))}) m; no contact, no mass. -->
       <geom name="body" type="box" size="{_vec((B, D / 2, H))}" contype="0" conaffinity="0" mass="0"
             rgba=".75 .78 .82 .6"/>
-      <!-- (9) Contact strips, {_num(w)} m wide and {_num(hs)} m tall, full depth; outer edges at x = +-B = +-{_num(B)} m,
-           so centres at x = +-(B - w/2) = +-{_num(strip_x)} m and z = -H + h/2 = {_num(strip_z)} m (bottom on the
-           pivot line). (10) friction mu = {_num(s["friction"])}; solref = (timeconst [s], dampratio [-]);
+      <!-- (9) Contact strips, {_num(w)} m wide and {_num(hs)} m tall, full depth; outer edges at
+           x = +-B = +-{_num(B)} m, so centres at x = +-(B - w/2) = +-{_num(strip_x)} m and
+           z = -H + h/2 = {_num(strip_z)} m (bottom on the pivot line).
+           (10) friction mu = {_num(s["friction"])}; solref = (timeconst [s], dampratio [-]);
            solimp = (dmin, dmax, width [m], midpoint, power): contact settings. -->
       <geom name="pivot_pos" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((strip_x, 0, strip_z))}"
             condim="3" friction="{_num(s["friction"])} 0 0" solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"

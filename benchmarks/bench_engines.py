@@ -1,0 +1,142 @@
+"""Speed of each registered engine on the seed's ground motions, against the analytic model in the same run.
+
+Run from the repository root::
+
+    python benchmarks/bench_engines.py                         # every engine, 10 motions, 1 process
+    python benchmarks/bench_engines.py --engines mujoco --n 100 --processes 2
+    python benchmarks/bench_engines.py --engines mujoco --settings '{"timestep": 2.5e-4, "solref": [5e-4, 1]}'
+
+Motions: the first ``--n`` of the ``elcentro`` scenario (Rezaeian & Der
+Kiureghian motions fitted to El Centro 1940 NS, seed 2017, at model scale,
+time compressed by sqrt(10)), built by ``scenarios.catalogue``; the seed
+specimen. Each engine runs once on a short record first (compilation, model
+building), then on all motions, whole-run timed: wall time, process CPU time
+(``--processes 1``) and simulated time. The baseline is the analytic Housner
+engine on the same motions in the same run; the table gives each engine's
+wall time as a multiple of it.
+
+Targets (issue): the 100-motion ensemble in < 20 s for MuJoCo and < 90 s for
+PyBullet on 2 cores. The last columns project the measured rates (wall, and
+process CPU) onto 100 such motions on ``--target-processes`` cores, assuming
+perfect scaling; run with ``--n 100 --processes 2`` to measure it directly.
+Timings on a shared machine are noisy; the CPU projection is less so.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from engines import ENGINES, get_engine  # noqa: E402
+from housner import GroundMotion, Specimen  # noqa: E402
+
+
+def seed_motions(n: int) -> list[GroundMotion]:
+    """The first ``n`` motions of the seed study (scenario ``elcentro``), at model scale."""
+    from scenarios.catalogue import load_scenario
+
+    motions, _ = load_scenario("elcentro").build_motions(n)
+    return motions
+
+
+def _run(name: str, settings: dict, specimen: Specimen, motions: list[GroundMotion]) -> tuple[float, int, int]:
+    """Simulate all motions with one engine; CPU seconds, overturns, impacts."""
+    eng = get_engine(name, **settings)
+    c0 = time.process_time()
+    many = getattr(eng, "simulate_many", None)
+    resps = many(specimen, motions) if many is not None else [eng.simulate(specimen, m) for m in motions]
+    return time.process_time() - c0, sum(r.overturned for r in resps), sum(r.n_impacts for r in resps)
+
+
+def time_engine(name: str, settings: dict, specimen: Specimen, motions: list[GroundMotion], processes: int) -> dict:
+    """Whole-run timing of one engine on ``motions`` (after a warm-up run)."""
+    warm = GroundMotion.free_vibration(0.5 * specimen.alpha, 0.5, dt=motions[0].dt)
+    get_engine(name, **settings).simulate(specimen, warm)
+    w0 = time.perf_counter()
+    if processes == 1:
+        cpu, n_over, n_imp = _run(name, settings, specimen, motions)
+    else:
+        chunks = [motions[i::processes] for i in range(processes)]
+        with ProcessPoolExecutor(processes) as pool:
+            # warm each worker, then time the whole ensemble
+            list(
+                pool.map(_run, [name] * processes, [settings] * processes, [specimen] * processes, [[warm]] * processes)
+            )
+            w0 = time.perf_counter()
+            parts = list(pool.map(_run, [name] * processes, [settings] * processes, [specimen] * processes, chunks))
+        cpu = sum(p[0] for p in parts)
+        n_over = sum(p[1] for p in parts)
+        n_imp = sum(p[2] for p in parts)
+    wall = time.perf_counter() - w0
+    sim = sum(m.duration for m in motions)
+    return {
+        "engine": name,
+        "settings": settings,
+        "motions": len(motions),
+        "processes": processes,
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "simulated_s": sim,
+        "wall_per_sim_s": wall / sim,
+        "overturned": n_over,
+        "impacts": n_imp,
+    }
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--engines", nargs="*", default=None, help="engine names (default: all registered)")
+    ap.add_argument("--n", type=int, default=10, help="number of motions (default 10)")
+    ap.add_argument("--processes", type=int, default=1, help="worker processes (default 1)")
+    ap.add_argument("--target-processes", type=int, default=2, help="cores of the projection (default 2)")
+    ap.add_argument("--settings", default="{}", help="JSON settings for the engines named (not the baseline)")
+    ap.add_argument("--json", default=None, help="write the rows as JSON here")
+    args = ap.parse_args(argv)
+    names = args.engines or sorted(ENGINES)
+    settings = json.loads(args.settings)
+    specimen = Specimen.bachmann2017()
+    motions = seed_motions(args.n)
+    print(
+        f"{len(motions)} motions of {motions[0].duration:.2f} s at dt = {motions[0].dt:.5g} s; "
+        f"{args.processes} process(es); specimen {specimen.name}"
+    )
+    rows = [time_engine("housner", {}, specimen, motions, args.processes)]
+    for name in names:
+        if name != "housner":
+            try:
+                rows.append(time_engine(name, settings, specimen, motions, args.processes))
+            except ImportError as e:
+                print(f"skipping {name}: {e}")
+    base = rows[0]["wall_s"]
+    target = args.target_processes
+    mean_dur = sum(m.duration for m in motions) / len(motions)
+    print(
+        f"{'engine':10s} {'wall s':>8s} {'CPU s':>8s} {'x housner':>10s} {'wall/sim s':>11s} {'CPU/sim s':>10s} "
+        f"{'overturned':>10s} {'impacts':>8s}   100 motions on {target} cores (from wall / from CPU)"
+    )
+    for r in rows:
+        # ideal scaling: one process's rate is processes x the measured wall rate
+        r["projected_100_motions_wall_s"] = r["wall_per_sim_s"] * r["processes"] * 100 * mean_dur / target
+        r["projected_100_motions_cpu_s"] = r["cpu_s"] / r["simulated_s"] * 100 * mean_dur / target
+        r["ratio_to_housner"] = r["wall_s"] / base if base > 0 else math.inf
+        print(
+            f"{r['engine']:10s} {r['wall_s']:8.2f} {r['cpu_s']:8.2f} {r['ratio_to_housner']:10.1f} "
+            f"{r['wall_per_sim_s']:11.4f} {r['cpu_s'] / r['simulated_s']:10.4f} {r['overturned']:10d} "
+            f"{r['impacts']:8d}   {r['projected_100_motions_wall_s']:8.1f} s / "
+            f"{r['projected_100_motions_cpu_s']:6.1f} s"
+        )
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as fh:
+            json.dump(rows, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,482 @@
+"""The rocking block in MuJoCo.
+
+The block is the planar model of :mod:`engines.mjcf`: one body with slide x,
+slide z and a hinge about y from the world, standing on two 2 mm contact strips
+whose outer edges are the pivots at x = +-B. The hinge angle is theta
+(theta > 0 leans toward +x, rocking on the +x pivot).
+
+Ground motion
+-------------
+The ground is fixed and the ground acceleration enters as the d'Alembert force
+-m ug''(t) on the centre of mass, along x (an actuator on the x slide, whose
+anchor is the centre of mass). This is exact: in the ground's frame the block
+sees gravity and the inertial force -m ug''. ug'' is linear between the
+motion's samples and is evaluated at the middle of each engine step, which
+makes the impulse of each step exact for the linear ug''.
+
+A kinematic ground (a mocap body moved along the record) does *not* transmit
+horizontal motion properly: a mocap body has no degrees of freedom, so the
+contact solver sees it at rest at every step while it is teleported between
+steps. Friction then acts on the block's absolute velocity instead of its
+velocity relative to the ground, and a moving infinite plane is geometrically
+the same plane, so the block does not follow the ground at all.
+``tests/test_mujoco.py`` demonstrates it.
+
+Sampling and speed
+------------------
+The engine step is ``timestep`` or shorter: it is shortened to motion.dt / n
+with n = ceil(motion.dt / timestep), so that the motion's samples fall on engine
+steps and the state is sampled there exactly (no interpolation). The whole
+record runs in C through :func:`mujoco.rollout.rollout` with one control value
+per step, in chunks of about half a second; the run stops at an overturn. At
+the default 0.125 ms step a record costs about 0.036 CPU s per simulated s
+(100 motions of 15 s: ~27 s on 2 cores); ``MujocoEngine(**MujocoEngine.FAST)``
+halves that at some cost in accuracy (class notes).
+
+Response
+--------
+theta_max, impacts and the overturn are taken from every engine step, not only
+from the samples. An impact is a sign change of theta after |theta| exceeded
+``ROCKING_EPS`` alpha (1e-3 alpha) since the previous one, so the micro-radian
+jitter of the compliant contact at rest is not counted; the analytic model
+counts every impact of a block coming to rest, so impact counts differ there.
+``overturned`` once |theta| reaches pi/2; theta is then held at +-pi/2.
+``uplift_time`` is the instant the heel strip leaves the ground before the
+block first rocks beyond 1e-3 alpha (5-10 ms after the rigid block's, since
+the compliant contact first tilts elastically). ``info`` holds the settings,
+the step used, the step count and the largest slip of the pivot while
+|theta| <= alpha (``max_pivot_slip_m``; ``max_pivot_slip_all_m`` includes a
+falling block). MuJoCo writes its own warnings to ``MUJOCO_LOG.TXT`` in the
+working directory; warnings that mean the simulation is unstable, and
+non-finite states, raise :class:`housner.EngineError` naming the motion.
+
+Contact settings and how they were tuned
+----------------------------------------
+MuJoCo's default contact (timestep 2 ms, solref (0.02, 1), elliptic cone,
+impratio 1) loses too much energy per impact (r 2 % low at 0.8 alpha, 7 % at
+0.2 alpha) and lets the block rock too far under a pulse. The defaults of
+:class:`MujocoEngine` come from ``python -m engines.tuning mujoco``
+(:func:`engines.tuning.tune` over :meth:`MujocoEngine.tuning_candidates`); the
+class notes give the measured errors and what each setting does.
+
+Limitations
+-----------
+* Each impact's energy ratio scatters with the phase of the impact within the
+  fixed engine step: std ~0.16 % of r at the default 0.125 ms step (within
+  -0.44 % .. +0.26 % of Housner's r from 0.2 to 0.9 alpha), ~0.35 % at
+  0.25 ms; the scatter scales with the step. The mean is within 0.1 %.
+* Very small rocking (below ~0.05 alpha) is affected by the contact's
+  compliance: a pulse that lifts the block by 0.005 alpha rocks it ~5 % too
+  far (4e-5 rad), one that lifts it by 0.04-0.05 alpha 1.4-2.9 % too far; at
+  rest under 0.9 g tan(alpha) the block tilts elastically by 6e-5 alpha. All
+  far below the 0.8 mrad (0.0053 alpha) resolution of the seed's measurements.
+* A falling block (|theta| well past alpha) slips on its pivot (cm), so the
+  overturn time is ~2 % later than the rigid block's.
+* No physical effects are realised yet (``effects_supported`` is empty).
+
+References
+----------
+Housner, G. W. (1963). The behavior of inverted pendulum structures during
+earthquakes. BSSA 53(2), 403-417.
+Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
+model. COMPDYN 2017, eqs. 2-4 and 8.
+MuJoCo documentation, "Computation" (soft contact model, solref/solimp) and
+"Python bindings" (rollout), https://mujoco.readthedocs.io
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from engines.base import Engine
+from engines.mjcf import initial_qpos, mjcf_from_specimen
+from housner.errors import EngineError, unknown_choice
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+
+__all__ = ["MujocoEngine", "initial_qvel"]
+
+#: A sign change of theta counts as an impact only if |theta| exceeded this
+#: fraction of alpha since the previous sign change (the compliant contact
+#: jitters at the micro-radian level at rest; 1e-3 alpha is 0.15 mrad for the
+#: seed specimen, below its 0.8 mrad measurement resolution).
+ROCKING_EPS = 1e-3
+
+#: Simulated time per rollout chunk [s]; the run stops at the end of the chunk
+#: in which the block overturns.
+_CHUNK_S = 0.5
+
+
+def initial_qvel(specimen: Specimen, theta0: float, theta_dot0: float) -> tuple[float, float, float]:
+    """Joint velocities (vx [m/s], vz [m/s], theta_dot [rad/s]) of a block rotating about its pivot.
+
+    The pivot is the +x one for theta0 > 0 (or theta0 = 0 and theta_dot0 > 0)
+    and the -x one otherwise; the centre of mass moves as omega x r with r the
+    vector from pivot to centre of mass: (vx, vz) = theta_dot0 (r_z, -r_x).
+    """
+    th, w = float(theta0), float(theta_dot0)
+    if w == 0.0:
+        return 0.0, 0.0, 0.0
+    s = math.copysign(1.0, th) if th != 0.0 else math.copysign(1.0, w)
+    B, H = specimen.B, specimen.H
+    # pivot -> centre of mass, upright (-s B, H), rotated by th about y: (x cos + z sin, -x sin + z cos)
+    rx = -s * B * math.cos(th) + H * math.sin(th)
+    rz = s * B * math.sin(th) + H * math.cos(th)
+    return w * rz, -w * rx, w
+
+
+class MujocoEngine(Engine):
+    """The planar rocking block in MuJoCo, driven by the d'Alembert force of the ground acceleration.
+
+    Parameters
+    ----------
+    timestep : float
+        Largest engine step [s]; the step used is motion.dt / ceil(motion.dt / timestep).
+    solref : (float, float)
+        Contact (timeconst [s], dampratio [-]) of the strips, or MuJoCo's direct
+        (-stiffness, -damping) when negative.
+    solimp : 5 floats
+        Contact impedance (dmin, dmax, width [m], midpoint, power).
+    friction : float
+        Friction coefficient mu of the strips [-]; well above any max |ug''|/g
+        of the records used (the seed's ground motions stay below 0.6 g).
+    cone : {"pyramidal", "elliptic"}
+        Friction cone.
+    impratio : float
+        Frictional-to-normal impedance ratio [-]; above 1 makes friction stiffer.
+    noslip_iterations : int
+        MuJoCo no-slip post-solver iterations (0 = off).
+    integrator : {"Euler", "implicitfast", "implicit", "RK4"}
+    iterations, tolerance : int, float
+        Constraint-solver iterations and tolerance.
+    strip_width, strip_height : float
+        Contact strip size [m] (the seed specimen's strips are 2 mm wide).
+
+    Notes
+    -----
+    Defaults (``DEFAULTS``) came from ``python -m engines.tuning mujoco``
+    (``housner tune mujoco``) on 2026-11-21 with MuJoCo 4.0.0, for the seed
+    specimen and Housner's r = 0.94652: the cheapest of 128 candidates whose
+    first-impact energy ratio is within 0.5 % of the target at
+    theta0/alpha = 0.20, 0.25, ..., 0.90 and whose first peak under the
+    tuner's two one-sine pulses is within 0.5 % of the analytic model's (2
+    candidates met both). Measured there: r worst error -0.44 % (at 0.2
+    alpha), mean -0.06 %; pulse first peaks +0.10 % and +0.40 %; cost about
+    0.032 CPU s per simulated s. What matters, and why:
+
+    * ``cone="pyramidal"`` with ``impratio=100``: with a pyramidal cone MuJoCo
+      regularises the contact as a whole more strongly as mu^2 / impratio
+      grows; at impratio 1 the block loses up to 4 % too much energy at small
+      amplitudes and rocks 3-10 % too far under a pulse, at impratio 10 still
+      1.7 % too far. The elliptic cone behaves like impratio 1 whatever its
+      impratio.
+    * ``timestep`` 0.125 ms: each impact's r scatters with where the impact
+      falls within the step, by about +-1 % at 0.25 ms (``FAST``) and +-0.45 %
+      at 0.125 ms.
+    * ``friction`` 1.5 is set on the ground too (MuJoCo takes the larger of
+      the two geoms' coefficients): far above the seed's ground motions
+      (< 0.6 g) and the impacts' demand; the pivots slip by micrometres.
+
+    The calibrated r = 0.9532 of the seed (Table 1) is out of reach: the
+    contact is plastic whatever its damping, and no candidate (including
+    dampratio 0.1 and direct stiffness with little damping) raised the ratio
+    above Housner's consistently; see ``engines/models/README.md``.
+
+    References
+    ----------
+    MuJoCo documentation, "Computation": soft contacts, solref and solimp.
+    Bachmann, J. A. et al. (2017). COMPDYN 2017, eq. 8 and Table 1.
+    """
+
+    name: ClassVar[str] = "mujoco"
+    effects_supported: ClassVar[frozenset[str]] = frozenset()
+
+    #: Tuned defaults (see the class notes for their provenance and measured errors).
+    DEFAULTS: ClassVar[dict] = {
+        "timestep": 1.25e-4,
+        "solref": (2.5e-4, 1.0),
+        "solimp": (0.9, 0.95, 0.001, 0.5, 2.0),
+        "friction": 1.5,
+        "cone": "pyramidal",
+        "impratio": 100.0,
+        "noslip_iterations": 0,
+        "integrator": "Euler",
+        "iterations": 50,
+        "tolerance": 1e-10,
+        "strip_width": 0.002,
+        "strip_height": 0.002,
+    }
+
+    #: Twice as fast, less accurate: the cheapest candidate of the same tuning
+    #: run at a 0.25 ms step. r within 0.72 % (mean -0.09 %) on the 15
+    #: amplitudes, pulses within 0.41 %, about 0.017 CPU s per simulated s.
+    #: Use ``MujocoEngine(**MujocoEngine.FAST)`` where speed matters more.
+    FAST: ClassVar[dict] = {"timestep": 2.5e-4, "solref": (5e-4, 1.0)}
+
+    def __init__(self, **settings: Any):
+        for key in settings:
+            if key not in self.DEFAULTS:
+                raise unknown_choice("MujocoEngine setting", key, self.DEFAULTS)
+        merged = {**self.DEFAULTS, **settings}
+        for key in ("solref", "solimp"):
+            merged[key] = tuple(float(v) for v in merged[key])
+        # validate now with the seed specimen's geometry (again per specimen when simulating)
+        mjcf_from_specimen(Specimen.bachmann2017(), **merged)
+        self._settings = merged
+        self._cache: dict = {}
+
+    # ------------------------------------------------------------------
+    def settings(self) -> dict:
+        """The engine's settings as plain data (tuples as lists)."""
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in self._settings.items()}
+
+    def version(self) -> str:
+        """The MuJoCo package version."""
+        import mujoco
+
+        return mujoco.__version__
+
+    def mjcf(self, specimen: Specimen) -> str:
+        """The MJCF text of ``specimen`` with this engine's settings."""
+        return mjcf_from_specimen(specimen, **self._settings)
+
+    def __getstate__(self) -> dict:  # compiled models stay in their process
+        return {"_settings": self._settings}
+
+    def __setstate__(self, state: dict) -> None:
+        self._settings = state["_settings"]
+        self._cache = {}
+
+    def _model(self, specimen: Specimen):
+        import mujoco
+
+        entry = self._cache.get(specimen)
+        if entry is None:
+            model = mujoco.MjModel.from_xml_string(self.mjcf(specimen))
+            entry = (model, mujoco.MjData(model))
+            self._cache[specimen] = entry
+        return entry
+
+    # ------------------------------------------------------------------
+    @classmethod
+    def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
+        """Settings to try when tuning the contact to an energy ratio, cheap to expensive.
+
+        Steps of 1, 0.5, 0.25 and 0.125 ms; for each, contact time constants of
+        2 and 4 steps (MuJoCo needs at least 2), MuJoCo's default impedance
+        (0.9, 0.95, 1 mm) and a stiff one (0.99, 0.999, 0.1 mm), pyramidal
+        and elliptic cones, and impratio 1, 10, 30 and 100 (with a pyramidal
+        cone MuJoCo softens the contact as mu^2 / impratio grows). The friction
+        coefficient stays at its default: it is chosen to prevent sliding, not
+        tuned. When the target lies above Housner's r, lightly damped contacts
+        are added (dampratio 0.1, and direct stiffness with little damping):
+        the only knobs that could give energy back at an impact.
+
+        Parameters
+        ----------
+        specimen : Specimen
+        target_r : float
+            Target kinetic-energy ratio at impact [-].
+
+        Returns
+        -------
+        list of dict
+            Keyword settings of :class:`MujocoEngine`.
+        """
+        soft = (0.9, 0.95, 0.001, 0.5, 2.0)
+        stiff = (0.99, 0.999, 0.0001, 0.5, 2.0)
+        above = target_r > specimen.r_housner * 1.001
+        out = []
+        for h in (1e-3, 5e-4, 2.5e-4, 1.25e-4):
+            for tc in (2 * h, 4 * h):
+                for dr in (1.0, 0.1) if above else (1.0,):
+                    for solimp in (soft, stiff):
+                        for cone in ("pyramidal", "elliptic"):
+                            for impratio in (1.0, 10.0, 30.0, 100.0):
+                                out.append(
+                                    dict(timestep=h, solref=(tc, dr), solimp=solimp, cone=cone, impratio=impratio)
+                                )
+            if above:
+                k = 1.0 / (2 * h) ** 2  # stiffness of timeconst 2h, dampratio 1 [1/s^2]
+                for b in (100.0, 300.0):
+                    out.append(dict(timestep=h, solref=(-k, -b), solimp=stiff, cone="pyramidal", impratio=100.0))
+        return out
+
+    # ------------------------------------------------------------------
+    def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
+        import mujoco
+        from mujoco import rollout
+
+        model, data = self._model(specimen)
+        n_sub = max(1, math.ceil(motion.dt / self._settings["timestep"] * (1.0 - 1e-12)))
+        h = motion.dt / n_sub
+        model.opt.timestep = h
+        nstep = (motion.n - 1) * n_sub
+
+        # d'Alembert force at the middle of each step, ug'' linear between samples
+        t_mid = (np.arange(nstep) + 0.5) * h
+        ctrl = (-specimen.mass * np.interp(t_mid, motion.t, motion.acc)).reshape(-1, 1)
+
+        mujoco.mj_resetData(model, data)
+        data.qpos[:] = initial_qpos(specimen, motion.theta0)
+        data.qvel[:] = initial_qvel(specimen, motion.theta0, motion.theta_dot0)
+        mujoco.mj_forward(model, data)
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        state = np.empty(mujoco.mj_stateSize(model, spec))
+        mujoco.mj_getState(model, data, state, spec)
+        i_q = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_TIME)
+        i_v = i_q + model.nq
+
+        # per-step histories, index 0 = initial state
+        x = np.empty(nstep + 1)
+        z = np.empty(nstep + 1)
+        th = np.empty(nstep + 1)
+        w = np.empty(nstep + 1)
+        x[0], z[0], th[0], w[0] = data.qpos[0], data.qpos[1], data.qpos[2], data.qvel[2]
+        chunk = max(1, round(_CHUNK_S / motion.dt)) * n_sub
+        warm = np.zeros(model.nv)
+        done = 0
+        overturn_step = None
+        while done < nstep:
+            k1 = min(nstep, done + chunk)
+            out, _ = rollout.rollout(model, data, state, ctrl[done:k1], initial_warmstart=warm)
+            out = out[0]
+            x[done + 1 : k1 + 1] = out[:, i_q]
+            z[done + 1 : k1 + 1] = out[:, i_q + 1]
+            th[done + 1 : k1 + 1] = out[:, i_q + 2]
+            w[done + 1 : k1 + 1] = out[:, i_v + 2]
+            if not np.all(np.isfinite(out[:, i_q : i_v + model.nv])):
+                bad = done + 1 + int(np.flatnonzero(~np.all(np.isfinite(out[:, i_q : i_v + model.nv]), axis=1))[0])
+                raise EngineError(
+                    f"MuJoCo diverged on motion {motion.name!r}: non-finite state at t = {bad * h:.6g} s "
+                    f"(settings {self.settings()})"
+                )
+            bad_warn = [
+                mujoco.mjtWarning(i).name
+                for i in range(len(data.warning))
+                if data.warning[i].number
+                and mujoco.mjtWarning(i)
+                not in (mujoco.mjtWarning.mjWARN_CONTACTFULL, mujoco.mjtWarning.mjWARN_CNSTRFULL)
+            ]
+            if bad_warn:
+                raise EngineError(
+                    f"MuJoCo diverged on motion {motion.name!r} before t = {k1 * h:.6g} s: warnings {bad_warn} "
+                    f"(settings {self.settings()})"
+                )
+            hit = np.flatnonzero(np.abs(th[done + 1 : k1 + 1]) >= math.pi / 2)
+            state = out[-1].copy()
+            warm = data.qacc_warmstart.copy()
+            if hit.size:
+                overturn_step = done + 1 + int(hit[0])
+                done = k1
+                break
+            done = k1
+        k = done + 1
+        return self._response(specimen, motion, x[:k], z[:k], th[:k], w[:k], h, n_sub, overturn_step)
+
+    def _response(self, specimen, motion, x, z, th, w, h, n_sub, overturn_step) -> Response:
+        """Assemble the Response from per-step histories (index 0 = initial state, step i at t = i h)."""
+        alpha = specimen.alpha
+        n = motion.n
+        if overturn_step is not None:
+            k = overturn_step
+            # time at which |theta| reached pi/2, linear between steps
+            a0, a1 = abs(th[k - 1]), abs(th[k])
+            frac = (math.pi / 2 - a0) / (a1 - a0) if a1 != a0 else 1.0
+            overturn_time = (k - 1 + min(max(frac, 0.0), 1.0)) * h
+            sign = math.copysign(1.0, th[k])
+            x, z, th, w = x[:k], z[:k], th[:k], w[:k]
+        else:
+            overturn_time = math.nan
+        t_steps = np.arange(th.size) * h
+
+        # samples on the motion's grid (held at +-pi/2 and at rest after an overturn)
+        theta = np.empty(n)
+        theta_dot = np.empty(n)
+        idx = np.arange(n) * n_sub
+        have = idx < th.size
+        theta[have] = th[idx[have]]
+        theta_dot[have] = w[idx[have]]
+        if overturn_step is not None:
+            after = motion.t >= overturn_time
+            theta[after] = sign * math.pi / 2
+            theta_dot[after] = 0.0
+
+        eps = ROCKING_EPS * alpha
+        impacts = _impact_times(t_steps, th, eps)
+        theta_max = math.pi / 2 if overturn_step is not None else float(np.max(np.abs(th)))
+        B, H, w_strip = specimen.B, specimen.H, self._settings["strip_width"]
+        # height of the lowest corner of the heel strip (the one that lifts): H + z + (B - w)|sin th| - H cos th
+        heel = H + z + (B - w_strip) * np.abs(np.sin(th)) - H * np.cos(th)
+        uplift_time = _uplift_time(t_steps, th, heel, eps, released=motion.theta0 != 0.0 or motion.theta_dot0 != 0.0)
+
+        # slip of the pivot the block stands on (outer bottom corner of its strip): x + s B cos th - H sin th - s B
+        s = np.where(th >= 0.0, 1.0, -1.0)
+        slip = np.abs(x + s * B * np.cos(th) - H * np.sin(th) - s * B)
+        rocking = np.abs(th) <= alpha
+        info = {
+            "settings": self.settings(),
+            "mujoco_version": self.version(),
+            "timestep_used_s": h,
+            "substeps_per_sample": n_sub,
+            "n_steps": int(th.size - 1),
+            "max_pivot_slip_m": float(np.max(slip[rocking])) if np.any(rocking) else math.nan,
+            "max_pivot_slip_all_m": float(np.max(slip)),
+        }
+        return Response(
+            t=motion.t.copy(),
+            theta=theta,
+            theta_dot=theta_dot,
+            impact_times=impacts,
+            theta_max=theta_max,
+            alpha=alpha,
+            overturned=overturn_step is not None,
+            overturn_time=overturn_time,
+            uplift_time=uplift_time,
+            engine=self.name,
+            info=info,
+        )
+
+
+def _uplift_time(t: np.ndarray, th: np.ndarray, heel: np.ndarray, eps: float, released: bool) -> float:
+    """First time [s] the block left rest: the heel strip's last lift-off before |theta| first exceeds ``eps``.
+
+    0 for a block released off its rest position; NaN if |theta| never exceeds ``eps`` [rad].
+    """
+    if released:
+        return 0.0
+    above = np.flatnonzero(np.abs(th) > eps)
+    if above.size == 0:
+        return math.nan
+    k = int(above[0])
+    down = np.flatnonzero(heel[: k + 1] <= 0.0)
+    if down.size == 0:
+        return float(t[0])
+    j = int(down[-1])  # last step with the heel on the ground; lift-off between j and j + 1
+    a, b = heel[j], heel[j + 1]
+    return float(t[j] + (t[j + 1] - t[j]) * (-a) / (b - a)) if b != a else float(t[j + 1])
+
+
+def _impact_times(t: np.ndarray, th: np.ndarray, eps: float) -> np.ndarray:
+    """Times [s] at which theta changes sign after |theta| exceeded ``eps`` [rad] on the departing side.
+
+    The crossing time is interpolated linearly between the two steps around it.
+    """
+    sgn = np.sign(th)
+    nz = np.flatnonzero(sgn != 0)
+    if nz.size < 2:
+        return np.empty(0)
+    s = sgn[nz]
+    change = np.flatnonzero(s[1:] != s[:-1])  # between nz[c] and nz[c+1]
+    if change.size == 0:
+        return np.empty(0)
+    starts = np.concatenate(([nz[0]], nz[change + 1]))
+    seg_max = np.maximum.reduceat(np.abs(th), starts)[:-1]  # |theta| max of the stretch ending at each change
+    keep = change[seg_max > eps]
+    i0, i1 = nz[keep], nz[keep + 1]
+    a, b = th[i0], th[i1]
+    return t[i0] + (t[i1] - t[i0]) * a / (a - b)
