@@ -1,0 +1,663 @@
+"""The rocking block in PyBullet (Bullet's Featherstone multibody with a sequential-impulse contact solver).
+
+Model. The block is the URDF of :func:`engines.urdf.urdf_from_specimen` (a
+massless x-slide, a massless z-slide and a hinge about +y through the centre of
+mass, two 2 mm contact strips whose outer edges are the pivots at x = +-B),
+written to a private temporary folder and loaded with ``loadURDF`` (the
+inertia from the file, not from the collision boxes). The ground is PyBullet's
+infinite plane z = 0, fixed in the world. The hinge angle is the suite's theta
+(theta > 0 leans toward +x, rocking on the +x pivot).
+
+Ground motion. The ground never moves: the block sees the d'Alembert force
+-m ug''(t) along x at its centre of mass. It is applied by tilting gravity to
+(-ug'', 0, -g) before each step: gravity acts at every link's centre of mass,
+which for the block is exactly the d'Alembert force (the carriages, 1e-6 kg,
+get theirs too, as they should). The value set before each step is the exact
+mean of the piecewise-linear ug'' over that step, so each step receives the
+exact impulse of the record. A kinematic ground (a plane moved by resetting
+its position each step, the "mocap" way) does not transmit horizontal motion
+properly: the contact solver sees the plane's position jump but no velocity,
+so friction cannot drag the block along and the block barely notices the
+shaking (``tests/test_pybullet.py`` shows it).
+
+Stepping. The engine step is ``motion.dt / k`` with k = ceil(motion.dt /
+timestep), so the motion's samples fall on step boundaries and the state is
+read exactly at the sample times (never interpolated). Every
+:meth:`PybulletEngine.simulate` call rebuilds the world in the engine's own
+``DIRECT`` client (``resetSimulation`` and ``loadURDF``, about 1 ms), so runs
+do not depend on what ran before: the same motion gives bit-identical results.
+
+Contact. By default the contact is rigid: Bullet's velocity-level contact
+constraint (restitution 0, friction 1.5, no allowed penetration), solved by
+sequential impulses. Only the strips' outer edges touch the ground (the URDF
+bevels the strips by 5 mrad), so the block stands on exactly its two pivots
+and rocks on one. Contact points are made only within 1 um of the ground
+(``contact_breaking_threshold``): with Bullet's default 2 cm the landing pivot
+is caught by a "speculative" contact a step early and the impact loses about
+0.5 % too much energy. The impact is then the solver's plastic impulse at the
+landing pivot, and the energy ratio scatters about Housner's
+r = (1 - 2 m R^2 / I0 sin^2 alpha)^2 by an amount that shrinks with the step:
+at the default 2e-4 s it is within 0.31 % of it at every release amplitude
+from 0.2 to 0.9 alpha (0.01 alpha grid; mean -0.05 %). A compliant contact
+(``contact_stiffness`` and ``contact_damping``, both set) can reach other r
+values in free rocking but distorts the forced response, see
+:meth:`PybulletEngine.tuning_candidates`.
+
+Speed. One ``setGravity`` and one ``stepSimulation`` call per step, the
+state read once per sample: about 8 us per step on one core, 0.04 CPU
+seconds per simulated second at the default step (El Centro ensemble of the
+seed paper: 100 motions of 15 s in about 60 CPU seconds).
+
+References
+----------
+Coumans, E. and Bai, Y. (2016-2021). PyBullet, a Python module for physics
+simulation for games, robotics and machine learning. https://pybullet.org
+(PyBullet Quickstart Guide: loadURDF, setPhysicsEngineParameter, changeDynamics).
+Featherstone, R. (2008). Rigid Body Dynamics Algorithms. Springer.
+Housner, G. W. (1963). The behavior of inverted pendulum structures during
+earthquakes. BSSA 53(2), 403-417.
+Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
+model. COMPDYN 2017, eqs. 2, 4 and 8.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+import time
+import weakref
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from engines.base import Engine
+from engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
+from housner.errors import EngineError
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+from housner.units import G
+
+__all__ = ["PybulletEngine", "ROCKING_TOL", "OVERTURN_ANGLE"]
+
+#: |theta| above ROCKING_TOL * alpha counts as rocking [-]. Below it the block is
+#: taken to be at rest: the rigid contact lets each pivot sink about 10 um into
+#: the ground, and when the load shifts to one pivot (ground acceleration near
+#: g tan alpha) the block tilts by up to about 2e-3 alpha without any uplift.
+#: 5e-3 alpha is 0.74 mrad for the seed specimen, just below the 0.8 mrad
+#: accuracy of the seed's camera (0.0053 alpha).
+ROCKING_TOL = 5e-3
+
+#: |theta| at which the block is "fallen" [rad]: it lies on its side (its
+#: collision strips are then the only thing below the pivot line, so the
+#: engine stops there and holds theta at +-pi/2).
+OVERTURN_ANGLE = math.pi / 2
+
+#: Fraction of the rocking threshold taken as "still at rest" when dating the
+#: uplift: 2e-3 * 5e-3 alpha = 1e-5 alpha, four times the largest tilt of the
+#: block at rest under load (the two pivots sink by different nanometres).
+_QUIET = 2e-3
+
+#: Sliding is measured while |theta| stays below this [rad]: past it a falling
+#: block's normal force fades and it slides, as a real one does.
+_SLIP_ANGLE = math.pi / 4
+
+#: The seed specimen's p [1/s]: tuning candidates are scaled from it.
+_P_SEED = 4.8883
+
+#: A centre of mass displaced farther than this [m] has run away (diverged, or
+#: slid off for want of friction): the engine stops with an EngineError.
+_RUNAWAY_M = 10.0
+
+_SETTING_DOCS = {
+    "timestep": "largest engine step [s]",
+    "solver_iterations": "sequential-impulse iterations per step [-]",
+    "lateral_friction": "Coulomb friction coefficient strip/ground [-]",
+    "restitution": "Newton restitution coefficient strip/ground [-]",
+    "restitution_velocity_threshold": "normal speed below which restitution is ignored [m/s]",
+    "contact_erp": "contact position-error reduction per step (rigid contact) [-]",
+    "friction_erp": "friction drift correction per step [-]",
+    "contact_slop": "penetration the solver leaves uncorrected [m]",
+    "contact_breaking_threshold": "distance within which contact points are kept and made [m]",
+    "cone_friction": "friction cone (True) or two-direction pyramid (False)",
+    "contact_stiffness": "compliant contact stiffness [N/m] (None: rigid)",
+    "contact_damping": "compliant contact damping [N s/m] (None: rigid)",
+    "strip_width": "width of each contact strip [m]",
+    "bevel": "bevel of the strips' bottom faces [rad]",
+}
+
+
+class PybulletEngine(Engine):
+    """PyBullet's rigid block on a rigid plane, driven by the d'Alembert force.
+
+    Parameters
+    ----------
+    timestep : float
+        Largest engine step [s]; the step used is ``motion.dt / k`` with the
+        smallest integer k that makes it at most ``timestep``.
+    solver_iterations : int
+        Sequential-impulse iterations per step [-] (``numSolverIterations``).
+    lateral_friction : float
+        Friction coefficient between the strips and the ground [-]. It must
+        exceed max |ug''| / g with a margin for the impacts, which need about
+        0.1 for the seed specimen; sliding is reported in
+        ``Response.info["max_pivot_slip_m"]``.
+    restitution : float
+        Newton coefficient of restitution at the strips [-]; 0 is Housner's
+        plastic impact.
+    restitution_velocity_threshold : float
+        Normal approach speed below which restitution is ignored [m/s].
+    contact_erp : float
+        Fraction of the contact penetration corrected per step (rigid
+        contact) [-] (``contactERP``).
+    friction_erp : float
+        Fraction of the friction drift corrected per step [-] (``frictionERP``).
+    contact_slop : float
+        Penetration the solver leaves uncorrected [m] (``contactSlop``).
+    contact_breaking_threshold : float
+        Distance within which contact points are made and kept [m]
+        (``contactBreakingThreshold``; Bullet keeps it in a process-wide
+        global, so the engine sets it before every run).
+    cone_friction : bool
+        Coulomb friction cone (True) or a pyramid of two independent
+        directions (False) (``enableConeFriction``).
+    contact_stiffness, contact_damping : float or None
+        A compliant contact, stiffness [N/m] and damping [N s/m]; give both or
+        neither. None: rigid contact.
+    strip_width : float
+        Width of each contact strip [m] (their outer edges stay at +-B).
+    bevel : float
+        Rotation of each strip about its outer bottom edge [rad]: the inner
+        edge stands ``strip_width * sin(bevel)`` above the ground, so only the
+        outer edges touch (see :func:`engines.urdf.urdf_from_specimen`).
+
+    Notes
+    -----
+    The defaults come from the contact tuner (:mod:`engines.tuning`) run on
+    2026-11-21 for the seed specimen and Housner's r: see :attr:`DEFAULTS` for
+    the measured errors. Each instance owns one PyBullet ``DIRECT`` client
+    (opened on first use and reused by every :meth:`simulate` call, which
+    resets the world in it); a pickled engine carries only its settings.
+
+    Examples
+    --------
+    >>> from housner import GroundMotion, Specimen
+    >>> from engines.pybullet_engine import PybulletEngine
+    >>> spec = Specimen.bachmann2017()
+    >>> res = PybulletEngine().simulate(spec, GroundMotion.free_vibration(0.5 * spec.alpha, 1.0))
+    >>> res.n_impacts >= 2
+    True
+    """
+
+    name = "pybullet"
+    effects_supported = frozenset()
+
+    #: Default settings: the choice of ``python -m engines.tuning pybullet``
+    #: (engines.tuning.tune) on 2026-11-21 for Specimen.bachmann2017() and
+    #: r_housner = 0.94652, pybullet 3.2.7: first-impact r within 0.29 % of
+    #: Housner's at the tuner's 15 amplitudes 0.2 ... 0.9 alpha (mean -0.05 %),
+    #: first peaks of its two one-sine pulses within 0.02 % of the analytic
+    #: model, 0.043 CPU s per simulated s. On a 0.01 alpha grid the worst r
+    #: error is 0.31 %. Settings other than the step were fixed beforehand
+    #: (see the module docstring): contact_breaking_threshold = 1e-6 m and
+    #: contact_slop = 0 remove a -0.2 % bias of r; solver_iterations above
+    #: 10 change nothing measurable here and cost up to 2x.
+    DEFAULTS: dict = {
+        "timestep": 2.0e-4,
+        "solver_iterations": 10,
+        "lateral_friction": 1.5,
+        "restitution": 0.0,
+        "restitution_velocity_threshold": 0.0,
+        "contact_erp": 0.2,
+        "friction_erp": 0.2,
+        "contact_slop": 0.0,
+        "contact_breaking_threshold": 1e-6,
+        "cone_friction": True,
+        "contact_stiffness": None,
+        "contact_damping": None,
+        "strip_width": URDF_DEFAULTS["strip_width"],
+        "bevel": URDF_DEFAULTS["bevel"],
+    }
+
+    def __init__(self, **settings: Any):
+        unknown = sorted(set(settings) - set(self.DEFAULTS))
+        if unknown:
+            from housner.errors import unknown_choice
+
+            raise unknown_choice("PyBullet setting", unknown[0], self.DEFAULTS)
+        s = dict(self.DEFAULTS)
+        s.update(settings)
+        self._settings = _validated(s)
+        self._client: int | None = None
+        self._finalizer: weakref.finalize | None = None
+        self._urdf: dict[tuple, Path] = {}
+
+    # ------------------------------------------------------------------
+    def settings(self) -> dict:
+        """The engine's settings (see the class docstring for units)."""
+        return dict(self._settings)
+
+    def version(self) -> str:
+        """The installed pybullet package's version."""
+        from importlib.metadata import version
+
+        return version("pybullet")
+
+    def __getstate__(self) -> dict:
+        return {"settings": dict(self._settings)}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(**state["settings"])
+
+    def close(self) -> None:
+        """Disconnect the PyBullet client and delete the temporary URDF files (reopened on next use)."""
+        if self._finalizer is not None:
+            self._finalizer()
+        self._client = None
+        self._finalizer = None
+        self._urdf = {}
+
+    # ------------------------------------------------------------------
+    @classmethod
+    def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
+        """Settings to try when tuning the contact to reach ``target_r``, cheap to expensive.
+
+        Parameters
+        ----------
+        specimen : Specimen
+        target_r : float
+            Kinetic-energy ratio at impact to reach [-].
+
+        Returns
+        -------
+        list of dict
+            Keyword settings for :class:`PybulletEngine`.
+
+        Notes
+        -----
+        Steps are given for the seed specimen (p = 4.8883 1/s) and scaled by
+        p_seed / p, so a geometrically similar block S times larger gets
+        sqrt(S) times longer steps (the same steps per rocking time).
+
+        1. Rigid contact with shrinking steps from 2e-4 s (the step decides
+           how close the impact's energy loss comes to Housner's, from below
+           or above depending on where in a step the impact falls). Longer
+           steps (5e-4 s, 3.4e-4 s, 2.5e-4 s) also keep r within 0.5 % of
+           Housner's at the tuner's amplitudes, but the free flight between
+           impacts (Bullet integrates with semi-implicit Euler, first order)
+           then costs accuracy under shaking: the median theta_max error on
+           one-sine pulses is 0.69 %, 0.47 % and 0.35 % against 0.26 % at
+           2e-4 s, so they are not offered.
+        2. When ``target_r`` is more than 0.25 % away from Housner's r, a
+           compliant contact: stiffness k = m omega_c^2 (per strip edge)
+           with omega_c = 461 p and 798 p (2e7 and 6e7 N/m for the seed
+           specimen), damping d = 2 zeta sqrt(k m) for a range of zeta, and a
+           step of 0.08 / omega_c; softer contacts (146 p, 2e6 N/m) for
+           targets below Housner's. A stiff, lightly damped contact keeps
+           more energy than Housner's plastic impact, a softer or more damped
+           one less. But a compliant contact also lets the block tilt on it
+           before uplift, which the tuner's pulse check catches: for the seed
+           specimen the contacts that reach the calibrated r = 0.9532 in free
+           rocking overshoot the analytic first peak under a one-sine pulse
+           by about 2 %. The rigid contact has no knob for r: a restitution
+           above 0 makes the landing pivot bounce and chatter, which leaves r
+           nearly unchanged for small values and erratic for large ones.
+        """
+        try:
+            target = float(target_r)
+        except (TypeError, ValueError):
+            raise ValueError(f"`target_r` must be a number, got {target_r!r}") from None
+        if not (math.isfinite(target) and 0.0 < target <= 1.0):
+            raise ValueError(f"`target_r` must lie in (0, 1], got {target_r!r}")
+        scale = _P_SEED / specimen.p
+        out: list[dict] = [{"timestep": _sig(h * scale)} for h in (2e-4, 1.5e-4, 1e-4, 7e-5, 5e-5)]
+        if abs(target / specimen.r_housner - 1.0) > 0.0025:
+            m = specimen.mass
+            zetas = (0.005, 0.01, 0.02, 0.05) if target > specimen.r_housner else (0.3, 0.5, 1.0)
+            ratios = (461.0, 798.0) if target > specimen.r_housner else (146.0, 461.0)
+            for ratio in ratios:
+                omega_c = ratio * specimen.p
+                k = m * omega_c**2
+                for zeta in zetas:
+                    out.append(
+                        {
+                            "timestep": _sig(0.08 / omega_c),
+                            "contact_stiffness": _sig(k),
+                            "contact_damping": _sig(2.0 * zeta * math.sqrt(k * m)),
+                        }
+                    )
+        return out
+
+    # ------------------------------------------------------------------
+    def _connect(self) -> int:
+        if self._client is None:
+            import pybullet as pb
+
+            cid = pb.connect(pb.DIRECT)
+            if cid < 0:
+                raise EngineError("cannot open a PyBullet DIRECT client")
+            tmp = Path(tempfile.mkdtemp(prefix="housner-urdf-"))
+            self._client = cid
+            self._tmp = tmp
+            self._finalizer = weakref.finalize(self, _close_client, cid, str(tmp))
+            self._urdf = {}
+        return self._client
+
+    def _urdf_path(self, specimen: Specimen) -> Path:
+        key = (specimen.height, specimen.width, specimen.depth, specimen.mass, specimen.inertia)
+        path = self._urdf.get(key)
+        if path is None:
+            path = write_urdf(
+                specimen,
+                self._tmp / f"block{len(self._urdf)}.urdf",
+                strip_width=self.strip_width,
+                bevel=self._settings["bevel"],
+            )
+            self._urdf[key] = path
+        return path
+
+    @property
+    def strip_width(self) -> float:
+        """Width of each contact strip [m]."""
+        return self._settings["strip_width"]
+
+    def build(self, specimen: Specimen, step: float) -> tuple[int, int]:
+        """Reset the client's world to the specimen standing on the plane.
+
+        Parameters
+        ----------
+        specimen : Specimen
+        step : float
+            Engine step [s].
+
+        Returns
+        -------
+        (client, body) : tuple of int
+            PyBullet client id and the block's body id (joints 0, 1, 2 are x,
+            z, theta).
+        """
+        import pybullet as pb
+
+        cid = self._connect()
+        s = self._settings
+        pb.resetSimulation(physicsClientId=cid)
+        params = {
+            "fixedTimeStep": step,
+            "numSubSteps": 0,
+            "numSolverIterations": s["solver_iterations"],
+            "contactERP": s["contact_erp"],
+            "frictionERP": s["friction_erp"],
+            "restitutionVelocityThreshold": s["restitution_velocity_threshold"],
+            "contactSlop": s["contact_slop"],
+            "enableConeFriction": int(s["cone_friction"]),
+            # A process-wide global in Bullet (gContactBreakingThreshold): set it on every build.
+            "contactBreakingThreshold": s["contact_breaking_threshold"],
+            "deterministicOverlappingPairs": 1,
+        }
+        pb.setPhysicsEngineParameter(physicsClientId=cid, **params)
+        pb.setGravity(0.0, 0.0, -G, physicsClientId=cid)
+        plane = pb.createMultiBody(
+            0.0, pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=cid), physicsClientId=cid
+        )
+        body = pb.loadURDF(
+            str(self._urdf_path(specimen)),
+            useFixedBase=True,
+            flags=pb.URDF_USE_INERTIA_FROM_FILE,
+            physicsClientId=cid,
+        )
+        if [pb.getJointInfo(body, j, physicsClientId=cid)[1].decode() for j in range(3)] != list(JOINTS):
+            raise EngineError("the generated URDF's joints are not (x, z, theta)")
+        # PyBullet motorises every joint by default; a zero-force motor frees it.
+        pb.setJointMotorControlArray(body, [0, 1, 2], pb.VELOCITY_CONTROL, forces=[0.0] * 3, physicsClientId=cid)
+        # Combined coefficients are products (Bullet): the plane carries 1 so the block's values are the contact's.
+        pb.changeDynamics(plane, -1, lateralFriction=1.0, restitution=1.0, physicsClientId=cid)
+        for link in (-1, 0, 1, 2):
+            pb.changeDynamics(body, link, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0, physicsClientId=cid)
+        contact = {
+            "lateralFriction": s["lateral_friction"],
+            "restitution": s["restitution"],
+            "rollingFriction": 0.0,
+            "spinningFriction": 0.0,
+        }
+        if s["contact_stiffness"] is not None:
+            contact["contactStiffness"] = s["contact_stiffness"]
+            contact["contactDamping"] = s["contact_damping"]
+        pb.changeDynamics(body, 2, physicsClientId=cid, **contact)
+        # Bullet puts resting bodies to sleep, and a gravity change does not wake them.
+        pb.changeDynamics(body, -1, activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, physicsClientId=cid)
+        return cid, body
+
+    # ------------------------------------------------------------------
+    def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
+        import pybullet as pb
+
+        wall0 = time.perf_counter()
+        H, B, alpha = specimen.H, specimen.B, specimen.alpha
+        k = max(1, math.ceil(motion.dt / self._settings["timestep"] * (1.0 - 1e-12)))
+        h = motion.dt / k
+        cid, body = self.build(specimen, h)
+
+        # Release state: rotated by theta0 about the pivot on its side, touching the ground.
+        th0, om0 = motion.theta0, motion.theta_dot0
+        s0 = math.copysign(1.0, th0) if th0 != 0.0 else (math.copysign(1.0, om0) if om0 != 0.0 else 0.0)
+        xc, zc, dxc, dzc = _com_state(H, s0 * B, th0, om0)
+        pb.resetJointState(body, 0, xc, dxc, physicsClientId=cid)
+        pb.resetJointState(body, 1, zc - H, dzc, physicsClientId=cid)
+        pb.resetJointState(body, 2, th0, om0, physicsClientId=cid)
+
+        # Gravity x component before each step: minus the exact mean of the linear ug'' over the step.
+        acc = motion.acc
+        frac = (np.arange(k) + 0.5) / k
+        gx = -(acc[:-1, None] + np.diff(acc)[:, None] * frac[None, :])
+        gx_rows = gx.tolist()
+
+        n = motion.n
+        states = np.empty((n, 6))
+        states[0] = (xc, zc - H, th0, dxc, dzc, om0)
+        set_gravity, step, get_states = pb.setGravity, pb.stepSimulation, pb.getJointStates
+        joints = (0, 1, 2)
+        g = -G
+        last = n - 1
+        overturned = False
+        for i in range(1, n):
+            for gxi in gx_rows[i - 1]:
+                set_gravity(gxi, 0.0, g, physicsClientId=cid)
+                step(physicsClientId=cid)
+            (q0, v0, *_), (q1, v1, *_), (q2, v2, *_) = get_states(body, joints, physicsClientId=cid)
+            states[i] = (q0, q1, q2, v0, v1, v2)
+            if not (abs(q0) < _RUNAWAY_M and abs(q1) < _RUNAWAY_M and math.isfinite(q2) and math.isfinite(v2)):
+                raise EngineError(
+                    f"PyBullet failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not "
+                    f"finite or ran away (x = {q0:.6g} m, z = {q1:.6g} m, theta = {q2:.6g} rad; limit "
+                    f"{_RUNAWAY_M:g} m); a block that slides needs more `lateral_friction`, one that diverges "
+                    f"a smaller `timestep`"
+                )
+            if abs(q2) >= OVERTURN_ANGLE:
+                overturned = True
+                last = i
+                break
+
+        t = motion.t
+        theta = states[:, 2].copy()
+        theta_dot = states[:, 5].copy()
+        overturn_time = math.nan
+        if overturned:
+            a, b = abs(theta[last - 1]), abs(theta[last])
+            frac_ot = (OVERTURN_ANGLE - a) / (b - a) if b > a else 1.0
+            overturn_time = float(t[last - 1] + min(max(frac_ot, 0.0), 1.0) * motion.dt)
+            sign = math.copysign(1.0, theta[last])
+            theta[last:] = sign * OVERTURN_ANGLE
+            theta_dot[last:] = 0.0
+            states[last + 1 :] = states[last]
+        # Sliding: the x drift of the pivot carrying the block, while |theta| < pi/4 (a falling block slides).
+        upright = np.abs(states[: last + 1, 2]) < _SLIP_ANGLE
+        x_com, th = states[: last + 1, 0][upright], states[: last + 1, 2][upright]
+        sgn = np.sign(th)
+        slip = x_com + sgn * B * np.cos(th) - H * np.sin(th) - sgn * B
+        impacts, uplift = _events(t[: last + 1], theta[: last + 1], ROCKING_TOL * alpha, th0 != 0.0 or om0 != 0.0)
+        theta_max = OVERTURN_ANGLE if overturned else float(np.max(np.abs(theta)))
+        n_steps = (last) * k
+        info = {
+            "settings": self.settings(),
+            "version": self.version(),
+            "step": h,
+            "steps_per_sample": k,
+            "n_steps": n_steps,
+            "max_pivot_slip_m": float(np.max(np.abs(slip), initial=0.0)),
+            "max_penetration_m": float(max(0.0, -np.min(_pivot_z(states[: last + 1], H, B)))),
+            "wall_time_s": time.perf_counter() - wall0,
+        }
+        return Response(
+            t=t,
+            theta=theta,
+            theta_dot=theta_dot,
+            impact_times=impacts,
+            theta_max=theta_max,
+            alpha=alpha,
+            overturned=overturned,
+            overturn_time=overturn_time,
+            uplift_time=uplift,
+            engine=self.name,
+            info=info,
+        )
+
+
+# ----------------------------------------------------------------------
+def _validated(s: dict) -> dict:
+    """Check and normalise the settings (messages name the setting)."""
+    out = dict(s)
+
+    def number(key: str, lo: float, hi: float, lo_open: bool = False) -> float:
+        v = out[key]
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise ValueError(f"`{key}` ({_SETTING_DOCS[key]}) must be a number, got {v!r}") from None
+        if not math.isfinite(x) or x < lo or x > hi or (lo_open and x == lo):
+            rng = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]"
+            raise ValueError(f"`{key}` ({_SETTING_DOCS[key]}) must lie in {rng}, got {v!r}")
+        return x
+
+    out["timestep"] = number("timestep", 0.0, 0.01, lo_open=True)
+    it = out["solver_iterations"]
+    if isinstance(it, bool) or not isinstance(it, (int, np.integer)) or it < 1:
+        raise ValueError(f"`solver_iterations` must be a positive integer, got {it!r}")
+    out["solver_iterations"] = int(it)
+    out["lateral_friction"] = number("lateral_friction", 0.0, 10.0)
+    out["restitution"] = number("restitution", 0.0, 1.0)
+    out["restitution_velocity_threshold"] = number("restitution_velocity_threshold", 0.0, 10.0)
+    out["contact_erp"] = number("contact_erp", 0.0, 1.0)
+    out["friction_erp"] = number("friction_erp", 0.0, 1.0)
+    out["contact_slop"] = number("contact_slop", 0.0, 0.01)
+    out["contact_breaking_threshold"] = number("contact_breaking_threshold", 0.0, 0.1, lo_open=True)
+    if not isinstance(out["cone_friction"], (bool, np.bool_)):
+        raise ValueError(f"`cone_friction` must be True or False, got {out['cone_friction']!r}")
+    out["cone_friction"] = bool(out["cone_friction"])
+    out["bevel"] = number("bevel", 0.0, 0.1)
+    out["strip_width"] = number("strip_width", 0.0, 1.0, lo_open=True)
+    ks, kd = out["contact_stiffness"], out["contact_damping"]
+    if (ks is None) != (kd is None):
+        raise ValueError("`contact_stiffness` and `contact_damping` must be given together (or both None: rigid)")
+    if ks is not None:
+        out["contact_stiffness"] = number("contact_stiffness", 0.0, 1e12, lo_open=True)
+        out["contact_damping"] = number("contact_damping", 0.0, 1e9)
+    return out
+
+
+def _sig(x: float, digits: int = 3) -> float:
+    """``x`` rounded to ``digits`` significant digits (tidy settings in tables)."""
+    return float(f"{x:.{digits - 1}e}")
+
+
+def _close_client(cid: int, tmp: str) -> None:
+    try:
+        import pybullet as pb
+
+        if pb.isConnected(physicsClientId=cid):
+            pb.disconnect(physicsClientId=cid)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _com_state(H: float, pivot_x: float, theta: float, omega: float) -> tuple[float, float, float, float]:
+    """Centre of mass (x, z) [m] and velocity [m/s] of the block rotated by ``theta`` about the pivot (pivot_x, 0).
+
+    With Rot(theta) the rotation about +y, (x, z) -> (x cos + z sin, -x sin + z cos),
+    the centre of mass is pivot + Rot(theta) (-pivot_x, H).
+    """
+    c, s = math.cos(theta), math.sin(theta)
+    rx, rz = -pivot_x, H
+    x = pivot_x + rx * c + rz * s
+    z = -rx * s + rz * c
+    dx = (-rx * s + rz * c) * omega
+    dz = (-rx * c - rz * s) * omega
+    return x, z, dx, dz
+
+
+def _pivot_z(states: np.ndarray, H: float, B: float) -> np.ndarray:
+    """Height of the lower pivot edge [m] from the states (x, z - H, theta, ...); negative = penetration."""
+    z = states[:, 1] + H
+    th = states[:, 2]
+    return z - H * np.cos(th) - B * np.abs(np.sin(th))
+
+
+def _events(t: np.ndarray, theta: np.ndarray, tol: float, released: bool) -> tuple[np.ndarray, float]:
+    """Impact times [s] (theta changes sign while rocking) and the uplift time [s].
+
+    A sign change counts as an impact only if |theta| exceeded ``tol`` [rad]
+    since the previous impact (or the uplift): the block resting on both
+    pivots tilts by far less than that without rocking. The uplift time is the
+    first sample for a release from a tilted or moving state; otherwise see
+    :func:`_uplift_time`.
+    """
+    big = np.abs(theta) > tol
+    if not big.any():
+        return np.empty(0), math.nan
+    first = int(np.argmax(big))
+    if released:
+        uplift = float(t[0])
+    else:
+        uplift = _uplift_time(t, np.abs(theta), first, tol * _QUIET)
+    sign_change = np.flatnonzero(np.signbit(theta[:-1]) != np.signbit(theta[1:]))
+    if sign_change.size == 0:
+        return np.empty(0), uplift
+    # largest |theta| of each stretch between sign changes (sample j belongs to the stretch it ends)
+    swing = np.maximum.reduceat(np.abs(theta[: sign_change[-1] + 1]), np.r_[0, sign_change[:-1] + 1])
+    impacts = []
+    since = 0.0  # largest |theta| since the last impact
+    for j, peak in zip(sign_change, swing, strict=True):
+        since = max(since, peak)
+        if since > tol:
+            a, b = theta[j], theta[j + 1]
+            impacts.append(t[j] + a / (a - b) * (t[j + 1] - t[j]))
+            since = 0.0
+    return np.asarray(impacts, dtype=float), uplift
+
+
+def _uplift_time(t: np.ndarray, abs_theta: np.ndarray, first: int, quiet: float) -> float:
+    """When the block left its rest position [s], from the climb of |theta| that first passed the rocking threshold.
+
+    Walking back from sample ``first`` (the first above the threshold) while
+    |theta| falls and stays above ``quiet`` [rad] finds the start of the
+    climb. Just after uplift theta grows like (t - t_u)^3 (the ground
+    acceleration crosses g tan(alpha) with a finite slope), so the times t1
+    and t2 at which the climb passes ``quiet`` and ``8 quiet`` (linear
+    interpolation between samples) give t_u = 2 t1 - t2. Against the analytic
+    model's exact uplift instants this is within about 1 ms on one-sine pulses,
+    where the first sample above ``quiet`` alone is 3-6 ms late.
+    """
+    j = first
+    while j > 0 and quiet < abs_theta[j - 1] < abs_theta[j]:
+        j -= 1
+    if j == 0 or abs_theta[j] <= quiet:
+        return float(t[j])
+
+    def crossing(level: float) -> float:
+        k = j + int(np.argmax(abs_theta[j : first + 1] > level))
+        a, b = abs_theta[k - 1], abs_theta[k]
+        return float(t[k - 1] + (level - a) / (b - a) * (t[k] - t[k - 1])) if b > a else float(t[k])
+
+    t1, t2 = crossing(quiet), crossing(8.0 * quiet)
+    return max(float(t[j - 1]) - (t2 - t1), min(t1, 2.0 * t1 - t2), float(t[0]))

@@ -1,0 +1,292 @@
+"""The rocking specimen as a URDF robot (for PyBullet), generated from a :class:`housner.Specimen`.
+
+URDF has no planar joint, so the block hangs from the world through a chain of
+two massless carriages (world frame: x horizontal in the plane of rocking, y out
+of plane, z up; the pivot line is z = 0)::
+
+    world --x (prismatic along +x, anchor at z = H)--> carriage_x
+          --z (prismatic along +z)------------------> carriage_z
+          --theta (continuous, about +y)------------> block
+
+* ``world``: the fixed base (load with ``useFixedBase=True``); it carries no
+  geometry. The ground is a separate body (PyBullet's infinite plane).
+* ``carriage_x``, ``carriage_z``: dummy links with a tiny mass and inertia
+  (Featherstone's algorithm needs every link to have some). They move with the
+  block's centre of mass, so they add ``2 * carriage_mass`` to the translating
+  mass and ``carriage_mass * R^2``-sized terms to the rocking inertia: with the
+  default 1e-6 kg that is a relative 1e-6 of m and 1e-7 of I0, far below
+  anything measurable (``tests/test_pybullet.py`` checks I0 from PyBullet's own
+  mass matrix).
+* ``block``: its frame is the centre of mass, (0, 0, H) when the joints are at
+  zero; so the ``x`` and ``z`` joint values are the centre of mass's
+  displacement and the ``theta`` joint value is the block's rotation. A
+  positive rotation about +y moves the top toward +x, which is the suite's
+  theta (theta > 0 leans toward +x, rocking on the +x pivot).
+
+How each number follows from the specimen (m = ``specimen.mass``, 2H =
+``specimen.height``, 2B = ``specimen.width``, D = ``specimen.depth``):
+
+1. Mass: ``m``, at the block's frame origin (the centre of mass).
+2. Inertia about the centre of mass: ``I_c = I0 - m R^2``
+   (``specimen.centroidal_inertia``) about the y axis, so that the inertia
+   about either pivot is ``I_c + m R^2 = I0`` and p = sqrt(m g R / I0) is the
+   specimen's (4.8883 1/s for the seed specimen; a solid block would give
+   5.39 1/s). Only ``iyy`` enters the planar dynamics; ``ixx`` and ``izz`` are
+   set to the same value (the joints forbid those rotations).
+3. Contact strips: two boxes ``strip_width`` wide (x), D deep (y) and
+   ``strip_height`` tall (z) whose OUTER bottom edges are the pivots, at
+   x = +B and x = -B on the pivot line z = -H of the block frame, so the block
+   rocks about pivots 2B apart (75 mm for the seed specimen, whose wedges have
+   two 2 mm strips with 71 mm hollow between). Each strip is turned about its
+   outer bottom edge by ``bevel`` (5 mrad), which lifts its inner bottom edge
+   by ``strip_width * sin(bevel)`` (10 um): on flat ground only the outer
+   edges touch, as the seed's wedges were designed to, and the contact forces
+   at rest are statically determinate (two lines, not four). Flat strips
+   (``bevel=0``) rock the same but leave the sequential-impulse solver an
+   indeterminate split of the load between the two edges of a strip, which
+   it resolves in a fixed order: the block then lifts off about 0.3 % earlier
+   on one side than on the other. The strips are the only collision geometry.
+4. Visual: a box 2B x D x 2H centred on the centre of mass (drawn only in
+   PyBullet's GUI; it has no mass and no collision).
+
+Load the file with ``flags=pybullet.URDF_USE_INERTIA_FROM_FILE``: without it
+PyBullet recomputes the inertia from the collision boxes and ``p`` is wrong.
+Contact properties (friction, restitution, stiffness) are not in the file: the
+engine sets them with ``changeDynamics`` from its settings, see
+:class:`engines.pybullet_engine.PybulletEngine`.
+
+The seed specimen's model is shipped as ``engines/models/eth_specimen.urdf``;
+regenerate it with :func:`write_eth_specimen` (a test checks that the shipped
+file equals the generator's output). ``engines/models/README.md`` has the
+derivation step by step.
+
+References
+----------
+ROS URDF specification, http://wiki.ros.org/urdf/XML (links, joints, inertial).
+PyBullet Quickstart Guide (loadURDF, URDF_USE_INERTIA_FROM_FILE).
+Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
+model. COMPDYN 2017, section 3.1 (specimen geometry, 2 mm contact strips).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from housner.specimen import Specimen
+
+__all__ = [
+    "ETH_SPECIMEN_PATH",
+    "JOINTS",
+    "URDF_DEFAULTS",
+    "urdf_from_specimen",
+    "write_eth_specimen",
+    "write_urdf",
+]
+
+#: Where the seed specimen's generated model is shipped.
+ETH_SPECIMEN_PATH = Path(__file__).resolve().parent / "models" / "eth_specimen.urdf"
+
+#: Joint names in the order PyBullet numbers them (joint index 0, 1, 2).
+JOINTS = ("x", "z", "theta")
+
+#: Geometry and dummy-link settings used when a keyword is not given.
+URDF_DEFAULTS: dict = {
+    "strip_width": 0.002,  # [m] the seed's wedges end in 2 mm strips
+    "strip_height": 0.002,  # [m] collision only; any height gives the same contact
+    "carriage_mass": 1e-6,  # [kg] relative 2.5e-7 of the seed's 3.94 kg
+    "carriage_inertia": 1e-9,  # [kg m^2] the carriages never rotate
+    "bevel": 0.005,  # [rad] inner edges 10 um above the ground: only the outer edges touch
+}
+
+#: Travel of the two slide joints [m]; wide enough never to be reached.
+_SLIDE_LIMIT = 1.0e3
+
+
+def _num(x: float) -> str:
+    """Shortest decimal text that reads back as the same float."""
+    x = float(x)
+    if x == 0.0:
+        return "0"
+    return repr(x)
+
+
+def _positive(name: str, value: float) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
+    if not (math.isfinite(x) and x > 0.0):
+        raise ValueError(f"`{name}` must be positive and finite, got {value!r}")
+    return x
+
+
+def _inertial(mass: float, inertia: float, indent: str) -> str:
+    i = _num(inertia)
+    return (
+        f"{indent}<inertial>\n"
+        f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>\n'
+        f'{indent}  <mass value="{_num(mass)}"/>\n'
+        f'{indent}  <inertia ixx="{i}" ixy="0" ixz="0" iyy="{i}" iyz="0" izz="{i}"/>\n'
+        f"{indent}</inertial>\n"
+    )
+
+
+def urdf_from_specimen(
+    specimen: Specimen,
+    *,
+    strip_width: float = URDF_DEFAULTS["strip_width"],
+    strip_height: float = URDF_DEFAULTS["strip_height"],
+    carriage_mass: float = URDF_DEFAULTS["carriage_mass"],
+    carriage_inertia: float = URDF_DEFAULTS["carriage_inertia"],
+    bevel: float = URDF_DEFAULTS["bevel"],
+    name: str = "rocking_block",
+) -> str:
+    """The URDF text of the planar rocking block.
+
+    Parameters
+    ----------
+    specimen : Specimen
+        Geometry [m], mass [kg] and inertia [kg m^2] of the block.
+    strip_width : float
+        Width of each contact strip along x [m]; the strips' outer edges are
+        at x = +-B whatever the width. Must be below B.
+    strip_height : float
+        Height of the strips [m] (collision geometry only).
+    bevel : float
+        Rotation of each strip about its outer bottom edge [rad], in
+        [0, 0.1]: it lifts the inner bottom edge by ``strip_width *
+        sin(bevel)`` so that only the outer edges touch flat ground.
+    carriage_mass : float
+        Mass of each of the two dummy carriage links [kg]; must be below 1e-3
+        of the specimen's mass so that it cannot distort the dynamics.
+    carriage_inertia : float
+        Principal moments of inertia of each carriage [kg m^2].
+    name : str
+        The robot's name.
+
+    Returns
+    -------
+    str
+        URDF (XML) text; every number is written with enough digits to read
+        back as the same float.
+
+    Notes
+    -----
+    See the module docstring for the layout and the derivation of each number.
+    The joint anchor of ``x`` is at z = H, so with all joints at zero the block
+    stands upright with its strips touching the plane z = 0.
+    """
+    if not isinstance(specimen, Specimen):
+        raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
+    strip_width = _positive("strip_width", strip_width)
+    strip_height = _positive("strip_height", strip_height)
+    carriage_mass = _positive("carriage_mass", carriage_mass)
+    carriage_inertia = _positive("carriage_inertia", carriage_inertia)
+    try:
+        bevel = float(bevel)
+    except (TypeError, ValueError):
+        raise ValueError(f"`bevel` must be a number, got {bevel!r}") from None
+    if not (0.0 <= bevel <= 0.1):
+        raise ValueError(f"`bevel` must lie in [0, 0.1] rad, got {bevel!r}")
+    H, B, D, m = specimen.H, specimen.B, specimen.depth, specimen.mass
+    if strip_width >= B:
+        raise ValueError(f"`strip_width` ({strip_width} m) must be below B = {B} m (half the pivot distance)")
+    if carriage_mass > 1e-3 * m:
+        raise ValueError(f"`carriage_mass` ({carriage_mass} kg) must be below 1e-3 of the specimen's mass ({m} kg)")
+    if not (isinstance(name, str) and name and all(ch.isalnum() or ch in "_-." for ch in name)):
+        raise ValueError(f"`name` must be a non-empty identifier (letters, digits, _ - .), got {name!r}")
+    ic = specimen.centroidal_inertia
+    # Strip centre = outer bottom edge (B, -H) + Rot(bevel) (-w/2, h/2), with Rot(b) (x, z) = (x c + z s, -x s + z c)
+    cb, sb = math.cos(bevel), math.sin(bevel)
+    sx = B - (strip_width / 2.0 * cb - strip_height / 2.0 * sb)
+    sz = -H + (strip_width / 2.0 * sb + strip_height / 2.0 * cb)
+    strip = f'<box size="{_num(strip_width)} {_num(D)} {_num(strip_height)}"/>'
+    lim = _num(_SLIDE_LIMIT)
+    slide_limit = f'<limit lower="-{lim}" upper="{lim}" effort="0" velocity="1000"/>'
+    text = f"""<?xml version="1.0"?>
+<!-- Generated by engines.urdf.urdf_from_specimen; do not edit by hand.
+     Specimen: {_xml_comment(specimen.name)}
+     2H = {_num(specimen.height)} m, 2B = {_num(specimen.width)} m, depth = {_num(D)} m, m = {_num(m)} kg
+     I0 = {_num(specimen.inertia)} kg m^2 (pivot), p = {_num(specimen.p)} 1/s, alpha = {_num(specimen.alpha)} rad
+     I_c = I0 - m R^2 = {_num(ic)} kg m^2 (centre of mass), R = {_num(specimen.R)} m
+     Load with useFixedBase=True and flags=URDF_USE_INERTIA_FROM_FILE. -->
+<robot name="{name}">
+  <link name="world"/>
+  <joint name="x" type="prismatic">
+    <parent link="world"/>
+    <child link="carriage_x"/>
+    <origin xyz="0 0 {_num(H)}" rpy="0 0 0"/>
+    <axis xyz="1 0 0"/>
+    {slide_limit}
+  </joint>
+  <link name="carriage_x">
+{_inertial(carriage_mass, carriage_inertia, "    ")}  </link>
+  <joint name="z" type="prismatic">
+    <parent link="carriage_x"/>
+    <child link="carriage_z"/>
+    <origin xyz="0 0 0" rpy="0 0 0"/>
+    <axis xyz="0 0 1"/>
+    {slide_limit}
+  </joint>
+  <link name="carriage_z">
+{_inertial(carriage_mass, carriage_inertia, "    ")}  </link>
+  <joint name="theta" type="continuous">
+    <parent link="carriage_z"/>
+    <child link="block"/>
+    <origin xyz="0 0 0" rpy="0 0 0"/>
+    <axis xyz="0 1 0"/>
+  </joint>
+  <link name="block">
+    <!-- centre of mass at the link origin; iyy = I0 - m R^2 -->
+{_inertial(m, ic, "    ")}    <visual>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <geometry><box size="{_num(specimen.width)} {_num(D)} {_num(specimen.height)}"/></geometry>
+    </visual>
+    <!-- contact strip at the +x pivot: outer bottom edge at (+B, -H), turned by the bevel about it -->
+    <collision name="pivot_pos">
+      <origin xyz="{_num(sx)} 0 {_num(sz)}" rpy="0 {_num(bevel)} 0"/>
+      <geometry>{strip}</geometry>
+    </collision>
+    <!-- contact strip at the -x pivot: outer bottom edge at (-B, -H) -->
+    <collision name="pivot_neg">
+      <origin xyz="{_num(-sx)} 0 {_num(sz)}" rpy="0 {_num(-bevel)} 0"/>
+      <geometry>{strip}</geometry>
+    </collision>
+  </link>
+</robot>
+"""
+    return text
+
+
+def _xml_comment(s: str) -> str:
+    """Text safe inside an XML comment (no ``--``)."""
+    return str(s).replace("--", "- -")
+
+
+def write_urdf(specimen: Specimen, path: str | Path, **kwargs) -> Path:
+    """Write :func:`urdf_from_specimen` ``(specimen, **kwargs)`` to ``path``.
+
+    Parameters
+    ----------
+    specimen : Specimen
+    path : str or pathlib.Path
+        Output file (parent folders are created).
+    **kwargs
+        Passed to :func:`urdf_from_specimen`.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
+    path = Path(path)
+    text = urdf_from_specimen(specimen, **kwargs)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def write_eth_specimen(path: str | Path = ETH_SPECIMEN_PATH) -> Path:
+    """Regenerate the shipped model of the seed specimen (:meth:`Specimen.bachmann2017`) [file]."""
+    return write_urdf(Specimen.bachmann2017(), path)
