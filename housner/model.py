@@ -1,0 +1,535 @@
+"""The analytic Housner rocking model: the reference solver of the suite.
+
+A rigid block on a rigid base rocks on one of its two bottom corners and
+impacts when the rotation passes through zero. Between impacts it follows
+the full nonlinear equation of the seed paper (eq. 2, not linearised),
+written here with pivot-dependent parameters and an optional viscous term::
+
+    theta'' = -p_s^2 (sin(alpha_s sgn(theta) - theta)
+                      + ug''(t)/g cos(alpha_s sgn(theta) - theta)) - c theta'
+
+where ``s`` is the current pivot (+x corner when theta > 0), ug'' [m/s^2]
+is linear between the motion's samples, and ``c`` [1/s] is a rotational
+viscous damping rate (0 for Housner's model).
+
+Events are located to machine precision on the integrator's own trajectory:
+
+* **Uplift.** At rest the block stays at theta = theta' = 0 until
+  ug'' < -g tan(alpha_+) (it lifts to theta > 0, pivoting on the +x corner)
+  or ug'' > g tan(alpha_-) (theta < 0). The uplift instant is the exact root
+  of the linear interpolant of ug'' inside the sample interval.
+* **Impact.** When theta crosses zero the angular velocity is multiplied by
+  sqrt(r_eff) (r is the ratio of kinetic energies after/before, seed eq. 4)
+  and the block continues on the other corner. Impact times are recorded.
+* **Rest rule.** The ever-faster sequence of ever-smaller impacts of a block
+  coming to rest (a Zeno sequence) is cut off as follows: after an impact,
+  the free-rocking peak theta_pk that the post-impact velocity could reach
+  (energy integral, theta'^2 / (2 p^2) = cos(alpha - theta_pk) - cos(alpha),
+  on the new pivot) is compared with ``rest_tol * alpha``; below it the block
+  is put at rest (theta = theta' = 0) and may lift off again by the uplift
+  rule above, within the same sample interval if the ground acceleration is
+  already beyond the threshold.
+* **Overturn.** Once |theta| reaches pi/2 the block has fallen: theta is held
+  at +-pi/2, theta' = 0, and integration stops.
+* **Peak.** theta_max is the largest |theta| including between samples: a
+  peak inside a substep is located as the root of theta'.
+
+Numerics: classic RK4 with ``substeps`` equal steps per sample interval (the
+steps are aligned to the samples, so the forcing is smooth inside each step);
+events split a step and are found by safeguarded Newton iteration on the
+length of one RK4 step. The kernel is compiled with numba (no fastmath) and
+computes the negative pivot with the same arithmetic as the positive one, so
+mirroring the ground motion mirrors the response exactly, bit for bit.
+With the default step (p h <= 0.01) theta_max of a pulse is converged to
+about 1e-9 alpha and impact times to about 1e-10 s (5e-8 s at slow, grazing
+impacts). Long records are another matter: near the upright position the
+equation has negative stiffness, perturbations grow like e^(p t), and the
+late response of a long record (whether a chatter sequence ends at rest, the
+phase of small free rocking) differs between any two accurate solutions:
+rocking is chaotic, so verdicts should rest on distributions over ensembles.
+
+References
+----------
+Housner, G. W. (1963). The behavior of inverted pendulum structures during
+earthquakes. Bulletin of the Seismological Society of America 53(2), 403-417.
+Yim, C.-S., Chopra, A. K., Penzien, J. (1980). Rocking response of rigid
+blocks to earthquakes. Earthquake Engineering & Structural Dynamics 8(6), 565-587.
+Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
+(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
+eqs. 1-4.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from housner import _kernel
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+from housner.units import G
+
+__all__ = ["RockingParams", "default_substeps", "simulate", "simulate_many", "theta_max_many"]
+
+#: Default accuracy target: the RK4 step h is chosen so that p h <= PH_MAX [-].
+#: RK4's global error scales as (p h)^4; at 0.01 theta_max is converged to
+#: about 1e-8 alpha (see tests/test_model.py and benchmarks/bench_analytic.py).
+PH_MAX = 0.01
+
+#: Largest number of substeps per sample accepted [-].
+MAX_SUBSTEPS = 100_000
+
+
+@dataclass(frozen=True)
+class RockingParams:
+    """Parameters of the rocking equation, per pivot.
+
+    Parameters
+    ----------
+    alpha_pos, alpha_neg : float
+        Slenderness [rad] when rocking on the +x corner (theta > 0) and on the
+        -x corner (theta < 0); equal for a symmetric block.
+    p_pos, p_neg : float
+        Frequency parameter [1/s] when rocking on each corner.
+    r : float
+        Kinetic-energy ratio at impact [-], in [0, 1]: theta'_after =
+        sqrt(r_eff) theta'_before.
+    r_amp_exponent : float
+        Exponent n of an amplitude-dependent restitution [-]:
+        r_eff = clip(r (|theta'_before| / (p_s alpha_s))^n, 0, 1), where p_s
+        and alpha_s belong to the corner the block rocked on before the
+        impact; p_s alpha_s is the impact speed of a block released from
+        theta = alpha in the linearised model, so r_eff = r at that reference
+        speed. n = 0 (default) is Housner's constant r; n > 0 makes small
+        impacts more dissipative.
+    damping : float
+        Rotational viscous damping rate c [1/s]: the equation of motion gains
+        the term -c theta'. Equivalent to a viscous moment -c I0 theta' about
+        the pivot; the rocking energy E = theta'^2/2 + p^2 (cos(alpha - |theta|)
+        - cos(alpha)) then decays as dE/dt = -c theta'^2. 0 (default) is
+        Housner's model.
+
+    Notes
+    -----
+    With alpha_pos == alpha_neg, p_pos == p_neg, r_amp_exponent == 0 and
+    damping == 0 the model is exactly Housner's (seed eq. 2 with eq. 4).
+    """
+
+    alpha_pos: float
+    alpha_neg: float
+    p_pos: float
+    p_neg: float
+    r: float
+    r_amp_exponent: float = 0.0
+    damping: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ("alpha_pos", "alpha_neg"):
+            v = _finite(key, getattr(self, key))
+            if not 0.0 < v < math.pi / 2:
+                raise ValueError(f"`{key}` must lie in (0, pi/2) rad, got {v!r}")
+            object.__setattr__(self, key, v)
+        for key in ("p_pos", "p_neg"):
+            v = _finite(key, getattr(self, key))
+            if v <= 0.0:
+                raise ValueError(f"`{key}` must be positive [1/s], got {v!r}")
+            object.__setattr__(self, key, v)
+        r = _finite("r", self.r)
+        if not 0.0 <= r <= 1.0:
+            raise ValueError(f"`r` must lie in [0, 1], got {r!r}")
+        object.__setattr__(self, "r", r)
+        object.__setattr__(self, "r_amp_exponent", _finite("r_amp_exponent", self.r_amp_exponent))
+        c = _finite("damping", self.damping)
+        if c < 0.0:
+            raise ValueError(f"`damping` must be >= 0 [1/s], got {c!r}")
+        object.__setattr__(self, "damping", c)
+
+    @classmethod
+    def from_specimen(cls, specimen: Specimen, r: float | None = None) -> RockingParams:
+        """Housner's symmetric parameters of ``specimen``; ``r`` [-] defaults to ``specimen.r_housner``."""
+        if not isinstance(specimen, Specimen):
+            raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
+        alpha = specimen.alpha
+        p = specimen.frequency_parameter
+        return cls(alpha, alpha, p, p, specimen.r_housner if r is None else r)
+
+    @property
+    def is_housner(self) -> bool:
+        """True for the plain symmetric Housner model (no asymmetry, constant r, no damping)."""
+        return (
+            self.alpha_pos == self.alpha_neg
+            and self.p_pos == self.p_neg
+            and self.r_amp_exponent == 0.0
+            and self.damping == 0.0
+        )
+
+    @property
+    def p_max(self) -> float:
+        """The larger frequency parameter of the two corners [1/s]."""
+        return max(self.p_pos, self.p_neg)
+
+    def as_array(self) -> np.ndarray:
+        """The kernel's parameter vector (float64, layout of ``housner._kernel``)."""
+        v = np.empty(_kernel.N_PARAMS)
+        v[_kernel.I_ALPHA_POS] = self.alpha_pos
+        v[_kernel.I_ALPHA_NEG] = self.alpha_neg
+        v[_kernel.I_P_POS] = self.p_pos
+        v[_kernel.I_P_NEG] = self.p_neg
+        v[_kernel.I_R] = self.r
+        v[_kernel.I_R_EXP] = self.r_amp_exponent
+        v[_kernel.I_DAMPING] = self.damping
+        return v
+
+
+def _finite(name: str, value) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"`{name}` must be finite, got {value!r}")
+    return x
+
+
+def default_substeps(p: float, dt: float) -> int:
+    """RK4 substeps per sample so that p h <= PH_MAX, h = dt / substeps [-].
+
+    Parameters
+    ----------
+    p : float
+        Largest frequency parameter [1/s].
+    dt : float
+        Sample step [s].
+    """
+    return max(1, math.ceil(p * dt / PH_MAX - 1e-9))
+
+
+# ----------------------------------------------------------------------
+# validation shared by the public entry points
+def _resolve_params(specimen: Specimen, r, params) -> RockingParams:
+    if not isinstance(specimen, Specimen):
+        raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
+    if params is None:
+        return RockingParams.from_specimen(specimen, r=r)
+    if not isinstance(params, RockingParams):
+        raise TypeError(f"`params` must be a housner.model.RockingParams, got {type(params).__name__}")
+    return params if r is None else replace(params, r=r)
+
+
+def _check_rest_tol(rest_tol) -> float:
+    v = _finite("rest_tol", rest_tol)
+    if not 0.0 < v < 1.0:
+        raise ValueError(f"`rest_tol` must lie in (0, 1), got {rest_tol!r}")
+    return v
+
+
+def _check_substeps(substeps, p: float, dt: float) -> int:
+    if substeps is None:
+        return default_substeps(p, dt)
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)):
+        raise ValueError(f"`substeps` must be a positive integer, got {substeps!r}")
+    if not 1 <= substeps <= MAX_SUBSTEPS:
+        raise ValueError(f"`substeps` must lie in [1, {MAX_SUBSTEPS}], got {substeps!r}")
+    return int(substeps)
+
+
+def _check_initial(theta0, theta_dot0) -> tuple[float, float]:
+    th = _finite("theta0", theta0)
+    if abs(th) >= math.pi / 2:
+        raise ValueError(f"`theta0` must lie within (-pi/2, pi/2) rad, got {theta0!r}")
+    return th, _finite("theta_dot0", theta_dot0)
+
+
+def _prepare_motion(motion, duration) -> GroundMotion:
+    if not isinstance(motion, GroundMotion):
+        raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
+    if duration is None:
+        return motion
+    d = _finite("duration", duration)
+    if d <= 0.0:
+        raise ValueError(f"`duration` must be positive [s], got {duration!r}")
+    if d == motion.duration:
+        return motion
+    return motion.with_duration(d)
+
+
+# ----------------------------------------------------------------------
+def simulate(
+    specimen: Specimen,
+    motion: GroundMotion,
+    *,
+    theta0: float | None = None,
+    theta_dot0: float | None = None,
+    r: float | None = None,
+    duration: float | None = None,
+    substeps: int | None = None,
+    params: RockingParams | None = None,
+    rest_tol: float = 1e-6,
+) -> Response:
+    """Rocking response of a rigid block to one ground motion (Housner's model).
+
+    Parameters
+    ----------
+    specimen : Specimen
+        The block (alpha [rad], p [1/s], r_housner [-]).
+    motion : GroundMotion
+        Ground acceleration [m/s^2], linear between samples.
+    theta0, theta_dot0 : float, optional
+        Initial rotation [rad] and angular velocity [rad/s]; default to
+        ``motion.theta0`` and ``motion.theta_dot0``. The block starts at rest
+        only when both are zero.
+    r : float, optional
+        Kinetic-energy ratio at impact [-], in [0, 1]; defaults to
+        ``specimen.r_housner`` (or to ``params.r``). Given together with
+        ``params`` it replaces ``params.r``.
+    duration : float, optional
+        Simulated time [s]; defaults to the motion's duration. A longer
+        duration pads the motion with zeros (free rocking after the shaking),
+        a shorter one cuts it.
+    substeps : int, optional
+        RK4 steps per sample interval; by default the fewest with p h <= 0.01.
+    params : RockingParams, optional
+        Overrides the parameters derived from ``specimen`` (asymmetric
+        pivots, amplitude-dependent restitution, damping).
+    rest_tol : float
+        Rest rule threshold [-], in (0, 1): after an impact whose free-rocking
+        peak would stay below ``rest_tol * alpha`` the block is at rest.
+
+    Returns
+    -------
+    Response
+        Histories on the motion's sample grid, impact times, theta_max, and
+        the overturn and uplift times; ``alpha`` is ``specimen.alpha`` and
+        ``info`` holds ``substeps``, ``rest_tol`` and ``params`` (as a dict).
+        ``uplift_time`` is 0 for a block released off its rest position.
+
+    Notes
+    -----
+    The physics and the event handling are described in the module
+    docstring (:mod:`housner.model`).
+
+    References
+    ----------
+    Housner (1963); Bachmann et al. (2017), eqs. 2-4.
+    """
+    prm = _resolve_params(specimen, r, params)
+    motion = _prepare_motion(motion, duration)
+    th0, thd0 = _check_initial(
+        motion.theta0 if theta0 is None else theta0, motion.theta_dot0 if theta_dot0 is None else theta_dot0
+    )
+    m = _check_substeps(substeps, prm.p_max, motion.dt)
+    tol = _check_rest_tol(rest_tol)
+    return _simulate_batch(specimen, [motion], [(th0, thd0)], prm, [m], tol, parallel=False)[0]
+
+
+def simulate_many(
+    specimen: Specimen,
+    motions: Sequence[GroundMotion],
+    *,
+    theta0: float | None = None,
+    theta_dot0: float | None = None,
+    r: float | None = None,
+    duration: float | None = None,
+    substeps: int | None = None,
+    params: RockingParams | None = None,
+    rest_tol: float = 1e-6,
+    parallel: bool = True,
+) -> list[Response]:
+    """:func:`simulate` for many motions in one compiled call.
+
+    Parameters are those of :func:`simulate`, applied to every motion
+    (``theta0``/``theta_dot0`` default to each motion's own), plus
+    ``parallel`` : bool, spread the records over numba threads.
+
+    Returns
+    -------
+    list of Response
+        One per motion, in order; identical to calling :func:`simulate` on each.
+
+    Notes
+    -----
+    ``parallel=True`` uses numba's threading layer (OpenMP here): pass
+    ``parallel=False`` inside worker processes that are forked from a parent
+    that already ran a parallel kernel, and when the caller itself runs many
+    of these calls in parallel.
+    """
+    prm = _resolve_params(specimen, r, params)
+    tol = _check_rest_tol(rest_tol)
+    prepared, inits, ms = [], [], []
+    for i, mo in enumerate(motions):
+        try:
+            mo = _prepare_motion(mo, duration)
+        except TypeError:
+            raise TypeError(f"`motions[{i}]` must be a housner.GroundMotion, got {type(mo).__name__}") from None
+        prepared.append(mo)
+        inits.append(
+            _check_initial(mo.theta0 if theta0 is None else theta0, mo.theta_dot0 if theta_dot0 is None else theta_dot0)
+        )
+        ms.append(_check_substeps(substeps, prm.p_max, mo.dt))
+    if not prepared:
+        return []
+    return _simulate_batch(specimen, prepared, inits, prm, ms, tol, parallel=bool(parallel))
+
+
+def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: float, parallel: bool):
+    n_rec = len(motions)
+    sizes = np.array([mo.n for mo in motions], dtype=np.int64)
+    offsets = np.zeros(n_rec + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    acc_g = np.concatenate([mo.acc for mo in motions]) / G
+    dts = np.array([mo.dt for mo in motions], dtype=np.float64)
+    ms_a = np.asarray(ms, dtype=np.int64)
+    prm_a = np.tile(prm.as_array(), (n_rec, 1))
+    th0 = np.array([i[0] for i in inits], dtype=np.float64)
+    thd0 = np.array([i[1] for i in inits], dtype=np.float64)
+    theta = np.empty(offsets[-1])
+    theta_dot = np.empty(offsets[-1])
+    # impact buffer: a generous guess, rerun the rare record that overflows it
+    caps = np.maximum(64, sizes // 4)
+    imp_off = np.zeros(n_rec + 1, dtype=np.int64)
+    np.cumsum(caps, out=imp_off[1:])
+    impacts = np.empty(imp_off[-1])
+    out = np.empty((n_rec, 6))
+    kern = _kernel.run_batch_parallel if parallel and n_rec > 1 else _kernel.run_batch
+    kern(acc_g, offsets, dts, ms_a, prm_a, th0, thd0, rest_tol, True, theta, theta_dot, impacts, imp_off, out)
+    results = []
+    for i, mo in enumerate(motions):
+        n_imp = int(out[i, 4])
+        if n_imp > caps[i]:
+            imp_i = np.empty(n_imp)
+            one = np.array([0, mo.n], dtype=np.int64)
+            _kernel.run_batch(
+                acc_g[offsets[i] : offsets[i + 1]], one, dts[i : i + 1], ms_a[i : i + 1], prm_a[i : i + 1],
+                th0[i : i + 1], thd0[i : i + 1], rest_tol, False, theta[:0], theta_dot[:0], imp_i,
+                np.array([0, n_imp], dtype=np.int64), np.empty((1, 6)),
+            )  # fmt: skip
+        else:
+            imp_i = impacts[imp_off[i] : imp_off[i] + n_imp].copy()
+        overturned = bool(out[i, 1])
+        info = {"substeps": int(ms_a[i]), "rest_tol": rest_tol, "params": asdict(prm)}
+        if out[i, 5]:
+            info["rest_guard_trips"] = int(out[i, 5])
+        results.append(
+            Response(
+                t=mo.t,
+                theta=theta[offsets[i] : offsets[i + 1]].copy(),
+                theta_dot=theta_dot[offsets[i] : offsets[i + 1]].copy(),
+                impact_times=imp_i,
+                theta_max=math.pi / 2 if overturned else float(out[i, 0]),
+                alpha=specimen.alpha,
+                overturned=overturned,
+                overturn_time=float(out[i, 2]),
+                uplift_time=float(out[i, 3]),
+                engine="housner",
+                info=info,
+            )
+        )
+    return results
+
+
+def theta_max_many(
+    specimen: Specimen,
+    acc,
+    dt,
+    *,
+    theta0=0.0,
+    theta_dot0=0.0,
+    r: float | None = None,
+    substeps: int | None = None,
+    params: RockingParams | Sequence[RockingParams] | None = None,
+    rest_tol: float = 1e-6,
+    parallel: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Peak response of many records without building their histories.
+
+    Parameters
+    ----------
+    specimen : Specimen
+        The block; its ``alpha`` [rad] normalises theta_max.
+    acc : array_like or sequence of array_like
+        Ground accelerations [m/s^2]: a 2-D array (one record per row) or a
+        list of 1-D arrays of any lengths.
+    dt : float or array_like
+        Sample step [s], one for all or one per record.
+    theta0, theta_dot0 : float or array_like
+        Initial state [rad, rad/s], one for all or one per record.
+    r : float, optional
+        Kinetic-energy ratio at impact [-]; see :func:`simulate`.
+    substeps : int, optional
+        RK4 steps per sample; by default p h <= 0.01 for each record's dt.
+    params : RockingParams or sequence of RockingParams, optional
+        One parameter set for all records or one per record.
+    rest_tol : float
+        Rest rule threshold [-]; see :func:`simulate`.
+    parallel : bool
+        Spread the records over numba threads.
+
+    Returns
+    -------
+    theta_max_over_alpha : ndarray of float
+        theta_max / specimen.alpha [-]; +inf where the block overturned.
+    overturned : ndarray of bool
+    n_impacts : ndarray of int
+    """
+    if isinstance(acc, np.ndarray) and acc.ndim == 2:
+        rows = [np.asarray(a, dtype=np.float64) for a in acc]
+    elif isinstance(acc, np.ndarray) and acc.ndim == 1 and acc.dtype != object:
+        raise ValueError("`acc` must be a 2-D array (one record per row) or a list of 1-D arrays, got a 1-D array")
+    else:
+        try:
+            rows = [np.asarray(a, dtype=np.float64) for a in acc]
+        except (TypeError, ValueError):
+            raise ValueError("`acc` must be a 2-D array or a list of 1-D numeric arrays") from None
+    n_rec = len(rows)
+    for i, a in enumerate(rows):
+        if a.ndim != 1 or a.size == 0:
+            raise ValueError(f"`acc[{i}]` must be a non-empty 1-D array, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"`acc[{i}]` is not finite at sample {int(np.flatnonzero(~np.isfinite(a))[0])}")
+    if n_rec == 0:
+        return np.empty(0), np.empty(0, dtype=bool), np.empty(0, dtype=np.int64)
+    dts = _per_record("dt", dt, n_rec)
+    if not np.all(dts > 0.0):
+        raise ValueError(f"`dt` must be positive [s], got {dt!r}")
+    th0 = _per_record("theta0", theta0, n_rec)
+    if np.any(np.abs(th0) >= math.pi / 2):
+        raise ValueError("`theta0` must lie within (-pi/2, pi/2) rad")
+    thd0 = _per_record("theta_dot0", theta_dot0, n_rec)
+    tol = _check_rest_tol(rest_tol)
+    if params is None or isinstance(params, RockingParams):
+        prms = [_resolve_params(specimen, r, params)] * n_rec
+    else:
+        params = list(params)
+        if len(params) != n_rec:
+            raise ValueError(f"`params` must be one RockingParams or {n_rec} of them, got {len(params)}")
+        prms = [_resolve_params(specimen, r, p) for p in params]
+    prm_a = np.array([p.as_array() for p in prms])
+    ms = np.array([_check_substeps(substeps, p.p_max, d) for p, d in zip(prms, dts, strict=True)], dtype=np.int64)
+    offsets = np.zeros(n_rec + 1, dtype=np.int64)
+    np.cumsum([a.size for a in rows], out=offsets[1:])
+    acc_g = np.concatenate(rows) / G
+    out = np.empty((n_rec, 6))
+    empty = np.empty(0)
+    kern = _kernel.run_batch_parallel if parallel and n_rec > 1 else _kernel.run_batch
+    kern(acc_g, offsets, dts, ms, prm_a, th0, thd0, tol, False, empty, empty, empty, np.zeros(n_rec + 1, np.int64), out)
+    overturned = out[:, 1] != 0.0
+    ratio = np.where(overturned, np.inf, out[:, 0] / specimen.alpha)
+    return ratio, overturned, out[:, 4].astype(np.int64)
+
+
+def _per_record(name: str, value, n: int) -> np.ndarray:
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be a number or an array of numbers, got {value!r}") from None
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    elif a.shape != (n,):
+        raise ValueError(f"`{name}` must be a number or have one value per record ({n}), got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"`{name}` must be finite")
+    return np.ascontiguousarray(a)
