@@ -71,5 +71,16 @@ class HousnerEngine(Engine):
         return plan.run(substeps=self.substeps)
 
     def simulate_many(self, specimen: Specimen, motions: list[GroundMotion], effects: Sequence = ()) -> list[Response]:
-        """Simulate several records (same as calling ``simulate`` on each)."""
-        return [self.simulate(specimen, m, effects) for m in motions]
+        """Simulate several records; the same results as calling ``simulate`` on each.
+
+        Without effects the records go to the compiled batch solver
+        (:func:`housner.model.simulate_many`, parallel over records).
+        """
+        if effects:
+            return [self.simulate(specimen, m, effects) for m in motions]
+        from housner.model import simulate_many
+
+        kwargs = {"r": self.r}
+        if self.substeps is not None:
+            kwargs["substeps"] = self.substeps
+        return simulate_many(specimen, list(motions), **kwargs)
