@@ -195,7 +195,9 @@ class GroundMotion:
                 header_line = i
                 break
         if header_line is None:
-            raise DataFileError(path, "no 'NPTS= n, DT= dt' header line in the first 50 lines; is this a PEER AT2 file?")
+            raise DataFileError(
+                path, "no 'NPTS= n, DT= dt' header line in the first 50 lines; is this a PEER AT2 file?"
+            )
         npts = int(m.group(1))
         try:
             dt = float(m.group(2).replace("D", "E").replace("d", "e"))
@@ -219,9 +221,7 @@ class GroundMotion:
         if not values:
             raise DataFileError(path, "no acceleration samples after the header", line=header_line + 1)
         if len(values) != npts:
-            raise DataFileError(
-                path, f"header says NPTS={npts} but {len(values)} samples follow", line=header_line + 1
-            )
+            raise DataFileError(path, f"header says NPTS={npts} but {len(values)} samples follow", line=header_line + 1)
         if not (dt > 0 and math.isfinite(dt)):
             raise DataFileError(path, f"DT must be positive, got {dt}", line=header_line + 1)
         title = " / ".join(s.strip() for s in lines[1:header_line] if s.strip())[:200]
@@ -286,9 +286,11 @@ def read_csv_columns(path: Path, columns: list[str]) -> tuple[list[np.ndarray], 
             lineno = reader.line_num
             if not row or all(not x.strip() for x in row):
                 continue
-            for k, (c, j) in enumerate(zip(columns, idx)):
+            for k, (c, j) in enumerate(zip(columns, idx, strict=True)):
                 if j >= len(row):
-                    raise DataFileError(path, f"row has {len(row)} fields, expected {len(header)}", line=lineno, column=c)
+                    raise DataFileError(
+                        path, f"row has {len(row)} fields, expected {len(header)}", line=lineno, column=c
+                    )
                 tok = row[j].strip()
                 try:
                     v = float(tok)

@@ -89,9 +89,7 @@ def _check_table(path: Path, table: str, data: dict) -> None:
         if key not in allowed:
             close = difflib.get_close_matches(key, allowed, n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise ScenarioError(
-                f"{path}: unknown key {where}{key!r}{hint} (allowed: {', '.join(sorted(allowed))})"
-            )
+            raise ScenarioError(f"{path}: unknown key {where}{key!r}{hint} (allowed: {', '.join(sorted(allowed))})")
         expected = allowed[key]
         types = expected if isinstance(expected, tuple) else (expected,)
         if float in types:
@@ -248,7 +246,7 @@ class Scenario:
         dt = float(m.get("dt", 0.002))
         kind = m.get("pulse", "symmetric_ricker")
         motions = []
-        for w, a in zip(W, A):
+        for w, a in zip(W, A, strict=True):
             if kind == "one_sine":
                 g = pulses.one_sine(a * a_up, w * p, dt=dt, p=p)
             else:

@@ -42,7 +42,7 @@ def reference():
 def test_pulse_responses_agree(engine, reference):
     eng = get_engine(engine)
     rows = []
-    for m, ref in zip(pulse_motions(), reference):
+    for m, ref in zip(pulse_motions(), reference, strict=True):
         got = eng.simulate(SPEC, m)
         rows.append((m.name, ref.theta_max_over_alpha, got.theta_max_over_alpha))
         assert got.overturned == ref.overturned, f"{engine} {m.name}: overturn verdict differs"

@@ -19,7 +19,12 @@ N = 30
 def ci_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("ci-elcentro")
     return run_scenario(
-        "elcentro", engines=["housner", "mujoco", "pybullet"], n_motions=N, out=out, jobs=2, progress=False,
+        "elcentro",
+        engines=["housner", "mujoco", "pybullet"],
+        n_motions=N,
+        out=out,
+        jobs=2,
+        progress=False,
         cache_dir=out / "cache",
     )
 

@@ -50,7 +50,7 @@ def test_csv_reader_and_errors(tmp_path):
     t = np.arange(6) * 0.002
     a = np.sin(t * 100)
     p = tmp_path / "m.csv"
-    p.write_text("time,ground_acc\n" + "".join(f"{float(x)!r},{float(y)!r}\n" for x, y in zip(t, a)))
+    p.write_text("time,ground_acc\n" + "".join(f"{float(x)!r},{float(y)!r}\n" for x, y in zip(t, a, strict=True)))
     m = GroundMotion.from_csv(p)
     assert m.dt == pytest.approx(0.002)
     np.testing.assert_array_equal(m.acc, a)

@@ -49,7 +49,7 @@ def test_rows_and_failures_kept_apart(tmp_path):
     assert list(df.columns[:4]) == ["engine", "motion_id", "motion_name", "theta_max_over_alpha"]
     assert len(df) == 8
     bad = df[df.status == "failed"]
-    assert list(zip(bad.engine, bad.motion_id)) == [("failing-housner", 1)]
+    assert list(zip(bad.engine, bad.motion_id, strict=True)) == [("failing-housner", 1)]
     assert "solver diverged on purpose" in bad.error.iloc[0]
     assert math.isnan(bad.theta_max_over_alpha.iloc[0])
     good = df[df.status == "ok"]
@@ -88,15 +88,22 @@ def test_dask_cluster_matches(tmp_path):
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as lc:
         with distributed.Client(lc) as client:
             d2, _, _ = run_engines(SPEC, ms, {"housner": {}}, scheduler=client, use_cache=False, progress=False)
-            d3, _, _ = run_engines(SPEC, ms, {"housner": {}}, scheduler=lc.scheduler_address, use_cache=False,
-                                   progress=False)
+            d3, _, _ = run_engines(
+                SPEC, ms, {"housner": {}}, scheduler=lc.scheduler_address, use_cache=False, progress=False
+            )
     assert np.array_equal(d1.theta_max_over_alpha.to_numpy(), d2.theta_max_over_alpha.to_numpy())
     assert np.array_equal(d1.theta_max_over_alpha.to_numpy(), d3.theta_max_over_alpha.to_numpy())
 
 
 def test_run_scenario_writes_the_run_directory(tmp_path):
-    run = run_scenario("free-vibration", engines=["housner"], out=tmp_path / "run", jobs=1,
-                       cache_dir=tmp_path / "cache", progress=False)
+    run = run_scenario(
+        "free-vibration",
+        engines=["housner"],
+        out=tmp_path / "run",
+        jobs=1,
+        cache_dir=tmp_path / "cache",
+        progress=False,
+    )
     out = tmp_path / "run"
     df = pd.read_parquet(out / "results.parquet")
     assert len(df) == 8 and (df.status == "ok").all()
