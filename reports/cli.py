@@ -75,8 +75,10 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
     run_dir = Path(args.run_dir)
     if not (run_dir / "results.parquet").exists():
-        print(f"error: {run_dir} holds no results.parquet; run `housner run SCENARIO --out {run_dir}` first",
-              file=sys.stderr)
+        print(
+            f"error: {run_dir} holds no results.parquet; run `housner run SCENARIO --out {run_dir}` first",
+            file=sys.stderr,
+        )
         return 2
     print(f"report: {write_report(run_dir, args.out)}")
     return 0
@@ -101,6 +103,48 @@ def _cmd_tune(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps(result.to_dict(), indent=2, default=str))
         print(f"written: {args.json}")
     return 0 if result.met else 1
+
+
+def _names_arg(value: str) -> list[str]:
+    if value.strip().lower() == "none":
+        return []
+    return [v.strip() for v in value.split(",") if v.strip()]
+
+
+def _cmd_diagnose(args: argparse.Namespace) -> int:
+    from scenarios.campaign import load_campaign
+    from scenarios.diagnose import diagnose
+
+    campaign = load_campaign(args.campaign)
+    for rid, file, msg in campaign.skipped:
+        print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
+    print(f"{campaign!r}", file=sys.stderr)
+    want_report = args.report is not None
+    diag = diagnose(
+        campaign,
+        effects=args.effects,
+        add=tuple(args.add or ()),
+        train_fraction=args.train_fraction,
+        seed=args.seed,
+        max_effects=args.max_effects,
+        compare_steps=want_report,
+        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
+    )
+    print(diag.summary())
+    print()
+    print(f"{'step':45s} {'held-out error [alpha]':>24s} {'improvement':>20s}")
+    for s in diag.steps:
+        imp = "" if s.added is None else f"{s.improvement:+.4f} +- {s.improvement_se:.2g}"
+        print(f"{s.label()[:45]:45s} {s.heldout_error:>13.4f} +- {s.heldout_se:<8.2g} {imp:>20s}")
+    print(f"noise floor sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
+    if args.json:
+        diag.to_json(args.json)
+        print(f"json:   {args.json}")
+    if want_report:
+        from reports.diagnosis import write_diagnosis_report
+
+        print(f"report: {write_diagnosis_report(diag, args.report)}")
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -140,6 +184,18 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--json", help="write the tuning result to this JSON file")
     t.add_argument("-q", "--quiet", action="store_true")
     t.set_defaults(func=_cmd_tune)
+
+    d = sub.add_parser("diagnose", help="find the physical effect a measurement campaign needs (error ladder)")
+    d.add_argument("campaign", help="campaign directory (campaign.toml + records/)")
+    d.add_argument("--effects", type=_names_arg, help="candidate effects, comma-separated, or 'none' (default: all)")
+    d.add_argument("--add", action="append", metavar="NAME", help="add this effect by hand first (repeatable)")
+    d.add_argument("--json", help="write the diagnosis to this JSON file")
+    d.add_argument("--report", help="write the HTML report to this file")
+    d.add_argument("--train-fraction", type=float, default=0.5, help="share of ground motions to fit on (0.5)")
+    d.add_argument("--seed", type=int, default=0, help="seed of the train / held-out split (0)")
+    d.add_argument("--max-effects", type=int, default=3, help="most effects the search adds (3)")
+    d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    d.set_defaults(func=_cmd_diagnose)
     return p
 
 

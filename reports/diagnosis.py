@@ -1,0 +1,534 @@
+"""The diagnosis report: which effect the Housner model misses, and the error falling as it is added.
+
+:func:`render_diagnosis` turns a :class:`scenarios.diagnose.Diagnosis` into
+one self-contained HTML page (figures are base64 PNGs, the style sheet is
+inline, no script, no network); :func:`write_diagnosis_report` writes it.
+
+What it shows, top first: a summary (what fails, which effect explains it
+with which parameters, by how much the held-out error fell); the error
+ladder (baseline, then each added effect, held-out error with its standard
+error, against the noise floor); the candidates of every greedy round; the
+theta_max/alpha CDFs of the measurement and of the model at every step; the
+localisation figures, each with the measurement and the model at every step
+side by side (energy ratio per impact and half-cycle duration against
+amplitude, energy kept between impacts, uplift onset per direction,
+direction bias, rotation before uplift, overturn fraction); the table of the
+localisation quantities; a per-record table.
+
+References
+----------
+Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
+(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
+eqs. 7-8, Figs. 5 and 10.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from housner.calibration import half_cycle_integral
+from reports import figures
+
+__all__ = ["render_diagnosis", "write_diagnosis_report"]
+
+_MEASURED = "#000000"
+_STEP_COLORS = ("#7f7f7f", "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd")
+
+
+def _e(x: Any) -> str:
+    return html.escape(str(x), quote=True)
+
+
+def _f(x: Any, digits: int = 4) -> str:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return _e(x)
+    if math.isnan(v):
+        return "&ndash;"
+    if math.isinf(v):
+        return "overturn" if v > 0 else "&minus;&infin;"
+    return f"{v:.{digits}g}" if abs(v) >= 1e4 or (v != 0 and abs(v) < 1e-3) else f"{v:.{digits}f}"
+
+
+def _table(header: list[str], rows: list[list[str]], caption: str = "", cls: str = "") -> str:
+    head = "<thead><tr>" + "".join(f"<th>{h}</th>" for h in header) + "</tr></thead>"
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
+    cap = f'<p class="caption">{caption}</p>' if caption else ""
+    return f'<div class="tbl"><table class="{cls}">{head}<tbody>{body}</tbody></table>{cap}</div>'
+
+
+def _figure(fig: Figure, caption: str, alt: str) -> str:
+    data = figures.to_png_base64(fig)
+    return (
+        f'<figure><img src="data:image/png;base64,{data}" alt="{_e(alt)}"><figcaption>{caption}</figcaption></figure>'
+    )
+
+
+def _colors(steps) -> list[str]:
+    return [_STEP_COLORS[i % len(_STEP_COLORS)] for i in range(len(steps))]
+
+
+def _label(step) -> str:
+    return step.label()
+
+
+# ----------------------------------------------------------------------------
+# figures
+def _ladder_figure(diag) -> Figure:
+    steps = diag.steps
+    fig = Figure(figsize=(7.4, 3.6))
+    ax = fig.add_subplot()
+    x = np.arange(len(steps))
+    y = np.array([s.heldout_error for s in steps])
+    se = np.array([s.heldout_se if math.isfinite(s.heldout_se) else 0.0 for s in steps])
+    tr = np.array([s.train_error for s in steps])
+    ax.errorbar(x, y, yerr=1.96 * se, fmt="o-", color="#0b5394", capsize=4, lw=1.8, label="held-out (95 % interval)")
+    ax.plot(x, tr, "s--", color="#999999", ms=4, lw=1, label="training")
+    ax.axhline(
+        diag.noise_floor, color="#2b6a2b", ls=":", lw=1.4, label=f"noise floor sigma/alpha = {diag.noise_floor:.4f}"
+    )
+    ax.set_xticks(x)
+    ax.set_xticklabels(["baseline"] + [f"+ {s.added}" for s in steps[1:]], rotation=12, fontsize=8)
+    ax.set_ylabel(r"time-history error [$\alpha$]")
+    ax.set_yscale("log")
+    ax.set_title("Error ladder", fontsize=11)
+    ax.grid(True, alpha=0.3, which="both")
+    ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    return fig
+
+
+def _scatter_figure(diag, xkey: str, ykey: str, *, xlabel: str, ylabel: str, title: str, lines=None) -> Figure:
+    fig = Figure(figsize=(7.4, 4.2))
+    ax = fig.add_subplot()
+    meas = diag.steps[0].comparison.measured
+    ax.plot(getattr(meas, xkey), getattr(meas, ykey), "o", color=_MEASURED, ms=4.5, label="measured", zorder=5)
+    for s, c in zip(diag.steps, _colors(diag.steps), strict=True):
+        mod = s.comparison.model
+        ax.plot(getattr(mod, xkey), getattr(mod, ykey), "x", color=c, ms=5, alpha=0.8, label=f"model: {_label(s)}")
+    if lines:
+        for xs, ys, lab, sty in lines:
+            ax.plot(xs, ys, sty, color="#555555", lw=1, label=lab)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=11)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7.5)
+    fig.tight_layout()
+    return fig
+
+
+def _energy_figure(diag) -> Figure:
+    r_h = diag.campaign.specimen.r_housner
+    return _scatter_figure(
+        diag, "energy_amplitude", "energy_ratio",
+        xlabel=r"amplitude before the impact $\theta_i/\alpha$ [-]", ylabel="energy ratio c_i [-] (seed eq. 8)",
+        title="Energy ratio per impact against amplitude (free vibration)",
+        lines=[([0, 1], [r_h, r_h], f"Housner r = {r_h:.4f}", "--")],
+    )  # fmt: skip
+
+
+def _half_cycle_figure(diag) -> Figure:
+    spec = diag.campaign.specimen
+    a = np.linspace(0.05, 0.95, 60)
+    T = 2.0 * np.asarray(half_cycle_integral(a * spec.alpha, spec.alpha)) / spec.p
+    return _scatter_figure(
+        diag, "half_cycle_amplitude", "half_cycle_duration",
+        xlabel=r"half-cycle amplitude $\theta_i/\alpha$ [-]", ylabel="half-cycle duration [s]",
+        title="Half-cycle duration against amplitude (free vibration)",
+        lines=[(a, T, f"Housner, p = {spec.p:.4f} 1/s (exact eq. 7)", "--")],
+    )  # fmt: skip
+
+
+def _flight_figure(diag) -> Figure:
+    return _scatter_figure(
+        diag, "flight_amplitude", "flight_ratio",
+        xlabel=r"half-cycle amplitude $\theta_i/\alpha$ [-]",
+        ylabel="(speed at closing / opening impact)$^2$ [-]",
+        title="Energy kept between impacts (free vibration)",
+        lines=[([0, 1], [1, 1], "no loss between impacts (Housner)", "--")],
+    )  # fmt: skip
+
+
+def _onset_figure(diag) -> Figure:
+    fig = Figure(figsize=(7.4, 4.2))
+    ax = fig.add_subplot()
+    sources = [("measured", diag.steps[0].comparison.measured, _MEASURED)] + [
+        (f"model: {_label(s)}", s.comparison.model, c) for s, c in zip(diag.steps, _colors(diag.steps), strict=True)
+    ]
+    width = 0.8 / len(sources)
+    for k, (lab, f, c) in enumerate(sources):
+        for j, (sgn, key_st) in enumerate(((1, "withstood_pos"), (-1, "withstood_neg"))):
+            on = f.onset_ratio[(f.onset_sign == sgn) & np.isfinite(f.onset_ratio)]
+            st = getattr(f, key_st)
+            st = st[np.isfinite(st)]
+            x0 = j * 2 + (k - (len(sources) - 1) / 2) * width
+            ax.plot(np.full(on.size, x0), on, "^", color=c, ms=4, alpha=0.6)
+            ax.plot(np.full(st.size, x0 + 1), st, "v", color=c, ms=4, alpha=0.6)
+            for xx, v in ((x0, on), (x0 + 1, st)):
+                if v.size:
+                    ax.plot([xx - width / 2, xx + width / 2], [np.median(v)] * 2, color=c, lw=2.5)
+        ax.plot([], [], "s", color=c, label=lab)
+    ax.axhline(1.0, color="#555555", ls="--", lw=1, label=r"$g\tan\alpha$ (Housner)")
+    ax.set_xticks([0, 1, 2, 3])
+    ax.set_xticklabels(
+        ["onset toward +theta", "stood toward +theta", "onset toward -theta", "stood toward -theta"], fontsize=8
+    )
+    ax.set_ylabel(r"ground acceleration / $g\tan\alpha$ [-]")
+    ax.set_title("Uplift onset per direction (ground motion; bars: medians)", fontsize=11)
+    ax.grid(True, alpha=0.3, axis="y")
+    ax.legend(fontsize=7.5)
+    fig.tight_layout()
+    return fig
+
+
+def _bars_figure(diag, keys: list[tuple[str, str]], title: str, ylabel: str, ref: float | None = None) -> Figure:
+    fig = Figure(figsize=(7.4, 3.8))
+    ax = fig.add_subplot()
+    loc0 = diag.steps[0].comparison.localisation()
+    sources = [("measured", _MEASURED, lambda k: loc0[k][0])] + [
+        (f"model: {_label(s)}", c, (lambda k, s=s: s.comparison.localisation()[k][1]))
+        for s, c in zip(diag.steps, _colors(diag.steps), strict=True)
+    ]
+    width = 0.8 / len(sources)
+    for k, (lab, c, get) in enumerate(sources):
+        for j, (key, _name) in enumerate(keys):
+            m = get(key)
+            x = j + (k - (len(sources) - 1) / 2) * width
+            if math.isfinite(m.value):
+                err = 1.96 * m.se if math.isfinite(m.se) else 0.0
+                ax.bar(x, m.value, width * 0.9, color=c, alpha=0.75, label=lab if j == 0 else None)
+                ax.errorbar(x, m.value, yerr=err, color="#333333", capsize=3, lw=1)
+    if ref is not None:
+        ax.axhline(ref, color="#555555", ls="--", lw=1)
+    ax.set_xticks(range(len(keys)))
+    ax.set_xticklabels([n for _k, n in keys], fontsize=8)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=11)
+    ax.grid(True, alpha=0.3, axis="y")
+    ax.legend(fontsize=7.5)
+    fig.tight_layout()
+    return fig
+
+
+def _tilt_figure(diag) -> Figure:
+    fig = Figure(figsize=(7.4, 4.2))
+    ax = fig.add_subplot()
+    meas = diag.steps[0].comparison.measured
+    n = meas.tilt_acc.size
+    step = max(1, n // 4000)
+    ax.plot(meas.tilt_acc[::step], meas.tilt_theta[::step], ".", color="#bbbbbb", ms=2, label="measured samples")
+    xs = np.array([-1.0, 1.0])
+    loc0 = diag.steps[0].comparison.localisation()
+    o, k = loc0["tilt_offset"][0], loc0["tilt_slope"][0]
+    if math.isfinite(o.value):
+        ax.plot(xs, o.value + k.value * xs, color=_MEASURED, lw=2.2, label="measured fit")
+    for s, c in zip(diag.steps, _colors(diag.steps), strict=True):
+        loc = s.comparison.localisation()
+        o, k = loc["tilt_offset"][1], loc["tilt_slope"][1]
+        if math.isfinite(o.value):
+            ax.plot(xs, o.value + k.value * xs, color=c, lw=1.4, ls="--", label=f"model: {_label(s)}")
+    sd = float(np.std(meas.tilt_theta)) if n else 0.01
+    ax.set_ylim(-4 * sd - 0.01, 4 * sd + 0.01)
+    ax.set_xlabel(r"ground acceleration / $g\tan\alpha$ [-]")
+    ax.set_ylabel(r"$\theta/\alpha$ before uplift [-]")
+    ax.set_title("Rotation before uplift (while |ground acc.| < g tan alpha)", fontsize=11)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7.5)
+    fig.tight_layout()
+    return fig
+
+
+def _cdf_figure(diag) -> Figure:
+    dist0 = diag.steps[0].comparison.distribution
+    samples = {"measured": dist0.measured}
+    colors = {"measured": _MEASURED}
+    for s, c in zip(diag.steps, _colors(diag.steps), strict=True):
+        name = f"model: {_label(s)}"
+        samples[name] = s.comparison.distribution.model
+        colors[name] = c
+    return figures.plot_cdfs(samples, reference="measured", colors=colors)
+
+
+# ----------------------------------------------------------------------------
+# sections
+def _summary(diag) -> str:
+    spec = diag.campaign.specimen
+    c = diag.campaign
+    skipped = ""
+    if c.skipped:
+        items = "".join(f"<li><code>{_e(rid)}</code> ({_e(f)}): {_e(msg)}</li>" for rid, f, msg in c.skipped)
+        skipped = f'<p class="bad">{len(c.skipped)} record(s) skipped:</p><ul>{items}</ul>'
+    return (
+        f'<p class="lead">{_e(diag.summary())}</p>'
+        f'<p class="sub">Specimen: 2H = {spec.height:g} m, 2B = {spec.width:g} m, m = {spec.mass:g} kg, '
+        f"alpha = {spec.alpha:.4f} rad, p = {spec.p:.4f} 1/s, Housner r = {spec.r_housner:.4f}. "
+        f"{len(c.free_vibration)} free-vibration and {len(c.ground_motion)} ground-motion records; "
+        f"{len(diag.train_ids)} train (free vibration and {len(diag.train_ids) - len(c.free_vibration)} ground "
+        f"motions), {len(diag.heldout_ids)} held out (seed {_e(diag.settings.get('seed'))}).</p>{skipped}"
+    )
+
+
+def _ladder(diag) -> str:
+    rows = []
+    for s in diag.steps:
+        prm = "<br>".join(
+            f"<code>{_e(n)}</code>: " + ", ".join(f"{_e(k)} = {_f(v)}" for k, v in p.items()) for n, p in s.effects
+        )
+        rows.append(
+            [
+                _e(s.label()) + (" <span class=muted>(by hand)</span>" if s.by_hand else ""),
+                prm or "&ndash;",
+                f"{_f(s.heldout_error)} &plusmn; {_f(s.heldout_se, 2)}",
+                _f(s.train_error),
+                "&ndash;" if s.added is None else f"{_f(s.improvement)} &plusmn; {_f(s.improvement_se, 2)}",
+                "&ndash;" if s.added is None else ('<span class="ok">yes</span>' if s.significant else "no"),
+            ]
+        )
+    table = _table(
+        ["step", "effects (fitted parameters)", "held-out error [alpha]", "training error", "improvement",
+         "significant"],
+        rows,
+        caption=(
+            "Time-history error over the measured window (see scenarios.compare), mean over the held-out "
+            "ground-motion records with its standard error; the improvement is the mean paired difference to the "
+            f"previous step. The noise floor (sigma/alpha, the error of a perfect model) is {diag.noise_floor:.4f}."
+        ),
+    )  # fmt: skip
+    fig = _figure(_ladder_figure(diag), "Held-out error at each step, with the noise floor.", "error ladder")
+    return table + fig
+
+
+def _candidates(diag) -> str:
+    out = []
+    for k, rnd in enumerate(diag.rounds):
+        base = " + ".join(rnd[0].base) if rnd and rnd[0].base else "the plain Housner model"
+        rows = [
+            [
+                f"<code>{_e(c.effect)}</code>",
+                ", ".join(f"{_e(key)} = {_f(v)}" for key, v in c.params.items()),
+                _f(c.train_error),
+                f"{_f(c.heldout_error)} &plusmn; {_f(c.heldout_se, 2)}",
+                f"{_f(c.improvement)} &plusmn; {_f(c.improvement_se, 2)}",
+                _f(c.pvalue, 2),
+                ('<span class="ok">yes</span>' if c.significant else "no")
+                + f" <span class=muted>({_e(c.reason)})</span>",
+            ]
+            for c in rnd
+        ]  # fmt: skip
+        out.append(f"<h3>Round {k + 1}: candidates added to {_e(base)}</h3>")
+        out.append(
+            _table(
+                [
+                    "effect",
+                    "fitted parameters",
+                    "training error",
+                    "held-out error",
+                    "improvement",
+                    "p (Wilcoxon)",
+                    "significant",
+                ],
+                rows,
+            )  # fmt: skip
+        )
+    if not out:
+        return "<p>No candidates were tried.</p>"
+    return "".join(out)
+
+
+def _localisation(diag) -> str:
+    parts = [
+        _figure(
+            _cdf_figure(diag),
+            "theta_max/alpha of the ground-motion records: measurement and model at every step (model peaks seen "
+            "through the same sensor noise as the measurement).",
+            "CDFs",
+        ),
+        _figure(
+            _energy_figure(diag),
+            "Energy ratio of each free-vibration impact from successive peaks (seed eq. 8) against the amplitude "
+            "before it. A constant lower than Housner's says restitution; a trend with amplitude says "
+            "amplitude-dependent restitution or damping.",
+            "energy ratio",
+        ),
+        _figure(
+            _half_cycle_figure(diag),
+            "Duration of each complete free-vibration half-cycle against its amplitude, with Housner's exact "
+            "relation for the stated p: a uniform shift says p is mis-stated.",
+            "half-cycle duration",
+        ),
+        _figure(
+            _flight_figure(diag),
+            "Squared ratio of the speeds at the closing and the opening impact of each half-cycle: 1 when no "
+            "energy is lost between impacts (Housner); below 1 with damping.",
+            "decay between impacts",
+        ),
+        _figure(
+            _onset_figure(diag),
+            "Per ground-motion record and direction: the largest ground acceleration toward the first uplift "
+            "before the block is seen to move (onset, an upper estimate of the threshold) and the largest toward "
+            "each direction it stood up to 50 ms before (stood). Housner's threshold is g tan alpha; asymmetric "
+            "pivots split the two directions.",
+            "uplift onset",
+        ),
+        _figure(
+            _bars_figure(
+                diag,
+                [
+                    ("share_pos", "excursions toward +theta"),
+                    ("first_uplift_pos", "first uplifts toward +theta"),
+                    ("overturn_fraction", "overturn fraction"),
+                ],
+                "Direction bias and overturning (95 % intervals)",
+                "share [-]",
+                ref=0.5,
+            ),  # fmt: skip
+            "Share of excursions and of first uplifts toward +theta (0.5 for a symmetric block), and the overturn "
+            "fraction of the ground-motion records.",
+            "direction bias",
+        ),
+        _figure(
+            _bars_figure(
+                diag,
+                [("alternation", "ln c (ends +) - ln c (ends -)")],
+                "Alternation of free-vibration energy ratios (95 % intervals)",
+                "[-]",
+                ref=0.0,
+            ),  # fmt: skip
+            "Difference of the mean log energy ratio of impacts that end a theta > 0 half-cycle and of those that "
+            "end a theta < 0 one: 0 for a symmetric block; peaks alternating in size give a non-zero value.",
+            "alternation",
+        ),
+        _figure(
+            _tilt_figure(diag),
+            "Rotation before the first uplift while the ground acceleration is below g tan alpha, against the "
+            "ground acceleration: Housner's block does not move (0); a sensor offset shifts it, a flexible base "
+            "tilts it in proportion to the acceleration.",
+            "rotation before uplift",
+        ),
+    ]
+    return "".join(parts) + _metric_table(diag)
+
+
+def _metric_table(diag) -> str:
+    from scenarios.compare import METRICS
+
+    header = ["quantity", "unit", "measured"] + [f"model: {_e(_label(s))}" for s in diag.steps]
+    rows = []
+    locs = [s.comparison.localisation() for s in diag.steps]
+    for key, (label, unit) in METRICS.items():
+        m = locs[0][key][0]
+        row = [_e(label), _e(unit), f"{_f(m.value)} &plusmn; {_f(m.se, 2)}"]
+        for loc in locs:
+            x = loc[key][1]
+            se = math.hypot(m.se if math.isfinite(m.se) else 0.0, x.se if math.isfinite(x.se) else 0.0)
+            z = (x.value - m.value) / se if se > 0 and math.isfinite(x.value) and math.isfinite(m.value) else math.nan
+            flag = ' class="bad"' if math.isfinite(z) and abs(z) > 3 else ""
+            row.append(f"<span{flag}>{_f(x.value)} &plusmn; {_f(x.se, 2)}</span>")
+        rows.append(row)
+    return _table(
+        header,
+        rows,
+        caption="Localisation quantities with standard errors; a model value more than 3 combined standard errors "
+        "from the measurement is marked.",
+    )
+
+
+def _records(diag) -> str:
+    steps = diag.steps
+    held = set(diag.heldout_ids)
+    header = ["record", "kind", "set", "window [s]"] + [f"error: {_e(_label(s))}" for s in steps] + [
+        "theta_max/alpha measured", f"theta_max/alpha {_e(_label(steps[-1]))}", "diverges at [s]"]  # fmt: skip
+    rows = []
+    per_step = [{r.id: r for r in s.comparison.records} for s in steps]
+    for rec in diag.campaign.records:
+        r0 = per_step[0][rec.id]
+        rl = per_step[-1][rec.id]
+        which = "held out" if rec.id in held else "train"
+        rows.append(
+            [f"<code>{_e(rec.id)}</code>", _e(rec.kind), which, _f(r0.window_end, 3)]
+            + [_f(p[rec.id].error) for p in per_step]
+            + [_f(r0.theta_max_over_alpha_measured, 3), _f(rl.theta_max_over_alpha_model, 3),
+               _f(rl.divergence_time, 3)]
+        )  # fmt: skip
+    return _table(header, rows, caption="Errors in units of alpha over each record's window; failures show a dash.")
+
+
+def _settings(diag) -> str:
+    rows = [[_e(k), f"<code>{_e(v)}</code>"] for k, v in diag.settings.items()]
+    rows.append(["elapsed", f"{diag.elapsed:.1f} s"])
+    rows.append(["campaign", f"<code>{_e(diag.campaign.path)}</code>"])
+    return _table(["setting", "value"], rows, cls="kv")
+
+
+_CSS = """
+body { font: 15px/1.5 system-ui, -apple-system, "Segoe UI", Roboto, Arial, sans-serif; color: #1d2327; margin: 0; }
+main { max-width: 1080px; margin: 0 auto; padding: 1.5rem 1.5rem 4rem; }
+header { border-bottom: 3px solid #0b5394; margin-bottom: 1rem; }
+h1 { font-size: 1.6rem; margin: .2rem 0; }
+h2 { font-size: 1.3rem; border-bottom: 1px solid #d8dee4; padding-bottom: .2rem; margin-top: 2.2rem; }
+h3 { font-size: 1.05rem; margin-top: 1.4rem; }
+.sub, .muted, p.caption, figcaption { color: #5f6b73; }
+p.lead { font-size: 1.08rem; background: #f6f8fa; border-left: 4px solid #0b5394; padding: .6rem .9rem; }
+table { border-collapse: collapse; font-size: .9rem; }
+th, td { border: 1px solid #d8dee4; padding: .28rem .5rem; text-align: left; vertical-align: top; }
+thead th { background: #f6f8fa; }
+div.tbl { margin: .8rem 0 1.2rem; overflow-x: auto; }
+p.caption, figcaption { font-size: .86rem; max-width: 60rem; }
+figure { margin: 1rem 0; }
+figure img { max-width: 100%; height: auto; border: 1px solid #d8dee4; border-radius: 4px; }
+.ok { color: #2b6a2b; font-weight: 600; } .bad { color: #a94442; font-weight: 600; }
+nav ol { columns: 2; }
+"""
+
+
+def render_diagnosis(diag) -> str:
+    """The diagnosis report as one HTML string (self-contained: inline CSS, base64 PNG figures).
+
+    Parameters
+    ----------
+    diag : scenarios.diagnose.Diagnosis
+        From :func:`scenarios.diagnose.diagnose` with ``compare_steps=True``
+        (every step carries its comparison with the campaign).
+    """
+    if any(s.comparison is None for s in diag.steps):
+        raise ValueError("the diagnosis has no comparisons per step; run diagnose(..., compare_steps=True)")
+    t0 = time.perf_counter()
+    sections = [
+        ("summary", "Summary", _summary(diag)),
+        ("ladder", "Error ladder", _ladder(diag)),
+        ("candidates", "Candidate effects", _candidates(diag)),
+        ("where", "Where the model fails, step by step", _localisation(diag)),
+        ("records", "Records", _records(diag)),
+        ("settings", "Settings", _settings(diag)),
+    ]
+    toc = "".join(f'<li><a href="#{i}">{_e(t)}</a></li>' for i, t, _b in sections)
+    body = "".join(f'<section id="{i}"><h2>{_e(t)}</h2>{b}</section>' for i, t, b in sections)
+    took = time.perf_counter() - t0
+    return (
+        "<!DOCTYPE html>\n"
+        '<html lang="en"><head><meta charset="utf-8">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        '<link rel="icon" href="data:,">'
+        f"<title>{_e(diag.campaign.name)}: diagnosis</title><style>{_CSS}</style></head><body><main>"
+        f"<header><h1>Diagnosis: <code>{_e(diag.campaign.name)}</code></h1>"
+        f'<p class="sub">Which physical effect the Housner model misses, judged on held-out records.</p></header>'
+        f"<nav><ol>{toc}</ol></nav>{body}"
+        f'<p class="muted">Page built in {took:.1f} s.</p></main></body></html>\n'
+    )
+
+
+def write_diagnosis_report(diag, path: str | Path) -> Path:
+    """Write :func:`render_diagnosis` to ``path`` (parents created) and return the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(render_diagnosis(diag), encoding="utf-8")
+    return path

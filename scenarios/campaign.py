@@ -1,0 +1,488 @@
+"""Measurement campaigns: a specimen and its measured records, read from a campaign directory.
+
+A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one
+``[[record]]`` per test) and one CSV per record with the columns ``time``
+[s], ``ground_acc`` [m/s^2] and ``theta`` [rad] (see campaign-format.md).
+:func:`load_campaign` reads it into a :class:`Campaign` whose records carry
+the measured rotation and the ground motion that drives a model of the same
+test (:class:`housner.GroundMotion`, with the initial angle of a
+free-vibration release).
+
+Errors: a malformed ``campaign.toml`` raises :class:`housner.errors.DataFileError`
+naming the key (and the line); a malformed record file is reported with its
+file, line and column in :attr:`Campaign.skipped` and left out, the other
+records are kept.
+
+References
+----------
+Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
+(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
+section 3 (specimen, free-vibration and shake-table tests, 500 Hz, 0.8 mrad).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from housner.calibration import estimate_noise
+from housner.errors import DataFileError
+from housner.motion import GroundMotion, read_csv_columns, uniform_step
+from housner.specimen import Specimen
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["KINDS", "OVERTURN_ANGLE", "Campaign", "MeasuredRecord", "estimate_release", "load_campaign"]
+
+#: Record kinds of the format.
+KINDS = ("free_vibration", "ground_motion")
+#: A measured block has overturned once |theta| reaches this angle [rad]: it lies on its side at
+#: pi/2; the 10 % margin allows for the sensor and for the block bouncing on the table.
+OVERTURN_ANGLE = 0.9 * math.pi / 2
+#: |theta| beyond pi/2 by more than this [rad] is not a rotation of a block on a table.
+_THETA_SLACK = 0.1
+#: The release fit of a free-vibration record uses the samples until the block has fallen by
+#: this fraction of its initial angle [-]: there theta0 - theta(t) ~ c t^2 + d t^4 holds to the noise.
+_RELEASE_DROP = 0.3
+#: A free-vibration record must start at least this many noise sigmas away from rest [-].
+_RELEASE_MIN_SIGMAS = 10.0
+
+_SPECIMEN_KEYS = {"height": "2H [m]", "width": "2B [m]", "depth": "[m]", "mass": "[kg]", "p": "[1/s] (optional)"}
+_RECORD_KEYS = {"id": "str", "kind": "str", "file": "str", "overturned": "bool (optional)"}
+_TOP_KEYS = {"name", "description", "specimen", "record"}
+
+
+@dataclass(frozen=True, eq=False)
+class MeasuredRecord:
+    """One measured test.
+
+    Attributes
+    ----------
+    id : str
+        Record id from campaign.toml.
+    kind : str
+        ``"free_vibration"`` or ``"ground_motion"``.
+    file : pathlib.Path
+        The CSV file.
+    motion : GroundMotion
+        The measured ground acceleration [m/s^2] on the record's sample grid.
+        A free-vibration record starts at the release: ``theta0`` is the
+        measured initial angle [rad] and ``theta_dot0`` = 0.
+    t : ndarray
+        Sample times [s], starting at 0 (at the release for a free-vibration
+        record whose file starts with a hold; see ``t_offset``).
+    theta : ndarray
+        Measured rotation [rad] at ``t``.
+    noise : float
+        Standard deviation of the measurement noise on theta [rad], estimated
+        from the record (:func:`housner.calibration.estimate_noise`).
+    overturned : bool
+        The block overturned: |theta| reached :data:`OVERTURN_ANGLE`, or the
+        campaign says so (``overturned = true`` in the record's table).
+    t_offset : float
+        Time in the file of the first sample kept [s] (the release of a
+        free-vibration record held before it; else the file's first time).
+    """
+
+    id: str
+    kind: str
+    file: Path
+    motion: GroundMotion
+    t: np.ndarray
+    theta: np.ndarray
+    noise: float
+    overturned: bool
+    t_offset: float = 0.0
+
+    @property
+    def dt(self) -> float:
+        """Sample step [s]."""
+        return self.motion.dt
+
+    @property
+    def theta_max(self) -> float:
+        """Largest measured |theta| [rad] (pi/2 when overturned)."""
+        return math.pi / 2 if self.overturned else float(np.max(np.abs(self.theta)))
+
+    @property
+    def is_free_vibration(self) -> bool:
+        return self.kind == "free_vibration"
+
+
+@dataclass(eq=False)
+class Campaign:
+    """A measurement campaign: the specimen and its records.
+
+    Attributes
+    ----------
+    name : str
+    specimen : Specimen
+        From ``[specimen]`` (2H, 2B, depth, mass, optional p).
+    records : list of MeasuredRecord
+        The records that were read, in the order of campaign.toml.
+    skipped : list of (str, str, str)
+        (record id, file, error message) of each record left out.
+    path : pathlib.Path
+        The campaign directory.
+    """
+
+    name: str
+    specimen: Specimen
+    records: list[MeasuredRecord]
+    skipped: list[tuple[str, str, str]] = field(default_factory=list)
+    path: Path = Path(".")
+    _cache: dict = field(default_factory=dict, init=False, repr=False)
+
+    @property
+    def free_vibration(self) -> list[MeasuredRecord]:
+        """The free-vibration records."""
+        return [r for r in self.records if r.kind == "free_vibration"]
+
+    @property
+    def ground_motion(self) -> list[MeasuredRecord]:
+        """The ground-motion (shake-table) records."""
+        return [r for r in self.records if r.kind == "ground_motion"]
+
+    def record(self, rid: str) -> MeasuredRecord:
+        """The record with id ``rid`` (ValueError listing the ids when unknown)."""
+        for r in self.records:
+            if r.id == rid:
+                return r
+        from housner.errors import unknown_choice
+
+        raise unknown_choice("record", rid, [r.id for r in self.records])
+
+    def __len__(self) -> int:
+        return len(self.records)
+
+    def __repr__(self) -> str:
+        return (
+            f"Campaign({self.name!r}, {len(self.free_vibration)} free-vibration + {len(self.ground_motion)} "
+            f"ground-motion records, {len(self.skipped)} skipped)"
+        )
+
+
+# ----------------------------------------------------------------------------
+# campaign.toml
+def _table_line(text: str, table: str, index: int = 0) -> int | None:
+    """1-based line of the ``[table]`` header (or of the ``index``-th ``[[table]]``); None if absent."""
+    hdr = re.compile(
+        rf"^\s*\[\[\s*{re.escape(table)}\s*\]\]" if table == "record" else rf"^\s*\[\s*{re.escape(table)}\s*\]"
+    )
+    hits = [i for i, ln in enumerate(text.splitlines()) if hdr.match(ln)]
+    return hits[index] + 1 if len(hits) > index else None
+
+
+def _key_line(text: str, key: str, table: str | None = None, index: int = 0) -> int | None:
+    """1-based line of ``key = ...`` in ``[table]`` (the ``index``-th ``[[table]]``) or at the top level.
+
+    Falls back to the table's header line when the key is not written there; None when nothing is found.
+    """
+    lines = text.splitlines()
+    start = 0
+    if table is not None:
+        head = _table_line(text, table, index)
+        if head is None:
+            return None
+        start = head
+    pat = re.compile(rf"^\s*{re.escape(key)}\s*=")
+    for i in range(start, len(lines)):
+        if re.match(r"^\s*\[", lines[i]):
+            break
+        if pat.match(lines[i]):
+            return i + 1
+    return start if table is not None else None
+
+
+def _unknown_key(path: Path, text: str, where: str, key: str, allowed, table=None, index=0) -> DataFileError:
+    close = difflib.get_close_matches(key, list(allowed), n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    return DataFileError(
+        path,
+        f"unknown key {where}{key!r}{hint} (allowed: {', '.join(sorted(allowed))})",
+        line=_key_line(text, key, table, index),
+    )
+
+
+def _read_toml(path: Path) -> tuple[dict, str]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise DataFileError(path, "no campaign.toml here (a campaign is a directory with campaign.toml)") from None
+    except OSError as e:
+        raise DataFileError(path, f"cannot read: {e.strerror or e}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"line (\d+)", str(e))
+        raise DataFileError(path, f"not valid TOML: {e}", line=int(m.group(1)) if m else None) from None
+    return data, text
+
+
+def _specimen(path: Path, text: str, data: dict) -> Specimen:
+    spec = data.get("specimen")
+    if not isinstance(spec, dict):
+        raise DataFileError(path, "missing table [specimen] (height, width, depth, mass, optional p)")
+    for key in spec:
+        if key not in _SPECIMEN_KEYS:
+            raise _unknown_key(path, text, "[specimen] ", key, _SPECIMEN_KEYS, "specimen")
+    kwargs = {}
+    for key, unit in _SPECIMEN_KEYS.items():
+        if key not in spec:
+            if key == "p":
+                continue
+            raise DataFileError(path, f"missing key [specimen] {key!r} {unit}", line=_table_line(text, "specimen"))
+        v = spec[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise DataFileError(
+                path,
+                f"[specimen] {key!r} must be a positive number {unit}, got {v!r}",
+                line=_key_line(text, key, "specimen"),
+            )
+        kwargs[key] = float(v)
+    try:
+        return Specimen(name=str(data.get("name", path.parent.name)), **kwargs)
+    except ValueError as e:
+        raise DataFileError(path, f"[specimen]: {e}", line=_table_line(text, "specimen")) from None
+
+
+def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
+    recs = data.get("record")
+    if recs is None:
+        raise DataFileError(path, "no [[record]] tables: a campaign needs at least one record")
+    if not isinstance(recs, list):
+        raise DataFileError(path, "`record` must be an array of tables ([[record]])", line=_key_line(text, "record"))
+    seen: dict[str, int] = {}
+    out = []
+    for i, rec in enumerate(recs):
+        where = f"[[record]] #{i + 1} "
+        for key in rec:
+            if key not in _RECORD_KEYS:
+                raise _unknown_key(path, text, where, key, _RECORD_KEYS, "record", i)
+        for key in ("id", "kind", "file"):
+            if key not in rec:
+                raise DataFileError(
+                    path, f"missing key {where}{key!r} ({_RECORD_KEYS[key]})", line=_table_line(text, "record", i)
+                )
+            if not isinstance(rec[key], str) or not rec[key].strip():
+                raise DataFileError(
+                    path, f"{where}{key!r} must be a non-empty string, got {rec[key]!r}",
+                    line=_key_line(text, key, "record", i),
+                )  # fmt: skip
+        rid = rec["id"]
+        if rid in seen:
+            raise DataFileError(
+                path,
+                f"{where}'id' {rid!r} is already used by [[record]] #{seen[rid] + 1}",
+                line=_key_line(text, "id", "record", i),
+            )
+        seen[rid] = i
+        if rec["kind"] not in KINDS:
+            close = difflib.get_close_matches(rec["kind"], KINDS, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise DataFileError(
+                path,
+                f"{where}'kind' must be one of {', '.join(KINDS)}, got {rec['kind']!r}{hint}",
+                line=_key_line(text, "kind", "record", i),
+            )
+        if "overturned" in rec and not isinstance(rec["overturned"], bool):
+            raise DataFileError(
+                path, f"{where}'overturned' must be true or false, got {rec['overturned']!r}",
+                line=_key_line(text, "overturned", "record", i),
+            )  # fmt: skip
+        out.append(rec)
+    return out
+
+
+# ----------------------------------------------------------------------------
+# records
+def estimate_release(t, theta, noise: float) -> tuple[int, float]:
+    """Release sample and initial angle of a free-vibration record, robust to noise.
+
+    The block is at rest at theta0 (possibly held for a while) and falls
+    freely from the release on; near the release
+    theta(t) = theta0 + c tau^2 + d tau^4 with tau = max(t - t_r, 0) (the
+    cubic term vanishes because theta' = 0 at the release). The model is
+    fitted by least squares over the samples until the block has fallen by
+    30 % of its angle, profiling the release time t_r over the samples; a
+    hold (t_r > 0) is accepted only when it lowers the squared residual by
+    more than ln(n) noise^2 (the Bayesian information criterion's price of
+    one more parameter).
+
+    Parameters
+    ----------
+    t : array_like
+        Uniform sample times [s].
+    theta : array_like
+        Measured rotation [rad].
+    noise : float
+        Noise standard deviation [rad].
+
+    Returns
+    -------
+    k_release : int
+        Index of the sample nearest the release (0 when the record starts at it).
+    theta0 : float
+        Fitted angle at that sample [rad]; its standard error is about
+        2 noise / sqrt(samples in the fit) (0.1-0.2 mrad at 500 Hz and 0.8 mrad).
+
+    Raises
+    ------
+    ValueError
+        The record does not start away from rest (|theta0| below 10 noise
+        sigmas) or never falls.
+    """
+    t = np.asarray(t, dtype=float)
+    th = np.asarray(theta, dtype=float)
+    k0 = min(th.size, 9)
+    start = float(np.median(th[:k0]))
+    sigma = max(float(noise), 1e-12)
+    if abs(start) < _RELEASE_MIN_SIGMAS * sigma:
+        raise ValueError(
+            f"a free-vibration record must start from a released tilt: the first samples are at "
+            f"{start:.3g} rad, within {_RELEASE_MIN_SIGMAS:g} noise sigmas ({sigma:.2g} rad) of rest"
+        )
+    s = math.copysign(1.0, start)
+    fallen = np.flatnonzero(s * (start - th) > _RELEASE_DROP * abs(start))
+    if fallen.size == 0:
+        raise ValueError("the free-vibration record never falls from its initial tilt")
+    kw = int(fallen[0])
+    # candidate releases: every sample up to where the record has clearly left the plateau
+    left = np.flatnonzero(s * (start - th[:kw]) > 4.0 * sigma)
+    k_hi = int(left[0]) if left.size else kw
+    cands = np.arange(0, max(k_hi, 1))
+    if cands.size > 400:
+        cands = cands[-400:]
+    y = th[: kw + 1]
+    tt = t[: kw + 1]
+    fits = []
+    for kr in cands:
+        tau = np.maximum(tt - t[kr], 0.0) / max(tt[-1] - t[kr], 1e-12)
+        A = np.column_stack((np.ones_like(tau), tau**2, tau**4))
+        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+        fits.append((float(np.sum((y - A @ coef) ** 2)), int(kr), float(coef[0])))
+    best = min(fits)
+    at_start = fits[0] if fits[0][1] == 0 else best
+    # A hold is one more parameter: accept it only when it lowers the residual by more than the
+    # Bayesian-information price of a parameter, ln(n) sigma^2 (noise alone would not).
+    if at_start[0] - best[0] <= math.log(y.size) * sigma * sigma:
+        best = at_start
+    return best[1], best[2]
+
+
+def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord:
+    path = (root / rec["file"]).resolve() if not Path(rec["file"]).is_absolute() else Path(rec["file"])
+    (t, acc, theta), lines = read_csv_columns(path, ["time", "ground_acc", "theta"])
+    dt = uniform_step(path, t, lines, "time")
+    bad = np.flatnonzero(np.abs(theta) > math.pi / 2 + _THETA_SLACK)
+    if bad.size:
+        k = int(bad[0])
+        raise DataFileError(
+            path,
+            f"|theta| = {abs(theta[k]):.4g} rad is beyond pi/2: not a rotation in rad of a block on a table "
+            "(degrees or another unit?)",
+            line=int(lines[k]),
+            column="theta",
+        )
+    if theta.size < 16:
+        raise DataFileError(path, f"only {theta.size} samples; a record needs at least 16", line=int(lines[-1]))
+    noise = estimate_noise(theta)
+    overturned = bool(rec.get("overturned", False)) or bool(np.max(np.abs(theta)) >= OVERTURN_ANGLE)
+    k_rel = 0
+    theta0 = 0.0
+    if rec["kind"] == "free_vibration":
+        try:
+            k_rel, theta0 = estimate_release(t, theta, noise)
+        except ValueError as e:
+            raise DataFileError(path, str(e), line=int(lines[0]), column="theta") from None
+        if abs(theta0) >= specimen.alpha:
+            raise DataFileError(
+                path,
+                f"released at theta0 = {theta0:.4g} rad, beyond alpha = {specimen.alpha:.4g} rad: the block "
+                "would overturn without rocking",
+                line=int(lines[0]),
+                column="theta",
+            )
+    t_off = float(t[k_rel])
+    acc = acc[k_rel:]
+    theta = theta[k_rel:]
+    motion = GroundMotion(
+        acc=acc,
+        dt=dt,
+        name=rec["id"],
+        provenance=f"{path.name} (campaign record, {rec['kind']})",
+        theta0=theta0,
+        theta_dot0=0.0,
+    )
+    return MeasuredRecord(
+        id=rec["id"],
+        kind=rec["kind"],
+        file=path,
+        motion=motion,
+        t=np.arange(theta.size) * dt,
+        theta=theta,
+        noise=noise,
+        overturned=overturned,
+        t_offset=t_off,
+    )
+
+
+def load_campaign(path: str | Path) -> Campaign:
+    """Read a measurement campaign.
+
+    Parameters
+    ----------
+    path : path
+        The campaign directory (or its ``campaign.toml``).
+
+    Returns
+    -------
+    Campaign
+        Records that could not be read are listed in ``skipped`` with the
+        error (file, line and column), the others kept.
+
+    Raises
+    ------
+    housner.errors.DataFileError
+        ``campaign.toml`` is missing or malformed (the message names the key
+        and, where known, the line), or no record could be read.
+
+    Notes
+    -----
+    A free-vibration record starts at the release: its initial angle is
+    fitted to the first samples (:func:`estimate_release`) and becomes the
+    motion's ``theta0`` (with ``theta_dot0`` = 0); samples of a hold before
+    the release are dropped. A record file whose time column does not start
+    at 0 is taken as starting at its first sample.
+    """
+    p = Path(path)
+    toml = p if p.suffix == ".toml" else p / "campaign.toml"
+    root = toml.parent
+    data, text = _read_toml(toml)
+    for key in data:
+        if key not in _TOP_KEYS:
+            raise _unknown_key(toml, text, "", key, _TOP_KEYS)
+    name = data.get("name", root.name)
+    if not isinstance(name, str):
+        raise DataFileError(toml, f"'name' must be a string, got {name!r}", line=_key_line(text, "name"))
+    specimen = _specimen(toml, text, data)
+    entries = _record_entries(toml, text, data)
+    records, skipped = [], []
+    for rec in entries:
+        try:
+            records.append(_read_record(root, rec, specimen))
+        except DataFileError as e:
+            skipped.append((rec["id"], rec["file"], str(e)))
+    if not records:
+        detail = "; ".join(f"{rid}: {msg}" for rid, _f, msg in skipped[:3])
+        raise DataFileError(toml, f"no record could be read ({len(skipped)} skipped: {detail})")
+    return Campaign(name=name, specimen=specimen, records=records, skipped=skipped, path=root)

@@ -1,0 +1,394 @@
+"""Synthetic measurement campaigns with a known ("hidden") physical effect, for the diagnosis tests.
+
+This is test code, written separately from :mod:`housner.model` and
+:mod:`housner.effects` so that the diagnosis is checked against physics it
+did not produce itself: its own integrator (fixed-step RK4 on a finer grid
+than the suite's, events located by bisection instead of Newton, the pivot
+carried in the state, its own rest rule), its own impact law (angular
+momentum about the landing corner computed from the corner vectors, not from
+the library's closed form), its own ground motions, noise and file writer.
+
+A campaign is written in the measurement format (``campaign.toml`` and
+``records/<id>.csv``, see campaign-format.md) for the seed specimen
+(Bachmann et al. 2017: 2H = 0.5 m, 2B = 0.075 m, 3.94 kg, p = 4.8883 1/s),
+sampled at 500 Hz with 0.8 mrad Gaussian noise on theta (seed section 3.4).
+
+Hidden effects (:data:`HIDDEN`; units SI): ``none``, ``rotational_damping``
+(viscous moment -c I0 theta'), ``asymmetric_pivots`` (centre of mass e off
+the centre line), ``sensor_offset`` (constant angle offset), ``p_misstated``
+(the block rocks with another p than campaign.toml states; its r is the
+stated specimen's), ``p_misstated_consistent`` (the same, with the impacts
+of the true inertia: two effects at once), ``restitution``
+(another constant r), ``amplitude_dependent_restitution`` (r falling with the
+impact speed), ``time_lag`` (theta channel late).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+from scipy import signal
+
+G = 9.80665
+#: Seed specimen (Bachmann et al. 2017, Table 1 and section 3.1).
+HEIGHT, WIDTH, DEPTH, MASS, P_SEED = 0.5, 0.075, 0.4, 3.94, 4.8883
+#: 500 Hz, 0.8 mrad (seed section 3.4).
+DT = 0.002
+NOISE = 0.8e-3
+#: Integrator substeps per 2 ms sample: h = 0.25 ms, p h ~ 1.2e-3 (RK4 error ~ (p h)^4 per unit time).
+SUBSTEPS = 8
+#: Ground motions: band-pass centre [Hz] and peak over g tan(alpha) [-].
+FG_RANGE = (2.0, 4.0)
+PGA_RANGE = (1.0, 2.0)
+
+#: The hidden effects: the generator's own parameters, and the registry names the diagnosis should give.
+HIDDEN: dict[str, tuple[dict, tuple[str, ...]]] = {
+    "none": ({}, ()),
+    "rotational_damping": ({"c": 0.6}, ("rotational_damping",)),  # c [1/s]
+    "asymmetric_pivots": ({"e": 0.3 * WIDTH / 2}, ("asymmetric_pivots",)),  # e [m], 30 % of B
+    "sensor_offset": ({"offset": 4.0e-3}, ("sensor_offset",)),  # [rad], 5 noise sigmas
+    "p_misstated": ({"p_true": 1.08 * P_SEED}, ("frequency_parameter",)),  # [1/s]
+    "restitution": ({"r": 0.88}, ("restitution",)),  # [-]
+    "amplitude_dependent_restitution": ({"exponent": 0.6}, ("amplitude_dependent_restitution",)),  # [-]
+    "time_lag": ({"tau": 0.02}, ("time_lag",)),  # [s]
+    # p mis-stated, and the impacts those of the true inertia (Housner's r 0.938 instead of 0.9465)
+    "p_misstated_consistent": ({"p_true": 1.08 * P_SEED, "consistent": True}, ("frequency_parameter", "restitution")),
+}
+
+
+@dataclass(frozen=True)
+class Truth:
+    """The physics a synthetic campaign is generated with (SI units)."""
+
+    alpha_pos: float
+    alpha_neg: float
+    p_pos: float
+    p_neg: float
+    rho_pn: float  # theta' ratio, impact that leaves the +x corner and lands on the -x corner
+    rho_np: float
+    c: float = 0.0  # [1/s]
+    exponent: float = 0.0  # r_eff = rho^2 (|w| / (p_s alpha_s))^n
+    offset: float = 0.0  # [rad]
+    tau: float = 0.0  # [s]
+
+
+def truth_for(hidden: str) -> Truth:
+    """The generator's physics for a hidden effect name of :data:`HIDDEN`."""
+    kw, _ = HIDDEN[hidden]
+    hh, bb = HEIGHT / 2, WIDTH / 2
+    R = math.hypot(hh, bb)
+    p = kw.get("p_true", P_SEED)
+    i0 = MASS * G * R / p**2
+    ic = i0 - MASS * R**2
+    e = kw.get("e", 0.0)
+    b_pos, b_neg = bb - e, bb + e  # horizontal distances centre of mass -> corners
+    corners = {+1: np.array([b_pos, 0.0]), -1: np.array([-b_neg, 0.0])}
+    com = np.array([0.0, hh])
+
+    def inertia(s):
+        d = com - corners[s]
+        return ic + MASS * float(d @ d)
+
+    def ratio(s_old):
+        # Angular momentum about the landing corner, just before and just after the impact
+        # (rotation rate W about the old corner): L = Ic W + m (G - O_new) x v_G, v_G = W z x (G - O_old).
+        s_new = -s_old
+        r_old = com - corners[s_old]
+        v = np.array([-r_old[1], r_old[0]])  # W = 1
+        r_new = com - corners[s_new]
+        L = ic + MASS * (r_new[0] * v[1] - r_new[1] * v[0])
+        return L / inertia(s_new)
+
+    def p_of(s):
+        d = com - corners[s]
+        return math.sqrt(MASS * G * math.hypot(*d) / inertia(s))
+
+    rho_pn, rho_np = ratio(+1), ratio(-1)
+    if "r" in kw:  # another constant r: both impacts lose 1 - r of the energy
+        rho_pn = rho_np = math.sqrt(kw["r"])
+    if "p_true" in kw and not kw.get("consistent", False):
+        # The block rocks with p_true, but its impacts lose what Housner's formula gives for the stated
+        # specimen (a block whose r is what it is, e.g. calibrated separately, as in seed Table 1): the
+        # mis-stated p is then the only thing wrong. (Housner's r for p_true would be 0.938, not 0.9465.)
+        i0_stated = MASS * G * R / P_SEED**2
+        rho_pn = rho_np = 1.0 - 2.0 * MASS * bb * bb / i0_stated
+    return Truth(
+        alpha_pos=math.atan2(b_pos, hh),
+        alpha_neg=math.atan2(b_neg, hh),
+        p_pos=p_of(+1),
+        p_neg=p_of(-1),
+        rho_pn=rho_pn,
+        rho_np=rho_np,
+        c=kw.get("c", 0.0),
+        exponent=kw.get("exponent", 0.0),
+        offset=kw.get("offset", 0.0),
+        tau=kw.get("tau", 0.0),
+    )
+
+
+# ----------------------------------------------------------------------------
+# the integrator
+@njit(cache=True)
+def _rhs(s, th, w, a, al_p, al_n, p2_p, p2_n, c):
+    # Housner's equation on pivot s (s = +1: +x corner), a = ug''/g [-]
+    if s > 0:
+        d = al_p - th
+        return -p2_p * (math.sin(d) + a * math.cos(d)) - c * w
+    d = -al_n - th
+    return -p2_n * (math.sin(d) + a * math.cos(d)) - c * w
+
+
+@njit(cache=True)
+def _step(s, th, w, a0, a1, h, al_p, al_n, p2_p, p2_n, c):
+    # one RK4 step of length h with a(t) linear from a0 (t = 0) to a1 (t = h)
+    am = 0.5 * (a0 + a1)
+    k1t, k1w = w, _rhs(s, th, w, a0, al_p, al_n, p2_p, p2_n, c)
+    k2t, k2w = w + 0.5 * h * k1w, _rhs(s, th + 0.5 * h * k1t, w + 0.5 * h * k1w, am, al_p, al_n, p2_p, p2_n, c)
+    k3t, k3w = w + 0.5 * h * k2w, _rhs(s, th + 0.5 * h * k2t, w + 0.5 * h * k2w, am, al_p, al_n, p2_p, p2_n, c)
+    k4t, k4w = w + h * k3w, _rhs(s, th + h * k3t, w + h * k3w, a1, al_p, al_n, p2_p, p2_n, c)
+    return th + h / 6 * (k1t + 2 * k2t + 2 * k3t + k4t), w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
+
+
+@njit(cache=True)
+def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, expo, out):
+    """theta at the samples of acc_g (units of g, linear in between); returns 1 if it overturned."""
+    n = acc_g.size
+    h = dt / m
+    p2_p, p2_n = p_p * p_p, p_n * p_n
+    rocking = th0 != 0.0 or w0 != 0.0
+    s = 1 if (th0 > 0.0 or (th0 == 0.0 and w0 > 0.0)) else -1
+    th, w = th0, w0
+    out[0] = th
+    for k in range(n - 1):
+        for j in range(m):
+            t0 = j * h
+            a0 = acc_g[k] + (acc_g[k + 1] - acc_g[k]) * (t0 / dt)
+            a1 = acc_g[k] + (acc_g[k + 1] - acc_g[k]) * ((t0 + h) / dt)
+            left = h
+            while left > 0.0:
+                if not rocking:
+                    # at rest: lift off where the linear ground acceleration passes a threshold
+                    lo_p, lo_n = -math.tan(al_p), math.tan(al_n)
+                    t_up = -1.0
+                    a_beg = a0 + (a1 - a0) * ((h - left) / h)
+                    if a_beg < lo_p:
+                        t_up, s = 0.0, 1
+                    elif a_beg > lo_n:
+                        t_up, s = 0.0, -1
+                    elif a1 < lo_p:
+                        t_up, s = left * (lo_p - a_beg) / (a1 - a_beg), 1
+                    elif a1 > lo_n:
+                        t_up, s = left * (lo_n - a_beg) / (a1 - a_beg), -1
+                    if t_up < 0.0:
+                        break
+                    left -= t_up
+                    rocking = True
+                    th, w = 0.0, 0.0
+                    continue
+                a_beg = a0 + (a1 - a0) * ((h - left) / h)
+                tn, wn = _step(s, th, w, a_beg, a1, left, al_p, al_n, p2_p, p2_n, c)
+                if abs(tn) >= 0.5 * math.pi:
+                    th = math.copysign(0.5 * math.pi, tn)
+                    for kk in range(k + 1, n):
+                        out[kk] = th
+                    return 1
+                if tn * s >= 0.0:
+                    th, w = tn, wn
+                    break
+                # theta crosses zero inside the step: bisection on the step length
+                lo, hi = 0.0, left
+                for _ in range(80):
+                    mid = 0.5 * (lo + hi)
+                    am = a_beg + (a1 - a_beg) * (mid / left)
+                    tm, _wm = _step(s, th, w, a_beg, am, mid, al_p, al_n, p2_p, p2_n, c)
+                    if tm * s > 0.0:
+                        lo = mid
+                    else:
+                        hi = mid
+                am = a_beg + (a1 - a_beg) * (hi / left)
+                tm, wm = _step(s, th, w, a_beg, am, hi, al_p, al_n, p2_p, p2_n, c)
+                left -= hi
+                # impact: the new pivot is the other corner
+                rho = rho_pn if s > 0 else rho_np
+                if expo != 0.0:
+                    ref = (p_p * al_p) if s > 0 else (p_n * al_n)
+                    r_eff = rho * rho * (abs(wm) / ref) ** expo
+                    if r_eff > 1.0:
+                        r_eff = 1.0
+                    rho = math.sqrt(r_eff)
+                w = wm * rho
+                th = 0.0
+                s = -s
+                # rest: the excursion the new speed could reach is below 1e-7 rad
+                if w * w < 2.0 * (p2_p if s > 0 else p2_n) * 1e-7 * (al_p if s > 0 else al_n):
+                    rocking = False
+                    w = 0.0
+        out[k + 1] = th
+    return 0
+
+
+def simulate_truth(truth: Truth, acc: np.ndarray, *, theta0: float = 0.0) -> tuple[np.ndarray, bool]:
+    """theta [rad] at the 500 Hz samples of ``acc`` [m/s^2] (block released at rest from theta0), overturned."""
+    out = np.empty(acc.size)
+    over = _integrate(
+        np.ascontiguousarray(acc, dtype=np.float64) / G, DT, SUBSTEPS, float(theta0), 0.0,
+        truth.alpha_pos, truth.alpha_neg, truth.p_pos, truth.p_neg, truth.rho_pn, truth.rho_np,
+        truth.c, truth.exponent, out,
+    )  # fmt: skip
+    return out, bool(over)
+
+
+# ----------------------------------------------------------------------------
+# ground motions
+def ground_motion(rng: np.random.Generator, duration: float = 6.0) -> np.ndarray:
+    """A short pulse-like filtered-noise record at model scale [m/s^2].
+
+    White noise through a second-order band-pass (Kanai-Tajimi-like, centre
+    :data:`FG_RANGE`, damping 0.35), under a (t/t1)^2 exp(2 (1 - t/t1))
+    envelope, plus a one-cycle sine pulse of 1-2 Hz in half the records,
+    scaled to a peak of :data:`PGA_RANGE` times g tan(alpha) (1.47 m/s^2 for
+    the seed specimen), then 1.5 s of free rocking at the end (zeros). For
+    the seed specimen about a quarter of the records overturn and the median
+    theta_max/alpha of the others is ~0.15.
+    """
+    n_shake = int(round((duration - 1.5) / DT))
+    n = int(round(duration / DT)) + 1
+    t = np.arange(n_shake) * DT
+    fg = rng.uniform(FG_RANGE[0], FG_RANGE[1])
+    wg, zg = 2 * math.pi * fg, 0.35
+    # band-pass 2 z w s / (s^2 + 2 z w s + w^2), discretised with the bilinear transform
+    b, a = signal.bilinear([2 * zg * wg, 0.0], [1.0, 2 * zg * wg, wg * wg], fs=1.0 / DT)
+    y = signal.lfilter(b, a, rng.standard_normal(n_shake))
+    t1 = rng.uniform(0.6, 1.4)
+    env = (t / t1) ** 2 * np.exp(2.0 * (1.0 - t / t1))
+    a = y * env
+    if rng.random() < 0.5:
+        fp = rng.uniform(1.0, 2.0)
+        t0 = rng.uniform(0.8, 2.0)
+        tp = t - t0
+        pulse = np.where((tp > 0) & (tp < 1 / fp), np.sin(2 * math.pi * fp * tp), 0.0)
+        a = a / np.max(np.abs(a)) + rng.choice([-1.0, 1.0]) * rng.uniform(0.6, 1.0) * pulse
+    a = a / np.max(np.abs(a)) * rng.uniform(PGA_RANGE[0], PGA_RANGE[1]) * G * WIDTH / HEIGHT
+    # taper the last 0.2 s of shaking so the record ends at rest
+    taper = np.ones(n_shake)
+    k = int(0.2 / DT)
+    taper[-k:] = 0.5 * (1 + np.cos(np.linspace(0, math.pi, k)))
+    out = np.zeros(n)
+    out[:n_shake] = a * taper
+    return out
+
+
+# ----------------------------------------------------------------------------
+# campaigns
+def _observe(truth: Truth, theta: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    th = theta
+    if truth.tau:
+        k = np.arange(th.size)
+        th = np.interp(k - truth.tau / DT, k, th)  # the theta channel shows theta(t - tau)
+    return th + truth.offset + rng.normal(0.0, NOISE, th.size)
+
+
+def _write_csv(path: Path, acc: np.ndarray, theta: np.ndarray) -> None:
+    t = np.arange(acc.size) * DT
+    np.savetxt(path, np.column_stack((t, acc, theta)), fmt=("%.4f", "%.9e", "%.9e"), delimiter=",",
+               header="time,ground_acc,theta", comments="")  # fmt: skip
+
+
+def write_campaign(
+    root: str | Path,
+    hidden: str = "none",
+    *,
+    n_ground: int = 60,
+    seed: int = 0,
+    fv_theta0_over_alpha: tuple[float, ...] = (0.8, -0.65, 0.5),
+    fv_duration: float = 12.0,
+    gm_duration: float = 6.0,
+) -> dict:
+    """Write a synthetic campaign to ``root`` and return what it holds.
+
+    Parameters
+    ----------
+    root : path
+        Directory to create (campaign.toml and records/).
+    hidden : str
+        Key of :data:`HIDDEN`.
+    n_ground : int
+        Number of ground-motion records.
+    seed : int
+        Seed of the ground motions and the noise (numpy SeedSequence; record
+        i draws from the i-th child, so records do not change when n grows).
+    fv_theta0_over_alpha : tuple of float
+        Release angles of the free-vibration records over the stated alpha [-].
+    fv_duration, gm_duration : float
+        Record lengths [s].
+
+    Returns
+    -------
+    dict
+        ``root``, ``hidden``, ``expected`` (tuple of registry names, empty for none), ``truth``,
+        ``overturned`` (per ground-motion record), ``gm_ids``.
+    """
+    root = Path(root)
+    (root / "records").mkdir(parents=True, exist_ok=True)
+    truth = truth_for(hidden)
+    alpha = math.atan2(WIDTH, HEIGHT)
+    ss = np.random.SeedSequence([seed, 7919])
+    fv_ss, gm_ss = ss.spawn(2)
+    entries = []
+    for i, (x, child) in enumerate(zip(fv_theta0_over_alpha, fv_ss.spawn(len(fv_theta0_over_alpha)), strict=True)):
+        rid = f"fv{i + 1:02d}"
+        acc = np.zeros(int(round(fv_duration / DT)) + 1)
+        th, _ = simulate_truth(truth, acc, theta0=x * alpha)
+        _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(child)))
+        entries.append((rid, "free_vibration"))
+    overturned = []
+    gm_ids = []
+    for i, child in enumerate(gm_ss.spawn(n_ground)):
+        rid = f"gm{i + 1:03d}"
+        motion_ss, noise_ss = child.spawn(2)
+        acc = ground_motion(np.random.default_rng(motion_ss), gm_duration)
+        th, over = simulate_truth(truth, acc)
+        _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(noise_ss)))
+        entries.append((rid, "ground_motion"))
+        overturned.append(over)
+        gm_ids.append(rid)
+    lines = [
+        f'name = "synthetic campaign, hidden effect: {hidden}"',
+        "[specimen]",
+        f"height = {HEIGHT}",
+        f"width = {WIDTH}",
+        f"depth = {DEPTH}",
+        f"mass = {MASS}",
+        f"p = {P_SEED}",
+    ]
+    for rid, kind in entries:
+        lines += ["[[record]]", f'id = "{rid}"', f'kind = "{kind}"', f'file = "records/{rid}.csv"']
+    (root / "campaign.toml").write_text("\n".join(lines) + "\n")
+    return {
+        "root": root,
+        "hidden": hidden,
+        "expected": HIDDEN[hidden][1],
+        "truth": truth,
+        "overturned": np.array(overturned),
+        "gm_ids": gm_ids,
+    }
+
+
+def cached_campaign(base: str | Path, hidden: str, *, n_ground: int = 60, seed: int = 0) -> dict:
+    """:func:`write_campaign` into ``base/<hidden>-<n_ground>-<seed>``, reusing it when a test already wrote it.
+
+    Test modules share one campaign per (hidden, n_ground, seed) through a common base folder
+    (pytest's session base temp), so it is generated once per session.
+    """
+    root = Path(base) / f"{hidden}-{n_ground}-{seed}"
+    done = root / ".complete"
+    if done.exists():
+        truth = truth_for(hidden)
+        return {"root": root, "hidden": hidden, "expected": HIDDEN[hidden][1], "truth": truth}
+    info = write_campaign(root, hidden, n_ground=n_ground, seed=seed)
+    done.write_text("ok\n")
+    return info
