@@ -12,7 +12,10 @@ output). Open any generated file in MuJoCo's own viewer with::
 Model layout (world frame: x horizontal in the plane of rocking, y out of plane,
 z up; the pivot line is z = 0):
 
-* ``ground``: an infinite plane, the only thing the strips touch.
+* ``ground``: an infinite plane, the only thing the pivots touch. It carries
+  the pivots' ``solref`` and ``solimp``: MuJoCo averages the two geoms' values
+  (``solmix``), so a ground left at MuJoCo's defaults would make every contact
+  softer than asked (see ``engines/models/README.md``, CHANGELOG).
 * ``block``: one body whose frame sits at the centre of mass (0, 0, H), with
   three joints from the world in this order: ``x`` (slide along x), ``z``
   (slide along z) and ``theta`` (hinge about +y, through the centre of mass).
@@ -20,8 +23,13 @@ z up; the pivot line is z = 0):
   the suite's theta (theta > 0 leans toward +x, rocking on the +x pivot).
 * ``body``: the 2H x depth x 2B block, visual only (``contype`` =
   ``conaffinity`` = 0, no mass: the mass is in the explicit ``<inertial>``).
-* ``pivot_pos`` / ``pivot_neg``: the two contact strips under the block,
-  ``strip_width`` wide, whose outer edges are at x = +B and x = -B.
+* ``pivot_pos`` / ``pivot_neg``: the block's only contact geoms, two spheres
+  of radius ``pivot_radius`` (10 um) that touch the ground at the outer
+  bottom edges of the strips, x = +B and x = -B: the rigid block's pivots.
+  One contact point per pivot, as in Housner's model.
+* ``strip_pos`` / ``strip_neg``: the specimen's two contact strips,
+  ``strip_width`` wide, drawn only (no contact, no mass). A flat strip would
+  land flat on its inner and outer edges; only the outer edge is a pivot.
 * ``dalembert``: a motor on the ``x`` slide. A generalised force on a slide
   joint is a force along x through the joint anchor, which is the centre of
   mass, so ``ctrl = -m ug''(t)`` is the d'Alembert force of the ground
@@ -58,20 +66,22 @@ ETH_SPECIMEN_PATH = Path(__file__).resolve().parent / "models" / "eth_specimen.x
 
 #: Model settings used when a keyword is not given. The contact numbers are the
 #: tuned defaults of :class:`engines.mujoco_engine.MujocoEngine` (see there for
-#: how they were found); ``strip_width`` and ``strip_height`` are geometry [m].
+#: how they were found); ``strip_width``, ``strip_height`` (drawn strips) and
+#: ``pivot_radius`` (contact spheres at their outer edges) are geometry [m].
 MJCF_DEFAULTS: dict = {
-    "timestep": 1.25e-4,
-    "solref": (2.5e-4, 1.0),
+    "timestep": 2e-4,
+    "solref": (4e-4, 1.0),
     "solimp": (0.9, 0.95, 0.001, 0.5, 2.0),
     "friction": 1.5,
     "cone": "pyramidal",
-    "impratio": 100.0,
+    "impratio": 10.0,
     "noslip_iterations": 0,
     "integrator": "Euler",
     "iterations": 50,
     "tolerance": 1e-10,
     "strip_width": 0.002,
     "strip_height": 0.002,
+    "pivot_radius": 1e-5,
 }
 
 _CONES = ("pyramidal", "elliptic")
@@ -95,7 +105,7 @@ def _check_settings(specimen: Specimen, s: dict) -> dict:
     if not isinstance(specimen, Specimen):
         raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
     out = dict(s)
-    for key in ("timestep", "friction", "impratio", "strip_width", "strip_height", "tolerance"):
+    for key in ("timestep", "friction", "impratio", "strip_width", "strip_height", "pivot_radius", "tolerance"):
         v = out[key]
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ValueError(f"`{key}` must be a positive finite number, got {v!r}")
@@ -127,6 +137,10 @@ def _check_settings(specimen: Specimen, s: dict) -> dict:
         raise ValueError(f"`integrator` must be one of {_INTEGRATORS}, got {out['integrator']!r}")
     if out["strip_width"] >= specimen.B:
         raise ValueError(f"`strip_width` ({out['strip_width']} m) must be less than B = {specimen.B} m")
+    if out["pivot_radius"] > 1e-3 * specimen.H:
+        # the block rolls on the sphere: its pivot is the sphere's centre, rho above the corner; keep that
+        # below 1e-3 of H so the geometry (alpha, R) stays the specimen's to 1e-3 or better
+        raise ValueError(f"`pivot_radius` ({out['pivot_radius']} m) must be at most 1e-3 H = {1e-3 * specimen.H:.3g} m")
     return out
 
 
@@ -150,20 +164,23 @@ def block_inertia(specimen: Specimen) -> tuple[float, float, float]:
     return iyy, iyy, izz
 
 
-def initial_qpos(specimen: Specimen, theta0: float) -> tuple[float, float, float]:
+def initial_qpos(specimen: Specimen, theta0: float, pivot_radius: float = 0.0) -> tuple[float, float, float]:
     """Joint positions (x [m], z [m], theta [rad]) of the block at rest, rotated by ``theta0`` about a pivot.
 
-    The block is rotated about the +x pivot (B, 0) for ``theta0`` > 0 and about
-    the -x pivot for ``theta0`` < 0, touching the ground there. The centre of
-    mass, at (0, H) when upright, is then at
-    (s B (1 - cos theta0) + H sin theta0, B |sin theta0| + H cos theta0) with s = sgn(theta0);
-    the slides hold its offset from the upright position.
+    The block is rotated about the +x pivot for ``theta0`` > 0 and about the -x
+    pivot for ``theta0`` < 0, touching the ground at (s B, 0) with s = sgn(theta0).
+    The pivot is a sphere of radius rho = ``pivot_radius`` [m] whose centre sits
+    at (s B, -H + rho) in the body frame, and at (s B, rho) in the world; the
+    block turns about that centre, so its centre of mass is at
+    (s B (1 - cos theta0) + (H - rho) sin theta0, rho + B |sin theta0| + (H - rho) cos theta0);
+    the slides hold its offset from the upright position (0, H). rho = 0 is
+    rotation about the corner itself.
     """
     th = float(theta0)
     s = math.copysign(1.0, th) if th != 0.0 else 0.0
-    B, H = specimen.B, specimen.H
-    x = s * B * (1.0 - math.cos(th)) + H * math.sin(th)
-    z = B * abs(math.sin(th)) + H * math.cos(th) - H
+    B, H, rho = specimen.B, specimen.H, float(pivot_radius)
+    x = s * B * (1.0 - math.cos(th)) + (H - rho) * math.sin(th)
+    z = rho + B * abs(math.sin(th)) + (H - rho) * math.cos(th) - H
     return x, z, th
 
 
@@ -182,6 +199,7 @@ def mjcf_from_specimen(
     tolerance: float = MJCF_DEFAULTS["tolerance"],
     strip_width: float = MJCF_DEFAULTS["strip_width"],
     strip_height: float = MJCF_DEFAULTS["strip_height"],
+    pivot_radius: float = MJCF_DEFAULTS["pivot_radius"],
 ) -> str:
     """The MJCF XML text of a planar rocking block, commented with each number's derivation.
 
@@ -207,7 +225,10 @@ def mjcf_from_specimen(
     iterations, tolerance : int, float
         Main constraint-solver iterations and tolerance [-].
     strip_width, strip_height : float
-        Size of each contact strip in x and z [m]; its outer edge is at +-B.
+        Size of each (drawn) contact strip in x and z [m]; its outer edge is at +-B.
+    pivot_radius : float
+        Radius [m] of the contact spheres at the strips' outer bottom edges, the
+        pivots; at most 1e-3 H.
 
     Returns
     -------
@@ -233,6 +254,7 @@ def mjcf_from_specimen(
             tolerance=tolerance,
             strip_width=strip_width,
             strip_height=strip_height,
+            pivot_radius=pivot_radius,
         ),
     )
     H, B, D, m = specimen.H, specimen.B, specimen.depth, specimen.mass
@@ -240,6 +262,8 @@ def mjcf_from_specimen(
     w, hs = s["strip_width"], s["strip_height"]
     strip_x = B - w / 2.0
     strip_z = -H + hs / 2.0
+    rho = s["pivot_radius"]
+    pivot_z = -H + rho
     name = specimen.name.replace("--", "- -")  # "--" may not appear inside an XML comment
     return f"""<!--
   Rocking block "{name}", generated by engines/mjcf.py from a housner.Specimen.
@@ -272,9 +296,12 @@ def mjcf_from_specimen(
   </asset>
   <worldbody>
     <light pos="0 -2 3" dir="0 0.6 -0.8" directional="true"/>
-    <!-- (4) Pivot line z = 0 on an infinite ground plane (size 0 = infinite), with the strips' friction
-         (MuJoCo takes the larger of the two geoms' coefficients). -->
-    <geom name="ground" type="plane" size="0 0 1" material="grid" friction="{_num(s["friction"])} 0 0"/>
+    <!-- (4) Pivot line z = 0 on an infinite ground plane (size 0 = infinite) with the pivots' friction (MuJoCo
+         takes the larger of the two geoms' coefficients) and the pivots' solref and solimp (MuJoCo averages the
+         two geoms' values: a ground left at the default solref (0.02, 1) would give the contact a time constant
+         of (0.02 s + timeconst) / 2, tens of times softer than asked). -->
+    <geom name="ground" type="plane" size="0 0 1" material="grid" friction="{_num(s["friction"])} 0 0"
+          solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"/>
     <camera name="side" pos="0 {_num(-6 * H)} {_num(H)}" xyaxes="1 0 0 0 0 1"/>
     <!-- (5) The body frame is the centre of mass, at height H = 2H / 2 = {_num(H)} m above the pivot line. -->
     <body name="block" pos="0 0 {_num(H)}">
@@ -292,21 +319,28 @@ def mjcf_from_specimen(
       <!-- (8) Visual block: half-sizes (B, depth/2, H) = ({_vec((B, D / 2, H))}) m; no contact, no mass. -->
       <geom name="body" type="box" size="{_vec((B, D / 2, H))}" contype="0" conaffinity="0" mass="0"
             rgba=".75 .78 .82 .6"/>
-      <!-- (9) Contact strips, {_num(w)} m wide and {_num(hs)} m tall, full depth; outer edges at
-           x = +-B = +-{_num(B)} m, so centres at x = +-(B - w/2) = +-{_num(strip_x)} m and
-           z = -H + h/2 = {_num(strip_z)} m (bottom on the pivot line).
-           (10) friction mu = {_num(s["friction"])}; solref = (timeconst [s], dampratio [-]);
-           solimp = (dmin, dmax, width [m], midpoint, power): contact settings. -->
-      <geom name="pivot_pos" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((strip_x, 0, strip_z))}"
+      <!-- (9) Contact strips (drawn only: no contact, no mass), {_num(w)} m wide and {_num(hs)} m tall, full depth;
+           outer edges at x = +-B = +-{_num(B)} m, so centres at x = +-(B - w/2) = +-{_num(strip_x)} m and
+           z = -H + h/2 = {_num(strip_z)} m (bottom on the pivot line). -->
+      <geom name="strip_pos" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((strip_x, 0, strip_z))}"
+            contype="0" conaffinity="0" mass="0" rgba=".2 .3 .8 1"/>
+      <geom name="strip_neg" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((-strip_x, 0, strip_z))}"
+            contype="0" conaffinity="0" mass="0" rgba=".8 .3 .2 1"/>
+      <!-- (10) Pivots, the only contact geoms: spheres of radius rho = {_num(rho)} m at the strips' outer bottom
+           edges, centres at x = +-B = +-{_num(B)} m, z = -H + rho = {_num(pivot_z)} m, so each touches the ground
+           at (+-B, 0) when upright: one contact point per pivot, as in Housner's model.
+           (11) friction mu = {_num(s["friction"])}; solref = (timeconst [s], dampratio [-]);
+           solimp = (dmin, dmax, width [m], midpoint, power): contact settings, the ground's too. -->
+      <geom name="pivot_pos" type="sphere" size="{_num(rho)}" pos="{_vec((B, 0, pivot_z))}"
             condim="3" friction="{_num(s["friction"])} 0 0" solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"
-            mass="0" rgba=".2 .3 .8 1"/>
-      <geom name="pivot_neg" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((-strip_x, 0, strip_z))}"
+            mass="0" rgba=".1 .1 .1 1"/>
+      <geom name="pivot_neg" type="sphere" size="{_num(rho)}" pos="{_vec((-B, 0, pivot_z))}"
             condim="3" friction="{_num(s["friction"])} 0 0" solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"
-            mass="0" rgba=".8 .3 .2 1"/>
+            mass="0" rgba=".1 .1 .1 1"/>
     </body>
   </worldbody>
   <actuator>
-    <!-- (11) d'Alembert force of the ground acceleration, ctrl = -m ug''(t) [N], along x through the
+    <!-- (12) d'Alembert force of the ground acceleration, ctrl = -m ug''(t) [N], along x through the
          centre of mass (the slide joint's anchor); unlimited. -->
     <motor name="dalembert" joint="x" gear="1"/>
   </actuator>

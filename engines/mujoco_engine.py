@@ -1,9 +1,10 @@
 """The rocking block in MuJoCo.
 
 The block is the planar model of :mod:`engines.mjcf`: one body with slide x,
-slide z and a hinge about y from the world, standing on two 2 mm contact strips
-whose outer edges are the pivots at x = +-B. The hinge angle is theta
-(theta > 0 leans toward +x, rocking on the +x pivot).
+slide z and a hinge about y from the world, touching the ground only at its two
+pivots, 10 um spheres at the outer bottom edges of its 2 mm contact strips,
+x = +-B. The hinge angle is theta (theta > 0 leans toward +x, rocking on the
++x pivot).
 
 Ground motion
 -------------
@@ -29,9 +30,9 @@ with n = ceil(motion.dt / timestep), so that the motion's samples fall on engine
 steps and the state is sampled there exactly (no interpolation). The whole
 record runs in C through :func:`mujoco.rollout.rollout` with one control value
 per step, in chunks of about half a second; the run stops at an overturn. At
-the default 0.125 ms step a record costs about 0.036 CPU s per simulated s
-(100 motions of 15 s: ~27 s on 2 cores); ``MujocoEngine(**MujocoEngine.FAST)``
-halves that at some cost in accuracy (class notes).
+the default 0.2 ms step (0.198 ms for the El Centro records sampled every
+3.16 ms) a step costs about 3 us and a record about 0.016 CPU s per simulated
+s: the seed's 100 El Centro motions of 15 s take 24 CPU s, 12 s on 2 cores.
 
 Response
 --------
@@ -41,9 +42,9 @@ from the samples. An impact is a sign change of theta after |theta| exceeded
 jitter of the compliant contact at rest is not counted; the analytic model
 counts every impact of a block coming to rest, so impact counts differ there.
 ``overturned`` once |theta| reaches pi/2; theta is then held at +-pi/2.
-``uplift_time`` is the instant the heel strip leaves the ground before the
-block first rocks beyond 1e-3 alpha (5-10 ms after the rigid block's, since
-the compliant contact first tilts elastically). ``info`` holds the settings,
+``uplift_time`` is the instant the heel pivot leaves the ground before the
+block first rocks beyond 1e-3 alpha (within about 1 ms of the rigid block's:
+the contact is compliant). ``info`` holds the settings,
 the step used, the step count and the largest slip of the pivot while
 |theta| <= alpha (``max_pivot_slip_m``; ``max_pivot_slip_all_m`` includes a
 falling block). MuJoCo writes its own warnings to ``MUJOCO_LOG.TXT`` in the
@@ -57,21 +58,26 @@ impratio 1) loses too much energy per impact (r 2 % low at 0.8 alpha, 7 % at
 0.2 alpha) and lets the block rock too far under a pulse. The defaults of
 :class:`MujocoEngine` come from ``python -m engines.tuning mujoco``
 (:func:`engines.tuning.tune` over :meth:`MujocoEngine.tuning_candidates`); the
-class notes give the measured errors and what each setting does.
+class notes give the measured errors and what each setting does. MuJoCo
+averages the solref and solimp of the two geoms in contact, so the ground
+carries the pivots' values: in the first tuned model it did not, and every
+contact was some 40 times softer than its settings said (``engines/models/README.md``,
+CHANGELOG).
 
 Limitations
 -----------
 * Each impact's energy ratio scatters with the phase of the impact within the
-  fixed engine step: std ~0.16 % of r at the default 0.125 ms step (within
-  -0.44 % .. +0.26 % of Housner's r from 0.2 to 0.9 alpha), ~0.35 % at
-  0.25 ms; the scatter scales with the step. The mean is within 0.1 %.
-* Very small rocking (below ~0.05 alpha) is affected by the contact's
-  compliance: a pulse that lifts the block by 0.005 alpha rocks it ~5 % too
-  far (4e-5 rad), one that lifts it by 0.04-0.05 alpha 1.4-2.9 % too far; at
-  rest under 0.9 g tan(alpha) the block tilts elastically by 6e-5 alpha. All
-  far below the 0.8 mrad (0.0053 alpha) resolution of the seed's measurements.
+  fixed engine step: standard deviation 0.14 % of r at 0.2-0.9 alpha (worst
+  -0.29 % on a 0.01 alpha grid) and 0.26 % at 0.02-0.19 alpha (worst
+  +0.66 %) at the default step; the means are within 0.05 %. The scatter
+  grows with the step.
+* Very small rocking is still slightly affected by the contact's compliance:
+  pulses that lift the block by 0.001-0.008 alpha rock it 0.2-0.8 % too far
+  (below 1e-5 alpha), and at rest under 0.9 g tan(alpha) it tilts
+  elastically by 6e-6 alpha; far below the 0.8 mrad (0.0053 alpha)
+  resolution of the seed's measurements.
 * A falling block (|theta| well past alpha) slips on its pivot (cm), so the
-  overturn time is ~2 % later than the rigid block's.
+  overturn time is ~1 % later than the rigid block's.
 * No physical effects are realised yet (``effects_supported`` is empty).
 
 References
@@ -111,21 +117,28 @@ ROCKING_EPS = 1e-3
 _CHUNK_S = 0.5
 
 
-def initial_qvel(specimen: Specimen, theta0: float, theta_dot0: float) -> tuple[float, float, float]:
+def initial_qvel(
+    specimen: Specimen, theta0: float, theta_dot0: float, pivot_radius: float = 0.0
+) -> tuple[float, float, float]:
     """Joint velocities (vx [m/s], vz [m/s], theta_dot [rad/s]) of a block rotating about its pivot.
 
     The pivot is the +x one for theta0 > 0 (or theta0 = 0 and theta_dot0 > 0)
-    and the -x one otherwise; the centre of mass moves as omega x r with r the
-    vector from pivot to centre of mass: (vx, vz) = theta_dot0 (r_z, -r_x).
+    and the -x one otherwise. The block rolls without slip on its pivot sphere
+    of radius rho = ``pivot_radius`` [m] (0: the corner itself), so the
+    instantaneous centre of rotation is the contact point (s B, 0) and the
+    centre of mass moves as omega x r, with r the vector from that point to the
+    centre of mass (placed by :func:`engines.mjcf.initial_qpos`):
+    (vx, vz) = theta_dot0 (r_z, -r_x).
     """
     th, w = float(theta0), float(theta_dot0)
     if w == 0.0:
         return 0.0, 0.0, 0.0
     s = math.copysign(1.0, th) if th != 0.0 else math.copysign(1.0, w)
-    B, H = specimen.B, specimen.H
-    # pivot -> centre of mass, upright (-s B, H), rotated by th about y: (x cos + z sin, -x sin + z cos)
-    rx = -s * B * math.cos(th) + H * math.sin(th)
-    rz = s * B * math.sin(th) + H * math.cos(th)
+    B, H, rho = specimen.B, specimen.H, float(pivot_radius)
+    # contact point -> centre of mass: sphere centre (s B, rho) -> centre of mass, upright (-s B, H - rho),
+    # rotated by th about y: (x cos + z sin, -x sin + z cos); plus rho up from the contact to the sphere centre
+    rx = -s * B * math.cos(th) + (H - rho) * math.sin(th)
+    rz = rho + s * B * math.sin(th) + (H - rho) * math.cos(th)
     return w * rz, -w * rx, w
 
 
@@ -137,12 +150,12 @@ class MujocoEngine(Engine):
     timestep : float
         Largest engine step [s]; the step used is motion.dt / ceil(motion.dt / timestep).
     solref : (float, float)
-        Contact (timeconst [s], dampratio [-]) of the strips, or MuJoCo's direct
-        (-stiffness, -damping) when negative.
+        Contact (timeconst [s], dampratio [-]) of the pivots and the ground, or
+        MuJoCo's direct (-stiffness, -damping) when negative.
     solimp : 5 floats
-        Contact impedance (dmin, dmax, width [m], midpoint, power).
+        Contact impedance (dmin, dmax, width [m], midpoint, power) of the pivots and the ground.
     friction : float
-        Friction coefficient mu of the strips [-]; well above any max |ug''|/g
+        Friction coefficient mu of the pivots [-]; well above any max |ug''|/g
         of the records used (the seed's ground motions stay below 0.6 g).
     cone : {"pyramidal", "elliptic"}
         Friction cone.
@@ -154,32 +167,52 @@ class MujocoEngine(Engine):
     iterations, tolerance : int, float
         Constraint-solver iterations and tolerance.
     strip_width, strip_height : float
-        Contact strip size [m] (the seed specimen's strips are 2 mm wide).
+        Size [m] of the drawn contact strips (the seed specimen's are 2 mm wide);
+        their outer bottom edges are the pivots.
+    pivot_radius : float
+        Radius [m] of the contact spheres at the pivots (at most 1e-3 H).
 
     Notes
     -----
     Defaults (``DEFAULTS``) came from ``python -m engines.tuning mujoco``
     (``housner tune mujoco``) on 2026-11-21 with MuJoCo 4.0.0, for the seed
-    specimen and Housner's r = 0.94652: the cheapest of 128 candidates whose
-    first-impact energy ratio is within 0.5 % of the target at
-    theta0/alpha = 0.20, 0.25, ..., 0.90 and whose first peak under the
-    tuner's two one-sine pulses is within 0.5 % of the analytic model's (2
-    candidates met both). Measured there: r worst error -0.44 % (at 0.2
-    alpha), mean -0.06 %; pulse first peaks +0.10 % and +0.40 %; cost about
-    0.032 CPU s per simulated s. What matters, and why:
+    specimen and Housner's r = 0.94652: of the 120 candidates, 26 passed every
+    check of :mod:`engines.tuning` at both sample steps (1 ms and 3.16 ms);
+    the tuner took the one with the widest margin among those within 15 % of
+    the cheapest cost. Measured there (worst of the two sample steps):
 
-    * ``cone="pyramidal"`` with ``impratio=100``: with a pyramidal cone MuJoCo
-      regularises the contact as a whole more strongly as mu^2 / impratio
-      grows; at impratio 1 the block loses up to 4 % too much energy at small
-      amplitudes and rocks 3-10 % too far under a pulse, at impratio 10 still
-      1.7 % too far. The elliptic cone behaves like impratio 1 whatever its
-      impratio.
-    * ``timestep`` 0.125 ms: each impact's r scatters with where the impact
-      falls within the step, by about +-1 % at 0.25 ms (``FAST``) and +-0.45 %
-      at 0.125 ms.
+    * r at 71 amplitudes 0.20-0.90 alpha: worst -0.29 % (accepted 0.5 %), mean -0.03 %;
+    * r at 18 amplitudes 0.02-0.19 alpha: worst +0.66 % (accepted 1.5 %), mean -0.09 % (0.5 %);
+    * free decay from 0.1 alpha, peaks after 10-40 impacts: within 1.6 % (5 %);
+    * pulses: first peaks within 0.14 %, theta_max within 0.26 % (0.5 %) on
+      the strong pulses and 0.85 % (1.5 %) on the near-threshold ones;
+    * cost 0.0155 CPU s per simulated s.
+
+    On the seed's El Centro ensemble (100 RDK motions, model scale) the
+    distribution of theta_max/alpha matches the analytic model's: KS distance
+    0.08-0.09, quartiles 0.163 / 0.203 / 0.282 against 0.153 / 0.198 / 0.289,
+    no overturn in either (the first tuned contact: KS 0.19, 0.090 / 0.173 /
+    0.249, one overturn). What matters, and why:
+
+    * The ground carries the pivots' ``solref`` and ``solimp``: MuJoCo averages
+      the two geoms' values, and a ground at MuJoCo's default solref
+      (0.02, 1) makes the contact's time constant 10 ms whatever the pivots
+      ask. Such a soft contact lets the pivot sink by 2-18 um while the block
+      rocks by a few mrad (its heel lifts by 2B theta = 75 um per mrad) and
+      absorbs the energy of small impacts: r 3-15 % low below 0.02 alpha, the
+      small rocking of a record dies out.
+    * ``timestep`` 0.2 ms with ``solref`` (0.4 ms, 1), two steps, critically
+      damped: the coarsest step whose per-impact scatter passes the tuner at
+      both sample steps (0.25 ms passed at one only).
+    * ``cone="pyramidal"`` with ``impratio=10``: with a pyramidal cone MuJoCo
+      regularises the whole contact in proportion to mu^2 / impratio; at
+      impratio 1 the stiff contact still passes, but with less margin.
+    * ``pivot_radius`` 10 um: one contact point per pivot (a box strip gives
+      four), about 30 % less time per step than the strips; the block rolls
+      on the sphere, which moves its pivot by rho = 4e-5 H.
     * ``friction`` 1.5 is set on the ground too (MuJoCo takes the larger of
       the two geoms' coefficients): far above the seed's ground motions
-      (< 0.6 g) and the impacts' demand; the pivots slip by micrometres.
+      (< 0.6 g) and the impacts' demand; the pivots slip by about 1 um.
 
     The calibrated r = 0.9532 of the seed (Table 1) is out of reach: the
     contact is plastic whatever its damping, and no candidate (including
@@ -188,7 +221,7 @@ class MujocoEngine(Engine):
 
     References
     ----------
-    MuJoCo documentation, "Computation": soft contacts, solref and solimp.
+    MuJoCo documentation, "Computation": soft contacts, solref, solimp and solmix.
     Bachmann, J. A. et al. (2017). COMPDYN 2017, eq. 8 and Table 1.
     """
 
@@ -197,25 +230,20 @@ class MujocoEngine(Engine):
 
     #: Tuned defaults (see the class notes for their provenance and measured errors).
     DEFAULTS: ClassVar[dict] = {
-        "timestep": 1.25e-4,
-        "solref": (2.5e-4, 1.0),
+        "timestep": 2e-4,
+        "solref": (4e-4, 1.0),
         "solimp": (0.9, 0.95, 0.001, 0.5, 2.0),
         "friction": 1.5,
         "cone": "pyramidal",
-        "impratio": 100.0,
+        "impratio": 10.0,
         "noslip_iterations": 0,
         "integrator": "Euler",
         "iterations": 50,
         "tolerance": 1e-10,
         "strip_width": 0.002,
         "strip_height": 0.002,
+        "pivot_radius": 1e-5,
     }
-
-    #: Twice as fast, less accurate: the cheapest candidate of the same tuning
-    #: run at a 0.25 ms step. r within 0.72 % (mean -0.09 %) on the 15
-    #: amplitudes, pulses within 0.41 %, about 0.017 CPU s per simulated s.
-    #: Use ``MujocoEngine(**MujocoEngine.FAST)`` where speed matters more.
-    FAST: ClassVar[dict] = {"timestep": 2.5e-4, "solref": (5e-4, 1.0)}
 
     def __init__(self, **settings: Any):
         for key in settings:
@@ -266,15 +294,17 @@ class MujocoEngine(Engine):
     def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
         """Settings to try when tuning the contact to an energy ratio, cheap to expensive.
 
-        Steps of 1, 0.5, 0.25 and 0.125 ms; for each, contact time constants of
-        2 and 4 steps (MuJoCo needs at least 2), MuJoCo's default impedance
-        (0.9, 0.95, 1 mm) and a stiff one (0.99, 0.999, 0.1 mm), pyramidal
-        and elliptic cones, and impratio 1, 10, 30 and 100 (with a pyramidal
-        cone MuJoCo softens the contact as mu^2 / impratio grows). The friction
-        coefficient stays at its default: it is chosen to prevent sliding, not
-        tuned. When the target lies above Housner's r, lightly damped contacts
-        are added (dampratio 0.1, and direct stiffness with little damping):
-        the only knobs that could give energy back at an impact.
+        Steps of 1/2, 1/3, 1/4, 1/5, 1/6 and 1/8 ms (they divide the tuner's
+        1 ms samples); for each, contact time constants of 2 and 4 steps
+        (MuJoCo needs at least 2), MuJoCo's default impedance (0.9, 0.95, 1 mm)
+        and a stiff one (0.99, 0.999, 0.1 mm), and the friction cone as
+        pyramidal with impratio 1, 10 and 100 (with a pyramidal cone MuJoCo
+        regularises the whole contact in proportion to mu^2 / impratio) or
+        elliptic with impratio 1 and 100. The friction coefficient stays at its
+        default: it is chosen to prevent sliding, not tuned. When the target
+        lies above Housner's r, lightly damped contacts are added (dampratio
+        0.1, and direct stiffness with little damping): the only knobs that
+        could give energy back at an impact.
 
         Parameters
         ----------
@@ -289,17 +319,16 @@ class MujocoEngine(Engine):
         """
         soft = (0.9, 0.95, 0.001, 0.5, 2.0)
         stiff = (0.99, 0.999, 0.0001, 0.5, 2.0)
+        cones = [("pyramidal", 1.0), ("pyramidal", 10.0), ("pyramidal", 100.0), ("elliptic", 1.0), ("elliptic", 100.0)]
         above = target_r > specimen.r_housner * 1.001
         out = []
-        for h in (1e-3, 5e-4, 2.5e-4, 1.25e-4):
+        for n in (2, 3, 4, 5, 6, 8):
+            h = 1e-3 / n
             for tc in (2 * h, 4 * h):
                 for dr in (1.0, 0.1) if above else (1.0,):
                     for solimp in (soft, stiff):
-                        for cone in ("pyramidal", "elliptic"):
-                            for impratio in (1.0, 10.0, 30.0, 100.0):
-                                out.append(
-                                    dict(timestep=h, solref=(tc, dr), solimp=solimp, cone=cone, impratio=impratio)
-                                )
+                        for cone, impratio in cones:
+                            out.append(dict(timestep=h, solref=(tc, dr), solimp=solimp, cone=cone, impratio=impratio))
             if above:
                 k = 1.0 / (2 * h) ** 2  # stiffness of timeconst 2h, dampratio 1 [1/s^2]
                 for b in (100.0, 300.0):
@@ -322,8 +351,9 @@ class MujocoEngine(Engine):
         ctrl = (-specimen.mass * np.interp(t_mid, motion.t, motion.acc)).reshape(-1, 1)
 
         mujoco.mj_resetData(model, data)
-        data.qpos[:] = initial_qpos(specimen, motion.theta0)
-        data.qvel[:] = initial_qvel(specimen, motion.theta0, motion.theta_dot0)
+        rho = self._settings["pivot_radius"]
+        data.qpos[:] = initial_qpos(specimen, motion.theta0, rho)
+        data.qvel[:] = initial_qvel(specimen, motion.theta0, motion.theta_dot0, rho)
         mujoco.mj_forward(model, data)
         spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
         state = np.empty(mujoco.mj_stateSize(model, spec))
@@ -409,14 +439,16 @@ class MujocoEngine(Engine):
         eps = ROCKING_EPS * alpha
         impacts = _impact_times(t_steps, th, eps)
         theta_max = math.pi / 2 if overturn_step is not None else float(np.max(np.abs(th)))
-        B, H, w_strip = specimen.B, specimen.H, self._settings["strip_width"]
-        # height of the lowest corner of the heel strip (the one that lifts): H + z + (B - w)|sin th| - H cos th
-        heel = H + z + (B - w_strip) * np.abs(np.sin(th)) - H * np.cos(th)
+        B, H, rho = specimen.B, specimen.H, self._settings["pivot_radius"]
+        # height of the bottom of the heel pivot sphere (centre (-s B, -H + rho) in the body frame, s = sgn th):
+        # H + z + B |sin th| - (H - rho) cos th - rho
+        heel = H + z + B * np.abs(np.sin(th)) - (H - rho) * np.cos(th) - rho
         uplift_time = _uplift_time(t_steps, th, heel, eps, released=motion.theta0 != 0.0 or motion.theta_dot0 != 0.0)
 
-        # slip of the pivot the block stands on (outer bottom corner of its strip): x + s B cos th - H sin th - s B
+        # slip of the pivot the block stands on: its sphere's centre, at x + s B cos th - (H - rho) sin th, minus
+        # where rolling without slip from (s B, rho) upright would put it, s B + rho th
         s = np.where(th >= 0.0, 1.0, -1.0)
-        slip = np.abs(x + s * B * np.cos(th) - H * np.sin(th) - s * B)
+        slip = np.abs(x + s * B * np.cos(th) - (H - rho) * np.sin(th) - s * B - rho * th)
         rocking = np.abs(th) <= alpha
         info = {
             "settings": self.settings(),
@@ -443,7 +475,7 @@ class MujocoEngine(Engine):
 
 
 def _uplift_time(t: np.ndarray, th: np.ndarray, heel: np.ndarray, eps: float, released: bool) -> float:
-    """First time [s] the block left rest: the heel strip's last lift-off before |theta| first exceeds ``eps``.
+    """First time [s] the block left rest: the heel pivot's last lift-off before |theta| first exceeds ``eps``.
 
     0 for a block released off its rest position; NaN if |theta| never exceeds ``eps`` [rad].
     """

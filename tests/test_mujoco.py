@@ -20,11 +20,18 @@ from engines.mjcf import (
 )
 from engines.mujoco_engine import MujocoEngine, initial_qvel
 from engines.tuning import (
+    DECAY_IMPACTS,
+    DECAY_RTOL,
+    DECAY_START,
     DEFAULT_AMPLITUDES,
+    SMALL_AMPLITUDES,
+    decay_motion,
+    decay_peaks,
     first_impact_ratio,
     first_peak,
     free_rocking_quarter_period,
     free_vibration_motions,
+    half_cycle_peaks,
 )
 from housner import EngineError, GroundMotion, Specimen
 from housner.model import simulate as housner_simulate
@@ -86,13 +93,21 @@ def test_model_mass_inertia_and_geometry_follow_the_specimen(tmp_path):
     assert math.sqrt(SEED.mass * G * SEED.R / (body.inertia[1] + SEED.mass * SEED.R**2)) == pytest.approx(4.8883, 1e-9)
     assert body.pos[2] == pytest.approx(SEED.H)  # centre of mass H above the pivot line
     assert model.body_ipos[body.id] == pytest.approx([0, 0, 0])
-    # strips: outer edges at +-B (2B = 75 mm between them), bottom on the pivot line, 2 mm wide
-    for name, sign in (("pivot_pos", 1), ("pivot_neg", -1)):
+    # drawn strips: outer edges at +-B (2B = 75 mm between them), bottom on the pivot line, 2 mm wide, no contact
+    for name, sign in (("strip_pos", 1), ("strip_neg", -1)):
         g = model.geom(name)
         assert sign * (g.pos[0] + sign * g.size[0]) == pytest.approx(SEED.B, abs=1e-15)
         assert 2 * g.size[0] == pytest.approx(0.002)
         assert body.pos[2] + g.pos[2] - g.size[2] == pytest.approx(0.0, abs=1e-15)
-    assert model.geom("body").contype == 0 and model.geom("body").conaffinity == 0
+        assert g.contype == 0 and g.conaffinity == 0
+    # pivots: spheres whose lowest points are the strips' outer bottom edges (+-B, 0)
+    for name, sign in (("pivot_pos", 1), ("pivot_neg", -1)):
+        g = model.geom(name)
+        assert g.type == mujoco.mjtGeom.mjGEOM_SPHERE and g.size[0] == MJCF_DEFAULTS["pivot_radius"]
+        assert g.pos[0] == pytest.approx(sign * SEED.B, abs=1e-15)
+        assert body.pos[2] + g.pos[2] - g.size[0] == pytest.approx(0.0, abs=1e-15)
+    colliding = [model.geom(i).name for i in range(model.ngeom) if model.geom(i).contype or model.geom(i).conaffinity]
+    assert sorted(colliding) == ["ground", "pivot_neg", "pivot_pos"]
     assert mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_QPOS) == 3  # planar: x, z, theta
 
 
@@ -103,6 +118,8 @@ def test_inertia_triangle_inequality_and_bad_settings():
         mjcf_from_specimen(SEED, cone="round")
     with pytest.raises(ValueError, match="`strip_width`"):
         mjcf_from_specimen(SEED, strip_width=0.05)
+    with pytest.raises(ValueError, match="`pivot_radius`"):
+        mjcf_from_specimen(SEED, pivot_radius=0.001)  # 4e-3 H: would move the pivot by more than 1e-3 H
     with pytest.raises(ValueError, match="`solimp`"):
         mjcf_from_specimen(SEED, solimp=(0.9, 0.95))
     with pytest.raises(ValueError, match="`solref`"):
@@ -117,18 +134,55 @@ def test_engine_defaults_are_the_model_defaults(engine):
     assert engine.version() == mujoco.__version__
 
 
-def test_initial_state_puts_the_pivot_on_the_ground():
+@pytest.mark.parametrize("rho", [0.0, MJCF_DEFAULTS["pivot_radius"], 2e-4])
+def test_initial_state_puts_the_pivot_on_the_ground(rho):
     for th0 in (0.3, -0.3, 0.0):
-        x, z, th = initial_qpos(SEED, th0)
+        x, z, th = initial_qpos(SEED, th0, rho)
         s = math.copysign(1.0, th0)
-        # outer bottom corner of the pivot strip: (x + s B cos th - H sin th, H + z + s B sin th... ) back at (s B, 0)
-        assert x + s * SEED.B * math.cos(th) - SEED.H * math.sin(th) == pytest.approx(s * SEED.B, abs=1e-15)
-        assert SEED.H + z - s * SEED.B * math.sin(th) - SEED.H * math.cos(th) == pytest.approx(0.0, abs=1e-15)
-    # rotating about the +x pivot at rate w: the centre of mass moves perpendicular to the pivot arm
-    vx, vz, w = initial_qvel(SEED, 0.1, 2.0)
-    rx, rz = -SEED.B * math.cos(0.1) + SEED.H * math.sin(0.1), SEED.B * math.sin(0.1) + SEED.H * math.cos(0.1)
+        # centre of the pivot sphere, body point (s B, -H + rho), rotated by th about y and shifted by the slides:
+        # (x + s B cos th + (-H + rho) sin th, H + z - s B sin th + (-H + rho) cos th), back at (s B, rho)
+        assert x + s * SEED.B * math.cos(th) + (rho - SEED.H) * math.sin(th) == pytest.approx(s * SEED.B, abs=1e-15)
+        assert SEED.H + z - s * SEED.B * math.sin(th) + (rho - SEED.H) * math.cos(th) == pytest.approx(rho, abs=1e-15)
+    # rolling about the contact point (B, 0) of the +x pivot at rate w: the centre of mass moves perpendicular to
+    # the arm from that point, at w times its length
+    vx, vz, w = initial_qvel(SEED, 0.1, 2.0, rho)
+    x, z, _ = initial_qpos(SEED, 0.1, rho)
+    rx, rz = x - SEED.B, SEED.H + z
     assert vx * rx + vz * rz == pytest.approx(0.0, abs=1e-15)
-    assert math.hypot(vx, vz) == pytest.approx(2.0 * SEED.R)
+    assert math.hypot(vx, vz) == pytest.approx(2.0 * math.hypot(rx, rz), rel=1e-12)
+    assert math.hypot(rx, rz) == pytest.approx(SEED.R, rel=1e-4 if rho else 1e-12)  # rho shortens the arm
+
+
+def _contact_rows(xml: str) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_step(model, data, 10)
+    assert data.ncon == 2  # one contact per pivot
+    return model, data
+
+
+def test_ground_carries_the_pivots_contact_settings():
+    """The contact's stiffness and damping are those of the pivots' solref, not an average with the ground's.
+
+    MuJoCo builds each contact row's reference acceleration -B v - K d with K = 1 / (dmax tc dr)^2 and
+    B = 2 / (dmax tc), from the solref (tc, dr) and solimp dmax of the contact, where the two geoms' solref and
+    solimp are averaged (solmix 1 each). A ground left at MuJoCo's default solref (0.02, 1) averages the time
+    constant to (0.02 + tc) / 2: the cause of the too soft contact of the first tuned model (README).
+    """
+    tc, dr = MJCF_DEFAULTS["solref"]
+    dmax = MJCF_DEFAULTS["solimp"][1]
+    xml = mjcf_from_specimen(SEED)
+    model, data = _contact_rows(xml)
+    kbip = data.efc_KBIP[: data.nefc]
+    assert np.allclose(kbip[:, 0], 1.0 / (dmax * tc * dr) ** 2, rtol=1e-9)
+    assert np.allclose(kbip[:, 1], 2.0 / (dmax * tc), rtol=1e-9)
+    # the same model with the ground's solref and solimp removed: the time constant is averaged with 0.02 s
+    start = xml.index('<geom name="ground"')
+    end = xml.index("/>", start)
+    bare = xml[:start] + xml[start:end].split(" solref=")[0] + xml[end:]
+    model, data = _contact_rows(bare)
+    tc_mix = (0.02 + tc) / 2
+    assert np.allclose(data.efc_KBIP[: data.nefc, 0], 1.0 / (dmax * tc_mix * dr) ** 2, rtol=1e-9)
 
 
 # --------------------------------------------------------------------------- physics
@@ -155,30 +209,70 @@ def test_free_vibration_quarter_period_gives_the_specimens_p(engine, amplitude):
 
 
 def test_energy_ratio_at_impact_is_housners_at_every_amplitude(engine):
-    # The tuned settings' acceptance criterion (engines/tuning.py): 0.5 %, half the 0.7 % gap between the seed's
-    # calibrated and Housner's r. Measured at the defaults: worst -0.44 % (0.2 alpha), mean -0.06 %.
+    # Check 1 of the tuner (engines/tuning.py) at its first sample step: 0.5 % at 71 amplitudes 0.2-0.9 alpha, half
+    # the 0.7 % gap between the seed's calibrated and Housner's r. Measured at the defaults: worst -0.285 %
+    # (0.25 alpha), mean -0.012 %.
     r = np.array(
         [first_impact_ratio(engine.simulate(SEED, m)) for m in free_vibration_motions(SEED, DEFAULT_AMPLITUDES)]
     )
     rel = r / SEED.r_housner - 1
     assert np.all(np.abs(rel) <= 5e-3), dict(zip(DEFAULT_AMPLITUDES, np.round(rel * 100, 3), strict=True))
-    assert abs(rel.mean()) <= 1.5e-3  # no bias beyond the per-impact scatter
+    assert abs(rel.mean()) <= 1e-3  # no bias beyond the per-impact scatter (std 0.135 %)
+
+
+def test_energy_ratio_of_small_impacts(engine):
+    # Check 2 of the tuner: releases at 0.02-0.19 alpha, where the first tuned contact lost 3-15 % of the energy
+    # per impact below 0.03 alpha. Each slow impact's r scatters more with its phase in the step, so the worst may
+    # reach 3 x 0.5 %; the mean (a bias would add up over a record's many small impacts) stays within 0.5 %.
+    # Measured at the defaults: worst +0.66 % (0.02 alpha), mean +0.04 %, std 0.26 %.
+    r = np.array([first_impact_ratio(engine.simulate(SEED, m)) for m in free_vibration_motions(SEED, SMALL_AMPLITUDES)])
+    rel = r / SEED.r_housner - 1
+    assert np.all(np.abs(rel) <= 1.5e-2), dict(zip(SMALL_AMPLITUDES, np.round(rel * 100, 3), strict=True))
+    assert abs(rel.mean()) <= 5e-3
+
+
+class _SoftGroundEngine(MujocoEngine):
+    """The engine with its ground plane left at MuJoCo's default solref and solimp (the first tuned model's fault)."""
+
+    def mjcf(self, specimen):
+        xml = super().mjcf(specimen)
+        start = xml.index('<geom name="ground"')
+        end = xml.index("/>", start)
+        return xml[:start] + xml[start:end].split(" solref=")[0] + xml[end:]
+
+
+def test_free_decay_follows_housner_for_40_impacts(engine):
+    # Check 3 of the tuner: released at 0.1 alpha, the peaks after 10-40 impacts (0.056 to 0.011 alpha) against the
+    # exact sequence cos(alpha - theta_k) - cos(alpha) = r^k (cos(alpha - theta_0) - cos(alpha)). 5 %: scatter of
+    # ~0.3 % per impact adds up to ~2 % (one standard deviation) over 40; 5 % of the 40th peak is 0.08 mrad.
+    # Measured at the defaults: +0.87, +0.68, +1.26, +1.61 %.
+    m = decay_motion(SEED)
+    exact = decay_peaks(SEED, DECAY_START * SEED.alpha, max(DECAY_IMPACTS))[list(DECAY_IMPACTS)]
+    peaks = half_cycle_peaks(engine.simulate(SEED, m))[list(DECAY_IMPACTS)]
+    assert np.all(np.abs(peaks / exact - 1) <= DECAY_RTOL), np.round((peaks / exact - 1) * 100, 2)
+    # The same model with a soft ground (the contact's time constant averaged with MuJoCo's default 20 ms) loses the
+    # small rocking: at rest before the 40th impact (the first tuned model: 40th peak 91 % low, check 1 passed).
+    soft = half_cycle_peaks(_SoftGroundEngine(**engine.settings()).simulate(SEED, m))
+    assert soft.size <= max(DECAY_IMPACTS) or soft[max(DECAY_IMPACTS)] < 0.5 * exact[-1]
 
 
 @pytest.mark.parametrize(
-    ("w_ratio", "a_ratio"),
-    [(8.0, 5.0), (6.0, 3.0), (12.0, 5.0)],
-    ids=["8p-5gtan", "6p-3gtan", "12p-5gtan"],
+    ("w_ratio", "a_ratio", "rtol_max"),
+    [(8.0, 5.0, 5e-3), (6.0, 3.0, 5e-3), (12.0, 5.0, 5e-3), (6.0, 1.5, 1.5e-2), (3.0, 1.2, 1.5e-2)],
+    ids=["8p-5gtan", "6p-3gtan", "12p-5gtan", "6p-1.5gtan", "3p-1.2gtan"],
 )
-def test_dalembert_force_reproduces_the_analytic_pulse_response(engine, w_ratio, a_ratio):
-    # One-sine pulses that rock the block to 0.2-0.65 alpha with 2-5 impacts. theta_max within 0.5 % of the
-    # analytic model: the tuning tolerance on r (each impact's error enters theta_max once); measured -0.18 %,
-    # -0.11 %, -0.17 %. The first peak (before any impact) tests the ground forcing alone: +0.10 %, +0.40 %, +0.05 %.
+def test_dalembert_force_reproduces_the_analytic_pulse_response(engine, w_ratio, a_ratio, rtol_max):
+    # Check 4 of the tuner. The first three pulses rock the block to 0.2-0.65 alpha: theta_max (after one impact)
+    # within 0.5 % of the analytic model, the tuning tolerance on r. The last two lift it just above the uplift
+    # threshold to 0.02 alpha, where the first tuned contact rocked 4 % and 10 % too far; their theta_max follows an
+    # impact at 0.02 alpha and gets the small-impact tolerance, 1.5 %. The first peak (before any impact) tests the
+    # ground forcing and the uplift alone: 0.5 %. Measured at the defaults: theta_max -0.16, +0.18, -0.01, +0.14,
+    # +0.24 %; first peaks +0.05, +0.04, +0.09, +0.04, +0.13 %.
     m = _one_sine(SEED, w_ratio, a_ratio, tail=4.0 / SEED.p)
     ref = housner_simulate(SEED, m)
     resp = engine.simulate(SEED, m)
     assert not ref.overturned and not resp.overturned
-    assert resp.theta_max == pytest.approx(ref.theta_max, rel=5e-3)
+    assert resp.theta_max == pytest.approx(ref.theta_max, rel=rtol_max)
     assert first_peak(resp) == pytest.approx(first_peak(ref), rel=5e-3)
     assert resp.n_impacts == ref.n_impacts
 
@@ -192,7 +286,7 @@ def test_no_sliding_while_rocking(engine):
     assert MujocoEngine.DEFAULTS["friction"] >= 1.99 * demand
     resp = engine.simulate(SEED, m)
     assert resp.info["max_pivot_slip_m"] < 1e-4
-    assert resp.info["max_pivot_slip_m"] < 2e-5  # measured 5 um
+    assert resp.info["max_pivot_slip_m"] < 1e-5  # measured 0.9 um
 
 
 def test_overturn_is_detected_held_and_the_run_stops(engine):
