@@ -97,6 +97,10 @@ def _cmd_tune(args: argparse.Namespace) -> int:
     kwargs = {"target_r": args.target_r, "progress": not args.quiet}
     if amps:
         kwargs["amplitudes"] = amps
+    if args.defaults_only:
+        from engines.base import get_engine
+
+        kwargs["candidates"] = [get_engine(args.engine).settings()]
     result = tune(args.engine, specimen, **kwargs)
     print(result.summary())
     if args.json:
@@ -181,7 +185,14 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--target-r", type=float, help="kinetic-energy ratio to reach (default: the specimen's Housner r)")
     t.add_argument("--amplitudes", help="release amplitudes theta0/alpha, comma-separated (default 0.2..0.9)")
     t.add_argument("--scenario", help="take the specimen from this scenario (default: the seed specimen)")
-    t.add_argument("--json", help="write the tuning result to this JSON file")
+    t.add_argument(
+        "--json", help="write the tuning result to this JSON file (the report reads engines/models/tuning-ENGINE.json)"
+    )
+    t.add_argument(
+        "--defaults-only",
+        action="store_true",
+        help="only measure the engine's current default settings (r against amplitude, cost)",
+    )
     t.add_argument("-q", "--quiet", action="store_true")
     t.set_defaults(func=_cmd_tune)
 
