@@ -9,6 +9,7 @@ its seed.
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 import sys
 from dataclasses import dataclass, field
@@ -217,7 +218,7 @@ class Scenario:
             else:
                 from scenarios import rdk
 
-                params = rdk.fit(record)
+                params = _rdk_fit(rec_name)
                 meta["rdk_params"] = params.describe()
                 n = int(m.get("n", 100)) if n is None else int(n)
                 if n <= 0:
@@ -260,6 +261,15 @@ class Scenario:
     def describe(self) -> dict:
         """The scenario as plain data (for run.json and the cache key)."""
         return {"name": self.name, "file": str(self.path) if self.path else None, **self.raw}
+
+
+@functools.lru_cache(maxsize=8)
+def _rdk_fit(record_name: str):
+    """RDK parameters fitted to a shipped record (deterministic; cached for repeated ensembles)."""
+    from scenarios import rdk
+    from scenarios.records import RECORDS
+
+    return rdk.fit(RECORDS[record_name]())
 
 
 def _discover() -> dict[str, Path]:
