@@ -354,6 +354,13 @@ def estimate_release(t, theta, noise: float) -> tuple[int, float]:
     s = math.copysign(1.0, start)
     fallen = np.flatnonzero(s * (start - th) > _RELEASE_DROP * abs(start))
     if fallen.size == 0:
+        far = float(np.max(s * th))
+        if far > abs(start) + _RELEASE_DROP * abs(start):
+            raise ValueError(
+                f"the free-vibration record never rocks back toward rest: theta moves away from its release "
+                f"at {start:.4g} rad to {s * far:.4g} rad (the block toppled; a release beyond the overturning "
+                f"angle cannot calibrate p or r)"
+            )
         raise ValueError("the free-vibration record never falls from its initial tilt")
     kw = int(fallen[0])
     # candidate releases: every sample up to where the record has clearly left the plateau
