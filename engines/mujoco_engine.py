@@ -98,7 +98,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from engines.base import Engine
-from engines.mjcf import initial_qpos, mjcf_from_specimen
+from engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 from housner.errors import EngineError, unknown_choice
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -229,21 +229,7 @@ class MujocoEngine(Engine):
     effects_supported: ClassVar[frozenset[str]] = frozenset()
 
     #: Tuned defaults (see the class notes for their provenance and measured errors).
-    DEFAULTS: ClassVar[dict] = {
-        "timestep": 2e-4,
-        "solref": (4e-4, 1.0),
-        "solimp": (0.9, 0.95, 0.001, 0.5, 2.0),
-        "friction": 1.5,
-        "cone": "pyramidal",
-        "impratio": 10.0,
-        "noslip_iterations": 0,
-        "integrator": "Euler",
-        "iterations": 50,
-        "tolerance": 1e-10,
-        "strip_width": 0.002,
-        "strip_height": 0.002,
-        "pivot_radius": 1e-5,
-    }
+    DEFAULTS: ClassVar[dict] = dict(MJCF_DEFAULTS)
 
     def __init__(self, **settings: Any):
         for key in settings:

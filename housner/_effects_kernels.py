@@ -27,6 +27,8 @@ import math
 
 from numba import njit
 
+from housner._kernel import _uplift_side
+
 HALF_PI = 0.5 * math.pi
 EPS = 2.220446049250313e-16
 
@@ -494,22 +496,6 @@ def _sl_bracket(kind, mode, s, sig, fric, jam, phi, w, x, xd, tau, hl, vl, hr, v
 
 
 @njit(cache=True)
-def _first_below(b0, b1, tau_c, dt, thr):
-    """First local time >= tau_c [s] at which b(tau) < thr, b linear b0 -> b1 over dt; inf if none."""
-    b_c = b0 + (b1 - b0) * (tau_c / dt)
-    if b_c < thr:
-        return tau_c
-    if b1 < thr:
-        tu = dt * ((thr - b0) / (b1 - b0))
-        if tu < tau_c:
-            tu = tau_c
-        if tu > dt:
-            tu = dt
-        return tu
-    return math.inf
-
-
-@njit(cache=True)
 def _sl_rock_or_slip(s, phi, w, a, q):
     """Regime of a rocking block whose pivot is not slipping: (mode, sig, jam)."""
     f, nn = _sl_stick(s, phi, w, a, q)
@@ -614,10 +600,10 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
         n_ev = 0
         while True:
             if mode == REST:
-                tu_p = _first_below(g0, g1, tau, dt, -tan_p)
-                tu_n = _first_below(-g0, -g1, tau, dt, -tan_n)
-                ts_p = _first_below(g0, g1, tau, dt, -mu)  # slides toward +x
-                ts_n = _first_below(-g0, -g1, tau, dt, -mu)
+                tu_p = _uplift_side(g0, g1, tau, dt, -tan_p)
+                tu_n = _uplift_side(-g0, -g1, tau, dt, -tan_n)
+                ts_p = _uplift_side(g0, g1, tau, dt, -mu)  # slides toward +x
+                ts_n = _uplift_side(-g0, -g1, tau, dt, -mu)
                 t_tip = min(tu_p, tu_n)
                 t_sl = min(ts_p, ts_n)
                 if t_tip == math.inf and t_sl == math.inf:

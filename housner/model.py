@@ -68,6 +68,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from housner import _kernel
+from housner._validate import finite as _finite
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -183,16 +184,6 @@ class RockingParams:
         v[_kernel.I_R_EXP] = self.r_amp_exponent
         v[_kernel.I_DAMPING] = self.damping
         return v
-
-
-def _finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"`{name}` must be finite, got {value!r}")
-    return x
 
 
 def default_substeps(p: float, dt: float) -> int:

@@ -11,6 +11,7 @@ import math
 import warnings
 from dataclasses import dataclass, field, replace
 
+from housner._validate import positive
 from housner.units import G
 
 __all__ = ["Specimen"]
@@ -25,15 +26,7 @@ def _positive(name: str, value: float | None, *, optional: bool = False) -> floa
         if optional:
             return None
         raise ValueError(f"`{name}` is required")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"`{name}` must be finite, got {value!r}")
-    if x <= 0.0:
-        raise ValueError(f"`{name}` must be positive, got {value!r}")
-    return x
+    return positive(name, value)
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,8 @@ import math
 
 import numpy as np
 
+from housner._validate import finite as _finite
+from housner._validate import positive as _positive
 from housner.motion import GroundMotion
 from housner.spectra import RICKER_KINDS, ricker_half_width, ricker_shape
 
@@ -47,26 +49,6 @@ _FREE_ROCKING_P = 30.0
 #: Free time after the pulse when p is not given [s]: 10 pulse periods, and at
 #: least this much (covers 30/p for blocks with p >= 3 1/s, i.e. R <~ 0.8 m).
 _FREE_ROCKING_MIN = 10.0
-
-
-def _positive(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise ValueError(f"`{name}` must be positive and finite, got {value!r}")
-    return x
-
-
-def _finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"`{name}` must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"`{name}` must be finite, got {value!r}")
-    return x
 
 
 def _default_free_time(omega_p: float, p: float | None) -> float:
