@@ -34,9 +34,11 @@ from numba import njit, prange
 HALF_PI = 0.5 * math.pi
 EPS = 2.220446049250313e-16
 
-#: Layout of the parameter vector handed to the kernel.
-I_ALPHA_POS, I_ALPHA_NEG, I_P_POS, I_P_NEG, I_R, I_R_EXP, I_DAMPING = range(7)
-N_PARAMS = 7
+#: Layout of the parameter vector handed to the kernel. I_R is the common
+#: ratio (kept for reference); the kernel uses I_R_POS for an impact that
+#: lands on the +x corner and I_R_NEG for one that lands on the -x corner.
+I_ALPHA_POS, I_ALPHA_NEG, I_P_POS, I_P_NEG, I_R, I_R_EXP, I_DAMPING, I_R_POS, I_R_NEG = range(9)
+N_PARAMS = 9
 
 #: Block states.
 REST, ROCKING, OVERTURNED = 0, 1, 2
@@ -190,7 +192,8 @@ def run_one(acc_g, dt, m, prm, theta0, theta_dot0, rest_tol, record, theta_out, 
     alpha_n = prm[I_ALPHA_NEG]
     p2_p = prm[I_P_POS] * prm[I_P_POS]
     p2_n = prm[I_P_NEG] * prm[I_P_NEG]
-    r = prm[I_R]
+    r_p = prm[I_R_POS]
+    r_n = prm[I_R_NEG]
     r_exp = prm[I_R_EXP]
     c = prm[I_DAMPING]
     tan_p = math.tan(alpha_p)
@@ -361,12 +364,14 @@ def run_one(acc_g, dt, m, prm, theta0, theta_dot0, rest_tol, record, theta_out, 
                     impacts[n_imp] = t_k + tau + h_i
                 n_imp += 1
                 tau = tau + h_i
-                # restitution, with the pivot the block rocked on before the impact
+                # restitution: the ratio of the corner that lands (s is still the
+                # old pivot, so -s is the new one), the amplitude reference of the old pivot
                 v = -w_i
-                r_eff = r
+                r_imp = r_n if s > 0.0 else r_p
+                r_eff = r_imp
                 if r_exp != 0.0 and v > 0.0:
                     pa = math.sqrt(p2) * alpha
-                    r_eff = r * (v / pa) ** r_exp
+                    r_eff = r_imp * (v / pa) ** r_exp
                     if r_eff > 1.0:
                         r_eff = 1.0
                     if r_eff < 0.0:

@@ -599,7 +599,8 @@ class Restitution(Effect):
     r: float
 
     def modify_params(self, params, specimen):
-        return replace(params, r=self.r)
+        # with_r keeps the split of an asymmetric block's two impacts (r_pos / r_neg)
+        return params.with_r(self.r)
 
 
 @register_effect
@@ -714,13 +715,26 @@ class AsymmetricPivots(Effect):
     ug'' < -g tan(alpha+) and onto the -x corner when ug'' > g tan(alpha-).
 
     Impacts: angular momentum about the landing corner is conserved
-    (:func:`asymmetric_impact_ratios`); the two impacts of a cycle scale
-    theta' by rho+- and rho-+, whose ratio is I+/I- (a few per mil for small
-    e). ``RockingParams`` carries one r, so the effect sets
-    r = r_in_force * rho+- rho-+ / r_housner: the loss of a full cycle (two
-    impacts) is exact, split evenly between its two impacts (each half-cycle
-    energy is off by the factor sqrt(I+/I-) or its inverse, alternately, not
-    accumulating). With Housner's r in force this is r = rho+- rho-+.
+    (:func:`asymmetric_impact_ratios`): just before an impact that ends
+    rocking on the +x corner, the block turns at theta' about that corner;
+    the impulse acts at the landing (-x) corner, so the angular momentum
+    about it, (I_c + m (H^2 - b+ b-)) theta', is kept, and just after the
+    block turns about the -x corner with inertia I- = I_c + m (H^2 + b-^2).
+    This scales theta' by rho+- at that impact and by rho-+ (the same with
+    the sides swapped) at the converse; rho+- / rho-+ = I+ / I-. The effect
+    sets the restitution of each impact exactly (``RockingParams.r_pos`` and
+    ``r_neg``, ratios of the squared angular velocities; the kinetic energy
+    itself changes by rho+-^2 I- / I+ and rho-+^2 I+ / I-)::
+
+        r_neg = rho+-^2 * r_in_force(-) / r_housner   (lands on the -x corner)
+        r_pos = rho-+^2 * r_in_force(+) / r_housner   (lands on the +x corner)
+        r     = rho+- rho-+ * r_in_force / r_housner  (their geometric mean)
+
+    each clipped to 1, where r_in_force is the ratio in force before this
+    effect (per side where set). With Housner's r in force this is
+    r_neg = rho+-^2 and r_pos = rho-+^2; a later ``restitution`` effect
+    rescales both (:meth:`housner.model.RockingParams.with_r`), keeping
+    r_neg / r_pos = (I+ / I-)^2.
 
     Parameters
     ----------
@@ -751,8 +765,11 @@ class AsymmetricPivots(Effect):
             out[f"alpha_{side}"] = math.atan2(b, hh)
             out[f"p_{side}"] = math.sqrt(m * G * rr / (ic + m * rr * rr))
         rho_pn, rho_np = asymmetric_impact_ratios(specimen, self.e)
-        r = min(1.0, params.r * rho_pn * rho_np / specimen.r_housner)
-        return replace(params, r=r, **out)
+        r_h = specimen.r_housner
+        out["r"] = min(1.0, params.r * rho_pn * rho_np / r_h)
+        out["r_neg"] = min(1.0, params.r_impact_neg * rho_pn * rho_pn / r_h)  # lands on the -x corner
+        out["r_pos"] = min(1.0, params.r_impact_pos * rho_np * rho_np / r_h)  # lands on the +x corner
+        return replace(params, **out)
 
 
 @register_effect
@@ -1061,7 +1078,9 @@ def simulate_sliding(
         Ground acceleration [m/s^2] and initial state theta0 [rad],
         theta_dot0 [rad/s] (the base is not slipping at t = 0).
     params : RockingParams, optional
-        Every field is used; default: the specimen's.
+        Every field is used except the per-side ratios ``r_pos`` and
+        ``r_neg`` (the sliding kernel's impacts use ``r``, the geometric mean
+        of the two for :class:`AsymmetricPivots`); default: the specimen's.
     mu : float
         Friction coefficient [-].
     substeps : int, optional

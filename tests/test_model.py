@@ -427,6 +427,82 @@ def test_amplitude_dependent_restitution():
     assert e[k] / e[k - 1] == pytest.approx(r_eff, rel=1e-9)  # as the energy test above
 
 
+def test_per_side_restitution_applies_to_the_landing_corner():
+    """r_pos is the impact that lands on the +x corner, r_neg the one that lands on the -x corner.
+
+    Released on the +x corner the first impact lands on -x: theta'^2 drops by r_neg, the next by r_pos,
+    alternately; with an amplitude exponent the law of r_amp_exponent is applied on top of each side's
+    ratio, with the speed reference of the corner left. Energies as in the energy test above (1e-9).
+    """
+    r_pos, r_neg, theta0 = 0.7, 0.95, 0.6 * ALPHA
+    prm = RockingParams(ALPHA, ALPHA, P, P, R, r_pos=r_pos, r_neg=r_neg)
+    res = simulate(SPEC, GroundMotion.free_vibration(theta0, 3.0), params=prm)
+    e = energy(res)
+    k = np.searchsorted(res.t, res.impact_times)
+    assert k.size >= 6
+    ratios = e[k[:6]] / e[k[:6] - 1]
+    np.testing.assert_allclose(ratios, [r_neg, r_pos] * 3, rtol=1e-9)
+    # amplitude-dependent on top: r_eff = r_side (v / (p alpha))^n
+    n_exp = 0.5
+    prm = RockingParams(ALPHA, ALPHA, P, P, R, r_amp_exponent=n_exp, r_pos=r_pos, r_neg=r_neg)
+    res = simulate(SPEC, GroundMotion.free_vibration(theta0, 1.5), params=prm)
+    e = energy(res)
+    k = np.searchsorted(res.t, res.impact_times)
+    v = math.sqrt(2 * P * P * (math.cos(ALPHA - theta0) - math.cos(ALPHA)))  # first impact speed [rad/s]
+    r1 = r_neg * (v / (P * ALPHA)) ** n_exp
+    v2 = math.sqrt(r1) * v  # after the first impact; the half-cycle returns with the same speed (no damping)
+    r2 = r_pos * (v2 / (P * ALPHA)) ** n_exp
+    np.testing.assert_allclose(e[k[:2]] / e[k[:2] - 1], [r1, r2], rtol=1e-9)
+
+
+def test_per_side_restitution_equal_to_r_is_the_plain_model_bit_for_bit():
+    m = GroundMotion(noise_record(7, 2000, 0.002, 0.4), 0.002)
+    plain = simulate(SPEC, m)
+    same = simulate(SPEC, m, params=RockingParams(ALPHA, ALPHA, P, P, R, r_pos=R, r_neg=R))
+    assert plain.n_impacts > 5
+    assert np.array_equal(plain.theta, same.theta) and np.array_equal(plain.theta_dot, same.theta_dot)
+    assert np.array_equal(plain.impact_times, same.impact_times) and plain.theta_max == same.theta_max
+    # also on an asymmetric, damped block with amplitude-dependent restitution
+    kw = {"r_amp_exponent": 0.3, "damping": 0.2}
+    a = simulate(SPEC, m, params=RockingParams(0.16, 0.14, 4.7, 5.1, 0.9, **kw))
+    b = simulate(SPEC, m, params=RockingParams(0.16, 0.14, 4.7, 5.1, 0.9, r_pos=0.9, r_neg=0.9, **kw))
+    assert a.n_impacts > 5 and np.array_equal(a.theta, b.theta) and np.array_equal(a.impact_times, b.impact_times)
+    assert RockingParams(ALPHA, ALPHA, P, P, R, r_pos=R, r_neg=R).is_housner
+    assert not RockingParams(ALPHA, ALPHA, P, P, R, r_pos=0.9).is_housner
+
+
+def test_mirror_with_sides_swapped_is_exact():
+    """Mirroring ug and swapping every per-side parameter mirrors the response bit for bit."""
+    prm = RockingParams(0.16, 0.13, 4.6, 5.2, 0.9, r_amp_exponent=0.3, damping=0.1, r_pos=0.86, r_neg=0.93)
+    mir = prm.mirrored()
+    assert (mir.alpha_pos, mir.p_pos, mir.r_pos) == (prm.alpha_neg, prm.p_neg, prm.r_neg)
+    assert (mir.alpha_neg, mir.p_neg, mir.r_neg) == (prm.alpha_pos, prm.p_pos, prm.r_pos) and mir.mirrored() == prm
+    acc = noise_record(11, 3000, 0.002, 0.45)
+    a = simulate(SPEC, GroundMotion(acc, 0.002), params=prm)
+    b = simulate(SPEC, GroundMotion(-acc, 0.002), params=mir)
+    assert a.n_impacts > 5
+    assert np.array_equal(a.theta, -b.theta) and np.array_equal(a.theta_dot, -b.theta_dot)
+    assert np.array_equal(a.impact_times, b.impact_times) and a.theta_max == b.theta_max
+    # without the swap the response is another one: the sides really matter
+    c = simulate(SPEC, GroundMotion(-acc, 0.002), params=prm)
+    assert not np.array_equal(a.theta, -c.theta)
+    # a free vibration released on either side
+    d = simulate(SPEC, GroundMotion.free_vibration(0.1, 2.0), params=prm)
+    f = simulate(SPEC, GroundMotion.free_vibration(-0.1, 2.0), params=mir)
+    assert d.n_impacts >= 4 and np.array_equal(d.theta, -f.theta) and np.array_equal(d.impact_times, f.impact_times)
+
+
+def test_with_r_rescales_the_per_side_ratios():
+    prm = RockingParams(ALPHA, ALPHA, P, P, 0.9, r_pos=0.85, r_neg=0.95)
+    q = prm.with_r(0.45)
+    assert (q.r, q.r_pos, q.r_neg) == pytest.approx((0.45, 0.425, 0.475), rel=1e-15)
+    assert prm.with_r(1.0).r_neg == 1.0  # clipped: 0.95 / 0.9 > 1
+    assert RockingParams.from_specimen(SPEC).with_r(0.5) == RockingParams.from_specimen(SPEC, r=0.5)
+    # simulate(..., r=) with params goes through with_r
+    m = GroundMotion.free_vibration(0.5 * ALPHA, 1.0)
+    assert np.array_equal(simulate(SPEC, m, params=prm, r=0.45).theta, simulate(SPEC, m, params=q).theta)
+
+
 def test_viscous_damping_against_solve_ivp():
     c, theta0 = 0.4, 0.5 * ALPHA
     prm = RockingParams(ALPHA, ALPHA, P, P, r=R, damping=c)
@@ -498,6 +574,12 @@ def test_params_are_validated():
         RockingParams(0.1, 0.1, 0.0, 1.0, 0.9)
     with pytest.raises(ValueError, match="`damping`"):
         RockingParams(0.1, 0.1, 1.0, 1.0, 0.9, damping=-1.0)
+    with pytest.raises(ValueError, match="`r_pos`"):
+        RockingParams(0.1, 0.1, 1.0, 1.0, 0.9, r_pos=1.2)
+    with pytest.raises(ValueError, match="`r_neg`"):
+        RockingParams(0.1, 0.1, 1.0, 1.0, 0.9, r_neg=math.nan)
+    with pytest.raises(ValueError, match="`r`"):
+        RockingParams(0.1, 0.1, 1.0, 1.0, 0.9).with_r(-0.5)
     with pytest.raises(TypeError, match="`params`"):
         simulate(SPEC, GroundMotion.free_vibration(0.1, 1.0), params={"r": 0.9})
     with pytest.raises(ValueError, match="`dt`"):
