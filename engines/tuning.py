@@ -76,6 +76,7 @@ import numpy as np
 import pandas as pd
 
 from engines.base import engine_class
+from housner.calibration import half_cycle_integral
 from housner.errors import EngineError
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -174,10 +175,9 @@ def free_rocking_quarter_period(specimen: Specimen, theta0: float) -> float:
 
         T/4 = int_0^theta0 dtheta / sqrt(2 p^2 (cos(alpha - theta0) - cos(alpha - theta))).
 
-    The substitution theta = theta0 - s^2 removes the inverse-square-root end
-    singularity, and Gauss-Legendre quadrature (64 nodes) evaluates the smooth
-    rest to machine precision. For small alpha it tends to Housner's
-    T/4 = acosh(1 / (1 - theta0/alpha)) / p (seed eq. 7).
+    That integral is F(theta0, alpha) / p with F from
+    :func:`housner.calibration.half_cycle_integral`; a free half-cycle (impact
+    to impact) lasts twice as long, since its rise and fall are symmetric.
 
     Parameters
     ----------
@@ -194,14 +194,7 @@ def free_rocking_quarter_period(specimen: Specimen, theta0: float) -> float:
     alpha, p = specimen.alpha, specimen.p
     if not 0.0 < th0 < alpha:
         raise ValueError(f"`theta0` must satisfy 0 < |theta0| < alpha = {alpha:.6g} rad, got {theta0!r}")
-    x, wq = np.polynomial.legendre.leggauss(64)
-    smax = math.sqrt(th0)
-    s = 0.5 * smax * (x + 1.0)
-    theta = th0 - s * s
-    # cos(a - th0) - cos(a - th) = 2 sin((2a - th0 - th)/2) sin((th0 - th)/2), stable near th = th0
-    diff = 2.0 * np.sin(alpha - 0.5 * (th0 + theta)) * np.sin(0.5 * s * s)
-    integrand = 2.0 * s / np.sqrt(2.0 * p * p * diff)
-    return float(0.5 * smax * np.sum(wq * integrand))
+    return float(half_cycle_integral(th0, alpha)) / p
 
 
 def _parabolic_peak(y: np.ndarray, i: int) -> float:
