@@ -174,8 +174,14 @@ def test_crlf_and_end_marker_layouts_read(tmp_path):
     crlf.write_bytes(("\r\n".join(HEADER + ["NPTS=    8, DT=   .0100 SEC,"] + _rows(vals)) + "\r\n").encode())
     marker = _write(
         tmp_path / "marker.txt",
-        ["free text"] * 5
-        + ["*** Begin data ***", "NPTS=     8, DT= .02000 SEC", "".join(f"{v:10.5f}" for v in vals)]
+        # free-text header (like the Chopra file's): the reader finds the units in it, then the NPTS line
+        ["free text"] * 4
+        + [
+            "The units are (g)",
+            "*** Begin data ***",
+            "NPTS=     8, DT= .02000 SEC",
+            "".join(f"{v:10.5f}" for v in vals),
+        ]
         + ["*** End Data ***", "", ""],
     )
     for path, dt in ((crlf, 0.01), (marker, 0.02)):
