@@ -2,14 +2,18 @@
 
 A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one
 ``[[record]]`` per test) and one CSV per record with the columns ``time``
-[s], ``ground_acc`` [m/s^2] and ``theta`` [rad] (see campaign-format.md).
+[s], ``ground_acc`` [m/s^2] and ``theta`` [rad] (see campaign-format.md). A
+header cell may name another unit in brackets (``time [ms]``,
+``ground_acc [g]``, ``theta [deg]``, see :func:`housner.motion.parse_unit`);
+the reader converts once, to SI. A time column without a unit whose step is
+outside 1e-5 .. 0.1 s is refused (milliseconds taken for seconds).
 :func:`load_campaign` reads it into a :class:`Campaign` whose records carry
 the measured rotation and the ground motion that drives a model of the same
 test (:class:`housner.GroundMotion`, with the initial angle of a
 free-vibration release).
 
-Errors: a malformed ``campaign.toml`` raises :class:`housner.errors.DataFileError`
-naming the key (and the line); a malformed record file is reported with its
+Errors: a malformed ``campaign.toml`` (also a value of the wrong type) raises
+:class:`housner.errors.DataFileError` naming the key (and the line); a malformed record file is reported with its
 file, line and column in :attr:`Campaign.skipped` and left out, the other
 records are kept.
 
@@ -33,7 +37,7 @@ import numpy as np
 
 from housner.calibration import estimate_noise
 from housner.errors import DataFileError
-from housner.motion import GroundMotion, read_csv_columns, uniform_step
+from housner.motion import QUANTITIES, GroundMotion, read_csv_si, uniform_step
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):
@@ -215,11 +219,16 @@ def _unknown_key(path: Path, text: str, where: str, key: str, allowed, table=Non
 
 def _read_toml(path: Path) -> tuple[dict, str]:
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise DataFileError(path, "no campaign.toml here (a campaign is a directory with campaign.toml)") from None
     except OSError as e:
         raise DataFileError(path, f"cannot read: {e.strerror or e}") from None
+    try:
+        text = raw.decode("utf-8-sig")  # TOML is UTF-8; an editor's byte-order mark is skipped
+    except UnicodeDecodeError as e:
+        line = raw[: e.start].count(b"\n") + 1
+        raise DataFileError(path, f"not UTF-8 text (byte 0x{raw[e.start]:02x})", line=line) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
@@ -230,8 +239,15 @@ def _read_toml(path: Path) -> tuple[dict, str]:
 
 def _specimen(path: Path, text: str, data: dict) -> Specimen:
     spec = data.get("specimen")
-    if not isinstance(spec, dict):
+    if spec is None:
         raise DataFileError(path, "missing table [specimen] (height, width, depth, mass, optional p)")
+    if not isinstance(spec, dict):
+        raise DataFileError(
+            path,
+            f"`specimen` must be a table ([specimen] with height, width, depth, mass, optional p), "
+            f"got {type(spec).__name__} {spec!r}",
+            line=_key_line(text, "specimen") or _table_line(text, "specimen"),
+        )
     for key in spec:
         if key not in _SPECIMEN_KEYS:
             raise _unknown_key(path, text, "[specimen] ", key, _SPECIMEN_KEYS, "specimen")
@@ -259,8 +275,17 @@ def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
     recs = data.get("record")
     if recs is None:
         raise DataFileError(path, "no [[record]] tables: a campaign needs at least one record")
-    if not isinstance(recs, list):
-        raise DataFileError(path, "`record` must be an array of tables ([[record]])", line=_key_line(text, "record"))
+    if not isinstance(recs, list) or not all(isinstance(r, dict) for r in recs):
+        got = recs if not isinstance(recs, list) else next(r for r in recs if not isinstance(r, dict))
+        raise DataFileError(
+            path,
+            f"`record` must be an array of tables ([[record]] with id, kind, file), got {type(got).__name__} {got!r}",
+            line=_key_line(text, "record") or _table_line(text, "record"),
+        )
+    if not recs:
+        raise DataFileError(
+            path, "`record` is empty: a campaign needs at least one [[record]]", line=_key_line(text, "record")
+        )
     seen: dict[str, int] = {}
     out = []
     for i, rec in enumerate(recs):
@@ -388,15 +413,16 @@ def estimate_release(t, theta, noise: float) -> tuple[int, float]:
 
 def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord:
     path = (root / rec["file"]).resolve() if not Path(rec["file"]).is_absolute() else Path(rec["file"])
-    (t, acc, theta), lines = read_csv_columns(path, ["time", "ground_acc", "theta"])
-    dt = uniform_step(path, t, lines, "time")
+    table = read_csv_si(path, QUANTITIES)  # converted to SI from the units in the header (none: SI)
+    (t, acc, theta), lines = table.values, table.lines
+    dt = uniform_step(path, t, lines, "time", assumed_seconds=table.units[0] is None)
     bad = np.flatnonzero(np.abs(theta) > math.pi / 2 + _THETA_SLACK)
     if bad.size:
         k = int(bad[0])
         raise DataFileError(
             path,
             f"|theta| = {abs(theta[k]):.4g} rad is beyond pi/2: not a rotation in rad of a block on a table "
-            "(degrees or another unit?)",
+            "(degrees or another unit? write it in the header, e.g. `theta [deg]`)",
             line=int(lines[k]),
             column="theta",
         )
@@ -479,8 +505,10 @@ def load_campaign(path: str | Path) -> Campaign:
         if key not in _TOP_KEYS:
             raise _unknown_key(toml, text, "", key, _TOP_KEYS)
     name = data.get("name", root.name)
-    if not isinstance(name, str):
-        raise DataFileError(toml, f"'name' must be a string, got {name!r}", line=_key_line(text, "name"))
+    for key in ("name", "description"):
+        v = data.get(key, "")
+        if not isinstance(v, str):
+            raise DataFileError(toml, f"{key!r} must be a string, got {v!r}", line=_key_line(text, key))
     specimen = _specimen(toml, text, data)
     entries = _record_entries(toml, text, data)
     records, skipped = [], []
