@@ -615,13 +615,11 @@ def uniform_step(
             column=column,
         )
     lo, hi = PLAUSIBLE_STEP
-    if assumed_seconds and not (lo <= dt <= hi):
-        hint = "`[ms]`" if dt > hi else "`[s]`"
-        raise DataFileError(
-            path,
-            f"time step {dt:.6g} read in seconds (the header gives no unit) is implausible (outside {lo:g} .. "
-            f"{hi:g} s): write the unit in the header, e.g. `{column} [ms]` for milliseconds (or {hint} to confirm it)",
-            line=int(lines[1]),
-            column=column,
-        )
+    if assumed_seconds and not (lo * (1 - 1e-9) <= dt <= hi * (1 + 1e-9)):
+        what = f"time step {dt:.6g} read in seconds (no unit in the header) is implausible (outside {lo:g} .. {hi:g} s)"
+        if dt > hi:
+            fix = f"if the column is in milliseconds write `{column} [ms]` in the header; if in seconds, `{column} [s]`"
+        else:
+            fix = f"write its unit in the header (`{column} [s]` to confirm seconds)"
+        raise DataFileError(path, f"{what}: {fix}", line=int(lines[1]), column=column)
     return dt

@@ -186,6 +186,12 @@ def _table_line(text: str, table: str, index: int = 0) -> int | None:
     return hits[index] + 1 if len(hits) > index else None
 
 
+def _plain_table_line(text: str, table: str) -> int | None:
+    """1-based line of a ``[table]`` header (also for a name the format wants as ``[[table]]``); None if absent."""
+    hdr = re.compile(rf"^\s*\[\s*{re.escape(table)}\s*\]")
+    return next((i + 1 for i, ln in enumerate(text.splitlines()) if hdr.match(ln)), None)
+
+
 def _key_line(text: str, key: str, table: str | None = None, index: int = 0) -> int | None:
     """1-based line of ``key = ...`` in ``[table]`` (the ``index``-th ``[[table]]``) or at the top level.
 
@@ -280,7 +286,7 @@ def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
         raise DataFileError(
             path,
             f"`record` must be an array of tables ([[record]] with id, kind, file), got {type(got).__name__} {got!r}",
-            line=_key_line(text, "record") or _table_line(text, "record"),
+            line=_key_line(text, "record") or _table_line(text, "record") or _plain_table_line(text, "record"),
         )
     if not recs:
         raise DataFileError(
