@@ -220,6 +220,11 @@ def pulse_motion(pulse: str, a_p: float, omega_p: float, p: float, *, duration: 
     GroundMotion
         The same samples as :func:`scenarios.pulses.ricker` (centre t0 at the
         default half-width) or :func:`scenarios.pulses.one_sine` (phase 0) with this step.
+        The one-sine pulse is a_p sin(omega_p t) for 0 <= t <= 2 pi / omega_p,
+        phase 0 as in Zhang & Makris (2001): the block waits at rest until
+        a_p sin(omega_p t) reaches g tan(alpha). (Their psi =
+        asin(g tan(alpha) / a_p) is the phase at that uplift, not a shift of
+        the pulse; see :func:`scenarios.pulses.one_sine`.)
     """
     if pulse not in PULSES:
         raise unknown_choice("pulse", pulse, PULSES)
@@ -400,7 +405,8 @@ def rocking_spectrum(
     -----
     Each grid point simulates the pulse's forcing window only: the Ricker
     wavelets until |psi| < 1e-6 (2 x 8.3/omega_p symmetric, 2 x 10.6/omega_p
-    antisymmetric), the one-sine pulse until 2 pi/omega_p. The peak of the free
+    antisymmetric), the one-sine pulse (phase 0, as Zhang & Makris 2001) until
+    2 pi/omega_p. The peak of the free
     rocking that follows comes from the end state in closed form
     (:func:`free_rocking_peak`), which is exact for Housner's model and costs
     nothing, where simulating it would need a time that grows without bound

@@ -19,7 +19,8 @@ References
 Housner, G. W. (1963). The behavior of inverted pendulum structures during
 earthquakes. BSSA 53(2), 403-417 (rectangular and sine pulses).
 Zhang, J., Makris, N. (2001). Rocking response of free-standing blocks under
-cycloidal pulses. J. Eng. Mech. 127(5), 473-483 (one-sine pulse).
+cycloidal pulses. J. Eng. Mech. 127(5), 473-483 (one-sine pulse, phase 0:
+see :func:`one_sine`).
 Vassiliou, M. F., Makris, N. (2011). Estimating time scales and length scales
 in pulselike earthquake acceleration records with wavelet analysis. BSSA
 101(2), 596-618 (symmetric and antisymmetric Ricker wavelets).
@@ -144,6 +145,9 @@ def one_sine(
     """One full cycle of sine acceleration, then rest (Housner 1963; Zhang & Makris 2001).
 
     ug''(t) = a_p sin(omega_p t + phase) for 0 <= t <= T_p = 2 pi / omega_p, 0 after.
+    With the default phase 0 this is the one-sine pulse of Zhang & Makris
+    (2001), the block waiting at rest until |ug''| reaches g tan(alpha)
+    (see ``phase``).
 
     Parameters
     ----------
@@ -158,10 +162,26 @@ def one_sine(
         Total duration [s]; default T_p plus the free rocking after it (30/p
         when ``p`` is given, else the larger of ten pulse periods and 10 s).
     phase : float
-        Phase of the sine at t = 0 [rad]. With phase 0 the ground velocity
-        returns to zero at T_p and the displacement ends at 2 pi a_p / omega_p^2;
-        Zhang & Makris (2001) take phase = asin(g tan(alpha) / a_p) so that the
-        block uplifts at t = 0.
+        Phase of the sine at t = 0 [rad]. It shifts the sine *inside* a window
+        that is always one full period, 0 <= t <= T_p: the pulse runs from
+        phase ``phase`` to ``phase + 2 pi``, so a non-zero phase gives a
+        different pulse, not the same pulse started later. With any phase the
+        ground velocity returns to zero at T_p; the displacement ends at
+        2 pi a_p cos(phase) / omega_p^2 (2 pi a_p / omega_p^2 with phase 0).
+
+        **Zhang & Makris (2001) use phase 0** (their one-sine, "type-A" pulse,
+        whose displacement is a cycloid): the ground moves from t = 0, the
+        block stays at rest until a_p sin(omega_p t) first reaches
+        g tan(alpha), at t_u = asin(g tan(alpha) / a_p) / omega_p, and the
+        pulse ends at T_p. Their angle psi = asin(g tan(alpha) / a_p) is the
+        phase of the pulse *at uplift*, with which they write the solution in
+        a time counted from the uplift; it is not a phase to pass here.
+        ``phase = psi`` would run a whole extra period from the uplift phase
+        (the pulse then ends at psi + 2 pi), a stronger pulse: at
+        omega_p / p = 5 and r = 0.81 its first overturning acceleration is
+        3.34 g tan(alpha) instead of their 3.02, 11 % off.
+        ``tests/test_published.py`` reproduces their overturning boundaries
+        with phase 0.
     p : float, optional
         Frequency parameter of the block [1/s]; only used for the default duration.
 

@@ -95,7 +95,8 @@ def test_one_sine_closed_forms():
     # (linear interpolation of the sine: relative error ~ (w dt)^2 / 12 = 3e-6)
     assert abs(v[-1]) < 1e-9
     assert d[-1] == pytest.approx(2 * math.pi * a_p / w**2 + 0.0 * (t[-1] - 1.0), rel=1e-5)
-    # phase: the Zhang & Makris onset phase starts at the uplift acceleration
+    # phase: the sine starts at sin(phase). With phase = asin(g tan(alpha) / a_p) (the phase at which the block
+    # uplifts under Zhang & Makris' pulse, which itself has phase 0) the first sample is the uplift acceleration.
     ph = math.asin(SPEC.uplift_acceleration / a_p)
     assert pulses.one_sine(a_p, w, dt=dt, phase=ph).acc[0] == pytest.approx(SPEC.uplift_acceleration)
 
