@@ -5,6 +5,10 @@ Usage::
 
     python scripts/check_report_browser.py runs/elcentro/report.html --screenshot report.png
     python scripts/check_report_browser.py report.html --screenshot cdf.png --section distribution
+    python scripts/check_report_browser.py report.html --screenshot shot.png --section verdict --section table2-gap
+
+With several ``--section`` (any element id), each is written next to the
+screenshot path with its id appended: ``shot-verdict.png``, ``shot-table2-gap.png``.
 
 The page is loaded from disk in Debian's ``chromium`` (``apt-get install -y
 chromium``) with networking features off and a fresh profile, driven over the
@@ -257,7 +261,7 @@ def check(
     page: Path,
     screenshot: Path | None = None,
     *,
-    section: str | None = None,
+    section: str | list[str] | None = None,
     chromium: str | None = None,
     timeout: float = 60.0,
 ) -> tuple[list[str], dict]:
@@ -269,8 +273,10 @@ def check(
         HTML file to open.
     screenshot : pathlib.Path, optional
         PNG to write: the full page, or only the section with id ``section``.
-    section : str, optional
-        Id of the element to photograph.
+    section : str or list of str, optional
+        Id of the element to photograph; with several ids, one PNG each, named
+        ``<screenshot stem>-<id><suffix>`` (see :func:`shot_paths`). The
+        ``screenshots`` entry of the returned facts lists the files written.
     chromium : str, optional
         Browser executable (default: the first of /usr/bin/chromium, chromium, ...).
     timeout : float
@@ -338,30 +344,31 @@ def check(
             msg = _describe_event(ev)
             if msg:
                 problems.append(msg)
-        if screenshot is not None:
+        facts["screenshots"] = []
+        for sec, path in shot_paths(screenshot, section) if screenshot is not None else ():
             clip = {"x": 0, "y": 0, "width": VIEW_WIDTH, "height": max(int(facts.get("height", VIEW_HEIGHT)), 1)}
-            if section:
+            if sec:
                 expr = (
-                    f"(() => {{ const e = document.getElementById({json.dumps(section)}); if (!e) return null; "
+                    f"(() => {{ const e = document.getElementById({json.dumps(sec)}); if (!e) return null; "
                     "const r = e.getBoundingClientRect(); "
                     "return JSON.stringify({x: r.left + scrollX, y: r.top + scrollY, w: r.width, h: r.height}); })()"
                 )
                 box = cdp.call("Runtime.evaluate", {"expression": expr, "returnByValue": True}, session=session)
                 value = box.get("result", {}).get("value")
                 if value is None:
-                    problems.append(f"no element with id {section!r} to photograph")
-                else:
-                    b = json.loads(value)
-                    clip = {"x": b["x"], "y": b["y"], "width": b["w"], "height": b["h"]}
+                    problems.append(f"no element with id {sec!r} to photograph")
+                    continue
+                b = json.loads(value)
+                clip = {"x": b["x"], "y": b["y"], "width": b["w"], "height": b["h"]}
             shot = cdp.call(
                 "Page.captureScreenshot",
                 {"format": "png", "captureBeyondViewport": True, "clip": {**clip, "scale": 1}},
                 session=session,
                 timeout=timeout,
             )
-            screenshot = Path(screenshot)
-            screenshot.parent.mkdir(parents=True, exist_ok=True)
-            screenshot.write_bytes(base64.b64decode(shot["data"]))
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(base64.b64decode(shot["data"]))
+            facts["screenshots"].append(str(path))
         try:
             cdp.call("Browser.close", timeout=5)
         except Exception:
@@ -378,12 +385,25 @@ def check(
     return problems, facts
 
 
+def shot_paths(screenshot: Path | str, section: str | list[str] | None) -> list[tuple[str | None, Path]]:
+    """(element id or None for the whole page, PNG path) for each screenshot to take."""
+    screenshot = Path(screenshot)
+    ids = [section] if isinstance(section, str) else list(section or [])
+    if len(ids) <= 1:
+        return [(ids[0] if ids else None, screenshot)]
+    return [(i, screenshot.with_name(f"{screenshot.stem}-{i}{screenshot.suffix or '.png'}")) for i in ids]
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line; see the module docstring."""
     ap = argparse.ArgumentParser(description="Check an HTML report in headless Chromium (console errors, screenshot).")
     ap.add_argument("report", type=Path, help="the HTML file")
     ap.add_argument("--screenshot", type=Path, help="write a PNG screenshot here")
-    ap.add_argument("--section", help="photograph only the element with this id (e.g. distribution)")
+    ap.add_argument(
+        "--section",
+        action="append",
+        help="photograph only the element with this id (e.g. distribution); repeat for one PNG per id",
+    )
     ap.add_argument("--chromium", help="browser executable (default /usr/bin/chromium)")
     ap.add_argument("--timeout", type=float, default=60.0, help="seconds for start-up and loading (default 60)")
     args = ap.parse_args(argv)
@@ -402,8 +422,8 @@ def main(argv: list[str] | None = None) -> int:
             f"{args.report}: title {facts.get('title', '')!r}, {facts.get('images', 0)} image(s), "
             f"sections: {', '.join(facts.get('sections', []))}, page height {facts.get('height', '?')} px"
         )
-    if args.screenshot and args.screenshot.exists():
-        print(f"screenshot: {args.screenshot}")
+    for shot in facts.get("screenshots", []):
+        print(f"screenshot: {shot}")
     if problems:
         print(f"FAIL: {len(problems)} problem(s):", file=sys.stderr)
         for p in problems:
