@@ -167,9 +167,15 @@ def plot_cdfs(
         if pts:
             px, py = zip(*pts, strict=True)
             ax.plot(px, py, ls="none", marker="X", ms=9, mec="white", mfc="#444444", label="seed Table 2 (numerical)")
-    ax.axvline(1.0, color="#999999", lw=0.8, ls=":")
+    ax.axvline(1.0, color="#999999", lw=0.8, ls=":", label=r"$\theta/\alpha$ = 1: centre of mass over the pivot")
     right = edge + 0.06 * edge
-    ax.axvspan(edge - 0.005 * edge, right, color="#f2dede", zorder=0)
+    ax.axvspan(
+        edge - 0.005 * edge,
+        right,
+        color="#f2dede",
+        zorder=0,
+        label="overturned: bar from the CDF's end to 1 = P[overturn]",
+    )
     ax.text(right - 0.012 * edge, 0.02, "overturn", rotation=90, ha="center", va="bottom", fontsize=8, color="#a94442")
     ax.set_xlim(0.0, right)
     ax.set_ylim(0.0, 1.02)
@@ -177,7 +183,8 @@ def plot_cdfs(
     ax.set_ylabel("cumulative probability [-]")
     ax.set_title(rf"CDF of $\theta_{{max}}/\alpha$ with {ci:.0%} DKW bands", fontsize=11)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower right", fontsize=8, framealpha=0.9)
+    # Lower right, the emptiest corner of a CDF, but left of the overturn strip so that its label stays visible.
+    ax.legend(loc="lower right", bbox_to_anchor=(0.99 * edge / right - 0.01, 0.0), fontsize=8, framealpha=0.9)
     fig.tight_layout()
     return fig
 
@@ -397,33 +404,87 @@ def plot_energy_ratios(
 
 
 def plot_tuning(
-    curves: Mapping[str, tuple[np.ndarray, np.ndarray]],
+    curves: Mapping[str, Mapping[str, tuple[np.ndarray, np.ndarray]] | tuple[np.ndarray, np.ndarray]],
     *,
     target_r: float | None = None,
+    bands: Sequence[tuple[float, float, float]] = (),
+    decay: Mapping[str, Mapping[str, tuple[np.ndarray, np.ndarray]]] | None = None,
+    decay_rtol: float | None = None,
+    decay_start: float | None = None,
     colors: Mapping[str, str] | None = None,
 ) -> Figure:
-    """Tuned engines: kinetic-energy ratio r against release amplitude.
+    """Tuned engines: kinetic-energy ratio r against release amplitude, and the free-decay check.
 
     Parameters
     ----------
     curves : mapping
-        Engine -> (theta0/alpha [-], r [-]).
+        Engine -> {series label -> (theta0/alpha [-], r [-])}, one series per
+        way the tuner measured (e.g. per sample step); a bare (theta0/alpha, r)
+        pair is one unnamed series. Each series is drawn as one line sorted by
+        amplitude, the engine's colour, one line style per series label.
     target_r : float, optional
         The r the tuning aimed at [-].
+    bands : sequence of (amplitude low, amplitude high, rtol)
+        Accepted |r / target_r - 1| over amplitude ranges, drawn as grey bands
+        around the target.
+    decay : mapping, optional
+        Engine -> {series label -> (impacts, peak_engine / peak_analytic - 1)}
+        of a free decay; drawn in a second panel.
+    decay_rtol : float, optional
+        Accepted relative error of the decay peaks [-].
+    decay_start : float, optional
+        Release amplitude of the decay, theta0/alpha [-] (for the title).
     """
     colors = _colors(list(curves), colors, None)
-    fig = Figure(figsize=(6.4, 3.6))
-    ax = fig.add_subplot()
-    for name, (a, r) in curves.items():
-        ax.plot(a, r, marker="o", ms=4, color=colors.get(name), label=name)
+    styles = (("-", "o"), ("--", "s"), (":", "^"), ("-.", "v"))
+    labels = list(dict.fromkeys(lab for c in curves.values() if isinstance(c, Mapping) for lab in c))
+    style = {lab: styles[k % len(styles)] for k, lab in enumerate(labels)}
+    has_decay = bool(decay) and any(decay.values())
+    fig = Figure(figsize=(9.6, 4.6) if has_decay else (6.8, 4.6), layout="constrained")
+    if has_decay:
+        ax, axd = fig.subplots(1, 2, gridspec_kw={"width_ratios": (1.7, 1.0)})
+    else:
+        ax, axd = fig.add_subplot(), None
+    handles: dict[str, object] = {}
     if target_r is not None:
-        ax.axhline(target_r, color="#555555", ls="--", lw=1, label=f"target r = {target_r:.4f}")
+        for lo, hi, tol in bands:
+            h = ax.fill_between([lo, hi], target_r * (1 - tol), target_r * (1 + tol), color="#999999", alpha=0.18, lw=0)
+            handles.setdefault(f"accepted: $\\pm${tol:.1%} of the target at {lo:g}-{hi:g} $\\alpha$", h)
+        handles[f"target r = {target_r:.4f}"] = ax.axhline(target_r, color="#555555", ls="--", lw=1)
+
+    def line(axis, x, y, name, lab, ms):
+        ls, marker = style.get(lab, ("-", "o"))
+        (h,) = axis.plot(x, y, ls=ls, marker=marker, ms=ms, lw=0.8, alpha=0.85, color=colors.get(name))
+        handles.setdefault(f"{name}, {lab}" if lab else name, h)
+
+    for name, c in curves.items():
+        series = c if isinstance(c, Mapping) else {"": c}
+        for lab, (a, r) in series.items():
+            a, r = np.asarray(a, dtype=float), np.asarray(r, dtype=float)
+            ok = np.isfinite(a) & np.isfinite(r)
+            order = np.argsort(a[ok], kind="stable")
+            line(ax, a[ok][order], r[ok][order], name, lab, 2.8)
     ax.set_xlabel(r"release amplitude $\theta_0/\alpha$ [-]")
-    ax.set_ylabel("r [-]")
+    ax.set_ylabel("r of the first impact [-]")
     ax.set_title("Tuned contact: r against amplitude", fontsize=11)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    if axd is not None:
+        if decay_rtol is not None:
+            h = axd.axhspan(-100 * decay_rtol, 100 * decay_rtol, color="#999999", alpha=0.18, lw=0, ec="none")
+            handles[f"free decay accepted: $\\pm${decay_rtol:.0%}"] = h
+        axd.axhline(0.0, color="#555555", ls="--", lw=1)
+        for name, series in decay.items():
+            for lab, (k, e) in series.items():
+                k, e = np.asarray(k, dtype=float), np.asarray(e, dtype=float)
+                order = np.argsort(k, kind="stable")
+                line(axd, k[order], 100 * e[order], name, lab, 4.0)
+        axd.set_xlabel("impacts after the release")
+        axd.set_ylabel("peak: engine / analytic - 1 [%]")
+        start = rf" from {decay_start:g} $\alpha$" if decay_start is not None else ""
+        axd.set_title(f"Free decay{start}", fontsize=11)
+        axd.grid(True, alpha=0.3)
+    # One legend for both panels, below them: the series are the same in each, and inside they hide points.
+    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     return fig
 
 

@@ -353,11 +353,14 @@ def test_written_tables_from_any_engines(tmp_path, monkeypatch):
     assert "not in this run" in text  # the requested reference "housner" is absent
     row = page.row("verdict", "beta-engine")
     assert row[2].startswith("1.000")
-    assert row[-1] == "FAIL"
+    assert row[-1] == "FAIL 1 tuning check not met (above)"
     assert page.row("verdict", "alpha-engine")[-1] == "reference"
-    # the tuning file is read: settings, verdict and the r(amplitude) figure
+    # the tuning file is read: settings (the run recorded none), target, the failed check in words, verdict
     tuned = page.row("specimen", "beta-engine", table=-1)
-    assert tuned[1:5] == ["stiffness = 1000000.0", "0.9465", "1.20% (tolerance 0.50%)", "NOT MET"]
+    assert tuned[1] == "stiffness = 1000000.0 (the run recorded no settings)"
+    assert tuned[2] == "0.9465"
+    assert tuned[3].startswith("NOT MET: r of the first impact, 0.2-0.8 α: worst -1.22% at 0.8 α")
+    assert tuned[4] == "NOT MET"
     assert len(page.images["specimen"]) == 1
 
 
@@ -448,3 +451,230 @@ def test_browser_check_fails_on_console_errors_and_broken_images(tmp_path):
     )
     assert res.returncode == 1
     assert "page not found" in res.stderr
+
+
+# ----------------------------------------------------------------------------
+# the tuning summary: series per sample step, settings once, what is not met in words
+def tuning_file(engine: str, settings: dict, *, decay_40=-0.14) -> dict:
+    """A tuning file as ``housner tune`` writes it: two sample steps, amplitudes interleaved as the tuner runs them."""
+    amps = [0.2, 0.5, 0.9]
+    small = [0.02, 0.1]
+    r = {0.001: [0.947, 0.946, 0.9455], 0.00316: [0.9462, 0.9468, 0.9461]}
+    table = {"dt": [], "amplitude": [], "r_engine": [], "r_target": [], "rel_error": []}
+    small_table = {k: [] for k in table}
+    for dt in (0.001, 0.00316):
+        for a, x in zip(amps, r[dt], strict=True):
+            for k, v in zip(table, (dt, a, x, 0.9465, x / 0.9465 - 1), strict=True):
+                table[k].append(v)
+        for a in small:
+            for k, v in zip(small_table, (dt, a, 0.946, 0.9465, 0.946 / 0.9465 - 1), strict=True):
+                small_table[k].append(v)
+    decay = {"dt": [0.001] * 4, "impacts": [10, 20, 30, 40], "peak_analytic": [0.056, 0.032, 0.018, 0.0106]}
+    decay["rel_error"] = [0.001, -0.031, -0.081, decay_40]
+    decay["peak_engine"] = [p * (1 + e) for p, e in zip(decay["peak_analytic"], decay["rel_error"], strict=True)]
+    return {
+        "engine": engine,
+        "target_r": 0.9465,
+        "rtol": 0.005,
+        "settings": settings,
+        "met": abs(decay_40) <= 0.05,
+        "worst_rel_error": 0.0011,
+        "table": table,
+        "small_table": small_table,
+        "decay_table": decay,
+        "date": "2026-11-21",
+        "version": "0.1.0",
+    }
+
+
+@pytest.fixture(scope="module")
+def tuned_run(tmp_path_factory):
+    """The shaken run's engines with tuning files: report-r80 tuned to its own settings, not met (free decay)."""
+    base = tmp_path_factory.mktemp("tuned")
+    out = make_run(base / "run", shaking(), {"housner": {}, "report-r80": {}})
+    tdir = base / "tuning"
+    tdir.mkdir()
+    settings = json.loads((out / "run.json").read_text())["engines"]["report-r80"]["settings"]
+    (tdir / "tuning-report-r80.json").write_text(json.dumps(tuning_file("report-r80", settings)))
+    return out, tdir
+
+
+def test_tuning_series_are_one_line_per_sample_step_sorted_by_amplitude(tuned_run, monkeypatch):
+    out, tdir = tuned_run
+    monkeypatch.setattr(html, "TUNING_DIR", tdir)
+    seen = {}
+    real = figures.plot_tuning
+
+    def spy(curves, **kw):
+        seen["curves"], seen["kw"] = curves, kw
+        return real(curves, **kw)
+
+    monkeypatch.setattr(figures, "plot_tuning", spy)
+    page = Page(html.render_report(out))
+    assert len(page.images["specimen"]) == 1
+    series = seen["curves"]["report-r80"]
+    # one series per sample step, the small amplitudes joined to the large ones, each sorted by amplitude
+    assert sorted(series) == ["1 ms sampling", "3.16 ms sampling"]
+    for a, _ in series.values():
+        assert list(a) == [0.02, 0.1, 0.2, 0.5, 0.9]
+    assert list(series["1 ms sampling"][1]) == [0.946, 0.946, 0.947, 0.946, 0.9455]
+    # and the figure draws them so: every line of the r panel runs left to right
+    fig = real(seen["curves"], **seen["kw"])
+    lines = [ln for ln in fig.axes[0].get_lines() if len(ln.get_xdata()) > 2]
+    assert len(lines) == 2
+    for ln in lines:
+        assert np.all(np.diff(ln.get_xdata()) > 0)
+    # the free-decay check is drawn too, with its tolerance
+    assert seen["kw"]["decay_rtol"] == pytest.approx(0.05)
+    assert list(seen["kw"]["decay"]["report-r80"]["1 ms sampling"][0]) == [10, 20, 30, 40]
+
+
+def test_real_tuning_files_give_monotone_series():
+    for engine in ("mujoco", "pybullet"):
+        d = json.loads((ROOT / "engines" / "models" / f"tuning-{engine}.json").read_text())
+        curves, decay = html._tuning_series(d)
+        n_steps = len(set(d["table"]["dt"]))
+        assert len(curves) == n_steps and len(decay) == n_steps
+        for a, _ in curves.values():
+            assert np.all(np.diff(a) > 0), engine
+            assert a.size == (len(d["table"]["dt"]) + len(d["small_table"]["dt"])) // n_steps
+
+
+def test_engine_settings_are_printed_once(tuned_run, monkeypatch):
+    out, tdir = tuned_run
+    monkeypatch.setattr(html, "TUNING_DIR", tdir)
+    text = html.render_report(out)
+    page = Page(text)
+    # the engines table lists r = 0.8 once; the tuning table refers to it instead of repeating it
+    assert text.count("<code>r = 0.8</code>") == 1
+    assert page.row("specimen", "report-r80", table=-1)[1] == "the run's settings (above)"
+    # a run that differs from its tuning says where
+    d = tuning_file("report-r80", {"r": 0.75, "substeps": None})
+    (tdir / "tuning-report-r80.json").write_text(json.dumps(d))
+    try:
+        row = Page(html.render_report(out)).row("specimen", "report-r80", table=-1)
+    finally:
+        settings = json.loads((out / "run.json").read_text())["engines"]["report-r80"]["settings"]
+        (tdir / "tuning-report-r80.json").write_text(json.dumps(tuning_file("report-r80", settings)))
+    assert row[1] == "the run differs: r: tuned 0.75, run 0.8"
+
+
+def test_a_tuning_check_not_met_is_explained_under_the_verdict(tuned_run, monkeypatch):
+    out, tdir = tuned_run
+    monkeypatch.setattr(html, "TUNING_DIR", tdir)
+    text = html.render_report(out)
+    page = Page(text)
+    row = page.row("verdict", "report-r80")
+    assert "1 tuning check not met" in row[-1]
+    line = next(li for li in text.split("<li>") if "report-r80</span>:" in li)
+    # what was not met, by how much, against what
+    assert "Tuning not met" in line
+    assert "after 40 impacts is -14.0% off the analytic 0.0106 &alpha;" in line
+    assert "accepted &plusmn;5%" in line
+    # and what it means for the verdict, with the verdict's own figure
+    ks = float(row[2].split()[0])
+    if row[-1].startswith("PASS"):
+        assert "It does not change this verdict" in line and f"KS {ks:.3f}" in line
+        # records of the reference at or below the largest failing peak (0.018 alpha) are counted
+        df = pd.read_parquet(out / "results.parquet")
+        ref = df[(df.engine == "housner") & (df.status == "ok")].theta_max_over_alpha.to_numpy()
+        assert f"{int(np.sum(ref <= 0.018))} of the {ref.size} records peak there" in line
+    else:
+        assert "fails on its own criteria as well" in line
+    # a met tuning adds nothing
+    (tdir / "tuning-report-r80.json").write_text(json.dumps(tuning_file("report-r80", {}, decay_40=-0.02)))
+    try:
+        again = html.render_report(out)
+    finally:
+        settings = json.loads((out / "run.json").read_text())["engines"]["report-r80"]["settings"]
+        (tdir / "tuning-report-r80.json").write_text(json.dumps(tuning_file("report-r80", settings)))
+    assert "Tuning not met" not in again and "tuning check not met" not in again
+
+
+def test_cdf_legend_names_the_overturn_strip_and_the_line_at_one():
+    samples = {"a": np.array([0.1, 0.4, 0.5, np.inf]), "b": np.array([0.2, 0.3, 0.6, 0.9])}
+    fig = figures.plot_cdfs(samples, reference="a")
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert any(t.startswith("overturned") and "P[overturn]" in t for t in texts), texts
+    assert any(r"$\theta/\alpha$ = 1" in t for t in texts), texts
+
+
+# ----------------------------------------------------------------------------
+# Table 2: the gap to the paper and its measured cause
+def test_record_against_itself_is_the_median_with_the_same_spectrum():
+    from engines.analytic import HousnerEngine as Analytic
+    from scenarios.analysis import record_against_ensemble
+
+    rec = shaking(1)[0]
+    S = 10.0
+    same = [rec.to_model_scale(S)] * 4
+    g = record_against_ensemble(SPEC, rec, same, S)
+    x = Analytic().simulate(SPEC, rec.to_model_scale(S)).theta_max_over_alpha
+    assert g["record_theta_max_over_alpha"] == pytest.approx(x, rel=1e-12)
+    assert g["record_percentile"] == 50.0  # all ties, counted half
+    assert g["band_ratio_min"] == pytest.approx(1.0, rel=1e-9) and g["band_ratio_max"] == pytest.approx(1.0, rel=1e-9)
+    # half the amplitude: spectra are linear, and the record beats every member
+    half = [m.scaled(amplitude=0.5) for m in same]
+    g = record_against_ensemble(SPEC, rec, half, S)
+    assert g["band_ratio_min"] == pytest.approx(0.5, rel=1e-9) and g["short_ratio_max"] == pytest.approx(0.5, rel=1e-9)
+    assert g["arias_ensemble_mean_m_s"] == pytest.approx(0.25 * g["arias_record_m_s"], rel=1e-9)
+    assert g["record_percentile"] == (100.0 if x > 0 else 50.0)
+    assert g["p_prototype_1_s"] == pytest.approx(SPEC.p / np.sqrt(S))
+    assert g["omega_ratio_band"] == pytest.approx(
+        [2 * np.pi / (1.25 * SPEC.p / np.sqrt(S)), 2 * np.pi / (0.5 * SPEC.p / np.sqrt(S))]
+    )
+
+
+def test_table2_says_whether_the_paper_lies_within_the_spread(shaken):
+    _, path, _ = shaken
+    text = path.read_text()
+    gap = text.split('id="table2-gap"')[1]
+    # SPREAD holds the paper's 0.37 / 0.77 / overturn between its min and max
+    assert "lie within the spread of independent ensembles" in gap
+    assert "0.30&ndash;0.40 / 0.70&ndash;0.80 / overturn&ndash;overturn" in gap
+    # no record behind these motions: no cause is claimed
+    assert "No measured cause on this page" in gap
+
+
+@pytest.fixture(scope="module")
+def rdk_run(tmp_path_factory):
+    """Model-scale motions said to be simulated from El Centro, the paper's Table 2 and a spread far below it."""
+    S = 10.0
+    model = [m.to_model_scale(S) for m in shaking(8, seed=3)]
+    meta = {"source": "rdk", "S": S, "seed": 1, "record": {"name": "elcentro-peer1999", "dt": 0.01, "n": 4000}}
+    spread = {**SPREAD, "summary": {"25": [0.1, 0.12, 0.14], "50": [0.2, 0.22, 0.24], "75": [0.3, 0.32, 0.34]}}
+    out = make_run(
+        tmp_path_factory.mktemp("rdk") / "rdk",
+        model,
+        {"housner": {}},
+        motions_meta=meta,
+        scenario={"motions": {"source": "rdk", "record": "elcentro"}},
+        analysis={"reference": "housner", "paper_percentiles": {"25": 0.37, "50": 0.77, "75": "overturn"}},
+        extra={"table2_spread": spread},
+    )
+    return out, model, S
+
+
+def test_table2_states_the_records_own_peak_and_rank(rdk_run):
+    from engines.analytic import HousnerEngine as Analytic
+    from scenarios.elastic import ensemble_spectra, response_spectrum
+    from scenarios.records import RECORDS
+
+    out, model, S = rdk_run
+    text = html.render_report(out)
+    gap = text.split('id="table2-gap"')[1].split("</section>")[0]
+    assert "lie outside the spread of independent ensembles at every percentile" in gap
+    # the record through the same model at model scale, independently
+    rec = RECORDS["elcentro"]()
+    x = Analytic().simulate(SPEC, rec.to_model_scale(S)).theta_max_over_alpha
+    df = pd.read_parquet(out / "results.parquet")
+    v = df[df.engine == "housner"].theta_max_over_alpha.to_numpy()
+    pct = 100 * (np.sum(v < x) + 0.5 * np.sum(v == x)) / v.size
+    assert f"&theta;<sub>max</sub>/&alpha; = <strong>{x:.2f}</strong>" in gap
+    assert f"higher than {'only ' if pct < 50 else ''}{pct:.0f} % of the {v.size} motions" in gap
+    # the ensemble's mean 5 %-damped PSa against the record's, 0.5-1.25 s at prototype scale
+    T = np.geomspace(0.5, 1.25, 16)
+    psa, _ = ensemble_spectra([m.scaled(time=np.sqrt(S)) for m in model], T, 0.05)
+    ratio = psa.mean(axis=0) / response_spectrum(rec, T, 0.05)[0]
+    assert f"{ratio.min():.2f}&ndash;{ratio.max():.2f}" in gap
+    assert "between 0.5 and 1.25 s" in gap
