@@ -63,6 +63,7 @@ model. COMPDYN 2017, eqs. 2, 4 and 8.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import tempfile
 import time
@@ -333,7 +334,7 @@ class PybulletEngine(Engine):
     # ------------------------------------------------------------------
     def _connect(self) -> int:
         if self._client is None:
-            import pybullet as pb
+            pb = _pybullet()
 
             cid = pb.connect(pb.DIRECT)
             if cid < 0:
@@ -378,7 +379,7 @@ class PybulletEngine(Engine):
             PyBullet client id and the block's body id (joints 0, 1, 2 are x,
             z, theta).
         """
-        import pybullet as pb
+        pb = _pybullet()
 
         cid = self._connect()
         s = self._settings
@@ -431,7 +432,7 @@ class PybulletEngine(Engine):
 
     # ------------------------------------------------------------------
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
-        import pybullet as pb
+        pb = _pybullet()
 
         wall0 = time.perf_counter()
         H, B, alpha = specimen.H, specimen.B, specimen.alpha
@@ -571,9 +572,63 @@ def _sig(x: float, digits: int = 3) -> float:
     return float(f"{x:.{digits - 1}e}")
 
 
+def _pybullet():
+    """The ``pybullet`` module, imported without its "pybullet build time: ..." banner.
+
+    The C extension prints the banner when it is imported (to fd 2 with the
+    wheels of PyBullet 3.2.7, to fd 1 with other builds); it would land in the
+    middle of the progress bar or of a command's output. The import runs with
+    file descriptors 1 and 2 pointed at the null device, C's stdio flushed before
+    they are restored. Where that cannot be done, the module is imported plainly.
+    """
+    import sys
+
+    pb = sys.modules.get("pybullet")
+    if pb is not None:
+        return pb
+    saved: list[tuple[int, int]] = []
+    try:
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:
+                stream.flush()
+        for fd in (1, 2):
+            saved.append((fd, os.dup(fd)))
+    except (OSError, ValueError, AttributeError):
+        for _fd, copy in saved:
+            os.close(copy)
+        import pybullet as pb
+
+        return pb
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            for fd, _copy in saved:
+                os.dup2(devnull, fd)
+        finally:
+            os.close(devnull)
+        import pybullet as pb
+
+        _flush_c_stdio()
+    finally:
+        for fd, copy in saved:
+            os.dup2(copy, fd)
+            os.close(copy)
+    return pb
+
+
+def _flush_c_stdio() -> None:
+    """fflush(NULL): push C stdio buffers (the banner) out while fds 1 and 2 are still the null device."""
+    try:
+        import ctypes
+
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError, TypeError):
+        pass
+
+
 def _close_client(cid: int, tmp: str) -> None:
     try:
-        import pybullet as pb
+        pb = _pybullet()
 
         if pb.isConnected(physicsClientId=cid):
             pb.disconnect(physicsClientId=cid)
