@@ -11,6 +11,7 @@ from __future__ import annotations
 import difflib
 import functools
 import math
+import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -76,44 +77,102 @@ _SCHEMA: dict[str, dict[str, Any]] = {
 
 
 class ScenarioError(ValueError):
-    """A scenario file is invalid; the message names the file and the key."""
+    """A scenario file is invalid; the message names the file, the key and, where known, the line."""
 
 
-def _check_table(path: Path, table: str, data: dict) -> None:
+_TABLE_RE = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\-\"' ]+?)\s*\]")
+_TOML_LINE_RE = re.compile(r"\(at line (\d+), column (\d+)\)")
+
+
+def _key_line(text: str, table: str, key: str) -> int | None:
+    """1-based line of ``key = ...`` in ``[table]`` ("" = top level) of a TOML text, or None.
+
+    A plain scan (tomllib keeps no positions): good for the flat files of the
+    catalogue, None when the key is written in a way it does not recognise.
+    """
+    current = ""
+    pat = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*=")
+    for n, line in enumerate(text.splitlines(), start=1):
+        m = _TABLE_RE.match(line)
+        if m and not line.lstrip().startswith("[["):
+            current = m.group(1).replace('"', "").replace("'", "").strip()
+            continue
+        if current == table and pat.match(line):
+            return n
+    if table and "." not in table:  # an inline table: `motions = { n = 0 }` or `[engines.x]`
+        return _key_line(text, "", table)
+    return None
+
+
+class _File:
+    """A scenario file being checked: builds messages that name the file, the line and the key."""
+
+    def __init__(self, path: Path, text: str):
+        self.path = path
+        self.text = text
+
+    def error(self, table: str, key: str | None, message: str) -> ScenarioError:
+        line = _key_line(self.text, table, key) if key is not None else None
+        if line is None and table:
+            line = _table_line(self.text, table)
+        where = f"{self.path} line {line}" if line is not None else f"{self.path}"
+        return ScenarioError(f"{where}: {message}")
+
+
+def _table_line(text: str, table: str) -> int | None:
+    for n, line in enumerate(text.splitlines(), start=1):
+        m = _TABLE_RE.match(line)
+        if m and m.group(1).replace('"', "").replace("'", "").strip() == table:
+            return n
+    return None
+
+
+def _check_table(f: _File, table: str, data: dict) -> None:
     allowed = _SCHEMA[table]
     for key, value in data.items():
         if table == "engines" and key != "names":
             if not isinstance(value, dict):
-                raise ScenarioError(f"{path}: [engines.{key}] must be a table of engine settings")
+                raise f.error(table, key, f"[engines.{key}] must be a table of engine settings")
             continue
         where = f"[{table}] " if table else ""
         if key not in allowed:
             close = difflib.get_close_matches(key, allowed, n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise ScenarioError(f"{path}: unknown key {where}{key!r}{hint} (allowed: {', '.join(sorted(allowed))})")
+            raise f.error(table, key, f"unknown key {where}{key!r}{hint} (allowed: {', '.join(sorted(allowed))})")
         expected = allowed[key]
         types = expected if isinstance(expected, tuple) else (expected,)
         if float in types:
             types = types + (int,)
         if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
             names = " or ".join(t.__name__ for t in types if t is not int or float not in types)
-            raise ScenarioError(f"{path}: {where}{key!r} must be {names}, got {value!r}")
+            raise f.error(table, key, f"{where}{key!r} must be {names}, got {value!r}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise f.error(table, key, f"{where}{key!r} must be a finite number, got {value!r}")
         if table and isinstance(value, dict) and table != "analysis":
             continue
         if isinstance(value, dict) and key in _SCHEMA:
-            _check_table(path, key, value)
+            _check_table(f, key, value)
 
 
-def _grid(path: Path, key: str, spec: Any) -> np.ndarray:
-    if isinstance(spec, list):
-        arr = np.asarray(spec, dtype=float)
-    else:
-        extra = set(spec) - {"start", "stop", "num"}
-        if extra or not {"start", "stop", "num"} <= set(spec):
-            raise ScenarioError(f"{path}: [motions] {key!r} must be a list or {{start, stop, num}}, got {spec!r}")
-        arr = np.linspace(float(spec["start"]), float(spec["stop"]), int(spec["num"]))
-    if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise ScenarioError(f"{path}: [motions] {key!r} must hold positive finite numbers")
+def _grid(path: Path, key: str, spec: Any, text: str = "") -> np.ndarray:
+    f = _File(path, text)
+    try:
+        if isinstance(spec, list):
+            arr = np.asarray(spec, dtype=float)
+        else:
+            extra = set(spec) - {"start", "stop", "num"}
+            if extra or not {"start", "stop", "num"} <= set(spec):
+                raise f.error("motions", key, f"[motions] {key!r} must be a list or {{start, stop, num}}, got {spec!r}")
+            num = spec["num"]
+            if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+                raise f.error("motions", key, f"[motions] {key!r}: 'num' must be a positive integer, got {num!r}")
+            arr = np.linspace(float(spec["start"]), float(spec["stop"]), num)
+    except (TypeError, ValueError) as e:
+        if isinstance(e, ScenarioError):
+            raise
+        raise f.error("motions", key, f"[motions] {key!r} must hold numbers, got {spec!r}") from None
+    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise f.error("motions", key, f"[motions] {key!r} must hold positive finite numbers")
     return arr
 
 
@@ -146,6 +205,7 @@ class Scenario:
     analysis: dict = field(default_factory=dict)
     path: Path | None = None
     raw: dict = field(default_factory=dict, repr=False)
+    raw_text: str = field(default="", repr=False)
 
     @property
     def source(self) -> str:
@@ -180,8 +240,9 @@ class Scenario:
 
     def pulse_grid(self) -> tuple[np.ndarray, np.ndarray]:
         """Flattened (omega_p/p, a_p/(g tan alpha)) pairs of a pulse scenario, row-major in omega."""
-        w = _grid(self.path, "omega_ratio", self.motions["omega_ratio"])
-        a = _grid(self.path, "accel_ratio", self.motions["accel_ratio"])
+        text = self.raw_text
+        w = _grid(self.path, "omega_ratio", self.motions["omega_ratio"], text)
+        a = _grid(self.path, "accel_ratio", self.motions["accel_ratio"], text)
         W, A = np.meshgrid(w, a, indexing="ij")
         return W.ravel(), A.ravel()
 
@@ -220,9 +281,11 @@ class Scenario:
 
                 params = _rdk_fit(rec_name)
                 meta["rdk_params"] = params.describe()
+                if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
+                    raise ValueError(f"`n` (number of motions) must be a positive integer, got {n!r}")
+                if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+                    raise ValueError(f"`seed` must be a non-negative integer, got {seed!r}")
                 n = int(m.get("n", 100)) if n is None else int(n)
-                if n <= 0:
-                    raise ValueError(f"`n` must be positive, got {n}")
                 seed = int(m.get("seed", 0)) if seed is None else int(seed)
                 meta["seed"] = seed
                 proto = rdk.simulate(params, n, seed)
@@ -258,6 +321,35 @@ class Scenario:
         meta.update({"pulse": kind, "omega_ratio": W.tolist(), "accel_ratio": A.tolist()})
         return motions, meta
 
+    def check_engines(self, names: list[str] | None = None) -> None:
+        """Instantiate every engine to run with its [engines.NAME] settings, to refuse bad settings
+        before any work (imports the engines' packages).
+
+        Parameters
+        ----------
+        names : list of str, optional
+            Engines to check (default: the scenario's).
+
+        Raises
+        ------
+        ScenarioError
+            An engine name is unknown or its settings are refused; the message names
+            the file and the [engines.NAME] table.
+        """
+        from engines.base import ENGINES, engine_class
+
+        where = f"{self.path}" if self.path else f"scenario {self.name!r}"
+        for name in names if names is not None else self.engines:
+            if name not in ENGINES:
+                raise ValueError(f"{unknown_choice('engine', name, ENGINES)}")
+            settings = self.engine_settings.get(name, {})
+            line = _table_line(self.raw_text, f"engines.{name}") if settings else None
+            at = f"{where} line {line}" if line is not None else where
+            try:
+                engine_class(name)(**settings)
+            except (TypeError, ValueError) as e:
+                raise ScenarioError(f"{at}: [engines.{name}] {e}") from None
+
     def describe(self) -> dict:
         """The scenario as plain data (for run.json and the cache key)."""
         return {"name": self.name, "file": str(self.path) if self.path else None, **self.raw}
@@ -291,26 +383,69 @@ def list_scenarios() -> list[tuple[str, str]]:
     return out
 
 
-def load_scenario(name_or_path: str | Path) -> Scenario:
-    """Load and validate a scenario by catalogue name or by path to a TOML file."""
-    p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
-        path = p
-        if not path.exists():
-            raise ScenarioError(f"scenario file {path} does not exist")
-    else:
-        name = str(name_or_path)
-        if name not in SCENARIOS:
-            raise unknown_choice("scenario", name, SCENARIOS)
-        path = SCENARIOS[name]
+def _read_scenario_text(path: Path) -> str:
+    """The file's text; every way of failing to read it becomes a ScenarioError naming the file."""
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = path.read_bytes()
+    except IsADirectoryError:
+        raise ScenarioError(f"{path}: is a directory, not a scenario file") from None
+    except OSError as e:
+        raise ScenarioError(f"{path}: cannot read the scenario file ({e.strerror or type(e).__name__})") from None
+    try:
+        return data.decode("utf-8-sig")  # an editor's byte-order mark is skipped
+    except UnicodeDecodeError as e:
+        line = data[: e.start].count(b"\n") + 1
+        raise ScenarioError(
+            f"{path} line {line}: not UTF-8 text (byte 0x{data[e.start]:02x} at offset {e.start}); "
+            "a scenario is a UTF-8 TOML file"
+        ) from None
+
+
+def _resolve(name_or_path: str | Path) -> Path:
+    """The file of a catalogue name or a path (a name with a path separator or a suffix is a path)."""
+    text = str(name_or_path)
+    p = Path(name_or_path)
+    if isinstance(name_or_path, Path) or p.suffix or "/" in text or "\\" in text or p.exists():
+        if p.is_dir():
+            raise ScenarioError(
+                f"{p}: is a directory, not a scenario file (give a .toml file or one of: {', '.join(SCENARIOS)})"
+            )
+        if not p.exists():
+            raise ScenarioError(f"scenario file {p} does not exist")
+        return p
+    if text not in SCENARIOS:
+        raise unknown_choice("scenario", text, SCENARIOS)
+    return SCENARIOS[text]
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """Load and validate a scenario by catalogue name or by path to a TOML file.
+
+    Raises
+    ------
+    ScenarioError
+        The file cannot be read, is not UTF-8 or not TOML, or a key is unknown,
+        missing or out of range; the message names the file, the key and, where
+        it can be found, the line.
+    ValueError
+        ``name_or_path`` is neither a file nor a catalogue name (the choices are listed).
+    """
+    path = _resolve(name_or_path)
+    text = _read_scenario_text(path)
+    try:
+        raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        raise ScenarioError(f"{path}: invalid TOML: {e}") from None
-    _check_table(path, "", raw)
+        m = _TOML_LINE_RE.search(str(e))
+        where = f"{path} line {m.group(1)}" if m else f"{path}"
+        raise ScenarioError(f"{where}: invalid TOML: {e}") from None
+    f = _File(path, text)
+    _check_table(f, "", raw)
     for required in ("specimen", "motions"):
         if required not in raw:
             raise ScenarioError(f"{path}: missing table [{required}]")
+    name = raw.get("name", path.stem)
+    if not name.strip() or name in (".", "..") or any(c in name for c in "/\\\0"):
+        raise f.error("", "name", f"'name' must be a plain name (it names the run directory runs/NAME), got {name!r}")
 
     spec_t = dict(raw["specimen"])
     preset = spec_t.pop("preset", None)
@@ -328,44 +463,110 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         else:
             specimen = Specimen(**spec_t)
     except (ValueError, TypeError) as e:
-        raise ScenarioError(f"{path}: [specimen] {e}") from None
+        key = re.search(r"`(\w+)`", str(e))
+        raise f.error("specimen", key.group(1) if key else None, f"[specimen] {e}") from None
 
     mot = dict(raw["motions"])
     src = mot.get("source")
     if src not in MOTION_SOURCES:
-        raise ScenarioError(f"{path}: [motions] {unknown_choice('source', src, MOTION_SOURCES)}")
+        raise f.error("motions", "source", f"[motions] {unknown_choice('source', src, MOTION_SOURCES)}")
     need = {"free_vibration": ["theta0_over_alpha"], "pulses": ["omega_ratio", "accel_ratio"]}.get(src, [])
     for k in need:
         if k not in mot:
-            raise ScenarioError(f"{path}: [motions] source {src!r} needs key {k!r}")
+            raise f.error("motions", None, f"[motions] source {src!r} needs key {k!r}")
     if src == "pulses" and mot.get("pulse", "symmetric_ricker") not in PULSES:
-        raise ScenarioError(f"{path}: [motions] {unknown_choice('pulse', mot['pulse'], PULSES)}")
-    for k in ("prototype_height", "S", "duration", "dt"):
+        raise f.error("motions", "pulse", f"[motions] {unknown_choice('pulse', mot['pulse'], PULSES)}")
+    for k in ("prototype_height", "S", "duration", "dt", "amplitude"):
         if k in mot and not (math.isfinite(mot[k]) and mot[k] > 0):
-            raise ScenarioError(f"{path}: [motions] {k!r} must be positive, got {mot[k]!r}")
+            raise f.error("motions", k, f"[motions] {k!r} must be positive and finite, got {mot[k]!r}")
+    if "n" in mot and mot["n"] < 1:
+        raise f.error("motions", "n", f"[motions] 'n' must be a positive integer, got {mot['n']!r}")
+    if "seed" in mot and mot["seed"] < 0:
+        raise f.error("motions", "seed", f"[motions] 'seed' must be a non-negative integer, got {mot['seed']!r}")
+    if "dt" in mot and "duration" in mot and mot["dt"] >= mot["duration"]:
+        raise f.error(
+            "motions", "dt", f"[motions] 'dt' ({mot['dt']!r} s) must be below 'duration' ({mot['duration']!r} s)"
+        )
+    if src in ("rdk", "record"):
+        from scenarios.records import RECORDS
+
+        rec = mot.get("record", "elcentro")
+        if rec not in RECORDS:
+            raise f.error("motions", "record", f"[motions] {unknown_choice('record', rec, RECORDS)}")
     if src == "free_vibration":
-        bad = [a for a in mot["theta0_over_alpha"] if not (isinstance(a, (int, float)) and 0 < a < 1)]
-        if bad:
-            raise ScenarioError(f"{path}: [motions] 'theta0_over_alpha' values must lie in (0, 1), got {bad}")
+        values = mot["theta0_over_alpha"]
+        bad = [a for a in values if isinstance(a, bool) or not (isinstance(a, (int, float)) and 0 < a < 1)]
+        if bad or not values:
+            got = bad if bad else "an empty list"
+            raise f.error(
+                "motions", "theta0_over_alpha", f"[motions] 'theta0_over_alpha' values must lie in (0, 1), got {got}"
+            )
 
     eng_t = dict(raw.get("engines", {}))
     names = list(eng_t.pop("names", ["housner"]))
     from engines.base import ENGINES
 
+    if not names:
+        raise f.error("engines", "names", "[engines] 'names' must list at least one engine")
+    for n in names:
+        if not isinstance(n, str):
+            raise f.error("engines", "names", f"[engines] 'names' must hold engine names (strings), got {n!r}")
     for n in names + list(eng_t):
         if n not in ENGINES:
-            raise ScenarioError(f"{path}: [engines] {unknown_choice('engine', n, ENGINES)}")
+            key = "names" if n in names else None
+            err = f.error("engines", key, f"[engines] {unknown_choice('engine', n, ENGINES)}")
+            if key is None:
+                line = _table_line(text, f"engines.{n}")
+                if line is not None:
+                    err = ScenarioError(f"{path} line {line}: [engines] {unknown_choice('engine', n, ENGINES)}")
+            raise err
+    analysis = dict(raw.get("analysis", {}))
+    _check_analysis(f, analysis)
     scen = Scenario(
-        name=raw.get("name", path.stem),
+        name=name,
         description=raw.get("description", ""),
         specimen=specimen,
         motions=mot,
         engines=names,
         engine_settings=eng_t,
-        analysis=dict(raw.get("analysis", {})),
+        analysis=analysis,
         path=path,
         raw=raw,
+        raw_text=text,
     )
     if src == "pulses":
         scen.pulse_grid()  # validate the grids now
     return scen
+
+
+def _check_analysis(f: _File, analysis: dict) -> None:
+    """The [analysis] table is read after the simulation (report): check it now."""
+    ref = analysis.get("reference")
+    if ref is not None:
+        from engines.base import ENGINES
+
+        if ref not in ENGINES:
+            raise f.error("analysis", "reference", f"[analysis] {unknown_choice('reference engine', ref, ENGINES)}")
+    for k, v in (analysis.get("paper_percentiles") or {}).items():
+        try:
+            q = float(k)
+        except ValueError:
+            q = math.nan
+        if not 0 < q < 100:
+            raise f.error(
+                "analysis",
+                "paper_percentiles",
+                f"[analysis] 'paper_percentiles' key {k!r} must be a percentile in (0, 100)",
+            )
+        ok = (isinstance(v, str) and v.strip().lower() in ("overturn", "overturned")) or (
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
+        )
+        if not ok:
+            raise f.error(
+                "analysis",
+                "paper_percentiles",
+                f"[analysis] 'paper_percentiles' value for {k!r} must be a number >= 0 or \"overturn\", got {v!r}",
+            )
+    k = analysis.get("seed_spread")
+    if k is not None and not 0 <= k <= 1000:
+        raise f.error("analysis", "seed_spread", f"[analysis] 'seed_spread' must be between 0 and 1000, got {k!r}")
