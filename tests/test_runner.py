@@ -116,3 +116,61 @@ def test_run_scenario_writes_the_run_directory(tmp_path):
     assert meta["engines"]["housner"]["settings"] == {"r": None, "substeps": None}
     assert meta["specimen"]["p_1_s"] == pytest.approx(4.8883)
     assert run.failures.empty
+
+
+# ----------------------------------------------------------------------------
+# cache integrity: every entry carries its key and a SHA-256 of its payload
+def _entry(cache_dir, motion):
+    from engines.base import get_engine
+    from scenarios.runner import cache_key
+
+    eng = get_engine("housner")
+    k = cache_key(SPEC, motion, "housner", eng.settings(), eng.version())
+    return cache_dir / k[:2] / f"{k}.npz"
+
+
+def test_cache_entry_copied_over_another_key_is_detected_and_recomputed(tmp_path, caplog):
+    import shutil
+
+    ms = motions()
+    df1, h1, _ = run_engines(SPEC, ms, {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=False)
+    # Motion 0 overturns, motion 3 does not: serving 3's entry for 0 would change the results.
+    assert df1.theta_max_over_alpha[0] == np.inf and df1.theta_max_over_alpha[3] < 1
+    shutil.copyfile(_entry(tmp_path, ms[3]), _entry(tmp_path, ms[0]))  # a valid entry, under the wrong key
+    with caplog.at_level("WARNING", logger="housner.runner"):
+        df2, h2, info = run_engines(SPEC, ms, {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=False)
+    assert info["housner"]["cache_rejected"] == 1 and info["housner"]["cached"] == 3
+    assert list(df2.cached) == [False, True, True, True]
+    assert any("another key" in r.getMessage() and "motion 0" in r.getMessage() for r in caplog.records)
+    pd.testing.assert_series_equal(df1.theta_max_over_alpha, df2.theta_max_over_alpha)
+    assert np.array_equal(h1[("housner", 0)], h2[("housner", 0)])
+    # The recomputed entry was written back, correct: the next run trusts all four.
+    _, _, info3 = run_engines(SPEC, ms, {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=False)
+    assert info3["housner"]["cached"] == 4 and info3["housner"]["cache_rejected"] == 0
+
+
+def test_cache_entry_edited_by_hand_fails_its_checksum(tmp_path, caplog):
+    ms = motions()
+    df1, _, _ = run_engines(SPEC, ms, {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=False)
+    path = _entry(tmp_path, ms[2])
+    with np.load(path, allow_pickle=False) as z:
+        theta, row = z["theta"], json.loads(str(z["row"]))
+    row["theta_max_over_alpha"], row["n_impacts"] = "9.99", 12345  # the sha256 field is left as it was
+    np.savez_compressed(path, theta=theta, row=np.array(json.dumps(row)))
+    garbage = _entry(tmp_path, ms[3])
+    garbage.write_bytes(b"not an npz file")  # a truncated or foreign file
+    with caplog.at_level("WARNING", logger="housner.runner"):
+        df2, _, info = run_engines(SPEC, ms, {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=False)
+    assert info["housner"]["cache_rejected"] == 2 and info["housner"]["cached"] == 2
+    messages = " | ".join(r.getMessage() for r in caplog.records)
+    assert "checksum" in messages and "motion 2" in messages and "unreadable" in messages
+    assert df2.theta_max_over_alpha[2] == df1.theta_max_over_alpha[2] != 9.99
+    assert df2.n_impacts[2] == df1.n_impacts[2] != 12345
+    assert list(df2.cached) == [True, True, False, False]
+
+
+def test_bad_jobs_and_chunk_size_are_refused():
+    with pytest.raises(ValueError, match="`jobs` must be a positive integer"):
+        run_engines(SPEC, motions(1), {"housner": {}}, jobs=-2, use_cache=False, progress=False)
+    with pytest.raises(ValueError, match="`chunk_size`"):
+        run_engines(SPEC, motions(1), {"housner": {}}, jobs=1, chunk_size=0, use_cache=False, progress=False)
