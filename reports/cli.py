@@ -1,20 +1,148 @@
-"""The ``housner`` command line: the top layer, above scenarios, engines and reports."""
+"""The ``housner`` command line: the top layer, above scenarios, engines and reports.
+
+Errors are one line on stderr, ``housner: error: ...``, naming the file, line,
+key or argument at fault; ``--debug`` (or ``HOUSNER_DEBUG=1``) adds the
+traceback. Inputs and output paths are checked before any simulation.
+
+Exit status: 0 done; 1 a runtime failure (``run``: a record failed, unless
+``--allow-failures``; ``tune``: target not met; an unreachable Dask
+scheduler; an unexpected error); 2 bad input (arguments, scenario, campaign
+or record files, output paths); 130 interrupted by Ctrl-C.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
+import traceback
 from pathlib import Path
 
 __all__ = ["main"]
+
+#: Exit statuses of the command (see the module docstring).
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+_EXIT_HELP = """exit status:
+  0    done
+  1    runtime failure: {run_failure}an unreachable scheduler, an unexpected error
+  2    bad input: arguments, scenario/campaign/record files, output paths (checked before any work)
+  130  interrupted (Ctrl-C){ctrl_c}"""
+
+
+class UsageError(ValueError):
+    """Bad input found by the command itself (an argument, a path); exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, with one-line errors raised as :class:`UsageError` instead of usage text and exit."""
+
+    def error(self, message: str):  # noqa: D102 - argparse API
+        raise UsageError(f"{message} (see `{self.prog} --help`)")
+
+
+def _positive_int(value: str) -> int:
+    try:
+        n = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value!r}")
+    return n
+
+
+def _nonneg_int(value: str) -> int:
+    try:
+        n = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a non-negative integer, got {value!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"must be a non-negative integer, got {value!r}")
+    return n
+
+
+def _open_fraction(value: str) -> float:
+    try:
+        x = float(value)
+    except ValueError:
+        x = math.nan
+    if not 0.0 < x < 1.0:
+        raise argparse.ArgumentTypeError(f"must be a number between 0 and 1 (exclusive), got {value!r}")
+    return x
+
+
+def _ratio(value: str) -> float:
+    try:
+        x = float(value)
+    except ValueError:
+        x = math.nan
+    if not 0.0 < x <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be a kinetic-energy ratio in (0, 1], got {value!r}")
+    return x
+
+
+def _amplitudes(value: str) -> tuple[float, ...]:
+    out = []
+    for part in value.split(","):
+        try:
+            a = float(part)
+        except ValueError:
+            a = math.nan
+        if not 0.0 < a < 1.0:
+            raise argparse.ArgumentTypeError(
+                f"must be comma-separated amplitudes theta0/alpha in (0, 1), got {part.strip()!r} in {value!r}"
+            )
+        out.append(a)
+    return tuple(out)
 
 
 def _engines_arg(value: str) -> list[str]:
     names = [v.strip() for v in value.split(",") if v.strip()]
     if not names:
         raise argparse.ArgumentTypeError("give at least one engine name, e.g. housner,mujoco")
+    from engines.base import ENGINES
+    from housner.errors import unknown_choice
+
+    for n in names:
+        if n not in ENGINES:
+            raise argparse.ArgumentTypeError(str(unknown_choice("engine", n, ENGINES)))
     return names
+
+
+def _versions() -> str:
+    """``housner X (python Y; engines: ...)``, from package metadata (imports no engine)."""
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+
+    import housner
+    from engines.base import ENGINES
+
+    parts = []
+    for name in ENGINES:
+        pkg = "housner" if name == "housner" else name
+        try:
+            v = housner.__version__ if pkg == "housner" else version(pkg)
+        except PackageNotFoundError:
+            v = "not installed"
+        parts.append(f"{name} {v}")
+    return f"housner {housner.__version__} (python {platform.python_version()}; engines: {', '.join(parts)})"
+
+
+class _VersionAction(argparse.Action):
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings=option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(_versions())
+        parser.exit(0)
+
+
+def _check_output_file(path: str, option: str) -> Path:
+    from scenarios._outputs import check_output_file
+
+    return check_output_file(path, option)
 
 
 def _cmd_scenarios(args: argparse.Namespace) -> int:
@@ -28,34 +156,51 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from scenarios._outputs import check_output_dir
     from scenarios.catalogue import load_scenario
-    from scenarios.runner import run_scenario
+    from scenarios.runner import RUN_FILES, connect_scheduler, run_scenario
 
+    # Everything is checked before the first simulation: scenario, engines, arguments, outputs, scheduler.
     scenario = load_scenario(args.scenario)
     engines = args.engines or scenario.engines
+    scenario.check_engines(engines)
+    for opt, value in (("--n-motions", args.n_motions), ("--seed", args.seed)):
+        if value is not None and scenario.source != "rdk":
+            raise UsageError(
+                f"argument {opt}: scenario {scenario.name!r} has a fixed set of {scenario.n_motions} motions "
+                f"(source {scenario.source!r}); {opt} applies to RDK ensembles"
+            )
     out = Path(args.out) if args.out else Path("runs") / scenario.name
+    check_output_dir(out, "--out" if args.out else "run directory (--out)", files=RUN_FILES)
+    client = connect_scheduler(args.scheduler) if args.scheduler else None
     n = args.n_motions if args.n_motions is not None else scenario.n_motions
     print(f"scenario {scenario.name}: {n} motions x engines {', '.join(engines)} -> {out}", file=sys.stderr)
-    run = run_scenario(
-        scenario,
-        engines=engines,
-        n_motions=args.n_motions,
-        seed=args.seed,
-        out=out,
-        jobs=args.jobs,
-        scheduler=args.scheduler,
-        use_cache=not args.no_cache,
-        progress=not args.quiet,
-    )
+    try:
+        run = run_scenario(
+            scenario,
+            engines=engines,
+            n_motions=args.n_motions,
+            seed=args.seed,
+            out=out,
+            jobs=args.jobs,
+            scheduler=client,
+            use_cache=not args.no_cache,
+            progress=not args.quiet,
+        )
+    finally:
+        if client is not None:
+            client.close(timeout=2)
     res = run.results
     for name in engines:
         sub = res[res.engine == name]
         ok = sub[sub.status == "ok"]
         info = run.meta["engines"][name]
+        rejected = f", {info['cache_rejected']} cache entries rejected" if info.get("cache_rejected") else ""
+        median = ok.theta_max_over_alpha.median() if len(ok) else math.nan
         print(
             f"  {name:9s} {len(ok)}/{len(sub)} ok, {int(ok.overturned.sum())} overturned, "
-            f"median theta_max/alpha {ok.theta_max_over_alpha.median():.3f}, "
-            f"{info['wall_s']:.1f} s engine time ({info['cached']} cached)"
+            f"median theta_max/alpha {median:.3f}, "
+            f"{info['wall_s']:.1f} s engine time ({info['cached']} cached{rejected})"
         )
     if len(run.failures):
         print(f"{len(run.failures)} record(s) failed (kept out of the statistics):", file=sys.stderr)
@@ -67,21 +212,38 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
         path = write_report(out)
         print(f"report:  {path}")
-    return 0
+    if len(run.failures) and not args.allow_failures:
+        print(
+            f"housner: error: {len(run.failures)} of {len(res)} records failed (listed above); "
+            "exit status 1 (--allow-failures: exit 0 when records fail)",
+            file=sys.stderr,
+        )
+        return EXIT_FAILURE
+    return EXIT_OK
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
     from reports.html import write_report
 
     run_dir = Path(args.run_dir)
-    if not (run_dir / "results.parquet").exists():
-        print(
-            f"error: {run_dir} holds no results.parquet; run `housner run SCENARIO --out {run_dir}` first",
-            file=sys.stderr,
-        )
-        return 2
-    print(f"report: {write_report(run_dir, args.out)}")
-    return 0
+    if not run_dir.exists():
+        raise UsageError(f"run directory {run_dir} does not exist")
+    if not run_dir.is_dir():
+        raise UsageError(f"run directory {run_dir} is a file; give the directory a run wrote (--out of `housner run`)")
+    if not (run_dir / "results.parquet").is_file():
+        raise UsageError(f"{run_dir} holds no results.parquet; run `housner run SCENARIO --out {run_dir}` first")
+    out = _check_output_file(args.out, "--out") if args.out else None
+    if out is None:
+        from scenarios._outputs import check_output_dir
+
+        check_output_dir(run_dir, "run directory", files=("report.html",))
+    try:
+        path = write_report(run_dir, out)
+    except (OSError, ValueError) as e:  # a damaged run directory: name it, no traceback
+        detail = " ".join(str(e).split()) or type(e).__name__
+        raise UsageError(f"run directory {run_dir}: cannot build the report ({type(e).__name__}: {detail})") from e
+    print(f"report: {path}")
+    return EXIT_OK
 
 
 def _cmd_tune(args: argparse.Namespace) -> int:
@@ -93,7 +255,9 @@ def _cmd_tune(args: argparse.Namespace) -> int:
         from scenarios.catalogue import load_scenario
 
         specimen = load_scenario(args.scenario).specimen
-    amps = tuple(float(a) for a in args.amplitudes.split(",")) if args.amplitudes else None
+    if args.json:
+        _check_output_file(args.json, "--json")
+    amps = args.amplitudes
     kwargs = {"target_r": args.target_r, "progress": not args.quiet}
     if amps:
         kwargs["amplitudes"] = amps
@@ -115,10 +279,41 @@ def _names_arg(value: str) -> list[str]:
     return [v.strip() for v in value.split(",") if v.strip()]
 
 
+def _check_campaign(path: str) -> None:
+    """The campaign argument is a directory with campaign.toml, or a .toml file: checked before the work."""
+    p = Path(path)
+    if not p.exists():
+        raise UsageError(f"campaign {p} does not exist (give a directory with campaign.toml, or the campaign.toml)")
+    if p.is_dir() and not (p / "campaign.toml").exists():
+        raise UsageError(f"campaign directory {p} holds no campaign.toml")
+    if p.is_file() and p.suffix != ".toml":
+        raise UsageError(f"campaign {p} is a file but not a .toml file (give the directory with campaign.toml)")
+    toml = p / "campaign.toml" if p.is_dir() else p
+    if toml.is_dir():
+        raise UsageError(f"campaign {toml} is a directory, not a file")
+
+
+def _check_effects(names: list[str] | None, option: str) -> None:
+    from housner.effects import available_effects
+    from housner.errors import unknown_choice
+
+    known = available_effects()
+    for n in names or ():
+        if n not in known:
+            raise UsageError(f"argument {option}: {unknown_choice('effect', n, known)}")
+
+
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     from scenarios.campaign import load_campaign
     from scenarios.diagnose import diagnose
 
+    _check_campaign(args.campaign)  # inputs and outputs checked before the work
+    _check_effects(args.effects, "--effects")
+    _check_effects(args.add, "--add")
+    if args.json:
+        _check_output_file(args.json, "--json")
+    if args.report is not None:
+        _check_output_file(args.report, "--report")
     campaign = load_campaign(args.campaign)
     for rid, file, msg in campaign.skipped:
         print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
@@ -151,27 +346,67 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+def _listing(full: bool) -> dict[str, str]:
+    """Names from the registries for the help texts (only built when help is asked for)."""
+    if not full:
+        return {"engines": "see `housner run --help`", "effects": "", "scenarios": ""}
+    from engines.base import ENGINES
+    from housner.effects import available_effects
+    from scenarios.catalogue import SCENARIOS
+
+    return {
+        "engines": ", ".join(ENGINES),
+        "effects": ", ".join(available_effects()),
+        "scenarios": ", ".join(SCENARIOS),
+    }
+
+
+def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
+    """The command's parser; ``full_help`` lists the registered engines, effects and scenarios in the help."""
+    names = _listing(full_help)
+    raw = argparse.RawDescriptionHelpFormatter
+    p = _Parser(
         prog="housner",
         description="Cross-validate physics engines against the analytic Housner rocking block.",
+        epilog=_EXIT_HELP.format(run_failure="`run`: a record failed; `tune`: target not met; ", ctrl_c="")
+        + "\n\nerrors are one line; --debug or HOUSNER_DEBUG=1 shows the traceback",
+        formatter_class=raw,
     )
-    sub = p.add_subparsers(dest="command", required=True)
+    p.add_argument("--version", action=_VersionAction, help="print the versions of housner and its engines, and exit")
+    p.add_argument("--debug", action="store_true", help="show the traceback of an error (also HOUSNER_DEBUG=1)")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     s = sub.add_parser("scenarios", help="list the shipped scenarios")
     s.add_argument("-v", "--verbose", action="store_true", help="also print each scenario's file")
     s.set_defaults(func=_cmd_scenarios)
 
-    r = sub.add_parser("run", help="run a scenario on its engines and write results and an HTML report")
+    r = sub.add_parser(
+        "run",
+        help="run a scenario on its engines and write results and an HTML report",
+        description="Run a scenario on its engines, write the run directory and its HTML report.",
+        epilog=f"engines: {names['engines']}\nscenarios: {names['scenarios']} (or a TOML file)\n\n"
+        + _EXIT_HELP.format(
+            run_failure="a record failed in an engine (unless --allow-failures), ",
+            ctrl_c="; finished records stay in the cache, re-run to resume",
+        ),
+        formatter_class=raw,
+    )
     r.add_argument("scenario", help="catalogue name (see `housner scenarios`) or path to a TOML file")
-    r.add_argument("--engines", type=_engines_arg, help="comma-separated engines (default: the scenario's)")
-    r.add_argument("--n-motions", type=int, help="number of motions of a stochastic ensemble")
-    r.add_argument("--seed", type=int, help="override the ensemble's seed")
-    r.add_argument("--out", help="run directory (default runs/SCENARIO)")
-    r.add_argument("--jobs", type=int, help="worker processes (default: all CPUs; 1 = this process)")
-    r.add_argument("--scheduler", help="address of a Dask distributed scheduler to run on")
+    r.add_argument(
+        "--engines", type=_engines_arg, help=f"comma-separated engines (default: the scenario's): {names['engines']}"
+    )
+    r.add_argument("--n-motions", type=_positive_int, help="number of motions of an RDK ensemble (positive)")
+    r.add_argument("--seed", type=_nonneg_int, help="override the RDK ensemble's seed (non-negative)")
+    r.add_argument("--out", help="run directory (default runs/SCENARIO); checked writable before the run")
+    r.add_argument("--jobs", type=_positive_int, help="worker processes (default: all CPUs; 1 = this process)")
+    r.add_argument("--scheduler", help="address of a Dask distributed scheduler to run on (5 s to connect)")
     r.add_argument("--no-cache", action="store_true", help="recompute instead of reusing cached results")
     r.add_argument("--no-report", action="store_true", help="skip the HTML report")
+    r.add_argument(
+        "--allow-failures",
+        action="store_true",
+        help="exit 0 even when records failed (they are listed, and kept out of the statistics)",
+    )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
@@ -180,10 +415,17 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--out", help="report file (default RUN_DIR/report.html)")
     rep.set_defaults(func=_cmd_report)
 
-    t = sub.add_parser("tune", help="search engine contact settings that reproduce a target r in free vibration")
+    t = sub.add_parser(
+        "tune",
+        help="search engine contact settings that reproduce a target r in free vibration",
+        epilog=f"engines: {names['engines']}",
+        formatter_class=raw,
+    )
     t.add_argument("engine", help="engine name (mujoco, pybullet)")
-    t.add_argument("--target-r", type=float, help="kinetic-energy ratio to reach (default: the specimen's Housner r)")
-    t.add_argument("--amplitudes", help="release amplitudes theta0/alpha, comma-separated (default 0.2..0.9)")
+    t.add_argument("--target-r", type=_ratio, help="kinetic-energy ratio to reach (default: the specimen's Housner r)")
+    t.add_argument(
+        "--amplitudes", type=_amplitudes, help="release amplitudes theta0/alpha, comma-separated (default 0.2..0.9)"
+    )
     t.add_argument("--scenario", help="take the specimen from this scenario (default: the seed specimen)")
     t.add_argument(
         "--json", help="write the tuning result to this JSON file (the report reads engines/models/tuning-ENGINE.json)"
@@ -196,28 +438,95 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("-q", "--quiet", action="store_true")
     t.set_defaults(func=_cmd_tune)
 
-    d = sub.add_parser("diagnose", help="find the physical effect a measurement campaign needs (error ladder)")
+    d = sub.add_parser(
+        "diagnose",
+        help="find the physical effect a measurement campaign needs (error ladder)",
+        epilog=f"effects: {names['effects']}",
+        formatter_class=raw,
+    )
     d.add_argument("campaign", help="campaign directory (campaign.toml + records/)")
-    d.add_argument("--effects", type=_names_arg, help="candidate effects, comma-separated, or 'none' (default: all)")
+    d.add_argument(
+        "--effects",
+        type=_names_arg,
+        help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}",
+    )
     d.add_argument("--add", action="append", metavar="NAME", help="add this effect by hand first (repeatable)")
     d.add_argument("--json", help="write the diagnosis to this JSON file")
     d.add_argument("--report", help="write the HTML report to this file")
-    d.add_argument("--train-fraction", type=float, default=0.5, help="share of ground motions to fit on (0.5)")
-    d.add_argument("--seed", type=int, default=0, help="seed of the train / held-out split (0)")
-    d.add_argument("--max-effects", type=int, default=3, help="most effects the search adds (3)")
+    d.add_argument("--train-fraction", type=_open_fraction, default=0.5, help="share of ground motions to fit on (0.5)")
+    d.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the train / held-out split (0)")
+    d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=_cmd_diagnose)
     return p
 
 
+def _one_line(text: str) -> str:
+    """Join a multi-line message into one line."""
+    return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
+
+
+def _error(message: str) -> None:
+    print(f"housner: error: {_one_line(message)}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``housner`` command."""
-    args = build_parser().parse_args(argv)
+    """Entry point of the ``housner`` command; returns the exit status (see the module docstring)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = os.environ.get("HOUSNER_DEBUG", "").strip().lower() not in ("", "0", "false", "no") or "--debug" in argv
+    argv = [a for a in argv if a != "--debug"]  # accepted anywhere on the line
     try:
+        try:
+            parser = build_parser(full_help=any(a in ("-h", "--help") for a in argv))
+            args = parser.parse_args(argv)
+        except SystemExit as e:  # --help, --version
+            return e.code if isinstance(e.code, int) else (EXIT_OK if e.code is None else EXIT_USAGE)
         return int(args.func(args) or 0)
-    except (ValueError, FileNotFoundError) as e:  # bad input: one clear line, no traceback
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+    except KeyboardInterrupt as e:
+        from scenarios.runner import RunInterrupted
+
+        if debug:
+            traceback.print_exc()
+        if isinstance(e, RunInterrupted) and e.cached:
+            print(
+                f"housner: interrupted: {e.done} of {e.total} records finished and are cached; "
+                "run the same command again to resume",
+                file=sys.stderr,
+            )
+        elif isinstance(e, RunInterrupted):
+            print(
+                f"housner: interrupted: {e.done} of {e.total} records finished (not cached: --no-cache)",
+                file=sys.stderr,
+            )
+        else:
+            print("housner: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as e:
+        if debug:
+            traceback.print_exc()
+        status, message = _classify(e)
+        if status == EXIT_FAILURE and not debug and type(e).__name__ not in ("SchedulerError",):
+            message += " (run with --debug or HOUSNER_DEBUG=1 for the traceback)"
+        _error(message)
+        return status
+
+
+def _classify(e: Exception) -> tuple[int, str]:
+    """Exit status and message of an error that reached :func:`main`."""
+    from housner.errors import DataFileError
+    from scenarios.runner import SchedulerError
+
+    if isinstance(e, SchedulerError):
+        return EXIT_FAILURE, str(e)
+    if isinstance(e, (UsageError, DataFileError, ValueError, FileNotFoundError)):  # bad input
+        msg = str(e)
+        if isinstance(e, OSError) and e.filename is not None and str(e.filename) not in msg:
+            msg = f"{e.filename}: {e.strerror or msg}"
+        return EXIT_USAGE, msg or type(e).__name__
+    if isinstance(e, OSError):
+        where = f"{e.filename}: " if e.filename is not None else ""
+        return EXIT_FAILURE, f"{where}{e.strerror or e}"
+    return EXIT_FAILURE, f"unexpected {type(e).__name__}: {e}"
 
 
 if __name__ == "__main__":
