@@ -133,9 +133,19 @@ def check_output_file(path: str | Path, what: str = "output file") -> Path:
     """
     raw = os.fspath(path)
     path = Path(path)
-    if raw.endswith(("/", os.sep)) or path.is_dir():
+    if path.is_dir():
         raise OutputPathError(what, path, "is a directory; give a file name")
+    if raw.endswith(("/", os.sep)):
+        raise OutputPathError(what, path, "ends with a slash, so it names a directory; give a file name")
     parent = path.parent if str(path.parent) else Path(".")
+    for above in (parent, *parent.parents):
+        try:
+            if above.exists():
+                if not above.is_dir():
+                    raise OutputPathError(what, path, f"{above} is a file, not a directory")
+                break
+        except OSError:
+            break
     _make_dir(parent, what, path)
     if path.exists() and not os.access(path, os.W_OK):
         raise OutputPathError(what, path, "exists and is not writable")

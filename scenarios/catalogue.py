@@ -113,6 +113,8 @@ class _File:
 
     def error(self, table: str, key: str | None, message: str) -> ScenarioError:
         line = _key_line(self.text, table, key) if key is not None else None
+        if line is None and key is not None:  # the key is a table of its own: [key] or [table.key]
+            line = _table_line(self.text, f"{table}.{key}" if table else key)
         if line is None and table:
             line = _table_line(self.text, table)
         where = f"{self.path} line {line}" if line is not None else f"{self.path}"
@@ -345,10 +347,20 @@ class Scenario:
             settings = self.engine_settings.get(name, {})
             line = _table_line(self.raw_text, f"engines.{name}") if settings else None
             at = f"{where} line {line}" if line is not None else where
+            cls = engine_class(name)
             try:
-                engine_class(name)(**settings)
+                cls(**settings)
             except (TypeError, ValueError) as e:
-                raise ScenarioError(f"{at}: [engines.{name}] {e}") from None
+                msg = str(e)
+                if isinstance(e, TypeError) and "unexpected keyword argument" in msg:
+                    import inspect
+
+                    known = [p for p in inspect.signature(cls).parameters if p not in ("self", "args", "kwargs")]
+                    bad = [k for k in settings if k not in known]
+                    close = difflib.get_close_matches(bad[0], known, n=1) if bad else []
+                    hint = f"; did you mean {close[0]!r}?" if close else ""
+                    msg = f"unknown setting {bad[0] if bad else '?'!r}{hint} (settings: {', '.join(known) or 'none'})"
+                raise ScenarioError(f"{at}: [engines.{name}] {msg}") from None
 
     def describe(self) -> dict:
         """The scenario as plain data (for run.json and the cache key)."""
