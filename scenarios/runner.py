@@ -798,7 +798,7 @@ def run_engines(
     rows: dict[tuple[str, int], dict] = {}
     keys: dict[tuple[str, int], str] = {}
     info: dict[str, dict] = {}
-    chunks: list[_Chunk] = []
+    per_engine: list[list[tuple[str, dict, list]]] = []
     for name, settings in engines.items():
         cls = engine_class(name)
         probe = cls(**settings)
@@ -834,8 +834,14 @@ def run_engines(
                 todo.append((i, m))
         n_workers = 1 if scheduler is None and jobs == 1 else max(jobs, 1)
         size = chunk_size or max(1, min(10, math.ceil(len(todo) / (4 * n_workers))))
-        for c in range(0, len(todo), size):
-            chunks.append(_Chunk(len(chunks), name, settings, todo[c : c + size]))
+        per_engine.append([(name, settings, todo[c : c + size]) for c in range(0, len(todo), size)])
+    # Engines interleaved, chunk by chunk: the progress bar's rate (and time left) then mixes fast
+    # and slow engines from the start instead of extrapolating the fastest one.
+    chunks: list[_Chunk] = []
+    for k in range(max((len(p) for p in per_engine), default=0)):
+        for p in per_engine:
+            if k < len(p):
+                chunks.append(_Chunk(len(chunks), *p[k]))
 
     total = sum(len(c.items) for c in chunks)
     if scheduler is not None:
