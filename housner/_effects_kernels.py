@@ -183,7 +183,7 @@ def _ff_bracket(kind, th, thd, w, wd, tau, hl, vl, hr, vr, a0, slope, s, ap, an,
     return hr, y0, y1, y2, y3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_flexible(
     acc, dt, msub, q, theta0, theta_dot0, w0, w_dot0, record, th_out, thd_out, w_out, wd_out, impacts, durations
 ):
@@ -507,7 +507,7 @@ def _sl_rock_or_slip(s, phi, w, a, q):
     return SLIDE_ROCK, sig, False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out, thd_out, x_out, reg_out, impacts):
     """Simulate rocking with Coulomb friction at the pivot (regimes rest, slide, rock, slide-rock).
 

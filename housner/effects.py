@@ -1245,7 +1245,8 @@ class SensorOffset(Effect):
     at rest and subtracted; a residual remains). ``theta_max`` becomes the
     largest |theta + offset|: exact at the response's own (between-sample)
     peak on its side, sampled on the other side. Impact, uplift and overturn
-    times are those of the block.
+    times are those of the block. A record released from a measured tilt
+    (free vibration) starts from the measured angle less the offset.
 
     Parameters
     ----------
@@ -1262,6 +1263,12 @@ class SensorOffset(Effect):
     params = {"offset": ParamSpec("rad", (-0.05, 0.05), 0.0, 0.0, "constant offset of the measured angle")}
     stage = STAGE_SENSOR
     offset: float = 0.0
+
+    def transform_input(self, motion):
+        # a block released from a measured tilt was released from the measured angle less the offset
+        if self.offset == 0.0 or motion.theta0 == 0.0:
+            return motion
+        return replace(motion, theta0=motion.theta0 - self.offset)
 
     def observe(self, response):
         if self.offset == 0.0:

@@ -323,19 +323,23 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         campaign,
         effects=args.effects,
         add=tuple(args.add or ()),
+        folds=args.folds,
         train_fraction=args.train_fraction,
         seed=args.seed,
         max_effects=args.max_effects,
         compare_steps=want_report,
         progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
     )
+    print(f"verdict: {diag.status}")
     print(diag.summary())
     print()
     print(f"{'step':45s} {'held-out error [alpha]':>24s} {'improvement':>20s}")
     for s in diag.steps:
         imp = "" if s.added is None else f"{s.improvement:+.4f} +- {s.improvement_se:.2g}"
         print(f"{s.label()[:45]:45s} {s.heldout_error:>13.4f} +- {s.heldout_se:<8.2g} {imp:>20s}")
-    print(f"noise floor sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
+    res = diag.verdict.residual
+    print(f"correct-model floor {res.floor:.4f} (measured), error/floor {res.ratio:.2f}, z {res.z:+.1f}; "
+          f"sensor noise sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
     if args.json:
         diag.to_json(args.json)
         print(f"json:   {args.json}")
@@ -453,8 +457,11 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     d.add_argument("--add", action="append", metavar="NAME", help="add this effect by hand first (repeatable)")
     d.add_argument("--json", help="write the diagnosis to this JSON file")
     d.add_argument("--report", help="write the HTML report to this file")
-    d.add_argument("--train-fraction", type=_open_fraction, default=0.5, help="share of ground motions to fit on (0.5)")
-    d.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the train / held-out split (0)")
+    d.add_argument("--folds", type=_nonneg_int, default=5,
+                   help="cross-validation folds: every record is held out once (5; at least 2)")
+    d.add_argument("--train-fraction", type=_open_fraction, default=None,
+                   help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
+    d.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the fold assignment (0)")
     d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=_cmd_diagnose)

@@ -260,6 +260,59 @@ def _cdf_figure(diag) -> Figure:
 
 # ----------------------------------------------------------------------------
 # sections
+_STATUS_CLASS = {"no_misfit": "ok", "explained": "ok", "partly_explained": "bad", "unexplained": "bad",
+                 "inconclusive": "warn"}  # fmt: skip
+
+
+def _verdict(diag) -> str:
+    """The verdict: status, its paragraph, the residual against the measured floor, where to look next."""
+    v = diag.verdict
+    if v is None:
+        return ""
+    head = (f'<p class="lead"><span class="{_STATUS_CLASS.get(v.status, "")}">'
+            f"{_e(v.status.replace('_', ' ').upper())}</span> &mdash; {_e(v.text)}</p>")  # fmt: skip
+    rows = []
+    for label, res in (("plain Housner model", v.baseline), ("final model", v.residual)):
+        for kind, g in res.groups.items():
+            rows.append([_e(label), _e(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
+                         f"{g['ratio']:.2f}", f"{g['z']:+.1f}", '<span class="bad">yes</span>' if g["misfit"] else "no",
+                         f"{g.get('detectable_ratio', float('nan')):.2f}"])  # fmt: skip
+    from scenarios.verdict import RATIO_MISFIT, Z_MISFIT
+
+    table = _table(
+        ["model", "records", "n", "held-out error [alpha]", "correct-model floor", "ratio", "z", "misfit",
+         "detectable ratio"],
+        rows,
+        caption=(
+            "Held-out (out-of-fold) time-history error against the floor a correct model shows on the same records, "
+            "measured by a parametric bootstrap of the fitted model (scenarios.verdict). A misfit is z > "
+            f"{Z_MISFIT:g} and ratio > {RATIO_MISFIT:g}; the detectable ratio is what these records would reveal "
+            "with 80 % power."
+        ),
+    )  # fmt: skip
+    nxt = ""
+    if v.next and v.status in ("partly_explained", "unexplained"):
+        items = []
+        for c in v.next:
+            ev = "; ".join(
+                f"{_e(e['label'])}: measured {_f(e['measured'])} &plusmn; {_f(e['measured_se'], 2)}, model "
+                f"{_f(e['model'])} &plusmn; {_f(e['model_se'], 2)} (z = {e['z']:+.1f})"
+                for e in c["evidence"]
+            )
+            items.append(f"<li><b>{_e(c['class'])}</b> &mdash; {_e(c['meaning'])}<br><span class=sub>{ev}</span></li>")
+        nxt = "<h3>Where to look next</h3><ol>" + "".join(items) + "</ol>"
+    freq = ""
+    if diag.selection_frequency:
+        k = diag.settings.get("folds", "?")
+        cells = ", ".join(f"<code>{_e(n)}</code> {100 * f:.0f} %" for n, f in
+                          sorted(diag.selection_frequency.items(), key=lambda kv: -kv[1]))  # fmt: skip
+        freq = f'<p class="sub">Best candidate of its round, fold by fold ({k} folds): {cells}.</p>'
+    dist = ""
+    if v.distribution:
+        dist = '<p class="bad">Distributions: ' + _e("; ".join(v.distribution)) + ".</p>"
+    return head + table + dist + nxt + freq
+
+
 def _summary(diag) -> str:
     spec = diag.campaign.specimen
     c = diag.campaign
@@ -267,13 +320,15 @@ def _summary(diag) -> str:
     if c.skipped:
         items = "".join(f"<li><code>{_e(rid)}</code> ({_e(f)}): {_e(msg)}</li>" for rid, f, msg in c.skipped)
         skipped = f'<p class="bad">{len(c.skipped)} record(s) skipped:</p><ul>{items}</ul>'
+    rest = diag.summary().replace(diag.verdict.text, "").strip() if diag.verdict else diag.summary()
     return (
-        f'<p class="lead">{_e(diag.summary())}</p>'
+        _verdict(diag)
+        + f'<p class="sub">{_e(rest)}</p>'
         f'<p class="sub">Specimen: 2H = {spec.height:g} m, 2B = {spec.width:g} m, m = {spec.mass:g} kg, '
         f"alpha = {spec.alpha:.4f} rad, p = {spec.p:.4f} 1/s, Housner r = {spec.r_housner:.4f}. "
-        f"{len(c.free_vibration)} free-vibration and {len(c.ground_motion)} ground-motion records; "
-        f"{len(diag.train_ids)} train (free vibration and {len(diag.train_ids) - len(c.free_vibration)} ground "
-        f"motions), {len(diag.heldout_ids)} held out (seed {_e(diag.settings.get('seed'))}).</p>{skipped}"
+        f"{len(c.free_vibration)} free-vibration and {len(c.ground_motion)} ground-motion records, "
+        f"{diag.settings.get('folds', '?')}-fold cross-validation (seed {_e(diag.settings.get('seed'))}): every "
+        f"record is fitted on in the other folds and held out once.</p>{skipped}"
     )
 
 
@@ -298,9 +353,10 @@ def _ladder(diag) -> str:
          "significant"],
         rows,
         caption=(
-            "Time-history error over the measured window (see scenarios.compare), mean over the held-out "
-            "ground-motion records with its standard error; the improvement is the mean paired difference to the "
-            f"previous step. The noise floor (sigma/alpha, the error of a perfect model) is {diag.noise_floor:.4f}."
+            "Time-history error over the measured window (see scenarios.compare), mean over every record held "
+            "out once (out-of-fold) with its standard error; the improvement is the mean paired difference to the "
+            f"previous step. The sensor noise alone (sigma/alpha) is {diag.noise_floor:.4f}; the correct-model floor "
+            "the verdict uses is in the table above."
         ),
     )  # fmt: skip
     fig = _figure(_ladder_figure(diag), "Held-out error at each step, with the noise floor.", "error ladder")
@@ -486,6 +542,7 @@ p.caption, figcaption { font-size: .86rem; max-width: 60rem; }
 figure { margin: 1rem 0; }
 figure img { max-width: 100%; height: auto; border: 1px solid #d8dee4; border-radius: 4px; }
 .ok { color: #2b6a2b; font-weight: 600; } .bad { color: #a94442; font-weight: 600; }
+.warn { color: #8a6d3b; font-weight: 600; }
 nav ol { columns: 2; }
 """
 

@@ -74,7 +74,9 @@ eqs. 2, 7, 8; Figs. 9-10; Table 2.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -222,11 +224,23 @@ def simulate_records(
             for i, r in zip(idx, res, strict=True):
                 out[i] = plans[i].observe(r)
         todo = [i for i in range(len(records)) if not isinstance(out[i], Response)]
-        for i in todo:
+
+        def run_one(i: int) -> Response | str:
             try:
-                out[i] = plans[i].run(substeps=eng.substeps)
+                return plans[i].run(substeps=eng.substeps)
             except (EngineError, ValueError, FloatingPointError) as e:
-                out[i] = f"{type(e).__name__}: {e}"
+                return f"{type(e).__name__}: {e}"
+
+        # Effects that replace the equation of motion run one record at a time in kernels that release
+        # the GIL: threads put every core to work on them.
+        workers = min(len(todo), os.cpu_count() or 1)
+        if workers > 1:
+            with ThreadPoolExecutor(workers) as pool:
+                for i, r in zip(todo, pool.map(run_one, todo), strict=True):
+                    out[i] = r
+        else:
+            for i in todo:
+                out[i] = run_one(i)
         return out
     for i, rec in enumerate(records):
         try:
@@ -331,7 +345,9 @@ class Metric(NamedTuple):
 METRICS: dict[str, tuple[str, str]] = {
     "energy_ratio": ("energy ratio per impact (free vibration, seed eq. 8)", "-"),
     "energy_ratio_trend": ("slope of the energy ratio against amplitude/alpha", "-"),
+    "energy_ratio_scatter": ("scatter of the energy ratio about its trend, impact to impact (standard deviation)", "-"),
     "flight_ratio": ("energy kept between impacts, (speed before / after the half-cycle)^2", "-"),
+    "flight_ratio_trend": ("slope of the energy kept between impacts against amplitude/alpha", "-"),
     "p": ("frequency parameter from the half-cycle durations (exact seed eq. 7)", "1/s"),
     "alternation": ("ln c of impacts ending theta > 0 minus ending theta < 0 (free vibration)", "-"),
     "onset_pos": ("uplift onset toward +theta, ground acceleration / g tan(alpha)", "-"),
@@ -407,9 +423,11 @@ class Features:
         c, amp = self.energy_ratio, self.energy_amplitude
         out["energy_ratio"] = _mean_se(c)
         out["energy_ratio_trend"] = _slope_se(amp, c)
+        out["energy_ratio_scatter"] = _scatter_se(amp, c)
         # a ratio of two noisy speeds: averaged in logarithms (no bias toward > 1), reported as a ratio
         lf = _mean_se(np.log(self.flight_ratio[self.flight_ratio > 0]))
         out["flight_ratio"] = Metric(math.exp(lf.value), math.exp(lf.value) * lf.se, lf.n) if lf.n else lf
+        out["flight_ratio_trend"] = _slope_se(self.flight_amplitude, self.flight_ratio)
         ps, pv = [], []
         for cal in self.calibrations.values():
             if isinstance(cal, FreeVibrationCalibration) and math.isfinite(cal.p_std) and cal.p_std > 0:
@@ -497,6 +515,23 @@ def _slope_se(x: np.ndarray, y: np.ndarray) -> Metric:
     s2 = float(res @ res) / (x.size - 2)
     cov = s2 * np.linalg.inv(A.T @ A)
     return Metric(float(coef[1]), float(math.sqrt(max(cov[1, 1], 0.0))), int(x.size))
+
+
+def _scatter_se(x: np.ndarray, y: np.ndarray) -> Metric:
+    """Standard deviation of y about its straight-line fit on x, with the standard error of a normal sample's s.
+
+    Model and measurement are observed through the same sensor noise (see :func:`compare`), so the
+    noise's share of the scatter is the same on both sides and a difference is impact-to-impact physics.
+    """
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = np.asarray(x)[ok], np.asarray(y)[ok]
+    if x.size < 5:
+        return Metric(math.nan, math.nan, int(x.size))
+    A = np.column_stack((np.ones_like(x), x))
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    res = y - A @ coef
+    s = math.sqrt(float(res @ res) / (x.size - 2))
+    return Metric(s, s / math.sqrt(2.0 * (x.size - 2)), int(x.size))
 
 
 def _regression(x: np.ndarray, y: np.ndarray) -> tuple[Metric, Metric]:

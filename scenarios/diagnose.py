@@ -109,9 +109,21 @@ FIT_BOUNDS: dict[tuple[str, str], tuple[float, float]] = {
     ("flexible_foundation", "frequency"): (10.0, 100.0),
     ("flexible_foundation", "damping_ratio"): (0.0, 1.0),
 }
-#: Effects that replace the equation of motion run their own (slower, 10-100x) kernels; they are
-#: fitted on the first free-vibration record and at most this many training ground motions [-].
-MAX_MECHANICS_FIT_RECORDS = 8
+#: Effects that replace the equation of motion run their own (slower, 10-100x) kernels: their grid
+#: search runs on the free vibrations and this many ground motions spread over the campaign, the
+#: local search that ends the fit on all records [-].
+MECHANICS_GRID_RECORDS = 12
+#: Cross-validation folds [-]: every record is held out once, so the answer rests on all of them
+#: and depends far less on the assignment than one random split does.
+DEFAULT_FOLDS = 5
+#: Local search budget of a fold's refit, started from the fit on all records (Brent iterations).
+FOLD_ITERATIONS = 8
+#: Nelder-Mead evaluations per parameter of a fold's joint refit.
+FOLD_JOINT_FEV = 6
+#: Free-vibration localisation quantities a candidate must not contradict (seed section 3.2: they
+#: pin p and r), and the |z| beyond which it does (when it is also worse than the current model's).
+FV_CHECK = ("p", "energy_ratio")
+FV_Z = 3.0
 
 
 # ----------------------------------------------------------------------------
@@ -251,6 +263,7 @@ def fit_effect(
     *,
     start: dict[str, float] | None = None,
     local_only: bool = False,
+    local_iterations: int = 14,
 ) -> tuple[dict[str, float], float, int]:
     """Fit one effect's parameters by minimising ``objective(effect)`` within the bounds.
 
@@ -266,6 +279,9 @@ def fit_effect(
         Starting parameters (for ``local_only``).
     local_only : bool
         Skip the grids: a local search from ``start``.
+    local_iterations : int
+        Budget of the local search: Brent iterations (one parameter); Powell
+        evaluations are 10/14 of it per parameter (more).
 
     Returns
     -------
@@ -326,14 +342,15 @@ def fit_effect(
         b = min(hi[0], best_u[0] + step[0])
         if b > a:
             res = optimize.minimize_scalar(
-                lambda x: f_u([x]), bounds=(a, b), method="bounded", options={"xatol": 1e-3 * step[0], "maxiter": 14}
-            )
+                lambda x: f_u([x]), bounds=(a, b), method="bounded",
+                options={"xatol": 1e-3 * step[0], "maxiter": local_iterations},
+            )  # fmt: skip
             if res.fun <= f_u(best_u):
                 best_u = np.array([res.x])
     else:
         res = optimize.minimize(
             f_u, best_u, method="Powell", bounds=list(zip(lo, hi, strict=True)),
-            options={"maxfev": 10 * len(dims), "xtol": 1e-3, "ftol": 1e-4},
+            options={"maxfev": max(2, local_iterations * 10 // 14) * len(dims), "xtol": 1e-3, "ftol": 1e-4},
         )  # fmt: skip
         if res.fun <= f_u(best_u):
             best_u = np.asarray(res.x)
@@ -431,7 +448,9 @@ class Candidate:
     reason : str
         Why it is (not) significant, in words.
     heldout_errors : ndarray
-        Per held-out record [alpha].
+        Per record, out of fold [alpha] (None when not held out).
+    fold_wins : ndarray
+        Per fold: mean improvement on that fold's records [alpha] (None when not held out).
     """
 
     effect: str
@@ -448,6 +467,7 @@ class Candidate:
     significant: bool
     reason: str
     heldout_errors: np.ndarray = field(repr=False, compare=False, default=None)
+    fold_wins: np.ndarray = field(repr=False, compare=False, default=None)
 
     def to_dict(self) -> dict:
         return {
@@ -464,6 +484,7 @@ class Candidate:
             "pvalue": self.pvalue,
             "significant": self.significant,
             "reason": self.reason,
+            "fold_improvements": None if self.fold_wins is None else [float(x) for x in self.fold_wins],
         }
 
 
@@ -549,11 +570,20 @@ class Diagnosis:
     added : list of str
         Effects added by hand.
     noise_floor : float
-        Mean sigma/alpha of the held-out records [-]: the error of a perfect model.
+        Mean sigma/alpha of the records [-]: the sensor noise alone (the verdict uses the measured
+        correct-model floor, ``floors``).
     test_level : float
         The per-test significance level of the first round, ``level`` / candidates [-].
     train_ids, heldout_ids : list of str
+        Every record (cross-validation: each trains in K - 1 folds and is held out in one).
     settings : dict
+    folds : list of list of str
+        Record ids of each fold.
+    verdict : scenarios.verdict.Verdict
+    floors : (Floor, Floor)
+        The measured correct-model floor of the plain and of the final model.
+    selection_frequency : dict
+        Effect -> share of the folds in which it was the best candidate of its round [-].
     elapsed : float
         Wall time [s].
     """
@@ -570,7 +600,16 @@ class Diagnosis:
     train_ids: list[str]
     heldout_ids: list[str]
     settings: dict
+    folds: list = field(default_factory=list)
+    verdict: Any = None
+    floors: tuple = ()
+    selection_frequency: dict = field(default_factory=dict)
     elapsed: float = math.nan
+
+    @property
+    def status(self) -> str:
+        """The verdict's status (see :data:`scenarios.verdict.STATUSES`)."""
+        return self.verdict.status if self.verdict is not None else "inconclusive"
 
     @property
     def final(self) -> Step:
@@ -583,54 +622,37 @@ class Diagnosis:
         return (b - self.final.heldout_error) / b if b > 0 else 0.0
 
     def summary(self) -> str:
-        """One paragraph: what fails, which effect explains it with which parameters, how much the error fell."""
-        b = self.baseline
-        parts = [
-            f"Campaign {self.campaign.name!r}: the plain Housner model's held-out time-history error is "
-            f"{b.heldout_error:.4f} +- {b.heldout_se:.4f} alpha (noise floor {self.noise_floor:.4f})."
-        ]
-        cmp = b.comparison
-        if cmp is not None:
-            bad = cmp.discrepancies()
-            if bad:
-                from scenarios.compare import METRICS
-
-                txt = "; ".join(
-                    f"{METRICS[k][0]}: measured {m.value:.4g}, model {x.value:.4g}" for k, _z, m, x in bad[:3]
-                )
-                parts.append(f"Where it fails: {txt}.")
-            else:
-                parts.append("No localisation quantity differs from the measurement by more than 3 standard errors.")
+        """One paragraph: the verdict in words, then the ladder with its figures."""
+        parts = [self.verdict.text if self.verdict is not None else ""]
         chosen = self.steps[1:]
-        if not chosen:
-            best = self.candidates[0] if self.candidates else None
-            extra = ""
-            if best is not None:
-                extra = (
-                    f" The best candidate, {best.effect}, would change it by {best.improvement:+.4f} +- "
-                    f"{best.improvement_se:.4f} alpha ({best.reason})."
-                )
-            parts.append(f"No effect is needed: nothing improves the held-out error significantly.{extra}")
-        else:
-            for s in chosen:
+        if chosen:
+            ladder = []
+            for st in chosen:
                 prm = "; ".join(
-                    ", ".join(f"{k} = {_fmt_num(v)}" for k, v in dict(s.effects)[n].items()) for n in s.added_names
+                    ", ".join(f"{k} = {_fmt_num(v)}" for k, v in dict(st.effects)[n].items()) for n in st.added_names
                 )
-                how = (
-                    "added by hand"
-                    if s.by_hand
-                    else ("explain it together" if len(s.added_names) > 1 else "explains it")
+                how = " (by hand)" if st.by_hand else ""
+                ladder.append(
+                    f"+ {st.added}{how} ({prm}): held-out error {st.heldout_error:.4f} +- {st.heldout_se:.4f} alpha, "
+                    f"improvement {st.improvement:.4f} +- {st.improvement_se:.4f}"
+                    f"{'' if st.significant else ', not significant'}"
                 )
-                parts.append(
-                    f"{s.added} ({prm}) {how}: held-out error {s.heldout_error:.4f} +- {s.heldout_se:.4f} alpha "
-                    f"(improvement {s.improvement:.4f} +- {s.improvement_se:.4f}"
-                    f"{'' if s.significant else ', not significant'})."
-                )
+            parts.append("Ladder: " + "; ".join(ladder) + ".")
             parts.append(
                 f"In all the held-out error fell by {100 * self.reduction:.0f} % "
-                f"({b.heldout_error:.4f} -> {self.final.heldout_error:.4f} alpha)."
+                f"({self.baseline.heldout_error:.4f} -> {self.final.heldout_error:.4f} alpha)."
             )
-        return " ".join(parts)
+        elif self.candidates:
+            best = self.candidates[0]
+            if math.isfinite(best.improvement):
+                parts.append(
+                    f"The best candidate, {best.effect}, would change the held-out error by "
+                    f"{best.improvement:+.4f} +- {best.improvement_se:.4f} alpha ({best.reason})."
+                )
+        k = self.settings.get("folds", "?")
+        parts.append(f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha "
+                     f"{self.noise_floor:.4f}.)")  # fmt: skip
+        return " ".join(p for p in parts if p)
 
     def to_dict(self) -> dict:
         """Plain data for JSON: baseline, candidates, selected, final, ladder, rounds, settings."""
@@ -658,6 +680,27 @@ class Diagnosis:
             "heldout_ids": list(self.heldout_ids),
             "skipped": [list(s) for s in self.campaign.skipped],
             "settings": self.settings,
+            "folds": [list(f) for f in self.folds],
+            "selection_frequency": dict(self.selection_frequency),
+            "verdict": None if self.verdict is None else self.verdict.to_dict(),
+            "floor": None
+            if not self.floors
+            else {
+                "baseline": {
+                    "per_record": [float(x) for x in self.floors[0].mean],
+                    "perturbation": self.floors[0].perturbation,
+                    "replicas": self.floors[0].n_replicas,
+                },
+                "final": {
+                    "per_record": [float(x) for x in self.floors[1].mean],
+                    "perturbation": self.floors[1].perturbation,
+                    "replicas": self.floors[1].n_replicas,
+                },
+            },
+            "localisation": {
+                "baseline": self.baseline.comparison.summary() if self.baseline.comparison is not None else None,
+                "final": self.final.comparison.summary() if self.final.comparison is not None else None,
+            },
             "summary": self.summary(),
             "elapsed_s": self.elapsed,
         }
@@ -767,21 +810,96 @@ def _compatible(campaign: Campaign, model_effects: list, name: str) -> str:
     return ""
 
 
+def cv_folds(campaign: Campaign, folds: int = DEFAULT_FOLDS, seed=0) -> list[list[str]]:
+    """Every record in one of ``folds`` folds: free vibrations dealt first, then ground motions, each shuffled.
+
+    Dealing the free vibrations first spreads them over different folds, so each is held out once
+    and the others train (they pin p and r, seed section 3.2).
+
+    Parameters
+    ----------
+    campaign : Campaign
+    folds : int
+        Number of folds K [-], at least 2.
+    seed : int, SeedSequence or Generator
+        Seed of the assignment.
+
+    Returns
+    -------
+    list of K lists of record ids, each in campaign order.
+    """
+    k = int(folds)
+    if k < 2:
+        raise ValueError(f"`folds` must be at least 2, got {folds!r}")
+    rng = np.random.default_rng(seed)
+    out: list[list[str]] = [[] for _ in range(k)]
+    j = 0
+    for group in ([r.id for r in campaign.free_vibration], [r.id for r in campaign.ground_motion]):
+        for i in rng.permutation(len(group)):
+            out[j % k].append(group[int(i)])
+            j += 1
+    order = {r.id: i for i, r in enumerate(campaign.records)}
+    return [sorted(f, key=order.__getitem__) for f in out]
+
+
+@dataclass
+class _CV:
+    """A model fitted on all records (``full``) and without each fold (``folds``)."""
+
+    full: list[tuple[str, dict]]
+    folds: list[list[tuple[str, dict]]]
+
+
+def _fv_metrics(campaign: Campaign, effects: list, engine_settings) -> dict:
+    """Free-vibration localisation (p, energy ratio) of a model, observed through the campaign's sensor."""
+    from scenarios.compare import _observe, _on_grid, features
+
+    fv = campaign.free_vibration
+    if not fv:
+        return {}
+    res = simulate_records(campaign.specimen, fv, "housner", effects, engine_settings)
+    index = {r.id: i for i, r in enumerate(campaign.records)}
+    hist, over = {}, {}
+    for rec, r in zip(fv, res, strict=True):
+        if isinstance(r, str):
+            continue
+        hist[rec.id] = _observe(_on_grid(r, rec), rec, index[rec.id])
+        over[rec.id] = bool(r.overturned)
+    if not hist:
+        return {}
+    m = features(campaign, hist, over).metrics()
+    return {k: m[k] for k in FV_CHECK}
+
+
+def _fv_z(model: dict, measured: dict) -> dict[str, float]:
+    out = {}
+    for k in FV_CHECK:
+        a, b = measured.get(k), model.get(k)
+        if a is None or b is None or not (math.isfinite(a.value) and math.isfinite(b.value)):
+            continue
+        se = math.hypot(a.se if math.isfinite(a.se) else 0.0, b.se if math.isfinite(b.se) else 0.0)
+        if se > 0:
+            out[k] = (b.value - a.value) / se
+    return out
+
+
 def diagnose(
     campaign: Campaign | str | Path,
     *,
     effects: Iterable[str] | None = None,
     add: Sequence[str] = (),
-    train_fraction: float = 0.5,
+    folds: int = DEFAULT_FOLDS,
+    train_fraction: float | None = None,
     seed=0,
     max_effects: int = MAX_EFFECTS,
     level: float = LEVEL,
     engine_settings: dict | None = None,
     compare_steps: bool = True,
     pairs: bool = True,
+    n_replicas: int | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
-    """Find the physical effect(s) missing from the Housner model of a campaign.
+    """Find the physical effect(s) missing from the Housner model of a campaign, and say what remains.
 
     Parameters
     ----------
@@ -791,10 +909,12 @@ def diagnose(
         Candidate effects (registry names); default every registered effect.
     add : sequence of str
         Effects to add by hand first, in order (fitted, whatever their significance).
-    train_fraction : float
-        Share of the ground-motion records used for fitting [-].
+    folds : int
+        Cross-validation folds K [-]: every record is held out once.
+    train_fraction : float, optional
+        Older interface: the share of records to fit on; sets K = round(1 / (1 - train_fraction)).
     seed : int
-        Seed of the split of the ground-motion records.
+        Seed of the fold assignment (and of the floor's bootstrap).
     max_effects : int
         Most effects the greedy search adds.
     level : float
@@ -802,27 +922,31 @@ def diagnose(
     engine_settings : dict, optional
         Settings of the analytic engine (``r``, ``substeps``).
     compare_steps : bool
-        Also run the full :func:`scenarios.compare.compare` (localisation
-        included) for every step of the ladder, for the report.
+        Also run the full :func:`scenarios.compare.compare` for the intermediate steps of the ladder
+        (the baseline's and the final model's are always run: the verdict needs their localisation).
     pairs : bool
-        When no single effect helps significantly, also try the pairs among
-        the three that lowered the training error most, fitted jointly.
+        When no single effect helps significantly, also try the pairs among the three that lowered
+        the training error most, fitted jointly.
+    n_replicas : int, optional
+        Replicas of the floor's parametric bootstrap (default :data:`scenarios.verdict.N_REPLICAS`).
     progress : callable, optional
         Called with a line of text as the search goes.
 
     Returns
     -------
     Diagnosis
-        See the module docstring for the method. ``selected`` is empty when
-        the plain model already explains the data within the noise.
+        With its :class:`scenarios.verdict.Verdict` (see the module docstrings of this module and
+        of :mod:`scenarios.verdict`).
     """
+    from housner.effects import available_effects, effect_class
+    from scenarios.compare import _measured_features
+    from scenarios.verdict import N_REPLICAS, decide, measure_floor, residual_test
+
     t_start = time.perf_counter()
     if not isinstance(campaign, Campaign):
         from scenarios.campaign import load_campaign
 
         campaign = load_campaign(campaign)
-    from housner.effects import available_effects
-
     names_all = available_effects()
     cands = list(names_all if effects is None else effects)
     for n in [*cands, *add]:
@@ -834,71 +958,145 @@ def diagnose(
         raise ValueError(f"`max_effects` must be a non-negative integer, got {max_effects!r}")
     if not 0.0 < level < 1.0:
         raise ValueError(f"`level` must lie in (0, 1), got {level!r}")
+    if train_fraction is not None:
+        tf = float(train_fraction)
+        if not 0.0 < tf < 1.0:
+            raise ValueError(f"`train_fraction` must lie in (0, 1), got {train_fraction!r}")
+        folds = max(2, int(round(1.0 / (1.0 - tf))))
+    if not (isinstance(folds, int) and folds >= 2):
+        raise ValueError(f"`folds` must be an integer of at least 2, got {folds!r}")
+    ids = [r.id for r in campaign.records]
+    if len(ids) < 4:
+        raise ValueError(
+            f"campaign {campaign.name!r} has {len(ids)} usable record(s); the diagnosis needs at least 4 "
+            "(some to fit on, some to judge on)"
+        )
+    n_rep = N_REPLICAS if n_replicas is None else int(n_replicas)
     say = progress or (lambda s: None)
     spec = campaign.specimen
-    train_ids, held_ids = split_records(campaign, train_fraction, seed)
-    train = _Scorer(campaign, train_ids, engine_settings)
-    held = _Scorer(campaign, held_ids, engine_settings)
-    fv_ids = [r.id for r in campaign.free_vibration]
-    gm_train = [i for i in train_ids if i not in set(fv_ids)]
-    train_mech = train.subset(fv_ids[:1] + gm_train[:MAX_MECHANICS_FIT_RECORDS])
-    floor = float(np.mean([campaign.record(i).noise for i in held_ids])) / spec.alpha
+    k_folds = min(folds, len(ids) // 2)
+    fold_ids = cv_folds(campaign, k_folds, seed)
+    pos = {rid: i for i, rid in enumerate(ids)}
+    fold_of = np.empty(len(ids), dtype=int)
+    for k, f in enumerate(fold_ids):
+        fold_of[[pos[i] for i in f]] = k
+    allsc = _Scorer(campaign, ids, engine_settings)
+    train_sc = [allsc.subset([i for i in ids if fold_of[pos[i]] != k]) for k in range(k_folds)]
+    held_sc = [allsc.subset(fold_ids[k]) for k in range(k_folds)]
+    gm_ids = [r.id for r in campaign.ground_motion]
+    step = max(1, len(gm_ids) // MECHANICS_GRID_RECORDS)
+    mech_sc = allsc.subset([r.id for r in campaign.free_vibration] + gm_ids[::step][:MECHANICS_GRID_RECORDS])
+    kinds = [r.kind for r in campaign.records]
+    floor = float(np.mean([r.noise for r in campaign.records])) / spec.alpha
+    measured_fv = {k: v for k, v in _measured_features(campaign).metrics().items() if k in FV_CHECK}
 
     def build(model: list[tuple[str, dict]]) -> list:
         return [_make(n, p) for n, p in model]
 
-    def scorer_for(model_effects: list) -> _Scorer:
-        return train_mech if any(type(e).changes_mechanics for e in model_effects) else train
+    def oof(cv: _CV) -> np.ndarray:
+        out = np.empty(len(ids))
+        for k in range(k_folds):
+            out[fold_of == k] = held_sc[k].errors(build(cv.folds[k]))
+        return out
 
-    base_train = float(np.mean(train.errors([])))
-    base_held = held.errors([])
+    def fold_means(v: np.ndarray) -> np.ndarray:
+        return np.array([v[fold_of == k].mean() for k in range(k_folds)])
+
+    def refit_folds(cv: _CV, free_from: int = 0) -> _CV:
+        return _CV(cv.full, [_joint_refit(cv.folds[k], train_sc[k], spec, FOLD_JOINT_FEV, free_from)[0]
+                             for k in range(k_folds)])  # fmt: skip
+
+    def add_cv(cv: _CV, name: str, params: dict) -> _CV:
+        fixed = build(cv.full)
+        per = []
+        for k in range(k_folds):
+            obj = _objective(train_sc[k], build(cv.folds[k]), [])
+            pk, _e, _n = fit_effect(name, obj, spec, start=params, local_only=True, local_iterations=FOLD_ITERATIONS)
+            per.append([*cv.folds[k], (name, pk)])
+        del fixed
+        return _CV([*cv.full, (name, params)], per)
+
+    base = _CV([], [[] for _ in range(k_folds)])
+    base_train_errors = allsc.errors([])
+    base_train = float(base_train_errors.mean())
+    base_held = base_train_errors.copy()  # no fitted parameter: out-of-fold errors are the plain errors
     baseline = Step((), None, False, base_train, float(base_held.mean()), _se(base_held), math.nan, math.nan, False,
                     base_held)  # fmt: skip
     say(f"baseline: held-out error {baseline.heldout_error:.4f} +- {baseline.heldout_se:.4f} alpha "
-        f"(noise floor {floor:.4f})")  # fmt: skip
+        f"(sigma/alpha {floor:.4f}); {k_folds}-fold cross-validation")  # fmt: skip
     steps = [baseline]
-    model: list[tuple[str, dict]] = []
-    cur_held, cur_train = base_held, base_train
+    cur, cur_held, cur_train = base, base_held, base_train
+    cur_fvz = _fv_z(_fv_metrics(campaign, [], engine_settings), measured_fv)
 
-    def try_candidate(name: str, model: list[tuple[str, dict]], rnd: int, cur: np.ndarray, test_level: float):
-        fixed = build(model)
-        from housner.effects import effect_class
-
-        sc = train_mech if effect_class(name).changes_mechanics else scorer_for(fixed)
-
-        def objective(effect) -> float:
-            return float(np.mean(sc.errors([*fixed, effect])))
-
-        params, tr_err, _nev = fit_effect(name, objective, spec)
-        he = held.errors([*fixed, _make(name, params)])
-        sig, d, se, z, pval, why = _judge(cur, he, test_level, floor)
-        return Candidate(name, params, tuple(n for n, _ in model), rnd, tr_err, float(he.mean()), _se(he), d, se,
-                         z, pval, sig, why, he)  # fmt: skip
+    def fv_reason(model_effects: list) -> str:
+        z = _fv_z(_fv_metrics(campaign, model_effects, engine_settings), measured_fv)
+        for k, v in z.items():
+            if abs(v) > FV_Z and abs(v) > abs(cur_fvz.get(k, 0.0)):
+                m = measured_fv[k]
+                return (f"contradicts the free vibrations: {k} is {v:+.1f} standard errors from the measured "
+                        f"{m.value:.4g} +- {m.se:.2g}")  # fmt: skip
+        return ""
 
     def level_for(m: int) -> float:
         return level / max(m, 1)
 
+    def candidate(name, params, cv_new, rnd, tr_err, test_level, he=None, reason=""):
+        if he is None:
+            return Candidate(name, params, tuple(n for n, _ in cur.full), rnd, tr_err, math.nan, math.nan, math.nan,
+                             math.nan, math.nan, 1.0, False, reason, None)  # fmt: skip
+        sig, d, se, z, pval, why = _judge(cur_held, he, test_level, floor)
+        wins = fold_means(cur_held - he)
+        return Candidate(name, params, tuple(n for n, _ in cur.full), rnd, tr_err, float(he.mean()), _se(he), d, se,
+                         z, pval, sig, why, he, wins)  # fmt: skip
+
+    def try_candidate(name: str, rnd: int, test_level: float):
+        fixed = build(cur.full)
+        if effect_class(name).changes_mechanics:
+            # 10-100x slower kernels: the grid finds the basin on a spread subset of the records, the
+            # local search then fits on all of them
+            start, e_sub, _n = fit_effect(name, _objective(mech_sc, fixed, []), spec)
+            gain_sub = float(np.mean(mech_sc.errors(fixed))) - e_sub
+            if not gain_sub > NOISE_MARGIN * floor:
+                why = f"error on {len(mech_sc.records)} records falls by {gain_sub:+.4f} < " \
+                      f"{NOISE_MARGIN * floor:.4f} alpha (noise floor): not fitted further"  # fmt: skip
+                return candidate(name, start, None, rnd, e_sub, test_level, reason=why), None
+            params, tr_err, _nev = fit_effect(name, _objective(allsc, fixed, []), spec, start=start, local_only=True,
+                                              local_iterations=FOLD_ITERATIONS)  # fmt: skip
+        else:
+            params, tr_err, _nev = fit_effect(name, _objective(allsc, fixed, []), spec)
+        gain = cur_train - tr_err
+        if not gain > NOISE_MARGIN * floor:
+            why = f"training error falls by {gain:+.4f} < {NOISE_MARGIN * floor:.4f} alpha (noise floor): not held out"
+            return candidate(name, params, None, rnd, tr_err, test_level, reason=why), None
+        bad = fv_reason([*fixed, _make(name, params)])
+        if bad:
+            return candidate(name, params, None, rnd, tr_err, test_level, reason=bad), None
+        cv_new = add_cv(cur, name, params)
+        he = oof(cv_new)
+        return candidate(name, params, cv_new, rnd, tr_err, test_level, he), cv_new
+
     # effects added by hand
     for name in add:
-        reason = _compatible(campaign, build(model), name)
+        reason = _compatible(campaign, build(cur.full), name)
         if reason:
-            raise ValueError(f"cannot add {name!r} to {[n for n, _ in model] or 'the plain model'}: {reason}")
-        c = try_candidate(name, model, 0, cur_held, level_for(1))
-        model = [*model, (name, c.params)]
-        model, tr = _joint_refit(model, scorer_for(build(model)), spec)
-        he = held.errors(build(model))
+            raise ValueError(f"cannot add {name!r} to {[n for n, _ in cur.full] or 'the plain model'}: {reason}")
+        params, _tr, _n = fit_effect(name, _objective(allsc, build(cur.full), []), spec)
+        cv_new = add_cv(cur, name, params)
+        full, tr = _joint_refit(cv_new.full, allsc, spec)
+        cv_new = refit_folds(_CV(full, cv_new.folds))
+        he = oof(cv_new)
         sig, d, se, _z, _p, _why = _judge(cur_held, he, level_for(1), floor)
-        steps.append(Step(tuple(model), name, True, tr, float(he.mean()), _se(he), d, se, sig, he))
-        cur_held, cur_train = he, tr
-        say(f"+ {name} (by hand) {_fmt_params(c.params)}: held-out error {he.mean():.4f}")
+        steps.append(Step(tuple(cv_new.full), name, True, tr, float(he.mean()), _se(he), d, se, sig, he))
+        cur, cur_held, cur_train = cv_new, he, tr
+        say(f"+ {name} (by hand) {_fmt_params(params)}: held-out error {he.mean():.4f}")
 
-    def _try_pairs(results, model, cur_train, cur_held, test_level):
+    def try_pairs(results, test_level):
         # Only candidates that lowered the training error by more than the noise floor pair up:
         # the others are fitting noise (and cost time).
-        helped = sorted(
-            (c for c in results if c.train_error < cur_train - NOISE_MARGIN * floor), key=lambda c: c.train_error
-        )
-        fixed = build(model)
+        helped = sorted((c for c in results if c.train_error < cur_train - NOISE_MARGIN * floor),
+                        key=lambda c: c.train_error)  # fmt: skip
+        fixed = build(cur.full)
+        n0 = len(cur.full)
         out = []
         for i, j in ((0, 1), (0, 2), (1, 2)):
             if j >= len(helped):
@@ -906,83 +1104,107 @@ def diagnose(
             a, b = helped[i], helped[j]
             if _compatible(campaign, [*fixed, _make(a.effect, a.params)], b.effect):
                 continue
-            # Two starts, each effect's own fit with the other fitted given it, then both together
-            # from each (the joint optimum of correlated parameters lies along a narrow valley that
-            # a single local search from one start often misses); the model's own effects keep their
-            # parameters, so that the improvement is the pair's.
-            sc = scorer_for([*fixed, _make(a.effect, a.params), _make(b.effect, b.params)])
-            pb, _e, _n = fit_effect(b.effect, _objective(sc, [*fixed, _make(a.effect, a.params)], []), spec)
-            pa, _e, _n = fit_effect(a.effect, _objective(sc, fixed, [_make(b.effect, b.params)]), spec)
+            # Two starts, each effect's own fit with the other fitted given it, then both together from
+            # each (the joint optimum of correlated parameters lies along a narrow valley that a single
+            # local search from one start often misses); the model's own effects keep their parameters.
+            pb, _e, _n = fit_effect(b.effect, _objective(allsc, [*fixed, _make(a.effect, a.params)], []), spec)
+            pa, _e, _n = fit_effect(a.effect, _objective(allsc, fixed, [_make(b.effect, b.params)]), spec)
             tries = [
-                _joint_refit([*model, (a.effect, a.params), (b.effect, pb)], sc, spec, 30, free_from=len(model)),
-                _joint_refit([*model, (a.effect, pa), (b.effect, b.params)], sc, spec, 30, free_from=len(model)),
+                _joint_refit([*cur.full, (a.effect, a.params), (b.effect, pb)], allsc, spec, 30, free_from=n0),
+                _joint_refit([*cur.full, (a.effect, pa), (b.effect, b.params)], allsc, spec, 30, free_from=n0),
             ]
             both, tr = min(tries, key=lambda x: x[1])
-            he = held.errors(build(both))
-            sig, d, se, z, pval, why = _judge(cur_held, he, test_level, floor)
             name = f"{a.effect} + {b.effect}"
-            prm = {f"{n}.{k}": v for n, p in both[len(model) :] for k, v in p.items()}
-            cand = Candidate(name, prm, tuple(n for n, _ in model), a.round, tr, float(he.mean()), _se(he), d, se,
-                             z, pval, sig, why, he)  # fmt: skip
-            say(f"round {a.round}: {name:32s} {_fmt_params(prm):40s} held-out {he.mean():.4f} improvement "
-                f"{d:+.4f} +- {se:.4f} {'*' if sig else ' '} (pair)")  # fmt: skip
-            out.append((cand, both, tr, he))
+            prm = {f"{n}.{k}": v for n, p in both[n0:] for k, v in p.items()}
+            bad = fv_reason(build(both))
+            if bad:
+                out.append((candidate(name, prm, None, a.round, tr, test_level, reason=bad), None, tr))
+                continue
+            cv_new = refit_folds(_CV(both, [[*f, *both[n0:]] for f in cur.folds]), free_from=n0)
+            he = oof(cv_new)
+            cand = candidate(name, prm, cv_new, a.round, tr, test_level, he)
+            say(
+                f"round {a.round}: {name:32s} {_fmt_params(prm):40s} held-out {he.mean():.4f} improvement "
+                f"{cand.improvement:+.4f} +- {cand.improvement_se:.4f} {'*' if cand.significant else ' '} (pair)"
+            )
+            out.append((cand, cv_new, tr))
         return out
 
     rounds: list[list[Candidate]] = []
     selected: list[str] = []
     first_level = level_for(len(cands))
     for rnd in range(1, max_effects + 1):
-        in_model = {n for n, _ in model}
-        pool = [n for n in cands if n not in in_model and not _compatible(campaign, build(model), n)]
+        in_model = {n for n, _ in cur.full}
+        pool = [n for n in cands if n not in in_model and not _compatible(campaign, build(cur.full), n)]
         if not pool:
             break
         zc = level_for(len(pool))
         if rnd == 1:
             first_level = zc
-        results = []
+        results, models = [], {}
         for name in pool:
             t0 = time.perf_counter()
-            c = try_candidate(name, model, rnd, cur_held, zc)
+            c, cv_new = try_candidate(name, rnd, zc)
             results.append(c)
-            say(f"round {rnd}: {name:32s} {_fmt_params(c.params):40s} held-out {c.heldout_error:.4f} "
-                f"improvement {c.improvement:+.4f} +- {c.improvement_se:.4f} "
-                f"{'*' if c.significant else ' '} ({time.perf_counter() - t0:.1f} s)")  # fmt: skip
-        results.sort(key=lambda c: -c.improvement if math.isfinite(c.improvement) else math.inf)
+            models[name] = cv_new
+            held = f"held-out {c.heldout_error:.4f} improvement {c.improvement:+.4f} +- {c.improvement_se:.4f} " \
+                   f"{'*' if c.significant else ' '}" if cv_new is not None else c.reason  # fmt: skip
+            say(f"round {rnd}: {name:32s} {_fmt_params(c.params):40s} {held} ({time.perf_counter() - t0:.1f} s)")
+        results.sort(key=_rank)
         best = results[0]
+        chosen = None
         if best.significant:
-            rounds.append(results)
-            model = [*model, (best.effect, best.params)]
-            model, tr = _joint_refit(model, scorer_for(build(model)), spec)
-            he = held.errors(build(model))
-            _sig, d, se, _z, _p, _why = _judge(cur_held, he, level_for(len(pool)), floor)
-            steps.append(Step(tuple(model), best.effect, False, tr, float(he.mean()), _se(he), d, se, True, he))
-            selected.append(best.effect)
-            cur_held, cur_train = he, tr
-            say(f"+ {best.effect}: held-out error {he.mean():.4f} +- {_se(he):.4f} alpha")
-            continue
-        # No effect helps alone. Two effects may (a mis-stated p also mis-states Housner's r): fit the
-        # pairs among the three that lowered the training error most jointly, as three more tests.
-        tried = _try_pairs(results, model, cur_train, cur_held, level_for(len(pool) + 3)) if pairs else []
-        results.extend(p[0] for p in tried)
-        results.sort(key=lambda c: -c.improvement if math.isfinite(c.improvement) else math.inf)
+            chosen = (best, models[best.effect])
+        elif pairs:
+            tried = try_pairs(results, level_for(len(pool) + 3))
+            results.extend(p[0] for p in tried)
+            results.sort(key=_rank)
+            good = sorted((p for p in tried if p[0].significant), key=lambda p: -p[0].improvement)
+            if good:
+                chosen = (good[0][0], good[0][1])
         rounds.append(results)
-        good = sorted((p for p in tried if p[0].significant), key=lambda p: -p[0].improvement)
-        if not good:
+        if chosen is None:
             break
-        cand, model, tr, he = good[0]
-        d, se = cand.improvement, cand.improvement_se
-        steps.append(Step(tuple(model), cand.effect, False, tr, float(he.mean()), _se(he), d, se, True, he))
+        cand, cv_new = chosen
+        full, tr = _joint_refit(cv_new.full, allsc, spec)
+        cv_new = refit_folds(_CV(full, cv_new.folds))
+        he = oof(cv_new)
+        _sig, d, se, _z, _p, _why = _judge(cur_held, he, zc, floor)
+        steps.append(Step(tuple(cv_new.full), cand.effect, False, tr, float(he.mean()), _se(he), d, se, True, he))
         selected.extend(cand.effect.split(" + "))
-        cur_held, cur_train = he, tr
+        cur, cur_held, cur_train = cv_new, he, tr
         say(f"+ {cand.effect}: held-out error {he.mean():.4f} +- {_se(he):.4f} alpha")
 
+    # the verdict: both ends of the ladder against their measured floors
+    cmps = {0: compare(campaign, "housner", [], engine_settings), len(steps) - 1: None}
+    cmps[len(steps) - 1] = cmps[0] if len(steps) == 1 else compare(campaign, "housner", build(cur.full),
+                                                                   engine_settings)  # fmt: skip
     if compare_steps:
-        done = []
-        for s in steps:
-            cmp = compare(campaign, "housner", build(list(s.effects)), engine_settings)
-            done.append(_with_comparison(s, cmp))
-        steps = done
+        for i in range(1, len(steps) - 1):
+            cmps[i] = compare(campaign, "housner", build(list(steps[i].effects)), engine_settings)
+    steps = [_with_comparison(s, cmps[i]) if i in cmps else s for i, s in enumerate(steps)]
+    seed_int = seed if isinstance(seed, int) else 0
+    say("measuring the correct-model floor (parametric bootstrap)")
+    floor_base = measure_floor(allsc, [], base.folds, fold_of, n_replicas=n_rep, seed=seed_int)
+    floor_fin = floor_base if not cur.full else measure_floor(allsc, cur.full, cur.folds, fold_of,
+                                                               n_replicas=n_rep, seed=seed_int)  # fmt: skip
+    res_base = residual_test(base_held, floor_base, kinds)
+    res_fin = residual_test(cur_held, floor_fin, kinds)
+    verdict = decide(
+        n_records=len(ids), baseline=res_base, final=res_fin, selected=selected, params=dict(cur.full),
+        baseline_cmp=steps[0].comparison, final_cmp=steps[-1].comparison, library=cands,
+    )  # fmt: skip
+    say(f"verdict: {verdict.status}")
+    sel_freq: dict[str, float] = {}
+    for r in rounds:
+        cv_c = [c for c in r if c.fold_wins is not None]
+        wins: dict[str, int] = {}
+        for k in range(k_folds):
+            best_k = max(cv_c, key=lambda c: c.fold_wins[k], default=None)
+            if best_k is not None and best_k.fold_wins[k] > 0:
+                wins[best_k.effect] = wins.get(best_k.effect, 0) + 1
+        for c in cv_c:
+            sel_freq[c.effect] = max(sel_freq.get(c.effect, 0.0), wins.get(c.effect, 0) / k_folds)
     diag = Diagnosis(
         campaign=campaign,
         baseline=steps[0],
@@ -993,22 +1215,31 @@ def diagnose(
         added=list(add),
         noise_floor=floor,
         test_level=first_level,
-        train_ids=train_ids,
-        heldout_ids=held_ids,
+        train_ids=ids,
+        heldout_ids=ids,
         settings={
             "effects": cands,
             "add": list(add),
-            "train_fraction": train_fraction,
+            "folds": k_folds,
             "seed": seed if isinstance(seed, (int, type(None))) else str(seed),
             "max_effects": max_effects,
             "level": level,
             "noise_margin": NOISE_MARGIN,
             "pairs": pairs,
+            "replicas": n_rep,
             "engine_settings": dict(engine_settings or {}),
         },
+        folds=fold_ids,
+        verdict=verdict,
+        floors=(floor_base, floor_fin),
+        selection_frequency=sel_freq,
     )
     diag.elapsed = time.perf_counter() - t_start
     return diag
+
+
+def _rank(c: Candidate) -> float:
+    return -c.improvement if math.isfinite(c.improvement) else math.inf
 
 
 def _with_comparison(step: Step, cmp: Comparison) -> Step:

@@ -21,6 +21,12 @@ stated specimen's), ``p_misstated_consistent`` (the same, with the impacts
 of the true inertia: two effects at once), ``restitution``
 (another constant r), ``amplitude_dependent_restitution`` (r falling with the
 impact speed), ``time_lag`` (theta channel late).
+
+Hidden effects the library does not have (:data:`OUTSIDE`): ``air_drag``
+(quadratic moment -cd I0 theta'|theta'|), ``pivot_friction`` (a constant
+Coulomb moment at the pivot against the rotation), ``random_restitution``
+(every impact keeps a random share of Housner's energy ratio, as if it acted
+at a different point of the contact strip each time).
 """
 
 from __future__ import annotations
@@ -60,6 +66,22 @@ HIDDEN: dict[str, tuple[dict, tuple[str, ...]]] = {
 }
 
 
+#: Hidden effects that the effect library does NOT have (the diagnosis must say so): the generator's
+#: parameters, and the localisation class (scenarios.verdict.CLASSES) that should come first.
+OUTSIDE: dict[str, tuple[dict, str]] = {
+    # quadratic air drag: theta'' gains -cd theta' |theta'| [cd in 1/rad]; the loss grows with the speed
+    "air_drag": ({"cd": 2.0}, "dissipation"),
+    # a constant (Coulomb) friction moment at the pivot, m g R mu_r, against the rotation [mu_r in rad]; it
+    # takes a fixed energy per half-cycle, which the free-vibration localisation sees in the energy ratio per
+    # impact (falling with amplitude) while the loss between impacts it resolves stays within 3 standard
+    # errors: the contact class
+    "pivot_friction": ({"mu_r": 0.003}, "impact"),
+    # the impact acts at a different point of the contact strip every time: each impact keeps a random
+    # share u ~ U(0.85, 1) of what Housner's impact keeps (energy), drawn per impact
+    "random_restitution": ({"u_low": 0.85}, "impact"),
+}
+
+
 @dataclass(frozen=True)
 class Truth:
     """The physics a synthetic campaign is generated with (SI units)."""
@@ -74,11 +96,14 @@ class Truth:
     exponent: float = 0.0  # r_eff = rho^2 (|w| / (p_s alpha_s))^n
     offset: float = 0.0  # [rad]
     tau: float = 0.0  # [s]
+    cd: float = 0.0  # quadratic drag [1/rad]
+    mu_r: float = 0.0  # Coulomb pivot friction, moment / (m g R) [rad]
+    u_low: float = 1.0  # per-impact energy share drawn from U(u_low, 1) [-]
 
 
 def truth_for(hidden: str) -> Truth:
     """The generator's physics for a hidden effect name of :data:`HIDDEN`."""
-    kw, _ = HIDDEN[hidden]
+    kw = HIDDEN[hidden][0] if hidden in HIDDEN else OUTSIDE[hidden][0]
     hh, bb = HEIGHT / 2, WIDTH / 2
     R = math.hypot(hh, bb)
     p = kw.get("p_true", P_SEED)
@@ -127,34 +152,39 @@ def truth_for(hidden: str) -> Truth:
         exponent=kw.get("exponent", 0.0),
         offset=kw.get("offset", 0.0),
         tau=kw.get("tau", 0.0),
+        cd=kw.get("cd", 0.0),
+        mu_r=kw.get("mu_r", 0.0),
+        u_low=kw.get("u_low", 1.0),
     )
 
 
 # ----------------------------------------------------------------------------
 # the integrator
 @njit(cache=True)
-def _rhs(s, th, w, a, al_p, al_n, p2_p, p2_n, c):
-    # Housner's equation on pivot s (s = +1: +x corner), a = ug''/g [-]
+def _rhs(s, th, w, a, al_p, al_n, p2_p, p2_n, c, cd, mu):
+    # Housner's equation on pivot s (s = +1: +x corner), a = ug''/g [-], with viscous (c), quadratic (cd)
+    # and Coulomb (mu, a moment m g R mu against the rotation) losses
+    extra = -c * w - cd * w * abs(w)
     if s > 0:
         d = al_p - th
-        return -p2_p * (math.sin(d) + a * math.cos(d)) - c * w
+        return -p2_p * (math.sin(d) + a * math.cos(d) + mu * np.sign(w)) + extra
     d = -al_n - th
-    return -p2_n * (math.sin(d) + a * math.cos(d)) - c * w
+    return -p2_n * (math.sin(d) + a * math.cos(d) + mu * np.sign(w)) + extra
 
 
 @njit(cache=True)
-def _step(s, th, w, a0, a1, h, al_p, al_n, p2_p, p2_n, c):
+def _step(s, th, w, a0, a1, h, al_p, al_n, p2_p, p2_n, c, cd, mu):
     # one RK4 step of length h with a(t) linear from a0 (t = 0) to a1 (t = h)
     am = 0.5 * (a0 + a1)
-    k1t, k1w = w, _rhs(s, th, w, a0, al_p, al_n, p2_p, p2_n, c)
-    k2t, k2w = w + 0.5 * h * k1w, _rhs(s, th + 0.5 * h * k1t, w + 0.5 * h * k1w, am, al_p, al_n, p2_p, p2_n, c)
-    k3t, k3w = w + 0.5 * h * k2w, _rhs(s, th + 0.5 * h * k2t, w + 0.5 * h * k2w, am, al_p, al_n, p2_p, p2_n, c)
-    k4t, k4w = w + h * k3w, _rhs(s, th + h * k3t, w + h * k3w, a1, al_p, al_n, p2_p, p2_n, c)
+    k1t, k1w = w, _rhs(s, th, w, a0, al_p, al_n, p2_p, p2_n, c, cd, mu)
+    k2t, k2w = w + 0.5 * h * k1w, _rhs(s, th + 0.5 * h * k1t, w + 0.5 * h * k1w, am, al_p, al_n, p2_p, p2_n, c, cd, mu)
+    k3t, k3w = w + 0.5 * h * k2w, _rhs(s, th + 0.5 * h * k2t, w + 0.5 * h * k2w, am, al_p, al_n, p2_p, p2_n, c, cd, mu)
+    k4t, k4w = w + h * k3w, _rhs(s, th + h * k3t, w + h * k3w, a1, al_p, al_n, p2_p, p2_n, c, cd, mu)
     return th + h / 6 * (k1t + 2 * k2t + 2 * k3t + k4t), w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
 
 
 @njit(cache=True)
-def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, expo, out):
+def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, expo, cd, mu, share, out):
     """theta at the samples of acc_g (units of g, linear in between); returns 1 if it overturned."""
     n = acc_g.size
     h = dt / m
@@ -162,6 +192,7 @@ def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, e
     rocking = th0 != 0.0 or w0 != 0.0
     s = 1 if (th0 > 0.0 or (th0 == 0.0 and w0 > 0.0)) else -1
     th, w = th0, w0
+    n_imp = 0
     out[0] = th
     for k in range(n - 1):
         for j in range(m):
@@ -190,7 +221,7 @@ def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, e
                     th, w = 0.0, 0.0
                     continue
                 a_beg = a0 + (a1 - a0) * ((h - left) / h)
-                tn, wn = _step(s, th, w, a_beg, a1, left, al_p, al_n, p2_p, p2_n, c)
+                tn, wn = _step(s, th, w, a_beg, a1, left, al_p, al_n, p2_p, p2_n, c, cd, mu)
                 if abs(tn) >= 0.5 * math.pi:
                     th = math.copysign(0.5 * math.pi, tn)
                     for kk in range(k + 1, n):
@@ -204,13 +235,13 @@ def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, e
                 for _ in range(80):
                     mid = 0.5 * (lo + hi)
                     am = a_beg + (a1 - a_beg) * (mid / left)
-                    tm, _wm = _step(s, th, w, a_beg, am, mid, al_p, al_n, p2_p, p2_n, c)
+                    tm, _wm = _step(s, th, w, a_beg, am, mid, al_p, al_n, p2_p, p2_n, c, cd, mu)
                     if tm * s > 0.0:
                         lo = mid
                     else:
                         hi = mid
                 am = a_beg + (a1 - a_beg) * (hi / left)
-                tm, wm = _step(s, th, w, a_beg, am, hi, al_p, al_n, p2_p, p2_n, c)
+                tm, wm = _step(s, th, w, a_beg, am, hi, al_p, al_n, p2_p, p2_n, c, cd, mu)
                 left -= hi
                 # impact: the new pivot is the other corner
                 rho = rho_pn if s > 0 else rho_np
@@ -220,7 +251,8 @@ def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, e
                     if r_eff > 1.0:
                         r_eff = 1.0
                     rho = math.sqrt(r_eff)
-                w = wm * rho
+                w = wm * rho * math.sqrt(share[n_imp % share.size])
+                n_imp += 1
                 th = 0.0
                 s = -s
                 # rest: the excursion the new speed could reach is below 1e-7 rad
@@ -231,13 +263,19 @@ def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, e
     return 0
 
 
-def simulate_truth(truth: Truth, acc: np.ndarray, *, theta0: float = 0.0) -> tuple[np.ndarray, bool]:
-    """theta [rad] at the 500 Hz samples of ``acc`` [m/s^2] (block released at rest from theta0), overturned."""
+def simulate_truth(
+    truth: Truth, acc: np.ndarray, *, theta0: float = 0.0, rng: np.random.Generator | None = None
+) -> tuple[np.ndarray, bool]:
+    """theta [rad] at the 500 Hz samples of ``acc`` [m/s^2] (block released at rest from theta0), overturned.
+
+    ``rng`` draws the per-impact energy shares of ``truth.u_low`` < 1 (required then).
+    """
     out = np.empty(acc.size)
+    share = np.ones(1) if truth.u_low >= 1.0 else rng.uniform(truth.u_low, 1.0, 4096)
     over = _integrate(
         np.ascontiguousarray(acc, dtype=np.float64) / G, DT, SUBSTEPS, float(theta0), 0.0,
         truth.alpha_pos, truth.alpha_neg, truth.p_pos, truth.p_neg, truth.rho_pn, truth.rho_np,
-        truth.c, truth.exponent, out,
+        truth.c, truth.exponent, truth.cd, truth.mu_r, share, out,
     )  # fmt: skip
     return out, bool(over)
 
@@ -342,16 +380,16 @@ def write_campaign(
     for i, (x, child) in enumerate(zip(fv_theta0_over_alpha, fv_ss.spawn(len(fv_theta0_over_alpha)), strict=True)):
         rid = f"fv{i + 1:02d}"
         acc = np.zeros(int(round(fv_duration / DT)) + 1)
-        th, _ = simulate_truth(truth, acc, theta0=x * alpha)
+        th, _ = simulate_truth(truth, acc, theta0=x * alpha, rng=np.random.default_rng(child.spawn(1)[0]))
         _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(child)))
         entries.append((rid, "free_vibration"))
     overturned = []
     gm_ids = []
     for i, child in enumerate(gm_ss.spawn(n_ground)):
         rid = f"gm{i + 1:03d}"
-        motion_ss, noise_ss = child.spawn(2)
+        motion_ss, noise_ss, impact_ss = child.spawn(3)
         acc = ground_motion(np.random.default_rng(motion_ss), gm_duration)
-        th, over = simulate_truth(truth, acc)
+        th, over = simulate_truth(truth, acc, rng=np.random.default_rng(impact_ss))
         _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(noise_ss)))
         entries.append((rid, "ground_motion"))
         overturned.append(over)
@@ -371,11 +409,16 @@ def write_campaign(
     return {
         "root": root,
         "hidden": hidden,
-        "expected": HIDDEN[hidden][1],
+        "expected": _expected(hidden),
         "truth": truth,
         "overturned": np.array(overturned),
         "gm_ids": gm_ids,
     }
+
+
+def _expected(hidden: str):
+    """Registry names the diagnosis should give (a tuple), or the localisation class of an effect outside it."""
+    return HIDDEN[hidden][1] if hidden in HIDDEN else OUTSIDE[hidden][1]
 
 
 def cached_campaign(base: str | Path, hidden: str, *, n_ground: int = 60, seed: int = 0) -> dict:
@@ -388,7 +431,7 @@ def cached_campaign(base: str | Path, hidden: str, *, n_ground: int = 60, seed: 
     done = root / ".complete"
     if done.exists():
         truth = truth_for(hidden)
-        return {"root": root, "hidden": hidden, "expected": HIDDEN[hidden][1], "truth": truth}
+        return {"root": root, "hidden": hidden, "expected": _expected(hidden), "truth": truth}
     info = write_campaign(root, hidden, n_ground=n_ground, seed=seed)
     done.write_text("ok\n")
     return info

@@ -1,0 +1,522 @@
+"""The diagnosis' verdict: is the remaining misfit physics, or what a correct model shows anyway?
+
+A held-out time-history error is only meaningful against the error that a
+*correct* model would show on the same records: the sensor noise, plus what
+chaos makes of parameters that the campaign pins only so well. That floor is
+measured here from the campaign itself, by a parametric bootstrap
+(:func:`measure_floor`):
+
+1. the fitted model is taken as the truth and run on the measured table
+   motions (free vibrations released at the measured angle): the records a
+   correct model would have produced;
+2. Gaussian noise of each record's measured sigma is added (a fresh draw per
+   replica);
+3. the model that scores them is the same model with its parameters
+   perturbed by what the campaign knows of them: the effects' fitted
+   parameters by the spread of their cross-validation fold fits (the
+   variance of a fold fit about the truth is the sum of the squared
+   deviations of the K fold fits from their mean, the grouped-jackknife
+   estimate scaled to a fold's training share), and integrated with twice
+   the substeps (a measurement is never produced by the model's own
+   integrator, and chaos amplifies the difference like any other); the
+   stated specimen's p and r are not perturbed: a model that is right about
+   them is what "correct" means here;
+4. each record is scored with the same error and window as the real one.
+
+The real held-out errors are then tested against the floor record by record
+(:func:`residual_test`), separately for ground motions (paired differences,
+their mean over its standard error: chaos makes them heavy-tailed and
+independent from record to record) and free vibrations (not chaotic; each
+record's difference over the replicas' spread, combined by Stouffer's sum).
+A misfit is *significant* when z > :data:`Z_MISFIT` and its size *matters*
+when the error is more than :data:`RATIO_MISFIT` times the floor.
+
+:func:`decide` turns the residual of the plain model and of the final model,
+the effects selected and the distributions into one of five statuses:
+``no_misfit``, ``explained``, ``partly_explained``, ``unexplained``,
+``inconclusive``, with a paragraph that says it in words, where the misfit
+shows (localisation items), and which physical classes to look at next
+(:func:`physical_classes`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from scenarios.compare import METRICS, Comparison, record_error, simulate_records
+
+__all__ = [
+    "CLASSES",
+    "RATIO_MISFIT",
+    "STATUSES",
+    "Z_MISFIT",
+    "Floor",
+    "Residual",
+    "Verdict",
+    "decide",
+    "distribution_checks",
+    "measure_floor",
+    "physical_classes",
+    "residual_test",
+]
+
+STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconclusive")
+#: One-sided z above which the error is significantly above the floor (p ~ 1.3e-3) [-].
+Z_MISFIT = 3.0
+#: Error / floor ratio above which a significant misfit is called a misfit [-]. The floor is an
+#: estimate (a Gaussian perturbation model of the parameters' uncertainty, 5-8 replicas): a
+#: residual within a quarter of it is not distinguished from the floor's own approximation.
+RATIO_MISFIT = 1.25
+#: The misfit the verdict promises to see: a model that leaves twice the error of a correct one.
+#: With less power than that the verdict is "inconclusive" instead of "no misfit" / "explained"
+#: [error / floor].
+DETECTABLE_RATIO = 2.0
+#: One-sided z of 80 % power [-].
+Z_POWER = 0.8416
+#: Fewest records of a campaign (free vibration and ground motion) the verdict speaks on [-].
+MIN_RECORDS = 8
+#: Significance level of each distribution check (KS of theta_max/alpha, overturn fraction) [-].
+DIST_LEVEL = 0.01
+#: Replicas of the floor bootstrap [-]. Each is one simulation of the campaign.
+N_REPLICAS = 6
+#: Relative spread of one free-vibration record's error below which the replicas' spread is not
+#: trusted (an RMS over ~1000-5000 noisy samples scatters by ~1-2 %) [-].
+FV_MIN_REL_SD = 0.02
+
+#: Localisation metric -> physical class it points to.
+_CLASS_OF: dict[str, str] = {
+    "energy_ratio": "impact",
+    "energy_ratio_trend": "impact",
+    "energy_ratio_scatter": "impact",
+    "flight_ratio": "dissipation",
+    "flight_ratio_trend": "dissipation",
+    "p": "inertia",
+    "alternation": "asymmetry",
+    "onset_pos": "asymmetry",
+    "onset_neg": "asymmetry",
+    "withstood_pos": "asymmetry",
+    "withstood_neg": "asymmetry",
+    "first_uplift_pos": "asymmetry",
+    "share_pos": "asymmetry",
+    "tilt_offset": "setup",
+    "tilt_slope": "compliance",
+    "overturn_fraction": "response",
+    "theta_max_median": "response",
+}
+#: Physical class -> what it means, in words.
+CLASSES: dict[str, str] = {
+    "impact": "impact or contact physics: the energy lost per impact differs from the model's, changes with "
+    "amplitude or varies from impact to impact (restitution law, where on the contact strip the impact acts)",
+    "dissipation": "dissipation between impacts: energy is lost while the block rocks (air drag, friction or "
+    "micro-slip at the pivot, a lossy interface)",
+    "inertia": "inertia or foundation: the half-cycle durations depart from Housner's law (p, a compliant base, "
+    "a flexible body)",
+    "asymmetry": "asymmetry: the two directions differ (mass distribution, pivot geometry, a tilted table)",
+    "setup": "set-up or sensor: the block reads a rotation while at rest (sensor offset, a tilted table)",
+    "compliance": "base or body compliance: the block rotates before it lifts off (flexible foundation or body)",
+    "response": "response amplitude: the peaks or the overturn fraction differ although the records' details "
+    "do not say why (an intensity-dependent effect)",
+}
+
+
+@dataclass(frozen=True)
+class Floor:
+    """The error a correct model shows on each record, measured by the parametric bootstrap.
+
+    Attributes
+    ----------
+    mean, sd : ndarray
+        Per record (campaign order): mean and standard deviation over the replicas [alpha].
+    n_replicas : int
+    perturbation : dict
+        What was perturbed and by how much: parameter -> standard deviation (units of the parameter),
+        and the substeps of the scoring model.
+    """
+
+    mean: np.ndarray
+    sd: np.ndarray
+    n_replicas: int
+    perturbation: dict
+
+
+@dataclass(frozen=True)
+class Residual:
+    """Held-out error against the correct-model floor.
+
+    Attributes
+    ----------
+    error, floor : float
+        Mean held-out error and mean floor over the records [alpha].
+    ratio : float
+        error / floor [-].
+    z : float
+        The larger of the two groups' one-sided z (ground motion, free vibration) [-].
+    misfit : bool
+        Significant (z > Z_MISFIT) and larger than RATIO_MISFIT x the floor in at least one group.
+    groups : dict
+        ``ground_motion`` / ``free_vibration`` -> {n, error, floor, ratio, z, misfit}.
+    detectable_ratio : float
+        The error / floor ratio this campaign detects with 80 % power in its most telling group
+        (never below RATIO_MISFIT) [-].
+    records_needed : int
+        Ground-motion records needed to detect DETECTABLE_RATIO in them alone (0 when already enough).
+    """
+
+    error: float
+    floor: float
+    ratio: float
+    z: float
+    misfit: bool
+    groups: dict
+    detectable_ratio: float
+    records_needed: int
+
+    def to_dict(self) -> dict:
+        return {
+            "error": self.error,
+            "floor": self.floor,
+            "ratio": self.ratio,
+            "z": self.z,
+            "misfit": self.misfit,
+            "groups": self.groups,
+            "detectable_ratio": self.detectable_ratio,
+            "records_needed": self.records_needed,
+        }
+
+
+# ----------------------------------------------------------------------------
+# the floor
+def _perturbed(name: str, params: dict, sd: dict, rng, specimen) -> dict:
+    from scenarios.diagnose import _dims
+
+    out = dict(params)
+    for d in _dims(name, specimen):
+        s = sd.get(f"{name}.{d.key}", 0.0)
+        if s > 0:
+            out[d.key] = min(max(params[d.key] + s * rng.standard_normal(), d.lo), d.hi)
+    return out
+
+
+def measure_floor(
+    scorer,
+    model_full: list[tuple[str, dict]],
+    model_folds: list[list[tuple[str, dict]]],
+    fold_of: np.ndarray,
+    *,
+    n_replicas: int = N_REPLICAS,
+    seed: int = 0,
+) -> Floor:
+    """Parametric bootstrap of the error a correct model shows on each record (module docstring).
+
+    Parameters
+    ----------
+    scorer : scenarios.diagnose._Scorer
+        All records of the campaign (truncated to their error windows), in campaign order.
+    model_full : list of (name, params)
+        The model fitted on every record: the bootstrap's truth.
+    model_folds : list of list of (name, params)
+        The same model fitted without each fold: the spread of its parameters.
+    fold_of : ndarray of int
+        Fold of each record.
+    n_replicas : int
+    seed : int
+
+    Returns
+    -------
+    Floor
+    """
+    from housner.effects import make_effect
+    from housner.model import default_substeps
+
+    camp = scorer.campaign
+    spec = camp.specimen
+    alpha = spec.alpha
+    recs = scorer.records
+    k_folds = len(model_folds)
+    sd: dict[str, float] = {}
+    for i, (name, p) in enumerate(model_full):
+        for key in p:
+            vals = np.array([mf[i][1][key] for mf in model_folds], dtype=float)
+            sd[f"{name}.{key}"] = float(math.sqrt(np.sum((vals - vals.mean()) ** 2))) if k_folds > 1 else 0.0
+    settings = dict(scorer.engine_settings)
+    truth_eff = [make_effect(n, **p) for n, p in model_full]
+    truth = simulate_records(spec, recs, "housner", truth_eff, settings)
+    # the scoring model integrates with twice the substeps: the measurement was not produced by this
+    # integrator, and chaos amplifies such a difference as it amplifies any other
+    sub = settings.get("substeps") or default_substeps(spec.frequency_parameter, recs[0].dt)
+    model_settings = {**settings, "substeps": 2 * int(sub)}
+    errs = np.empty((n_replicas, len(recs)))
+    for b in range(n_replicas):
+        rng = np.random.default_rng(np.random.SeedSequence([seed, 4241, b]))
+        model = [None] * len(recs)
+        for k in range(k_folds):
+            idx = np.flatnonzero(fold_of == k)
+            if idx.size == 0:
+                continue
+            eff = [make_effect(n, **_perturbed(n, p, sd, rng, spec)) for n, p in model_full]
+            res = simulate_records(spec, [recs[i] for i in idx], "housner", eff, model_settings)
+            for i, r in zip(idx, res, strict=True):
+                model[i] = r
+        for i, rec in enumerate(recs):
+            tr, mo = truth[i], model[i]
+            if isinstance(tr, str) or isinstance(mo, str) or mo is None:
+                errs[b, i] = 1.0
+                continue
+            th_true = np.asarray(tr.theta, dtype=float)[: rec.theta.size]
+            th_mod = np.asarray(mo.theta, dtype=float)[: rec.theta.size]
+            meas = th_true + rng.normal(0.0, rec.noise, th_true.size)
+            errs[b, i] = record_error(th_mod, meas, scorer.ends[i], alpha)
+    pert = {k: v for k, v in sd.items() if v > 0}
+    pert["substeps"] = model_settings["substeps"]
+    return Floor(errs.mean(axis=0), errs.std(axis=0, ddof=1) if n_replicas > 1 else np.zeros(len(recs)), n_replicas,
+                 pert)  # fmt: skip
+
+
+# ----------------------------------------------------------------------------
+# the residual test
+def residual_test(errors: np.ndarray, floor: Floor, kinds: Sequence[str]) -> Residual:
+    """Test held-out errors (per record, campaign order) against the floor (module docstring)."""
+    e = np.asarray(errors, dtype=float)
+    f = floor.mean
+    kinds = np.asarray(kinds)
+    groups = {}
+    z_all, misfit = -math.inf, False
+    det, need = math.inf, 0
+    zz = Z_MISFIT + Z_POWER
+    for kind in ("ground_motion", "free_vibration"):
+        m = (kinds == kind) & np.isfinite(e)
+        n = int(m.sum())
+        if n == 0:
+            continue
+        d = e[m] - f[m]
+        fm = float(f[m].mean())
+        ratio = float(e[m].mean() / fm) if fm > 0 else math.inf
+        if kind == "ground_motion":
+            # records are independent draws of chaos: the paired differences' own spread
+            sd_d = float(d.std(ddof=1)) if n > 1 else math.inf
+            se = sd_d / math.sqrt(n)
+            z = float(d.mean() / se) if se > 0 else (math.inf if d.mean() > 0 else 0.0)
+            det_k = 1.0 + zz * se / fm if fm > 0 else math.inf
+            want = (DETECTABLE_RATIO - 1.0) * fm
+            if want > 0 and math.isfinite(sd_d):
+                need = max(int(math.ceil((zz * sd_d / want) ** 2)) - n, 0)
+        else:
+            # not chaotic: each record against the replicas' spread of its own error (Stouffer)
+            s = np.maximum(floor.sd[m], FV_MIN_REL_SD * f[m])
+            z = float(np.sum(d / s) / math.sqrt(n))
+            det_k = 1.0 + zz * float(np.mean(s)) / math.sqrt(n) / fm if fm > 0 else math.inf
+        mis = bool(z > Z_MISFIT and ratio > RATIO_MISFIT)
+        groups[kind] = {"n": n, "error": float(e[m].mean()), "floor": fm, "ratio": ratio, "z": z, "misfit": mis,
+                        "detectable_ratio": max(det_k, RATIO_MISFIT)}  # fmt: skip
+        z_all = max(z_all, z)
+        misfit = misfit or mis
+        det = min(det, max(det_k, RATIO_MISFIT))
+    ok = np.isfinite(e)
+    err, flo = float(e[ok].mean()), float(f[ok].mean())
+    return Residual(err, flo, err / flo if flo > 0 else math.inf, z_all, misfit, groups, det, need)
+
+
+# ----------------------------------------------------------------------------
+# where to look
+def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
+    """Physical classes the localisation points to, strongest first, each with its supporting figures.
+
+    Returns a list of {``class``, ``meaning``, ``z`` (largest |z| of its metrics), ``evidence`` (list of
+    {metric, label, measured, measured_se, model, model_se, z})}.
+    """
+    if cmp is None:
+        return []
+    by: dict[str, dict] = {}
+    found = cmp.discrepancies(z)
+    # The energy ratio of seed eq. 8 is taken peak to peak: it holds the loss at the impact AND the loss
+    # while the block rocks. When the loss between impacts (flight ratio) also differs, that is where
+    # the energy goes; only when it agrees is a differing energy ratio the impact's.
+    flight = any(k.startswith("flight_ratio") for k, *_ in found)
+    for key, zz, m, x in found:
+        c = _CLASS_OF.get(key, "response")
+        if flight and key.startswith("energy_ratio") and key != "energy_ratio_scatter":
+            c = "dissipation"
+        entry = by.setdefault(c, {"class": c, "meaning": CLASSES[c], "z": 0.0, "evidence": []})
+        entry["z"] = max(entry["z"], abs(zz))
+        entry["evidence"].append(
+            {
+                "metric": key,
+                "label": METRICS[key][0],
+                "measured": m.value,
+                "measured_se": m.se,
+                "model": x.value,
+                "model_se": x.se,
+                "z": zz,
+            }  # fmt: skip
+        )
+    return sorted(by.values(), key=lambda d: -d["z"])
+
+
+def _groups_text(r: Residual) -> str:
+    names = {"ground_motion": "ground motions", "free_vibration": "free vibrations"}
+    return "; ".join(f"{names[k]} {g['ratio']:.2f}x, z = {g['z']:+.1f}" for k, g in r.groups.items())
+
+
+def _evidence_text(ev: dict) -> str:
+    return (
+        f"{ev['label']}: measured {_g(ev['measured'])} +- {_g(ev['measured_se'])}, model {_g(ev['model'])} "
+        f"+- {_g(ev['model_se'])} (z = {ev['z']:+.1f})"
+    )
+
+
+def _g(v: float) -> str:
+    return f"{v:.4g}" if math.isfinite(v) else str(v)
+
+
+def distribution_checks(cmp: Comparison | None) -> list[str]:
+    """Distribution misfits of the ground-motion records, in words (empty when none is significant)."""
+    out: list[str] = []
+    if cmp is None or cmp.distribution is None or cmp.distribution.measured.size < 5:
+        return out
+    d = cmp.distribution
+    if d.ks.pvalue < DIST_LEVEL:
+        out.append(f"the theta_max/alpha distributions differ (KS D = {d.ks.distance:.3f}, p = {d.ks.pvalue:.2g})")
+    n = d.measured.size
+    k1, k2 = int(np.isinf(d.measured).sum()), int(np.isinf(d.model).sum())
+    pool = (k1 + k2) / (2 * n)
+    if 0 < pool < 1:
+        zz = (k2 - k1) / n / math.sqrt(2 * pool * (1 - pool) / n)
+        from scipy.stats import norm
+
+        if 2 * norm.sf(abs(zz)) < DIST_LEVEL:
+            out.append(f"the overturn fractions differ (measured {k1}/{n}, model {k2}/{n}, z = {zz:+.1f})")
+    return out
+
+
+# ----------------------------------------------------------------------------
+# the verdict
+@dataclass(frozen=True)
+class Verdict:
+    """What the diagnosis can claim.
+
+    Attributes
+    ----------
+    status : str
+        One of :data:`STATUSES`.
+    residual : Residual
+        The final model's held-out error against its floor.
+    baseline : Residual
+        The plain model's.
+    text : str
+        One paragraph in words (the same in the JSON, the CLI and the report).
+    where : list of str
+        Localisation items where the final model still differs from the measurement.
+    next : list of dict
+        Physical classes to look at, strongest first (:func:`physical_classes`).
+    distribution : list of str
+        Distribution misfits of the final model.
+    records_needed : int
+        For ``inconclusive``: ground-motion records to add.
+    """
+
+    status: str
+    residual: Residual
+    baseline: Residual
+    text: str
+    where: list[str] = field(default_factory=list)
+    next: list[dict] = field(default_factory=list)
+    distribution: list[str] = field(default_factory=list)
+    records_needed: int = 0
+
+    def to_dict(self) -> dict:
+        r = self.residual
+        return {
+            "status": self.status,
+            "residual": {"error": r.error, "floor": r.floor, "ratio": r.ratio, "z": r.z},
+            "residual_detail": r.to_dict(),
+            "baseline_residual": self.baseline.to_dict(),
+            "text": self.text,
+            "where": list(self.where),
+            "next": list(self.next),
+            "distribution": list(self.distribution),
+            "records_needed": self.records_needed,
+        }
+
+
+def decide(
+    *,
+    n_records: int,
+    baseline: Residual,
+    final: Residual,
+    selected: Sequence[str],
+    params: dict[str, dict],
+    baseline_cmp: Comparison | None,
+    final_cmp: Comparison | None,
+    library: Sequence[str],
+) -> Verdict:
+    """The status and its paragraph from the residuals, the effects selected and the localisation."""
+    dist_final = distribution_checks(final_cmp)
+    dist_base = distribution_checks(baseline_cmp)
+    # what differs from Housner's physics (the plain model) names the family; what the final model still
+    # misses follows
+    classes = physical_classes(baseline_cmp)
+    have = {c["class"] for c in classes}
+    classes += [c for c in physical_classes(final_cmp) if c["class"] not in have]
+    where = [_evidence_text(ev) for c in physical_classes(final_cmp) for ev in c["evidence"]]
+    base_mis = baseline.misfit or bool(dist_base)
+    fin_mis = final.misfit or bool(dist_final)
+    powered = final.detectable_ratio <= DETECTABLE_RATIO
+    need = final.records_needed if selected else baseline.records_needed
+    eff = "; ".join(f"{n} ({', '.join(f'{k} = {v:.4g}' for k, v in params.get(n, {}).items())})" for n in selected)
+    figs = f"held-out error {final.error:.4f} alpha against a correct-model floor of {final.floor:.4f} " \
+           f"({_groups_text(final)})"  # fmt: skip
+    base_figs = f"the plain Housner model's held-out error is {baseline.error:.4f} alpha against a correct-model " \
+                f"floor of {baseline.floor:.4f} ({_groups_text(baseline)})"  # fmt: skip
+    if n_records < MIN_RECORDS:
+        status = "inconclusive"
+        text = (f"Inconclusive: {n_records} usable records are too few to tell a misfit from chance (at least "
+                f"{MIN_RECORDS} are needed, with free vibrations among them); {base_figs}.")  # fmt: skip
+    elif not base_mis:
+        if powered:
+            status = "no_misfit"
+            text = (f"No misfit: {base_figs}; no group is more than {RATIO_MISFIT}x above it with significance, "
+                    f"which is what a correct model shows on these records. No effect is needed. This campaign "
+                    f"would have detected a misfit of {final.detectable_ratio:.2f}x the floor or more.")  # fmt: skip
+        else:
+            status = "inconclusive"
+            text = (f"Inconclusive: {base_figs}, not significantly above it, but with these records only a misfit "
+                    f"of {final.detectable_ratio:.2f}x the floor or more would show; about {need} more ground-motion "
+                    f"records are needed to see one of {DETECTABLE_RATIO}x.")  # fmt: skip
+    elif not selected:
+        status = "unexplained"
+        text = (f"Unexplained: {base_figs}, a misfit of {baseline.ratio:.1f}x that no effect in the library "
+                f"({', '.join(library)}) reduces significantly.")  # fmt: skip
+    elif not fin_mis:
+        if powered:
+            status = "explained"
+            text = (
+                f"Explained: {base_figs}; with {eff} the {figs}, no group more than {RATIO_MISFIT}x above "
+                f"it with significance: what a correct model shows. {' + '.join(selected)} explains it."
+            )
+        else:
+            status = "inconclusive"
+            text = (f"Inconclusive: {base_figs}; {eff} lowers it significantly, to a {figs}, but these records "
+                    f"would only show a remaining misfit of {final.detectable_ratio:.2f}x or more; about {need} more "
+                    f"ground-motion records are needed.")  # fmt: skip
+    else:
+        status = "partly_explained"
+        text = (f"Partly explained: {base_figs}; {eff} lowers it significantly, to a {figs}. A misfit of "
+                f"{final.ratio:.1f}x remains that no effect in the library explains.")  # fmt: skip
+    if status in ("partly_explained", "unexplained"):
+        if dist_final:
+            text += " The distributions disagree too: " + "; ".join(dist_final) + "."
+        if classes:
+            top = classes[0]
+            ev = "; ".join(_evidence_text(e) for e in top["evidence"][:2])
+            text += f" Where to look first: {top['meaning']} ({ev})."
+            if len(classes) > 1:
+                text += " Then: " + "; ".join(c["class"] for c in classes[1:]) + "."
+        else:
+            text += " No localisation quantity differs by more than 3 standard errors: the misfit is in the " \
+                    "time histories only."  # fmt: skip
+    return Verdict(status, final, baseline, text, where, classes, dist_final,
+                   need if status == "inconclusive" else 0)  # fmt: skip

@@ -1,0 +1,153 @@
+"""The diagnosis' verdict (scenarios.verdict): the measured correct-model floor, the residual test, and
+campaigns whose hidden effect is NOT in the effect library.
+
+The campaigns come from tests/campaign_generators.py (an integrator written apart from the library):
+``OUTSIDE`` holds three effects the library does not have (quadratic air drag, a Coulomb friction
+moment at the pivot, a restitution that varies from impact to impact). The verdict must say
+``partly_explained`` or ``unexplained`` for them, with the right localisation class first, and
+``explained`` / ``no_misfit`` where the library has the truth; the slow matrix checks every case at
+two split seeds and that the answer does not change with the split.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import campaign_generators as cg
+import numpy as np
+import pytest
+
+from scenarios.campaign import load_campaign
+from scenarios.diagnose import cv_folds, diagnose
+from scenarios.verdict import RATIO_MISFIT, STATUSES, Floor, decide, residual_test
+
+_CACHE: dict = {}
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory):
+    return tmp_path_factory.getbasetemp() / "campaigns"
+
+
+def _diag(base, hidden, split_seed=0, campaign_seed=0):
+    key = (hidden, split_seed, campaign_seed)
+    if key not in _CACHE:
+        info = cg.cached_campaign(base, hidden, seed=campaign_seed)
+        _CACHE[key] = (info, diagnose(load_campaign(info["root"]), seed=split_seed, compare_steps=False))
+    return _CACHE[key]
+
+
+# ----------------------------------------------------------------------------
+# pieces
+def test_folds_hold_every_record_out_once_and_spread_the_free_vibrations(base):
+    camp = load_campaign(cg.cached_campaign(base, "none")["root"])
+    folds = cv_folds(camp, 5, seed=0)
+    ids = [i for f in folds for i in f]
+    assert sorted(ids) == sorted(r.id for r in camp.records)  # each exactly once
+    assert [sum(i.startswith("fv") for i in f) for f in folds].count(1) == 3  # three folds hold one each
+    assert max(map(len, folds)) - min(map(len, folds)) <= 1
+    assert folds == cv_folds(camp, 5, seed=0) and folds != cv_folds(camp, 5, seed=1)
+    with pytest.raises(ValueError, match="folds"):
+        cv_folds(camp, 1)
+
+
+def _floor(mean, sd):
+    return Floor(np.asarray(mean, float), np.asarray(sd, float), 6, {})
+
+
+def test_residual_at_the_floor_is_no_misfit_and_twice_it_is():
+    rng = np.random.default_rng(0)
+    n = 60
+    f = 0.01 * (1 + rng.uniform(0, 1, n))
+    kinds = ["ground_motion"] * n
+    same = f * (1 + 0.2 * rng.standard_normal(n))  # chaos scatters a correct model's error by ~20 %
+    r = residual_test(same, _floor(f, 0.2 * f), kinds)
+    assert not r.misfit and abs(r.ratio - 1) < 0.1
+    twice = 2 * same
+    r2 = residual_test(twice, _floor(f, 0.2 * f), kinds)
+    assert r2.misfit and r2.ratio == pytest.approx(2, rel=0.1) and r2.z > 3
+    # significant but small (1.1x over 10 000 records) is not called a misfit: below RATIO_MISFIT
+    big = np.tile(f, 200)
+    r3 = residual_test(1.1 * big, _floor(big, 0.01 * big), ["ground_motion"] * big.size)
+    assert r3.z > 3 and not r3.misfit and RATIO_MISFIT > 1.1
+    # four records whose errors scatter like chaotic ones (80 %) cannot see a 2x misfit: the detectable
+    # ratio says so, and how many records would
+    wild = f[:4] * (1 + 0.8 * rng.standard_normal(4))
+    r4 = residual_test(wild, _floor(f[:4], 0.8 * f[:4]), kinds[:4])
+    assert r4.detectable_ratio > 2 and r4.records_needed > 0
+
+
+def test_too_few_records_is_inconclusive():
+    r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
+    v = decide(n_records=5, baseline=r, final=r, selected=[], params={}, baseline_cmp=None, final_cmp=None,
+               library=["restitution"])  # fmt: skip
+    assert v.status == "inconclusive" and "too few" in v.text
+
+
+def test_a_small_campaign_with_a_wrong_p_is_not_called_fine(base):
+    # 3 free vibrations + 8 ground motions with p mis-stated by 8 %: too little data is no evidence of fit
+    info = cg.write_campaign(base / "small-p", "p_misstated", n_ground=8, seed=3)
+    diag = diagnose(load_campaign(info["root"]), compare_steps=False)
+    assert diag.status != "no_misfit", diag.summary()
+    assert diag.verdict.baseline.misfit  # the free vibrations alone show it
+
+
+def test_an_effect_outside_the_library_is_not_called_explained(base):
+    info, diag = _diag(base, "random_restitution")
+    v = diag.verdict
+    assert v.status in ("partly_explained", "unexplained"), diag.summary()
+    assert "no effect in the library" in v.text and "explains it" not in v.text
+    assert v.residual.misfit and v.residual.ratio > RATIO_MISFIT
+    assert v.next and v.next[0]["class"] == info["expected"], v.next
+    assert "explains it" not in diag.summary()
+
+
+def test_json_carries_the_verdict_and_the_localisation(base, tmp_path):
+    _info, diag = _diag(base, "random_restitution")
+    d = json.loads(diag.to_json(tmp_path / "d.json"))
+    v = d["verdict"]
+    assert v["status"] in STATUSES and v["text"] == diag.verdict.text
+    assert set(v["residual"]) == {"error", "floor", "ratio", "z"}
+    assert all(math.isfinite(v["residual"][k]) for k in ("error", "floor", "ratio"))
+    assert v["next"][0]["evidence"]  # each class with its figures
+    assert d["localisation"]["baseline"]["localisation"] and d["localisation"]["final"]["localisation"]
+    assert d["selection_frequency"] and len(d["folds"]) == 5
+
+
+# ----------------------------------------------------------------------------
+# the matrix (slow): every case at two split seeds
+LIBRARY = [h for h in cg.HIDDEN if h != "none"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("hidden", LIBRARY)
+def test_library_effects_are_explained_at_both_split_seeds(base, hidden):
+    out = []
+    for s in (0, 1):
+        info, diag = _diag(base, hidden, s)
+        assert diag.status == "explained", diag.summary()
+        assert tuple(diag.selected) == info["expected"], diag.summary()
+        out.append(tuple(diag.selected))
+    assert out[0] == out[1]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("hidden", list(cg.OUTSIDE))
+def test_effects_outside_the_library_at_both_split_seeds(base, hidden):
+    got = []
+    for s in (0, 1):
+        info, diag = _diag(base, hidden, s)
+        assert diag.status in ("partly_explained", "unexplained"), diag.summary()
+        assert diag.verdict.next[0]["class"] == info["expected"], diag.verdict.next
+        got.append(diag.status)
+    assert got[0] == got[1]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("campaign_seed", [0, 1])
+def test_controls_are_no_misfit_at_both_split_seeds(base, campaign_seed):
+    for s in (0, 1):
+        _info, diag = _diag(base, "none", s, campaign_seed)
+        assert diag.status == "no_misfit", diag.summary()
+        assert diag.selected == []
