@@ -317,7 +317,7 @@ def test_wrong_types_in_campaign_toml_are_one_line_cli_errors(si_campaign, tmp_p
     (d / "campaign.toml").write_text(text)
     assert main(["diagnose", str(d), "-q"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("error: ") and "Traceback" not in err
+    assert err.count("\n") == 1 and err.startswith("housner: error: ") and "Traceback" not in err
     assert "campaign.toml" in err
     for n in needles:
         assert n in err
