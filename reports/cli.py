@@ -63,6 +63,13 @@ def _nonneg_int(value: str) -> int:
     return n
 
 
+def _folds_int(value: str) -> int:
+    n = _nonneg_int(value)
+    if n < 2:
+        raise argparse.ArgumentTypeError(f"must be an integer of at least 2, got {value!r}")
+    return n
+
+
 def _open_fraction(value: str) -> float:
     try:
         x = float(value)
@@ -457,7 +464,7 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     d.add_argument("--add", action="append", metavar="NAME", help="add this effect by hand first (repeatable)")
     d.add_argument("--json", help="write the diagnosis to this JSON file")
     d.add_argument("--report", help="write the HTML report to this file")
-    d.add_argument("--folds", type=_nonneg_int, default=5,
+    d.add_argument("--folds", type=_folds_int, default=5,
                    help="cross-validation folds: every record is held out once (5; at least 2)")
     d.add_argument("--train-fraction", type=_open_fraction, default=None,
                    help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
