@@ -1007,13 +1007,11 @@ def diagnose(
                              for k in range(k_folds)])  # fmt: skip
 
     def add_cv(cv: _CV, name: str, params: dict) -> _CV:
-        fixed = build(cv.full)
         per = []
         for k in range(k_folds):
             obj = _objective(train_sc[k], build(cv.folds[k]), [])
             pk, _e, _n = fit_effect(name, obj, spec, start=params, local_only=True, local_iterations=FOLD_ITERATIONS)
             per.append([*cv.folds[k], (name, pk)])
-        del fixed
         return _CV([*cv.full, (name, params)], per)
 
     base = _CV([], [[] for _ in range(k_folds)])
@@ -1176,12 +1174,10 @@ def diagnose(
         say(f"+ {cand.effect}: held-out error {he.mean():.4f} +- {_se(he):.4f} alpha")
 
     # the verdict: both ends of the ladder against their measured floors
-    cmps = {0: compare(campaign, "housner", [], engine_settings), len(steps) - 1: None}
-    cmps[len(steps) - 1] = cmps[0] if len(steps) == 1 else compare(campaign, "housner", build(cur.full),
-                                                                   engine_settings)  # fmt: skip
-    if compare_steps:
-        for i in range(1, len(steps) - 1):
-            cmps[i] = compare(campaign, "housner", build(list(steps[i].effects)), engine_settings)
+    # the baseline's and the final model's comparisons always (the verdict's localisation), the rest on request
+    last = len(steps) - 1
+    cmps = {i: compare(campaign, "housner", build(list(steps[i].effects)), engine_settings)
+            for i in range(len(steps)) if compare_steps or i in (0, last)}  # fmt: skip
     steps = [_with_comparison(s, cmps[i]) if i in cmps else s for i, s in enumerate(steps)]
     seed_int = seed if isinstance(seed, int) else 0
     say("measuring the correct-model floor (parametric bootstrap)")
