@@ -177,6 +177,11 @@ class Effect:
         True for effects that bring their own equation of motion (``solver``).
     conflicts : frozenset of str
         Names of effects that cannot be combined with this one while it is active.
+    seen_in_free_vibration : bool
+        False for an effect that a free-vibration record measured with the
+        campaign's release alignment cannot show (its time axis starts at the
+        release seen in its own theta channel); the campaign comparison leaves
+        such an effect out of those records.
 
     The dataclass fields are validated on construction against the static
     bounds (a value outside them raises a ValueError naming the parameter,
@@ -190,6 +195,7 @@ class Effect:
     changes_mechanics: ClassVar[bool] = False
     conflicts: ClassVar[frozenset[str]] = frozenset()
     conflict_reason: ClassVar[str] = ""
+    seen_in_free_vibration: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         for key, spec in self.params.items():
@@ -1317,6 +1323,9 @@ class TimeLag(Effect):
     name = "time_lag"
     params = {"tau": ParamSpec("s", (-0.1, 0.1), 0.0, 0.0, "lag of the theta channel behind ground_acc")}
     stage = STAGE_SENSOR
+    # a free vibration has no ground channel to lag behind, and a measured one starts at the release
+    # its theta channel shows (scenarios.campaign.estimate_release), which already carries the lag
+    seen_in_free_vibration = False
     tau: float = 0.0
 
     def observe(self, response):

@@ -198,6 +198,8 @@ def simulate_records(
 
     eng = engine if isinstance(engine, Engine) else get_engine(engine, **dict(engine_settings or {}))
     effects = resolve_effects(effects, specimen)
+    # an effect a free vibration cannot show (its time axis starts at its own release) is left out there
+    fv_effects = [e for e in effects if type(e).seen_in_free_vibration]
     refused = [e.name for e in effects if e.name not in eng.effects_supported]
     if refused:
         supported = ", ".join(sorted(eng.effects_supported)) or "none"
@@ -211,7 +213,8 @@ def simulate_records(
         from housner.model import RockingParams, simulate_many
 
         base = RockingParams.from_specimen(specimen, r=eng.r)
-        plans = [apply_effects(specimen, rec.motion, effects, params=base) for rec in records]
+        plans = [apply_effects(specimen, rec.motion, fv_effects if rec.kind == "free_vibration" else effects,
+                               params=base) for rec in records]  # fmt: skip
         groups: dict[Any, list[int]] = {}
         for i, pl in enumerate(plans):
             if pl.solver is None:
@@ -244,7 +247,7 @@ def simulate_records(
         return out
     for i, rec in enumerate(records):
         try:
-            out[i] = eng.simulate(specimen, rec.motion, effects)
+            out[i] = eng.simulate(specimen, rec.motion, fv_effects if rec.kind == "free_vibration" else effects)
         except (EngineError, ValueError, FloatingPointError) as e:
             out[i] = f"{type(e).__name__}: {e}"
     return out
@@ -309,11 +312,120 @@ def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | Non
     return max(end, 2)
 
 
-def record_error(theta_model, theta_measured, end: int, alpha: float) -> float:
-    """RMS of min(|theta_model - theta_measured| / alpha, 1) over the first ``end`` samples [-]."""
+def record_error(
+    theta_model, theta_measured, end: int, alpha: float, *, align: int = 0, sensitivity=None, max_dtheta0: float = 0.0
+) -> float:
+    """RMS of min(|theta_model - theta_measured| / alpha, 1) over the first ``end`` samples [-].
+
+    ``align`` > 0 (a free vibration): the release instant and angle are nuisance parameters,
+    :func:`release_error`.
+    """
+    if align > 0:
+        return release_error(theta_model, theta_measured, end, alpha, align, sensitivity, max_dtheta0)
     d = np.abs(np.asarray(theta_model[:end]) - np.asarray(theta_measured[:end])) / alpha
     np.minimum(d, ERROR_CLIP, out=d)
     return float(math.sqrt(float(np.mean(d * d))))
+
+
+def release_error(theta_model, theta_measured, end: int, alpha: float, max_shift: int, sensitivity=None,
+                  max_dtheta0: float = 0.0) -> float:  # fmt: skip
+    """:func:`record_error` of a free vibration, minimised over its release instant and angle [-].
+
+    A free-vibration record's time axis starts at the release its own theta channel shows and its
+    initial angle is fitted there (:func:`scenarios.campaign.estimate_release`). Near the release
+    theta falls only as c (t - t_r)^2, so with 0.8 mrad noise the instant is known to about +-20 ms,
+    and a hold too short to be told from the fall (measured on the seed specimen: 10 samples, half of
+    the time) biases the angle by 0.3-0.45 noise sigmas; either alone costs 2-5 noise sigmas of error
+    over the window. Both are nuisance parameters of the measurement, not physics: the model is
+    shifted by s samples, |s| <= ``max_shift`` (every whole sample, then the vertex of the parabola
+    through the best and its neighbours), its release angle changed by d, |d| <= ``max_dtheta0`` [rad],
+    to first order through ``sensitivity`` = d theta / d theta0 on the model's grid (least squares for
+    d at each shift), and the smallest error counts.
+    """
+    m = np.asarray(theta_model, dtype=float)
+    g = None if sensitivity is None or max_dtheta0 <= 0 else np.asarray(sensitivity, dtype=float)
+    y = np.asarray(theta_measured[:end], dtype=float)
+    n, k = y.size, int(max_shift)
+
+    def pad(a: np.ndarray) -> np.ndarray:
+        # a[j - s] for every shift s in [-k, k]: held at its first value before it starts and at its
+        # last beyond its end
+        tail = max(0, n + k - a.size)
+        return np.concatenate((np.full(k, a[0]), a[: n + k], np.full(tail, a[-1])))
+
+    def errors(rows_m: np.ndarray, rows_g: np.ndarray | None) -> np.ndarray:
+        r = y - rows_m
+        if rows_g is not None:
+            gg = np.einsum("ij,ij->i", rows_g, rows_g)
+            d = np.where(gg > 0, np.einsum("ij,ij->i", r, rows_g) / np.where(gg > 0, gg, 1.0), 0.0)
+            r = r - np.clip(d, -max_dtheta0, max_dtheta0)[:, None] * rows_g
+        e = np.minimum(np.abs(r) / alpha, ERROR_CLIP)
+        return np.sqrt(np.mean(e * e, axis=1))
+
+    # whole-sample shifts at once: row i is the model delayed by s = k - i samples
+    win_m = np.lib.stride_tricks.sliding_window_view(pad(m), n)
+    win_g = None if g is None else np.lib.stride_tricks.sliding_window_view(pad(g), n)
+    vals = errors(win_m, win_g)
+    b = int(np.argmin(vals))
+    best = float(vals[b])
+    if 0 < b < vals.size - 1:
+        # a fraction of a sample: the vertex of the parabola through the best shift and its neighbours
+        den = vals[b - 1] - 2 * vals[b] + vals[b + 1]
+        if den > 0:
+            frac = 0.5 * (vals[b - 1] - vals[b + 1]) / den  # in rows, |frac| <= 1/2
+            shift = (k - b) - frac
+            idx = np.arange(n, dtype=float) - shift
+            grid = np.arange(m.size, dtype=float)
+            rm = np.interp(idx, grid, m)[None, :]
+            rg = None if g is None else np.interp(idx, grid, g)[None, :]
+            best = min(best, float(errors(rm, rg)[0]))
+    return best
+
+
+#: Largest shift of the release instant of a free vibration tried by the error [s] (release_error):
+#: twice the +-20 ms to which the instant is known.
+RELEASE_SHIFT = 0.05
+#: Largest change of a free vibration's release angle tried by the error [noise sigmas]: about twice
+#: the bias an undetected short hold leaves (0.3-0.45 sigma), five times the fit's standard error.
+RELEASE_DTHETA0_SIGMAS = 1.0
+
+
+def release_shift_samples(rec: MeasuredRecord) -> int:
+    """Samples a free-vibration record's model may be shifted by (0 for a ground motion)."""
+    if rec.kind != "free_vibration":
+        return 0
+    return max(1, int(round(RELEASE_SHIFT / rec.dt)))
+
+
+def release_sensitivities(specimen, records: Sequence[MeasuredRecord], responses: Sequence[Response | str],
+                          engine: Any = "housner", effects: Sequence[Any] = (),
+                          engine_settings: Mapping[str, Any] | None = None) -> list[np.ndarray | None]:  # fmt: skip
+    """d theta / d theta0 on each free-vibration record's grid (finite difference; None elsewhere).
+
+    One more run of each free-vibration record, released RELEASE_DTHETA0_SIGMAS / 2 noise sigmas
+    further from rest.
+    """
+    from dataclasses import replace
+
+    out: list[np.ndarray | None] = [None] * len(records)
+    fv = [i for i, rec in enumerate(records) if rec.kind == "free_vibration" and isinstance(responses[i], Response)]
+    if not fv:
+        return out
+    eps = [math.copysign(0.5 * RELEASE_DTHETA0_SIGMAS * max(records[i].noise, 1e-9), records[i].motion.theta0)
+           for i in fv]  # fmt: skip
+    bumped = [replace(records[i], motion=replace(records[i].motion, theta0=records[i].motion.theta0 + e))
+              for i, e in zip(fv, eps, strict=True)]  # fmt: skip
+    res = simulate_records(specimen, bumped, engine, effects, engine_settings)
+    for i, e, r, rec in zip(fv, eps, res, bumped, strict=True):
+        if isinstance(r, Response):
+            out[i] = (_on_grid(r, rec) - _on_grid(responses[i], records[i])) / e
+    return out
+
+
+def scored_error(theta_model, rec: MeasuredRecord, end: int, alpha: float, sensitivity=None) -> float:
+    """The time-history error of one record as the comparison and the diagnosis score it [-]."""
+    return record_error(theta_model, rec.theta, end, alpha, align=release_shift_samples(rec), sensitivity=sensitivity,
+                        max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise)  # fmt: skip
 
 
 def divergence_time(theta_model, theta_measured, t, noise: float, alpha: float) -> float:
@@ -1026,6 +1138,7 @@ def compare(
             f"`responses` must hold one response per record ({len(campaign.records)}), got {len(responses)}"
         )
     name = engine if isinstance(engine, str) else getattr(engine, "name", type(engine).__name__)
+    sens = release_sensitivities(spec, campaign.records, responses, engine, eff, engine_settings)
     rows = []
     for rec, res in zip(campaign.records, responses, strict=True):
         meas_tm = math.inf if rec.overturned else rec.theta_max / alpha
@@ -1042,7 +1155,7 @@ def compare(
             RecordComparison(
                 id=rec.id,
                 kind=rec.kind,
-                error=record_error(th, rec.theta, end, alpha),
+                error=scored_error(th, rec, end, alpha, sens[len(rows)]),
                 window_end=float(rec.t[end - 1]),
                 divergence_time=divergence_time(th, rec.theta, rec.t, rec.noise, alpha),
                 theta_max_over_alpha_measured=meas_tm,

@@ -20,7 +20,11 @@ the centre line), ``sensor_offset`` (constant angle offset), ``p_misstated``
 stated specimen's), ``p_misstated_consistent`` (the same, with the impacts
 of the true inertia: two effects at once), ``restitution``
 (another constant r), ``amplitude_dependent_restitution`` (r falling with the
-impact speed), ``time_lag`` (theta channel late).
+impact speed), ``time_lag`` (theta channel late), ``sliding`` (Coulomb friction below
+tan(alpha): the block slides under a ground motion and never rocks, Shenton 1996), and
+``flexible_foundation`` (a second, compliant-contact integrator: the block as a free 3-DOF rigid
+body on compression-only spring-dashpots at its corners with elastic-plastic Coulomb friction,
+semi-implicit Euler; the library's model has 2 DOF, a kinematic pivot and no horizontal compliance).
 
 Hidden effects the library does not have (:data:`OUTSIDE`): ``air_drag``
 (quadratic moment -cd I0 theta'|theta'|), ``pivot_friction`` (a constant
@@ -63,6 +67,16 @@ HIDDEN: dict[str, tuple[dict, tuple[str, ...]]] = {
     "time_lag": ({"tau": 0.02}, ("time_lag",)),  # [s]
     # p mis-stated, and the impacts those of the true inertia (Housner's r 0.938 instead of 0.9465)
     "p_misstated_consistent": ({"p_true": 1.08 * P_SEED, "consistent": True}, ("frequency_parameter", "restitution")),
+    # compliant contact (a free 3-DOF body on corner springs, :func:`_integrate_contact`): a 25 Hz
+    # foundation (the seed's measured eigenfrequency) with 30 % damping, horizontally stiff (1000 Hz)
+    "flexible_foundation": (
+        {"contact_freq": 25.0, "contact_zeta": 0.3, "tangential_freq": 1000.0, "mu": 2.0},
+        ("flexible_foundation",),
+    ),
+    # Coulomb friction mu = 0.12 below tan(alpha) = 0.15 on rigid ground: a ground motion makes the block
+    # slide, never rock (Shenton 1996); the free vibrations rock as Housner's block (their friction demand
+    # stays below 0.091, the impulse ratio of an impact (1 - sqrt r) / ((1 + sqrt r) tan alpha) is 0.091)
+    "sliding": ({"mu": 0.12}, ("sliding",)),
 }
 
 
@@ -99,6 +113,13 @@ class Truth:
     cd: float = 0.0  # quadratic drag [1/rad]
     mu_r: float = 0.0  # Coulomb pivot friction, moment / (m g R) [rad]
     u_low: float = 1.0  # per-impact energy share drawn from U(u_low, 1) [-]
+    # Coulomb friction at the base [-]; on rigid ground (contact_freq 0) only 0.1 <= mu < tan(alpha)
+    mu: float = math.inf
+    # compliant contact (the 3-DOF integrator :func:`_integrate_contact` when contact_freq > 0)
+    contact_freq: float = 0.0  # vertical frequency of the block on its two corner springs [Hz]
+    contact_zeta: float = 0.0  # damping ratio of that mode [-]
+    tangential_freq: float = 0.0  # the same for the corners' horizontal stick springs [Hz]
+    both_corners_hold: bool = False  # both corners in contact hold horizontally (else the pivot only)
 
 
 def truth_for(hidden: str) -> Truth:
@@ -155,6 +176,10 @@ def truth_for(hidden: str) -> Truth:
         cd=kw.get("cd", 0.0),
         mu_r=kw.get("mu_r", 0.0),
         u_low=kw.get("u_low", 1.0),
+        contact_freq=kw.get("contact_freq", 0.0),
+        contact_zeta=kw.get("contact_zeta", 0.0),
+        tangential_freq=kw.get("tangential_freq", 0.0),
+        mu=kw.get("mu", math.inf),
     )
 
 
@@ -268,8 +293,18 @@ def simulate_truth(
 ) -> tuple[np.ndarray, bool]:
     """theta [rad] at the 500 Hz samples of ``acc`` [m/s^2] (block released at rest from theta0), overturned.
 
-    ``rng`` draws the per-impact energy shares of ``truth.u_low`` < 1 (required then).
+    ``rng`` draws the per-impact energy shares of ``truth.u_low`` < 1 (required then). A truth with
+    compliant contact (``contact_freq`` > 0) runs :func:`simulate_contact` instead.
     """
+    if truth.contact_freq > 0.0:
+        return simulate_contact(truth, acc, theta0=theta0)
+    if truth.mu < math.inf:
+        # rigid ground with friction: only mu below tan(alpha) (slide, never rock, from rest) is modelled
+        # here; the free vibrations then need mu above their friction demand (0.091 for the seed specimen)
+        if not 0.1 <= truth.mu < min(math.tan(truth.alpha_pos), math.tan(truth.alpha_neg)):
+            raise NotImplementedError("the rigid generator models sliding only for 0.1 <= mu < tan(alpha)")
+        if theta0 == 0.0:
+            return np.zeros(acc.size), False  # the base slides with friction mu m g < m g tan(alpha): no uplift
     out = np.empty(acc.size)
     share = np.ones(1) if truth.u_low >= 1.0 else rng.uniform(truth.u_low, 1.0, 4096)
     over = _integrate(
@@ -277,6 +312,112 @@ def simulate_truth(
         truth.alpha_pos, truth.alpha_neg, truth.p_pos, truth.p_neg, truth.rho_pn, truth.rho_np,
         truth.c, truth.exponent, truth.cd, truth.mu_r, share, out,
     )  # fmt: skip
+    return out, bool(over)
+
+
+# ----------------------------------------------------------------------------
+# the compliant-contact integrator (flexible foundation, sliding)
+@njit(cache=True)
+def _integrate_contact(acc, dt, m, th0, mass, ic, hh, b_pos, b_neg, kn, cn, kt, ct, mu, both, out):
+    """A free planar rigid body (x, y of the centre of mass relative to the table, theta) on two
+    compliant corner contacts, theta at the samples of ``acc`` [m/s^2] (linear in between); returns
+    1 if it overturned.
+
+    Each corner in contact (penetration d > 0) feels a compression-only normal force
+    N = max(0, kn d - cn vy) and a horizontal stick spring-dashpot anchored where it touched down,
+    F = -kt (x - x_anchor) - ct vx, capped at mu N (Coulomb: beyond it the anchor follows the corner,
+    elastic-plastic friction). With ``both`` False only the corner on the side of theta (the pivot)
+    holds horizontally, the other one is frictionless: the idealisation of the library's flexible
+    foundation (with both corners holding, a 0.8 alpha free vibration on a 25 Hz, 30 % foundation
+    departs from it by 0.024 alpha rms over 12 s, 4.4 noise sigmas: friction at the landing corner
+    during the roll-over, which the library's model leaves out). Semi-implicit Euler with ``m``
+    substeps per sample. theta > 0 tips the block onto its +x corner (the sign of the rigid
+    integrator above).
+    """
+    n = acc.size
+    h = dt / m
+    # corner offsets from the centre of mass in the body frame: (+b_pos, -hh), (-b_neg, -hh)
+    ux = np.array([b_pos, -b_neg])
+    uy = np.array([-hh, -hh])
+    anchor = np.zeros(2)
+    touching = np.zeros(2, dtype=np.bool_)
+    th, w = th0, 0.0
+    # released at rest on the pivot corner (both corners when th0 = 0), springs at their static set
+    piv = 0 if th0 >= 0.0 else 1
+    c0, s0 = math.cos(th), math.sin(th)
+    n_down = 2 if th0 == 0.0 else 1
+    set_ = mass * 9.80665 / (n_down * kn)
+    y = -(-ux[piv] * s0 + uy[piv] * c0) - set_
+    x = 0.0
+    vx, vy = 0.0, 0.0
+    for i in range(2):
+        cy = y - ux[i] * s0 + uy[i] * c0
+        if cy <= 0.0:
+            touching[i] = True
+            anchor[i] = x + ux[i] * c0 + uy[i] * s0
+    out[0] = th
+    for k in range(n - 1):
+        for j in range(m):
+            a = acc[k] + (acc[k + 1] - acc[k]) * ((j + 0.5) / m)
+            c, s = math.cos(th), math.sin(th)
+            fx, fy, tq = -mass * a, -mass * 9.80665, 0.0
+            for i in range(2):
+                # corner position and velocity (body rotation phi = -theta, counter-clockwise)
+                rx = ux[i] * c + uy[i] * s
+                ry = -ux[i] * s + uy[i] * c
+                cx, cy = x + rx, y + ry
+                cvx, cvy = vx + w * ry, vy - w * rx
+                if cy >= 0.0:
+                    touching[i] = False
+                    continue
+                if not touching[i]:
+                    touching[i] = True
+                    anchor[i] = cx
+                nf = -kn * cy - cn * cvy
+                if nf < 0.0:
+                    nf = 0.0
+                tf = -kt * (cx - anchor[i]) - ct * cvx
+                if not both and ((i == 0) != (th >= 0.0)):
+                    tf = 0.0  # only the corner on the side of theta holds (the pivot)
+                    anchor[i] = cx
+                cap = mu * nf
+                if abs(tf) > cap:
+                    tf = math.copysign(cap, tf)
+                    anchor[i] = cx + (tf + ct * cvx) / kt  # the spring carries what friction allows
+                fx += tf
+                fy += nf
+                # moment about the centre of mass, counter-clockwise, then in theta's sense
+                tq -= rx * nf - ry * tf
+            vx += h * fx / mass
+            vy += h * fy / mass
+            w += h * tq / ic
+            x += h * vx
+            y += h * vy
+            th += h * w
+            if abs(th) >= 0.5 * math.pi:
+                for kk in range(k + 1, n):
+                    out[kk] = math.copysign(0.5 * math.pi, th)
+                return 1
+        out[k + 1] = th
+    return 0
+
+
+def simulate_contact(truth: Truth, acc: np.ndarray, *, theta0: float = 0.0) -> tuple[np.ndarray, bool]:
+    """theta [rad] at the 500 Hz samples of ``acc`` [m/s^2] for a truth with compliant contact."""
+    hh = HEIGHT / 2
+    R = math.hypot(hh, WIDTH / 2)
+    i0 = MASS * G * R / truth.p_pos**2
+    ic = i0 - MASS * R * R
+    kn = MASS * (2 * math.pi * truth.contact_freq) ** 2 / 2  # per corner
+    cn = truth.contact_zeta * MASS * 2 * math.pi * truth.contact_freq
+    kt = MASS * (2 * math.pi * truth.tangential_freq) ** 2 / 2
+    ct = 0.5 * MASS * 2 * math.pi * truth.tangential_freq
+    # substeps: 40 per period of the stiffest spring, at least 8 per sample
+    m = max(8, int(math.ceil(40 * max(truth.contact_freq, truth.tangential_freq) * DT)))
+    out = np.empty(acc.size)
+    b = WIDTH / 2
+    over = _integrate_contact(np.ascontiguousarray(acc, dtype=np.float64), DT, m, float(theta0), MASS, ic, hh,
+                              b, b, kn, cn, kt, ct, truth.mu, truth.both_corners_hold, out)  # fmt: skip
     return out, bool(over)
 
 
