@@ -336,10 +336,6 @@ def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
 
 # ----------------------------------------------------------------------------
 # records
-def _hold_price(n: int) -> float:
-    return math.log(n)
-
-
 def estimate_release(t, theta, noise: float) -> tuple[int, float]:
     """Release sample and initial angle of a free-vibration record, robust to noise.
 
@@ -416,7 +412,7 @@ def estimate_release(t, theta, noise: float) -> tuple[int, float]:
     at_start = fits[0] if fits[0][1] == 0 else best
     # A hold is one more parameter: accept it only when it lowers the residual by more than the
     # Bayesian-information price of a parameter, ln(n) sigma^2 (noise alone would not).
-    if at_start[0] - best[0] <= _hold_price(y.size) * sigma * sigma:
+    if at_start[0] - best[0] <= math.log(y.size) * sigma * sigma:
         best = at_start
     return best[1], best[2]
 

@@ -142,6 +142,13 @@ FV_Z = 3.0
 
 # ----------------------------------------------------------------------------
 # records and errors
+def _train_fraction(train_fraction) -> float:
+    tf = float(train_fraction)
+    if not 0.0 < tf < 1.0:
+        raise ValueError(f"`train_fraction` must lie in (0, 1), got {train_fraction!r}")
+    return tf
+
+
 def split_records(campaign: Campaign, train_fraction: float = 0.5, seed=0) -> tuple[list[str], list[str]]:
     """Training and held-out record ids: free vibration trains, ground motions are split at random.
 
@@ -158,9 +165,7 @@ def split_records(campaign: Campaign, train_fraction: float = 0.5, seed=0) -> tu
     (train_ids, heldout_ids) : lists of str
         Held-out ids are ground-motion records only (at least two).
     """
-    tf = float(train_fraction)
-    if not 0.0 < tf < 1.0:
-        raise ValueError(f"`train_fraction` must lie in (0, 1), got {train_fraction!r}")
+    tf = _train_fraction(train_fraction)
     gm = [r.id for r in campaign.ground_motion]
     if len(gm) < 4:
         raise ValueError(
@@ -1004,10 +1009,7 @@ def diagnose(
     if not 0.0 < level < 1.0:
         raise ValueError(f"`level` must lie in (0, 1), got {level!r}")
     if train_fraction is not None:
-        tf = float(train_fraction)
-        if not 0.0 < tf < 1.0:
-            raise ValueError(f"`train_fraction` must lie in (0, 1), got {train_fraction!r}")
-        folds = max(2, int(round(1.0 / (1.0 - tf))))
+        folds = max(2, int(round(1.0 / (1.0 - _train_fraction(train_fraction)))))
     if not (isinstance(folds, int) and folds >= 2):
         raise ValueError(f"`folds` must be an integer of at least 2, got {folds!r}")
     ids = [r.id for r in campaign.records]

@@ -478,9 +478,10 @@ def decide(
     # what differs from Housner's physics (the plain model) names the family; what the final model still
     # misses follows
     classes = physical_classes(baseline_cmp)
+    final_classes = physical_classes(final_cmp)
     have = {c["class"] for c in classes}
-    classes += [c for c in physical_classes(final_cmp) if c["class"] not in have]
-    where = [_evidence_text(ev) for c in physical_classes(final_cmp) for ev in c["evidence"]]
+    classes += [c for c in final_classes if c["class"] not in have]
+    where = [_evidence_text(ev) for c in final_classes for ev in c["evidence"]]
     # a localisation quantity beyond Z_LOCAL standard errors is a misfit the errors may not show
     loc_base = physical_classes(baseline_cmp, Z_LOCAL)
     loc_final = physical_classes(final_cmp, Z_LOCAL)
