@@ -152,3 +152,23 @@ def test_controls_are_no_misfit_at_both_split_seeds(base, campaign_seed):
         _info, diag = _diag(base, "none", s, campaign_seed)
         assert diag.status == "no_misfit", diag.summary()
         assert diag.selected == []
+
+
+@pytest.mark.slow
+def test_verdict_matrix_table(base, capsys):
+    """Every case at both split seeds, as one table (after the matrix above: its diagnoses are cached)."""
+    cases = [(h, 0) for h in LIBRARY] + [(h, 0) for h in cg.OUTSIDE] + [("none", 0), ("none", 1)]
+    lines = [f"{'hidden effect (truth)':32s} {'camp':>4s}  {'split 0: status, named':54s} "
+             f"{'split 1: status, named':54s} {'ratio 0':>7s} {'ratio 1':>7s}"]  # fmt: skip
+    stable = []
+    for hidden, cs in cases:
+        cells, ratios = [], []
+        for s in (0, 1):
+            _info, diag = _diag(base, hidden, s, cs)
+            cells.append(f"{diag.status}, {' + '.join(diag.selected) or '-'}")
+            ratios.append(diag.verdict.residual.ratio)
+        stable.append(cells[0] == cells[1])
+        lines.append(f"{hidden:32s} {cs:4d}  {cells[0]:54s} {cells[1]:54s} {ratios[0]:7.2f} {ratios[1]:7.2f}")
+    with capsys.disabled():
+        print("\n" + "\n".join(lines))
+    assert all(stable)
