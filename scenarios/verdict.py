@@ -16,7 +16,11 @@ measured here from the campaign itself, by a parametric bootstrap
    parameters by the spread of their cross-validation fold fits (the
    variance of a fold fit about the truth is the sum of the squared
    deviations of the K fold fits from their mean, the grouped-jackknife
-   estimate scaled to a fold's training share), and integrated with twice
+   estimate scaled to a fold's training share), each draw kept within the
+   range the fold fits and the full fit span (the values the data chose: a
+   draw beyond them can cross into a regime the data reject, e.g. a sliding
+   block's friction coefficient across tan alpha, where the block rocks and
+   the error is tens of noise sigmas), and integrated with twice
    the substeps (a measurement is never produced by the model's own
    integrator, and chaos amplifies the difference like any other); the
    stated specimen's p and r are not perturbed: a model that is right about
@@ -202,14 +206,16 @@ class Residual:
 
 # ----------------------------------------------------------------------------
 # the floor
-def _perturbed(name: str, params: dict, sd: dict, rng, specimen) -> dict:
+def _perturbed(name: str, params: dict, sd: dict, rng, specimen, hull: dict | None = None) -> dict:
     from scenarios.diagnose import _dims
 
     out = dict(params)
     for d in _dims(name, specimen):
-        s = sd.get(f"{name}.{d.key}", 0.0)
+        key = f"{name}.{d.key}"
+        s = sd.get(key, 0.0)
         if s > 0:
-            out[d.key] = min(max(params[d.key] + s * rng.standard_normal(), d.lo), d.hi)
+            lo, hi = (hull or {}).get(key, (d.lo, d.hi))
+            out[d.key] = min(max(params[d.key] + s * rng.standard_normal(), d.lo, lo), d.hi, hi)
     return out
 
 
@@ -250,10 +256,12 @@ def measure_floor(
     recs = scorer.records
     k_folds = len(model_folds)
     sd: dict[str, float] = {}
+    hull: dict[str, tuple[float, float]] = {}
     for i, (name, p) in enumerate(model_full):
         for key in p:
             vals = np.array([mf[i][1][key] for mf in model_folds], dtype=float)
             sd[f"{name}.{key}"] = float(math.sqrt(np.sum((vals - vals.mean()) ** 2))) if k_folds > 1 else 0.0
+            hull[f"{name}.{key}"] = (min(float(vals.min()), p[key]), max(float(vals.max()), p[key]))
     settings = dict(scorer.engine_settings)
     truth_eff = [make_effect(n, **p) for n, p in model_full]
     truth = simulate_records(spec, recs, "housner", truth_eff, settings)
@@ -270,7 +278,7 @@ def measure_floor(
             idx = np.flatnonzero(fold_of == k)
             if idx.size == 0:
                 continue
-            eff = [make_effect(n, **_perturbed(n, p, sd, rng, spec)) for n, p in model_full]
+            eff = [make_effect(n, **_perturbed(n, p, sd, rng, spec, hull)) for n, p in model_full]
             sub = [recs[i] for i in idx]
             res = simulate_records(spec, sub, "housner", eff, model_settings)
             sens = release_sensitivities(spec, sub, res, "housner", eff, model_settings)

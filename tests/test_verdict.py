@@ -78,6 +78,20 @@ def test_residual_at_the_floor_is_no_misfit_and_twice_it_is():
     assert r4.detectable_ratio > 2 and r4.records_needed > 0
 
 
+def test_the_floors_parameter_draws_stay_within_the_fold_fits():
+    # a sliding block's mu fitted at 0.139 with a jackknife spread of 0.02: Gaussian draws would cross
+    # tan(alpha) = 0.15 (where the block rocks) 29 % of the time; the folds chose 0.132-0.141
+    from housner.specimen import Specimen
+    from scenarios.verdict import _perturbed
+
+    spec = Specimen.bachmann2017()
+    rng = np.random.default_rng(0)
+    draws = [_perturbed("sliding", {"mu": 0.139}, {"sliding.mu": 0.02}, rng, spec, {"sliding.mu": (0.132, 0.141)})["mu"]
+             for _ in range(2000)]  # fmt: skip
+    assert min(draws) >= 0.132 and max(draws) <= 0.141
+    assert len(set(np.round(draws, 12))) > 100  # still a spread inside, not the end points alone
+
+
 def test_too_few_records_is_inconclusive():
     r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
     v = decide(n_records=5, baseline=r, final=r, selected=[], params={}, baseline_cmp=None, final_cmp=None,
