@@ -450,6 +450,28 @@ def _filtered_noise(u, omega, zeta, dt, tol):  # pragma: no cover - compiled
     return x
 
 
+def _modulated_noise(params: RDKParams, u: np.ndarray) -> np.ndarray:
+    """The modulated filtered noise x before the high-pass filter, shape (params.n, m) [m/s^2].
+
+    ``u`` holds white-noise columns of shape (params.n_warm + params.n_noise, m);
+    the first ``n_warm`` pulses fall before t = 0. x is zero after ``duration``.
+    Also the entry point of :mod:`scenarios.rdk_match`, which reshapes x's
+    spectrum before the high-pass filter.
+    """
+    nw, nn = params.n_warm, params.n_noise
+    tu = (np.arange(nw + nn) - nw) * params.dt
+    noise = _filtered_noise(np.ascontiguousarray(u), params.filter_frequency(tu), params.zeta_f, params.dt, _KERNEL_TOL)
+    x = np.zeros((params.n, u.shape[1]))
+    x[:nn] = noise[nw:] * params.modulating(tu[nw:])[:, None]
+    return x
+
+
+def _highpass(x: np.ndarray, dt: float, omega_c: float) -> np.ndarray:
+    """ü = x - 2 omega_c u' - omega_c^2 u with u'' + 2 omega_c u' + omega_c^2 u = x from rest [m/s^2], along axis 0."""
+    disp, vel = sdof_history(x, dt, omega_c, 1.0)
+    return x - 2.0 * omega_c * vel - omega_c**2 * disp
+
+
 def _simulate_array(params: RDKParams, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Model accelerations for white-noise columns u of shape (params.n_warm + params.n_noise, m).
 
@@ -457,13 +479,8 @@ def _simulate_array(params: RDKParams, u: np.ndarray) -> tuple[np.ndarray, np.nd
     accelerations and the modulated noise x before the filter, both of shape
     (params.n, m) [m/s^2].
     """
-    nw, nn = params.n_warm, params.n_noise
-    tu = (np.arange(nw + nn) - nw) * params.dt
-    noise = _filtered_noise(np.ascontiguousarray(u), params.filter_frequency(tu), params.zeta_f, params.dt, _KERNEL_TOL)
-    x = np.zeros((params.n, u.shape[1]))
-    x[:nn] = noise[nw:] * params.modulating(tu[nw:])[:, None]
-    disp, vel = sdof_history(x, params.dt, params.omega_c, 1.0)
-    return x - 2.0 * params.omega_c * vel - params.omega_c**2 * disp, x
+    x = _modulated_noise(params, u)
+    return _highpass(x, params.dt, params.omega_c), x
 
 
 def _seed_sequence(seed) -> np.random.SeedSequence:
