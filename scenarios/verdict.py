@@ -11,12 +11,13 @@ measured here from the campaign itself, by a parametric bootstrap
    correct model would have produced;
 2. Gaussian noise of each record's measured sigma is added (a fresh draw per
    replica);
-3. the model that scores them is the same model with its parameters
-   perturbed by what the campaign knows of them: the effects' fitted
-   parameters by the spread of their cross-validation fold fits (the
-   variance of a fold fit about the truth is the sum of the squared
-   deviations of the K fold fits from their mean, the grouped-jackknife
-   estimate scaled to a fold's training share), each draw kept within the
+3. the model that scores them is the one the real held-out errors use: the
+   records of fold k are scored by the model fitted without fold k (its
+   parameters differ from the full fit's as they do in the real scoring,
+   a fold refit that wandered included), each parameter moved by a
+   Gaussian draw of the full fit's own uncertainty (the grouped-jackknife
+   standard error over the K fold fits: the bootstrap's truth is the full
+   fit, the real truth is within that of it), each draw kept within the
    range the fold fits and the full fit span (the values the data chose: a
    draw beyond them can cross into a regime the data reject, e.g. a sliding
    block's friction coefficient across tan alpha, where the block rocks and
@@ -29,8 +30,9 @@ measured here from the campaign itself, by a parametric bootstrap
 
 The real held-out errors are then tested against the floor record by record
 (:func:`residual_test`), separately for ground motions (paired differences,
-their mean over its standard error: chaos makes them heavy-tailed and
-independent from record to record) and free vibrations (not chaotic; each
+their mean over its standard error, and the same on 10 %-trimmed means,
+Yuen's test: chaos makes them heavy-tailed and independent from record to
+record) and free vibrations (not chaotic; each
 record's difference over the replicas' spread, combined by Stouffer's sum).
 A misfit is *significant* when z > :data:`Z_MISFIT` and its size *matters*
 when the error is more than :data:`RATIO_MISFIT` times the floor.
@@ -93,6 +95,10 @@ RATIO_MISFIT = 1.25
 DETECTABLE_RATIO = 2.0
 #: One-sided z of 80 % power [-].
 Z_POWER = 0.8416
+#: Share of the ground motions' paired differences trimmed off each end in the robust test [-]: chaos
+#: carries a record or two of 60 far off a correct model's floor (measured: one record at 0.66 alpha
+#: against a floor of 0.38 +- 0.35 while the other 59 sit at it, median ratio 1.00).
+TRIM = 0.1
 #: Fewest records of a campaign (free vibration and ground motion) the verdict speaks on [-].
 MIN_RECORDS = 8
 #: Significance level of each distribution check (KS of theta_max/alpha, overturn fraction) [-].
@@ -237,7 +243,7 @@ def measure_floor(
     model_full : list of (name, params)
         The model fitted on every record: the bootstrap's truth.
     model_folds : list of list of (name, params)
-        The same model fitted without each fold: the spread of its parameters.
+        The same model fitted without each fold: the model that scores that fold's records.
     fold_of : ndarray of int
         Fold of each record.
     n_replicas : int
@@ -260,7 +266,10 @@ def measure_floor(
     for i, (name, p) in enumerate(model_full):
         for key in p:
             vals = np.array([mf[i][1][key] for mf in model_folds], dtype=float)
-            sd[f"{name}.{key}"] = float(math.sqrt(np.sum((vals - vals.mean()) ** 2))) if k_folds > 1 else 0.0
+            # the grouped-jackknife standard error of the full fit: how far the bootstrap's truth may be
+            # from the real one
+            ss = float(np.sum((vals - vals.mean()) ** 2))
+            sd[f"{name}.{key}"] = math.sqrt((k_folds - 1) / k_folds * ss) if k_folds > 1 else 0.0
             hull[f"{name}.{key}"] = (min(float(vals.min()), p[key]), max(float(vals.max()), p[key]))
     settings = dict(scorer.engine_settings)
     truth_eff = [make_effect(n, **p) for n, p in model_full]
@@ -278,7 +287,10 @@ def measure_floor(
             idx = np.flatnonzero(fold_of == k)
             if idx.size == 0:
                 continue
-            eff = [make_effect(n, **_perturbed(n, p, sd, rng, spec, hull)) for n, p in model_full]
+            # the model that scores fold k's records is the one fitted without them, as in the real
+            # held-out errors, moved by the uncertainty of the truth
+            eff = [make_effect(n, **_perturbed(n, model_folds[k][j][1], sd, rng, spec, hull))
+                   for j, (n, _p) in enumerate(model_full)]  # fmt: skip
             sub = [recs[i] for i in idx]
             res = simulate_records(spec, sub, "housner", eff, model_settings)
             sens = release_sensitivities(spec, sub, res, "housner", eff, model_settings)
@@ -305,6 +317,17 @@ def measure_floor(
 
 # ----------------------------------------------------------------------------
 # the residual test
+def _trimmed(x: np.ndarray) -> tuple[float, float, float]:
+    """Trimmed mean of ``x`` (:data:`TRIM` off each end), its standard error and the winsorised sd (Yuen 1974)."""
+    x = np.sort(np.asarray(x, dtype=float))
+    n = x.size
+    g = int(math.floor(TRIM * n))
+    if n < 2:
+        return (float(x.mean()) if n else math.nan), math.inf, math.inf
+    tm = float(x[g : n - g].mean())
+    w = np.clip(x, x[g], x[n - 1 - g])
+    sw = float(w.std(ddof=1))
+    return tm, sw / ((1 - 2 * g / n) * math.sqrt(n)), sw
 def residual_test(errors: np.ndarray, floor: Floor, kinds: Sequence[str]) -> Residual:
     """Test held-out errors (per record, campaign order) against the floor (module docstring)."""
     e = np.asarray(errors, dtype=float)
@@ -323,23 +346,33 @@ def residual_test(errors: np.ndarray, floor: Floor, kinds: Sequence[str]) -> Res
         fm = float(f[m].mean())
         ratio = float(e[m].mean() / fm) if fm > 0 else math.inf
         if kind == "ground_motion":
-            # records are independent draws of chaos: the paired differences' own spread
+            # records are independent draws of chaos: the paired differences' own spread. One record the
+            # chaos carries off (near an overturn: a correct model's error anywhere in 0-1) dominates the
+            # mean and its standard error, so the test and the power are also taken on trimmed means
+            # (Yuen 1974): a misfit of either kind counts, the power is the trimmed test's.
             sd_d = float(d.std(ddof=1)) if n > 1 else math.inf
             se = sd_d / math.sqrt(n)
             z = float(d.mean() / se) if se > 0 else (math.inf if d.mean() > 0 else 0.0)
-            det_k = 1.0 + zz * se / fm if fm > 0 else math.inf
-            want = (DETECTABLE_RATIO - 1.0) * fm
-            if want > 0 and math.isfinite(sd_d):
-                need = max(int(math.ceil((zz * sd_d / want) ** 2)) - n, 0)
+            dt_, se_t, sw = _trimmed(d)
+            ft = _trimmed(f[m])[0]
+            z_t = float(dt_ / se_t) if se_t > 0 else (math.inf if dt_ > 0 else 0.0)
+            ratio_t = 1.0 + dt_ / ft if ft > 0 else math.inf
+            mis_t = bool(z_t > Z_MISFIT and ratio_t > RATIO_MISFIT)
+            det_k = 1.0 + zz * se_t / ft if ft > 0 else math.inf
+            want = (DETECTABLE_RATIO - 1.0) * ft
+            if want > 0 and math.isfinite(sw):
+                need = max(int(math.ceil((zz * sw / (1 - 2 * TRIM) / want) ** 2)) - n, 0)
         else:
             # not chaotic: each record against the replicas' spread of its own error (Stouffer)
             s = np.maximum(floor.sd[m], FV_MIN_REL_SD * f[m])
             z = float(np.sum(d / s) / math.sqrt(n))
             det_k = 1.0 + zz * float(np.mean(s)) / math.sqrt(n) / fm if fm > 0 else math.inf
-        mis = bool(z > Z_MISFIT and ratio > RATIO_MISFIT)
+            z_t, ratio_t, mis_t = z, ratio, False
+        mis = bool(z > Z_MISFIT and ratio > RATIO_MISFIT) or mis_t
         groups[kind] = {"n": n, "error": float(e[m].mean()), "floor": fm, "ratio": ratio, "z": z, "misfit": mis,
+                        "ratio_trimmed": ratio_t, "z_trimmed": z_t,
                         "detectable_ratio": max(det_k, RATIO_MISFIT)}  # fmt: skip
-        z_all = max(z_all, z)
+        z_all = max(z_all, z, z_t)
         misfit = misfit or mis
         det = min(det, max(det_k, RATIO_MISFIT))
     ok = np.isfinite(e)
@@ -381,6 +414,16 @@ def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
             }  # fmt: skip
         )
     return sorted(by.values(), key=lambda d: -d["z"])
+
+
+def _beyond(classes: list[dict], z: float) -> list[dict]:
+    """The classes of :func:`physical_classes` with only their evidence beyond ``z`` standard errors."""
+    out = []
+    for c in classes:
+        ev = [e for e in c["evidence"] if abs(e["z"]) > z]
+        if ev:
+            out.append({**c, "z": max(abs(e["z"]) for e in ev), "evidence": ev})
+    return out
 
 
 def _groups_text(r: Residual) -> str:
@@ -485,14 +528,14 @@ def decide(
     dist_base = distribution_checks(baseline_cmp)
     # what differs from Housner's physics (the plain model) names the family; what the final model still
     # misses follows
-    classes = physical_classes(baseline_cmp)
+    base_classes = physical_classes(baseline_cmp)
     final_classes = physical_classes(final_cmp)
-    have = {c["class"] for c in classes}
-    classes += [c for c in final_classes if c["class"] not in have]
+    have = {c["class"] for c in base_classes}
+    classes = base_classes + [c for c in final_classes if c["class"] not in have]
     where = [_evidence_text(ev) for c in final_classes for ev in c["evidence"]]
     # a localisation quantity beyond Z_LOCAL standard errors is a misfit the errors may not show
-    loc_base = physical_classes(baseline_cmp, Z_LOCAL)
-    loc_final = physical_classes(final_cmp, Z_LOCAL)
+    loc_base = _beyond(base_classes, Z_LOCAL)
+    loc_final = _beyond(final_classes, Z_LOCAL)
     base_mis = baseline.misfit or bool(dist_base) or bool(loc_base)
     fin_mis = final.misfit or bool(dist_final) or bool(loc_final)
     powered = final.detectable_ratio <= DETECTABLE_RATIO

@@ -92,6 +92,24 @@ def test_the_floors_parameter_draws_stay_within_the_fold_fits():
     assert len(set(np.round(draws, 12))) > 100  # still a spread inside, not the end points alone
 
 
+def test_one_record_carried_off_by_chaos_does_not_hide_the_power_of_sixty():
+    # measured on a restitution campaign: 59 ground motions at their floor, one at 0.66 alpha against a
+    # floor of 0.38 +- 0.35 (a correct model's error on it is anywhere in 0-1)
+    rng = np.random.default_rng(1)
+    n = 60
+    f = 0.006 * (1 + rng.uniform(0, 1, n))
+    f[7] = 0.38
+    e = f * (1 + 0.2 * rng.standard_normal(n))
+    e[7] = 0.66
+    fl = _floor(f, 0.2 * f)
+    r = residual_test(e, fl, ["ground_motion"] * n)
+    # the plain mean's standard error alone (0.0047 on a floor of 0.0154) would promise only 2.17x
+    assert not r.misfit and r.detectable_ratio <= 2.0 and r.records_needed == 0
+    # a broad misfit (every record 2x) still shows, with or without the outlier
+    r2 = residual_test(2 * e, fl, ["ground_motion"] * n)
+    assert r2.misfit and r2.groups["ground_motion"]["ratio_trimmed"] == pytest.approx(2, rel=0.15)
+
+
 def test_too_few_records_is_inconclusive():
     r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
     v = decide(n_records=5, baseline=r, final=r, selected=[], params={}, baseline_cmp=None, final_cmp=None,
