@@ -7,6 +7,7 @@ for sources, checksums and how to cite them); they are found through
     >>> from scenarios.records import elcentro, load_record
     >>> rec = elcentro()                    # PEER 1999 I-ELC180, 4000 x 0.01 s
     >>> rec = load_record("elcentro-chopra")
+    >>> rec = read_record_file("records/kobe.AT2")   # a user's file, by its suffix
 
 Intensity measures (SI): Arias intensity Ia = pi / (2 g) int ug''^2 dt [m/s];
 the Husid curve Ia(t) / Ia [-]; significant duration D5-95 [s]; and t_mid, the
@@ -17,23 +18,28 @@ linear between samples to within O(dt^2).
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
 
-from housner.errors import unknown_choice
+from housner.errors import DataFileError, unknown_choice
 from housner.motion import GroundMotion
 from housner.units import G
 
 __all__ = [
     "ELCENTRO_VARIANTS",
     "RECORDS",
+    "RECORD_SUFFIXES",
     "arias_intensity",
     "elcentro",
     "husid",
     "husid_time",
+    "file_sha256",
     "load_record",
+    "read_record_file",
     "significant_duration",
     "t_mid",
 ]
@@ -126,6 +132,53 @@ def load_record(name: str) -> GroundMotion:
     except (KeyError, TypeError):
         raise unknown_choice("record", name, RECORDS) from None
     return loader()
+
+
+#: Suffixes of the record files :func:`read_record_file` reads (compared in lower case): reader.
+RECORD_SUFFIXES: dict[str, str] = {".at2": "PEER AT2", ".csv": "CSV with `time` and `ground_acc` columns"}
+
+
+def read_record_file(path: str | Path, name: str | None = None) -> GroundMotion:
+    """Read a user's record file, a PEER AT2 or a CSV, chosen by its suffix.
+
+    Parameters
+    ----------
+    path : path
+        ``*.AT2`` (any case): :meth:`GroundMotion.from_at2`, the unit from the
+        header; ``*.csv``: :meth:`GroundMotion.from_csv`, columns ``time`` [s]
+        and ``ground_acc`` [m/s^2] unless the header names their units
+        (``ground_acc [g]``). Converted once, in the reader, to m/s^2.
+    name : str, optional
+        Name of the motion (default: the file's stem).
+
+    Returns
+    -------
+    GroundMotion
+        Acceleration [m/s^2]; the provenance names the file and the conversion.
+
+    Raises
+    ------
+    DataFileError
+        The file is missing, unreadable, of another suffix, or malformed; the
+        message names the file and, where known, the line.
+    """
+    path = Path(path)
+    kind = RECORD_SUFFIXES.get(path.suffix.lower())
+    if kind is None:
+        got = f"suffix {path.suffix!r}" if path.suffix else "no suffix"
+        raise DataFileError(path, f"{got}: a record file is an .AT2 (PEER) or a .csv (time, ground_acc) file")
+    if path.is_dir():
+        raise DataFileError(path, "is a directory, not a record file")
+    if not path.exists():
+        raise DataFileError(path, "no such file")
+    if path.suffix.lower() == ".at2":
+        return GroundMotion.from_at2(path, name=name)
+    return GroundMotion.from_csv(path, name=name)
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 of a file's bytes (hex), to tell later whether a record file has changed."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 # ----------------------------------------------------------------------
