@@ -1,18 +1,23 @@
 """The scenario catalogue: declarative TOML files in this folder, read and validated here.
 
 A scenario names a specimen, a motion source (an RDK ensemble fitted to a
-record, a record, pulses on a grid, free-vibration releases), the engines to
-run and what to analyse. Everything a run produces follows from the file and
-its seed.
+record, a record, a suite of records, pulses on a grid, free-vibration
+releases), the engines to run and what to analyse. Everything a run produces
+follows from the file and its seed.
+
+A record is a shipped one (:data:`scenarios.records.RECORDS`) or a user's
+``.AT2`` / ``.csv`` file, its path relative to the scenario file's folder;
+record files are read, and refused with a one-line error, when the scenario
+is loaded.
 """
 
 from __future__ import annotations
 
 import difflib
-import functools
 import math
 import re
 import sys
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,7 +38,11 @@ __all__ = ["SCENARIOS", "Scenario", "ScenarioError", "list_scenarios", "load_sce
 HERE = Path(__file__).resolve().parent
 
 SPECIMEN_PRESETS = {"bachmann2017": Specimen.bachmann2017}
-MOTION_SOURCES = ("rdk", "record", "pulses", "free_vibration")
+MOTION_SOURCES = ("rdk", "record", "records", "pulses", "free_vibration")
+#: Ground-motion models of source "rdk": the published RDK model, and the spectrally
+#: matched ensemble of :mod:`scenarios.rdk_match`.
+RDK_MODELS = ("rdk2010", "matched")
+DEFAULT_RDK_MODEL = "rdk2010"
 PULSES = ("symmetric_ricker", "antisymmetric_ricker", "one_sine")
 
 # Allowed keys per table: key -> expected type(s). Unknown keys get "did you mean".
@@ -59,6 +68,8 @@ _SCHEMA: dict[str, dict[str, Any]] = {
     "motions": {
         "source": str,
         "record": str,
+        "records": (str, list),
+        "model": str,
         "n": int,
         "seed": int,
         "prototype_height": float,
@@ -208,10 +219,12 @@ class Scenario:
     path: Path | None = None
     raw: dict = field(default_factory=dict, repr=False)
     raw_text: str = field(default="", repr=False)
+    #: Record files read from the [motions] table: key -> [(motion, facts)]; None until read.
+    _files: dict | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def source(self) -> str:
-        """Motion source: one of rdk, record, pulses, free_vibration."""
+        """Motion source: one of rdk, record, records, pulses, free_vibration."""
         return self.motions["source"]
 
     @property
@@ -236,6 +249,8 @@ class Scenario:
             return int(self.motions.get("n", 100))
         if src == "record":
             return 1
+        if src == "records":
+            return len(self._read_files()["records"])
         if src == "free_vibration":
             return len(self.motions["theta0_over_alpha"])
         return len(self.pulse_grid()[0])
@@ -248,7 +263,113 @@ class Scenario:
         W, A = np.meshgrid(w, a, indexing="ij")
         return W.ravel(), A.ravel()
 
-    def build_motions(self, n: int | None = None, *, seed: int | None = None) -> tuple[list[GroundMotion], dict]:
+    # ------------------------------------------------------------------ records
+    def _error(self, key: str | None, message: str) -> ScenarioError:
+        return _File(self.path or Path(f"scenario {self.name!r}"), self.raw_text).error("motions", key, message)
+
+    def _record_path(self, written: str) -> Path:
+        """A record path as written in the file: relative to the scenario file's folder, or absolute."""
+        p = Path(written)
+        if p.is_absolute():
+            return p
+        return (self.path.parent if self.path is not None else Path.cwd()) / p
+
+    def _read_file(self, key: str, written: str) -> tuple[GroundMotion, dict]:
+        """One record file, and its facts for the metadata; any failure is one ScenarioError naming key and path."""
+        from scenarios.records import RECORD_SUFFIXES, RECORDS, file_sha256, read_record_file
+
+        path = self._record_path(written)
+        what = f"[motions] {key!r} names {written!r}"
+        if path.suffix.lower() in RECORD_SUFFIXES and not path.exists():
+            hint = f"; shipped records: {', '.join(RECORDS)}" if key == "record" else ""
+            raise self._error(key, f"{what}: no such file {path} (relative paths start at the scenario's folder{hint})")
+        if key == "record" and path.is_dir():
+            raise self._error(
+                key,
+                f"{what}: {path} is a folder; 'record' names one file (a folder of records is "
+                'source = "records" with records = "FOLDER")',
+            )
+        try:
+            motion = read_record_file(path)
+            sha = file_sha256(path)
+        except (OSError, ValueError) as e:
+            raise self._error(key, f"{what}: {_one_line(e)}") from None
+        facts = {
+            "name": motion.name,
+            "provenance": f"{motion.provenance}; file {path.resolve()} (sha256 {sha[:16]})",
+            "dt": motion.dt,
+            "n": motion.n,
+            "file": written,
+            "path": str(path.resolve()),
+            "sha256": sha,
+        }
+        return GroundMotion(motion.acc, motion.dt, motion.name, facts["provenance"]), facts
+
+    def _suite_files(self) -> list[str]:
+        """The files of ``records`` (a folder: its .AT2 and .csv files sorted by name; or a list), as written."""
+        from scenarios.records import RECORD_SUFFIXES
+
+        spec = self.motions["records"]
+        if isinstance(spec, str):
+            folder = self._record_path(spec)
+            what = f"[motions] 'records' names folder {spec!r}"
+            if not folder.exists():
+                raise self._error(
+                    "records", f"{what}: no such folder {folder} (relative paths start at the scenario's folder)"
+                )
+            if not folder.is_dir():
+                raise self._error("records", f"{what}: {folder} is a file; give a folder or a list of files")
+            try:
+                names = sorted(p.name for p in folder.iterdir() if p.suffix.lower() in RECORD_SUFFIXES and p.is_file())
+            except OSError as e:
+                raise self._error("records", f"{what}: cannot list {folder} ({e.strerror or e})") from None
+            if not names:
+                raise self._error("records", f"{what}: {folder} holds no .AT2 or .csv file")
+            return [str(Path(spec) / name) for name in names]
+        if not spec:
+            raise self._error("records", "[motions] 'records' is an empty list; name at least one .AT2 or .csv file")
+        for v in spec:
+            if not isinstance(v, str):
+                raise self._error("records", f"[motions] 'records' must hold file paths (strings), got {v!r}")
+        return list(spec)
+
+    def _read_files(self) -> dict:
+        """Read the record files the [motions] table names, once (load_scenario does it, to fail early)."""
+        if self._files is not None:
+            return self._files
+        files: dict[str, list] = {}
+        src, m = self.source, self.motions
+        if src in ("rdk", "record") and _is_path(m.get("record", "elcentro")):
+            files["record"] = [self._read_file("record", m["record"])]
+        elif src == "records":
+            written = self._suite_files()
+            seen: dict[str, str] = {}
+            for w in written:  # names are checked before the files are read
+                stem = Path(w).stem
+                if stem in seen:
+                    raise self._error(
+                        "records",
+                        f"[motions] 'records': {seen[stem]!r} and {w!r} would both be motion {stem!r}; "
+                        "every record needs a name (file stem) of its own",
+                    )
+                seen[stem] = w
+            files["records"] = [self._read_file("records", w) for w in written]
+        self._files = files
+        return files
+
+    def _record(self) -> tuple[GroundMotion, dict]:
+        """The record of an rdk or record source, and its facts (name, provenance, dt, n; file and sha256)."""
+        files = self._read_files()
+        if "record" in files:
+            return files["record"][0]
+        from scenarios.records import load_record
+
+        record = load_record(self.motions.get("record", "elcentro"))
+        return record, {"name": record.name, "provenance": record.provenance, "dt": record.dt, "n": record.n}
+
+    def build_motions(
+        self, n: int | None = None, *, seed: int | None = None, band_check: bool = False
+    ) -> tuple[list[GroundMotion], dict]:
         """Generate the scenario's motions at model scale, and metadata for the report.
 
         Parameters
@@ -257,42 +378,63 @@ class Scenario:
             Number of motions (RDK ensembles only; motion i does not depend on n).
         seed : int, optional
             Override the scenario's seed (RDK only).
+        band_check : bool
+            RDK only: also compare the ensemble's mean 5 % spectra with the
+            record's, per third-octave band (PSa 0.05-3 s, Sd 0.5-3 s, at
+            prototype scale, before ``amplitude``; :func:`scenarios.rdk_match.band_check`).
+            About 2 s per 100 motions, so off unless asked (the runner asks).
 
         Returns
         -------
         motions : list of GroundMotion
         meta : dict
-            Source-specific facts (fitted RDK parameters, record, scaling S).
+            Source-specific facts: ``S``; the ``record`` (name, provenance,
+            dt [s], n; for a file also ``file``, ``path``, ``sha256``) or, for a
+            suite, ``records`` (one such dict per motion); for RDK the ``model``,
+            ``rdk_params``, ``seed``, for the matched model ``matched_gain``,
+            and with ``band_check`` the ``band_check`` table.
         """
         src = self.source
         m = self.motions
         meta: dict[str, Any] = {"source": src, "S": self.S}
+        amp = float(m.get("amplitude", 1.0))
+        if src == "records":
+            suite = self._read_files()["records"]
+            meta["records"] = [facts for _, facts in suite]
+            return [_to_model(g, amp, self.S) for g, _ in suite], meta
         if src in ("rdk", "record"):
-            from scenarios.records import RECORDS
-
-            rec_name = m.get("record", "elcentro")
-            if rec_name not in RECORDS:
-                raise unknown_choice("record", rec_name, RECORDS)
-            record = RECORDS[rec_name]()
-            meta["record"] = {"name": record.name, "provenance": record.provenance, "dt": record.dt, "n": record.n}
-            amp = float(m.get("amplitude", 1.0))
+            record, meta["record"] = self._record()
             if src == "record":
-                motions = [record.scaled(amplitude=amp).to_model_scale(self.S)]
+                return [_to_model(record, amp, self.S)], meta
+            if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
+                raise ValueError(f"`n` (number of motions) must be a positive integer, got {n!r}")
+            if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+                raise ValueError(f"`seed` must be a non-negative integer, got {seed!r}")
+            n = int(m.get("n", 100)) if n is None else int(n)
+            seed = int(m.get("seed", 0)) if seed is None else int(seed)
+            model = m.get("model", DEFAULT_RDK_MODEL)
+            try:
+                fit = _fit(model, record)
+            except ValueError as e:  # a user's record the model cannot be fitted to
+                raise self._error(
+                    "record", f"[motions] cannot fit model {model!r} to record {record.name!r}: {_one_line(e)}"
+                ) from None
+            meta["model"] = model
+            meta["seed"] = seed
+            if model == "matched":
+                from scenarios import rdk_match
+
+                meta["rdk_params"] = fit.params.describe()
+                meta["matched_gain"] = _gain_facts(fit)
+                proto = rdk_match.simulate_matched(fit, n, seed)
             else:
                 from scenarios import rdk
 
-                params = _rdk_fit(rec_name)
-                meta["rdk_params"] = params.describe()
-                if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
-                    raise ValueError(f"`n` (number of motions) must be a positive integer, got {n!r}")
-                if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
-                    raise ValueError(f"`seed` must be a non-negative integer, got {seed!r}")
-                n = int(m.get("n", 100)) if n is None else int(n)
-                seed = int(m.get("seed", 0)) if seed is None else int(seed)
-                meta["seed"] = seed
-                proto = rdk.simulate(params, n, seed)
-                motions = [g.scaled(amplitude=amp).to_model_scale(self.S) for g in proto]
-            return motions, meta
+                meta["rdk_params"] = fit.describe()
+                proto = rdk.simulate(fit, n, seed)
+            if band_check:
+                meta["band_check"] = _band_facts(proto, record, seed)
+            return [_to_model(g, amp, self.S) for g in proto], meta
         if src == "free_vibration":
             alpha = self.specimen.alpha
             dur = float(m.get("duration", 10.0))
@@ -367,13 +509,81 @@ class Scenario:
         return {"name": self.name, "file": str(self.path) if self.path else None, **self.raw}
 
 
-@functools.lru_cache(maxsize=8)
-def _rdk_fit(record_name: str):
-    """RDK parameters fitted to a shipped record (deterministic; cached for repeated ensembles)."""
-    from scenarios import rdk
+def _to_model(g: GroundMotion, amplitude: float, S: float) -> GroundMotion:
+    """A prototype-scale motion (record or simulated) times ``amplitude``, compressed in time by sqrt(S)."""
+    return g.scaled(amplitude=amplitude).to_model_scale(S)
+
+
+def _is_path(record: str) -> bool:
+    """True if ``record`` names a file: not a shipped name, and with a suffix or a path separator."""
     from scenarios.records import RECORDS
 
-    return rdk.fit(RECORDS[record_name]())
+    return record not in RECORDS and (bool(Path(record).suffix) or "/" in record or "\\" in record)
+
+
+def _one_line(e: Exception) -> str:
+    return "; ".join(line.strip() for line in str(e).splitlines() if line.strip()) or type(e).__name__
+
+
+#: Fitted ground-motion models, oldest first: (model, record name, content hash of the record's
+#: samples and step) -> RDKParams or MatchedRDK. A record file that changes has another hash, so
+#: its fit is redone; the fits are deterministic (fixed fit seed).
+_FITS: OrderedDict[tuple[str, str, str], Any] = OrderedDict()
+_FITS_SIZE = 8
+
+
+def _fit(model: str, record: GroundMotion):
+    """The model of ``RDK_MODELS`` fitted to ``record`` (cached, see :data:`_FITS`)."""
+    key = (model, record.name, record.content_hash())
+    if key in _FITS:
+        _FITS.move_to_end(key)
+        return _FITS[key]
+    if model == "matched":
+        from scenarios import rdk_match
+
+        fit = rdk_match.fit_matched(record, params=_fit(DEFAULT_RDK_MODEL, record))
+    elif model == DEFAULT_RDK_MODEL:
+        from scenarios import rdk
+
+        fit = rdk.fit(record)
+    else:
+        raise unknown_choice("RDK model", model, RDK_MODELS)
+    _FITS[key] = fit
+    while len(_FITS) > _FITS_SIZE:
+        _FITS.popitem(last=False)
+    return fit
+
+
+def _gain_facts(fit) -> dict:
+    """The spectral gain of a MatchedRDK as plain data (units in the keys)."""
+    d = fit.describe()
+    keys = ("gain_centres_s", "gain", "fir_length_s", "n_fit", "iterations", "worst_band_ratio_per_iteration")
+    return {"model": d["model"], **{k: d[k] for k in keys}, "fit_seed": d["fit_seed"]}
+
+
+def _band_facts(proto: list[GroundMotion], record: GroundMotion, seed: int) -> dict:
+    """The band check of a prototype-scale ensemble against its record, as plain data for run.json."""
+    from scenarios import rdk_match
+
+    check = rdk_match.band_check(proto, record)
+    keep = ("centre_s", "lo_s", "hi_s", "ratio", "ci95_lo", "ci95_hi", "verdict")
+
+    def table(t, t_range) -> dict:
+        bands = [{k: row[k] for k in keep} for row in t.rows()]
+        return {"range_s": list(t_range), "passed": t.passed, "bands": bands}
+
+    return {
+        "what": (
+            f"5 % damped spectra, mean of {len(proto)} motions (seed {seed}) / record {record.name!r}, "
+            "per third-octave band, at prototype scale, before 'amplitude'"
+        ),
+        "record": record.name,
+        "damping": check.damping,
+        "bounds": list(check.psa.bounds),
+        "passed": check.passed,
+        "psa": table(check.psa, rdk_match.DEFAULT_PSA_RANGE),
+        "sd": table(check.sd, rdk_match.DEFAULT_SD_RANGE),
+    }
 
 
 def _discover() -> dict[str, Path]:
@@ -499,12 +709,23 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         raise f.error(
             "motions", "dt", f"[motions] 'dt' ({mot['dt']!r} s) must be below 'duration' ({mot['duration']!r} s)"
         )
+    for key, sources in (("record", ("rdk", "record")), ("records", ("records",)), ("model", ("rdk",))):
+        if key in mot and src not in sources:
+            use = " or ".join(f"source = {s!r}" for s in sources)
+            raise f.error("motions", key, f"[motions] {key!r} applies to {use}, not to source {src!r}")
+    if src == "records" and "records" not in mot:
+        raise f.error(
+            "motions", None, "[motions] source 'records' needs key 'records' (a folder, or a list of .AT2 / .csv files)"
+        )
     if src in ("rdk", "record"):
         from scenarios.records import RECORDS
 
         rec = mot.get("record", "elcentro")
-        if rec not in RECORDS:
-            raise f.error("motions", "record", f"[motions] {unknown_choice('record', rec, RECORDS)}")
+        if not _is_path(rec) and rec not in RECORDS:
+            msg = unknown_choice("record", rec, RECORDS)
+            raise f.error("motions", "record", f"[motions] {msg}, or a path to an .AT2 / .csv file")
+    if mot.get("model", DEFAULT_RDK_MODEL) not in RDK_MODELS:
+        raise f.error("motions", "model", f"[motions] {unknown_choice('model', mot['model'], RDK_MODELS)}")
     if src == "free_vibration":
         values = mot["theta0_over_alpha"]
         bad = [a for a in values if isinstance(a, bool) or not (isinstance(a, (int, float)) and 0 < a < 1)]
@@ -548,6 +769,7 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     )
     if src == "pulses":
         scen.pulse_grid()  # validate the grids now
+    scen._read_files()  # record files: read now, so that a bad one fails before any work
     return scen
 
 

@@ -1025,7 +1025,7 @@ def run_scenario(
     out = Path(out) if out else Path("runs") / scenario.name
     check_output_dir(out, "run directory", files=RUN_FILES)  # before the work, not after it
     t0 = time.perf_counter()
-    motions, mmeta = scenario.build_motions(n_motions, seed=seed)
+    motions, mmeta = scenario.build_motions(n_motions, seed=seed, band_check=True)  # the report shows the bands
     t_motions = time.perf_counter() - t0
     eng_settings = {n: dict(scenario.engine_settings.get(n, {})) for n in names}
     results, histories, info = run_engines(
