@@ -935,10 +935,14 @@ def _ensemble(run: _Run) -> str:
     words = {
         "rdk": "synthetic motions of the Rezaeian &amp; Der Kiureghian model fitted to a record",
         "record": "a recorded ground motion",
+        "records": "a suite of recorded ground motions, each run as recorded",
         "pulses": "analytical pulses on a grid",
         "free_vibration": "free rocking after a release from rest (no ground motion)",
     }.get(src, _e(src))
     facts = [["source", words]]
+    if "model" in mm:
+        model = {"rdk2010": "published (Rezaeian &amp; Der Kiureghian 2010)", "matched": "spectrally matched"}
+        facts.append(["ground-motion model", f"<code>{_e(mm['model'])}</code>: {model.get(mm['model'], '')}"])
     if "S" in mm:
         S = _num(mm["S"])
         facts.append(
@@ -974,12 +978,28 @@ def _ensemble(run: _Run) -> str:
             ["step dt", _fmt_g(rec.get("dt")), "s"],
             ["samples", _e(rec.get("n", "")), ""],
         ]
+        if rec.get("file"):
+            rows.insert(
+                1, ["file", f"<code>{_e(rec['file'])}</code> (sha256 {_e(str(rec.get('sha256', ''))[:16])})", ""]
+            )
         parts.append("<h3>Record</h3>")
         parts.append(_table(["", "value", "unit"], rows, cls="kv"))
+    suite = mm.get("records")
+    if isinstance(suite, list) and suite:
+        rows = [
+            [_e(r.get("name", "")), f"<code>{_e(r.get('file', ''))}</code>", _e(r.get("n", "")), _fmt_g(r.get("dt"))]
+            for r in suite
+            if isinstance(r, dict)
+        ]
+        parts.append("<h3>Records</h3>")
+        parts.append(_table(["motion", "file", "samples", "dt [s]"], rows, cls="kv"))
     params = mm.get("rdk_params")
     if isinstance(params, dict) and params:
         parts.append("<h3>Fitted Rezaeian &amp; Der Kiureghian parameters</h3>")
         parts.append(_rdk_table(params))
+    if isinstance(mm.get("band_check"), dict):
+        parts.append("<h3>Spectral match, band by band</h3>")
+        parts.append(_guard("The band check", lambda: _band_table(mm["band_check"], mm.get("matched_gain"))))
     if src in ("rdk", "record"):
         parts.append(_guard("The response spectra", lambda: _spectra_figure(run)))
     if src == "pulses" and "pulse" in mm:
@@ -990,6 +1010,37 @@ def _ensemble(run: _Run) -> str:
             )
         )
     return "".join(parts)
+
+
+def _band_table(check: dict, gain: dict | None) -> str:
+    """Per third-octave band: ensemble-mean / record of PSa and Sd with PASS/FAIL (and the matched model's gain)."""
+    rows: dict[float, list[str]] = {}
+    for q, col in (("psa", 1), ("sd", 2)):
+        for b in (check.get(q) or {}).get("bands", []):
+            c = round(_num(b.get("centre_s")), 6)
+            row = rows.setdefault(c, [_fmt_g(c, 3), "&ndash;", "&ndash;"])
+            row[col] = f"{_fmt(b.get('ratio'), 3)} {_badge(b.get('verdict') == 'PASS')}"
+    header = ["band centre [s]", "PSa ratio", "Sd ratio"]
+    gain_note = ""
+    if isinstance(gain, dict) and gain.get("gain_centres_s"):
+        header.append("gain G [&ndash;]")
+        gain_note = (
+            f" G: the matched model's spectral gain at the band centre, fitted in {_e(gain.get('iterations', '?'))} "
+            f"iterations on {_e(gain.get('n_fit', '?'))} motions."
+        )
+        g = {round(_num(c), 6): _num(v) for c, v in zip(gain["gain_centres_s"], gain.get("gain", []), strict=False)}
+        for c, row in rows.items():
+            row.append(_fmt(g.get(c, math.nan), 3))
+    lo, hi = (list(check.get("bounds") or []) + [math.nan, math.nan])[:2]
+    ranges = {q: (check.get(q) or {}).get("range_s") or ["?", "?"] for q in ("psa", "sd")}
+    verdict = _badge(bool(check.get("passed"))) if "passed" in check else ""
+    caption = (
+        f"{verdict} {_e(check.get('what', ''))}: ratio of the geometric mean over the band of ensemble mean / record, "
+        f"accepted within [{_fmt_g(lo)}, {_fmt_g(hi)}]; PSa checked over {_fmt_g(ranges['psa'][0])}-"
+        f"{_fmt_g(ranges['psa'][1])} s, Sd over {_fmt_g(ranges['sd'][0])}-{_fmt_g(ranges['sd'][1])} s "
+        "(scenarios.rdk_match.band_check)." + gain_note
+    )
+    return _table(header, [rows[c] for c in sorted(rows)], cls="kv", caption=caption)
 
 
 def _range(x: np.ndarray, unit: str) -> str:
@@ -1081,12 +1132,22 @@ def _motion_list(run: _Run):
 
 def _record(run: _Run):
     """(the record the run's motions come from, at prototype scale, None) or (None, why not)."""
-    from scenarios.records import RECORDS
+    from scenarios.records import RECORDS, file_sha256, read_record_file
 
     scen = run.meta.get("scenario") or {}
-    key = (scen.get("motions") or {}).get("record") or (run.motions_meta.get("record") or {}).get("name")
+    facts = run.motions_meta.get("record") or {}
+    key = (scen.get("motions") or {}).get("record") or facts.get("name")
     if not key:
         return None, "run.json names no record"
+    if facts.get("path"):  # a user's file: read it again if it has not changed since the run
+        path = Path(facts["path"])
+        try:
+            same = file_sha256(path) == facts.get("sha256")
+        except OSError:
+            return None, f"Record file {_e(path)} is no longer there"
+        if not same:
+            return None, f"Record file {_e(path)} has changed since the run"
+        return read_record_file(path), ""
     if key not in RECORDS:
         return None, f"Record {_e(key)!r} is not in the catalogue (scenarios.records.RECORDS)"
     return RECORDS[key](), ""
@@ -1101,7 +1162,7 @@ def _spectra_figure(run: _Run) -> str:
         return _note("The spectra figure needs reports/ground_figures.py, which is not installed.", "warn")
     record, why = _record(run)
     if record is None:
-        return _note(f"{why}: no spectra.", "warn" if "catalogue" in why else "note")
+        return _note(f"{why}: no spectra.", "warn" if "catalogue" in why or "Record file" in why else "note")
     S = run.S
     # motions.npz holds the model-scale motions (time compressed by sqrt(S), seed eq. 9); the figure takes
     # the prototype-scale ensemble and draws the time-scaled spectra itself.
