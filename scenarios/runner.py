@@ -432,10 +432,22 @@ def _death_reason(exitcode: int | None) -> str:
 
 @contextmanager
 def _sigint_ignored():
-    """Ignore Ctrl-C while starting a worker: the child inherits SIG_IGN and keeps it from its
-    first instruction, so a Ctrl-C never prints a traceback from a starting worker."""
+    """Hold Ctrl-C back while starting a worker.
+
+    Where the platform allows, SIGINT is *blocked*: the child inherits the mask (across fork and exec)
+    and so never sees a Ctrl-C before its main sets SIG_IGN, and a Ctrl-C that arrives meanwhile stays
+    pending in the parent and is delivered as soon as the start returns (ignoring it instead loses a
+    Ctrl-C that arrives while a worker starts, and the run goes on).
+    Elsewhere it is ignored for that moment, which the child inherits likewise."""
     if threading.current_thread() is not threading.main_thread():
         yield
+        return
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            yield
+        finally:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
         return
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
