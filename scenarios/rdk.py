@@ -538,17 +538,44 @@ def simulate(params: RDKParams, n: int, seed, *, name: str = "rdk") -> list[Grou
     """
     if not isinstance(params, RDKParams):
         raise TypeError(f"`params` must be an RDKParams, got {type(params).__name__}")
-    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 0:
-        raise ValueError(f"`n` must be a non-negative int, got {n!r}")
-    n = int(n)
+    what = f"Rezaeian & Der Kiureghian (2010) model ({describe_text(params)})"
+    return simulate_motions(params, n, seed, name, what, lambda u: _simulate_array(params, u)[0])
+
+
+def check_count(n, name: str, minimum: int = 0) -> int:
+    """``n`` as an int of at least ``minimum`` (0 or 1), else a ValueError naming ``name``."""
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < minimum:
+        kind = "non-negative" if minimum == 0 else "positive"
+        raise ValueError(f"`{name}` must be a {kind} int, got {n!r}")
+    return int(n)
+
+
+def seed_text(seed) -> str:
+    """The SeedSequence of ``seed`` as provenance names it."""
+    ss = _seed_sequence(seed)
+    return f"SeedSequence(entropy={ss.entropy}, spawn_key={tuple(ss.spawn_key)})"
+
+
+def describe_text(params: RDKParams) -> str:
+    """``params.describe()`` as one line, ``key=value, ...``."""
+    return ", ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.describe().items())
+
+
+def simulate_motions(params: RDKParams, n, seed, name: str, what: str, acc_of) -> list[GroundMotion]:
+    """The ensemble loop of :func:`simulate` and of the matched model (:mod:`scenarios.rdk_match`).
+
+    ``acc_of(u)`` turns white-noise columns u, shape (params.n_warm + params.n_noise, m), into
+    accelerations [m/s^2] with one column per motion; motion i gets child i of SeedSequence(seed)
+    (in chunks of :data:`_CHUNK`) and the provenance ``what``, its index and its seed.
+    """
+    n = check_count(n, "n", 0)
     ss = _seed_sequence(seed)
     children = ss.spawn(n)
-    pars = ", ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.describe().items())
-    seed_txt = f"SeedSequence(entropy={ss.entropy}, spawn_key={tuple(ss.spawn_key)})"
+    seed_txt = seed_text(ss)
     out: list[GroundMotion] = []
     for start in range(0, n, _CHUNK):
         block = children[start : start + _CHUNK]
-        acc, _ = _simulate_array(params, _white_noise(block, params.n_warm + params.n_noise))
+        acc = acc_of(_white_noise(block, params.n_warm + params.n_noise))
         for c in range(len(block)):
             i = start + c
             out.append(
@@ -556,8 +583,7 @@ def simulate(params: RDKParams, n: int, seed, *, name: str = "rdk") -> list[Grou
                     acc=acc[:, c].copy(),
                     dt=params.dt,
                     name=f"{name}-{i:03d}",
-                    provenance=f"Rezaeian & Der Kiureghian (2010) model ({pars}); motion {i}, "
-                    f"default_rng({seed_txt}.spawn(n)[{i}])",
+                    provenance=f"{what}; motion {i}, default_rng({seed_txt}.spawn(n)[{i}])",
                 )
             )
     return out

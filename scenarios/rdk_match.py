@@ -81,7 +81,13 @@ from scipy import fft as sfft
 
 from housner.motion import GroundMotion
 from scenarios import rdk
-from scenarios.elastic import POINTS_PER_PERIOD, ensemble_spectra, linear_step_coefficients, response_spectrum
+from scenarios.elastic import (
+    POINTS_PER_PERIOD,
+    _check_damping,
+    ensemble_spectra,
+    linear_step_coefficients,
+    response_spectrum,
+)
 from scenarios.rdk import RDKParams
 
 __all__ = [
@@ -302,16 +308,6 @@ def _band_table(
         bounds=tuple(float(b) for b in bounds),
         n_motions=n,
     )
-
-
-def _check_damping(damping) -> float:
-    try:
-        z = float(damping)
-    except (TypeError, ValueError):
-        raise ValueError(f"`damping` must be a number, got {damping!r}") from None
-    if not (math.isfinite(z) and 0.0 <= z < 1.0):
-        raise ValueError(f"`damping` must lie in [0, 1) (a ratio, 0.05 for 5 %), got {damping!r}")
-    return z
 
 
 def _check_bounds(bounds, name: str) -> tuple[float, float]:
@@ -549,15 +545,10 @@ class MatchedRDK:
                 "iterations": self.iterations,
                 "worst_band_ratio_per_iteration": list(self.history),
                 "beta": self.beta,
-                "fit_seed": _seed_text(self.fit_seed) if self.fit_seed is not None else None,
+                "fit_seed": rdk.seed_text(self.fit_seed) if self.fit_seed is not None else None,
             }
         )
         return out
-
-
-def _seed_text(seed) -> str:
-    ss = rdk._seed_sequence(seed)
-    return f"SeedSequence(entropy={ss.entropy}, spawn_key={tuple(ss.spawn_key)})"
 
 
 def _simulate_array(model: MatchedRDK, u: np.ndarray) -> np.ndarray:
@@ -565,13 +556,6 @@ def _simulate_array(model: MatchedRDK, u: np.ndarray) -> np.ndarray:
     p = model.params
     y = _convolve_columns(rdk._modulated_noise(p, u), model._fir)
     return rdk._highpass(y, p.dt, p.omega_c)
-
-
-def _check_count(n, name: str, minimum: int) -> int:
-    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < minimum:
-        kind = "non-negative" if minimum == 0 else "positive"
-        raise ValueError(f"`{name}` must be a {kind} int, got {n!r}")
-    return int(n)
 
 
 def simulate_matched(model: MatchedRDK, n: int, seed, *, name: str = "rdkm") -> list[GroundMotion]:
@@ -598,11 +582,8 @@ def simulate_matched(model: MatchedRDK, n: int, seed, *, name: str = "rdkm") -> 
     """
     if not isinstance(model, MatchedRDK):
         raise TypeError(f"`model` must be a MatchedRDK, got {type(model).__name__}")
-    n = _check_count(n, "n", 0)
-    ss = rdk._seed_sequence(seed)
-    children = ss.spawn(n)
     p = model.params
-    pars = ", ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}" for k, v in p.describe().items())
+    pars = rdk.describe_text(p)
     gains = ", ".join(f"{c:.4g} s: {g:.3f}" for c, g in zip(model.centres, model.gain, strict=True))
     what = (
         f"Rezaeian & Der Kiureghian (2010) model ({pars}) with a minimum-phase spectral gain "
@@ -610,22 +591,7 @@ def simulate_matched(model: MatchedRDK, n: int, seed, *, name: str = "rdkm") -> 
         f"{model.record!r} (SIMQKE-style iteration, Gasparini & Vanmarcke 1976; {model.iterations} iterations, "
         f"{model.n_fit} motions)"
     )
-    seed_txt = _seed_text(ss)
-    out: list[GroundMotion] = []
-    for start in range(0, n, rdk._CHUNK):
-        block = children[start : start + rdk._CHUNK]
-        acc = _simulate_array(model, rdk._white_noise(block, p.n_warm + p.n_noise))
-        for c in range(len(block)):
-            i = start + c
-            out.append(
-                GroundMotion(
-                    acc=acc[:, c].copy(),
-                    dt=p.dt,
-                    name=f"{name}-{i:03d}",
-                    provenance=f"{what}; motion {i}, default_rng({seed_txt}.spawn(n)[{i}])",
-                )
-            )
-    return out
+    return rdk.simulate_motions(p, n, seed, name, what, lambda u: _simulate_array(model, u))
 
 
 # ----------------------------------------------------------------------
@@ -750,8 +716,8 @@ def fit_matched(
     """
     if not isinstance(record, GroundMotion):
         raise TypeError(f"`record` must be a housner.GroundMotion, got {type(record).__name__}")
-    n_fit = _check_count(n_fit, "n_fit", 1)
-    iterations = _check_count(iterations, "iterations", 0)
+    n_fit = rdk.check_count(n_fit, "n_fit", 1)
+    iterations = rdk.check_count(iterations, "iterations", 0)
     try:
         beta = float(beta)
         tol = float(tol)

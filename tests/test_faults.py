@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_runner import motions  # the same short pulse-like motions
 
 from engines.analytic import HousnerEngine
 from engines.base import ENGINES, register_engine
@@ -30,20 +31,10 @@ SPEC = Specimen.bachmann2017()
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def motions(n=12, seed=1):
-    rng = np.random.default_rng(seed)
-    out = []
-    for i in range(n):
-        t = np.arange(0, 3.0, 0.002)
-        a = 2.5 * np.sin(2 * np.pi * 2.0 * t + rng.uniform(0, 6)) * np.exp(-((t - 1.0) ** 2))
-        out.append(GroundMotion(a, 0.002, name=f"m{i}"))
-    return out
-
-
 @pytest.fixture(scope="module")
 def reference():
     """The undisturbed run, in this process."""
-    ms = motions()
+    ms = motions(12)
     df, hist, _ = run_engines(SPEC, ms, {"housner": {}}, jobs=1, use_cache=False, progress=False)
     assert (df.status == "ok").all()
     return ms, df, hist
