@@ -280,7 +280,6 @@ class _Run:
     @cached_property
     def record_gap(self) -> dict:
         """:func:`scenarios.analysis.record_against_ensemble` for this run: the record among its ensemble."""
-        from housner import Specimen
         from scenarios.analysis import record_against_ensemble
 
         record, why = _record(self)
@@ -288,15 +287,7 @@ class _Run:
             raise DataFileError(self.path / "run.json", why)
         if self.motions is None:
             raise DataFileError(self.path / "motions.npz", "missing: the ensemble is needed")
-        sp = self.specimen
-        specimen = Specimen(
-            height=_num(sp.get("height_m")),
-            width=_num(sp.get("width_m")),
-            depth=_num(sp.get("depth_m")),
-            mass=_num(sp.get("mass_kg")),
-            I0=_num(sp.get("I0_kgm2")),
-            name=str(sp.get("name", "specimen")),
-        )
+        specimen = self.specimen_obj
         amp = _num(((self.meta.get("scenario") or {}).get("motions") or {}).get("amplitude", 1.0))
         settings = {
             k: v
@@ -314,6 +305,41 @@ class _Run:
             engine=self.reference,
             settings=settings,
             ensemble_values=self.values(self.reference),
+        )
+
+    @cached_property
+    def paper_factors(self) -> dict | None:
+        """:func:`scenarios.analysis.equivalent_amplitude` of this run's ensemble for the paper's percentiles.
+
+        The analytic model with the specimen's own r (the paper's numerical column is Housner's model),
+        whatever the run's reference: how much stronger, in effect, the paper's motions were.
+        """
+        from scenarios.analysis import equivalent_amplitude
+
+        analysis = self.meta.get("analysis") or {}
+        targets = {float(k): _num(v) for k, v in (analysis.get("paper_percentiles") or {}).items()}
+        targets = {q: v for q, v in targets.items() if not math.isnan(v)}
+        if not targets or self.motions is None:
+            return None
+        ids = self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int)
+        motions = _motion_list(self)
+        return equivalent_amplitude(
+            self.specimen_obj, [motions[i] for i in ids if i < len(motions)], targets, seed=BOOT_SEED
+        )
+
+    @cached_property
+    def specimen_obj(self):
+        """The run's specimen as a :class:`housner.Specimen` (from run.json)."""
+        from housner import Specimen
+
+        sp = self.specimen
+        return Specimen(
+            height=_num(sp.get("height_m")),
+            width=_num(sp.get("width_m")),
+            depth=_num(sp.get("depth_m")),
+            mass=_num(sp.get("mass_kg")),
+            I0=_num(sp.get("I0_kgm2")),
+            name=str(sp.get("name", "specimen")),
         )
 
     def motion_dt(self, motion_id: int) -> float:
@@ -1342,11 +1368,23 @@ def _table2_gap(run: _Run, paper: dict[float, float], spread: dict | None) -> st
     ia, ia_rec = g["arias_ensemble_mean_m_s"], g["arias_record_m_s"]
     ia_lo, ia_hi = g["arias_ensemble_5_95_m_s"]
     ia_ok = ia_lo <= ia_rec <= ia_hi
-    ia_line = (
-        f"{'Not' if ia_ok else 'Partly'} the intensity: the ensemble's mean Arias intensity is {ia:.2f} m/s against "
-        f"the record's {ia_rec:.2f} m/s (prototype scale; 5&ndash;95 % of the ensemble {ia_lo:.2f}&ndash;"
-        f"{ia_hi:.2f} m/s{'' if ia_ok else ', which leaves the record out'})."
+    # which way the gap goes: this run's percentiles below the paper's (or above)
+    below = [_num(cmp[f"q{q:g}"]) < _finite_or_inf(paper[q]) for q in gap if not math.isnan(_num(cmp[f"q{q:g}"]))]
+    facts = (
+        f"the ensemble's mean Arias intensity is {ia:.2f} m/s against the record's {ia_rec:.2f} m/s (prototype "
+        f"scale; 5&ndash;95 % of the ensemble {ia_lo:.2f}&ndash;{ia_hi:.2f} m/s"
     )
+    if ia_ok:
+        ia_line = f"Not the intensity: {facts})."
+    elif below and all(below) and ia > ia_rec:
+        ia_line = (
+            f"Not a lack of intensity: {facts}, so the ensemble carries <em>more</em> energy than the record, "
+            f"&times;{ia / ia_rec:.2f}), yet its percentiles stay below the paper's."
+        )
+    elif below and all(below):
+        ia_line = f"Partly the intensity: {facts}, which leaves the record out, below it)."
+    else:
+        ia_line = f"The intensity differs: {facts}, which leaves the record out)."
     b0, b1 = g["band_s"]
     w0, w1 = g["omega_ratio_band"]
     lo, hi, mean = g["band_ratio_min"], g["band_ratio_max"], g["band_ratio_mean"]
@@ -1372,7 +1410,7 @@ def _table2_gap(run: _Run, paper: dict[float, float], spread: dict | None) -> st
     elif lo >= 0.8 and hi <= 1.25:
         spec_line = (
             f"The spectral shape: {band}, the ensemble's mean {damp} PSa is {lo:.2f}&ndash;{hi:.2f} of the "
-            "record's, within &plusmn;25 %: the ensemble now carries the record's long-period content."
+            "record's, within &plusmn;25 %: the ensemble carries the record's content there."
         )
     else:
         spec_line = (
@@ -1380,6 +1418,7 @@ def _table2_gap(run: _Run, paper: dict[float, float], spread: dict | None) -> st
             f"(mean {mean:.2f})."
         )
     weak = pct >= 75 and hi < 0.8
+    matched = lo >= 0.8 and hi <= 1.25 and 25 <= pct <= 75
     if gap and weak:
         verdict = (
             "So the gap lies in the motions rather than in the rocking model or the engines: the record's own "
@@ -1390,14 +1429,27 @@ def _table2_gap(run: _Run, paper: dict[float, float], spread: dict | None) -> st
                 else "much further than they do."
             )
         )
+    elif gap and matched:
+        verdict = (
+            "So this ensemble stands for its record: it carries the record's spectrum where rocking is decided "
+            "and holds the record's own response near its middle. The remaining gap is not in the spectral shape "
+            "of the motions, and, the engines agreeing, not in an engine."
+        )
     elif gap:
         verdict = "These figures do not single out the motions' spectral shape as the cause of the remaining gap."
     else:
         verdict = "The paper's percentiles are reproduced within the ensemble's sampling noise."
-    parts.append(
-        "<p>Measured cause, on this run's own motions:</p><ul class=cause>"
-        f"<li>{rec_line}</li><li>{ia_line}</li><li>{spec_line}</li></ul><p>{verdict}</p>"
-    )
+    items = [rec_line, ia_line, spec_line]
+    if gap:
+        items.append(_guard("The equivalent amplitudes", lambda: _factor_line(run)))
+    lis = "".join(f"<li>{t}</li>" for t in items)
+    parts.append(f"<p>Measured cause, on this run's own motions:</p><ul class=cause>{lis}</ul><p>{verdict}</p>")
+    note = (run.meta.get("analysis") or {}).get("paper_note")
+    if gap and note:
+        parts.append(
+            "<p><strong>What this page cannot measure</strong> (from the scenario's <code>paper_note</code>): "
+            f"{_e(note)}</p>"
+        )
     parts.append(
         _note(
             "Computed by <code>scenarios.analysis.record_against_ensemble</code> when this page was written: the "
@@ -1406,6 +1458,51 @@ def _table2_gap(run: _Run, paper: dict[float, float], spread: dict | None) -> st
         )
     )
     return "".join(parts)
+
+
+def _factor_line(run: _Run) -> str:
+    """The factors on this ensemble that reach each of the paper's percentiles, and whether one factor does."""
+    f = run.paper_factors
+    if not f:
+        return "No equivalent amplitude: the paper gives no percentile or motions.npz is missing."
+    fac = f["factors"]
+    qs = sorted(fac)
+    ci = f"{100 * f['ci']:g} %"
+
+    def one(q: float) -> str:
+        d = fac[q]
+        tgt = "overturn" if math.isinf(d["target"]) else _fmt(d["target"], 2)
+        if not math.isfinite(d["factor"]):
+            return f"none within &times;1/8&ndash;8 for the {stats.percentile_label(q)} ({tgt})"
+        return f"&times;{d['factor']:.2f} [{d['low']:.2f}, {d['high']:.2f}] for the {stats.percentile_label(q)} ({tgt})"
+
+    text = (
+        "How much stronger, in effect, the paper's motions were: the analytic model reaches the paper's "
+        "percentiles with this ensemble's accelerations multiplied by " + "; ".join(one(q) for q in qs) + " ("
+        f"{100 * f['step']:g} % grid, {ci} bootstrap intervals over the {f['n']} records)."
+    )
+    ok = [fac[q] for q in qs if math.isfinite(fac[q]["low"]) and math.isfinite(fac[q]["high"])]
+    if len(ok) >= 2:
+        lo, hi = max(d["low"] for d in ok), min(d["high"] for d in ok)
+        if lo <= hi:
+            text += (
+                f" One factor, {lo:.2f}&ndash;{hi:.2f}, reaches them all: the paper's distribution has this "
+                "ensemble's shape at a higher intensity."
+            )
+        else:
+            a, b = min(ok, key=lambda d: d["high"]), max(ok, key=lambda d: d["low"])
+            text += (
+                f" <strong>No single factor does</strong> (the intervals {a['low']:.2f}&ndash;{a['high']:.2f} and "
+                f"{b['low']:.2f}&ndash;{b['high']:.2f} do not overlap): the paper's distribution is not this "
+                "ensemble's made stronger, but "
+                + (
+                    "wider"
+                    if qs.index(next(q for q in qs if fac[q] is a)) < qs.index(next(q for q in qs if fac[q] is b))
+                    else "narrower"
+                )
+                + " than it: its motions differed from these in their spread, not only in intensity."
+            )
+    return text
 
 
 def _table2(run: _Run, paper: dict[float, float]) -> str:

@@ -9,7 +9,7 @@ import numpy as np
 
 from scenarios.catalogue import Scenario
 
-__all__ = ["RECORD_BAND_S", "ensemble_seeds", "record_against_ensemble", "seed_spread"]
+__all__ = ["RECORD_BAND_S", "ensemble_seeds", "equivalent_amplitude", "record_against_ensemble", "seed_spread"]
 
 #: Prototype periods [s] where the rocking of the seed's 5 m prototype (p = 1.55 1/s) is decided:
 #: omega_p/p of about 3-8 (seed Fig. 2), i.e. T = 2 pi / (omega_p) = 0.5-1.25 s.
@@ -185,4 +185,140 @@ def record_against_ensemble(
         "arias_record_m_s": float(arias_intensity(rec)),
         "arias_ensemble_mean_m_s": float(ia.mean()),
         "arias_ensemble_5_95_m_s": [float(np.percentile(ia, 5)), float(np.percentile(ia, 95))],
+    }
+
+
+def equivalent_amplitude(
+    specimen,
+    motions,
+    targets: dict,
+    *,
+    engine: str = "housner",
+    settings: dict | None = None,
+    step: float = 0.02,
+    max_factor: float = 8.0,
+    ci: float = 0.90,
+    n_boot: int = 1000,
+    seed: int = 0,
+) -> dict:
+    """Factors on an ensemble's accelerations at which its percentiles reach another study's values.
+
+    How much stronger, in effect, another study's motions were than these, one
+    percentile at a time. The ensemble (as run) is multiplied by factors ``a``
+    on a geometric grid of ratio 1 + ``step`` and simulated with ``engine``;
+    for each target percentile q the factor is the first grid point where the
+    q-th percentile of theta_max/alpha reaches the target (+inf: the percentile
+    overturns). The grid spans the factors needed, found first by steps of 1.25
+    from 1, and one step of 1.1 beyond them. A percentile of an ensemble is
+    nearly, not strictly, monotone in the amplitude (single records are not),
+    so the first crossing is counted from the grid's lower end. Bootstrapping
+    the records (same grid, resampled columns) gives each factor's interval:
+    if one factor moved the whole distribution onto the study's, the
+    intervals of the percentiles would overlap.
+
+    Parameters
+    ----------
+    specimen : housner.Specimen
+    motions : sequence of GroundMotion
+        The ensemble as run (model scale, its amplitude included).
+    targets : dict
+        Percentile [%] -> theta_max/alpha to reach [-] (``inf`` for "overturn").
+    engine, settings
+        The engine (the analytic model by default).
+    step : float
+        Relative spacing of the grid of factors [-] (the factors' resolution).
+    max_factor : float
+        Search range [1/max_factor, max_factor]; a target out of it gets nan.
+    ci : float
+        Level of the bootstrap intervals.
+    n_boot : int
+        Bootstrap resamples of the records.
+    seed : int
+        Seed of the bootstrap.
+
+    Returns
+    -------
+    dict
+        ``factors`` {q: {"factor", "low", "high"}} (nan where not reached),
+        ``grid`` (the factors simulated), ``evaluations``, ``step``, ``ci``,
+        ``engine``, ``n`` (records).
+    """
+    from engines.base import get_engine
+
+    motions = list(motions)
+    if not motions:
+        raise ValueError("`motions` is empty")
+    tg = {}
+    for q, v in targets.items():
+        q, v = float(q), float(v)
+        if not (0 < q < 100):
+            raise ValueError(f"`targets`: percentile must lie in (0, 100), got {q!r}")
+        if math.isnan(v) or v <= 0:
+            raise ValueError(f"`targets`: theta_max/alpha must be positive or inf, got {v!r} at q={q:g}")
+        tg[q] = v
+    if not tg:
+        raise ValueError("`targets` is empty")
+    eng = get_engine(engine, **(settings or {}))
+    cache: dict[float, np.ndarray] = {}
+
+    def values(a: float) -> np.ndarray:
+        if a not in cache:
+            ms = [m.scaled(amplitude=a) for m in motions]
+            if hasattr(eng, "simulate_many"):
+                resp = eng.simulate_many(specimen, ms)
+            else:
+                resp = [eng.simulate(specimen, m) for m in ms]
+            cache[a] = np.array([r.theta_max_over_alpha for r in resp], dtype=float)
+        return cache[a]
+
+    def pct(v: np.ndarray, q: float) -> float:
+        v = v[~np.isnan(v)]
+        return float(np.percentile(v, q, method="inverted_cdf")) if v.size else math.nan
+
+    # bracket every target by steps of 1.25 from 1
+    lo_all, hi_all = 1.0, 1.0
+    for q, t in tg.items():
+        a = 1.0
+        if pct(values(a), q) >= t:
+            while a > 1.0 / max_factor and pct(values(a), q) >= t:
+                a /= 1.25
+            lo_all = min(lo_all, a)
+        else:
+            while a < max_factor and not pct(values(a), q) >= t:
+                a *= 1.25
+            hi_all = max(hi_all, a)
+    # one step of 1.1 beyond the bracket, so that the bootstrap's crossings are rarely cut off by the grid
+    lo_all, hi_all = max(lo_all / 1.1, 1.0 / max_factor), min(hi_all * 1.1, max_factor)
+    k0 = math.floor(math.log(lo_all) / math.log1p(step))
+    k1 = math.ceil(math.log(hi_all) / math.log1p(step))
+    grid = np.array([(1.0 + step) ** k for k in range(k0, k1 + 1)])
+    V = np.stack([values(float(a)) for a in grid])  # (grid, records)
+
+    def first_crossing(P: np.ndarray, t: float) -> np.ndarray:
+        hit = P >= t
+        idx = np.argmax(hit, axis=-1)
+        return np.where(hit.any(axis=-1), grid[idx], np.nan)
+
+    V = V[:, ~np.isnan(V).any(axis=0)]  # a record that failed at any factor leaves every factor
+    n = V.shape[1]
+    if n == 0:
+        raise ValueError("no record of `motions` gives a theta_max/alpha at every factor")
+    Vb = V[:, np.random.default_rng(seed).integers(0, n, size=(n_boot, n))]  # (grid, boot, records)
+    out = {}
+    for q, t in tg.items():
+        f = float(first_crossing(np.percentile(V, q, axis=1, method="inverted_cdf"), t))
+        fb = first_crossing(np.percentile(Vb, q, axis=2, method="inverted_cdf").T, t)
+        fb = np.where(np.isnan(fb), np.inf, fb)  # not reached on the grid: above it
+        fb = np.sort(fb)  # order statistics: the interval's ends are bootstrap values, never interpolated
+        lo, hi = fb[int((1 - ci) / 2 * fb.size)], fb[min(math.ceil((1 + ci) / 2 * fb.size) - 1, fb.size - 1)]
+        lo, hi = (float(x) if math.isfinite(x) else math.nan for x in (lo, hi))
+        out[q] = {"factor": f, "low": float(lo), "high": float(hi), "target": t}
+    return {
+        "factors": out,
+        "grid": grid.tolist(),
+        "evaluations": len(cache),
+        "step": step,
+        "ci": ci,
+        "engine": engine,
+        "n": int(n),
     }

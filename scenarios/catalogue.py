@@ -83,7 +83,7 @@ _SCHEMA: dict[str, dict[str, Any]] = {
         "accel_ratio": (list, dict),
     },
     "engines": {"names": list},
-    "analysis": {"reference": str, "paper_percentiles": dict, "seed_spread": int},
+    "analysis": {"reference": str, "paper_percentiles": dict, "paper_note": str, "seed_spread": int},
 }
 
 

@@ -3,8 +3,9 @@
 On pulses (not chaotic) every engine must follow the analytic model record by
 record: theta_max within 3 % where neither overturns, and the same overturn
 verdict. Under long random records rocking is chaotic, so the verdict rests on
-distributions: KS distance <= 0.15 and overturn fractions within 0.08 on the
-100-motion El Centro ensemble (slow).
+distributions on the 100-motion El Centro ensemble (slow): a KS distance below
+the two-sample 1 % critical value, overturn fractions within 0.08, and no
+record-by-record bias (sign test).
 """
 
 import math
@@ -57,11 +58,29 @@ def test_pulse_responses_agree(engine, reference):
 @pytest.mark.slow
 @pytest.mark.parametrize("engine", ENGINES)
 def test_elcentro_distributions_agree(engine, tmp_path_factory):
+    from scipy.stats import binomtest
+
     from scenarios.runner import run_scenario
 
     out = tmp_path_factory.mktemp("elcentro")
     run = run_scenario("elcentro", engines=["housner", engine], out=out, progress=False)
-    report = assert_cdf_agreement(run.results, engine=engine, reference="housner", ks_max=0.15, overturn_tol=0.08)
-    print(report)
     a = run.results
+    n = int((a.engine == engine).sum())
+    # Chaos decorrelates the engines record by record (see the README), so their samples behave
+    # as independent draws of one distribution: the two-sample KS distance of such draws exceeds
+    # 1.63 sqrt(2/n) (0.23 at n = 100) 1 % of the time. The old fixed 0.15 is exceeded 21 % of the
+    # time by identical distributions (PyBullet on the matched ensemble: 0.18, p = 0.08).
+    ks_max = 1.628 * math.sqrt(2.0 / n)
+    report = assert_cdf_agreement(run.results, engine=engine, reference="housner", ks_max=ks_max, overturn_tol=0.08)
+    print(report)
     assert np.isfinite(a[a.engine == engine].wall_s).all()
+    # No bias record by record: the engine lies below the reference about as often as above
+    # (sign test over the records where neither overturns). Both checks guard against gross
+    # errors only: the analytic model with r 2 % low gives KS 0.15 and a sign-test p of 0.010,
+    # 2 % high 0.25; r itself is held to 0.3 % by the free-rocking tests of each engine.
+    h = a[a.engine == "housner"].set_index("motion_id").theta_max_over_alpha
+    x = a[a.engine == engine].set_index("motion_id").theta_max_over_alpha
+    both = np.isfinite(h) & np.isfinite(x) & (x != h)
+    below = int((x[both] < h[both]).sum())
+    p = binomtest(below, int(both.sum())).pvalue
+    assert p >= 0.01, f"{engine} below the analytic model on {below} of {int(both.sum())} records (p = {p:.2g})"

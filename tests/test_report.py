@@ -7,6 +7,7 @@ import subprocess
 import sys
 from html.parser import HTMLParser
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -15,7 +16,7 @@ from scipy import stats as sps
 
 from engines.analytic import HousnerEngine
 from engines.base import ENGINES, register_engine
-from housner import GroundMotion, Specimen
+from housner import GroundMotion, Specimen, stats
 from housner.errors import DataFileError
 from reports import figures, html
 from scenarios.runner import provenance, run_engines, write_run
@@ -678,3 +679,40 @@ def test_table2_states_the_records_own_peak_and_rank(rdk_run):
     ratio = psa.mean(axis=0) / response_spectrum(rec, T, 0.05)[0]
     assert f"{ratio.min():.2f}&ndash;{ratio.max():.2f}" in gap
     assert "between 0.5 and 1.25 s" in gap
+
+
+def test_table2_gives_the_factors_that_reach_the_papers_percentiles(rdk_run):
+    from scenarios.analysis import equivalent_amplitude
+
+    out, model, S = rdk_run
+    gap = html.render_report(out).split('id="table2-gap"')[1].split("</section>")[0]
+    f = equivalent_amplitude(SPEC, model, {25: 0.37, 50: 0.77, 75: float("inf")}, seed=html.BOOT_SEED)
+    assert "How much stronger, in effect, the paper's motions were" in gap
+    for q, d in f["factors"].items():
+        label = f"for the {stats.percentile_label(q)}"
+        if np.isfinite(d["factor"]):
+            assert f"&times;{d['factor']:.2f} [{d['low']:.2f}, {d['high']:.2f}] {label}" in gap
+        else:  # these weak motions do not reach the paper's row within the search range
+            assert f"none within &times;1/8&ndash;8 {label}" in gap
+
+
+@pytest.mark.parametrize(
+    "factors, says",
+    [
+        # the 25th needs less than the median, intervals apart: the paper's distribution is wider
+        ({25: (1.2, 1.15, 1.24), 50: (1.58, 1.46, 1.58)}, ["No single factor does", "1.15&ndash;1.24", "wider"]),
+        ({25: (1.6, 1.5, 1.7), 50: (1.2, 1.1, 1.3)}, ["No single factor does", "narrower"]),
+        # overlapping intervals: one factor (the overlap) moves the whole row
+        ({25: (1.3, 1.2, 1.4), 50: (1.35, 1.25, 1.5)}, ["One factor, 1.25&ndash;1.40, reaches them all"]),
+    ],
+)
+def test_the_factor_line_says_whether_one_factor_reaches_the_whole_row(factors, says):
+    f = {
+        "factors": {q: {"factor": a, "low": lo, "high": hi, "target": 0.5} for q, (a, lo, hi) in factors.items()},
+        "step": 0.02,
+        "ci": 0.9,
+        "n": 100,
+    }
+    text = html._factor_line(SimpleNamespace(paper_factors=f))
+    for s in says:
+        assert s in text, text

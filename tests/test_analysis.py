@@ -1,0 +1,92 @@
+"""scenarios.analysis.equivalent_amplitude: the factor on an ensemble that reaches another study's percentiles.
+
+Checked against its definition by direct simulation, and by undoing a known
+scaling of the ensemble (the analytic model is deterministic, so multiplying
+the motions by 1/c and then by c gives back the same responses).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from engines.analytic import HousnerEngine
+from housner import GroundMotion, Specimen
+from scenarios.analysis import equivalent_amplitude
+
+SPEC = Specimen.bachmann2017()
+
+
+def motions(n=16, seed=5):
+    """Windowed sines at model scale, 1.5-4 g tan(alpha): most rock, a few overturn."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 3.0, 0.002)
+    out = []
+    for i in range(n):
+        f, a, ph = rng.uniform(1.5, 4.0), rng.uniform(1.5, 4.0), rng.uniform(0, 2 * np.pi)
+        acc = a * SPEC.uplift_acceleration * np.sin(2 * np.pi * f * t + ph) * np.exp(-(((t - 1.2) / 0.6) ** 2))
+        out.append(GroundMotion(acc, 0.002, name=f"m{i}"))
+    return out
+
+
+def pct(ms, q, a=1.0):
+    v = np.array(
+        [r.theta_max_over_alpha for r in HousnerEngine().simulate_many(SPEC, [m.scaled(amplitude=a) for m in ms])]
+    )
+    return float(np.percentile(v, q, method="inverted_cdf"))
+
+
+def test_the_factor_undoes_a_known_weakening_of_the_ensemble():
+    """Weakening the motions by c = 1.02**13 (a whole number of grid steps) multiplies every factor by c.
+
+    The weakened ensemble at a*c is the original at a (to rounding), so the grids line
+    up and each percentile crosses its target at the matching point.
+    """
+    ms = motions()
+    c = 1.02**13
+    targets = {25: 0.4, 50: 0.7, 75: math.inf}
+    orig = equivalent_amplitude(SPEC, ms, targets, n_boot=200)["factors"]
+    weak = equivalent_amplitude(SPEC, [m.scaled(amplitude=1.0 / c) for m in ms], targets, n_boot=200)["factors"]
+    for q in orig:
+        assert math.isfinite(orig[q]["factor"])
+        # 1e-9: the grid points are powers of 1.02 computed separately; the factors are equal to rounding
+        assert weak[q]["factor"] == pytest.approx(c * orig[q]["factor"], rel=1e-9), q
+        # (the bootstrap intervals line up too where neither grid cuts them off at its lower end)
+        for f in (orig[q], weak[q]):
+            assert f["low"] <= f["factor"] <= f["high"]
+
+
+def test_the_factor_is_the_first_grid_point_where_the_percentile_reaches_the_target():
+    ms = motions()
+    for q, target in ((25, 0.3), (75, math.inf)):
+        r = equivalent_amplitude(SPEC, ms, {q: target}, n_boot=100)
+        a = r["factors"][float(q)]["factor"]
+        assert math.isfinite(a)
+        # independently: the percentile at the factor reaches the target, one grid step below it does not
+        assert pct(ms, q, a) >= target
+        assert pct(ms, q, a / (1.0 + r["step"])) < target
+        assert a in r["grid"]
+
+
+def test_a_target_out_of_reach_is_nan_not_an_error():
+    weak = [m.scaled(amplitude=1e-3) for m in motions(4)]
+    r = equivalent_amplitude(SPEC, weak, {50: 0.5}, max_factor=2.0, n_boot=50)
+    assert math.isnan(r["factors"][50.0]["factor"])
+
+
+@pytest.mark.parametrize(
+    "motions_, targets, says",
+    [
+        ([], {50: 0.5}, "`motions` is empty"),
+        (None, {}, "`targets` is empty"),
+        (None, {0: 0.5}, "percentile must lie in (0, 100)"),
+        (None, {50: -1.0}, "must be positive or inf"),
+        (None, {50: float("nan")}, "must be positive or inf"),
+    ],
+)
+def test_bad_arguments_are_named(motions_, targets, says):
+    with pytest.raises(ValueError, match=None) as e:
+        equivalent_amplitude(SPEC, motions(2) if motions_ is None else motions_, targets)
+    assert says in str(e.value)
