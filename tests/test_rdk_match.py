@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import cumulative_trapezoid
 
 from scenarios import rdk, rdk_match
-from scenarios.elastic import ensemble_spectra
+from scenarios.elastic import ensemble_spectra, response_spectrum
 from scenarios.rdk_match import (
     BAND_BOUNDS,
     MatchedRDK,
@@ -93,6 +93,24 @@ def test_the_published_model_fails_the_same_check(records, models):
     check = band_check(rdk.simulate(models["peer1999"].params, 100, TEST_SEED), records["peer1999"])
     assert not check.psa.passed
     assert check.psa.worst < 0.6
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_matched_spectra_within_25_percent_at_every_period_where_the_published_miss(
+    variant, records, models, ensembles
+):
+    """The per-period target the published model cannot reach (it was a strict xfail of tests/test_rdk.py).
+
+    Ensemble mean 5 % PSa / record at 20 periods 0.1-2 s: the published model's single-mode
+    filter leaves 0.5-1 s short (0.53 of the record there, README), the matched model is
+    within 25 % at every period (measured 0.84-1.18 on both variants).
+    """
+    periods = np.logspace(-1, np.log10(2.0), 20)
+    rec, _ = response_spectrum(records[variant], periods)
+    published = rdk.simulate(models[variant].params, 100, TEST_SEED)
+    for ens, within in ((ensembles[variant], True), (published, False)):
+        ratio = ensemble_spectra(ens, periods)[0].mean(axis=0) / rec
+        assert bool(np.all(np.abs(ratio - 1) <= 0.25)) is within, np.round(ratio, 2)
 
 
 @pytest.mark.parametrize("variant", VARIANTS)
