@@ -100,6 +100,7 @@ import numpy as np
 from engines.base import Engine
 from engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 from housner.errors import EngineError, unknown_choice
+from housner.impacts import impact_times
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -423,7 +424,7 @@ class MujocoEngine(Engine):
             theta_dot[after] = 0.0
 
         eps = ROCKING_EPS * alpha
-        impacts = _impact_times(t_steps, th, eps)
+        impacts = impact_times(t_steps, th, eps)
         theta_max = math.pi / 2 if overturn_step is not None else float(np.max(np.abs(th)))
         B, H, rho = specimen.B, specimen.H, self._settings["pivot_radius"]
         # height of the bottom of the heel pivot sphere (centre (-s B, -H + rho) in the body frame, s = sgn th):
@@ -477,24 +478,3 @@ def _uplift_time(t: np.ndarray, th: np.ndarray, heel: np.ndarray, eps: float, re
     j = int(down[-1])  # last step with the heel on the ground; lift-off between j and j + 1
     a, b = heel[j], heel[j + 1]
     return float(t[j] + (t[j + 1] - t[j]) * (-a) / (b - a)) if b != a else float(t[j + 1])
-
-
-def _impact_times(t: np.ndarray, th: np.ndarray, eps: float) -> np.ndarray:
-    """Times [s] at which theta changes sign after |theta| exceeded ``eps`` [rad] on the departing side.
-
-    The crossing time is interpolated linearly between the two steps around it.
-    """
-    sgn = np.sign(th)
-    nz = np.flatnonzero(sgn != 0)
-    if nz.size < 2:
-        return np.empty(0)
-    s = sgn[nz]
-    change = np.flatnonzero(s[1:] != s[:-1])  # between nz[c] and nz[c+1]
-    if change.size == 0:
-        return np.empty(0)
-    starts = np.concatenate(([nz[0]], nz[change + 1]))
-    seg_max = np.maximum.reduceat(np.abs(th), starts)[:-1]  # |theta| max of the stretch ending at each change
-    keep = change[seg_max > eps]
-    i0, i1 = nz[keep], nz[keep + 1]
-    a, b = th[i0], th[i1]
-    return t[i0] + (t[i1] - t[i0]) * a / (a - b)

@@ -76,6 +76,7 @@ import numpy as np
 from engines.base import Engine
 from engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 from housner.errors import EngineError
+from housner.impacts import impact_times
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -675,20 +676,7 @@ def _events(t: np.ndarray, theta: np.ndarray, tol: float, released: bool) -> tup
         uplift = float(t[0])
     else:
         uplift = _uplift_time(t, np.abs(theta), first, tol * _QUIET)
-    sign_change = np.flatnonzero(np.signbit(theta[:-1]) != np.signbit(theta[1:]))
-    if sign_change.size == 0:
-        return np.empty(0), uplift
-    # largest |theta| of each stretch between sign changes (sample j belongs to the stretch it ends)
-    swing = np.maximum.reduceat(np.abs(theta[: sign_change[-1] + 1]), np.r_[0, sign_change[:-1] + 1])
-    impacts = []
-    since = 0.0  # largest |theta| since the last impact
-    for j, peak in zip(sign_change, swing, strict=True):
-        since = max(since, peak)
-        if since > tol:
-            a, b = theta[j], theta[j + 1]
-            impacts.append(t[j] + a / (a - b) * (t[j + 1] - t[j]))
-            since = 0.0
-    return np.asarray(impacts, dtype=float), uplift
+    return impact_times(t, theta, tol), uplift
 
 
 def _uplift_time(t: np.ndarray, abs_theta: np.ndarray, first: int, quiet: float) -> float:

@@ -32,7 +32,17 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate, optimize
+
+from housner.free_rocking import (
+    _check_alpha,
+    _potential,
+    amplitude_from_state,
+    energy_ratios,
+    half_cycle_integral,
+    half_cycle_time,
+    p_from_half_cycle,
+)
+from housner.impacts import HYSTERESIS_SIGMAS, MIN_SAMPLES, fit_crossing, fit_peak, hysteresis_crossings
 
 __all__ = [
     "FreeVibrationCalibration",
@@ -48,10 +58,6 @@ __all__ = [
     "p_from_half_cycle",
 ]
 
-#: Hysteresis of the zero-crossing detector, in noise standard deviations: a
-#: crossing counts only once theta has gone beyond this band on the other side.
-#: At 4 sigma a spurious crossing from Gaussian noise has probability ~3e-5 per sample.
-_HYSTERESIS_SIGMAS = 4.0
 #: Default noise floor: half-cycles whose amplitude falls below this many noise
 #: standard deviations end the analysis (their peak would be known to worse than ~5 %).
 _FLOOR_SIGMAS = 10.0
@@ -62,238 +68,6 @@ _PEAK_WINDOW = 0.5
 #: Half-width of the band |theta| < band around an impact that is used to locate
 #: it, as a fraction of the smaller neighbouring amplitude.
 _CROSSING_BAND = 0.65
-#: Fewest samples on each side of an impact, and in a peak window, for a fit.
-_MIN_SAMPLES = 4
-
-
-# ----------------------------------------------------------------------------
-# closed forms
-# ----------------------------------------------------------------------------
-def _check_alpha(alpha: float) -> float:
-    try:
-        a = float(alpha)
-    except (TypeError, ValueError):
-        raise ValueError(f"`alpha` must be a number, got {alpha!r}") from None
-    if not (math.isfinite(a) and 0.0 < a < math.pi / 2):
-        raise ValueError(f"`alpha` must lie in (0, pi/2) rad, got {alpha!r}")
-    return a
-
-
-def _potential(theta: np.ndarray, alpha: float) -> np.ndarray:
-    """Potential energy over m g R at |theta| [-]: cos(alpha - |theta|) - cos(alpha)."""
-    th = np.abs(theta)
-    # 2 sin(alpha - th/2) sin(th/2): the same quantity without cancellation at small th.
-    return 2.0 * np.sin(alpha - 0.5 * th) * np.sin(0.5 * th)
-
-
-def half_cycle_integral(theta0, alpha: float):
-    """Dimensionless quarter-cycle time F = p t of a free rocking excursion.
-
-    F(theta0, alpha) = integral from 0 to theta0 of
-    d theta / sqrt(2 (cos(alpha - theta0) - cos(alpha - theta)))
-
-    is p times the time the block takes to fall from rest at amplitude theta0
-    to the impact at theta = 0 under Housner's nonlinear equation with no
-    ground motion (energy conservation between impacts). A full half-cycle
-    between two impacts rises to theta0 and falls back symmetrically, so it
-    lasts 2 F / p.
-
-    Parameters
-    ----------
-    theta0 : float or array_like
-        Amplitude |theta| at the peak [rad], 0 <= theta0 < alpha.
-    alpha : float
-        Slenderness [rad].
-
-    Returns
-    -------
-    float or ndarray
-        F [-]. It tends to arccosh(1 / (1 - theta0/alpha)), the linearised
-        (seed eq. 7) value, as alpha -> 0, and to infinity as theta0 -> alpha.
-
-    Notes
-    -----
-    The substitution theta = theta0 (1 - s^2) removes the inverse-square-root
-    singularity at the peak; the remaining smooth integral over s in [0, 1] is
-    evaluated with adaptive Gauss-Kronrod quadrature (relative error ~1e-12).
-
-    References
-    ----------
-    Housner (1963), eq. for the free rocking period; Bachmann et al. (2017) eq. 7.
-    """
-    alpha = _check_alpha(alpha)
-    th = np.asarray(theta0, dtype=float)
-    if np.any(~np.isfinite(th)) or np.any(th < 0) or np.any(th >= alpha):
-        raise ValueError(f"`theta0` must lie in [0, alpha = {alpha:.6g}) rad, got {theta0!r}")
-    out = np.empty(th.shape)
-    for idx, x in np.ndenumerate(th):
-        out[idx] = _half_cycle_integral_scalar(float(x), alpha)
-    return float(out) if out.ndim == 0 else out
-
-
-def _half_cycle_integral_scalar(th0: float, alpha: float) -> float:
-    if th0 == 0.0:
-        return 0.0
-
-    def integrand(s: float) -> float:
-        # cos(alpha - th0) - cos(alpha - th) = 2 sin(alpha - (th0 + th)/2) sin((th0 - th)/2),
-        # th0 - th = th0 s^2; sin(th0 s^2 / 2) / s^2 is evaluated as a sinc to stay finite at s = 0.
-        half = 0.5 * th0
-        sin_over_s2 = half * np.sinc(half * s * s / math.pi)
-        d = 4.0 * math.sin(alpha - th0 * (1.0 - 0.5 * s * s)) * sin_over_s2
-        return 2.0 * th0 / math.sqrt(d)
-
-    val, _ = integrate.quad(integrand, 0.0, 1.0, epsabs=0.0, epsrel=1e-12, limit=200)
-    return val
-
-
-def half_cycle_time(theta0, alpha: float, p: float):
-    """Exact duration of a free half-cycle (impact to impact) of amplitude theta0.
-
-    Parameters
-    ----------
-    theta0 : float or array_like
-        Peak |theta| of the half-cycle [rad].
-    alpha : float
-        Slenderness [rad].
-    p : float
-        Frequency parameter [1/s].
-
-    Returns
-    -------
-    float or ndarray
-        2 F(theta0, alpha) / p [s]; see :func:`half_cycle_integral`.
-    """
-    if not (isinstance(p, (int, float, np.floating)) and math.isfinite(p) and p > 0):
-        raise ValueError(f"`p` must be positive and finite, got {p!r}")
-    return 2.0 * half_cycle_integral(theta0, alpha) / p
-
-
-def p_from_half_cycle(T_half, theta0, alpha: float, *, method: str = "linearised"):
-    """Frequency parameter p from the duration and amplitude of half-cycles.
-
-    Parameters
-    ----------
-    T_half : float or array_like
-        Time between two successive impacts [s].
-    theta0 : float or array_like
-        Amplitude |theta| of that half-cycle [rad], 0 < theta0 < alpha.
-    alpha : float
-        Slenderness [rad].
-    method : {"linearised", "exact"}
-        ``"linearised"``: Housner's cosh(p T/4) = 1/(1 - theta0/alpha) with the
-        period T = 2 T_half (seed eq. 7), i.e. p = 2 arccosh(1/(1 - theta0/alpha)) / T_half.
-        It is exact for the linearised equation of motion (sin x ~ x, cos x ~ 1).
-        ``"exact"``: p = 2 F(theta0, alpha) / T_half with the energy integral of
-        the full nonlinear equation (:func:`half_cycle_integral`); exact for a
-        Housner block whatever its amplitude and slenderness.
-
-    Returns
-    -------
-    float or ndarray
-        p [1/s].
-
-    Notes
-    -----
-    The linearised value is below the exact one at every amplitude: near
-    theta = 0 the true restoring term sin(alpha) is weaker than the linearised
-    alpha, so the true block is slower. The deficit is alpha^2 / 12 at small
-    amplitude and shrinks toward large ones; for the seed specimen (alpha =
-    0.149 rad) -0.18 % at theta0 -> 0, -0.065 % at 0.5 alpha, -0.025 % at
-    0.8 alpha. Averaged over the first 15 half-cycles of a release from
-    0.8 alpha it is -0.04 % to -0.14 %, depending on which amplitudes the
-    average weights most. The
-    seed corrected the drift with amplitude empirically; the exact form needs
-    no correction.
-
-    References
-    ----------
-    Housner (1963); Bachmann et al. (2017), eq. 7.
-    """
-    alpha = _check_alpha(alpha)
-    T = np.asarray(T_half, dtype=float)
-    th = np.asarray(theta0, dtype=float)
-    if np.any(~np.isfinite(T)) or np.any(T <= 0):
-        raise ValueError(f"`T_half` must be positive and finite, got {T_half!r}")
-    if np.any(~np.isfinite(th)) or np.any(th <= 0) or np.any(th >= alpha):
-        raise ValueError(f"`theta0` must lie in (0, alpha = {alpha:.6g}) rad, got {theta0!r}")
-    if method == "linearised":
-        F = np.arccosh(1.0 / (1.0 - th / alpha))
-    elif method == "exact":
-        F = half_cycle_integral(th, alpha)
-    else:
-        raise ValueError(f"`method` must be 'linearised' or 'exact', got {method!r}")
-    p = 2.0 * F / T
-    return float(p) if np.ndim(p) == 0 else p
-
-
-def amplitude_from_state(theta, theta_dot, alpha: float, p: float):
-    """Peak |theta| of the current free excursion, from the state (energy conservation).
-
-    Parameters
-    ----------
-    theta : float or array_like
-        Rotation [rad].
-    theta_dot : float or array_like
-        Angular velocity [rad/s].
-    alpha : float
-        Slenderness [rad].
-    p : float
-        Frequency parameter [1/s].
-
-    Returns
-    -------
-    float or ndarray
-        theta_i [rad] with cos(alpha - theta_i) = cos(alpha - |theta|) + theta_dot^2 / (2 p^2);
-        NaN where the energy reaches the overturning level (theta_i >= alpha).
-
-    Notes
-    -----
-    Between impacts, with no ground motion, theta_dot^2 = 2 p^2 (cos(alpha - theta_i)
-    - cos(alpha - |theta|)) (Housner 1963). Useful to get exact peaks from a
-    noise-free simulated record, and for the free rocking after a pulse.
-    """
-    alpha = _check_alpha(alpha)
-    th = np.abs(np.asarray(theta, dtype=float))
-    c = np.cos(alpha - th) + np.asarray(theta_dot, dtype=float) ** 2 / (2.0 * p * p)
-    with np.errstate(invalid="ignore"):
-        out = np.where(c < 1.0, alpha - np.arccos(np.minimum(c, 1.0)), np.nan)
-    return float(out) if out.ndim == 0 else out
-
-
-def energy_ratios(peaks, alpha: float) -> np.ndarray:
-    """Energy ratio of each impact from successive amplitudes (seed eq. 8).
-
-    c_i = (cos(alpha - |theta_{i+1}|) - cos(alpha)) / (cos(alpha - |theta_i|) - cos(alpha))
-
-    Parameters
-    ----------
-    peaks : FreeVibrationPeaks or array_like
-        Successive half-cycle amplitudes [rad] (|theta| at the peaks), one per
-        half-cycle, without gaps.
-    alpha : float
-        Slenderness [rad].
-
-    Returns
-    -------
-    ndarray
-        c_i [-], one per impact (len(peaks) - 1). For a Housner block it equals
-        the kinetic-energy ratio r at every impact: the potential energy at a
-        peak is the whole energy of the half-cycle.
-
-    References
-    ----------
-    Bachmann et al. (2017), eq. 8.
-    """
-    alpha = _check_alpha(alpha)
-    amp = peaks.amplitude if isinstance(peaks, FreeVibrationPeaks) else np.asarray(peaks, dtype=float)
-    amp = np.abs(np.asarray(amp, dtype=float))
-    if amp.ndim != 1:
-        raise ValueError(f"`peaks` must be one-dimensional, got shape {amp.shape}")
-    if np.any(~np.isfinite(amp)) or np.any(amp >= alpha):
-        raise ValueError(f"`peaks` must be finite amplitudes below alpha = {alpha:.6g} rad")
-    E = _potential(amp, alpha)
-    return E[1:] / E[:-1]
 
 
 # ----------------------------------------------------------------------------
@@ -376,124 +150,6 @@ class FreeVibrationPeaks:
         return self.t_end - self.t_start
 
 
-def _hysteresis_crossings(theta: np.ndarray, h: float) -> tuple[np.ndarray, int]:
-    """Indices k where theta has crossed to the other side beyond the band +-h.
-
-    Returns the indices of the first sample beyond the band after each crossing,
-    and the sign of the first side (0 if theta never leaves the band).
-    """
-    above = theta > h
-    below = theta < -h
-    state = np.zeros(theta.size, dtype=np.int8)
-    state[above] = 1
-    state[below] = -1
-    k = np.flatnonzero(state)
-    if k.size == 0:
-        return np.empty(0, dtype=int), 0
-    s = state[k]
-    flips = np.flatnonzero(s[1:] != s[:-1]) + 1
-    return k[flips], int(s[0])
-
-
-def _fit_crossing(
-    t: np.ndarray, theta: np.ndarray, lo: int, hi: int, kc: int, h: float, sigma: float
-) -> tuple[float, float]:
-    """Impact time from a kinked fit through samples lo..hi-1 (|theta| within the band).
-
-    Each side of the impact is a quadratic through (t_c, 0) with its own slope
-    and curvature (the angular velocity drops at the impact); t_c minimises the
-    total squared residual. Returns t_c and an approximate standard error.
-    """
-    ts = t[lo:hi]
-    ys = theta[lo:hi]
-
-    yy = ys * ys
-
-    def sse(tc: float) -> float:
-        # two least-squares fits through the origin, y ~ b tau + c tau^2, by their 2 x 2 normal equations
-        tau = ts - tc
-        total = 0.0
-        for side in (tau < 0.0, tau >= 0.0):
-            if np.count_nonzero(side) < 3:
-                return math.inf
-            u = tau[side]
-            y = ys[side]
-            u2 = u * u
-            s11, s12, s22 = u2.sum(), (u2 * u).sum(), (u2 * u2).sum()
-            r1, r2 = (u * y).sum(), (u2 * y).sum()
-            det = s11 * s22 - s12 * s12
-            if not det > 0:
-                return math.inf
-            b = (s22 * r1 - s12 * r2) / det
-            c = (s11 * r2 - s12 * r1) / det
-            total += float(yy[side].sum() - b * r1 - c * r2)
-        return total
-
-    # theta goes from beyond the band on the old side (last such sample before kc) to beyond it on the new
-    # side (kc): the zero crossing lies in between. Scan that bracket finely, then polish with Brent.
-    dt = t[1] - t[0]
-    s_new = math.copysign(1.0, theta[kc])
-    k_old = kc - 1
-    while k_old > lo and not (s_new * theta[k_old] < -h):
-        k_old -= 1
-    a, b = max(t[k_old], ts[0] + 0.5 * dt), min(t[kc], ts[-1] - 0.5 * dt)
-    if not b > a:
-        a, b = ts[0], ts[-1]
-    grid = np.linspace(a, b, max(3, int(round((b - a) / dt * 4)) + 1))
-    vals = [sse(x) for x in grid]
-    j = int(np.argmin(vals))
-    lo_b, hi_b = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
-    res = optimize.minimize_scalar(sse, bounds=(lo_b, hi_b), method="bounded", options={"xatol": 1e-7 * dt})
-    tc = float(res.x)
-    # profile-likelihood standard error: var(t_c) = 2 sigma^2 / SSE''(t_c), the other parameters re-fitted
-    hstep = 0.05 * dt
-    curv = (sse(tc + hstep) - 2.0 * res.fun + sse(tc - hstep)) / hstep**2
-    std = math.sqrt(2.0 * sigma * sigma / curv) if curv > 0 and math.isfinite(curv) else math.nan
-    return tc, std
-
-
-def _fit_peak(t: np.ndarray, y: np.ndarray, t_lo: float, t_hi: float, sigma: float) -> tuple[float, float, float]:
-    """Vertex of a least-squares quartic through |theta| samples with t_lo <= t <= t_hi.
-
-    A parabola is not enough: over the central half of a large half-cycle the
-    trajectory's quartic term (theta ~ alpha - (alpha - theta_i) cosh(p tau)
-    near the peak) biases a parabola's vertex by ~1e-3 of the amplitude, while
-    the quartic costs only ~25 % more noise on the vertex than the parabola.
-    """
-    m = (t >= t_lo) & (t <= t_hi)
-    if np.count_nonzero(m) < _MIN_SAMPLES + 3:
-        return math.nan, math.nan, math.nan
-    ts = t[m]
-    ys = y[m]
-    tc = 0.5 * (t_lo + t_hi)
-    half = 0.5 * (t_hi - t_lo)
-    x = (ts - tc) / half  # scaled to [-1, 1] for conditioning
-    A = np.vander(x, 5, increasing=True)
-    coef, *_ = np.linalg.lstsq(A, ys, rcond=None)
-    # vertex: Newton on the derivative from x = 0 (the peak is near the middle of a half-cycle)
-    xv = 0.0
-    for _ in range(20):
-        d1 = coef[1] + 2 * coef[2] * xv + 3 * coef[3] * xv**2 + 4 * coef[4] * xv**3
-        d2 = 2 * coef[2] + 6 * coef[3] * xv + 12 * coef[4] * xv**2
-        if not d2 < 0:
-            return math.nan, math.nan, math.nan
-        step = d1 / d2
-        xv -= step
-        if abs(step) < 1e-14:
-            break
-    if not (-1.0 <= xv <= 1.0):
-        return math.nan, math.nan, math.nan
-    g = xv ** np.arange(5)
-    amp = float(g @ coef)
-    # standard error of the fitted curve at the vertex (the vertex position's own error is second order)
-    resid = ys - A @ coef
-    dof = max(ys.size - 5, 1)
-    s = max(sigma, math.sqrt(float(resid @ resid) / dof))
-    cov = s * s * np.linalg.inv(A.T @ A)
-    std = math.sqrt(max(float(g @ cov @ g), 0.0))
-    return tc + xv * half, amp, std
-
-
 def _check_record(t, theta) -> tuple[np.ndarray, np.ndarray]:
     t = np.asarray(t, dtype=float)
     theta = np.asarray(theta, dtype=float)
@@ -567,8 +223,8 @@ def free_vibration_peaks(
     if not (math.isfinite(floor) and floor >= 0):
         raise ValueError(f"`min_amplitude` must be non-negative and finite, got {min_amplitude!r}")
 
-    h = _HYSTERESIS_SIGMAS * sigma_eff
-    kx, first_sign = _hysteresis_crossings(theta, h)
+    h = HYSTERESIS_SIGMAS * sigma_eff
+    kx, first_sign = hysteresis_crossings(theta, h)
     if first_sign == 0:
         raise ValueError("`theta` never leaves the noise band: no rocking to analyse")
     n = theta.size
@@ -590,9 +246,9 @@ def free_vibration_peaks(
         hi = k + 1
         while hi < n and abs(theta[hi]) < band:
             hi += 1
-        if (k - lo) < _MIN_SAMPLES // 2 + 1 or (hi - k) < _MIN_SAMPLES // 2 + 1:
+        if (k - lo) < MIN_SAMPLES // 2 + 1 or (hi - k) < MIN_SAMPLES // 2 + 1:
             break
-        tc[j], tc_std[j] = _fit_crossing(t, theta, lo, hi, k, h, sigma_eff)
+        tc[j], tc_std[j] = fit_crossing(t, theta, lo, hi, k, h, sigma_eff)
 
     rows = []
     for j in range(bounds.size - 1):
@@ -607,16 +263,16 @@ def free_vibration_peaks(
         if math.isfinite(t0) and math.isfinite(t1):
             w = 0.5 * _PEAK_WINDOW * (t1 - t0)
             mid = 0.5 * (t0 + t1)
-            tp, amp, std = _fit_peak(t, y, mid - w, mid + w, sigma_eff)
+            tp, amp, std = fit_peak(t, y, mid - w, mid + w, sigma_eff)
         elif j == 0 and math.isfinite(t1):
             tp, amp, std = _fit_release(t, y, t1, sigma_eff)
         else:
             # segment cut by the end of the record: use it only if its peak is well inside
             kk = bounds[j] + int(np.argmax(y[bounds[j] : bounds[j + 1]]))
-            half = max(_MIN_SAMPLES, (bounds[j + 1] - bounds[j]) // 8)
+            half = max(MIN_SAMPLES, (bounds[j + 1] - bounds[j]) // 8)
             if kk - half < bounds[j] or kk + half >= bounds[j + 1]:
                 break
-            tp, amp, std = _fit_peak(t, y, t[kk - half], t[kk + half], sigma_eff)
+            tp, amp, std = fit_peak(t, y, t[kk - half], t[kk + half], sigma_eff)
         if not math.isfinite(amp):
             if j == 0:
                 continue  # no usable release peak; the first full half-cycle follows
@@ -657,12 +313,12 @@ def _fit_release(t: np.ndarray, y: np.ndarray, t1: float, sigma: float) -> tuple
     n_first = int(np.count_nonzero(t < t1))
     if k_max > max(2, n_first // 20):
         # the record does not start at the release (hold before it, or a late start)
-        half = max(_MIN_SAMPLES, n_first // 8)
+        half = max(MIN_SAMPLES, n_first // 8)
         if k_max - half < 0 or k_max + half >= n_first:
             return math.nan, math.nan, math.nan
-        return _fit_peak(t, y, t[k_max - half], t[k_max + half], sigma)
+        return fit_peak(t, y, t[k_max - half], t[k_max + half], sigma)
     m = t <= t[0] + 0.5 * _PEAK_WINDOW * (t1 - t[0])
-    if np.count_nonzero(m) < _MIN_SAMPLES + 2:
+    if np.count_nonzero(m) < MIN_SAMPLES + 2:
         return math.nan, math.nan, math.nan
     x = (t[m] - t[0]) / (t1 - t[0])
     A = np.column_stack((np.ones_like(x), x * x, x**4))  # even: symmetric about the release
