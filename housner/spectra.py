@@ -34,6 +34,7 @@ import numpy as np
 
 from housner.errors import unknown_choice
 from housner.motion import GroundMotion
+from housner.pulses import RICKER_KINDS, one_sine, ricker, ricker_half_width, ricker_shape
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -48,25 +49,13 @@ __all__ = [
     "rocking_spectrum",
 ]
 
-RICKER_KINDS = ("symmetric", "antisymmetric")
-
-#: Pulse shapes of a spectrum (:mod:`scenarios.pulses` makes the same motions
-#: for the engines): name -> Ricker kind, or None for the one-sine pulse.
+#: Pulse shapes of a spectrum (:mod:`housner.pulses` makes the motions, for the
+#: spectrum and for the engines): name -> Ricker kind, or None for the one-sine pulse.
 PULSES: dict[str, str | None] = {
     "symmetric_ricker": "symmetric",
     "antisymmetric_ricker": "antisymmetric",
     "one_sine": None,
 }
-
-#: The Ricker window is cut where the wavelet's envelope falls below this
-#: fraction of a_p for good; at 1e-6 the cut is far below any uplift threshold
-#: (a_p / (g tan alpha) would have to exceed 1e6) and the velocity left at the
-#: ends is ~1e-6 a_p / omega_p.
-RICKER_TAIL = 1e-6
-
-#: Peak of |(u^3 - 3u) exp(-u^2/2)|, at u^2 = 3 - sqrt(6): normalises the
-#: antisymmetric wavelet to peak a_p (the beta = 1.3801 of Vassiliou & Makris 2011).
-_BETA_ANTI = abs((lambda u: (u**3 - 3 * u) * math.exp(-0.5 * u * u))(math.sqrt(3.0 - math.sqrt(6.0))))
 
 #: Samples per period of the faster of the pulse (2 pi / omega_p) and the block
 #: (2 pi / p). The motion is linear between samples, so the pulse is
@@ -133,62 +122,6 @@ def free_rocking_peak(theta, theta_dot, alpha: float, p: float, r: float) -> tup
     return np.where(over, math.pi / 2, peak), over
 
 
-def ricker_shape(x, kind: str = "symmetric") -> np.ndarray:
-    """Unit Ricker wavelet at dimensionless time x = omega_p (t - t0) [-].
-
-    Parameters
-    ----------
-    x : array_like
-        omega_p (t - t0) [-].
-    kind : {"symmetric", "antisymmetric"}
-        ``"symmetric"``: (1 - x^2/2) exp(-x^2/4), the second derivative of the
-        Gaussian exp(-x^2/4) up to a factor; value 1 at x = 0.
-        ``"antisymmetric"``: (u^3 - 3u) exp(-u^2/2) / beta with u = x / sqrt(3)
-        (the third derivative of the Gaussian exp(-x^2/6) up to a factor),
-        beta = 1.3801 its peak; -1 at u = sqrt(3 - sqrt(6)) (x = 1.285) and +1 at x = -1.285.
-
-    Returns
-    -------
-    ndarray
-        The wavelet [-], with max |value| = 1.
-
-    Notes
-    -----
-    With these Gaussians the Fourier amplitude of either wavelet, |omega|^k
-    exp(-omega^2 s^2 / 2) with k = 2, s^2 = 2/omega_p^2 and k = 3, s^2 = 3/omega_p^2,
-    peaks at omega = omega_p, the convention of Vassiliou & Makris (2011).
-
-    References
-    ----------
-    Vassiliou, M. F., Makris, N. (2011). Estimating time scales and length
-    scales in pulselike earthquake acceleration records with wavelet analysis.
-    BSSA 101(2), 596-618.
-    """
-    x = np.asarray(x, dtype=float)
-    if kind == "symmetric":
-        return (1.0 - 0.5 * x * x) * np.exp(-0.25 * x * x)
-    if kind == "antisymmetric":
-        u = x / math.sqrt(3.0)
-        return (u**3 - 3.0 * u) * np.exp(-0.5 * u * u) / _BETA_ANTI
-    raise ValueError(f"`kind` must be one of {RICKER_KINDS}, got {kind!r}")
-
-
-def ricker_half_width(kind: str = "symmetric", tail: float = RICKER_TAIL) -> float:
-    """Dimensionless half-width x = omega_p t beyond which |ricker_shape(x)| < ``tail`` for good [-].
-
-    8.33 (symmetric) and 10.64 (antisymmetric) for the default tail 1e-6.
-    """
-    from scipy import optimize
-
-    if kind not in RICKER_KINDS:
-        raise ValueError(f"`kind` must be one of {RICKER_KINDS}, got {kind!r}")
-    if not (0.0 < tail < 0.1):
-        raise ValueError(f"`tail` must lie in (0, 0.1), got {tail!r}")
-    # beyond the last side lobe (x^2 = 6 symmetric, u^2 = 3 + sqrt(6) antisymmetric) |psi| only falls
-    x_lobe = math.sqrt(6.0) if kind == "symmetric" else math.sqrt(3.0 * (3.0 + math.sqrt(6.0)))
-    return optimize.brentq(lambda x: abs(float(ricker_shape(x, kind))) - tail, x_lobe, 80.0, xtol=1e-12)
-
-
 def _pulse_window(pulse: str, omega_p: float, p: float) -> tuple[float, float]:
     """Sample step [s] and duration of the forcing window [s] of a pulse."""
     dt = 2.0 * math.pi / (max(omega_p, p) * SAMPLES_PER_PERIOD)
@@ -218,13 +151,13 @@ def pulse_motion(pulse: str, a_p: float, omega_p: float, p: float, *, duration: 
     Returns
     -------
     GroundMotion
-        The same samples as :func:`scenarios.pulses.ricker` (centre t0 at the
-        default half-width) or :func:`scenarios.pulses.one_sine` (phase 0) with this step.
+        :func:`housner.pulses.ricker` (centre t0 at the default half-width)
+        or :func:`housner.pulses.one_sine` (phase 0) with this step.
         The one-sine pulse is a_p sin(omega_p t) for 0 <= t <= 2 pi / omega_p,
         phase 0 as in Zhang & Makris (2001): the block waits at rest until
         a_p sin(omega_p t) reaches g tan(alpha). (Their psi =
         asin(g tan(alpha) / a_p) is the phase at that uplift, not a shift of
-        the pulse; see :func:`scenarios.pulses.one_sine`.)
+        the pulse; see :func:`housner.pulses.one_sine`.)
     """
     if pulse not in PULSES:
         raise unknown_choice("pulse", pulse, PULSES)
@@ -237,12 +170,11 @@ def pulse_motion(pulse: str, a_p: float, omega_p: float, p: float, *, duration: 
     total = window if duration is None else float(duration)
     if not (math.isfinite(total) and total > 0):
         raise ValueError(f"`duration` must be positive and finite, got {duration!r}")
-    t = np.arange(int(math.floor(total / dt + 1e-9)) + 1) * dt
     kind = PULSES[pulse]
     if kind is None:
-        acc = np.where(t <= window * (1.0 + 1e-12), a_p * np.sin(omega_p * t), 0.0)
+        acc = one_sine(a_p, omega_p, dt=dt, duration=total).acc
     else:
-        acc = a_p * ricker_shape(omega_p * (t - 0.5 * window), kind)
+        acc = ricker(a_p, omega_p, kind=kind, dt=dt, duration=total, t0=0.5 * window).acc
     name = f"{pulse} a_p={a_p:.4g} omega_p={omega_p:.4g}"
     return GroundMotion(acc, dt, name, f"housner.spectra.pulse_motion({pulse!r}, dt={dt!r})")
 
@@ -387,7 +319,7 @@ def rocking_spectrum(
     specimen : Specimen
         The block (alpha [rad], p [1/s]).
     pulse : {"symmetric_ricker", "antisymmetric_ricker", "one_sine"}
-        Pulse shape; see :mod:`scenarios.pulses`.
+        Pulse shape; see :mod:`housner.pulses`.
     omega_ratio : array_like, optional
         omega_p / p [-], positive; default 100 values from 1 to 12.
     accel_ratio : array_like, optional

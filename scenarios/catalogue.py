@@ -446,7 +446,7 @@ class Scenario:
             meta["theta0_over_alpha"] = list(m["theta0_over_alpha"])
             return motions, meta
         # pulses
-        from scenarios import pulses
+        from housner import pulses
 
         W, A = self.pulse_grid()
         p = self.specimen.p

@@ -14,9 +14,8 @@ import numpy as np
 import pytest
 
 from engines.base import get_engine
-from housner import Specimen, simulate
+from housner import Specimen, pulses, simulate
 from reports.assertions import assert_cdf_agreement
-from scenarios import pulses
 
 SPEC = Specimen.bachmann2017()
 ENGINES = ["mujoco", "pybullet"]

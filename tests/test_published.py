@@ -42,10 +42,9 @@ import math
 import numpy as np
 import pytest
 
-from housner import G, GroundMotion, Specimen
+from housner import G, GroundMotion, Specimen, pulses
 from housner.model import simulate
 from housner.spectra import rocking_spectrum
-from scenarios import pulses
 
 ALPHA = 0.01  # rad: slender enough that the nonlinear terms shift the boundaries by < 1e-4 (module docstring)
 P = 2.0  # 1/s; any p gives the same boundaries (they depend only on omega_p/p and a_p/(g tan alpha))
@@ -69,7 +68,7 @@ def _half_sine(a: float, w: float) -> GroundMotion:
 
 
 def _one_sine(a: float, w: float, phase: float = 0.0) -> GroundMotion:
-    """The suite's one-sine pulse (scenarios.pulses.one_sine) at a = a_p / (g tan alpha), w = omega_p / p."""
+    """The suite's one-sine pulse (housner.pulses.one_sine) at a = a_p / (g tan alpha), w = omega_p / p."""
     wp = w * P
     tp = 2.0 * math.pi / wp
     return pulses.one_sine(a * G * BLOCK.tan_alpha, wp, dt=tp / N_PER_PERIOD, duration=tp + FREE / P, phase=phase)

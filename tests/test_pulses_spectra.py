@@ -1,4 +1,4 @@
-"""Pulse ground motions (scenarios.pulses) and rocking spectra (housner.spectra)."""
+"""Pulse ground motions (housner.pulses) and rocking spectra (housner.spectra)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from housner import G, GroundMotion, Specimen
+from housner import G, GroundMotion, Specimen, pulses
 from housner.model import simulate
 from housner.spectra import (
     PULSES,
@@ -17,7 +17,6 @@ from housner.spectra import (
     ricker_shape,
     rocking_spectrum,
 )
-from scenarios import pulses
 
 SPEC = Specimen.bachmann2017()
 
@@ -171,7 +170,7 @@ def test_no_rocking_below_uplift(pulse):
     ],
 )
 def test_spectrum_point_against_direct_simulation(pulse, w, a):
-    # Direct simulation of the same pulse from scenarios.pulses, padded with 40/p of free rocking,
+    # Direct simulation of the same pulse from housner.pulses, padded with 40/p of free rocking,
     # against the spectrum (forcing window + closed-form free rocking). Same samples, same RK4:
     # they differ only by the closed form vs RK4 over the free part (~1e-8 alpha).
     s = rocking_spectrum(SPEC, pulse, [w], [a])

@@ -22,7 +22,7 @@ from housner import G, GroundMotion, Specimen
 from housner.calibration import energy_ratios, free_vibration_peaks, half_cycle_integral
 from housner.errors import EngineError
 from housner.model import simulate as housner_simulate
-from scenarios.pulses import one_sine
+from housner.pulses import one_sine
 
 SPEC = Specimen.bachmann2017()
 AMPLITUDES = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)

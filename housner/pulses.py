@@ -37,9 +37,20 @@ import numpy as np
 from housner._validate import finite as _finite
 from housner._validate import positive as _positive
 from housner.motion import GroundMotion
-from housner.spectra import RICKER_KINDS, ricker_half_width, ricker_shape
 
-__all__ = ["RICKER_KINDS", "free_vibration", "one_sine", "ricker", "ricker_shape"]
+__all__ = ["RICKER_KINDS", "RICKER_TAIL", "free_vibration", "one_sine", "ricker", "ricker_half_width", "ricker_shape"]
+
+RICKER_KINDS = ("symmetric", "antisymmetric")
+
+#: The Ricker window is cut where the wavelet's envelope falls below this
+#: fraction of a_p for good; at 1e-6 the cut is far below any uplift threshold
+#: (a_p / (g tan alpha) would have to exceed 1e6) and the velocity left at the
+#: ends is ~1e-6 a_p / omega_p.
+RICKER_TAIL = 1e-6
+
+#: Peak of |(u^3 - 3u) exp(-u^2/2)|, at u^2 = 3 - sqrt(6): normalises the
+#: antisymmetric wavelet to peak a_p (the beta = 1.3801 of Vassiliou & Makris 2011).
+_BETA_ANTI = abs((lambda u: (u**3 - 3 * u) * math.exp(-0.5 * u * u))(math.sqrt(3.0 - math.sqrt(6.0))))
 
 #: Free rocking after the pulse, in units of 1/p, when the block's p is given:
 #: a free half-cycle of amplitude theta_i lasts 2 F(theta_i)/p with
@@ -127,7 +138,7 @@ def ricker(
         dt=dt,
         name=f"{kind} Ricker a_p={a_p:.4g} m/s^2 omega_p={omega_p:.4g} rad/s",
         provenance=(
-            f"scenarios.pulses.ricker(a_p={a_p!r}, omega_p={omega_p!r}, kind={kind!r}, dt={dt!r}, "
+            f"housner.pulses.ricker(a_p={a_p!r}, omega_p={omega_p!r}, kind={kind!r}, dt={dt!r}, "
             f"duration={total!r}, t0={t0!r}); Vassiliou & Makris (2011) wavelet, peak |ug''| = |a_p|"
         ),
     )
@@ -207,7 +218,7 @@ def one_sine(
         dt=dt,
         name=f"one-sine a_p={a_p:.4g} m/s^2 omega_p={omega_p:.4g} rad/s",
         provenance=(
-            f"scenarios.pulses.one_sine(a_p={a_p!r}, omega_p={omega_p!r}, dt={dt!r}, duration={total!r}, "
+            f"housner.pulses.one_sine(a_p={a_p!r}, omega_p={omega_p!r}, dt={dt!r}, duration={total!r}, "
             f"phase={phase!r}); one cycle of a_p sin(omega_p t + phase), then zero"
         ),
     )
@@ -231,3 +242,59 @@ def free_vibration(theta0: float, duration: float, dt: float = 0.002) -> GroundM
         Zero accelerations with ``theta0`` set (:meth:`GroundMotion.free_vibration`).
     """
     return GroundMotion.free_vibration(_finite("theta0", theta0), _positive("duration", duration), _positive("dt", dt))
+
+
+def ricker_shape(x, kind: str = "symmetric") -> np.ndarray:
+    """Unit Ricker wavelet at dimensionless time x = omega_p (t - t0) [-].
+
+    Parameters
+    ----------
+    x : array_like
+        omega_p (t - t0) [-].
+    kind : {"symmetric", "antisymmetric"}
+        ``"symmetric"``: (1 - x^2/2) exp(-x^2/4), the second derivative of the
+        Gaussian exp(-x^2/4) up to a factor; value 1 at x = 0.
+        ``"antisymmetric"``: (u^3 - 3u) exp(-u^2/2) / beta with u = x / sqrt(3)
+        (the third derivative of the Gaussian exp(-x^2/6) up to a factor),
+        beta = 1.3801 its peak; -1 at u = sqrt(3 - sqrt(6)) (x = 1.285) and +1 at x = -1.285.
+
+    Returns
+    -------
+    ndarray
+        The wavelet [-], with max |value| = 1.
+
+    Notes
+    -----
+    With these Gaussians the Fourier amplitude of either wavelet, |omega|^k
+    exp(-omega^2 s^2 / 2) with k = 2, s^2 = 2/omega_p^2 and k = 3, s^2 = 3/omega_p^2,
+    peaks at omega = omega_p, the convention of Vassiliou & Makris (2011).
+
+    References
+    ----------
+    Vassiliou, M. F., Makris, N. (2011). Estimating time scales and length
+    scales in pulselike earthquake acceleration records with wavelet analysis.
+    BSSA 101(2), 596-618.
+    """
+    x = np.asarray(x, dtype=float)
+    if kind == "symmetric":
+        return (1.0 - 0.5 * x * x) * np.exp(-0.25 * x * x)
+    if kind == "antisymmetric":
+        u = x / math.sqrt(3.0)
+        return (u**3 - 3.0 * u) * np.exp(-0.5 * u * u) / _BETA_ANTI
+    raise ValueError(f"`kind` must be one of {RICKER_KINDS}, got {kind!r}")
+
+
+def ricker_half_width(kind: str = "symmetric", tail: float = RICKER_TAIL) -> float:
+    """Dimensionless half-width x = omega_p t beyond which |ricker_shape(x)| < ``tail`` for good [-].
+
+    8.33 (symmetric) and 10.64 (antisymmetric) for the default tail 1e-6.
+    """
+    from scipy import optimize
+
+    if kind not in RICKER_KINDS:
+        raise ValueError(f"`kind` must be one of {RICKER_KINDS}, got {kind!r}")
+    if not (0.0 < tail < 0.1):
+        raise ValueError(f"`tail` must lie in (0, 0.1), got {tail!r}")
+    # beyond the last side lobe (x^2 = 6 symmetric, u^2 = 3 + sqrt(6) antisymmetric) |psi| only falls
+    x_lobe = math.sqrt(6.0) if kind == "symmetric" else math.sqrt(3.0 * (3.0 + math.sqrt(6.0)))
+    return optimize.brentq(lambda x: abs(float(ricker_shape(x, kind))) - tail, x_lobe, 80.0, xtol=1e-12)
