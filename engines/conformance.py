@@ -53,7 +53,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from engines.base import Engine, get_engine
-from engines.tuning import _parabolic_peak, free_rocking_quarter_period, pulse_motions
+from engines.measures import free_rocking_quarter_period, parabolic_peak
+from engines.tuning import pulse_motions
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -167,7 +168,7 @@ def _peak_between(t: np.ndarray, theta: np.ndarray, t0: float, t1: float) -> flo
     if sel.size == 0:
         return math.nan
     i = int(sel[np.argmax(np.abs(theta[sel]))])
-    return _parabolic_peak(np.abs(theta), i)
+    return parabolic_peak(np.abs(theta), i)
 
 
 def _bounded(resp: Response, motion: GroundMotion) -> str:

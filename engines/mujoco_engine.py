@@ -56,7 +56,7 @@ Contact settings and how they were tuned
 MuJoCo's default contact (timestep 2 ms, solref (0.02, 1), elliptic cone,
 impratio 1) loses too much energy per impact (r 2 % low at 0.8 alpha, 7 % at
 0.2 alpha) and lets the block rock too far under a pulse. The defaults of
-:class:`MujocoEngine` come from ``python -m engines.tuning mujoco``
+:class:`MujocoEngine` come from ``housner tune mujoco``
 (:func:`engines.tuning.tune` over :meth:`MujocoEngine.tuning_candidates`); the
 class notes give the measured errors and what each setting does. MuJoCo
 averages the solref and solimp of the two geoms in contact, so the ground
@@ -175,7 +175,7 @@ class MujocoEngine(Engine):
 
     Notes
     -----
-    Defaults (``DEFAULTS``) came from ``python -m engines.tuning mujoco``
+    Defaults (``DEFAULTS``) came from ``housner tune mujoco``
     (``housner tune mujoco``) on 2026-11-21 with MuJoCo 4.0.0, for the seed
     specimen and Housner's r = 0.94652: of the 120 candidates, 26 passed every
     check of :mod:`engines.tuning` at both sample steps (1 ms and 3.16 ms);

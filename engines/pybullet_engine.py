@@ -196,7 +196,7 @@ class PybulletEngine(Engine):
     name = "pybullet"
     effects_supported = frozenset()
 
-    #: Default settings: the choice of ``python -m engines.tuning pybullet``
+    #: Default settings: the choice of ``housner tune pybullet``
     #: (engines.tuning.tune) on 2026-11-21 for Specimen.bachmann2017() and
     #: r_housner = 0.94652, pybullet 3.2.7: first-impact r within 0.29 % of
     #: Housner's at the tuner's 15 amplitudes 0.2 ... 0.9 alpha (mean -0.05 %),

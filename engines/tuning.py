@@ -54,7 +54,7 @@ the analytic amplitude (``engines/models/README.md``, CHANGELOG). That contact
 fails checks 2, 3 and 4 by far: worst small-amplitude error -2.7 % (at 0.02
 alpha), 40th decay peak -91 %, near-threshold first peaks +4 % and +10 %.
 
-Run it from the shell with ``python -m engines.tuning ENGINE [--target-r R]``.
+Run it from the shell with ``housner tune ENGINE [--target-r R] [--figure FILE]``.
 
 References
 ----------
@@ -76,10 +76,16 @@ import numpy as np
 import pandas as pd
 
 from engines.base import engine_class
-from housner.calibration import half_cycle_integral
+from engines.measures import (
+    decay_peaks,
+    first_impact_ratio,
+    first_peak,
+    free_rocking_quarter_period,
+    half_cycle_peaks,
+)
 from housner.errors import EngineError
 from housner.motion import GroundMotion
-from housner.response import Response
+from housner.pulses import one_sine
 from housner.specimen import Specimen
 
 __all__ = [
@@ -104,7 +110,6 @@ __all__ = [
     "half_cycle_peaks",
     "pulse_motions",
     "tune",
-    "tuning_report_figure",
 ]
 
 #: Release amplitudes theta0 / alpha [-] at which r is measured (check 1): 0.20
@@ -165,179 +170,6 @@ _DT = 0.001
 SAMPLE_STEPS = (0.001, 0.01 / math.sqrt(10.0))
 
 
-def free_rocking_quarter_period(specimen: Specimen, theta0: float) -> float:
-    """Time [s] from a release at rest at ``theta0`` [rad] to the first impact, exact for Housner's equation.
-
-    With no ground motion, rocking on the +x pivot obeys
-    theta'' = -p^2 sin(alpha - theta), whose energy integral from a release at
-    rest at theta0 is theta'^2 / 2 = p^2 (cos(alpha - theta0) - cos(alpha - theta)).
-    The time to fall to theta = 0 is
-
-        T/4 = int_0^theta0 dtheta / sqrt(2 p^2 (cos(alpha - theta0) - cos(alpha - theta))).
-
-    That integral is F(theta0, alpha) / p with F from
-    :func:`housner.calibration.half_cycle_integral`; a free half-cycle (impact
-    to impact) lasts twice as long, since its rise and fall are symmetric.
-
-    Parameters
-    ----------
-    specimen : Specimen
-        Provides p [1/s] and alpha [rad].
-    theta0 : float
-        Release angle [rad], 0 < |theta0| < alpha.
-
-    References
-    ----------
-    Housner (1963), eq. for the free-rocking period; Bachmann et al. (2017), eq. 7.
-    """
-    th0 = abs(float(theta0))
-    alpha, p = specimen.alpha, specimen.p
-    if not 0.0 < th0 < alpha:
-        raise ValueError(f"`theta0` must satisfy 0 < |theta0| < alpha = {alpha:.6g} rad, got {theta0!r}")
-    return float(half_cycle_integral(th0, alpha)) / p
-
-
-def _parabolic_peak(y: np.ndarray, i: int) -> float:
-    """Vertex of the parabola through y[i-1], y[i], y[i+1] (y[i] at the ends)."""
-    if i <= 0 or i >= y.size - 1:
-        return float(y[i])
-    a, b, c = y[i - 1], y[i], y[i + 1]
-    den = a - 2.0 * b + c
-    if den >= 0.0:
-        return float(b)
-    return float(b - 0.125 * (a - c) ** 2 / den)
-
-
-def first_impact_ratio(response: Response, alpha: float | None = None) -> float:
-    """Kinetic-energy ratio of the first impact of a free-vibration response (seed eq. 8) [-].
-
-    The peaks are |theta| at release (the largest |theta| before the first
-    sign change) and the largest |theta| of the next half-cycle, refined by a
-    parabola through the samples around it. NaN when the record ends before
-    that half-cycle's peak, when the block never crossed zero, or when a peak
-    reached alpha.
-
-    Parameters
-    ----------
-    response : Response
-        A free-vibration response (noise-free engine output).
-    alpha : float, optional
-        Slenderness [rad]; defaults to ``response.alpha``.
-
-    References
-    ----------
-    Bachmann et al. (2017), eq. 8.
-    """
-    alpha = response.alpha if alpha is None else float(alpha)
-    th = np.asarray(response.theta, dtype=float)
-    s0 = np.sign(th[0]) if th[0] != 0 else np.sign(th[np.argmax(np.abs(th))])
-    crossed = np.flatnonzero(th * s0 < 0)
-    if crossed.size == 0:
-        return math.nan
-    k1 = int(crossed[0])
-    i0 = int(np.argmax(np.abs(th[:k1])))
-    peak0 = _parabolic_peak(np.abs(th), i0)
-    back = np.flatnonzero(th[k1:] * s0 > 0)
-    k2 = k1 + int(back[0]) if back.size else th.size
-    seg = np.abs(th[k1:k2])
-    i1 = int(np.argmax(seg))
-    if i1 >= seg.size - 1:  # still rising when the record (or half-cycle) ends
-        return math.nan
-    peak1 = _parabolic_peak(np.abs(th), k1 + i1)
-    if not (peak0 < alpha and peak1 < alpha):  # rocked past alpha: no free-vibration half-cycle to compare
-        return math.nan
-    from housner.calibration import energy_ratios
-
-    return float(energy_ratios([peak0, peak1], alpha)[0])
-
-
-def first_peak(response: Response) -> float:
-    """Largest |theta| [rad] before the first impact of a response that starts at rest.
-
-    The peak is refined by a parabola through the samples around it. NaN if
-    the block never left rest, or if |theta| is still growing when the record
-    ends before any impact.
-    """
-    th = np.asarray(response.theta, dtype=float)
-    moving = np.flatnonzero(th != 0.0)
-    if moving.size == 0:
-        return math.nan
-    k0 = int(moving[0])
-    s0 = np.sign(th[k0])
-    back = np.flatnonzero(th[k0:] * s0 < 0)
-    end = k0 + int(back[0]) if back.size else th.size
-    seg = np.abs(th[:end])
-    i = int(np.argmax(seg))
-    if i >= seg.size - 1 and not back.size:
-        return math.nan
-    return _parabolic_peak(np.abs(th), i)
-
-
-def half_cycle_peaks(response: Response | np.ndarray) -> np.ndarray:
-    """|theta| peak [rad] of each half-cycle of a response (or of sampled theta [rad]), up to the last complete one.
-
-    Half-cycles are the stretches between sign changes of the sampled theta;
-    each peak is refined by a parabola through the samples around the largest
-    one. Index 0 is the stretch that starts the record (the release, for a
-    free vibration), index k the one after the k-th impact. A final stretch
-    still rising when the record ends is left out.
-    """
-    th = np.asarray(response.theta if isinstance(response, Response) else response, dtype=float)
-    a = np.abs(th)
-    sgn = np.sign(th)
-    nz = np.flatnonzero(sgn != 0)
-    if nz.size == 0:
-        return np.empty(0)
-    change = nz[1:][sgn[nz[1:]] != sgn[nz[:-1]]]  # first sample of each new half-cycle
-    bounds = np.concatenate(([0], change, [th.size]))
-    out = []
-    for i0, i1 in zip(bounds[:-1], bounds[1:], strict=True):
-        i = i0 + int(np.argmax(a[i0:i1]))
-        if i == th.size - 1 and i > 0:  # still rising at the end of the record
-            break
-        out.append(_parabolic_peak(a, i))
-    return np.asarray(out)
-
-
-def decay_peaks(specimen: Specimen, theta0: float, n_impacts: int, r: float | None = None) -> np.ndarray:
-    """Exact peaks [rad] of Housner's free rocking from rest at ``theta0``, before and after each of ``n_impacts``.
-
-    Between impacts the energy integral holds, and each impact keeps the
-    fraction r of the kinetic energy, which at theta = 0 is the whole energy
-    above the upright position; so the peak after impact k satisfies
-
-        cos(alpha - theta_k) - cos(alpha) = r^k (cos(alpha - theta_0) - cos(alpha)).
-
-    Parameters
-    ----------
-    specimen : Specimen
-        Provides alpha [rad] and Housner's r.
-    theta0 : float
-        Release angle [rad], 0 < |theta0| < alpha.
-    n_impacts : int
-        Number of impacts.
-    r : float, optional
-        Kinetic-energy ratio at impact [-]; ``specimen.r_housner`` by default.
-
-    Returns
-    -------
-    numpy.ndarray
-        n_impacts + 1 peaks |theta_k| [rad], k = 0 .. n_impacts.
-
-    References
-    ----------
-    Housner (1963); Bachmann et al. (2017), eqs. 4 and 8.
-    """
-    alpha = specimen.alpha
-    th0 = abs(float(theta0))
-    if not 0.0 < th0 < alpha:
-        raise ValueError(f"`theta0` must satisfy 0 < |theta0| < alpha = {alpha:.6g} rad, got {theta0!r}")
-    r = specimen.r_housner if r is None else float(r)
-    e0 = math.cos(alpha - th0) - math.cos(alpha)
-    k = np.arange(int(n_impacts) + 1)
-    return alpha - np.arccos(np.cos(alpha) + r**k * e0)
-
-
 def decay_motion(
     specimen: Specimen, start: float = DECAY_START, n_impacts: int = max(DECAY_IMPACTS), dt: float = _DT
 ) -> GroundMotion:
@@ -368,12 +200,11 @@ def pulse_motions(specimen: Specimen, pulses=PULSES, dt: float = _DT) -> list[Gr
         omega = w_ratio * specimen.p
         a_p = a_ratio * specimen.uplift_acceleration
         tp = 2.0 * math.pi / omega
-        n = int(math.ceil((tp + 3.0 / specimen.p) / dt)) + 1
-        t = np.arange(n) * dt
-        acc = np.where(t <= tp, a_p * np.sin(omega * t), 0.0)
+        n = int(math.ceil((tp + 3.0 / specimen.p) / dt)) + 1  # samples
+        g = one_sine(a_p, omega, dt=dt, duration=(n - 0.5) * dt)
         out.append(
             GroundMotion(
-                acc,
+                g.acc,
                 dt,
                 name=f"one-sine omega_p={w_ratio:g}p a_p={a_ratio:g}g tan(alpha)",
                 provenance="engines.tuning.pulse_motions",
@@ -852,80 +683,3 @@ def tune(
         rtol=rtol,
         version=version,
     )
-
-
-def tuning_report_figure(result: TuningResult):
-    """Energy ratio against release amplitude for the chosen settings, with the target and its bands.
-
-    Parameters
-    ----------
-    result : TuningResult
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        r_engine [-] against theta0/alpha [-], one line per sample step
-        (small amplitudes included), the target r as a line, the +-rtol band
-        shaded and the +-3 rtol band of single small-amplitude impacts dotted.
-    """
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6.5, 4.0), layout="constrained")
-    ax = fig.add_subplot()
-    r0, tol = result.target_r, result.rtol
-    ax.axhspan(r0 * (1 - tol), r0 * (1 + tol), color="tab:green", alpha=0.15, label=f"target +- {tol:.1%}")
-    ax.axhline(r0, color="tab:green", lw=1.5, label=f"target r = {r0:.4f}")
-    if len(result.small_table):
-        wide = SMALL_WORST_FACTOR * tol
-        for y in (r0 * (1 - wide), r0 * (1 + wide)):
-            ax.axhline(y, color="tab:green", lw=0.8, ls=":")
-    both = pd.concat([result.small_table, result.table], ignore_index=True).sort_values(["dt", "amplitude"])
-    for dt, t in both.groupby("dt", sort=False):
-        ax.plot(t["amplitude"], t["r_engine"], ".-", lw=0.8, label=f"{result.engine}, samples every {dt * 1e3:.3g} ms")
-    ax.set_xlabel(r"release amplitude $\theta_0/\alpha$ [-]")
-    ax.set_ylabel("energy ratio at first impact r [-]")
-    verdict = "met" if result.met else "NOT met"
-    ax.set_title(f"{result.engine} contact tuning: target {verdict}, worst error {result.worst_rel_error:.2%}")
-    ax.legend(loc="best", fontsize="small")
-    return fig
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Command line: ``python -m engines.tuning ENGINE [--target-r R] [--json FILE] [--figure FILE]``."""
-    import argparse
-    import json
-
-    ap = argparse.ArgumentParser(prog="python -m engines.tuning", description=main.__doc__)
-    ap.add_argument("engine")
-    ap.add_argument("--target-r", type=float, default=None, help="target energy ratio (default: Housner's r)")
-    ap.add_argument("--json", default=None, help="write the full result as JSON here")
-    ap.add_argument("--figure", default=None, help="write the r-against-amplitude figure here")
-    ap.add_argument("--quiet", action="store_true", help="no progress bar")
-    args = ap.parse_args(argv)
-    result = tune(args.engine, Specimen.bachmann2017(), target_r=args.target_r, progress=not args.quiet)
-    print(result.summary())
-    best = result.candidates.sort_values(["score", "cost_per_sim_second"]).head(10)
-    print("\nbest 10 candidates by score (largest error over its tolerance; <= 1 passes):")
-    cols = [
-        "settings",
-        "score",
-        "worst_rel_error",
-        "small_worst_rel_error",
-        "small_mean_rel_error",
-        "decay_rel_error",
-        "pulse_rel_error",
-        "cost_per_sim_second",
-        "met",
-    ]
-    with pd.option_context("display.width", 250, "display.max_colwidth", 120):
-        print(best[cols].to_string())
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(result.to_dict(), fh, indent=1, default=float)
-    if args.figure:
-        tuning_report_figure(result).savefig(args.figure)
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -271,12 +271,43 @@ def _cmd_tune(args: argparse.Namespace) -> int:
         from engines.base import get_engine
 
         kwargs["candidates"] = [get_engine(args.engine).settings()]
+    if args.figure:
+        _check_output_file(args.figure, "--figure")
     result = tune(args.engine, specimen, **kwargs)
     print(result.summary())
+    _print_best_candidates(result)
     if args.json:
         Path(args.json).write_text(json.dumps(result.to_dict(), indent=2, default=str))
         print(f"written: {args.json}")
+    if args.figure:
+        from reports.tuning_figure import tuning_report_figure
+
+        tuning_report_figure(result).savefig(args.figure)
+        print(f"written: {args.figure}")
     return 0 if result.met else 1
+
+
+def _print_best_candidates(result, n: int = 10) -> None:
+    """The n best candidates of a tuning by score (largest error over its tolerance; <= 1 passes)."""
+    import pandas as pd
+
+    if len(result.candidates) < 2:
+        return
+    cols = [
+        "settings",
+        "score",
+        "worst_rel_error",
+        "small_worst_rel_error",
+        "small_mean_rel_error",
+        "decay_rel_error",
+        "pulse_rel_error",
+        "cost_per_sim_second",
+        "met",
+    ]
+    best = result.candidates.sort_values(["score", "cost_per_sim_second"]).head(n)
+    print(f"\nbest {len(best)} candidates by score (largest error over its tolerance; <= 1 passes):")
+    with pd.option_context("display.width", 250, "display.max_colwidth", 120):
+        print(best[[c for c in cols if c in best.columns]].to_string())
 
 
 def _names_arg(value: str) -> list[str]:
@@ -440,6 +471,7 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     t.add_argument(
         "--json", help="write the tuning result to this JSON file (the report reads engines/models/tuning-ENGINE.json)"
     )
+    t.add_argument("--figure", help="write the figure of r against release amplitude to this file (PNG, SVG, PDF)")
     t.add_argument(
         "--defaults-only",
         action="store_true",

@@ -28,11 +28,11 @@ from engines.tuning import (
     half_cycle_peaks,
     pulse_motions,
     tune,
-    tuning_report_figure,
 )
 from housner import GroundMotion, Specimen
 from housner.calibration import half_cycle_time
 from housner.model import simulate as housner_simulate
+from reports.tuning_figure import tuning_report_figure
 
 SEED = Specimen.bachmann2017()
 
