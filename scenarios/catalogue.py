@@ -14,8 +14,6 @@ is loaded.
 from __future__ import annotations
 
 import difflib
-import math
-import re
 import sys
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -33,160 +31,25 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from scenarios.schema import (
+    _TOML_LINE_RE,
+    DEFAULT_RDK_MODEL,
+    RDK_MODELS,
+    ScenarioError,
+    _check_analysis,
+    _check_table,
+    _File,
+    _grid,
+    _is_path,
+    _table_line,
+    check_motions,
+    read_engines,
+    read_specimen,
+)
+
 __all__ = ["SCENARIOS", "Scenario", "ScenarioError", "list_scenarios", "load_scenario"]
 
 HERE = Path(__file__).resolve().parent
-
-SPECIMEN_PRESETS = {"bachmann2017": Specimen.bachmann2017}
-MOTION_SOURCES = ("rdk", "record", "records", "pulses", "free_vibration")
-#: Ground-motion models of source "rdk": the published RDK model, and the spectrally
-#: matched ensemble of :mod:`scenarios.rdk_match`.
-RDK_MODELS = ("rdk2010", "matched")
-DEFAULT_RDK_MODEL = "rdk2010"
-PULSES = ("symmetric_ricker", "antisymmetric_ricker", "one_sine")
-
-# Allowed keys per table: key -> expected type(s). Unknown keys get "did you mean".
-_SCHEMA: dict[str, dict[str, Any]] = {
-    "": {
-        "name": str,
-        "description": str,
-        "specimen": dict,
-        "motions": dict,
-        "engines": dict,
-        "analysis": dict,
-    },
-    "specimen": {
-        "preset": str,
-        "height": float,
-        "width": float,
-        "depth": float,
-        "mass": float,
-        "p": float,
-        "I0": float,
-        "name": str,
-    },
-    "motions": {
-        "source": str,
-        "record": str,
-        "records": (str, list),
-        "model": str,
-        "n": int,
-        "seed": int,
-        "prototype_height": float,
-        "S": float,
-        "amplitude": float,
-        "theta0_over_alpha": list,
-        "duration": float,
-        "dt": float,
-        "pulse": str,
-        "omega_ratio": (list, dict),
-        "accel_ratio": (list, dict),
-    },
-    "engines": {"names": list},
-    "analysis": {"reference": str, "paper_percentiles": dict, "paper_note": str, "seed_spread": int},
-}
-
-
-class ScenarioError(ValueError):
-    """A scenario file is invalid; the message names the file, the key and, where known, the line."""
-
-
-_TABLE_RE = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\-\"' ]+?)\s*\]")
-_TOML_LINE_RE = re.compile(r"\(at line (\d+), column (\d+)\)")
-
-
-def _key_line(text: str, table: str, key: str) -> int | None:
-    """1-based line of ``key = ...`` in ``[table]`` ("" = top level) of a TOML text, or None.
-
-    A plain scan (tomllib keeps no positions): good for the flat files of the
-    catalogue, None when the key is written in a way it does not recognise.
-    """
-    current = ""
-    pat = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*=")
-    for n, line in enumerate(text.splitlines(), start=1):
-        m = _TABLE_RE.match(line)
-        if m and not line.lstrip().startswith("[["):
-            current = m.group(1).replace('"', "").replace("'", "").strip()
-            continue
-        if current == table and pat.match(line):
-            return n
-    if table and "." not in table:  # an inline table: `motions = { n = 0 }` or `[engines.x]`
-        return _key_line(text, "", table)
-    return None
-
-
-class _File:
-    """A scenario file being checked: builds messages that name the file, the line and the key."""
-
-    def __init__(self, path: Path, text: str):
-        self.path = path
-        self.text = text
-
-    def error(self, table: str, key: str | None, message: str) -> ScenarioError:
-        line = _key_line(self.text, table, key) if key is not None else None
-        if line is None and key is not None:  # the key is a table of its own: [key] or [table.key]
-            line = _table_line(self.text, f"{table}.{key}" if table else key)
-        if line is None and table:
-            line = _table_line(self.text, table)
-        where = f"{self.path} line {line}" if line is not None else f"{self.path}"
-        return ScenarioError(f"{where}: {message}")
-
-
-def _table_line(text: str, table: str) -> int | None:
-    for n, line in enumerate(text.splitlines(), start=1):
-        m = _TABLE_RE.match(line)
-        if m and m.group(1).replace('"', "").replace("'", "").strip() == table:
-            return n
-    return None
-
-
-def _check_table(f: _File, table: str, data: dict) -> None:
-    allowed = _SCHEMA[table]
-    for key, value in data.items():
-        if table == "engines" and key != "names":
-            if not isinstance(value, dict):
-                raise f.error(table, key, f"[engines.{key}] must be a table of engine settings")
-            continue
-        where = f"[{table}] " if table else ""
-        if key not in allowed:
-            close = difflib.get_close_matches(key, allowed, n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise f.error(table, key, f"unknown key {where}{key!r}{hint} (allowed: {', '.join(sorted(allowed))})")
-        expected = allowed[key]
-        types = expected if isinstance(expected, tuple) else (expected,)
-        if float in types:
-            types = types + (int,)
-        if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
-            names = " or ".join(t.__name__ for t in types if t is not int or float not in types)
-            raise f.error(table, key, f"{where}{key!r} must be {names}, got {value!r}")
-        if isinstance(value, float) and not math.isfinite(value):
-            raise f.error(table, key, f"{where}{key!r} must be a finite number, got {value!r}")
-        if table and isinstance(value, dict) and table != "analysis":
-            continue
-        if isinstance(value, dict) and key in _SCHEMA:
-            _check_table(f, key, value)
-
-
-def _grid(path: Path, key: str, spec: Any, text: str = "") -> np.ndarray:
-    f = _File(path, text)
-    try:
-        if isinstance(spec, list):
-            arr = np.asarray(spec, dtype=float)
-        else:
-            extra = set(spec) - {"start", "stop", "num"}
-            if extra or not {"start", "stop", "num"} <= set(spec):
-                raise f.error("motions", key, f"[motions] {key!r} must be a list or {{start, stop, num}}, got {spec!r}")
-            num = spec["num"]
-            if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-                raise f.error("motions", key, f"[motions] {key!r}: 'num' must be a positive integer, got {num!r}")
-            arr = np.linspace(float(spec["start"]), float(spec["stop"]), num)
-    except (TypeError, ValueError) as e:
-        if isinstance(e, ScenarioError):
-            raise
-        raise f.error("motions", key, f"[motions] {key!r} must hold numbers, got {spec!r}") from None
-    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise f.error("motions", key, f"[motions] {key!r} must hold positive finite numbers")
-    return arr
 
 
 @dataclass
@@ -381,7 +244,7 @@ class Scenario:
         band_check : bool
             RDK only: also compare the ensemble's mean 5 % spectra with the
             record's, per third-octave band (PSa 0.05-3 s, Sd 0.5-3 s, at
-            prototype scale, before ``amplitude``; :func:`scenarios.rdk_match.band_check`).
+            prototype scale, before ``amplitude``; :func:`scenarios.bands.band_check`).
             About 2 s per 100 motions, so off unless asked (the runner asks).
 
         Returns
@@ -514,13 +377,6 @@ def _to_model(g: GroundMotion, amplitude: float, S: float) -> GroundMotion:
     return g.scaled(amplitude=amplitude).to_model_scale(S)
 
 
-def _is_path(record: str) -> bool:
-    """True if ``record`` names a file: not a shipped name, and with a suffix or a path separator."""
-    from scenarios.records import RECORDS
-
-    return record not in RECORDS and (bool(Path(record).suffix) or "/" in record or "\\" in record)
-
-
 def _one_line(e: Exception) -> str:
     return "; ".join(line.strip() for line in str(e).splitlines() if line.strip()) or type(e).__name__
 
@@ -563,9 +419,9 @@ def _gain_facts(fit) -> dict:
 
 def _band_facts(proto: list[GroundMotion], record: GroundMotion, seed: int) -> dict:
     """The band check of a prototype-scale ensemble against its record, as plain data for run.json."""
-    from scenarios import rdk_match
+    from scenarios import bands
 
-    check = rdk_match.band_check(proto, record)
+    check = bands.band_check(proto, record)
     keep = ("centre_s", "lo_s", "hi_s", "ratio", "ci95_lo", "ci95_hi", "verdict")
 
     def table(t, t_range) -> dict:
@@ -581,8 +437,8 @@ def _band_facts(proto: list[GroundMotion], record: GroundMotion, seed: int) -> d
         "damping": check.damping,
         "bounds": list(check.psa.bounds),
         "passed": check.passed,
-        "psa": table(check.psa, rdk_match.DEFAULT_PSA_RANGE),
-        "sd": table(check.sd, rdk_match.DEFAULT_SD_RANGE),
+        "psa": table(check.psa, bands.DEFAULT_PSA_RANGE),
+        "sd": table(check.sd, bands.DEFAULT_SD_RANGE),
     }
 
 
@@ -669,90 +525,11 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     if not name.strip() or name in (".", "..") or any(c in name for c in "/\\\0"):
         raise f.error("", "name", f"'name' must be a plain name (it names the run directory runs/NAME), got {name!r}")
 
-    spec_t = dict(raw["specimen"])
-    preset = spec_t.pop("preset", None)
-    try:
-        if preset is not None:
-            if preset not in SPECIMEN_PRESETS:
-                raise unknown_choice("specimen preset", preset, SPECIMEN_PRESETS)
-            specimen = SPECIMEN_PRESETS[preset]()
-            if spec_t:
-                from dataclasses import replace
-
-                if "p" not in spec_t and "I0" not in spec_t:
-                    spec_t["p"] = specimen.p
-                specimen = replace(specimen, **{"p": None, "I0": None, **spec_t})
-        else:
-            specimen = Specimen(**spec_t)
-    except (ValueError, TypeError) as e:
-        key = re.search(r"`(\w+)`", str(e))
-        raise f.error("specimen", key.group(1) if key else None, f"[specimen] {e}") from None
-
+    specimen = read_specimen(f, raw["specimen"])
     mot = dict(raw["motions"])
-    src = mot.get("source")
-    if src not in MOTION_SOURCES:
-        raise f.error("motions", "source", f"[motions] {unknown_choice('source', src, MOTION_SOURCES)}")
-    need = {"free_vibration": ["theta0_over_alpha"], "pulses": ["omega_ratio", "accel_ratio"]}.get(src, [])
-    for k in need:
-        if k not in mot:
-            raise f.error("motions", None, f"[motions] source {src!r} needs key {k!r}")
-    if src == "pulses" and mot.get("pulse", "symmetric_ricker") not in PULSES:
-        raise f.error("motions", "pulse", f"[motions] {unknown_choice('pulse', mot['pulse'], PULSES)}")
-    for k in ("prototype_height", "S", "duration", "dt", "amplitude"):
-        if k in mot and not (math.isfinite(mot[k]) and mot[k] > 0):
-            raise f.error("motions", k, f"[motions] {k!r} must be positive and finite, got {mot[k]!r}")
-    if "n" in mot and mot["n"] < 1:
-        raise f.error("motions", "n", f"[motions] 'n' must be a positive integer, got {mot['n']!r}")
-    if "seed" in mot and mot["seed"] < 0:
-        raise f.error("motions", "seed", f"[motions] 'seed' must be a non-negative integer, got {mot['seed']!r}")
-    if "dt" in mot and "duration" in mot and mot["dt"] >= mot["duration"]:
-        raise f.error(
-            "motions", "dt", f"[motions] 'dt' ({mot['dt']!r} s) must be below 'duration' ({mot['duration']!r} s)"
-        )
-    for key, sources in (("record", ("rdk", "record")), ("records", ("records",)), ("model", ("rdk",))):
-        if key in mot and src not in sources:
-            use = " or ".join(f"source = {s!r}" for s in sources)
-            raise f.error("motions", key, f"[motions] {key!r} applies to {use}, not to source {src!r}")
-    if src == "records" and "records" not in mot:
-        raise f.error(
-            "motions", None, "[motions] source 'records' needs key 'records' (a folder, or a list of .AT2 / .csv files)"
-        )
-    if src in ("rdk", "record"):
-        from scenarios.records import RECORDS
-
-        rec = mot.get("record", "elcentro")
-        if not _is_path(rec) and rec not in RECORDS:
-            msg = unknown_choice("record", rec, RECORDS)
-            raise f.error("motions", "record", f"[motions] {msg}, or a path to an .AT2 / .csv file")
-    if mot.get("model", DEFAULT_RDK_MODEL) not in RDK_MODELS:
-        raise f.error("motions", "model", f"[motions] {unknown_choice('model', mot['model'], RDK_MODELS)}")
-    if src == "free_vibration":
-        values = mot["theta0_over_alpha"]
-        bad = [a for a in values if isinstance(a, bool) or not (isinstance(a, (int, float)) and 0 < a < 1)]
-        if bad or not values:
-            got = bad if bad else "an empty list"
-            raise f.error(
-                "motions", "theta0_over_alpha", f"[motions] 'theta0_over_alpha' values must lie in (0, 1), got {got}"
-            )
-
-    eng_t = dict(raw.get("engines", {}))
-    names = list(eng_t.pop("names", ["housner"]))
-    from engines.base import ENGINES
-
-    if not names:
-        raise f.error("engines", "names", "[engines] 'names' must list at least one engine")
-    for n in names:
-        if not isinstance(n, str):
-            raise f.error("engines", "names", f"[engines] 'names' must hold engine names (strings), got {n!r}")
-    for n in names + list(eng_t):
-        if n not in ENGINES:
-            key = "names" if n in names else None
-            err = f.error("engines", key, f"[engines] {unknown_choice('engine', n, ENGINES)}")
-            if key is None:
-                line = _table_line(text, f"engines.{n}")
-                if line is not None:
-                    err = ScenarioError(f"{path} line {line}: [engines] {unknown_choice('engine', n, ENGINES)}")
-            raise err
+    check_motions(f, mot)
+    names, eng_t = read_engines(f, raw.get("engines", {}))
+    src = mot["source"]
     analysis = dict(raw.get("analysis", {}))
     _check_analysis(f, analysis)
     scen = Scenario(
@@ -771,36 +548,3 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         scen.pulse_grid()  # validate the grids now
     scen._read_files()  # record files: read now, so that a bad one fails before any work
     return scen
-
-
-def _check_analysis(f: _File, analysis: dict) -> None:
-    """The [analysis] table is read after the simulation (report): check it now."""
-    ref = analysis.get("reference")
-    if ref is not None:
-        from engines.base import ENGINES
-
-        if ref not in ENGINES:
-            raise f.error("analysis", "reference", f"[analysis] {unknown_choice('reference engine', ref, ENGINES)}")
-    for k, v in (analysis.get("paper_percentiles") or {}).items():
-        try:
-            q = float(k)
-        except ValueError:
-            q = math.nan
-        if not 0 < q < 100:
-            raise f.error(
-                "analysis",
-                "paper_percentiles",
-                f"[analysis] 'paper_percentiles' key {k!r} must be a percentile in (0, 100)",
-            )
-        ok = (isinstance(v, str) and v.strip().lower() in ("overturn", "overturned")) or (
-            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
-        )
-        if not ok:
-            raise f.error(
-                "analysis",
-                "paper_percentiles",
-                f"[analysis] 'paper_percentiles' value for {k!r} must be a number >= 0 or \"overturn\", got {v!r}",
-            )
-    k = analysis.get("seed_spread")
-    if k is not None and not 0 <= k <= 1000:
-        raise f.error("analysis", "seed_spread", f"[analysis] 'seed_spread' must be between 0 and 1000, got {k!r}")
