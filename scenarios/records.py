@@ -40,8 +40,10 @@ __all__ = [
     "file_sha256",
     "load_record",
     "read_record_file",
+    "pmnm_count",
     "significant_duration",
     "t_mid",
+    "upcrossing_count",
 ]
 
 _PEER_CITATION = "PEER Strong Motion Database (1999/2000), Pacific Earthquake Engineering Research Center"
@@ -243,3 +245,29 @@ def significant_duration(motion: GroundMotion, start: float = 0.05, end: float =
 def t_mid(motion: GroundMotion) -> float:
     """Time at 45 % of the Arias intensity, the middle of the strong-motion phase [s] (Rezaeian & Der Kiureghian)."""
     return float(husid_time(motion, 0.45))
+
+
+def upcrossing_count(acc) -> np.ndarray:
+    """Cumulative count of zero-level up-crossings at each sample [-], along axis 0.
+
+    A crossing between samples k and k + 1 (acc[k] < 0 <= acc[k + 1]) is counted at k + 1.
+    """
+    a = np.asarray(acc, dtype=float)
+    ind = np.zeros(a.shape)
+    ind[1:] = (a[:-1] < 0.0) & (a[1:] >= 0.0)
+    return np.cumsum(ind, axis=0)
+
+
+def pmnm_count(acc) -> np.ndarray:
+    """Cumulative count of positive minima and negative maxima at each sample [-], along axis 0.
+
+    Local extrema on the 'wrong' side of zero measure the bandwidth of a process:
+    a narrow-band process has almost none, a broad-band one many.
+    """
+    a = np.asarray(acc, dtype=float)
+    ind = np.zeros(a.shape)
+    prev, mid, nxt = a[:-2], a[1:-1], a[2:]
+    pos_min = (mid > 0.0) & (mid < prev) & (mid <= nxt)
+    neg_max = (mid < 0.0) & (mid > prev) & (mid >= nxt)
+    ind[1:-1] = pos_min | neg_max
+    return np.cumsum(ind, axis=0)
