@@ -11,9 +11,10 @@ import math
 
 import numpy as np
 import pytest
+from shared import windowed_sines
 
 from engines.analytic import HousnerEngine
-from housner import GroundMotion, Specimen
+from housner import Specimen
 from scenarios.analysis import equivalent_amplitude
 
 SPEC = Specimen.bachmann2017()
@@ -21,14 +22,7 @@ SPEC = Specimen.bachmann2017()
 
 def motions(n=16, seed=5):
     """Windowed sines at model scale, 1.5-4 g tan(alpha): most rock, a few overturn."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, 3.0, 0.002)
-    out = []
-    for i in range(n):
-        f, a, ph = rng.uniform(1.5, 4.0), rng.uniform(1.5, 4.0), rng.uniform(0, 2 * np.pi)
-        acc = a * SPEC.uplift_acceleration * np.sin(2 * np.pi * f * t + ph) * np.exp(-(((t - 1.2) / 0.6) ** 2))
-        out.append(GroundMotion(acc, 0.002, name=f"m{i}"))
-    return out
+    return windowed_sines(n, seed, freq=(1.5, 4.0), amp=(1.5, 4.0), scale=SPEC.uplift_acceleration, width=0.6)
 
 
 def pct(ms, q, a=1.0):

@@ -8,6 +8,7 @@ import pickle
 import mujoco
 import numpy as np
 import pytest
+from shared import SoftGroundMujoco
 
 from engines import get_engine
 from engines.mjcf import (
@@ -231,16 +232,6 @@ def test_energy_ratio_of_small_impacts(engine):
     assert abs(rel.mean()) <= 5e-3
 
 
-class _SoftGroundEngine(MujocoEngine):
-    """The engine with its ground plane left at MuJoCo's default solref and solimp (the first tuned model's fault)."""
-
-    def mjcf(self, specimen):
-        xml = super().mjcf(specimen)
-        start = xml.index('<geom name="ground"')
-        end = xml.index("/>", start)
-        return xml[:start] + xml[start:end].split(" solref=")[0] + xml[end:]
-
-
 def test_free_decay_follows_housner_for_40_impacts(engine):
     # Check 3 of the tuner: released at 0.1 alpha, the peaks after 10-40 impacts (0.056 to 0.011 alpha) against the
     # exact sequence cos(alpha - theta_k) - cos(alpha) = r^k (cos(alpha - theta_0) - cos(alpha)). 5 %: scatter of
@@ -252,7 +243,7 @@ def test_free_decay_follows_housner_for_40_impacts(engine):
     assert np.all(np.abs(peaks / exact - 1) <= DECAY_RTOL), np.round((peaks / exact - 1) * 100, 2)
     # The same model with a soft ground (the contact's time constant averaged with MuJoCo's default 20 ms) loses the
     # small rocking: at rest before the 40th impact (the first tuned model: 40th peak 91 % low, check 1 passed).
-    soft = half_cycle_peaks(_SoftGroundEngine(**engine.settings()).simulate(SEED, m))
+    soft = half_cycle_peaks(SoftGroundMujoco(**engine.settings()).simulate(SEED, m))
     assert soft.size <= max(DECAY_IMPACTS) or soft[max(DECAY_IMPACTS)] < 0.5 * exact[-1]
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from scipy import stats as sps
+from shared import windowed_sines
 
 from engines.analytic import HousnerEngine
 from engines.base import ENGINES, register_engine
@@ -55,14 +56,7 @@ def _keep_registry():
 
 def shaking(n=12, seed=7):
     """Short windowed sines strong enough that some blocks rock, some overturn, some stay put."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, 3.0, 0.002)
-    out = []
-    for i in range(n):
-        f, amp, ph = rng.uniform(1.0, 4.0), rng.uniform(1.0, 4.0), rng.uniform(0, 2 * np.pi)
-        a = amp * np.sin(2 * np.pi * f * t + ph) * np.exp(-(((t - 1.2) / 0.7) ** 2))
-        out.append(GroundMotion(a, 0.002, name=f"m{i}"))
-    return out
+    return windowed_sines(n, seed)
 
 
 SPREAD = {  # the layout of scenarios.analysis.seed_spread after run.json

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from shared import SoftGroundMujoco
 
 from engines.base import ENGINES
 from engines.mujoco_engine import MujocoEngine
@@ -171,22 +172,12 @@ def test_tuner_says_so_when_no_candidate_meets_the_target():
     assert ax.lines[-1].get_ydata() == pytest.approx([0.94] * 3, rel=1e-5)
 
 
-class _SoftGroundMujoco(MujocoEngine):
-    """MuJoCo with the ground at its default solref and solimp: the first tuned contact, about 40 times too soft."""
-
-    def mjcf(self, specimen):
-        xml = super().mjcf(specimen)
-        start = xml.index('<geom name="ground"')
-        end = xml.index("/>", start)
-        return xml[:start] + xml[start:end].split(" solref=")[0] + xml[end:]
-
-
 def test_tuner_rejects_the_soft_contact_that_only_matched_r_above_0_2_alpha(monkeypatch):
     # The failure that checks 2-4 were added for: the first tuned contact (0.125 ms, solref (0.25 ms, 1), averaged
     # with the ground's default 20 ms) kept r within 0.5 % at 0.2-0.9 alpha but lost 3 % per impact at 0.02 alpha,
     # let the small rocking die out and rocked too far after near-threshold pulses. Here on today's sphere pivots
     # (measured: 2.0 % at 0.02 alpha, the block at rest before the 40th impact, pulses 4.2 % off).
-    monkeypatch.setitem(ENGINES, "mujoco-soft-ground", _SoftGroundMujoco)
+    monkeypatch.setitem(ENGINES, "mujoco-soft-ground", SoftGroundMujoco)
     old = {"timestep": 1.25e-4, "solref": (2.5e-4, 1.0), "impratio": 100.0, "cone": "pyramidal"}
     res = tune(
         "mujoco-soft-ground",
