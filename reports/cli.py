@@ -69,33 +69,34 @@ def _folds_int(value: str) -> int:
     return n
 
 
-def _open_fraction(value: str) -> float:
+def _as_float(text: str) -> float:
+    """``float(text)``, NaN when it is not a number (so every range check fails on it)."""
     try:
-        x = float(value)
+        return float(text)
     except ValueError:
-        x = math.nan
-    if not 0.0 < x < 1.0:
-        raise argparse.ArgumentTypeError(f"must be a number between 0 and 1 (exclusive), got {value!r}")
-    return x
+        return math.nan
 
 
-def _ratio(value: str) -> float:
-    try:
-        x = float(value)
-    except ValueError:
-        x = math.nan
-    if not 0.0 < x <= 1.0:
-        raise argparse.ArgumentTypeError(f"must be a kinetic-energy ratio in (0, 1], got {value!r}")
-    return x
+def _float_within(inside, what: str):
+    """An argparse type: a float for which ``inside(x)`` holds, else "must be WHAT, got 'TEXT'"."""
+
+    def parse(value: str) -> float:
+        x = _as_float(value)
+        if not inside(x):
+            raise argparse.ArgumentTypeError(f"must be {what}, got {value!r}")
+        return x
+
+    return parse
+
+
+_open_fraction = _float_within(lambda x: 0.0 < x < 1.0, "a number between 0 and 1 (exclusive)")
+_ratio = _float_within(lambda x: 0.0 < x <= 1.0, "a kinetic-energy ratio in (0, 1]")
 
 
 def _amplitudes(value: str) -> tuple[float, ...]:
     out = []
     for part in value.split(","):
-        try:
-            a = float(part)
-        except ValueError:
-            a = math.nan
+        a = _as_float(part)
         if not 0.0 < a < 1.0:
             raise argparse.ArgumentTypeError(
                 f"must be comma-separated amplitudes theta0/alpha in (0, 1), got {part.strip()!r} in {value!r}"
