@@ -198,7 +198,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if client is not None:
             client.close(timeout=2)
     res = run.results
-    for name in engines:
+    for name in dict.fromkeys(res.engine):  # the engines, then the series with the scenario's [[effects]]
         sub = res[res.engine == name]
         ok = sub[sub.status == "ok"]
         info = run.meta["engines"][name]

@@ -491,6 +491,29 @@ def _verdict(row: pd.Series) -> tuple[bool | None, list[str]]:
     return all(c for c, _ in checks), [f'<span class="{"ok" if c else "bad"}">{t}</span>' for c, t in checks]
 
 
+def _effect_series(run: _Run) -> dict[str, str]:
+    """Series of the run that are an engine with the scenario's [[effects]]: series -> engine without them."""
+    info = run.meta.get("engines") or {}
+    return {n: str(v["engine"]) for n, v in info.items() if isinstance(v, dict) and v.get("effects") and "engine" in v}
+
+
+def _moved(run: _Run, base: str, series: str) -> str:
+    """How an effect moves an engine's distribution: median, P[overturn] and KS distance, without -> with."""
+    from housner import stats
+
+    a, b = run.values(base), run.values(series)
+    if not (a.size and b.size):
+        return "no usable records to compare"
+    ks = stats.ks_2samp(a, b)
+    med = [float(run.comparison.loc[n, "q50"]) for n in (base, series)]  # as in the table below
+    po = [float(np.mean(np.isinf(v))) for v in (a, b)]
+    return (
+        f"against {_e(base)} without the effects: median &theta;<sub>max</sub>/&alpha; {_fmt(med[0], 3)} &rarr; "
+        f"{_fmt(med[1], 3)}, P[overturn] {_fmt(po[0], 2)} &rarr; {_fmt(po[1], 2)}, KS distance "
+        f"{_fmt(ks.distance, 3)} (p = {_fmt_p(ks.pvalue)})"
+    )
+
+
 def _headline(run: _Run) -> str:
     cmp = run.comparison
     ref = run.reference
@@ -511,8 +534,25 @@ def _headline(run: _Run) -> str:
         parts.append(
             _note(f"The tuning files could not be checked: <code>{_e(type(e).__name__)}: {_e(e)}</code>", "warn")
         )
+    effects = _effect_series(run)
+    if effects:
+        label = _e((run.meta.get("effects") or {}).get("label", ""))
+        parts.append(
+            _note(
+                f"This run adds physical effects (the scenario's <code>[[effects]]</code>): <strong>{label}</strong>. "
+                "Each series &ldquo;ENGINE + effects&rdquo; is that engine with them, beside the same engine "
+                "without them: an effect is meant to move the distribution, so it gets no pass or fail, only "
+                "how far it moves it."
+            )
+        )
     for name in run.others:
         row = cmp.loc[name]
+        if name in effects:
+            base = effects[name]
+            lines.append(
+                f'<li><span class="badge na">effect</span> {_engine(name, run)}: {_moved(run, base, name)}</li>'
+            )
+            continue
         ok, reasons = _verdict(row)
         extra = f'<div class="caveat">{caveats[name]}</div>' if name in caveats else ""
         lines.append(f"<li>{_badge(ok)} {_engine(name, run)}: {'; '.join(reasons)}{extra}</li>")
@@ -543,7 +583,11 @@ def _headline(run: _Run) -> str:
                 _ci(row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"], 2),
                 "&ndash;" if is_ref else _signed(row["overturn_diff"], 3),
                 _ci(row["q50"], row["q50_low"], row["q50_high"], 3),
-                "reference" if is_ref else _badge(ok) + (_caveat_mark(caveats[name]) if name in caveats else ""),
+                "reference"
+                if is_ref
+                else "effect"
+                if name in effects
+                else _badge(ok) + (_caveat_mark(caveats[name]) if name in caveats else ""),
             ]
         )
     parts.append(_table(header, rows, cls="headline"))

@@ -43,6 +43,7 @@ from scenarios.schema import (
     _is_path,
     _table_line,
     check_motions,
+    read_effects,
     read_engines,
     read_specimen,
 )
@@ -66,6 +67,8 @@ class Scenario:
         Engine names to run by default.
     engine_settings : dict
         Per-engine settings overrides ([engines.NAME] tables).
+    effects : tuple of housner.effects.Effect
+        The [[effects]] tables; each engine runs without and with them.
     analysis : dict
         Reference engine, the paper's values, extra analyses.
     path : Path
@@ -82,6 +85,9 @@ class Scenario:
     path: Path | None = None
     raw: dict = field(default_factory=dict, repr=False)
     raw_text: str = field(default="", repr=False)
+    #: Physical effects of the [[effects]] tables (housner.effects); the runner runs every engine
+    #: without them and with them.
+    effects: tuple = ()
     #: Record files read from the [motions] table: key -> [(motion, facts)]; None until read.
     _files: dict | None = field(default=None, init=False, repr=False, compare=False)
 
@@ -366,6 +372,31 @@ class Scenario:
                     hint = f"; did you mean {close[0]!r}?" if close else ""
                     msg = f"unknown setting {bad[0] if bad else '?'!r}{hint} (settings: {', '.join(known) or 'none'})"
                 raise ScenarioError(f"{at}: [engines.{name}] {msg}") from None
+        self.check_effects(names)
+
+    def check_effects(self, names: list[str] | None = None) -> None:
+        """Refuse, by name, an engine to run that does not realise every effect of [[effects]].
+
+        Raises
+        ------
+        ScenarioError
+            Naming the file, the engine, the effect and what the engine realises.
+        """
+        from engines.base import ENGINES, engine_class
+
+        where = f"{self.path}" if self.path else f"scenario {self.name!r}"
+        for name in names if names is not None else self.engines:
+            if name not in ENGINES:
+                continue  # check_engines names it
+            realised = engine_class(name).effects_supported
+            for e in self.effects:
+                if e.name not in realised:
+                    can = ", ".join(sorted(realised)) or "none"
+                    ok = [n for n in ENGINES if all(x.name in engine_class(n).effects_supported for x in self.effects)]
+                    raise ScenarioError(
+                        f"{where}: [[effects]] engine {name!r} cannot realise effect {e.name!r} (it realises: {can});"
+                        f" run the effects on {', '.join(repr(n) for n in ok) or 'no engine'} (names = [...])"
+                    )
 
     def describe(self) -> dict:
         """The scenario as plain data (for run.json and the cache key)."""
@@ -532,6 +563,7 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     src = mot["source"]
     analysis = dict(raw.get("analysis", {}))
     _check_analysis(f, analysis)
+    effects = read_effects(f, raw.get("effects", []), specimen)
     scen = Scenario(
         name=name,
         description=raw.get("description", ""),
@@ -543,7 +575,9 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         path=path,
         raw=raw,
         raw_text=text,
+        effects=effects,
     )
+    scen.check_effects()
     if src == "pulses":
         scen.pulse_grid()  # validate the grids now
     scen._read_files()  # record files: read now, so that a bad one fails before any work

@@ -61,6 +61,7 @@ from housner.motion import GroundMotion
 from housner.specimen import Specimen
 from scenarios._outputs import check_output_dir
 from scenarios.catalogue import Scenario, load_scenario
+from scenarios.schema import effects_label
 
 __all__ = [
     "RunInterrupted",
@@ -84,6 +85,7 @@ RESULT_COLUMNS = [
     "status",
     "error",
     "cached",
+    "effects",
 ]
 
 
@@ -135,21 +137,21 @@ def _jsonable(x: Any) -> Any:
     return x
 
 
-def cache_key(specimen: Specimen, motion: GroundMotion, engine: str, settings: dict, version: str) -> str:
-    """Content hash of everything that determines one (engine, motion) result."""
-    payload = json.dumps(
-        _jsonable(
-            {
-                "specimen": specimen.describe(),
-                "motion": motion.content_hash(),
-                "engine": engine,
-                "settings": settings,
-                "engine_version": version,
-                "code": code_version(),
-            }
-        ),
-        sort_keys=True,
-    )
+def cache_key(
+    specimen: Specimen, motion: GroundMotion, engine: str, settings: dict, version: str, effects: tuple = ()
+) -> str:
+    """Content hash of everything that determines one (engine, effects, motion) result."""
+    content = {
+        "specimen": specimen.describe(),
+        "motion": motion.content_hash(),
+        "engine": engine,
+        "settings": settings,
+        "engine_version": version,
+        "code": code_version(),
+    }
+    if effects:  # no key for none: results without effects keep their cache entries
+        content["effects"] = [effect_data(e) for e in effects]
+    payload = json.dumps(_jsonable(content), sort_keys=True)
     return hashlib.sha256(payload.encode()).hexdigest()
 
 
@@ -208,10 +210,15 @@ def _worker_engine(name: str, settings: dict, specimen: Specimen | None = None):
     return eng
 
 
-def _simulate_one(eng: Any, specimen: Specimen, i: int, motion: GroundMotion) -> dict:
+def effect_data(effect: Any) -> dict:
+    """An effect as plain data: its registry name and parameter values (for cache keys and run.json)."""
+    return {"name": effect.name, **{k: getattr(effect, k) for k in type(effect).params}}
+
+
+def _simulate_one(eng: Any, specimen: Specimen, i: int, motion: GroundMotion, effects: tuple = ()) -> dict:
     t0 = time.perf_counter()
     try:
-        resp = eng.simulate(specimen, motion)
+        resp = eng.simulate(specimen, motion, effects) if effects else eng.simulate(specimen, motion)
         theta = np.asarray(resp.theta, dtype=np.float32)
         if not np.all(np.isfinite(theta)):
             raise FloatingPointError("non-finite theta in the response")
@@ -236,7 +243,9 @@ def _simulate_one(eng: Any, specimen: Specimen, i: int, motion: GroundMotion) ->
         }
 
 
-def _iter_chunk(name: str, settings: dict, specimen: Specimen, items: list[tuple[int, GroundMotion]]):
+def _iter_chunk(
+    name: str, settings: dict, specimen: Specimen, items: list[tuple[int, GroundMotion]], effects: tuple = ()
+):
     """Yield one result dict per record, as each finishes; failures are data, not exceptions."""
     try:
         eng = _worker_engine(name, settings, specimen)
@@ -247,12 +256,14 @@ def _iter_chunk(name: str, settings: dict, specimen: Specimen, items: list[tuple
         return
     for i, motion in items:
         _maybe_crash(name, i)
-        yield _simulate_one(eng, specimen, i, motion)
+        yield _simulate_one(eng, specimen, i, motion, effects)
 
 
-def _run_chunk(name: str, settings: dict, specimen: Specimen, items: list[tuple[int, GroundMotion]]) -> list[dict]:
+def _run_chunk(
+    name: str, settings: dict, specimen: Specimen, items: list[tuple[int, GroundMotion]], effects: tuple = ()
+) -> list[dict]:
     """Run one engine on a few motions; every failure is caught and returned as data."""
-    return list(_iter_chunk(name, settings, specimen, items))
+    return list(_iter_chunk(name, settings, specimen, items, effects))
 
 
 def _worker_main(conn: Any) -> None:
@@ -274,8 +285,8 @@ def _worker_main(conn: Any) -> None:
             return
         if msg is None:
             return
-        chunk_id, name, settings, specimen, items = msg
-        for row in _iter_chunk(name, settings, specimen, items):
+        chunk_id, name, settings, specimen, items, effects = msg
+        for row in _iter_chunk(name, settings, specimen, items, effects):
             conn.send(("rec", chunk_id, row))
         conn.send(("done", chunk_id, None))
 
@@ -404,6 +415,7 @@ class _Chunk:
     engine: str
     settings: dict
     items: list[tuple[int, GroundMotion]]
+    effects: tuple = ()
 
 
 def _failed(i: int, msg: str) -> dict:
@@ -473,7 +485,7 @@ class _Worker:
     def give(self, chunk: _Chunk, specimen: Specimen) -> bool:
         self.chunk, self.next = chunk, 0
         try:
-            self.conn.send((chunk.id, chunk.engine, chunk.settings, specimen, chunk.items))
+            self.conn.send((chunk.id, chunk.engine, chunk.settings, specimen, chunk.items, chunk.effects))
             return True
         except OSError:  # it died while idle
             return False
@@ -533,7 +545,7 @@ def _run_pool(
             return
         (i, m), rest = rest[0], rest[1:]
         if rest:
-            queue.appendleft(_Chunk(next_id, chunk.engine, chunk.settings, rest))
+            queue.appendleft(_Chunk(next_id, chunk.engine, chunk.settings, rest, chunk.effects))
             next_id += 1
         reasons = deaths.setdefault((chunk.engine, i), [])
         reasons.append(reason)
@@ -541,7 +553,7 @@ def _run_pool(
             msg = f"the worker process died while simulating this record: {reasons[0]}; on the retry: {reasons[1]}"
             on_record(chunk.engine, _failed(i, msg))
         else:
-            queue.append(_Chunk(next_id, chunk.engine, chunk.settings, [(i, m)]))  # the one retry, last
+            queue.append(_Chunk(next_id, chunk.engine, chunk.settings, [(i, m)], chunk.effects))  # the one retry, last
             next_id += 1
 
     def give(w: _Worker, chunk: _Chunk) -> None:
@@ -556,7 +568,8 @@ def _run_pool(
                 msg = f"not run: {n_dead} worker processes died (the last {last_reason}); gave up"
                 for w in workers:
                     if w.chunk is not None:
-                        queue.appendleft(_Chunk(0, w.chunk.engine, w.chunk.settings, w.chunk.items[w.next :]))
+                        rest = w.chunk.items[w.next :]
+                        queue.appendleft(_Chunk(0, w.chunk.engine, w.chunk.settings, rest, w.chunk.effects))
                         w.chunk = None
                 for c in queue:
                     for i, _ in c.items:
@@ -601,7 +614,7 @@ def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_recor
     futs: dict[Any, _Chunk] = {}
     try:
         for c in chunks:
-            f = client.submit(_run_chunk, c.engine, c.settings, specimen, c.items, pure=False, retries=1)
+            f = client.submit(_run_chunk, c.engine, c.settings, specimen, c.items, c.effects, pure=False, retries=1)
             futs[f] = c
         for f in as_completed(futs):
             c = futs[f]
@@ -753,8 +766,9 @@ def run_engines(
     use_cache: bool = True,
     progress: bool = True,
     chunk_size: int | None = None,
+    effects: tuple = (),
 ) -> tuple[pd.DataFrame, dict[tuple[str, int], np.ndarray], dict]:
-    """Run every engine on every motion.
+    """Run every engine on every motion (with ``effects``, if any).
 
     Parameters
     ----------
@@ -773,6 +787,9 @@ def run_engines(
         Show a progress bar with the estimated time left (tqdm, on stderr).
     chunk_size : int, optional
         Records per chunk sent to a worker (default: about a quarter of each worker's share, 1 to 10).
+    effects : tuple of housner.effects.Effect
+        Physical effects every engine realises in every record (``Engine.simulate``'s ``effects``);
+        an engine that cannot realise one fails each record, naming it. Part of the cache key.
 
     Returns
     -------
@@ -826,7 +843,7 @@ def run_engines(
         }
         todo = []
         for i, m in enumerate(motions):
-            k = cache_key(specimen, m, name, full_settings, version)
+            k = cache_key(specimen, m, name, full_settings, version, effects)
             keys[(name, i)] = k
             row, problem = _load_cached(cache_dir / k[:2] / f"{k}.npz", k) if use_cache else (None, None)
             if problem is not None:
@@ -846,7 +863,7 @@ def run_engines(
                 todo.append((i, m))
         n_workers = 1 if scheduler is None and jobs == 1 else max(jobs, 1)
         size = chunk_size or max(1, min(10, math.ceil(len(todo) / (4 * n_workers))))
-        per_engine.append([(name, settings, todo[c : c + size]) for c in range(0, len(todo), size)])
+        per_engine.append([(name, settings, todo[c : c + size], effects) for c in range(0, len(todo), size)])
     # Engines interleaved, chunk by chunk: the progress bar's rate (and time left) then mixes fast
     # and slow engines from the start instead of extrapolating the fastest one.
     chunks: list[_Chunk] = []
@@ -884,7 +901,7 @@ def run_engines(
                 _run_dask(chunks, specimen, scheduler, on_record)
             elif jobs == 1:
                 for c in chunks:
-                    for r in _iter_chunk(c.engine, c.settings, specimen, c.items):
+                    for r in _iter_chunk(c.engine, c.settings, specimen, c.items, c.effects):
                         on_record(c.engine, r)
             else:
                 _run_pool(chunks, specimen, jobs, on_record, deaths)
@@ -916,6 +933,7 @@ def run_engines(
                 "status": r["status"],
                 "error": r.get("error", ""),
                 "cached": bool(r.get("cached", False)),
+                "effects": effects_label(effects),
             }
         )
         if ok:
@@ -1000,6 +1018,29 @@ def write_run(
     (out / "run.json").write_text(json.dumps(_jsonable(meta), indent=2))
 
 
+def effects_series(engine: str, effects: tuple) -> str:
+    """The series name of an engine's records with ``effects``, e.g. ``housner + restitution(r=0.95)``."""
+    return f"{engine} + {effects_label(effects)}"
+
+
+def _with_effects(scenario, motions, eng_settings, results, histories, info, **run) -> tuple:
+    """Run every engine again with the scenario's [[effects]]; its rows join the run as series "ENGINE + EFFECTS".
+
+    The rows keep the engine's name in ``effects_series`` form in ``engine`` (so the statistics, the
+    report and the pytest assertions compare them like any engine, against the same engine without
+    the effects) and the effects in ``effects``; ``info`` gets one entry per series, with ``engine``
+    and ``effects``.
+    """
+    eff = scenario.effects
+    res_e, hist_e, info_e = run_engines(scenario.specimen, motions, eng_settings, effects=eff, **run)
+    series = {name: effects_series(name, eff) for name in eng_settings}
+    res_e = res_e.assign(engine=res_e["engine"].map(series))
+    hist = {**histories, **{(series[n], i): th for (n, i), th in hist_e.items()}}
+    data = [effect_data(e) for e in eff]
+    info = {**info, **{series[n]: {**v, "engine": n, "effects": data} for n, v in info_e.items()}}
+    return pd.concat([results, res_e], ignore_index=True), hist, info
+
+
 def run_scenario(
     scenario: Scenario | str | Path,
     *,
@@ -1050,6 +1091,20 @@ def run_scenario(
         use_cache=use_cache,
         progress=progress,
     )
+    if scenario.effects:
+        results, histories, info = _with_effects(
+            scenario,
+            motions,
+            eng_settings,
+            results,
+            histories,
+            info,
+            jobs=jobs,
+            scheduler=scheduler,
+            cache_dir=cache_dir,
+            use_cache=use_cache,
+            progress=progress,
+        )
     fails = results[results["status"] != "ok"]
     spread = None
     k = int(scenario.analysis.get("seed_spread", 0) or 0)
@@ -1070,5 +1125,10 @@ def run_scenario(
     }
     if spread is not None:
         meta["table2_spread"] = spread
+    if scenario.effects:
+        meta["effects"] = {
+            "label": effects_label(scenario.effects),
+            "effects": [effect_data(e) for e in scenario.effects],
+        }
     write_run(out, results, histories, motions, meta)
     return RunResult(results, histories, motions, meta, out)

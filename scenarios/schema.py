@@ -36,6 +36,7 @@ _SCHEMA: dict[str, dict[str, Any]] = {
         "motions": dict,
         "engines": dict,
         "analysis": dict,
+        "effects": list,
     },
     "specimen": {
         "preset": str,
@@ -305,3 +306,51 @@ def _check_analysis(f: _File, analysis: dict) -> None:
     k = analysis.get("seed_spread")
     if k is not None and not 0 <= k <= 1000:
         raise f.error("analysis", "seed_spread", f"[analysis] 'seed_spread' must be between 0 and 1000, got {k!r}")
+
+
+def _array_table_line(text: str, table: str, k: int) -> int | None:
+    """1-based line of the ``k``-th ``[[table]]`` header (k from 0) of a TOML text, or None."""
+    pat = re.compile(rf"^\s*\[\[\s*{re.escape(table)}\s*\]\]")
+    lines = [n for n, line in enumerate(text.splitlines(), start=1) if pat.match(line)]
+    return lines[k] if k < len(lines) else None
+
+
+def read_effects(f: _File, entries: list, specimen: Specimen) -> tuple:
+    """The ``[[effects]]`` tables as effects of :mod:`housner.effects`, each checked against the specimen.
+
+    Each table names an effect (``name = "rotational_damping"``) and gives its
+    parameters in the units of the effect's ``params``; an unknown name or
+    parameter, a missing one or a value out of bounds is a one-line error
+    naming the file and the line of that ``[[effects]]``.
+    """
+    from housner.effects import available_effects, make_effect
+
+    out = []
+    for k, entry in enumerate(entries):
+        line = _array_table_line(f.text, "effects", k)
+        at = f"{f.path} line {line}" if line is not None else f"{f.path}"
+        if not isinstance(entry, dict):
+            raise ScenarioError(f"{at}: [[effects]] entries must be tables (name = ..., parameters), got {entry!r}")
+        params = dict(entry)
+        name = params.pop("name", None)
+        if not isinstance(name, str):
+            choices = ", ".join(available_effects())
+            raise ScenarioError(f"{at}: [[effects]] needs name = \"<effect>\" (choices: {choices})")
+        try:
+            out.append(make_effect(name, specimen, **params))
+        except (TypeError, ValueError) as e:
+            raise ScenarioError(f"{at}: [[effects]] {e}") from None
+    names = [e.name for e in out]
+    dup = next((n for n in names if names.count(n) > 1), None)
+    if dup is not None:
+        raise ScenarioError(f"{f.path}: [[effects]] lists {dup!r} twice; give it once with all its parameters")
+    return tuple(out)
+
+
+def effects_label(effects) -> str:
+    """A short text naming effects and their parameters, e.g. ``restitution(r=0.9532)``; "" for none."""
+    parts = []
+    for e in effects:
+        vals = ", ".join(f"{k}={getattr(e, k):.4g}" for k in type(e).params)
+        parts.append(f"{e.name}({vals})")
+    return " + ".join(parts)
