@@ -1111,7 +1111,7 @@ def run_scenario(
     if k > 1 and "housner" in names and n_motions is None and seed is None:
         from scenarios.analysis import seed_spread
 
-        spread = seed_spread(scenario, k)
+        spread = seed_spread(scenario, k, cache_dir=cache_dir, use_cache=use_cache)
     meta = {
         "scenario": scenario.describe(),
         "specimen": scenario.specimen.describe(),

@@ -84,3 +84,20 @@ def test_bad_arguments_are_named(motions_, targets, says):
     with pytest.raises(ValueError, match=None) as e:
         equivalent_amplitude(SPEC, motions(2) if motions_ is None else motions_, targets)
     assert says in str(e.value)
+
+
+def test_seed_spread_runs_through_the_runner_and_its_cache(tmp_path):
+    """k ensembles of n motions: percentiles as computed directly with the analytic model, cached on the way."""
+    from scenarios.analysis import ensemble_seeds, seed_spread
+    from scenarios.catalogue import load_scenario
+
+    scen = load_scenario("elcentro")
+    got = seed_spread(scen, 2, n=6, cache_dir=tmp_path)
+    assert got["seeds"] == ensemble_seeds(2017, 2) and got["n_failed"] == 0
+    for j, s in enumerate(got["seeds"]):
+        ms, _ = scen.build_motions(6, seed=s)
+        v = np.array([r.theta_max_over_alpha for r in HousnerEngine().simulate_many(SPEC, ms)])
+        for q in (25, 50, 75):
+            assert got["percentiles"][q][j] == float(np.percentile(v, q, method="inverted_cdf"))
+    assert len(list(tmp_path.rglob("*.npz"))) == 12  # every record in the run cache
+    assert seed_spread(scen, 2, n=6, cache_dir=tmp_path)["percentiles"] == got["percentiles"]
