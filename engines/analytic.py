@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from engines.base import Engine
+from engines.base import Engine, check_response
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -83,4 +83,6 @@ class HousnerEngine(Engine):
         kwargs = {"r": self.r}
         if self.substeps is not None:
             kwargs["substeps"] = self.substeps
-        return simulate_many(specimen, list(motions), **kwargs)
+        motions = list(motions)
+        out = simulate_many(specimen, motions, **kwargs)
+        return [check_response(r, self.name, m) for r, m in zip(out, motions, strict=True)]

@@ -11,12 +11,12 @@ import importlib
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
-from housner.errors import unknown_choice
+from housner.errors import EngineError, unknown_choice
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
 
-__all__ = ["ENGINES", "Engine", "get_engine", "register_engine"]
+__all__ = ["ENGINES", "Engine", "check_response", "get_engine", "register_engine"]
 
 #: Registry: engine name -> class, or "module:Class" imported on first use
 #: (so that `import engines` does not import MuJoCo or PyBullet).
@@ -91,7 +91,24 @@ class Engine:
             if ename not in self.effects_supported:
                 supported = ", ".join(sorted(self.effects_supported)) or "none"
                 raise ValueError(f"engine {self.name!r} cannot realise effect {ename!r} (it realises: {supported})")
-        return self._simulate(specimen, motion, effects)
+        return check_response(self._simulate(specimen, motion, effects), self.name, motion)
+
+    def simulate_many(self, specimen: Specimen, motions: Sequence[GroundMotion], effects: Sequence[Any] = ()) -> list:
+        """Simulate several records: one :meth:`simulate` each (an engine may batch them, with the same results).
+
+        Parameters
+        ----------
+        specimen : Specimen
+        motions : sequence of GroundMotion
+        effects : sequence of effects
+            The same effects for every record.
+
+        Returns
+        -------
+        list of Response
+            One per motion, in order; each passed :func:`check_response`.
+        """
+        return [self.simulate(specimen, m, effects) for m in motions]
 
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
         raise NotImplementedError
@@ -107,3 +124,21 @@ class Engine:
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.settings().items())
         return f"{type(self).__name__}({args})"
+
+
+def check_response(resp: Response, engine: str, motion: GroundMotion) -> Response:
+    """The output check every engine's response passes: a finite theta history, a peak that is a number.
+
+    Raises
+    ------
+    EngineError
+        Naming the engine and the motion: the engine diverged or returned no usable history.
+    """
+    import numpy as np
+
+    theta = np.asarray(resp.theta, dtype=float)
+    if theta.size == 0 or not np.all(np.isfinite(theta)):
+        raise EngineError(f"engine {engine!r} returned a non-finite theta history on motion {motion.name!r}")
+    if np.isnan(resp.theta_max_over_alpha):
+        raise EngineError(f"engine {engine!r} returned no theta_max on motion {motion.name!r}")
+    return resp

@@ -174,3 +174,29 @@ def test_bad_jobs_and_chunk_size_are_refused():
         run_engines(SPEC, motions(1), {"housner": {}}, jobs=-2, use_cache=False, progress=False)
     with pytest.raises(ValueError, match="`chunk_size`"):
         run_engines(SPEC, motions(1), {"housner": {}}, jobs=1, chunk_size=0, use_cache=False, progress=False)
+
+
+@register_engine("nan-housner")
+class NanEngine(HousnerEngine):
+    """The analytic engine, except that its history on motion 'm2' holds a NaN (a diverged solver)."""
+
+    def _simulate(self, specimen, motion, effects):
+        resp = super()._simulate(specimen, motion, effects)
+        if motion.name == "m2":
+            resp.theta[len(resp.theta) // 2] = math.nan
+        return resp
+
+
+def test_the_engine_base_checks_every_response_and_the_runner_keeps_the_others(tmp_path):
+    from engines.base import check_response
+    from housner.errors import EngineError
+
+    ms = motions()
+    with pytest.raises(EngineError, match="engine 'nan-housner' returned a non-finite theta history on motion 'm2'"):
+        NanEngine().simulate(SPEC, ms[2])
+    resp = HousnerEngine().simulate(SPEC, ms[0])
+    assert check_response(resp, "housner", ms[0]) is resp
+    df, _, _ = run_engines(SPEC, ms, {"nan-housner": {}}, jobs=1, cache_dir=tmp_path, progress=False)
+    assert list(df.status) == ["ok", "ok", "failed", "ok"]
+    assert "non-finite theta history on motion 'm2'" in df.error[2]
+    ENGINES.setdefault("nan-housner", NanEngine)
