@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 
-from engines.base import Engine, check_response
+from engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -70,19 +72,67 @@ class HousnerEngine(Engine):
         plan = apply_effects(specimen, motion, effects, params=RockingParams.from_specimen(specimen, r=self.r))
         return plan.run(substeps=self.substeps)
 
-    def simulate_many(self, specimen: Specimen, motions: list[GroundMotion], effects: Sequence = ()) -> list[Response]:
+    def simulate_many(
+        self, specimen: Specimen, motions: Sequence[GroundMotion], effects: Sequence = (), *, errors: str = "raise"
+    ) -> list:
         """Simulate several records; the same results as calling ``simulate`` on each.
 
-        Without effects the records go to the compiled batch solver
-        (:func:`housner.model.simulate_many`, parallel over records).
-        """
-        if effects:
-            return [self.simulate(specimen, m, effects) for m in motions]
-        from housner.model import simulate_many
+        Records whose effects keep Housner's equation of motion (parameter and
+        sensor effects, or none) are solved together in one compiled call per
+        parameter set (:func:`housner.model.simulate_many`, parallel over
+        records); a batch that fails is redone record by record so that the
+        failing one is named. Effects that replace the equation of motion
+        (flexible foundation, sliding) run one record at a time in kernels
+        that release the GIL, on threads.
 
-        kwargs = {"r": self.r}
-        if self.substeps is not None:
-            kwargs["substeps"] = self.substeps
+        Parameters
+        ----------
+        specimen, motions, effects, errors
+            As for :meth:`engines.base.Engine.simulate_many`.
+        """
+        from housner.effects import apply_effects
+        from housner.model import RockingParams, simulate_many
+
+        _check_errors(errors)
         motions = list(motions)
-        out = simulate_many(specimen, motions, **kwargs)
-        return [check_response(r, self.name, m) for r, m in zip(out, motions, strict=True)]
+        effects = tuple(effects)
+        self._refuse_unrealised(effects)
+        base = RockingParams.from_specimen(specimen, r=self.r)
+        plans = [apply_effects(specimen, m, effects, params=base) for m in motions]
+        out: list = [None] * len(motions)
+        groups: dict = {}
+        for i, pl in enumerate(plans):
+            if pl.solver is None:
+                groups.setdefault(pl.params, []).append(i)
+        for prm, idx in groups.items():
+            try:
+                res = simulate_many(specimen, [plans[i].motion for i in idx], params=prm, substeps=self.substeps)
+            except RECORD_ERRORS:
+                continue  # one record at a time below, so that the failing one is named
+            for i, r in zip(idx, res, strict=True):
+                out[i] = plans[i].observe(r)
+
+        def run_one(i: int):
+            try:
+                return check_response(plans[i].run(substeps=self.substeps), self.name, motions[i])
+            except RECORD_ERRORS as e:
+                return e
+
+        todo = [i for i in range(len(motions)) if out[i] is None]
+        workers = min(len(todo), os.cpu_count() or 1)
+        if workers > 1:
+            with ThreadPoolExecutor(workers) as pool:
+                for i, r in zip(todo, pool.map(run_one, todo), strict=True):
+                    out[i] = r
+        else:
+            for i in todo:
+                out[i] = run_one(i)
+        for i, r in enumerate(out):
+            if isinstance(r, Response):
+                try:
+                    out[i] = check_response(r, self.name, motions[i])
+                except RECORD_ERRORS as e:
+                    out[i] = e
+            if errors == "raise" and isinstance(out[i], BaseException):
+                raise out[i]
+        return out

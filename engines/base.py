@@ -16,7 +16,7 @@ from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
 
-__all__ = ["ENGINES", "Engine", "check_response", "get_engine", "register_engine"]
+__all__ = ["ENGINES", "RECORD_ERRORS", "Engine", "check_response", "get_engine", "register_engine"]
 
 #: Registry: engine name -> class, or "module:Class" imported on first use
 #: (so that `import engines` does not import MuJoCo or PyBullet).
@@ -86,14 +86,12 @@ class Engine:
         if not isinstance(motion, GroundMotion):
             raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
         effects = tuple(effects)
-        for e in effects:
-            ename = getattr(e, "name", type(e).__name__)
-            if ename not in self.effects_supported:
-                supported = ", ".join(sorted(self.effects_supported)) or "none"
-                raise ValueError(f"engine {self.name!r} cannot realise effect {ename!r} (it realises: {supported})")
+        self._refuse_unrealised(effects)
         return check_response(self._simulate(specimen, motion, effects), self.name, motion)
 
-    def simulate_many(self, specimen: Specimen, motions: Sequence[GroundMotion], effects: Sequence[Any] = ()) -> list:
+    def simulate_many(
+        self, specimen: Specimen, motions: Sequence[GroundMotion], effects: Sequence[Any] = (), *, errors: str = "raise"
+    ) -> list:
         """Simulate several records: one :meth:`simulate` each (an engine may batch them, with the same results).
 
         Parameters
@@ -102,13 +100,34 @@ class Engine:
         motions : sequence of GroundMotion
         effects : sequence of effects
             The same effects for every record.
+        errors : {"raise", "return"}
+            What a record the engine fails on gives: its exception raised (the
+            default), or returned in the record's place, the others kept.
 
         Returns
         -------
-        list of Response
-            One per motion, in order; each passed :func:`check_response`.
+        list
+            One :class:`housner.Response` per motion, in order, each passed by
+            :func:`check_response` (or, with ``errors="return"``, the exception of a failed record).
         """
-        return [self.simulate(specimen, m, effects) for m in motions]
+        _check_errors(errors)
+        out: list = []
+        for m in motions:
+            try:
+                out.append(self.simulate(specimen, m, effects))
+            except RECORD_ERRORS as e:
+                if errors == "raise":
+                    raise
+                out.append(e)
+        return out
+
+    def _refuse_unrealised(self, effects: tuple) -> None:
+        """ValueError naming the first effect this engine does not realise, and those it does."""
+        for e in effects:
+            ename = getattr(e, "name", type(e).__name__)
+            if ename not in self.effects_supported:
+                supported = ", ".join(sorted(self.effects_supported)) or "none"
+                raise ValueError(f"engine {self.name!r} cannot realise effect {ename!r} (it realises: {supported})")
 
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
         raise NotImplementedError
@@ -142,3 +161,12 @@ def check_response(resp: Response, engine: str, motion: GroundMotion) -> Respons
     if np.isnan(resp.theta_max_over_alpha):
         raise EngineError(f"engine {engine!r} returned no theta_max on motion {motion.name!r}")
     return resp
+
+
+#: Exceptions that fail one record (an engine diverging, a refused value), not the whole batch.
+RECORD_ERRORS = (EngineError, ValueError, FloatingPointError, ArithmeticError)
+
+
+def _check_errors(errors: str) -> None:
+    if errors not in ("raise", "return"):
+        raise ValueError(f"`errors` must be 'raise' or 'return', got {errors!r}")

@@ -74,9 +74,7 @@ eqs. 2, 7, 8; Figs. 9-10; Table 2.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Iterable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -84,7 +82,6 @@ import numpy as np
 
 from housner import stats
 from housner.calibration import FreeVibrationCalibration, calibrate_free_vibration
-from housner.errors import EngineError
 from housner.response import Response
 from housner.units import G
 from scenarios.campaign import Campaign, MeasuredRecord
@@ -188,18 +185,15 @@ def simulate_records(
 
     Notes
     -----
-    For the analytic engine, records whose effects keep Housner's equation
-    of motion are solved together in one compiled call
-    (:func:`housner.model.simulate_many`), which gives the same responses as
-    one call per record.
+    The engine's ``simulate_many`` runs them (the analytic engine batches the
+    records whose effects keep Housner's equation of motion, with the same
+    responses as one call per record); free-vibration records and the others
+    go in two calls, the former without the effects a free vibration cannot show.
     """
-    from engines.analytic import HousnerEngine
     from engines.base import Engine, get_engine
 
     eng = engine if isinstance(engine, Engine) else get_engine(engine, **dict(engine_settings or {}))
     effects = resolve_effects(effects, specimen)
-    # an effect a free vibration cannot show (its time axis starts at its own release) is left out there
-    fv_effects = [e for e in effects if type(e).seen_in_free_vibration]
     refused = [e.name for e in effects if e.name not in eng.effects_supported]
     if refused:
         supported = ", ".join(sorted(eng.effects_supported)) or "none"
@@ -207,49 +201,18 @@ def simulate_records(
             f"engine {eng.name!r} cannot realise effect(s) {', '.join(map(repr, refused))} (it realises: "
             f"{supported}); compare effects on the analytic engine, 'housner'"
         )
+    # an effect a free vibration cannot show (its time axis starts at its own release) is left out there
+    fv_effects = tuple(e for e in effects if type(e).seen_in_free_vibration)
     out: list[Response | str] = [""] * len(records)
-    if isinstance(eng, HousnerEngine):
-        from housner.effects import apply_effects
-        from housner.model import RockingParams, simulate_many
-
-        base = RockingParams.from_specimen(specimen, r=eng.r)
-        plans = [apply_effects(specimen, rec.motion, fv_effects if rec.kind == "free_vibration" else effects,
-                               params=base) for rec in records]  # fmt: skip
-        groups: dict[Any, list[int]] = {}
-        for i, pl in enumerate(plans):
-            if pl.solver is None:
-                groups.setdefault(pl.params, []).append(i)
-        for prm, idx in groups.items():
-            try:
-                res = simulate_many(specimen, [plans[i].motion for i in idx], params=prm, substeps=eng.substeps)
-            except (EngineError, ValueError, FloatingPointError):
-                continue  # one record at a time below, so that the failing one is named
-            for i, r in zip(idx, res, strict=True):
-                out[i] = plans[i].observe(r)
-        todo = [i for i in range(len(records)) if not isinstance(out[i], Response)]
-
-        def run_one(i: int) -> Response | str:
-            try:
-                return plans[i].run(substeps=eng.substeps)
-            except (EngineError, ValueError, FloatingPointError) as e:
-                return f"{type(e).__name__}: {e}"
-
-        # Effects that replace the equation of motion run one record at a time in kernels that release
-        # the GIL: threads put every core to work on them.
-        workers = min(len(todo), os.cpu_count() or 1)
-        if workers > 1:
-            with ThreadPoolExecutor(workers) as pool:
-                for i, r in zip(todo, pool.map(run_one, todo), strict=True):
-                    out[i] = r
-        else:
-            for i in todo:
-                out[i] = run_one(i)
-        return out
-    for i, rec in enumerate(records):
-        try:
-            out[i] = eng.simulate(specimen, rec.motion, fv_effects if rec.kind == "free_vibration" else effects)
-        except (EngineError, ValueError, FloatingPointError) as e:
-            out[i] = f"{type(e).__name__}: {e}"
+    for kind_effects, idx in (
+        (fv_effects, [i for i, r in enumerate(records) if r.kind == "free_vibration"]),
+        (effects, [i for i, r in enumerate(records) if r.kind != "free_vibration"]),
+    ):
+        if not idx:
+            continue
+        res = eng.simulate_many(specimen, [records[i].motion for i in idx], kind_effects, errors="return")
+        for i, r in zip(idx, res, strict=True):
+            out[i] = r if isinstance(r, Response) else f"{type(r).__name__}: {r}"
     return out
 
 
