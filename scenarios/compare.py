@@ -82,6 +82,7 @@ import numpy as np
 
 from housner import stats
 from housner.calibration import FreeVibrationCalibration, calibrate_free_vibration
+from housner.impacts import HYSTERESIS_SIGMAS, noise_crossings
 from housner.response import Response
 from housner.units import G
 from scenarios.campaign import Campaign, MeasuredRecord
@@ -115,8 +116,6 @@ WINDOW_IMPACTS = 6
 #: Free vibration is not chaotic; its window runs over up to this many impacts [-] (from 0.8 alpha
 #: with r = 0.95 that is down to ~0.3 alpha: p and r are pinned long before).
 WINDOW_IMPACTS_FV = 20
-#: Hysteresis of the impact detector, in noise sigmas (a spurious crossing ~3e-5 per sample).
-HYSTERESIS_SIGMAS = 4.0
 #: Per-sample error clip [alpha].
 ERROR_CLIP = 1.0
 #: Divergence: |delta theta| > DIVERGENCE_SIGMAS sigma + DIVERGENCE_ALPHA alpha for DIVERGENCE_SUSTAIN s.
@@ -221,6 +220,9 @@ def simulate_records(
 def measured_impacts(theta, noise: float) -> np.ndarray:
     """Indices of the measured impacts: zero crossings of theta with a hysteresis of 4 noise sigmas.
 
+    :func:`housner.impacts.noise_crossings`, the detector the free-vibration
+    calibration uses too.
+
     Parameters
     ----------
     theta : array_like
@@ -233,14 +235,7 @@ def measured_impacts(theta, noise: float) -> np.ndarray:
     ndarray of int
         For each crossing, the first sample beyond the band on the new side.
     """
-    th = np.asarray(theta, dtype=float)
-    h = HYSTERESIS_SIGMAS * max(float(noise), 1e-12)
-    state = np.where(th > h, 1, np.where(th < -h, -1, 0))
-    k = np.flatnonzero(state)
-    if k.size < 2:
-        return np.empty(0, dtype=int)
-    s = state[k]
-    return k[np.flatnonzero(s[1:] != s[:-1]) + 1]
+    return noise_crossings(theta, noise)
 
 
 def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | None = None) -> int:
