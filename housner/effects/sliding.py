@@ -1,337 +1,22 @@
-"""Compiled equations of motion for the effects that change the mechanics (private).
-
-Two hybrid (piecewise-smooth) systems, both integrated with classic RK4 on
-steps aligned to the motion's samples (ground acceleration linear inside a
-sample interval). Each has a discrete *mode* (pivot side, contacts, slip
-direction); within a step the mode is frozen, so the right-hand side is
-smooth and RK4 keeps its order. A step whose end state violates the mode
-(a *margin* turns negative) is cut at the first violation, found by
-bracketing (Illinois false position with bisection safeguard) on the length
-of one RK4 step from the start of the step, to machine precision; the mode
-is then updated and the step resumed. See :mod:`housner.effects` for the
-physics and the public entry points.
-
-* ``run_flexible``: a block on two compression-only spring-dashpots at its
-  corners (vertical displacement w of the base point below the centre of
-  mass, and rotation theta).
-* ``run_sliding``: a block on rigid ground with Coulomb friction (pivot slip
-  x and rotation theta), regimes rest, slide, rock and slide-rock.
-
-Units: SI, angles [rad]; ``run_sliding`` takes the ground acceleration in
-units of g [-] like :mod:`housner._kernel`, ``run_flexible`` in m/s^2.
-"""
+"""Sliding: a block on rigid ground with Coulomb friction; rest, slide, rock, slide-rock (effect, driver, kernel)."""
 
 from __future__ import annotations
 
+import functools
 import math
+from dataclasses import asdict, dataclass
 
+import numpy as np
 from numba import njit
 
 from housner._kernel import _uplift_side
-
-HALF_PI = 0.5 * math.pi
-EPS = 2.220446049250313e-16
-
-#: Most mode changes allowed in one sample interval before the kernel gives up
-#: (chattering); the Python side turns it into an EngineError.
-MAX_EVENTS_PER_SAMPLE = 20_000
-
-# ----------------------------------------------------------------------
-# flexible foundation
-#: Layout of the constants vector of ``run_flexible`` (per unit mass).
-#: g [m/s^2], H [m] (pivot line to centre of mass), b_pos, b_neg [m] (horizontal
-#: distance from the centre of mass to the +x and -x corner), i_c [m^2]
-#: (centroidal inertia / m), i0_pos, i0_neg [m^2] (inertia about each corner / m),
-#: c [1/s] (rotational damping rate), kappa [1/s^2] (k/m per corner), eta [1/s]
-#: (dashpot c/m per corner).
-F_G, F_H, F_BP, F_BN, F_IC, F_I0P, F_I0N, F_C, F_KAPPA, F_ETA = range(10)
-N_FLEX = 10
-
-
-@njit(cache=True)
-def _grid(j, m, dt):
-    """Local time of substep boundary j of m [s] (exactly dt at j = m)."""
-    if j >= m:
-        return dt
-    return dt * j / m
-
-
-@njit(cache=True)
-def _ff_forces(th, thd, w, wd, ap, an, q):
-    """Corner forces per unit mass [m/s^2] of the active contacts (mode frozen: may be < 0)."""
-    sn = math.sin(th)
-    cs = math.cos(th)
-    fp = 0.0
-    fn = 0.0
-    if ap:
-        fp = q[F_KAPPA] * (q[F_BP] * sn - w) + q[F_ETA] * (q[F_BP] * cs * thd - wd)
-    if an:
-        fn = q[F_KAPPA] * (-w - q[F_BN] * sn) + q[F_ETA] * (-wd - q[F_BN] * cs * thd)
-    return fp, fn
-
-
-@njit(cache=True)
-def _ff_acc(th, thd, w, wd, ag, s, ap, an, q):
-    """(theta'', w'') [rad/s^2, m/s^2] with the horizontal constraint at the corner of side s."""
-    sn = math.sin(th)
-    cs = math.cos(th)
-    hh = q[F_H]
-    if s > 0:
-        sb = q[F_BP]
-        i0s = q[F_I0P]
-    else:
-        sb = -q[F_BN]
-        i0s = q[F_I0N]
-    a = sb * sn + hh * cs  # d x_G / d theta
-    ath = sb * cs - hh * sn  # d a / d theta
-    fp, fn = _ff_forces(th, thd, w, wd, ap, an, q)
-    num = -a * (ag + ath * thd * thd) + hh * sn * (fp + fn) - cs * (q[F_BP] * fp - q[F_BN] * fn) - q[F_C] * i0s * thd
-    thdd = num / (q[F_IC] + a * a)
-    wdd = -q[F_G] + fp + fn + hh * sn * thdd + hh * cs * thd * thd
-    return thdd, wdd
-
-
-@njit(cache=True)
-def _ff_rk4(th, thd, w, wd, tau, h, a0, slope, s, ap, an, q):
-    """One RK4 step of length h [s] from local time tau [s]; ground acc a0 + slope * tau [m/s^2]."""
-    hh = 0.5 * h
-    g_beg = a0 + slope * tau
-    g_mid = a0 + slope * (tau + hh)
-    g_end = a0 + slope * (tau + h)
-    k1t, k1w = _ff_acc(th, thd, w, wd, g_beg, s, ap, an, q)
-    v2t = thd + hh * k1t
-    v2w = wd + hh * k1w
-    k2t, k2w = _ff_acc(th + hh * thd, v2t, w + hh * wd, v2w, g_mid, s, ap, an, q)
-    v3t = thd + hh * k2t
-    v3w = wd + hh * k2w
-    k3t, k3w = _ff_acc(th + hh * v2t, v3t, w + hh * v2w, v3w, g_mid, s, ap, an, q)
-    v4t = thd + h * k3t
-    v4w = wd + h * k3w
-    k4t, k4w = _ff_acc(th + h * v3t, v4t, w + h * v3w, v4w, g_end, s, ap, an, q)
-    h6 = h / 6.0
-    return (
-        th + h6 * (thd + 2.0 * v2t + 2.0 * v3t + v4t),
-        thd + h6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t),
-        w + h6 * (wd + 2.0 * v2w + 2.0 * v3w + v4w),
-        wd + h6 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w),
-    )
-
-
-@njit(cache=True)
-def _ff_gap(th, thd, w, wd, q):
-    """Contact functions of the +x and -x corner: > 0 exactly when the corner pushes (compression-only)."""
-    sn = math.sin(th)
-    cs = math.cos(th)
-    dp = q[F_BP] * sn - w
-    dn = -w - q[F_BN] * sn
-    fp = q[F_KAPPA] * dp + q[F_ETA] * (q[F_BP] * cs * thd - wd)
-    fn = q[F_KAPPA] * dn + q[F_ETA] * (-wd - q[F_BN] * cs * thd)
-    return min(dp, fp), min(dn, fn)
-
-
-@njit(cache=True)
-def _ff_margin(th, thd, w, wd, s, ap, an, q):
-    """Smallest mode margin [mixed units]: negative once the frozen mode is violated."""
-    gp, gn = _ff_gap(th, thd, w, wd, q)
-    m = s * th
-    v = gp if ap else -gp
-    if v < m:
-        m = v
-    v = gn if an else -gn
-    if v < m:
-        m = v
-    v = HALF_PI - abs(th)
-    if v < m:
-        m = v
-    return m
-
-
-@njit(cache=True)
-def _ff_bracket(kind, th, thd, w, wd, tau, hl, vl, hr, vr, a0, slope, s, ap, an, q):
-    """First h in (hl, hr] where a function of one RK4 step from tau turns negative.
-
-    kind 0: the mode margin; kind 1: s theta' (a peak of |theta|). vl >= 0 and
-    vr < 0 are its values at the bracket ends. Returns (h, state at h) with the
-    function negative at h and non-negative just before (to rounding).
-    """
-    y0, y1, y2, y3 = _ff_rk4(th, thd, w, wd, tau, hr, a0, slope, s, ap, an, q)
-    side = 0
-    for _ in range(200):
-        if hr - hl <= 4.0 * EPS * (tau + hr):
-            break
-        h = hr - vr * (hr - hl) / (vr - vl)
-        if not (hl < h < hr):
-            h = 0.5 * (hl + hr)
-        z0, z1, z2, z3 = _ff_rk4(th, thd, w, wd, tau, h, a0, slope, s, ap, an, q)
-        if kind == 0:
-            v = _ff_margin(z0, z1, z2, z3, s, ap, an, q)
-        else:
-            v = s * z1
-        if v < 0.0:
-            hr = h
-            vr = v
-            y0, y1, y2, y3 = z0, z1, z2, z3
-            if side == -1:
-                vl *= 0.5
-            side = -1
-        else:
-            hl = h
-            vl = v
-            if side == 1:
-                vr *= 0.5
-            side = 1
-    return hr, y0, y1, y2, y3
-
-
-@njit(cache=True, nogil=True)
-def run_flexible(
-    acc, dt, msub, q, theta0, theta_dot0, w0, w_dot0, record, th_out, thd_out, w_out, wd_out, impacts, durations
-):
-    """Simulate the block on two compression-only spring-dashpots.
-
-    Parameters
-    ----------
-    acc : float64[:]
-        Ground acceleration [m/s^2].
-    dt : float
-        Sample step [s].
-    msub : int
-        RK4 substeps per sample.
-    q : float64[:]
-        Constants (layout ``F_*``).
-    theta0, theta_dot0, w0, w_dot0 : float
-        Initial state [rad, rad/s, m, m/s].
-    record : bool
-        Write histories (theta, theta', w, w') on the sample grid.
-    impacts, durations : float64[:]
-        Buffers: impact times [s] and the duration of the double contact
-        around each [s] (NaN when the block crossed theta = 0 off the ground).
-
-    Returns
-    -------
-    (theta_max, overturned, t_over, t_uplift, n_impacts, guard, w_min)
-    """
-    n = acc.size
-    th = theta0
-    thd = theta_dot0
-    w = w0
-    wd = w_dot0
-    if th > 0.0 or (th == 0.0 and thd >= 0.0):
-        s = 1.0
-    else:
-        s = -1.0
-    gp, gn = _ff_gap(th, thd, w, wd, q)
-    ap = gp > 0.0
-    an = gn > 0.0
-    lifted = not (ap and an)
-    t_uplift = 0.0 if lifted else math.nan
-    t_both = 0.0
-    imp_both = -1
-    theta_max = abs(th)
-    w_min = w
-    over = False
-    t_over = math.nan
-    n_imp = 0
-    cap = impacts.size
-    guard = 0
-    if record:
-        th_out[0] = th
-        thd_out[0] = thd
-        w_out[0] = w
-        wd_out[0] = wd
-    for k in range(n - 1):
-        if over:
-            if not record:
-                break
-            th_out[k + 1] = th
-            thd_out[k + 1] = 0.0
-            w_out[k + 1] = w
-            wd_out[k + 1] = 0.0
-            continue
-        t_k = k * dt
-        a0 = acc[k]
-        slope = (acc[k + 1] - a0) / dt
-        tau = 0.0
-        n_ev = 0
-        for j in range(msub):
-            tend = _grid(j + 1, msub, dt)
-            while tau < tend and not over:
-                hs = tend - tau
-                y0, y1, y2, y3 = _ff_rk4(th, thd, w, wd, tau, hs, a0, slope, s, ap, an, q)
-                mr = _ff_margin(y0, y1, y2, y3, s, ap, an, q)
-                event = mr < 0.0
-                if event:
-                    ml = _ff_margin(th, thd, w, wd, s, ap, an, q)
-                    if ml < 0.0:
-                        ml = 0.0
-                    hs, y0, y1, y2, y3 = _ff_bracket(0, th, thd, w, wd, tau, 0.0, ml, hs, mr, a0, slope, s, ap, an, q)
-                # a peak of |theta| inside the accepted step
-                if s * thd > 0.0 and s * y1 < 0.0:
-                    _h, p0, _p1, _p2, _p3 = _ff_bracket(
-                        1, th, thd, w, wd, tau, 0.0, s * thd, hs, s * y1, a0, slope, s, ap, an, q
-                    )
-                    if abs(p0) > theta_max:
-                        theta_max = abs(p0)
-                th = y0
-                thd = y1
-                w = y2
-                wd = y3
-                if abs(th) > theta_max:
-                    theta_max = abs(th)
-                if w < w_min:
-                    w_min = w
-                if not event:
-                    tau = tend
-                    break
-                tau = tau + hs
-                t = t_k + tau
-                n_ev += 1
-                if n_ev > MAX_EVENTS_PER_SAMPLE:
-                    guard += 1
-                    tau = tend
-                    break
-                if HALF_PI - abs(th) < 0.0:
-                    over = True
-                    t_over = t
-                    theta_max = HALF_PI
-                    th = s * HALF_PI
-                    thd = 0.0
-                    break
-                if s * th < 0.0:
-                    s = -s
-                    if lifted:
-                        if n_imp < cap:
-                            impacts[n_imp] = t
-                            durations[n_imp] = math.nan
-                        if ap and an:
-                            imp_both = n_imp
-                        n_imp += 1
-                        lifted = False
-                both_before = ap and an
-                gp, gn = _ff_gap(th, thd, w, wd, q)
-                if (gp if ap else -gp) < 0.0:
-                    ap = not ap
-                if (gn if an else -gn) < 0.0:
-                    an = not an
-                if both_before and not (ap and an):
-                    lifted = True
-                    if math.isnan(t_uplift):
-                        t_uplift = t
-                    if imp_both >= 0:
-                        if imp_both < cap:
-                            durations[imp_both] = t - t_both
-                        imp_both = -1
-                if ap and an and not both_before:
-                    t_both = t
-            if over:
-                break
-        if record:
-            th_out[k + 1] = th
-            thd_out[k + 1] = thd
-            w_out[k + 1] = w
-            wd_out[k + 1] = wd
-    return theta_max, over, t_over, t_uplift, n_imp, guard, w_min
-
+from housner.effects._mechanics import EPS, HALF_PI, MAX_EVENTS_PER_SAMPLE, _corner_geometry, _grid, _pos_int_or_none
+from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
+from housner.errors import EngineError
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+from housner.units import G
 
 # ----------------------------------------------------------------------
 # sliding
@@ -795,3 +480,175 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
                 th_out[k + 1] = 0.0
                 thd_out[k + 1] = 0.0
     return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard, x_max, t_slide, n_jam, t_lift
+
+
+def simulate_sliding(
+    specimen: Specimen,
+    motion: GroundMotion,
+    params=None,
+    *,
+    mu: float,
+    substeps: int | None = None,
+    rest_tol: float = 1e-6,
+) -> Response:
+    """Rocking with Coulomb friction at the base (see :class:`Sliding` for the model).
+
+    Parameters
+    ----------
+    specimen : Specimen
+    motion : GroundMotion
+        Ground acceleration [m/s^2] and initial state theta0 [rad],
+        theta_dot0 [rad/s] (the base is not slipping at t = 0).
+    params : RockingParams, optional
+        Every field is used except the per-side ratios ``r_pos`` and
+        ``r_neg`` (the sliding kernel's impacts use ``r``, the geometric mean
+        of the two for :class:`AsymmetricPivots`); default: the specimen's.
+    mu : float
+        Friction coefficient [-].
+    substeps : int, optional
+        RK4 substeps per sample; default as :func:`housner.model.simulate` (p h <= 0.01).
+    rest_tol : float
+        Rest rule of :func:`housner.model.simulate` [-].
+
+    Returns
+    -------
+    Response
+        ``info`` adds ``slip`` (horizontal displacement of the base corner in
+        contact relative to the ground [m], history), ``regime`` (int8
+        history: 0 rest, 1 slide, 2 rock, 3 slide-rock, 4 overturned),
+        ``slip_max`` [m], ``slide_time`` (first slip [s], NaN if none),
+        ``painleve_jams`` and ``lift_off_time`` [s] (see :class:`Sliding`).
+    """
+    from housner.model import RockingParams, default_substeps
+
+    prm = RockingParams.from_specimen(specimen) if params is None else params
+    mu = float(mu)
+    if not (math.isfinite(mu) and mu > 0):
+        raise ValueError(f"`mu` must be positive and finite, got {mu!r}")
+    if not (isinstance(rest_tol, (int, float)) and 0.0 < rest_tol < 1.0):
+        raise ValueError(f"`rest_tol` must lie in (0, 1), got {rest_tol!r}")
+    geo = _corner_geometry(specimen, prm)
+    q = np.zeros(N_SLIDE)
+    q[S_G], q[S_MU], q[S_C], q[S_R], q[S_REXP] = G, mu, prm.damping, prm.r, prm.r_amp_exponent
+    for side, (ia, ir, ii, ip) in (
+        ("pos", (S_ALPHA_P, S_R_P, S_I0_P, S_P2_P)),
+        ("neg", (S_ALPHA_N, S_R_N, S_I0_N, S_P2_N)),
+    ):
+        _b, rr, i0, _ic = geo[side]
+        q[ia] = getattr(prm, f"alpha_{side}")
+        q[ir] = rr
+        q[ii] = i0
+        q[ip] = getattr(prm, f"p_{side}") ** 2
+    m = _pos_int_or_none("substeps", substeps)
+    if m is None:
+        m = default_substeps(prm.p_max, motion.dt)
+    n = motion.n
+    th, thd, x = np.empty(n), np.empty(n), np.empty(n)
+    reg = np.empty(n, dtype=np.int8)
+    cap = max(64, n)
+    imp = np.empty(cap)
+    acc_g = np.ascontiguousarray(motion.acc, dtype=np.float64) / G
+    args = (acc_g, motion.dt, m, q, motion.theta0, motion.theta_dot0, float(rest_tol))
+    out = run_sliding(*args, True, th, thd, x, reg, imp)
+    theta_max, over, t_over, t_up, n_imp, guard, x_max, t_slide, n_jam, t_lift = out
+    if guard:
+        raise EngineError(
+            f"sliding: more than {MAX_EVENTS_PER_SAMPLE} regime changes in one sample on motion {motion.name!r}"
+        )
+    if n_imp > cap:
+        imp = np.empty(n_imp)
+        run_sliding(*args, False, th[:0], thd[:0], x[:0], reg[:0], imp)
+    info = {
+        "kernel": "sliding",
+        "substeps": m,
+        "rest_tol": rest_tol,
+        "params": asdict(prm),
+        "mu": mu,
+        "slip": x,
+        "regime": reg,
+        "slip_max": float(x_max),
+        "slide_time": float(t_slide),
+        "painleve_jams": int(n_jam),
+        "lift_off_time": float(t_lift),
+    }
+    return Response(
+        t=motion.t,
+        theta=th,
+        theta_dot=thd,
+        impact_times=imp[:n_imp].copy(),
+        theta_max=math.pi / 2 if over else float(theta_max),
+        alpha=specimen.alpha,
+        overturned=bool(over),
+        overturn_time=float(t_over),
+        uplift_time=float(t_up),
+        engine="housner",
+        info=info,
+    )
+
+
+@register_effect
+@dataclass(frozen=True)
+class Sliding(Effect):
+    """Rocking with Coulomb friction mu at the base: rest, slide, rock and slide-rock.
+
+    Rigid block, rigid ground; degrees of freedom theta and the horizontal
+    slip x of the base corner in contact (the pivot stays on the ground, as in
+    Housner's model). Friction F <= mu N, N the normal force. Regimes:
+
+    * rest: the block moves with the ground while |ug''| <= mu g and it does
+      not uplift (ug'' within [-g tan(alpha+), g tan(alpha-)]);
+    * slide (theta = 0): m x'' = -m ug'' - mu m g sgn(x'); it stops when x'
+      returns to zero and |ug''| <= mu g;
+    * rock (x' = 0): Housner's equation; the pivot holds while the friction
+      demand F = m (ug'' + zeta theta'' - xi theta'^2) stays within mu N,
+      N = m (g - xi theta'' - zeta theta'^2), where (xi, zeta) = position of the
+      centre of mass relative to the pivot;
+    * slide-rock: both; with F = -mu N sgn(x') the moment balance about the
+      pivot gives (I_c + m xi^2 + mu sgn(x') m zeta xi) theta'' =
+      m (mu sgn(x') zeta + xi)(g - zeta theta'^2) - c I0 theta'. When this
+      coefficient is not positive the Coulomb problem has no consistent slip
+      (Painleve's paradox): the slip is stopped (a tangential jam, counted in
+      ``info['painleve_jams']``). When the normal-force demand turns negative
+      (the block would jump) friction vanishes and the pivot is kept on the
+      ground (time counted in ``info['lift_off_time']``).
+
+    Impacts follow Housner's law (theta' times sqrt(r), with every
+    restitution effect) and keep the slip velocity: with x' unchanged,
+    angular momentum about the landing corner is conserved exactly as on a
+    fixed base, and the impulse lies inside the friction cone whenever
+    mu >= tan(alpha) (it needs (1 - sqrt r) / ((1 + sqrt r) tan(alpha)) < tan(alpha)).
+
+    Start of motion from rest under horizontal ground acceleration (Shenton
+    1996): the block slides if mu < tan(alpha) and |ug''| > mu g, and then
+    never rocks (friction caps the inertia force the base can transmit at
+    mu m g < m g tan(alpha)); it rocks if mu > tan(alpha) and |ug''| > g tan(alpha),
+    and slides while rocking when the friction demand exceeds mu N.
+
+    Parameters
+    ----------
+    mu : float
+        Coulomb friction coefficient at the base [-], in [0.01, 2]; neutral inf
+        (no sliding: Housner's model).
+
+    References
+    ----------
+    Shenton, H. W., Jones, N. P. (1991). Base excitation of rigid bodies. I:
+    Formulation. Journal of Engineering Mechanics 117(10), 2286-2306.
+    Shenton, H. W. (1996). Criteria for initiation of slide, rock, and
+    slide-rock rigid-body modes. Journal of Engineering Mechanics 122(7), 690-693.
+    Zhang, J., Makris, N. (2001). Rocking response of free-standing blocks
+    under cycloidal pulses. Journal of Engineering Mechanics 127(5), 473-483.
+    Genot, F., Brogliato, B. (1999). New results on Painleve paradoxes.
+    European Journal of Mechanics A/Solids 18(4), 653-677.
+    """
+
+    name = "sliding"
+    params = {"mu": ParamSpec("-", (0.01, 2.0), math.inf, None, "Coulomb friction coefficient at the base")}
+    stage = STAGE_MECHANICS
+    changes_mechanics = True
+    mu: float
+
+    def solver(self):
+        if math.isinf(self.mu):
+            return None
+        return functools.partial(simulate_sliding, mu=self.mu)

@@ -1,0 +1,122 @@
+"""Physical effects: small pluggable additions to the analytic rocking model.
+
+An *effect* is a frozen dataclass whose fields are its parameters. The class
+says, once, what each parameter means (:class:`ParamSpec`: unit, bounds for
+fitting, the neutral value at which the effect does nothing) and overrides
+only the hooks it needs; the others are no-ops:
+
+``modify_params(params, specimen)``
+    returns a changed :class:`housner.model.RockingParams` (restitution,
+    amplitude-dependent restitution, rotational damping, asymmetric pivots,
+    frequency parameter);
+``transform_input(motion)``
+    returns the ground motion the block really feels;
+``observe(response)``
+    returns what a sensor would record (angle offset, channel time lag);
+``solver()``
+    returns a different equation of motion, a callable
+    ``solve(specimen, motion, params, *, substeps=None, rest_tol=1e-6) -> Response``,
+    for the effects that change the mechanics (flexible foundation, sliding);
+    None keeps Housner's rigid block.
+
+Effects live in the registry :data:`EFFECTS` (name -> class). Add your own
+with the :func:`register_effect` decorator, or from an installed package
+through the entry-point group ``housner.effects`` (each entry point names an
+:class:`Effect` subclass, or a module that registers its effects on import)::
+
+    @register_effect
+    @dataclass(frozen=True)
+    class TableFilter(Effect):
+        name = "table_filter"
+        params = {"gain": ParamSpec("-", (0.5, 1.5), 1.0, doc="table gain")}
+        gain: float = 1.0
+
+        def transform_input(self, motion):
+            return motion.scaled(amplitude=self.gain)
+
+Composition (:func:`apply_effects`): effects are applied in the order of
+their ``stage`` (geometry, inertia, dissipation, mechanics, sensor) and,
+within a stage, in the order given, so that the built-in effects commute:
+
+1. ``modify_params`` of every effect, starting from
+   ``RockingParams.from_specimen(specimen)``: ``asymmetric_pivots`` sets the
+   per-corner alpha, p and the impact loss from the geometry, then
+   ``frequency_parameter`` scales p, then ``restitution`` replaces r,
+   ``amplitude_dependent_restitution`` sets the exponent and
+   ``rotational_damping`` adds its rate;
+2. ``transform_input`` of every effect;
+3. the solver: Housner's (``housner.model.simulate``) or the one mechanics
+   effect's; at most one mechanics-changing effect may be given (their
+   kernels do not compose: a block that both slides and sits on springs
+   would need a third kernel);
+4. ``observe`` of every effect (``sensor_offset`` and ``time_lag`` commute).
+
+References
+----------
+Housner, G. W. (1963). The behavior of inverted pendulum structures during
+earthquakes. Bulletin of the Seismological Society of America 53(2), 403-417.
+Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
+(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017.
+"""
+
+from __future__ import annotations
+
+from housner.effects.flexible import FlexibleFoundation, simulate_flexible
+from housner.effects.parameters import (
+    AmplitudeDependentRestitution,
+    AsymmetricPivots,
+    FrequencyParameter,
+    Restitution,
+    RotationalDamping,
+    asymmetric_impact_ratios,
+)
+from housner.effects.registry import (
+    EFFECTS,
+    ENTRY_POINT_GROUP,
+    STAGE_DISSIPATION,  # noqa: F401 - the stages, for users' effects
+    STAGE_GEOMETRY,  # noqa: F401
+    STAGE_INERTIA,  # noqa: F401
+    STAGE_MECHANICS,  # noqa: F401
+    STAGE_SENSOR,  # noqa: F401
+    Effect,
+    EffectPlan,
+    ParamSpec,
+    apply_effects,
+    available_effects,
+    discover_effects,
+    effect_class,
+    make_effect,
+    make_effects,
+    register_effect,
+    simulate_with_effects,
+)
+from housner.effects.sensor import SensorOffset, TimeLag
+from housner.effects.sliding import Sliding, simulate_sliding
+
+__all__ = [
+    "EFFECTS",
+    "ENTRY_POINT_GROUP",
+    "AmplitudeDependentRestitution",
+    "AsymmetricPivots",
+    "Effect",
+    "EffectPlan",
+    "FlexibleFoundation",
+    "FrequencyParameter",
+    "ParamSpec",
+    "Restitution",
+    "RotationalDamping",
+    "SensorOffset",
+    "Sliding",
+    "TimeLag",
+    "apply_effects",
+    "asymmetric_impact_ratios",
+    "available_effects",
+    "discover_effects",
+    "effect_class",
+    "make_effect",
+    "make_effects",
+    "register_effect",
+    "simulate_flexible",
+    "simulate_sliding",
+    "simulate_with_effects",
+]

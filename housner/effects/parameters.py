@@ -1,0 +1,259 @@
+"""Effects that change the rocking parameters (restitution, its amplitude dependence, rotational damping,
+asymmetric pivots, frequency parameter)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from housner.effects.registry import (
+    STAGE_DISSIPATION,
+    STAGE_GEOMETRY,
+    STAGE_INERTIA,
+    Effect,
+    ParamSpec,
+    register_effect,
+)
+from housner.specimen import Specimen
+from housner.units import G
+
+
+# ----------------------------------------------------------------------
+# effects that change the rocking parameters
+@register_effect
+@dataclass(frozen=True)
+class Restitution(Effect):
+    """Kinetic-energy ratio at impact r, free instead of Housner's value.
+
+    At every impact theta'_after = sqrt(r) theta'_before, so the energy ratio
+    of two successive free-rocking half-cycles is r (seed eq. 8 measures it
+    as c_i = (cos(alpha - |theta_{i+1}|) - cos alpha) / (cos(alpha - |theta_i|)
+    - cos alpha)). Neutral: the specimen's Housner value (seed eq. 4).
+
+    Parameters
+    ----------
+    r : float
+        Kinetic-energy ratio at impact [-], in [0, 1].
+
+    References
+    ----------
+    Housner (1963); Bachmann et al. (2017), eqs. 4 and 8 and Table 1
+    (r = 0.9532 measured, 0.9465 from eq. 4).
+    """
+
+    name = "restitution"
+    params = {"r": ParamSpec("-", (0.0, 1.0), lambda s: s.r_housner, doc="kinetic-energy ratio at impact")}
+    stage = STAGE_DISSIPATION
+    r: float
+
+    def modify_params(self, params, specimen):
+        # with_r keeps the split of an asymmetric block's two impacts (r_pos / r_neg)
+        return params.with_r(self.r)
+
+
+@register_effect
+@dataclass(frozen=True)
+class AmplitudeDependentRestitution(Effect):
+    """Impact loss that depends on the impact speed.
+
+    The energy ratio of an impact with pre-impact speed |theta'| is
+    r_eff = clip(r (|theta'| / (p_s alpha_s))^n, 0, 1) with the r in force
+    (Housner's or the ``restitution`` effect's), p_s and alpha_s of the
+    corner the block rocked on before the impact. p alpha is the impact speed
+    of a block released from theta = alpha in the linearised model, so a
+    block released near overturning loses what r says; n > 0 makes small
+    impacts lose more (tests on stone and concrete blocks find the measured
+    ratio falling with amplitude), n < 0 less. Realised by
+    ``RockingParams.r_amp_exponent``.
+
+    Parameters
+    ----------
+    exponent : float
+        Exponent n [-], in [-2, 2]; neutral 0 (constant r).
+
+    References
+    ----------
+    Kalliontzis, D., Sritharan, S., Schultz, A. (2016). Improved coefficient
+    of restitution estimation for free rocking members. Journal of Structural
+    Engineering 142(12), 06016002.
+    """
+
+    name = "amplitude_dependent_restitution"
+    params = {"exponent": ParamSpec("-", (-2.0, 2.0), 0.0, 0.0, "exponent n of r (|theta'|/(p alpha))^n")}
+    stage = STAGE_DISSIPATION
+    exponent: float = 0.0
+
+    def modify_params(self, params, specimen):
+        if self.exponent == 0.0:
+            return params
+        return replace(params, r_amp_exponent=self.exponent)
+
+
+@register_effect
+@dataclass(frozen=True)
+class RotationalDamping(Effect):
+    """Viscous moment between impacts, -c I0 theta'.
+
+    The equation of motion gains -c theta', so between impacts the rocking
+    energy per unit I0, E = theta'^2/2 + p^2 (cos(alpha - |theta|) - cos alpha)
+    [1/s^2], decays at exactly dE/dt = -c theta'^2. A phenomenological stand-in
+    for losses that Housner's instantaneous impact misses (air, interface
+    micro-slip, a soft base). Adds to any damping already in force.
+
+    Parameters
+    ----------
+    c : float
+        Damping rate [1/s] per unit rotational inertia about the pivot, in
+        [0, 5]; neutral 0.
+
+    References
+    ----------
+    Housner (1963) for the energy integral.
+    """
+
+    name = "rotational_damping"
+    params = {"c": ParamSpec("1/s", (0.0, 5.0), 0.0, 0.0, "viscous damping rate of the rotation")}
+    stage = STAGE_DISSIPATION
+    c: float = 0.0
+
+    def modify_params(self, params, specimen):
+        if self.c == 0.0:
+            return params
+        return replace(params, damping=params.damping + self.c)
+
+
+def asymmetric_impact_ratios(specimen: Specimen, e: float) -> tuple[float, float]:
+    """Angular-velocity ratios of the two impacts of a block whose centre of mass is off-centre.
+
+    The centre of mass sits at height H and horizontally e [m] toward +x from
+    the midpoint of the pivots, so the +x corner is b+ = B - e and the -x
+    corner b- = B + e away from it horizontally. Conservation of angular
+    momentum about the corner that lands (Housner's assumptions: impulse at
+    the corner, no bounce, no slip) gives, with I_c the centroidal inertia and
+    I+- = I_c + m (H^2 + b+-^2) the inertia about each corner::
+
+        theta'_after / theta'_before = (I_c + m (H^2 - b+ b-)) / I_landing
+
+    Returns
+    -------
+    (rho_pos_to_neg, rho_neg_to_pos) : tuple of float
+        Ratio [-] for an impact that ends rocking on the +x corner and lands
+        on the -x corner, and for the reverse. For e = 0 both are
+        1 - 2 m B^2 / I0 = sqrt(r_housner).
+    """
+    m = specimen.mass
+    hh = specimen.H
+    bp = specimen.B - e
+    bn = specimen.B + e
+    ic = specimen.centroidal_inertia
+    common = ic + m * (hh * hh - bp * bn)
+    return common / (ic + m * (hh * hh + bn * bn)), common / (ic + m * (hh * hh + bp * bp))
+
+
+@register_effect
+@dataclass(frozen=True)
+class AsymmetricPivots(Effect):
+    """Centre of mass off-centre by e: the two corners have their own alpha, R and p.
+
+    With the centre of mass e [m] toward +x of the midpoint of the pivots
+    (height H, centroidal inertia I_c unchanged), the block rocking on the +x
+    corner (theta > 0) has b+ = B - e, alpha+ = atan(b+/H), R+ = hypot(b+, H),
+    p+ = sqrt(m g R+ / (I_c + m R+^2)); on the -x corner the same with
+    b- = B + e. The uplift thresholds differ: it lifts onto the +x corner when
+    ug'' < -g tan(alpha+) and onto the -x corner when ug'' > g tan(alpha-).
+
+    Impacts: angular momentum about the landing corner is conserved
+    (:func:`asymmetric_impact_ratios`): just before an impact that ends
+    rocking on the +x corner, the block turns at theta' about that corner;
+    the impulse acts at the landing (-x) corner, so the angular momentum
+    about it, (I_c + m (H^2 - b+ b-)) theta', is kept, and just after the
+    block turns about the -x corner with inertia I- = I_c + m (H^2 + b-^2).
+    This scales theta' by rho+- at that impact and by rho-+ (the same with
+    the sides swapped) at the converse; rho+- / rho-+ = I+ / I-. The effect
+    sets the restitution of each impact exactly (``RockingParams.r_pos`` and
+    ``r_neg``, ratios of the squared angular velocities; the kinetic energy
+    itself changes by rho+-^2 I- / I+ and rho-+^2 I+ / I-)::
+
+        r_neg = rho+-^2 * r_in_force(-) / r_housner   (lands on the -x corner)
+        r_pos = rho-+^2 * r_in_force(+) / r_housner   (lands on the +x corner)
+        r     = rho+- rho-+ * r_in_force / r_housner  (their geometric mean)
+
+    each clipped to 1, where r_in_force is the ratio in force before this
+    effect (per side where set). With Housner's r in force this is
+    r_neg = rho+-^2 and r_pos = rho-+^2; a later ``restitution`` effect
+    rescales both (:meth:`housner.model.RockingParams.with_r`), keeping
+    r_neg / r_pos = (I+ / I-)^2.
+
+    Parameters
+    ----------
+    e : float
+        Horizontal offset of the centre of mass toward +x [m], within
+        +-B/2 (B the half width); neutral 0.
+
+    References
+    ----------
+    Housner (1963) for the impact law (angular momentum about the new pivot);
+    the asymmetric generalisation is derived in this docstring.
+    """
+
+    name = "asymmetric_pivots"
+    params = {
+        "e": ParamSpec("m", lambda s: (-0.5 * s.B, 0.5 * s.B), 0.0, 0.0, "offset of the centre of mass toward +x")
+    }
+    stage = STAGE_GEOMETRY
+    e: float = 0.0
+
+    def modify_params(self, params, specimen):
+        if self.e == 0.0:
+            return params
+        m, hh, ic = specimen.mass, specimen.H, specimen.centroidal_inertia
+        out = {}
+        for side, b in (("pos", specimen.B - self.e), ("neg", specimen.B + self.e)):
+            rr = math.hypot(b, hh)
+            out[f"alpha_{side}"] = math.atan2(b, hh)
+            out[f"p_{side}"] = math.sqrt(m * G * rr / (ic + m * rr * rr))
+        rho_pn, rho_np = asymmetric_impact_ratios(specimen, self.e)
+        r_h = specimen.r_housner
+        out["r"] = min(1.0, params.r * rho_pn * rho_np / r_h)
+        out["r_neg"] = min(1.0, params.r_impact_neg * rho_pn * rho_pn / r_h)  # lands on the -x corner
+        out["r_pos"] = min(1.0, params.r_impact_pos * rho_np * rho_np / r_h)  # lands on the +x corner
+        return replace(params, **out)
+
+
+@register_effect
+@dataclass(frozen=True)
+class FrequencyParameter(Effect):
+    """The frequency parameter p scaled by a factor (a mis-stated or mis-measured p).
+
+    Both corners' p are multiplied by ``factor``: half-cycle durations scale
+    as 1/factor (Housner: cosh(p T / 4) = 1 / (1 - theta0/alpha), seed eq. 7).
+    alpha and r are unchanged (change r with ``restitution``). To state p
+    directly use :meth:`from_p`.
+
+    Parameters
+    ----------
+    factor : float
+        Ratio of the p used to the specimen's p [-], in [0.5, 2]; neutral 1.
+
+    References
+    ----------
+    Housner (1963); Bachmann et al. (2017), eqs. 3 and 7 (p calibrated from
+    free vibration, 4.8883 1/s).
+    """
+
+    name = "frequency_parameter"
+    params = {"factor": ParamSpec("-", (0.5, 2.0), 1.0, 1.0, "ratio of the p used to the specimen's p")}
+    stage = STAGE_INERTIA
+    factor: float = 1.0
+
+    @classmethod
+    def from_p(cls, specimen: Specimen, p: float) -> FrequencyParameter:
+        """The effect that makes the specimen rock with frequency parameter ``p`` [1/s]."""
+        if not (isinstance(p, (int, float)) and math.isfinite(p) and p > 0):
+            raise ValueError(f"`p` must be a positive number [1/s], got {p!r}")
+        return cls(factor=p / specimen.frequency_parameter)
+
+    def modify_params(self, params, specimen):
+        if self.factor == 1.0:
+            return params
+        return replace(params, p_pos=params.p_pos * self.factor, p_neg=params.p_neg * self.factor)

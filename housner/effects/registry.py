@@ -1,0 +1,486 @@
+"""The effects' vocabulary and registry: ParamSpec, Effect, register / discover / make, composition (apply_effects)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, replace
+from importlib.metadata import entry_points
+from typing import Any, ClassVar
+
+import numpy as np
+
+from housner.errors import unknown_choice
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+
+ENTRY_POINT_GROUP = "housner.effects"
+
+#: Stages, in order of application (see the module docstring).
+STAGE_GEOMETRY, STAGE_INERTIA, STAGE_DISSIPATION, STAGE_MECHANICS, STAGE_SENSOR = 10, 20, 30, 40, 50
+
+#: Registry: effect name -> Effect subclass.
+EFFECTS: dict[str, type[Effect]] = {}
+
+_discovered = False
+
+
+# ----------------------------------------------------------------------
+# the parts of an effect
+@dataclass(frozen=True)
+class ParamSpec:
+    """What one parameter of an effect means.
+
+    Parameters
+    ----------
+    unit : str
+        Unit of the value ("-" when dimensionless).
+    bounds : (float, float) or callable
+        Closed interval [lo, hi] of meaningful values, used to validate and as
+        the search range of a fit; a callable ``bounds(specimen) -> (lo, hi)``
+        when the range depends on the specimen.
+    neutral : float or callable
+        The value at which the effect does nothing (it may lie outside
+        ``bounds``, e.g. ``inf`` for an infinitely stiff foundation), or a
+        callable ``neutral(specimen) -> float``.
+    default : float, optional
+        The dataclass field's default, repeated here for tables and as the
+        start value of a fit; None when the parameter is required.
+    doc : str
+        One line for tables and error messages.
+    """
+
+    unit: str
+    bounds: tuple[float, float] | Callable[[Specimen], tuple[float, float]]
+    neutral: float | Callable[[Specimen], float]
+    default: float | None = None
+    doc: str = ""
+
+    def bounds_for(self, specimen: Specimen | None = None) -> tuple[float, float] | None:
+        """The bounds [unit]; None when they depend on a specimen that is not given."""
+        if callable(self.bounds):
+            return None if specimen is None else tuple(float(b) for b in self.bounds(specimen))
+        return float(self.bounds[0]), float(self.bounds[1])
+
+    def neutral_for(self, specimen: Specimen | None = None) -> float | None:
+        """The neutral value [unit]; None when it depends on a specimen that is not given."""
+        if callable(self.neutral):
+            return None if specimen is None else float(self.neutral(specimen))
+        return float(self.neutral)
+
+
+class Effect:
+    """Base class of the physical effects (subclasses are frozen dataclasses).
+
+    Attributes
+    ----------
+    name : str
+        Registry key.
+    params : mapping of str to ParamSpec
+        One entry per dataclass field.
+    stage : int
+        Order of application (``STAGE_*``); ties keep the order given.
+    changes_mechanics : bool
+        True for effects that bring their own equation of motion (``solver``).
+    conflicts : frozenset of str
+        Names of effects that cannot be combined with this one while it is active.
+    seen_in_free_vibration : bool
+        False for an effect that a free-vibration record measured with the
+        campaign's release alignment cannot show (its time axis starts at the
+        release seen in its own theta channel); the campaign comparison leaves
+        such an effect out of those records.
+
+    The dataclass fields are validated on construction against the static
+    bounds (a value outside them raises a ValueError naming the parameter,
+    unless it is the neutral value); specimen-dependent bounds are checked by
+    :meth:`check`, which :func:`apply_effects` calls.
+    """
+
+    name: ClassVar[str] = ""
+    params: ClassVar[Mapping[str, ParamSpec]] = {}
+    stage: ClassVar[int] = STAGE_DISSIPATION
+    changes_mechanics: ClassVar[bool] = False
+    conflicts: ClassVar[frozenset[str]] = frozenset()
+    conflict_reason: ClassVar[str] = ""
+    seen_in_free_vibration: ClassVar[bool] = True
+
+    def __post_init__(self) -> None:
+        for key, spec in self.params.items():
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ValueError(f"`{key}` of effect {self.name!r} must be a number [{spec.unit}], got {value!r}")
+            x = float(value)
+            if math.isnan(x):
+                raise ValueError(f"`{key}` of effect {self.name!r} must not be NaN")
+            neutral = spec.neutral_for(None)
+            bounds = spec.bounds_for(None)
+            if bounds is not None and x != neutral and not bounds[0] <= x <= bounds[1]:
+                raise ValueError(
+                    f"`{key}` of effect {self.name!r} must lie in [{bounds[0]:g}, {bounds[1]:g}] {spec.unit}"
+                    + (
+                        f" or be {neutral:g} (no effect)"
+                        if neutral is not None and not bounds[0] <= neutral <= bounds[1]
+                        else ""
+                    )
+                    + f", got {value!r}"
+                )
+            if bounds is None and not math.isfinite(x) and x != neutral:
+                raise ValueError(f"`{key}` of effect {self.name!r} must be finite, got {value!r}")
+            object.__setattr__(self, key, x)
+
+    # -- validation and description ---------------------------------
+    def check(self, specimen: Specimen) -> None:
+        """Validate the specimen-dependent bounds (ValueError naming the parameter)."""
+        for key, spec in self.params.items():
+            if not callable(spec.bounds):
+                continue
+            lo, hi = spec.bounds_for(specimen)
+            x = getattr(self, key)
+            if x != spec.neutral_for(specimen) and not lo <= x <= hi:
+                raise ValueError(
+                    f"`{key}` of effect {self.name!r} must lie in [{lo:g}, {hi:g}] {spec.unit} "
+                    f"for specimen {specimen.name!r}, got {x!r}"
+                )
+
+    @classmethod
+    def neutral(cls, specimen: Specimen | None = None) -> Effect:
+        """The effect with every parameter at its neutral value (it changes nothing).
+
+        ``specimen`` is needed when a neutral value depends on it (``restitution``).
+        """
+        kwargs = {}
+        for key, spec in cls.params.items():
+            v = spec.neutral_for(specimen)
+            if v is None and callable(spec.neutral):
+                raise ValueError(f"the neutral `{key}` of effect {cls.name!r} depends on the specimen; pass it")
+            kwargs[key] = v if v is not None else spec.default
+        return cls(**kwargs)
+
+    def describe(self) -> dict:
+        """Plain data: ``{"name": ..., <param>: value, ...}`` (for results tables and the cache)."""
+        return {"name": self.name, **{k: getattr(self, k) for k in self.params}}
+
+    # -- hooks (no-op defaults) ---------------------------------------
+    def modify_params(self, params, specimen: Specimen):
+        """Return the rocking parameters with this effect applied (default: unchanged)."""
+        return params
+
+    def transform_input(self, motion: GroundMotion) -> GroundMotion:
+        """Return the ground motion the block feels (default: unchanged)."""
+        return motion
+
+    def observe(self, response: Response) -> Response:
+        """Return what the sensors record of ``response`` (default: unchanged)."""
+        return response
+
+    def solver(self) -> Callable[..., Response] | None:
+        """Equation of motion replacing Housner's rigid block, or None (default)."""
+        return None
+
+
+# ----------------------------------------------------------------------
+# registry
+def register_effect(arg: type | str | None = None) -> Any:
+    """Class decorator adding an :class:`Effect` subclass to :data:`EFFECTS`.
+
+    Use as ``@register_effect`` (the class's ``name``) or
+    ``@register_effect("name")``. Registering a different class under a name
+    already taken raises a ValueError; re-registering the same class (or a
+    redefinition of it, same module and qualified name) replaces it.
+    """
+    if isinstance(arg, type):
+        return _register(arg)
+
+    def deco(cls: type) -> type:
+        return _register(cls, arg)
+
+    return deco
+
+
+def _register(cls: type, name: str | None = None) -> type:
+    if not (isinstance(cls, type) and issubclass(cls, Effect)):
+        raise TypeError(f"only housner.effects.Effect subclasses can be registered, got {cls!r}")
+    if not dataclasses.is_dataclass(cls):
+        raise TypeError(f"effect class {cls.__qualname__} must be a dataclass (use @dataclass(frozen=True))")
+    name = cls.name if name is None else name
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ValueError(f"effect class {cls.__qualname__} needs a `name` that is an identifier, got {name!r}")
+    fields = [f.name for f in dataclasses.fields(cls)]
+    if sorted(fields) != sorted(cls.params):
+        raise ValueError(
+            f"effect {name!r}: the `params` specs ({', '.join(cls.params) or 'none'}) must match the dataclass "
+            f"fields ({', '.join(fields) or 'none'})"
+        )
+    for key, spec in cls.params.items():
+        if not isinstance(spec, ParamSpec):
+            raise TypeError(f"effect {name!r}: params[{key!r}] must be a ParamSpec, got {spec!r}")
+    old = EFFECTS.get(name)
+    if old is not None and old is not cls and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
+        raise ValueError(f"effect name {name!r} is already registered by {old.__module__}.{old.__qualname__}")
+    cls.name = name
+    EFFECTS[name] = cls
+    return cls
+
+
+def discover_effects(*, force: bool = False) -> tuple[str, ...]:
+    """Load the effects that installed packages declare in the ``housner.effects`` entry-point group.
+
+    Each entry point names an :class:`Effect` subclass (registered under its
+    ``name``) or a module (imported, so that its ``@register_effect``
+    decorators run). A broken entry point is reported with a warning and
+    skipped. Runs once per process unless ``force``; returns the names known.
+    """
+    global _discovered
+    if _discovered and not force:
+        return tuple(EFFECTS)
+    _discovered = True
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            obj = ep.load()
+        except Exception as e:  # a plugin must not break the suite
+            warnings.warn(f"cannot load effect entry point {ep.name!r} ({ep.value}): {e}", stacklevel=2)
+            continue
+        if isinstance(obj, type) and issubclass(obj, Effect):
+            if EFFECTS.get(obj.name) is obj:
+                continue
+            try:
+                _register(obj)
+            except (TypeError, ValueError) as e:
+                warnings.warn(f"effect entry point {ep.name!r} ({ep.value}) not registered: {e}", stacklevel=2)
+        elif not hasattr(obj, "__path__") and not hasattr(obj, "__file__"):
+            warnings.warn(
+                f"effect entry point {ep.name!r} ({ep.value}) is neither an Effect subclass nor a module", stacklevel=2
+            )
+    return tuple(EFFECTS)
+
+
+def available_effects() -> tuple[str, ...]:
+    """Names of every registered effect (built-in, decorated and installed), sorted."""
+    return tuple(sorted(discover_effects()))
+
+
+def effect_class(name: str) -> type[Effect]:
+    """The effect class registered as ``name``; unknown names list the choices and suggest the closest."""
+    cls = EFFECTS.get(name)
+    if cls is None:
+        discover_effects()
+        cls = EFFECTS.get(name)
+    if cls is None:
+        raise unknown_choice("effect", name, EFFECTS)
+    return cls
+
+
+def make_effect(name: str, specimen: Specimen | None = None, **params: float) -> Effect:
+    """Build the effect registered as ``name`` with ``params``, validating every value.
+
+    Parameters
+    ----------
+    name : str
+        Registry key (see :func:`available_effects`).
+    specimen : Specimen, optional
+        Also check the bounds that depend on the specimen.
+    **params : float
+        Parameter values in the units of the effect's :class:`ParamSpec`.
+
+    Raises
+    ------
+    ValueError
+        Unknown name or parameter (listing the choices), a missing required
+        parameter, or a value out of bounds (naming the parameter).
+    """
+    cls = effect_class(name)
+    for key in params:
+        if key not in cls.params:
+            raise unknown_choice(f"parameter of effect {name!r}:", key, cls.params)
+    missing = [k for k, s in cls.params.items() if k not in params and _field_default(cls, k) is None]
+    if missing:
+        spec = cls.params[missing[0]]
+        raise ValueError(f"effect {name!r} needs `{missing[0]}` [{spec.unit}] ({spec.doc})")
+    effect = cls(**params)
+    if specimen is not None:
+        effect.check(specimen)
+    return effect
+
+
+def _field_default(cls: type, key: str) -> Any:
+    for f in dataclasses.fields(cls):
+        if f.name == key:
+            if f.default is not dataclasses.MISSING:
+                return f.default
+            if f.default_factory is not dataclasses.MISSING:
+                return f.default_factory()
+    return None
+
+
+def make_effects(specs: Iterable[Any]) -> tuple[Effect, ...]:
+    """Effects from plain data: Effect instances, names, or ``{"name": ..., <param>: value}`` dicts."""
+    out = []
+    for i, spec in enumerate(specs):
+        if isinstance(spec, Effect):
+            out.append(spec)
+        elif isinstance(spec, str):
+            out.append(make_effect(spec))
+        elif isinstance(spec, Mapping):
+            spec = dict(spec)
+            name = spec.pop("name", None)
+            if name is None:
+                raise ValueError(f"`effects[{i}]` needs a 'name' key, got {spec!r}")
+            out.append(make_effect(name, **spec))
+        else:
+            raise TypeError(f"`effects[{i}]` must be an Effect, a name or a dict with 'name', got {spec!r}")
+    return tuple(out)
+
+
+# ----------------------------------------------------------------------
+# composition
+@dataclass(frozen=True, eq=False)
+class EffectPlan:
+    """Effects resolved for one (specimen, motion): what the solver is given and what it does afterwards.
+
+    Attributes
+    ----------
+    specimen : Specimen
+    effects : tuple of Effect
+        In the order of application.
+    params : RockingParams
+        The rocking parameters after every ``modify_params``.
+    motion : GroundMotion
+        The ground motion after every ``transform_input``.
+    solver : callable or None
+        The mechanics effect's equation of motion; None for Housner's.
+    mechanics : Effect or None
+        The effect that supplied ``solver``.
+    """
+
+    specimen: Specimen
+    effects: tuple
+    params: Any
+    motion: GroundMotion
+    solver: Callable[..., Response] | None = None
+    mechanics: Effect | None = None
+
+    def observe(self, response: Response) -> Response:
+        """Apply every ``observe`` hook and list the effects in ``response.info['effects']``."""
+        for e in self.effects:
+            out = e.observe(response)
+            if not isinstance(out, Response):
+                raise TypeError(f"effect {e.name!r}: observe() must return a Response, got {type(out).__name__}")
+            response = out
+        return replace(response, info={**response.info, "effects": [e.describe() for e in self.effects]})
+
+    def run(self, *, substeps: int | None = None, rest_tol: float = 1e-6) -> Response:
+        """Simulate: the solver on (specimen, motion, params), then the observers.
+
+        Parameters
+        ----------
+        substeps : int, optional
+            RK4 substeps per sample; default: the solver's.
+        rest_tol : float
+            Rest rule of :func:`housner.model.simulate` [-].
+        """
+        if self.solver is None:
+            from housner.model import simulate
+
+            res = simulate(self.specimen, self.motion, params=self.params, substeps=substeps, rest_tol=rest_tol)
+        else:
+            res = self.solver(self.specimen, self.motion, self.params, substeps=substeps, rest_tol=rest_tol)
+        return self.observe(res)
+
+
+def apply_effects(
+    specimen: Specimen, motion: GroundMotion, effects: Iterable[Effect] = (), *, params=None
+) -> EffectPlan:
+    """Resolve ``effects`` for one simulation (see the module docstring for the order).
+
+    Parameters
+    ----------
+    specimen : Specimen
+    motion : GroundMotion
+    effects : iterable of Effect
+        At most one of each name, and at most one that changes the mechanics.
+    params : RockingParams, optional
+        Starting parameters; default ``RockingParams.from_specimen(specimen)``.
+
+    Returns
+    -------
+    EffectPlan
+        Call its ``run()`` to simulate.
+    """
+    from housner.model import RockingParams
+
+    if not isinstance(specimen, Specimen):
+        raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
+    if not isinstance(motion, GroundMotion):
+        raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
+    effects = tuple(effects)
+    seen: dict[str, int] = {}
+    for i, e in enumerate(effects):
+        if not isinstance(e, Effect):
+            raise TypeError(
+                f"`effects[{i}]` must be a housner.effects.Effect (build one with make_effect(name, ...)), "
+                f"got {type(e).__name__}"
+            )
+        if e.name in seen:
+            raise ValueError(f"effect {e.name!r} given twice (effects[{seen[e.name]}] and effects[{i}]); give it once")
+        seen[e.name] = i
+        e.check(specimen)
+    mech = [e.name for e in effects if e.changes_mechanics]
+    if len(mech) > 1:
+        raise ValueError(
+            f"effects {' and '.join(repr(m) for m in mech)} each replace the equation of motion and cannot be "
+            "combined: give at most one mechanics-changing effect per simulation"
+        )
+    ordered = tuple(sorted(effects, key=lambda e: e.stage))
+    prm = RockingParams.from_specimen(specimen) if params is None else params
+    for e in ordered:
+        prm = e.modify_params(prm, specimen)
+        if not isinstance(prm, RockingParams):
+            raise TypeError(f"effect {e.name!r}: modify_params() must return a RockingParams, got {type(prm).__name__}")
+    mo = motion
+    for e in ordered:
+        mo = e.transform_input(mo)
+        if not isinstance(mo, GroundMotion):
+            raise TypeError(f"effect {e.name!r}: transform_input() must return a GroundMotion, got {type(mo).__name__}")
+    solver = None
+    mechanics = None
+    for e in ordered:
+        s = e.solver()
+        if s is not None:
+            solver, mechanics = s, e
+    if mechanics is not None:
+        clash = [e.name for e in ordered if e.name in mechanics.conflicts]
+        if clash:
+            raise ValueError(
+                f"effect {mechanics.name!r} cannot be combined with {', '.join(repr(c) for c in clash)}: "
+                f"{mechanics.conflict_reason}"
+            )
+    return EffectPlan(specimen, ordered, prm, mo, solver, mechanics)
+
+
+def simulate_with_effects(
+    specimen: Specimen,
+    motion: GroundMotion,
+    effects: Iterable[Effect] = (),
+    *,
+    params=None,
+    substeps: int | None = None,
+    rest_tol: float = 1e-6,
+) -> Response:
+    """Simulate ``motion`` on ``specimen`` with ``effects`` (``apply_effects(...).run(...)``).
+
+    Parameters
+    ----------
+    specimen : Specimen
+    motion : GroundMotion
+    effects : iterable of Effect
+    params : RockingParams, optional
+        Starting parameters (default: the specimen's Housner parameters).
+    substeps : int, optional
+        RK4 substeps per sample [-].
+    rest_tol : float
+        Rest rule of :func:`housner.model.simulate` [-].
+    """
+    return apply_effects(specimen, motion, effects, params=params).run(substeps=substeps, rest_tol=rest_tol)
