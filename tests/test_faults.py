@@ -139,6 +139,10 @@ def test_run_exits_nonzero_when_a_record_failed(tmp_path, capsys, monkeypatch, a
 
 # ----------------------------------------------------------------------------
 # Ctrl-C
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_exits_fast_with_130_and_keeps_the_cache(tmp_path):
     pytest.importorskip("mujoco")
     cache = tmp_path / "cache"
@@ -147,8 +151,10 @@ def test_ctrl_c_exits_fast_with_130_and_keeps_the_cache(tmp_path):
     cmd = [sys.executable, "-m", "reports.cli", "run", "elcentro", "--engines", "mujoco", "--n-motions", "24"]
     cmd += ["--out", str(tmp_path / "run"), "--jobs", "2", "--no-report"]
     # A session of its own, signalled as a whole: what a terminal does on Ctrl-C (workers get SIGINT too).
+    # SIGINT back to its default in the child: a test run started in the background of a non-interactive shell
+    # (`cmd &`) ignores SIGINT, and the child would inherit that and could never be interrupted.
     proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)  # fmt: skip
+                            start_new_session=True, preexec_fn=_default_sigint)  # fmt: skip
     try:
         deadline = time.monotonic() + 90
         while time.monotonic() < deadline and len(list(cache.rglob("*.npz"))) < 2 and proc.poll() is None:
