@@ -6,7 +6,11 @@ import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 
+import housner
 from engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
+from housner.effects import apply_effects, available_effects
+from housner.model import RockingParams, simulate
+from housner.model import simulate_many as simulate_batch
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -18,8 +22,6 @@ class _RegisteredEffects:
     """``effects_supported`` read live from the effect registry, on the class and on instances."""
 
     def __get__(self, obj, objtype=None) -> frozenset[str]:
-        from housner.effects import available_effects
-
         return frozenset(available_effects())
 
 
@@ -54,21 +56,14 @@ class HousnerEngine(Engine):
         return {"r": self.r, "substeps": self.substeps}
 
     def version(self) -> str:
-        import housner
-
         return housner.__version__
 
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
         if not effects:
-            from housner.model import simulate
-
             kwargs = {"r": self.r}
             if self.substeps is not None:
                 kwargs["substeps"] = self.substeps
             return simulate(specimen, motion, **kwargs)
-        from housner.effects import apply_effects
-        from housner.model import RockingParams
-
         plan = apply_effects(specimen, motion, effects, params=RockingParams.from_specimen(specimen, r=self.r))
         return plan.run(substeps=self.substeps)
 
@@ -83,50 +78,24 @@ class HousnerEngine(Engine):
         records); a batch that fails is redone record by record so that the
         failing one is named. Effects that replace the equation of motion
         (flexible foundation, sliding) run one record at a time in kernels
-        that release the GIL, on threads.
+        that release the GIL, on threads. Every response passes
+        :func:`engines.base.check_response`.
 
         Parameters
         ----------
         specimen, motions, effects, errors
             As for :meth:`engines.base.Engine.simulate_many`.
         """
-        from housner.effects import apply_effects
-        from housner.model import RockingParams, simulate_many
-
         _check_errors(errors)
         motions = list(motions)
         effects = tuple(effects)
         self._refuse_unrealised(effects)
         base = RockingParams.from_specimen(specimen, r=self.r)
         plans = [apply_effects(specimen, m, effects, params=base) for m in motions]
-        out: list = [None] * len(motions)
-        groups: dict = {}
-        for i, pl in enumerate(plans):
-            if pl.solver is None:
-                groups.setdefault(pl.params, []).append(i)
-        for prm, idx in groups.items():
-            try:
-                res = simulate_many(specimen, [plans[i].motion for i in idx], params=prm, substeps=self.substeps)
-            except RECORD_ERRORS:
-                continue  # one record at a time below, so that the failing one is named
-            for i, r in zip(idx, res, strict=True):
-                out[i] = plans[i].observe(r)
-
-        def run_one(i: int):
-            try:
-                return check_response(plans[i].run(substeps=self.substeps), self.name, motions[i])
-            except RECORD_ERRORS as e:
-                return e
-
-        todo = [i for i in range(len(motions)) if out[i] is None]
-        workers = min(len(todo), os.cpu_count() or 1)
-        if workers > 1:
-            with ThreadPoolExecutor(workers) as pool:
-                for i, r in zip(todo, pool.map(run_one, todo), strict=True):
-                    out[i] = r
-        else:
-            for i in todo:
-                out[i] = run_one(i)
+        out = self._batched(specimen, plans)
+        todo = [i for i, r in enumerate(out) if r is None]
+        for i, r in zip(todo, self._one_by_one([plans[i] for i in todo]), strict=True):
+            out[i] = r
         for i, r in enumerate(out):
             if isinstance(r, Response):
                 try:
@@ -136,3 +105,38 @@ class HousnerEngine(Engine):
             if errors == "raise" and isinstance(out[i], BaseException):
                 raise out[i]
         return out
+
+    def _batched(self, specimen: Specimen, plans: list) -> list:
+        """Responses of the plans that keep Housner's equation of motion, one compiled call per parameter set.
+
+        Returns one entry per plan: its response, or None where it is left to
+        :meth:`_one_by_one` (a mechanics effect, or a batch that failed).
+        """
+        out: list = [None] * len(plans)
+        groups: dict = {}
+        for i, pl in enumerate(plans):
+            if pl.solver is None:
+                groups.setdefault(pl.params, []).append(i)
+        for prm, idx in groups.items():
+            try:
+                res = simulate_batch(specimen, [plans[i].motion for i in idx], params=prm, substeps=self.substeps)
+            except RECORD_ERRORS:
+                continue  # one record at a time, so that the failing one is named
+            for i, r in zip(idx, res, strict=True):
+                out[i] = plans[i].observe(r)
+        return out
+
+    def _one_by_one(self, plans: list) -> list:
+        """Each plan run on its own (on threads when several): its response, or the exception it raised."""
+
+        def run_one(plan):
+            try:
+                return plan.run(substeps=self.substeps)
+            except RECORD_ERRORS as e:
+                return e
+
+        workers = min(len(plans), os.cpu_count() or 1)
+        if workers > 1:
+            with ThreadPoolExecutor(workers) as pool:
+                return list(pool.map(run_one, plans))
+        return [run_one(pl) for pl in plans]

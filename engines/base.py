@@ -11,6 +11,8 @@ import importlib
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
+import numpy as np
+
 from housner.errors import EngineError, unknown_choice
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -148,13 +150,29 @@ class Engine:
 def check_response(resp: Response, engine: str, motion: GroundMotion) -> Response:
     """The output check every engine's response passes: a finite theta history, a peak that is a number.
 
+    :meth:`Engine.simulate` and every ``simulate_many`` apply it; a caller
+    that holds a response from elsewhere (a worker process, the cache) can
+    apply the same check.
+
+    Parameters
+    ----------
+    resp : Response
+        The engine's answer: theta [rad] on the motion's grid, theta_max/alpha [-].
+    engine : str
+        The engine's registry name (for the message).
+    motion : GroundMotion
+        The motion it answered (for the message).
+
+    Returns
+    -------
+    Response
+        ``resp`` itself.
+
     Raises
     ------
     EngineError
         Naming the engine and the motion: the engine diverged or returned no usable history.
     """
-    import numpy as np
-
     theta = np.asarray(resp.theta, dtype=float)
     if theta.size == 0 or not np.all(np.isfinite(theta)):
         raise EngineError(f"engine {engine!r} returned a non-finite theta history on motion {motion.name!r}")

@@ -172,10 +172,7 @@ def record_against_ensemble(
     eng = get_engine(engine, **(settings or {}))
     x = float(eng.simulate(specimen, rec.to_model_scale(S)).theta_max_over_alpha)
     if ensemble_values is None:
-        if hasattr(eng, "simulate_many"):
-            resp = eng.simulate_many(specimen, motions)
-        else:
-            resp = [eng.simulate(specimen, m) for m in motions]
+        resp = eng.simulate_many(specimen, motions)
         ensemble_values = [r.theta_max_over_alpha for r in resp]
     v = np.asarray(ensemble_values, dtype=float)
     v = v[~np.isnan(v)]
@@ -293,10 +290,7 @@ def equivalent_amplitude(
     def values(a: float) -> np.ndarray:
         if a not in cache:
             ms = [m.scaled(amplitude=a) for m in motions]
-            if hasattr(eng, "simulate_many"):
-                resp = eng.simulate_many(specimen, ms)
-            else:
-                resp = [eng.simulate(specimen, m) for m in ms]
+            resp = eng.simulate_many(specimen, ms)
             cache[a] = np.array([r.theta_max_over_alpha for r in resp], dtype=float)
         return cache[a]
 
