@@ -919,7 +919,7 @@ class _CV:
 
 def _fv_metrics(campaign: Campaign, effects: list, engine_settings) -> dict:
     """Free-vibration localisation (p, energy ratio) of a model, observed through the campaign's sensor."""
-    from scenarios.compare import _observe, _on_grid, features
+    from scenarios.compare import features, observe, on_grid
 
     fv = campaign.free_vibration
     if not fv:
@@ -930,7 +930,7 @@ def _fv_metrics(campaign: Campaign, effects: list, engine_settings) -> dict:
     for rec, r in zip(fv, res, strict=True):
         if isinstance(r, str):
             continue
-        hist[rec.id] = _observe(_on_grid(r, rec), rec, index[rec.id])
+        hist[rec.id] = observe(on_grid(r, rec), rec, index[rec.id])
         over[rec.id] = bool(r.overturned)
     if not hist:
         return {}
@@ -1006,7 +1006,7 @@ def diagnose(
         of :mod:`scenarios.verdict`).
     """
     from housner.effects import available_effects, effect_class
-    from scenarios.compare import _measured_features
+    from scenarios.localise import measured_features
     from scenarios.verdict import N_REPLICAS, decide, measure_floor, residual_test
 
     t_start = time.perf_counter()
@@ -1053,7 +1053,7 @@ def diagnose(
     mech_sc.release_angle = False
     kinds = [r.kind for r in campaign.records]
     floor = float(np.mean([r.noise for r in campaign.records])) / spec.alpha
-    measured_fv = {k: v for k, v in _measured_features(campaign).metrics().items() if k in FV_CHECK}
+    measured_fv = {k: v for k, v in measured_features(campaign).metrics().items() if k in FV_CHECK}
 
     def build(model: list[tuple[str, dict]]) -> list:
         return [_make(n, p) for n, p in model]
