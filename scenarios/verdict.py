@@ -52,7 +52,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.stats import norm
 
+from housner.effects import make_effect
+from housner.model import default_substeps
 from scenarios.compare import (
     METRICS,
     RELEASE_DTHETA0_SIGMAS,
@@ -62,6 +65,7 @@ from scenarios.compare import (
     release_shift_samples,
     simulate_records,
 )
+from scenarios.fitting import param_dims
 
 __all__ = [
     "CLASSES",
@@ -213,10 +217,8 @@ class Residual:
 # ----------------------------------------------------------------------------
 # the floor
 def _perturbed(name: str, params: dict, sd: dict, rng, specimen, hull: dict | None = None) -> dict:
-    from scenarios.diagnose import _dims
-
     out = dict(params)
-    for d in _dims(name, specimen):
+    for d in param_dims(name, specimen):
         key = f"{name}.{d.key}"
         s = sd.get(key, 0.0)
         if s > 0:
@@ -238,7 +240,7 @@ def measure_floor(
 
     Parameters
     ----------
-    scorer : scenarios.diagnose._Scorer
+    scorer : scenarios.scoring.Scorer
         All records of the campaign (truncated to their error windows), in campaign order.
     model_full : list of (name, params)
         The model fitted on every record: the bootstrap's truth.
@@ -253,8 +255,6 @@ def measure_floor(
     -------
     Floor
     """
-    from housner.effects import make_effect
-    from housner.model import default_substeps
 
     camp = scorer.campaign
     spec = camp.specimen
@@ -463,8 +463,6 @@ def distribution_checks(cmp: Comparison | None) -> list[str]:
     pool = (k1 + k2) / (2 * n)
     if 0 < pool < 1:
         zz = (k2 - k1) / n / math.sqrt(2 * pool * (1 - pool) / n)
-        from scipy.stats import norm
-
         if 2 * norm.sf(abs(zz)) < DIST_LEVEL:
             out.append(f"the overturn fractions differ (measured {k1}/{n}, model {k2}/{n}, z = {zz:+.1f})")
     return out

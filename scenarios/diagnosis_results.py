@@ -1,0 +1,342 @@
+"""The diagnosis' results: candidates, the error ladder and the whole diagnosis, as text and JSON.
+
+:class:`Diagnosis` is what :func:`scenarios.diagnose.diagnose` returns; its
+:meth:`Diagnosis.to_json` is strict JSON (NaN and infinities written as null).
+Errors are time-history errors in units of alpha (see :mod:`scenarios.compare`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scenarios.campaign import Campaign
+from scenarios.compare import Comparison
+
+__all__ = ["Candidate", "Diagnosis", "Step"]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate effect, fitted on the training records and scored on the held-out ones.
+
+    Attributes
+    ----------
+    effect : str
+        Registered name.
+    params : dict
+        Fitted parameters (units of the effect's ParamSpec).
+    base : tuple of str
+        Effects already in the model it was added to.
+    round : int
+        Greedy round (1 = against the starting model).
+    train_error : float
+        Mean training error [alpha].
+    heldout_error, heldout_se : float
+        Mean held-out error [alpha] and its standard error.
+    improvement, improvement_se : float
+        Mean paired held-out improvement over the model it was added to [alpha], and its standard error.
+    z : float
+        improvement / improvement_se.
+    pvalue : float
+        One-sided Wilcoxon signed-rank p-value of the paired held-out differences.
+    significant : bool
+        See the module docstring (p-value below the Bonferroni level and improvement above the noise floor).
+    reason : str
+        Why it is (not) significant, in words.
+    heldout_errors : ndarray
+        Per record, out of fold [alpha] (None when not held out).
+    fold_wins : ndarray
+        Per fold: mean improvement on that fold's records [alpha] (None when not held out).
+    """
+
+    effect: str
+    params: dict
+    base: tuple
+    round: int
+    train_error: float
+    heldout_error: float
+    heldout_se: float
+    improvement: float
+    improvement_se: float
+    z: float
+    pvalue: float
+    significant: bool
+    reason: str
+    heldout_errors: np.ndarray = field(repr=False, compare=False, default=None)
+    fold_wins: np.ndarray = field(repr=False, compare=False, default=None)
+
+    def to_dict(self) -> dict:
+        return {
+            "effect": self.effect,
+            "params": _clean(self.params),
+            "base": list(self.base),
+            "round": self.round,
+            "train_error": self.train_error,
+            "heldout_error": self.heldout_error,
+            "heldout_se": self.heldout_se,
+            "improvement": self.improvement,
+            "improvement_se": self.improvement_se,
+            "z": self.z,
+            "pvalue": self.pvalue,
+            "significant": self.significant,
+            "reason": self.reason,
+            "fold_improvements": None if self.fold_wins is None else [float(x) for x in self.fold_wins],
+        }
+
+
+@dataclass(frozen=True)
+class Step:
+    """One rung of the error ladder: the model with the effects so far.
+
+    Attributes
+    ----------
+    effects : tuple of (str, dict)
+        (name, fitted parameters) of each effect in the model, in the order added.
+    added : str or None
+        The effect this step added (None for the baseline); two effects that
+        only help together enter in one step, written ``"a + b"``.
+    by_hand : bool
+        Added with ``add`` rather than by the greedy search.
+    train_error, heldout_error, heldout_se : float
+        [alpha].
+    improvement, improvement_se : float
+        Mean paired held-out improvement over the previous step [alpha] (NaN for the baseline).
+    significant : bool
+    heldout_errors : ndarray
+        Per held-out record [alpha].
+    comparison : Comparison or None
+        The full comparison of this model with the campaign (localisation included).
+    """
+
+    effects: tuple
+    added: str | None
+    by_hand: bool
+    train_error: float
+    heldout_error: float
+    heldout_se: float
+    improvement: float
+    improvement_se: float
+    significant: bool
+    heldout_errors: np.ndarray = field(repr=False, compare=False, default=None)
+    comparison: Comparison | None = field(repr=False, compare=False, default=None)
+
+    @property
+    def names(self) -> list[str]:
+        return [n for n, _p in self.effects]
+
+    @property
+    def added_names(self) -> tuple[str, ...]:
+        """The registered names of the effect(s) this step added."""
+        return tuple(self.added.split(" + ")) if self.added else ()
+
+    def label(self) -> str:
+        return "Housner (baseline)" if not self.effects else " + ".join(self.names)
+
+    def to_dict(self) -> dict:
+        return {
+            "effects": [{"name": n, "params": _clean(p)} for n, p in self.effects],
+            "added": self.added,
+            "by_hand": self.by_hand,
+            "train_error": self.train_error,
+            "heldout_error": self.heldout_error,
+            "heldout_se": self.heldout_se,
+            "improvement": _nan_none(self.improvement),
+            "improvement_se": _nan_none(self.improvement_se),
+            "significant": self.significant,
+        }
+
+
+@dataclass(eq=False)
+class Diagnosis:
+    """The result of :func:`diagnose`.
+
+    Attributes
+    ----------
+    campaign : Campaign
+    baseline : Step
+        The plain Housner model.
+    steps : list of Step
+        The error ladder: baseline, then each added effect.
+    candidates : list of Candidate
+        The first round: every candidate against the starting model, best first.
+    rounds : list of list of Candidate
+        Every greedy round, each best first.
+    selected : list of str
+        Effects the greedy search added (after the hand-added ones).
+    added : list of str
+        Effects added by hand.
+    noise_floor : float
+        Mean sigma/alpha of the records [-]: the sensor noise alone (the verdict uses the measured
+        correct-model floor, ``floors``).
+    test_level : float
+        The per-test significance level of the first round, ``level`` / candidates [-].
+    train_ids, heldout_ids : list of str
+        Every record (cross-validation: each trains in K - 1 folds and is held out in one).
+    settings : dict
+    folds : list of list of str
+        Record ids of each fold.
+    verdict : scenarios.verdict.Verdict
+    floors : (Floor, Floor)
+        The measured correct-model floor of the plain and of the final model.
+    selection_frequency : dict
+        Effect -> share of the folds in which it was the best candidate of its round [-].
+    elapsed : float
+        Wall time [s].
+    """
+
+    campaign: Campaign
+    baseline: Step
+    steps: list[Step]
+    candidates: list[Candidate]
+    rounds: list[list[Candidate]]
+    selected: list[str]
+    added: list[str]
+    noise_floor: float
+    test_level: float
+    train_ids: list[str]
+    heldout_ids: list[str]
+    settings: dict
+    folds: list = field(default_factory=list)
+    verdict: Any = None
+    floors: tuple = ()
+    selection_frequency: dict = field(default_factory=dict)
+    elapsed: float = math.nan
+
+    @property
+    def status(self) -> str:
+        """The verdict's status (see :data:`scenarios.verdict.STATUSES`)."""
+        return self.verdict.status if self.verdict is not None else "inconclusive"
+
+    @property
+    def final(self) -> Step:
+        return self.steps[-1]
+
+    @property
+    def reduction(self) -> float:
+        """Fraction of the baseline held-out error removed by the final model [-]."""
+        b = self.baseline.heldout_error
+        return (b - self.final.heldout_error) / b if b > 0 else 0.0
+
+    def summary(self) -> str:
+        """One paragraph: the verdict in words, then the ladder with its figures."""
+        parts = [self.verdict.text if self.verdict is not None else ""]
+        chosen = self.steps[1:]
+        if chosen:
+            ladder = []
+            for st in chosen:
+                prm = "; ".join(
+                    ", ".join(f"{k} = {_fmt_num(v)}" for k, v in dict(st.effects)[n].items()) for n in st.added_names
+                )
+                how = " (by hand)" if st.by_hand else ""
+                ladder.append(
+                    f"+ {st.added}{how} ({prm}): held-out error {st.heldout_error:.4f} +- {st.heldout_se:.4f} alpha, "
+                    f"improvement {st.improvement:.4f} +- {st.improvement_se:.4f}"
+                    f"{'' if st.significant else ', not significant'}"
+                )
+            parts.append("Ladder: " + "; ".join(ladder) + ".")
+            parts.append(
+                f"In all the held-out error fell by {100 * self.reduction:.0f} % "
+                f"({self.baseline.heldout_error:.4f} -> {self.final.heldout_error:.4f} alpha)."
+            )
+        elif self.candidates:
+            best = self.candidates[0]
+            if math.isfinite(best.improvement):
+                parts.append(
+                    f"The best candidate, {best.effect}, would change the held-out error by "
+                    f"{best.improvement:+.4f} +- {best.improvement_se:.4f} alpha ({best.reason})."
+                )
+        k = self.settings.get("folds", "?")
+        parts.append(f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha "
+                     f"{self.noise_floor:.4f}.)")  # fmt: skip
+        return " ".join(p for p in parts if p)
+
+    def to_dict(self) -> dict:
+        """Plain data for JSON: baseline, candidates, selected, final, ladder, rounds, settings."""
+
+        def err(step: Step) -> dict:
+            return {
+                "heldout_error": step.heldout_error,
+                "heldout_se": step.heldout_se,
+                "train_error": step.train_error,
+                "noise_floor": self.noise_floor,
+                "effects": [{"name": n, "params": _clean(p)} for n, p in step.effects],
+            }
+
+        return {
+            "campaign": self.campaign.name,
+            "baseline": err(self.baseline),
+            "candidates": [c.to_dict() for c in self.candidates],
+            "selected": list(self.selected),
+            "added": list(self.added),
+            "final": {**err(self.final), "reduction": self.reduction},
+            "ladder": [s.to_dict() for s in self.steps],
+            "rounds": [[c.to_dict() for c in r] for r in self.rounds],
+            "test_level": self.test_level,
+            "train_ids": list(self.train_ids),
+            "heldout_ids": list(self.heldout_ids),
+            "skipped": [list(s) for s in self.campaign.skipped],
+            "settings": self.settings,
+            "folds": [list(f) for f in self.folds],
+            "selection_frequency": dict(self.selection_frequency),
+            "verdict": None if self.verdict is None else self.verdict.to_dict(),
+            "floor": None if not self.floors else {"baseline": _floor(self.floors[0]), "final": _floor(self.floors[1])},
+            "localisation": {
+                "baseline": self.baseline.comparison.summary() if self.baseline.comparison is not None else None,
+                "final": self.final.comparison.summary() if self.final.comparison is not None else None,
+            },
+            "summary": self.summary(),
+            "elapsed_s": self.elapsed,
+        }
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """The JSON text of :meth:`to_dict`; also written to ``path`` when given."""
+        text = json.dumps(_sanitize(self.to_dict()), indent=2, allow_nan=False, default=_json_default)
+        if path is not None:
+            Path(path).write_text(text + "\n")
+        return text
+
+
+def _floor(f) -> dict:
+    """A :class:`scenarios.verdict.Floor` as plain data: per-record floor [alpha], perturbation, replicas."""
+    return {"per_record": [float(x) for x in f.mean], "perturbation": f.perturbation, "replicas": f.n_replicas}
+
+
+def _fmt_num(v: float) -> str:
+    return f"{v:.4g}"
+
+
+def _nan_none(v: float):
+    return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v
+
+
+def _clean(params: dict) -> dict:
+    return {k: _nan_none(float(v)) for k, v in params.items()}
+
+
+def _json_default(o):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def _sanitize(x):
+    """NaN and infinities as JSON null, recursively (strict JSON has no NaN)."""
+    if isinstance(x, dict):
+        return {k: _sanitize(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_sanitize(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
