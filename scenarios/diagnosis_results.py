@@ -17,6 +17,7 @@ import numpy as np
 
 from scenarios.campaign import Campaign
 from scenarios.compare import Comparison
+from scenarios.rundir import jsonable
 
 __all__ = ["Candidate", "Diagnosis", "Step"]
 
@@ -296,7 +297,7 @@ class Diagnosis:
 
     def to_json(self, path: str | Path | None = None) -> str:
         """The JSON text of :meth:`to_dict`; also written to ``path`` when given."""
-        text = json.dumps(_sanitize(self.to_dict()), indent=2, allow_nan=False, default=_json_default)
+        text = json.dumps(jsonable(self.to_dict(), nonfinite="null"), indent=2, allow_nan=False)
         if path is not None:
             Path(path).write_text(text + "\n")
         return text
@@ -317,26 +318,3 @@ def _nan_none(v: float):
 
 def _clean(params: dict) -> dict:
     return {k: _nan_none(float(v)) for k, v in params.items()}
-
-
-def _json_default(o):
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
-
-
-def _sanitize(x):
-    """NaN and infinities as JSON null, recursively (strict JSON has no NaN)."""
-    if isinstance(x, dict):
-        return {k: _sanitize(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_sanitize(v) for v in x]
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    return x

@@ -50,18 +50,26 @@ RESULT_COLUMNS = [
 RUN_FILES = ("results.parquet", "histories.parquet", "motions.npz", "run.json", "report.html")
 
 
-def jsonable(x: Any) -> Any:
+def jsonable(x: Any, *, nonfinite: str = "string") -> Any:
+    """``x`` as plain JSON data, recursively: numpy scalars and arrays, paths, tuples made plain.
+
+    Non-finite floats, which strict JSON cannot hold, become the strings "inf", "-inf" and "nan"
+    (``nonfinite="string"``, run.json: :func:`reports.html` reads them back as numbers) or null
+    (``nonfinite="null"``, diagnosis.json: "no value").
+    """
+    if nonfinite not in ("string", "null"):
+        raise ValueError(f"`nonfinite` must be 'string' or 'null', got {nonfinite!r}")
     if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
+        return {str(k): jsonable(v, nonfinite=nonfinite) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [jsonable(v, nonfinite=nonfinite) for v in x]
+    if isinstance(x, (np.bool_, bool)):
+        return bool(x)
     if isinstance(x, (np.floating, float)):
         v = float(x)
-        return v if math.isfinite(v) else str(v)
+        return v if math.isfinite(v) else (str(v) if nonfinite == "string" else None)
     if isinstance(x, (np.integer,)):
         return int(x)
-    if isinstance(x, (np.bool_,)):
-        return bool(x)
     if isinstance(x, Path):
         return str(x)
     return x
