@@ -11,8 +11,8 @@ and count them.
 Array functions: :func:`ecdf` (+ :func:`dkw_band`), :func:`percentiles` (with
 percentile-bootstrap intervals), :func:`overturn_probability` (Wilson or
 Clopper-Pearson intervals), :func:`ks_2samp`, :func:`wasserstein`,
-:func:`per_record_agreement`. Table helpers on the runner's results table:
-:func:`compare_engines`, :func:`percentile_table`, :func:`split_failed`.
+:func:`per_record_agreement`. Their use on the runner's results table (one
+row per engine and motion) is :mod:`scenarios.tables`'.
 
 References
 ----------
@@ -36,17 +36,14 @@ Am. Stat. 50(4), 361-365.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from statistics import NormalDist
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from housner.errors import unknown_choice
-
-if TYPE_CHECKING:  # pandas is only needed by the table helpers
-    import pandas as pd
 
 __all__ = [
     "ECDF",
@@ -54,22 +51,15 @@ __all__ = [
     "PercentileEstimate",
     "ProportionCI",
     "RecordAgreement",
-    "RESULT_COLUMNS",
-    "compare_engines",
     "dkw_band",
     "ecdf",
     "ks_2samp",
     "overturn_probability",
     "per_record_agreement",
     "percentile_label",
-    "percentile_table",
     "percentiles",
-    "split_failed",
     "wasserstein",
 ]
-
-#: Columns of the runner's results table that the table helpers read.
-RESULT_COLUMNS = ("engine", "motion_id", "theta_max_over_alpha", "overturned", "status")
 
 #: Bootstrap resamples are drawn in blocks of at most this many values, to bound memory.
 _BOOT_BLOCK_VALUES = 4_000_000
@@ -575,249 +565,6 @@ def per_record_agreement(a, b, *, rtol: float = 0.1, atol: float = 0.05) -> Reco
     close[both_rock] = np.abs(x[both_rock] - y[both_rock]) <= atol + rtol * np.abs(y[both_rock])
     agree = (ox & oy) | close
     return RecordAgreement(int(x.size), int(same.sum()), int(agree.sum()), same, agree)
-
-
-# ----------------------------------------------------------------------------
-# helpers on the results table
-def _check_table(results: pd.DataFrame) -> None:
-    import pandas as pd
-
-    if not isinstance(results, pd.DataFrame):
-        raise ValueError(f"`results` must be a pandas DataFrame (the runner's results table), got {type(results)}")
-    missing = [c for c in RESULT_COLUMNS if c not in results.columns]
-    if missing:
-        raise ValueError(
-            f"`results` lacks column(s) {', '.join(missing)}; a results table has "
-            f"{', '.join(RESULT_COLUMNS)} (one row per engine and motion)"
-        )
-
-
-def split_failed(results: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Split a results table into usable rows and failed rows.
-
-    A row fails when its ``status`` is not ``"ok"`` or its
-    ``theta_max_over_alpha`` is NaN. Usable rows get ``theta_max_over_alpha``
-    set to +inf where ``overturned`` is true, so that both columns agree.
-
-    Returns
-    -------
-    ok, failed : pandas.DataFrame
-    """
-    _check_table(results)
-    theta = results["theta_max_over_alpha"].astype(np.float64)
-    bad = (results["status"].astype(str) != "ok") | theta.isna()
-    ok = results.loc[~bad].copy()
-    ok["theta_max_over_alpha"] = np.where(
-        ok["overturned"].astype(bool).to_numpy(), np.inf, ok["theta_max_over_alpha"].astype(np.float64).to_numpy()
-    )
-    return ok, results.loc[bad].copy()
-
-
-def _engines(results: pd.DataFrame, reference: str | None) -> list[str]:
-    names = [str(e) for e in dict.fromkeys(results["engine"].astype(str))]
-    if reference is not None:
-        if reference not in names:
-            raise unknown_choice("reference engine", reference, names)
-        names.remove(reference)
-        names.insert(0, reference)
-    return names
-
-
-def _paired(ok: pd.DataFrame, engine: str, reference: str) -> tuple[np.ndarray, np.ndarray]:
-    """theta_max/alpha of ``engine`` and ``reference`` on the motions both ran successfully."""
-    sub = ok[ok["engine"].astype(str).isin([engine, reference])]
-    dup = sub.duplicated(["engine", "motion_id"])
-    if dup.any():
-        row = sub.loc[dup].iloc[0]
-        raise ValueError(
-            f"`results` has more than one row for engine {row['engine']!r} and motion_id {row['motion_id']}; "
-            "select one scenario and one set of effects before comparing engines"
-        )
-    wide = sub.pivot(index="motion_id", columns="engine", values="theta_max_over_alpha").dropna()
-    return wide[engine].to_numpy(np.float64), wide[reference].to_numpy(np.float64)
-
-
-#: Columns of :func:`compare_engines` that compare an engine with the reference.
-_VERSUS_COLUMNS = (
-    "ks_distance",
-    "ks_pvalue",
-    "wasserstein",
-    "overturn_diff",
-    "n_paired",
-    "agreement_share",
-    "verdict_share",
-)
-
-
-def compare_engines(
-    results: pd.DataFrame,
-    reference: str = "housner",
-    *,
-    q: Sequence[float] = (25, 50, 75),
-    ci: float = 0.90,
-    p_ci: float = 0.95,
-    p_method: str = "wilson",
-    n_boot: int = 2000,
-    seed=0,
-    rtol: float = 0.1,
-    atol: float = 0.05,
-) -> pd.DataFrame:
-    """One row of statistics per engine, each compared with a reference engine.
-
-    Parameters
-    ----------
-    results : pandas.DataFrame
-        The runner's results table (one row per engine and motion; columns
-        ``engine``, ``motion_id``, ``theta_max_over_alpha``, ``overturned``,
-        ``status``, optionally ``wall_s``).
-    reference : str
-        Engine the others are compared with (it gets the first row).
-    q : sequence of float
-        Percentile levels [%].
-    ci : float
-        Confidence level of the bootstrap intervals on percentiles [-].
-    p_ci, p_method
-        Confidence level and method of the interval on P[overturn]; see
-        :func:`overturn_probability`.
-    n_boot, seed
-        Bootstrap resamples and their seed. Every engine is resampled with the
-        same seed, so adding an engine to the table does not change the others' intervals.
-    rtol, atol
-        Tolerances of :func:`per_record_agreement`.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Indexed by engine, with columns ``n`` (rows), ``n_failed``, ``n_ok``;
-        ``q25``, ``q25_low``, ``q25_high``, ... (theta_max/alpha [-], +inf =
-        overturn); ``p_overturn``, ``p_overturn_low``, ``p_overturn_high``;
-        versus the reference: ``ks_distance``, ``ks_pvalue``, ``wasserstein``
-        [alpha], ``overturn_diff`` (P_engine - P_reference), ``n_paired``,
-        ``agreement_share``, ``verdict_share``; ``wall_s_median`` and
-        ``wall_s_total`` [s] when the table has ``wall_s``. The comparison
-        columns are NaN on the reference row.
-    """
-    import pandas as pd
-
-    ok, failed = split_failed(results)
-    names = _engines(results, reference)
-    qa = np.atleast_1d(np.asarray(q, dtype=np.float64))
-    qnames = [f"q{x:g}" for x in qa]
-    ref_ok = ok.loc[ok["engine"].astype(str) == reference, "theta_max_over_alpha"].to_numpy(np.float64)
-    rows = []
-    for name in names:
-        mine = ok["engine"].astype(str) == name
-        v = ok.loc[mine, "theta_max_over_alpha"].to_numpy(np.float64)
-        n_failed = int((failed["engine"].astype(str) == name).sum())
-        row: dict[str, float] = {"engine": name, "n": v.size + n_failed, "n_failed": n_failed, "n_ok": v.size}
-        if v.size:
-            pe = percentiles(v, qa, ci=ci, n_boot=n_boot, seed=seed)
-            po = overturn_probability(np.isposinf(v), ci=p_ci, method=p_method)
-        else:
-            nan = np.full(qa.shape, np.nan)
-            pe = PercentileEstimate(qa, nan, nan, nan)
-            po = ProportionCI(math.nan, math.nan, math.nan)
-        for k, qn in enumerate(qnames):
-            row[qn], row[f"{qn}_low"], row[f"{qn}_high"] = pe.value[k], pe.low[k], pe.high[k]
-        row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"] = po
-        cmp = dict.fromkeys(_VERSUS_COLUMNS, math.nan)
-        if name != reference and v.size and ref_ok.size:
-            cmp["ks_distance"], cmp["ks_pvalue"] = ks_2samp(v, ref_ok)
-            cmp["wasserstein"] = wasserstein(v, ref_ok)
-            cmp["overturn_diff"] = float(np.isposinf(v).mean() - np.isposinf(ref_ok).mean())
-            a, b = _paired(ok, name, reference)
-            agreement = per_record_agreement(a, b, rtol=rtol, atol=atol)
-            cmp["n_paired"] = agreement.n
-            cmp["agreement_share"] = agreement.share
-            cmp["verdict_share"] = agreement.verdict_share
-        row.update(cmp)
-        if "wall_s" in results.columns:
-            w = results.loc[results["engine"].astype(str) == name, "wall_s"].astype(np.float64)
-            row["wall_s_median"] = float(w.median())
-            row["wall_s_total"] = float(w.sum())
-        rows.append(row)
-    return pd.DataFrame(rows).set_index("engine")
-
-
-def percentile_table(
-    results: pd.DataFrame,
-    reference: str = "housner",
-    *,
-    engines: Iterable[str] | None = None,
-    q: Sequence[float] = (25, 50, 75),
-    formatted: bool = False,
-    digits: int = 2,
-) -> pd.DataFrame:
-    """Percentiles of theta_max/alpha per engine in the layout of Table 2 of the seed paper.
-
-    Parameters
-    ----------
-    results : pandas.DataFrame
-        The runner's results table; failed rows are left out.
-    reference : str
-        The engine the others are compared with (the seed's "exp" column).
-    engines : iterable of str, optional
-        Engines to show after the reference (default: all others, in table order).
-    q : sequence of float
-        Percentile levels [%].
-    formatted : bool
-        If true, return strings: values to ``digits`` decimals, "overturn" for
-        +inf, "-" where a difference is undefined, as printed in the paper.
-    digits : int
-        Decimals when ``formatted``.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Index "25th", "50th", ... ; columns "<reference> [alpha]", then per
-        engine "<engine> [alpha]", "<engine> - <reference> [alpha]" and
-        "(<engine> - <reference>)/<reference> [-]". Numbers are
-        theta_max/alpha; +inf is an overturn, and a difference involving an
-        overturn is NaN.
-
-    References
-    ----------
-    Bachmann et al. (2017), Table 2 (numerical vs experimental percentiles).
-    """
-    import pandas as pd
-
-    ok, _ = split_failed(results)
-    names = _engines(results, reference)
-    if engines is not None:
-        wanted = [str(e) for e in engines]
-        for e in wanted:
-            if e not in names:
-                raise unknown_choice("engine", e, names)
-        names = [reference] + [e for e in wanted if e != reference]
-    qa = np.atleast_1d(np.asarray(q, dtype=np.float64))
-    index = pd.Index([percentile_label(x) for x in qa], name="percentile")
-
-    def pct(name: str) -> np.ndarray:
-        v = ok.loc[ok["engine"].astype(str) == name, "theta_max_over_alpha"].to_numpy(np.float64)
-        return percentiles(v, qa, n_boot=0).value if v.size else np.full(qa.shape, np.nan)
-
-    ref = pct(reference)
-    cols: dict[str, np.ndarray] = {f"{reference} [alpha]": ref}
-    for name in names[1:]:
-        mine = pct(name)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            diff = np.where(np.isfinite(mine) & np.isfinite(ref), mine - ref, np.nan)
-            rel = np.where(ref != 0, diff / ref, np.nan)
-        cols[f"{name} [alpha]"] = mine
-        cols[f"{name} - {reference} [alpha]"] = diff
-        cols[f"({name} - {reference})/{reference} [-]"] = rel
-    table = pd.DataFrame(cols, index=index)
-    if not formatted:
-        return table
-
-    def fmt(x: float) -> str:
-        if np.isposinf(x):
-            return "overturn"
-        if np.isnan(x):
-            return "-"
-        return f"{x:.{digits}f}"
-
-    return table.map(fmt)
 
 
 def percentile_label(q: float) -> str:

@@ -17,7 +17,6 @@ distances in units of alpha; see :mod:`housner.stats` for the definitions.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -27,7 +26,9 @@ import numpy as np
 import pandas as pd
 
 from housner import stats
-from housner.errors import DataFileError, unknown_choice
+from housner.errors import unknown_choice
+from scenarios.rundir import REPORT_FILE, RESULTS_FILE, load_results
+from scenarios.tables import split_failed
 
 __all__ = [
     "AgreementReport",
@@ -39,77 +40,8 @@ __all__ = [
     "load_results",
 ]
 
-#: File names inside a run directory.
-RESULTS_FILE = "results.parquet"
-RUN_FILE = "run.json"
-REPORT_FILE = "report.html"
-
 #: Failed motions named in a message, at most.
 _SHOW_FAILED = 3
-
-
-# ----------------------------------------------------------------------------
-# loading
-def load_results(path: str | Path) -> pd.DataFrame:
-    """Read a results table from a run directory, a ``results.parquet`` or a CSV file.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        A run directory holding ``results.parquet`` (and ``run.json``), or the
-        table itself (``.parquet`` or ``.csv``).
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per engine and motion. ``df.attrs["source"]`` holds the
-        resolved path of the table and ``df.attrs["run"]`` the contents of
-        ``run.json`` next to it (an empty dict if there is none); the
-        assertions use them to point to the run's report.
-
-    Raises
-    ------
-    housner.errors.DataFileError
-        When the path does not exist, cannot be read, or lacks a column of
-        the results table (the message names the file and the column).
-    """
-    path = Path(path).expanduser()
-    if path.is_dir():
-        table = path / RESULTS_FILE
-        if not table.is_file():
-            raise DataFileError(path, f"no {RESULTS_FILE} in this directory; is it a run directory of the runner?")
-        path = table
-    elif not path.exists():
-        raise DataFileError(path, "no such file or directory (expected a run directory or a results.parquet)")
-    path = path.resolve()
-    suffix = path.suffix.lower()
-    try:
-        if suffix == ".csv":
-            df = pd.read_csv(path)
-        else:
-            df = pd.read_parquet(path)
-    except Exception as e:  # pyarrow and pandas raise many kinds; all mean "not a readable table"
-        kind = "CSV" if suffix == ".csv" else "parquet"
-        raise DataFileError(path, f"cannot read as {kind}: {e}") from None
-    for col in stats.RESULT_COLUMNS:
-        if col not in df.columns:
-            raise DataFileError(
-                path,
-                f"missing column `{col}` of the results table (has: {', '.join(map(str, df.columns))})",
-                column=col,
-            )
-    run: dict = {}
-    run_file = path.parent / RUN_FILE
-    if run_file.is_file():
-        try:
-            run = json.loads(run_file.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as e:
-            raise DataFileError(run_file, f"invalid JSON: {e.msg} (column {e.colno})", line=e.lineno) from None
-        except OSError as e:
-            raise DataFileError(run_file, f"cannot read: {e.strerror or e}") from None
-    df.attrs["source"] = str(path)
-    df.attrs["run"] = run
-    return df
 
 
 # ----------------------------------------------------------------------------
@@ -253,7 +185,7 @@ def _prepare(results, engine: str, reference: str, report) -> _Sides:
             raise ValueError(f"`{name}` must be an engine name, got {value!r}")
     if engine == reference:
         raise ValueError(f"`engine` and `reference` are both {engine!r}; compare two different engines")
-    ok, failed = stats.split_failed(results)
+    ok, failed = split_failed(results)
     names = sorted(set(results["engine"].astype(str)))
     for kind, value in (("engine", engine), ("reference engine", reference)):
         if value not in names:

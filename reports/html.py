@@ -41,6 +41,8 @@ from housner import stats
 from housner.errors import DataFileError
 from housner.units import G
 from reports import figures
+from scenarios.rundir import load_results, read_histories, read_motions
+from scenarios.tables import compare_engines, percentile_table, split_failed
 
 __all__ = [
     "DEFAULT_KS_MAX",
@@ -147,23 +149,8 @@ class _Run:
         path = Path(run_dir)
         if not path.is_dir():
             raise DataFileError(path, "not a directory (expected a run directory with results.parquet)")
-        table = path / "results.parquet"
-        if not table.is_file():
-            raise DataFileError(path, "holds no results.parquet; run `housner run SCENARIO --out DIR` first")
-        try:
-            results = pd.read_parquet(table)
-        except Exception as e:  # pyarrow raises several kinds; all mean an unreadable table
-            raise DataFileError(table, f"cannot read as parquet: {e}") from None
-        for col in stats.RESULT_COLUMNS:
-            if col not in results.columns:
-                raise DataFileError(table, f"missing column `{col}` of the results table", column=col)
-        meta: dict = {}
-        run_json = path / "run.json"
-        if run_json.is_file():
-            try:
-                meta = json.loads(run_json.read_text(encoding="utf-8"))
-            except json.JSONDecodeError as e:
-                raise DataFileError(run_json, f"invalid JSON: {e.msg}", line=e.lineno) from None
+        results = load_results(path)
+        meta = results.attrs.get("run", {})
         results = results.copy()
         results["engine"] = results["engine"].astype(str)
         if "motion_name" not in results.columns:
@@ -177,7 +164,7 @@ class _Run:
     # --- derived facts
     @cached_property
     def split(self) -> tuple[pd.DataFrame, pd.DataFrame]:
-        return stats.split_failed(self.results)
+        return split_failed(self.results)
 
     @property
     def ok(self) -> pd.DataFrame:
@@ -254,7 +241,7 @@ class _Run:
 
     @cached_property
     def comparison(self) -> pd.DataFrame:
-        return stats.compare_engines(
+        return compare_engines(
             self.results,
             self.reference,
             q=_Q,
@@ -268,14 +255,7 @@ class _Run:
 
     @cached_property
     def motions(self) -> dict | None:
-        f = self.path / "motions.npz"
-        if not f.is_file():
-            return None
-        try:
-            with np.load(f, allow_pickle=False) as z:
-                return {k: z[k] for k in z.files}
-        except Exception as e:
-            raise DataFileError(f, f"cannot read: {e}") from None
+        return read_motions(self.path)
 
     @cached_property
     def record_gap(self) -> dict:
@@ -350,22 +330,8 @@ class _Run:
 
     def histories(self, motion_ids: Iterable[int]) -> dict[tuple[str, int], tuple[np.ndarray, np.ndarray]]:
         """(engine, motion_id) -> (t [s], theta [rad]) for the given motions (empty when not stored)."""
-        f = self.path / "histories.parquet"
-        ids = sorted({int(i) for i in motion_ids})
-        if not ids or not f.is_file():
-            return {}
-        try:
-            df = pd.read_parquet(f, filters=[("motion_id", "in", ids)])
-        except Exception as e:
-            raise DataFileError(f, f"cannot read: {e}") from None
-        out = {}
-        for (eng, mid), g in df.groupby(["engine", "motion_id"], sort=False, observed=True):
-            theta = g["theta"].to_numpy(np.float64)
-            dt = self.motion_dt(int(mid))
-            # The stored t is float32; rebuild it from the step so that long records stay uniform.
-            t = np.arange(theta.size) * dt if math.isfinite(dt) else g["t"].to_numpy(np.float64)
-            out[(str(eng), int(mid))] = (t, theta)
-        return out
+        ids = {int(i) for i in motion_ids}
+        return read_histories(self.path, ids, {i: self.motion_dt(i) for i in ids})
 
 
 # ----------------------------------------------------------------------------
@@ -1551,7 +1517,7 @@ def _factor_line(run: _Run) -> str:
 
 def _table2(run: _Run, paper: dict[float, float]) -> str:
     """Percentiles and their differences to the reference (and to the paper), one row per quantity."""
-    t2 = stats.percentile_table(run.results, run.reference, q=_Q)
+    t2 = percentile_table(run.results, run.reference, q=_Q)
     labels = [_e(i) for i in t2.index]
     rows = []
     ref = t2.iloc[:, 0].to_numpy(float)

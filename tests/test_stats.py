@@ -11,6 +11,7 @@ import pytest
 from scipy import stats as sps
 
 from housner import stats
+from scenarios import tables
 
 INF = np.inf
 
@@ -320,11 +321,11 @@ def results_table(rng, n=100):
 
 def test_compare_engines_matches_the_array_functions():
     df = results_table(np.random.default_rng(12))
-    table = stats.compare_engines(df, "housner", n_boot=200, seed=3)
+    table = tables.compare_engines(df, "housner", n_boot=200, seed=3)
     assert list(table.index) == ["housner", "mujoco", "pybullet"]
     assert table.loc["pybullet", "n"] == 100 and table.loc["pybullet", "n_failed"] == 2
     assert table.loc["pybullet", "n_ok"] == 98
-    ok, failed = stats.split_failed(df)
+    ok, failed = tables.split_failed(df)
     assert len(failed) == 2
     ref = ok[ok.engine == "housner"].theta_max_over_alpha.to_numpy()
     pyb = ok[ok.engine == "pybullet"].theta_max_over_alpha.to_numpy()
@@ -348,12 +349,12 @@ def test_compare_engines_matches_the_array_functions():
 def test_compare_engines_errors():
     df = results_table(np.random.default_rng(13))
     with pytest.raises(ValueError, match="did you mean 'housner'"):
-        stats.compare_engines(df, "housne")
+        tables.compare_engines(df, "housne")
     with pytest.raises(ValueError, match="lacks column"):
-        stats.compare_engines(df.drop(columns="status"))
+        tables.compare_engines(df.drop(columns="status"))
     doubled = pd.concat([df, df[df.engine == "mujoco"]])
     with pytest.raises(ValueError, match="more than one row for engine 'mujoco'"):
-        stats.compare_engines(doubled, n_boot=0)
+        tables.compare_engines(doubled, n_boot=0)
 
 
 def test_percentile_table_reproduces_the_layout_of_seed_table_2():
@@ -370,7 +371,7 @@ def test_percentile_table_reproduces_the_layout_of_seed_table_2():
             "status": "ok",
         }
     )
-    t = stats.percentile_table(df, reference="experiment")
+    t = tables.percentile_table(df, reference="experiment")
     assert list(t.index) == ["25th", "50th", "75th"]
     assert list(t.columns) == [
         "experiment [alpha]",
@@ -380,7 +381,7 @@ def test_percentile_table_reproduces_the_layout_of_seed_table_2():
     ]
     np.testing.assert_allclose(t["housner - experiment [alpha]"][:2], [0.01, 0.12], atol=1e-12)
     np.testing.assert_allclose(t["(housner - experiment)/experiment [-]"][:2], [0.01 / 0.36, 0.12 / 0.65])
-    f = stats.percentile_table(df, reference="experiment", formatted=True)
+    f = tables.percentile_table(df, reference="experiment", formatted=True)
     assert f.loc["25th"].tolist() == ["0.36", "0.37", "0.01", "0.03"]
     assert f.loc["50th"].tolist() == ["0.65", "0.77", "0.12", "0.18"]
     assert f.loc["75th"].tolist() == ["overturn", "overturn", "-", "-"]
