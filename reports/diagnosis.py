@@ -24,7 +24,6 @@ eqs. 7-8, Figs. 5 and 10.
 
 from __future__ import annotations
 
-import html
 import math
 import time
 from pathlib import Path
@@ -35,6 +34,7 @@ from matplotlib.figure import Figure
 
 from housner.calibration import half_cycle_integral
 from reports import figures
+from reports.page import Section, document, esc, html_figure, html_table, write_page
 
 __all__ = ["render_diagnosis", "write_diagnosis_report"]
 
@@ -42,15 +42,13 @@ _MEASURED = "#000000"
 _STEP_COLORS = ("#7f7f7f", "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd")
 
 
-def _e(x: Any) -> str:
-    return html.escape(str(x), quote=True)
 
 
 def _f(x: Any, digits: int = 4) -> str:
     try:
         v = float(x)
     except (TypeError, ValueError):
-        return _e(x)
+        return esc(x)
     if math.isnan(v):
         return "&ndash;"
     if math.isinf(v):
@@ -58,18 +56,8 @@ def _f(x: Any, digits: int = 4) -> str:
     return f"{v:.{digits}g}" if abs(v) >= 1e4 or (v != 0 and abs(v) < 1e-3) else f"{v:.{digits}f}"
 
 
-def _table(header: list[str], rows: list[list[str]], caption: str = "", cls: str = "") -> str:
-    head = "<thead><tr>" + "".join(f"<th>{h}</th>" for h in header) + "</tr></thead>"
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
-    cap = f'<p class="caption">{caption}</p>' if caption else ""
-    return f'<div class="tbl"><table class="{cls}">{head}<tbody>{body}</tbody></table>{cap}</div>'
 
 
-def _figure(fig: Figure, caption: str, alt: str) -> str:
-    data = figures.to_png_base64(fig)
-    return (
-        f'<figure><img src="data:image/png;base64,{data}" alt="{_e(alt)}"><figcaption>{caption}</figcaption></figure>'
-    )
 
 
 def _colors(steps) -> list[str]:
@@ -270,16 +258,16 @@ def _verdict(diag) -> str:
     if v is None:
         return ""
     head = (f'<p class="lead"><span class="{_STATUS_CLASS.get(v.status, "")}">'
-            f"{_e(v.status.replace('_', ' ').upper())}</span> &mdash; {_e(v.text)}</p>")  # fmt: skip
+            f"{esc(v.status.replace('_', ' ').upper())}</span> &mdash; {esc(v.text)}</p>")  # fmt: skip
     rows = []
     for label, res in (("plain Housner model", v.baseline), ("final model", v.residual)):
         for kind, g in res.groups.items():
-            rows.append([_e(label), _e(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
+            rows.append([esc(label), esc(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
                          f"{g['ratio']:.2f}", f"{g['z']:+.1f}", '<span class="bad">yes</span>' if g["misfit"] else "no",
                          f"{g.get('detectable_ratio', float('nan')):.2f}"])  # fmt: skip
     from scenarios.verdict import RATIO_MISFIT, Z_MISFIT
 
-    table = _table(
+    table = html_table(
         ["model", "records", "n", "held-out error [alpha]", "correct-model floor", "ratio", "z", "misfit",
          "detectable ratio"],
         rows,
@@ -295,21 +283,23 @@ def _verdict(diag) -> str:
         items = []
         for c in v.next:
             ev = "; ".join(
-                f"{_e(e['label'])}: measured {_f(e['measured'])} &plusmn; {_f(e['measured_se'], 2)}, model "
+                f"{esc(e['label'])}: measured {_f(e['measured'])} &plusmn; {_f(e['measured_se'], 2)}, model "
                 f"{_f(e['model'])} &plusmn; {_f(e['model_se'], 2)} (z = {e['z']:+.1f})"
                 for e in c["evidence"]
             )
-            items.append(f"<li><b>{_e(c['class'])}</b> &mdash; {_e(c['meaning'])}<br><span class=sub>{ev}</span></li>")
+            items.append(
+                f"<li><b>{esc(c['class'])}</b> &mdash; {esc(c['meaning'])}<br><span class=sub>{ev}</span></li>"
+            )
         nxt = "<h3>Where to look next</h3><ol>" + "".join(items) + "</ol>"
     freq = ""
     if diag.selection_frequency:
         k = diag.settings.get("folds", "?")
-        cells = ", ".join(f"<code>{_e(n)}</code> {100 * f:.0f} %" for n, f in
+        cells = ", ".join(f"<code>{esc(n)}</code> {100 * f:.0f} %" for n, f in
                           sorted(diag.selection_frequency.items(), key=lambda kv: -kv[1]))  # fmt: skip
         freq = f'<p class="sub">Best candidate of its round, fold by fold ({k} folds): {cells}.</p>'
     dist = ""
     if v.distribution:
-        dist = '<p class="bad">Distributions: ' + _e("; ".join(v.distribution)) + ".</p>"
+        dist = '<p class="bad">Distributions: ' + esc("; ".join(v.distribution)) + ".</p>"
     return head + table + dist + nxt + freq
 
 
@@ -318,16 +308,15 @@ def _summary(diag) -> str:
     c = diag.campaign
     skipped = ""
     if c.skipped:
-        items = "".join(f"<li><code>{_e(rid)}</code> ({_e(f)}): {_e(msg)}</li>" for rid, f, msg in c.skipped)
+        items = "".join(f"<li><code>{esc(rid)}</code> ({esc(f)}): {esc(msg)}</li>" for rid, f, msg in c.skipped)
         skipped = f'<p class="bad">{len(c.skipped)} record(s) skipped:</p><ul>{items}</ul>'
     rest = diag.summary().replace(diag.verdict.text, "").strip() if diag.verdict else diag.summary()
     return (
-        _verdict(diag)
-        + f'<p class="sub">{_e(rest)}</p>'
+        _verdict(diag) + f'<p class="sub">{esc(rest)}</p>'
         f'<p class="sub">Specimen: 2H = {spec.height:g} m, 2B = {spec.width:g} m, m = {spec.mass:g} kg, '
         f"alpha = {spec.alpha:.4f} rad, p = {spec.p:.4f} 1/s, Housner r = {spec.r_housner:.4f}. "
         f"{len(c.free_vibration)} free-vibration and {len(c.ground_motion)} ground-motion records, "
-        f"{diag.settings.get('folds', '?')}-fold cross-validation (seed {_e(diag.settings.get('seed'))}): every "
+        f"{diag.settings.get('folds', '?')}-fold cross-validation (seed {esc(diag.settings.get('seed'))}): every "
         f"record is fitted on in the other folds and held out once.</p>{skipped}"
     )
 
@@ -336,11 +325,11 @@ def _ladder(diag) -> str:
     rows = []
     for s in diag.steps:
         prm = "<br>".join(
-            f"<code>{_e(n)}</code>: " + ", ".join(f"{_e(k)} = {_f(v)}" for k, v in p.items()) for n, p in s.effects
+            f"<code>{esc(n)}</code>: " + ", ".join(f"{esc(k)} = {_f(v)}" for k, v in p.items()) for n, p in s.effects
         )
         rows.append(
             [
-                _e(s.label()) + (" <span class=muted>(by hand)</span>" if s.by_hand else ""),
+                esc(s.label()) + (" <span class=muted>(by hand)</span>" if s.by_hand else ""),
                 prm or "&ndash;",
                 f"{_f(s.heldout_error)} &plusmn; {_f(s.heldout_se, 2)}",
                 _f(s.train_error),
@@ -348,7 +337,7 @@ def _ladder(diag) -> str:
                 "&ndash;" if s.added is None else ('<span class="ok">yes</span>' if s.significant else "no"),
             ]
         )
-    table = _table(
+    table = html_table(
         ["step", "effects (fitted parameters)", "held-out error [alpha]", "training error", "improvement",
          "significant"],
         rows,
@@ -359,7 +348,7 @@ def _ladder(diag) -> str:
             "the verdict uses is in the table above."
         ),
     )  # fmt: skip
-    fig = _figure(_ladder_figure(diag), "Held-out error at each step, with the noise floor.", "error ladder")
+    fig = html_figure(_ladder_figure(diag), "Held-out error at each step, with the noise floor.", "error ladder")
     return table + fig
 
 
@@ -369,20 +358,20 @@ def _candidates(diag) -> str:
         base = " + ".join(rnd[0].base) if rnd and rnd[0].base else "the plain Housner model"
         rows = [
             [
-                f"<code>{_e(c.effect)}</code>",
-                ", ".join(f"{_e(key)} = {_f(v)}" for key, v in c.params.items()),
+                f"<code>{esc(c.effect)}</code>",
+                ", ".join(f"{esc(key)} = {_f(v)}" for key, v in c.params.items()),
                 _f(c.train_error),
                 f"{_f(c.heldout_error)} &plusmn; {_f(c.heldout_se, 2)}",
                 f"{_f(c.improvement)} &plusmn; {_f(c.improvement_se, 2)}",
                 _f(c.pvalue, 2),
                 ('<span class="ok">yes</span>' if c.significant else "no")
-                + f" <span class=muted>({_e(c.reason)})</span>",
+                + f" <span class=muted>({esc(c.reason)})</span>",
             ]
             for c in rnd
         ]  # fmt: skip
-        out.append(f"<h3>Round {k + 1}: candidates added to {_e(base)}</h3>")
+        out.append(f"<h3>Round {k + 1}: candidates added to {esc(base)}</h3>")
         out.append(
-            _table(
+            html_table(
                 [
                     "effect",
                     "fitted parameters",
@@ -402,32 +391,32 @@ def _candidates(diag) -> str:
 
 def _localisation(diag) -> str:
     parts = [
-        _figure(
+        html_figure(
             _cdf_figure(diag),
             "theta_max/alpha of the ground-motion records: measurement and model at every step (model peaks seen "
             "through the same sensor noise as the measurement).",
             "CDFs",
         ),
-        _figure(
+        html_figure(
             _energy_figure(diag),
             "Energy ratio of each free-vibration impact from successive peaks (seed eq. 8) against the amplitude "
             "before it. A constant lower than Housner's says restitution; a trend with amplitude says "
             "amplitude-dependent restitution or damping.",
             "energy ratio",
         ),
-        _figure(
+        html_figure(
             _half_cycle_figure(diag),
             "Duration of each complete free-vibration half-cycle against its amplitude, with Housner's exact "
             "relation for the stated p: a uniform shift says p is mis-stated.",
             "half-cycle duration",
         ),
-        _figure(
+        html_figure(
             _flight_figure(diag),
             "Squared ratio of the speeds at the closing and the opening impact of each half-cycle: 1 when no "
             "energy is lost between impacts (Housner); below 1 with damping.",
             "decay between impacts",
         ),
-        _figure(
+        html_figure(
             _onset_figure(diag),
             "Per ground-motion record and direction: the largest ground acceleration toward the first uplift "
             "before the block is seen to move (onset, an upper estimate of the threshold) and the largest toward "
@@ -435,7 +424,7 @@ def _localisation(diag) -> str:
             "pivots split the two directions.",
             "uplift onset",
         ),
-        _figure(
+        html_figure(
             _bars_figure(
                 diag,
                 [
@@ -451,7 +440,7 @@ def _localisation(diag) -> str:
             "fraction of the ground-motion records.",
             "direction bias",
         ),
-        _figure(
+        html_figure(
             _bars_figure(
                 diag,
                 [("alternation", "ln c (ends +) - ln c (ends -)")],
@@ -463,7 +452,7 @@ def _localisation(diag) -> str:
             "end a theta < 0 one: 0 for a symmetric block; peaks alternating in size give a non-zero value.",
             "alternation",
         ),
-        _figure(
+        html_figure(
             _tilt_figure(diag),
             "Rotation before the first uplift while the ground acceleration is below g tan alpha, against the "
             "ground acceleration: Housner's block does not move (0); a sensor offset shifts it, a flexible base "
@@ -477,12 +466,12 @@ def _localisation(diag) -> str:
 def _metric_table(diag) -> str:
     from scenarios.compare import METRICS
 
-    header = ["quantity", "unit", "measured"] + [f"model: {_e(_label(s))}" for s in diag.steps]
+    header = ["quantity", "unit", "measured"] + [f"model: {esc(_label(s))}" for s in diag.steps]
     rows = []
     locs = [s.comparison.localisation() for s in diag.steps]
     for key, (label, unit) in METRICS.items():
         m = locs[0][key][0]
-        row = [_e(label), _e(unit), f"{_f(m.value)} &plusmn; {_f(m.se, 2)}"]
+        row = [esc(label), esc(unit), f"{_f(m.value)} &plusmn; {_f(m.se, 2)}"]
         for loc in locs:
             x = loc[key][1]
             se = math.hypot(m.se if math.isfinite(m.se) else 0.0, x.se if math.isfinite(x.se) else 0.0)
@@ -490,7 +479,7 @@ def _metric_table(diag) -> str:
             flag = ' class="bad"' if math.isfinite(z) and abs(z) > 3 else ""
             row.append(f"<span{flag}>{_f(x.value)} &plusmn; {_f(x.se, 2)}</span>")
         rows.append(row)
-    return _table(
+    return html_table(
         header,
         rows,
         caption="Localisation quantities with standard errors; a model value more than 3 combined standard errors "
@@ -501,8 +490,8 @@ def _metric_table(diag) -> str:
 def _records(diag) -> str:
     steps = diag.steps
     held = set(diag.heldout_ids)
-    header = ["record", "kind", "set", "window [s]"] + [f"error: {_e(_label(s))}" for s in steps] + [
-        "theta_max/alpha measured", f"theta_max/alpha {_e(_label(steps[-1]))}", "diverges at [s]"]  # fmt: skip
+    header = ["record", "kind", "set", "window [s]"] + [f"error: {esc(_label(s))}" for s in steps] + [
+        "theta_max/alpha measured", f"theta_max/alpha {esc(_label(steps[-1]))}", "diverges at [s]"]  # fmt: skip
     rows = []
     per_step = [{r.id: r for r in s.comparison.records} for s in steps]
     for rec in diag.campaign.records:
@@ -510,41 +499,21 @@ def _records(diag) -> str:
         rl = per_step[-1][rec.id]
         which = "held out" if rec.id in held else "train"
         rows.append(
-            [f"<code>{_e(rec.id)}</code>", _e(rec.kind), which, _f(r0.window_end, 3)]
+            [f"<code>{esc(rec.id)}</code>", esc(rec.kind), which, _f(r0.window_end, 3)]
             + [_f(p[rec.id].error) for p in per_step]
             + [_f(r0.theta_max_over_alpha_measured, 3), _f(rl.theta_max_over_alpha_model, 3),
                _f(rl.divergence_time, 3)]
         )  # fmt: skip
-    return _table(header, rows, caption="Errors in units of alpha over each record's window; failures show a dash.")
+    return html_table(header, rows, caption="Errors in units of alpha over each record's window; failures show a dash.")
 
 
 def _settings(diag) -> str:
-    rows = [[_e(k), f"<code>{_e(v)}</code>"] for k, v in diag.settings.items()]
+    rows = [[esc(k), f"<code>{esc(v)}</code>"] for k, v in diag.settings.items()]
     rows.append(["elapsed", f"{diag.elapsed:.1f} s"])
-    rows.append(["campaign", f"<code>{_e(diag.campaign.path)}</code>"])
-    return _table(["setting", "value"], rows, cls="kv")
+    rows.append(["campaign", f"<code>{esc(diag.campaign.path)}</code>"])
+    return html_table(["setting", "value"], rows, cls="kv")
 
 
-_CSS = """
-body { font: 15px/1.5 system-ui, -apple-system, "Segoe UI", Roboto, Arial, sans-serif; color: #1d2327; margin: 0; }
-main { max-width: 1080px; margin: 0 auto; padding: 1.5rem 1.5rem 4rem; }
-header { border-bottom: 3px solid #0b5394; margin-bottom: 1rem; }
-h1 { font-size: 1.6rem; margin: .2rem 0; }
-h2 { font-size: 1.3rem; border-bottom: 1px solid #d8dee4; padding-bottom: .2rem; margin-top: 2.2rem; }
-h3 { font-size: 1.05rem; margin-top: 1.4rem; }
-.sub, .muted, p.caption, figcaption { color: #5f6b73; }
-p.lead { font-size: 1.08rem; background: #f6f8fa; border-left: 4px solid #0b5394; padding: .6rem .9rem; }
-table { border-collapse: collapse; font-size: .9rem; }
-th, td { border: 1px solid #d8dee4; padding: .28rem .5rem; text-align: left; vertical-align: top; }
-thead th { background: #f6f8fa; }
-div.tbl { margin: .8rem 0 1.2rem; overflow-x: auto; }
-p.caption, figcaption { font-size: .86rem; max-width: 60rem; }
-figure { margin: 1rem 0; }
-figure img { max-width: 100%; height: auto; border: 1px solid #d8dee4; border-radius: 4px; }
-.ok { color: #2b6a2b; font-weight: 600; } .bad { color: #a94442; font-weight: 600; }
-.warn { color: #8a6d3b; font-weight: 600; }
-nav ol { columns: 2; }
-"""
 
 
 def render_diagnosis(diag) -> str:
@@ -567,25 +536,16 @@ def render_diagnosis(diag) -> str:
         ("records", "Records", _records(diag)),
         ("settings", "Settings", _settings(diag)),
     ]
-    toc = "".join(f'<li><a href="#{i}">{_e(t)}</a></li>' for i, t, _b in sections)
-    body = "".join(f'<section id="{i}"><h2>{_e(t)}</h2>{b}</section>' for i, t, b in sections)
     took = time.perf_counter() - t0
-    return (
-        "<!DOCTYPE html>\n"
-        '<html lang="en"><head><meta charset="utf-8">'
-        '<meta name="viewport" content="width=device-width, initial-scale=1">'
-        '<link rel="icon" href="data:,">'
-        f"<title>{_e(diag.campaign.name)}: diagnosis</title><style>{_CSS}</style></head><body><main>"
-        f"<header><h1>Diagnosis: <code>{_e(diag.campaign.name)}</code></h1>"
-        f'<p class="sub">Which physical effect the Housner model misses, judged on held-out records.</p></header>'
-        f"<nav><ol>{toc}</ol></nav>{body}"
-        f'<p class="muted">Page built in {took:.1f} s.</p></main></body></html>\n'
+    return document(
+        f"{diag.campaign.name}: diagnosis",
+        f"Diagnosis: <code>{esc(diag.campaign.name)}</code>",
+        '<p class="sub">Which physical effect the Housner model misses, judged on held-out records.</p>',
+        [Section(i, t, b) for i, t, b in sections],
+        f"Page built in {took:.1f} s.",
     )
 
 
 def write_diagnosis_report(diag, path: str | Path) -> Path:
     """Write :func:`render_diagnosis` to ``path`` (parents created) and return the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render_diagnosis(diag), encoding="utf-8")
-    return path
+    return write_page(path, render_diagnosis(diag))

@@ -80,6 +80,16 @@ def jsonable(x: Any, *, nonfinite: str = "string") -> Any:
     return x
 
 
+def json_number(x: Any) -> float:
+    """A number from run.json, where non-finite floats are written as strings ("inf", "nan")."""
+    if isinstance(x, str) and x.strip().lower() in ("overturn", "overturned"):
+        return math.inf
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        return math.nan
+
+
 def effect_data(effect: Any) -> dict:
     """An effect as plain data: its registry name and parameter values (for cache keys and run.json)."""
     return {"name": effect.name, **{k: getattr(effect, k) for k in type(effect).params}}

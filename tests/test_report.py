@@ -19,7 +19,9 @@ from engines.analytic import HousnerEngine
 from engines.base import ENGINES, register_engine
 from housner import GroundMotion, Specimen, stats
 from housner.errors import DataFileError
-from reports import figures, html
+from reports import figures, html, run_view
+from reports.sections import distribution as distribution_section
+from reports.sections import tuning as tuning_section
 from scenarios.runner import provenance, run_engines, write_run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -330,7 +332,7 @@ def test_written_tables_from_any_engines(tmp_path, monkeypatch):
     out = tmp_path / "bare"
     out.mkdir()
     pd.DataFrame(rows).to_parquet(out / "results.parquet")
-    monkeypatch.setattr(html, "TUNING_DIR", tmp_path)
+    monkeypatch.setattr(tuning_section, "TUNING_DIR", tmp_path)
     tuning = {
         "engine": "beta-engine",
         "target_r": 0.9465,
@@ -496,7 +498,7 @@ def tuned_run(tmp_path_factory):
 
 def test_tuning_series_are_one_line_per_sample_step_sorted_by_amplitude(tuned_run, monkeypatch):
     out, tdir = tuned_run
-    monkeypatch.setattr(html, "TUNING_DIR", tdir)
+    monkeypatch.setattr(tuning_section, "TUNING_DIR", tdir)
     seen = {}
     real = figures.plot_tuning
 
@@ -527,7 +529,7 @@ def test_tuning_series_are_one_line_per_sample_step_sorted_by_amplitude(tuned_ru
 def test_real_tuning_files_give_monotone_series():
     for engine in ("mujoco", "pybullet"):
         d = json.loads((ROOT / "engines" / "models" / f"tuning-{engine}.json").read_text())
-        curves, decay = html._tuning_series(d)
+        curves, decay = tuning_section._tuning_series(d)
         n_steps = len(set(d["table"]["dt"]))
         assert len(curves) == n_steps and len(decay) == n_steps
         for a, _ in curves.values():
@@ -537,7 +539,7 @@ def test_real_tuning_files_give_monotone_series():
 
 def test_engine_settings_are_printed_once(tuned_run, monkeypatch):
     out, tdir = tuned_run
-    monkeypatch.setattr(html, "TUNING_DIR", tdir)
+    monkeypatch.setattr(tuning_section, "TUNING_DIR", tdir)
     text = html.render_report(out)
     page = Page(text)
     # the engines table lists r = 0.8 once; the tuning table refers to it instead of repeating it
@@ -556,7 +558,7 @@ def test_engine_settings_are_printed_once(tuned_run, monkeypatch):
 
 def test_a_tuning_check_not_met_is_explained_under_the_verdict(tuned_run, monkeypatch):
     out, tdir = tuned_run
-    monkeypatch.setattr(html, "TUNING_DIR", tdir)
+    monkeypatch.setattr(tuning_section, "TUNING_DIR", tdir)
     text = html.render_report(out)
     page = Page(text)
     row = page.row("verdict", "report-r80")
@@ -680,7 +682,7 @@ def test_table2_gives_the_factors_that_reach_the_papers_percentiles(rdk_run):
 
     out, model, S = rdk_run
     gap = html.render_report(out).split('id="table2-gap"')[1].split("</section>")[0]
-    f = equivalent_amplitude(SPEC, model, {25: 0.37, 50: 0.77, 75: float("inf")}, seed=html.BOOT_SEED)
+    f = equivalent_amplitude(SPEC, model, {25: 0.37, 50: 0.77, 75: float("inf")}, seed=run_view.BOOT_SEED)
     assert "How much stronger, in effect, the paper's motions were" in gap
     for q, d in f["factors"].items():
         label = f"for the {stats.percentile_label(q)}"
@@ -707,6 +709,6 @@ def test_the_factor_line_says_whether_one_factor_reaches_the_whole_row(factors, 
         "ci": 0.9,
         "n": 100,
     }
-    text = html._factor_line(SimpleNamespace(paper_factors=f))
+    text = distribution_section._factor_line(SimpleNamespace(paper_factors=f))
     for s in says:
         assert s in text, text
