@@ -76,7 +76,7 @@ import numpy as np
 from engines.base import Engine
 from engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 from housner.errors import EngineError
-from housner.impacts import impact_times
+from housner.impacts import impact_times, uplift_time
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -498,7 +498,8 @@ class PybulletEngine(Engine):
         x_com, th = states[: last + 1, 0][upright], states[: last + 1, 2][upright]
         sgn = np.sign(th)
         slip = x_com + sgn * B * np.cos(th) - H * np.sin(th) - sgn * B
-        impacts, uplift = _events(t[: last + 1], theta[: last + 1], ROCKING_TOL * alpha, th0 != 0.0 or om0 != 0.0)
+        impacts = impact_times(t[: last + 1], theta[: last + 1], ROCKING_TOL * alpha)
+        uplift = uplift_time(t[: last + 1], theta[: last + 1], ROCKING_TOL * alpha, th0 != 0.0 or om0 != 0.0, _QUIET)
         theta_max = OVERTURN_ANGLE if overturned else float(np.max(np.abs(theta)))
         n_steps = (last) * k
         info = {
@@ -657,50 +658,3 @@ def _pivot_z(states: np.ndarray, H: float, B: float) -> np.ndarray:
     z = states[:, 1] + H
     th = states[:, 2]
     return z - H * np.cos(th) - B * np.abs(np.sin(th))
-
-
-def _events(t: np.ndarray, theta: np.ndarray, tol: float, released: bool) -> tuple[np.ndarray, float]:
-    """Impact times [s] (theta changes sign while rocking) and the uplift time [s].
-
-    A sign change counts as an impact only if |theta| exceeded ``tol`` [rad]
-    since the previous impact (or the uplift): the block resting on both
-    pivots tilts by far less than that without rocking. The uplift time is the
-    first sample for a release from a tilted or moving state; otherwise see
-    :func:`_uplift_time`.
-    """
-    big = np.abs(theta) > tol
-    if not big.any():
-        return np.empty(0), math.nan
-    first = int(np.argmax(big))
-    if released:
-        uplift = float(t[0])
-    else:
-        uplift = _uplift_time(t, np.abs(theta), first, tol * _QUIET)
-    return impact_times(t, theta, tol), uplift
-
-
-def _uplift_time(t: np.ndarray, abs_theta: np.ndarray, first: int, quiet: float) -> float:
-    """When the block left its rest position [s], from the climb of |theta| that first passed the rocking threshold.
-
-    Walking back from sample ``first`` (the first above the threshold) while
-    |theta| falls and stays above ``quiet`` [rad] finds the start of the
-    climb. Just after uplift theta grows like (t - t_u)^3 (the ground
-    acceleration crosses g tan(alpha) with a finite slope), so the times t1
-    and t2 at which the climb passes ``quiet`` and ``8 quiet`` (linear
-    interpolation between samples) give t_u = 2 t1 - t2. Against the analytic
-    model's exact uplift instants this is within about 1 ms on one-sine pulses,
-    where the first sample above ``quiet`` alone is 3-6 ms late.
-    """
-    j = first
-    while j > 0 and quiet < abs_theta[j - 1] < abs_theta[j]:
-        j -= 1
-    if j == 0 or abs_theta[j] <= quiet:
-        return float(t[j])
-
-    def crossing(level: float) -> float:
-        k = j + int(np.argmax(abs_theta[j : first + 1] > level))
-        a, b = abs_theta[k - 1], abs_theta[k]
-        return float(t[k - 1] + (level - a) / (b - a) * (t[k] - t[k - 1])) if b > a else float(t[k])
-
-    t1, t2 = crossing(quiet), crossing(8.0 * quiet)
-    return max(float(t[j - 1]) - (t2 - t1), min(t1, 2.0 * t1 - t2), float(t[0]))
