@@ -213,30 +213,11 @@ def urdf_from_specimen(
      Load with useFixedBase=True and flags=URDF_USE_INERTIA_FROM_FILE. -->
 <robot name="{name}">
   <link name="world"/>
-  <joint name="x" type="prismatic">
-    <parent link="world"/>
-    <child link="carriage_x"/>
-    <origin xyz="0 0 {_num(H)}" rpy="0 0 0"/>
-    <axis xyz="1 0 0"/>
-    {slide_limit}
-  </joint>
-  <link name="carriage_x">
-{_inertial(carriage_mass, carriage_inertia, "    ")}  </link>
-  <joint name="z" type="prismatic">
-    <parent link="carriage_x"/>
-    <child link="carriage_z"/>
-    <origin xyz="0 0 0" rpy="0 0 0"/>
-    <axis xyz="0 0 1"/>
-    {slide_limit}
-  </joint>
-  <link name="carriage_z">
-{_inertial(carriage_mass, carriage_inertia, "    ")}  </link>
-  <joint name="theta" type="continuous">
-    <parent link="carriage_z"/>
-    <child link="block"/>
-    <origin xyz="0 0 0" rpy="0 0 0"/>
-    <axis xyz="0 1 0"/>
-  </joint>
+{_joint("x", "prismatic", "world", "carriage_x", f"0 0 {_num(H)}", "1 0 0", slide_limit)}
+{_carriage("carriage_x", carriage_mass, carriage_inertia)}
+{_joint("z", "prismatic", "carriage_x", "carriage_z", "0 0 0", "0 0 1", slide_limit)}
+{_carriage("carriage_z", carriage_mass, carriage_inertia)}
+{_joint("theta", "continuous", "carriage_z", "block", "0 0 0", "0 1 0")}
   <link name="block">
     <!-- centre of mass at the link origin; iyy = I0 - m R^2 -->
 {_inertial(m, ic, "    ")}    <visual>
@@ -257,6 +238,25 @@ def urdf_from_specimen(
 </robot>
 """
     return text
+
+
+def _joint(name: str, kind: str, parent: str, child: str, xyz: str, axis: str, extra: str = "") -> str:
+    """A URDF joint from ``parent`` to ``child`` anchored at ``xyz`` [m] in the parent, moving along/about ``axis``."""
+    lines = [
+        f'  <joint name="{name}" type="{kind}">',
+        f'    <parent link="{parent}"/>',
+        f'    <child link="{child}"/>',
+        f'    <origin xyz="{xyz}" rpy="0 0 0"/>',
+        f'    <axis xyz="{axis}"/>',
+        *([f"    {extra}"] if extra else []),
+        "  </joint>",
+    ]
+    return "\n".join(lines)
+
+
+def _carriage(name: str, mass: float, inertia: float) -> str:
+    """A massless-in-effect carriage link between two prismatic joints."""
+    return f'  <link name="{name}">\n{_inertial(mass, inertia, "    ")}  </link>'
 
 
 def _xml_comment(s: str) -> str:

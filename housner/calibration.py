@@ -19,11 +19,8 @@ Angles in rad, times in s, p in 1/s, r dimensionless.
 
 References
 ----------
-Housner, G. W. (1963). The behavior of inverted pendulum structures during
-earthquakes. BSSA 53(2), 403-417.
-Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
-(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
-section 3.2, eqs. 7 and 8.
+Those of :mod:`housner.free_rocking` (Housner 1963; Bachmann et al. 2017,
+section 3.2, eqs. 7 and 8), whose closed forms the fits invert.
 """
 
 from __future__ import annotations

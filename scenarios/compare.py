@@ -66,11 +66,10 @@ theta_max distribution.
 
 References
 ----------
-Housner, G. W. (1963). The behavior of inverted pendulum structures during
-earthquakes. BSSA 53(2), 403-417.
 Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
 (2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
-eqs. 2, 7, 8; Figs. 9-10; Table 2.
+eqs. 2, 7, 8; Figs. 9-10; Table 2 (the metrics). Housner, G. W. (1963). The
+behavior of inverted pendulum structures during earthquakes. BSSA 53(2), 403-417.
 """
 
 from __future__ import annotations
