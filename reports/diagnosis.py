@@ -105,13 +105,7 @@ def _scatter_figure(diag, xkey: str, ykey: str, *, xlabel: str, ylabel: str, tit
     if lines:
         for xs, ys, lab, sty in lines:
             ax.plot(xs, ys, sty, color="#555555", lw=1, label=lab)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=11)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7.5)
-    fig.tight_layout()
-    return fig
+    return figures.finish(fig, ax, xlabel, ylabel, title)
 
 
 def _energy_figure(diag) -> Figure:
@@ -226,13 +220,8 @@ def _tilt_figure(diag) -> Figure:
             ax.plot(xs, o.value + k.value * xs, color=c, lw=1.4, ls="--", label=f"model: {_label(s)}")
     sd = float(np.std(meas.tilt_theta)) if n else 0.01
     ax.set_ylim(-4 * sd - 0.01, 4 * sd + 0.01)
-    ax.set_xlabel(r"ground acceleration / $g\tan\alpha$ [-]")
-    ax.set_ylabel(r"$\theta/\alpha$ before uplift [-]")
-    ax.set_title("Rotation before uplift (while |ground acc.| < g tan alpha)", fontsize=11)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7.5)
-    fig.tight_layout()
-    return fig
+    return figures.finish(fig, ax, r"ground acceleration / $g\tan\alpha$ [-]", r"$\theta/\alpha$ before uplift [-]",
+                          "Rotation before uplift (while |ground acc.| < g tan alpha)")  # fmt: skip
 
 
 def _cdf_figure(diag) -> Figure:

@@ -29,6 +29,7 @@ from housner import stats
 
 __all__ = [
     "engine_colors",
+    "finish",
     "plot_agreement_scatter",
     "plot_cdfs",
     "plot_energy_ratios",
@@ -90,6 +91,17 @@ def _colors(names, colors, reference):
 
 # ----------------------------------------------------------------------------
 # distributions
+def finish(fig, ax, xlabel: str, ylabel: str, title: str, *, legend_size: float = 7.5):
+    """Label a single-axes figure, grid it, put the legend in its best corner and fit the layout; returns ``fig``."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=11)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=legend_size)
+    fig.tight_layout()
+    return fig
+
+
 def plot_cdfs(
     samples: Mapping[str, np.ndarray],
     *,
@@ -394,13 +406,8 @@ def plot_energy_ratios(
         )
     if r_housner is not None:
         ax.axhline(r_housner, color="#555555", ls="--", lw=1, label=f"Housner r = {r_housner:.4f}")
-    ax.set_xlabel(r"peak before the impact $\theta_i/\alpha$ [-]")
-    ax.set_ylabel(r"energy ratio $r_i$ [-]")
-    ax.set_title("Energy ratio per impact (seed eq. 8)", fontsize=11)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    return finish(fig, ax, r"peak before the impact $\theta_i/\alpha$ [-]", r"energy ratio $r_i$ [-]",
+                  "Energy ratio per impact (seed eq. 8)", legend_size=8)  # fmt: skip
 
 
 def plot_tuning(

@@ -155,6 +155,14 @@ def sdof_history(f: np.ndarray, dt: float, omega: float, zeta: float) -> tuple[n
     return u, v
 
 
+def _check_spectrum_args(periods, damping, points_per_period) -> tuple[np.ndarray, float, int]:
+    """Periods [s], damping ratio [-] and integration points per period, checked (in that order)."""
+    T, zeta = _check_periods(periods), _check_damping(damping)
+    if int(points_per_period) < 1:
+        raise ValueError(f"`points_per_period` must be a positive integer, got {points_per_period!r}")
+    return T, zeta, int(points_per_period)
+
+
 def _check_periods(periods) -> np.ndarray:
     try:
         T = np.asarray(periods, dtype=float)
@@ -223,11 +231,8 @@ def response_spectrum(
     """
     if not isinstance(motion, GroundMotion):
         raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
-    T = _check_periods(periods)
-    zeta = _check_damping(damping)
-    if int(points_per_period) < 1:
-        raise ValueError(f"`points_per_period` must be a positive integer, got {points_per_period!r}")
-    omega, n_sub, A, B0, B1 = _spectrum_plan(motion.dt, T, zeta, int(points_per_period))
+    T, zeta, points_per_period = _check_spectrum_args(periods, damping, points_per_period)
+    omega, n_sub, A, B0, B1 = _spectrum_plan(motion.dt, T, zeta, points_per_period)
     sd = _peak_displacements(np.ascontiguousarray(motion.acc), n_sub, A, B0, B1)
     return omega**2 * sd, sd
 
@@ -251,10 +256,7 @@ def ensemble_spectra(
     for i, m in enumerate(motions):
         if not isinstance(m, GroundMotion):
             raise TypeError(f"`motions[{i}]` must be a housner.GroundMotion, got {type(m).__name__}")
-    T = _check_periods(periods)
-    zeta = _check_damping(damping)
-    if int(points_per_period) < 1:
-        raise ValueError(f"`points_per_period` must be a positive integer, got {points_per_period!r}")
+    T, zeta, points_per_period = _check_spectrum_args(periods, damping, points_per_period)
     plans: dict[float, tuple] = {}
     sd = np.empty((len(motions), T.size))
     for i, m in enumerate(motions):
