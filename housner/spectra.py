@@ -246,34 +246,75 @@ class RockingSpectrum:
         matplotlib.axes.Axes
         """
         import matplotlib.pyplot as plt
-        from matplotlib.patches import Patch
 
         if ax is None:
             _, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
         W, A = np.meshgrid(self.omega_ratio, self.accel_ratio)
-        Z = np.where(self.overturned, np.nan, self.theta_max_over_alpha)
-        # theta_max > alpha without overturning happens (a late lobe of the pulse pushes the block back):
-        # such points take the top colour
-        cs = ax.contourf(W, A, np.minimum(Z, 1.0), levels=np.linspace(0.0, 1.0, levels), cmap=cmap)
-        ax.figure.colorbar(cs, ax=ax, label=r"$\theta_{max}/\alpha$")
+        v = np.where(self.overturned, np.inf, self.theta_max_over_alpha)
+        mappable = draw_spectrum(ax, W.ravel(), A.ravel(), v.ravel(), levels=levels, cmap=cmap)
+        ax.figure.colorbar(mappable, ax=ax, extend="max", label=r"$\theta_{max}/\alpha$; grey with crosses: overturn")
         if self.overturned.any():
-            ov = self.overturned.astype(float)
-            ax.contourf(W, A, ov, levels=[0.5, 1.5], colors=["0.25"], hatches=["//"], alpha=0.9)
-            ax.contour(W, A, ov, levels=[0.5], colors="k", linewidths=1.0)
-            # grid points that survive amid overturning ones (the "safe" islands of pulse spectra) have no
-            # neighbours to make a filled contour with: mark them individually
-            pad = np.pad(self.overturned, 1, constant_values=False)
-            near = pad[:-2, 1:-1] | pad[2:, 1:-1] | pad[1:-1, :-2] | pad[1:-1, 2:]
-            isl = near & ~self.overturned
-            if isl.any():
-                ax.scatter(W[isl], A[isl], c=np.minimum(Z[isl], 1.0), cmap=cmap, vmin=0.0, vmax=1.0, s=9,
-                           edgecolors="none", zorder=3)  # fmt: skip
-            ax.legend(handles=[Patch(facecolor="0.25", hatch="//", label="overturn")], loc="upper left")
+            ax.legend(loc="upper left")
         ax.set_xlabel(r"$\omega_p / p$")
         ax.set_ylabel(r"$a_p / (g \tan\alpha)$")
         label = self.pulse.replace("_", " ")
-        ax.set_title(f"Rocking spectrum, {label}, tan(alpha) = {math.tan(self.alpha):.3g}, r = {self.r:.4g}")
+        ax.set_title(
+            f"Rocking spectrum, {label}, tan(alpha) = {math.tan(self.alpha):.3g}, r = {self.r:.4g}", fontsize=10
+        )
         return ax
+
+
+#: Colour of the overturn region of a rocking spectrum.
+OVERTURN_GREY = "#c8c8c8"
+
+
+def draw_spectrum(ax, omega_ratio, accel_ratio, values, *, levels: int = 11, cmap: str = "viridis"):
+    """One rocking-spectrum panel on ``ax``; returns the colour mapping for a colour bar.
+
+    Filled contours of theta_max/alpha [-] over omega_p/p and a_p/(g tan alpha)
+    on 0 .. 1 when the points fill a grid, coloured markers otherwise; overturns
+    (``+inf``) are the grey region above the top level, each marked with a cross,
+    and failed points (NaN) open squares. Rocking peaks are capped just below 1,
+    so that only an overturn takes the grey (theta_max > alpha without overturning
+    happens: a late lobe of a pulse pushes the block back).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    omega_ratio, accel_ratio : array_like
+        omega_p / p [-] and a_p / (g tan alpha) [-] of each point.
+    values : array_like
+        theta_max/alpha of each point [-].
+    levels : int
+        Contour levels between 0 and 1.
+    cmap : str
+        Colour map of the rocking responses.
+
+    References
+    ----------
+    Bachmann et al. (2017), Fig. 2 and eq. 6.
+    """
+    import matplotlib as mpl
+
+    w, a = np.asarray(omega_ratio, dtype=float), np.asarray(accel_ratio, dtype=float)
+    v = np.asarray(values, dtype=float)
+    wu, au = np.unique(w), np.unique(a)
+    cm = mpl.colormaps[cmap].with_extremes(over=OVERTURN_GREY)
+    bounds = np.linspace(0.0, 1.0, levels)
+    norm = mpl.colors.BoundaryNorm(bounds, cm.N, extend="max")
+    over = np.isposinf(v)
+    z = np.where(over, 2.0, np.minimum(v, 0.999))  # overturns above the top level: the bands run up to them
+    if wu.size >= 2 and au.size >= 2 and wu.size * au.size == w.size:
+        Z = np.full((au.size, wu.size), np.nan)
+        Z[np.searchsorted(au, a), np.searchsorted(wu, w)] = z
+        ax.contourf(wu, au, Z, levels=bounds, cmap=cm, norm=norm, extend="max")
+    else:
+        ax.scatter(w, a, c=z, cmap=cm, norm=norm, s=30)
+    ax.plot(w[over], a[over], ls="none", marker="x", ms=4, color="#a94442", label="overturn")
+    failed = np.isnan(v)
+    if failed.any():
+        ax.plot(w[failed], a[failed], ls="none", marker="s", ms=5, mfc="none", color="#d62728", label="failed")
+    return mpl.cm.ScalarMappable(norm=norm, cmap=cm)
 
 
 @contextmanager

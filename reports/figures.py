@@ -26,6 +26,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from housner import stats
+from housner.spectra import draw_spectrum
 
 __all__ = [
     "engine_colors",
@@ -43,7 +44,6 @@ __all__ = [
 #: Colours of the engines after the reference (which is drawn in black).
 _PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#7f7f7f")
 _REFERENCE_COLOR = "#000000"
-_OVERTURN_GREY = "#c8c8c8"
 
 #: Resolution of the embedded PNGs [dots per inch]; 110 keeps labels sharp at the
 #: page width (about 800 px) while a figure stays below ~150 kB.
@@ -525,47 +525,23 @@ def plot_rocking_spectra(
     ----------
     Bachmann et al. (2017), Fig. 2 and eq. 6.
     """
-    import matplotlib as mpl
-
-    w = np.asarray(omega_ratio, dtype=float)
-    a = np.asarray(accel_ratio, dtype=float)
-    wu, au = np.unique(w), np.unique(a)
-    iw = np.searchsorted(wu, w)
-    ia = np.searchsorted(au, a)
-    full = wu.size >= 2 and au.size >= 2 and wu.size * au.size == w.size
     n = max(len(values), 1)
     ncols = min(n, 3)
     nrows = math.ceil(n / ncols)
     fig = Figure(figsize=(4.0 * ncols + 0.8, 3.6 * nrows + 0.4), layout="constrained")
     axes = fig.subplots(nrows, ncols, squeeze=False)
-    cmap = mpl.colormaps["viridis"].with_extremes(over=_OVERTURN_GREY)
-    levels = np.linspace(0.0, 1.0, 11)
-    norm = mpl.colors.BoundaryNorm(levels, cmap.N, extend="max")
+    sm = None
     for k, (name, v) in enumerate(values.items()):
         ax = axes[k // ncols][k % ncols]
-        v = np.asarray(v, dtype=float)
-        over = np.isposinf(v)
-        # Rocking peaks are capped just below 1 so that only an overturn takes the "over" colour;
-        # overturns are 2, above the top level, so the contour bands run smoothly up to the overturn region.
-        z = np.where(over, 2.0, np.minimum(v, 0.999))
-        if full:
-            Z = np.full((au.size, wu.size), np.nan)
-            Z[ia, iw] = z
-            ax.contourf(wu, au, Z, levels=levels, cmap=cmap, norm=norm, extend="max")
-        else:
-            ax.scatter(w, a, c=z, cmap=cmap, norm=norm, s=30)
-        ax.plot(w[over], a[over], ls="none", marker="x", ms=4, color="#a94442", label="overturn")
-        failed = np.isnan(v)
-        if failed.any():
-            ax.plot(w[failed], a[failed], ls="none", marker="s", ms=5, mfc="none", color="#d62728", label="failed")
+        sm = draw_spectrum(ax, omega_ratio, accel_ratio, v)
         ax.set_title(name, fontsize=10)
         ax.set_xlabel(r"$\omega_p/p$ [-]")
         ax.set_ylabel(r"$a_p/(g\,\tan\alpha)$ [-]")
     for k in range(len(values), nrows * ncols):
         axes[k // ncols][k % ncols].set_visible(False)
-    sm = mpl.cm.ScalarMappable(norm=norm, cmap=cmap)
-    cb = fig.colorbar(sm, ax=axes.ravel().tolist(), extend="max", shrink=0.9)
-    cb.set_label(r"$\theta_{max}/\alpha$ [-]; grey with crosses: overturn")
+    if sm is not None:
+        cb = fig.colorbar(sm, ax=axes.ravel().tolist(), extend="max", shrink=0.9)
+        cb.set_label(r"$\theta_{max}/\alpha$ [-]; grey with crosses: overturn")
     if title:
         fig.suptitle(title, fontsize=11)
     return fig
