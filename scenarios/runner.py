@@ -150,54 +150,86 @@ def run_engines(
         raise ValueError(f"`chunk_size` must be a positive integer, got {chunk_size!r}")
     cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
     jobs = jobs or os.cpu_count() or 1
-    rows: dict[tuple[str, int], dict] = {}
-    keys: dict[tuple[str, int], str] = {}
-    info: dict[str, dict] = {}
-    per_engine: list[list[tuple[str, dict, list]]] = []
+    n_workers = 1 if scheduler is None and jobs == 1 else jobs
+    plan = _plan(specimen, motions, engines, effects, cache_dir if use_cache else None, n_workers, chunk_size)
+    elapsed = _execute(plan, specimen, jobs, scheduler, progress)
+    for name in plan.info:
+        plan.info[name]["elapsed_s"] = elapsed
+    df, histories = _table(plan.rows, list(engines), motions, effects)
+    return df, histories, plan.info
+
+
+@dataclass
+class _Plan:
+    """What a run has to do: the rows found in the cache, the chunks left to run, and where results go."""
+
+    rows: dict[tuple[str, int], dict]  # (engine, motion_id) -> record, cached or computed
+    keys: dict[tuple[str, int], str]  # (engine, motion_id) -> cache key
+    info: dict[str, dict]  # engine -> settings, version, counters
+    chunks: list[_Chunk]
+    cache_dir: Path | None  # None: the cache is not used
+
+    def store(self, name: str, r: dict) -> None:
+        """Take a computed record: into the rows, its time into the engine's total, into the cache if it is ok."""
+        r["cached"] = False
+        self.rows[(name, r["motion_id"])] = r
+        self.info[name]["wall_s"] += r["wall_s"]
+        if self.cache_dir is not None and r["status"] == "ok":
+            k = self.keys[(name, r["motion_id"])]
+            try:
+                _store_cached(self.cache_dir / k[:2] / f"{k}.npz", k, r)
+            except OSError:
+                pass  # a read-only cache must not fail the run
+
+
+def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | None, n_workers: int,
+          chunk_size: int | None) -> _Plan:  # fmt: skip
+    """Probe each engine (settings, version), take what the cache holds, cut the rest into chunks."""
+    plan = _Plan({}, {}, {}, [], cache_dir)
+    per_engine: list[list[tuple]] = []
     for name, settings in engines.items():
-        cls = engine_class(name)
-        probe = cls(**settings)
-        full_settings = probe.settings()
-        version = probe.version()
-        info[name] = {
-            "settings": full_settings,
-            "version": version,
-            "wall_s": 0.0,
-            "cached": 0,
-            "cache_rejected": 0,
-            "worker_deaths": 0,
-        }
+        probe = engine_class(name)(**settings)
+        full_settings, version = probe.settings(), probe.version()
+        plan.info[name] = {"settings": full_settings, "version": version, "wall_s": 0.0, "cached": 0,
+                           "cache_rejected": 0, "worker_deaths": 0}  # fmt: skip
         todo = []
         for i, m in enumerate(motions):
-            k = cache_key(specimen, m, name, full_settings, version, effects)
-            keys[(name, i)] = k
-            row, problem = _load_cached(cache_dir / k[:2] / f"{k}.npz", k) if use_cache else (None, None)
-            if problem is not None:
-                info[name]["cache_rejected"] += 1
-                _log.warning(
-                    "housner: warning: cache entry %s (%s, motion %d) %s; recomputed",
-                    cache_dir / k[:2] / f"{k}.npz",
-                    name,
-                    i,
-                    problem,
-                )
+            k = plan.keys[(name, i)] = cache_key(specimen, m, name, full_settings, version, effects)
+            row = _cached_row(plan, name, i, k)
             if row is not None:
-                row.update(motion_id=i, cached=True)
-                rows[(name, i)] = row
-                info[name]["cached"] += 1
+                plan.rows[(name, i)] = row
             else:
                 todo.append((i, m))
-        n_workers = 1 if scheduler is None and jobs == 1 else max(jobs, 1)
         size = chunk_size or max(1, min(10, math.ceil(len(todo) / (4 * n_workers))))
         per_engine.append([(name, settings, todo[c : c + size], effects) for c in range(0, len(todo), size)])
     # Engines interleaved, chunk by chunk: the progress bar's rate (and time left) then mixes fast
     # and slow engines from the start instead of extrapolating the fastest one.
-    chunks: list[_Chunk] = []
     for k in range(max((len(p) for p in per_engine), default=0)):
         for p in per_engine:
             if k < len(p):
-                chunks.append(_Chunk(len(chunks), *p[k]))
+                plan.chunks.append(_Chunk(len(plan.chunks), *p[k]))
+    return plan
 
+
+def _cached_row(plan: _Plan, name: str, i: int, k: str) -> dict | None:
+    """The cached record of (engine, motion) under key ``k``, or None (counted when an entry was refused)."""
+    if plan.cache_dir is None:
+        return None
+    path = plan.cache_dir / k[:2] / f"{k}.npz"
+    row, problem = _load_cached(path, k)
+    if problem is not None:
+        plan.info[name]["cache_rejected"] += 1
+        _log.warning("housner: warning: cache entry %s (%s, motion %d) %s; recomputed", path, name, i, problem)
+    if row is None:
+        return None
+    row.update(motion_id=i, cached=True)
+    plan.info[name]["cached"] += 1
+    return row
+
+
+def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress: bool) -> float:
+    """Run the plan's chunks (in this process, a process pool or on Dask); returns the wall time [s]."""
+    chunks = plan.chunks
     total = sum(len(c.items) for c in chunks)
     if scheduler is not None:
         how = "on the Dask cluster"
@@ -208,15 +240,7 @@ def run_engines(
     bar = _Progress(total, progress, how)
 
     def on_record(name: str, r: dict) -> None:
-        r["cached"] = False
-        rows[(name, r["motion_id"])] = r
-        info[name]["wall_s"] += r["wall_s"]
-        if use_cache and r["status"] == "ok":
-            k = keys[(name, r["motion_id"])]
-            try:
-                _store_cached(cache_dir / k[:2] / f"{k}.npz", k, r)
-            except OSError:
-                pass  # a read-only cache must not fail the run
+        plan.store(name, r)
         bar.update(name)
 
     deaths: dict[tuple[str, int], list[str]] = {}
@@ -233,19 +257,22 @@ def run_engines(
                 _run_pool(chunks, specimen, jobs, on_record, deaths)
     except KeyboardInterrupt:
         bar.close()
-        raise RunInterrupted(bar.done, total, cached=use_cache) from None
+        raise RunInterrupted(bar.done, total, cached=plan.cache_dir is not None) from None
     bar.close()
-    elapsed = time.perf_counter() - t_start
     for (name, _i), reasons in deaths.items():
-        info[name]["worker_deaths"] += len(reasons)
+        plan.info[name]["worker_deaths"] += len(reasons)
+    return time.perf_counter() - t_start
 
-    table = []
-    histories = {}
+
+def _table(rows: dict, engines: list[str], motions: list[GroundMotion], effects: tuple):
+    """The results table (one row per engine and motion, always all of them) and the histories of the ok rows."""
     for name in engines:
         for i in range(len(motions)):
             if (name, i) not in rows:  # cannot happen by design; never leave a record out silently
                 rows[(name, i)] = _failed(i, "no result came back from the workers")
-    for (name, i), r in sorted(rows.items(), key=lambda kv: (list(engines).index(kv[0][0]), kv[0][1])):
+    table, histories = [], {}
+    label = effects_label(effects)
+    for (name, i), r in sorted(rows.items(), key=lambda kv: (engines.index(kv[0][0]), kv[0][1])):
         ok = r["status"] == "ok"
         table.append(
             {
@@ -259,15 +286,12 @@ def run_engines(
                 "status": r["status"],
                 "error": r.get("error", ""),
                 "cached": bool(r.get("cached", False)),
-                "effects": effects_label(effects),
+                "effects": label,
             }
         )
         if ok:
             histories[(name, i)] = np.asarray(r["theta"], dtype=np.float32)
-    df = pd.DataFrame(table, columns=RESULT_COLUMNS)
-    for name in info:
-        info[name]["elapsed_s"] = elapsed
-    return df, histories, info
+    return pd.DataFrame(table, columns=RESULT_COLUMNS), histories
 
 
 def effects_series(engine: str, effects: tuple) -> str:
