@@ -561,9 +561,45 @@ def tune(
     10-20 % level, so candidates of nearly equal cost may swap places between
     runs.
     """
+    cls = engine_class(engine_name)
+    target, amps, small_amps, steps = _checked(specimen, target_r, amplitudes, small_amplitudes, rtol, sample_steps)
+    if candidates is None:
+        if not hasattr(cls, "tuning_candidates"):
+            raise ValueError(f"engine {engine_name!r} has no tuning_candidates(); pass `candidates`")
+        candidates = cls.tuning_candidates(specimen, target)
+    candidates = [dict(c) for c in candidates]
+    if not candidates:
+        raise ValueError("`candidates` is empty")
+    suites = [_suite(specimen, target, amps, small_amps, check_decay, check_pulses, d) for d in steps]
+    it = candidates
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(candidates, desc=f"tuning {engine_name}", unit="candidate")
+    table, errs, version = _try_all(cls, it, specimen, suites, target, rtol)
+    best = _best(table)
+    tables = _result_tables(suites, errs[best], specimen.alpha, target, amps, small_amps, rtol)
+    return TuningResult(
+        engine=engine_name,
+        specimen=specimen.name,
+        target_r=target,
+        settings=cls(**candidates[best]).settings() if hasattr(cls, "settings") else candidates[best],
+        table=tables["table"],
+        cost_per_sim_second=float(table["cost_per_sim_second"].iloc[best]),
+        met=bool(table["met"].iloc[best]),
+        candidates=table,
+        pulse_table=tables["pulse"],
+        small_table=tables["small"],
+        decay_table=tables["decay"],
+        rtol=rtol,
+        version=version,
+    )
+
+
+def _checked(specimen, target_r, amplitudes, small_amplitudes, rtol, sample_steps) -> tuple:
+    """:func:`tune`'s arguments checked: target r, amplitudes, small amplitudes, sample steps."""
     if not isinstance(specimen, Specimen):
         raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
-    cls = engine_class(engine_name)
     target = specimen.r_housner if target_r is None else float(target_r)
     if not (math.isfinite(target) and 0.0 < target < 1.0):
         raise ValueError(f"`target_r` must lie in (0, 1), got {target_r!r}")
@@ -575,26 +611,16 @@ def tune(
         raise ValueError(f"`small_amplitudes` must each lie in (0, 1) (theta0/alpha), got {small_amplitudes!r}")
     if not (math.isfinite(rtol) and rtol > 0):
         raise ValueError(f"`rtol` must be positive, got {rtol!r}")
-    if candidates is None:
-        if not hasattr(cls, "tuning_candidates"):
-            raise ValueError(f"engine {engine_name!r} has no tuning_candidates(); pass `candidates`")
-        candidates = cls.tuning_candidates(specimen, target)
-    candidates = [dict(c) for c in candidates]
-    if not candidates:
-        raise ValueError("`candidates` is empty")
-
     steps = tuple(float(d) for d in sample_steps)
     if not steps or not all(math.isfinite(d) and d > 0 for d in steps):
         raise ValueError(f"`sample_steps` must be non-empty and positive [s], got {sample_steps!r}")
-    suites = [_suite(specimen, target, amps, small_amps, check_decay, check_pulses, d) for d in steps]
-    rows, errs = [], []
-    it = candidates
-    if progress:
-        from tqdm.auto import tqdm
+    return target, amps, small_amps, steps
 
-        it = tqdm(candidates, desc=f"tuning {engine_name}", unit="candidate")
-    version = ""
-    for settings in it:
+
+def _try_all(cls, candidates, specimen, suites, target: float, rtol: float) -> tuple[pd.DataFrame, list, str]:
+    """Every candidate through every check: the candidates' table, their errors (with measures), the version."""
+    rows, errs, version = [], [], ""
+    for settings in candidates:
         err = ""
         try:
             engine = cls(**settings)
@@ -615,24 +641,27 @@ def tune(
                 "error": err,
             }
         )
-    table = pd.DataFrame(rows)
+    return pd.DataFrame(rows), errs, version
+
+
+def _best(table: pd.DataFrame) -> int:
+    """The passing candidate with the smallest score among those within COST_TIE of the cheapest passing one."""
     ok = np.flatnonzero(table["met"].to_numpy())
-    if ok.size:
-        cost = table["cost_per_sim_second"].to_numpy()
-        cheap = ok[cost[ok] <= (1.0 + COST_TIE) * np.min(cost[ok])]  # as cheap as the cheapest, within the noise
-        best = int(cheap[np.argmin(table["score"].to_numpy()[cheap])])
-    else:
-        best = int(np.argmin(table["score"].to_numpy()))
-    e, meas = errs[best], errs[best]["_meas"]
-    alpha = specimen.alpha
+    if not ok.size:
+        return int(np.argmin(table["score"].to_numpy()))
+    cost = table["cost_per_sim_second"].to_numpy()
+    cheap = ok[cost[ok] <= (1.0 + COST_TIE) * np.min(cost[ok])]  # as cheap as the cheapest, within the noise
+    return int(cheap[np.argmin(table["score"].to_numpy()[cheap])])
+
+
+def _result_tables(suites, e: dict, alpha: float, target: float, amps, small_amps, rtol: float) -> dict:
+    """The chosen candidate's checks as tables, every sample step stacked: r, small r, decay, pulses."""
+    meas = e["_meas"]
     chosen, small_t, decay_t, pulse_t = [], [], [], []
     for i, (suite, m) in enumerate(zip(suites, meas, strict=True)):
         n = len(amps)
-        chosen.append(
-            pd.DataFrame(
-                {"dt": suite.dt, "amplitude": amps, "r_engine": m["r"], "r_target": np.full(n, target)}
-            ).assign(rel_error=e["_rel"][i])
-        )
+        r = {"dt": suite.dt, "amplitude": amps, "r_engine": m["r"], "r_target": np.full(n, target)}
+        chosen.append(pd.DataFrame(r).assign(rel_error=e["_rel"][i]))
         small_t.append(
             pd.DataFrame(
                 {"dt": suite.dt, "amplitude": small_amps, "r_engine": m["small"], "r_target": target},
@@ -640,17 +669,8 @@ def tune(
             ).assign(rel_error=e["_small"][i])
         )
         if suite.decay:
-            decay_t.append(
-                pd.DataFrame(
-                    {
-                        "dt": suite.dt,
-                        "impacts": list(DECAY_IMPACTS),
-                        "peak_engine": m["decay"],
-                        "peak_analytic": suite.decay_ref,
-                        "rel_error": e["_decay"][i],
-                    }
-                )
-            )
+            decay = {"impacts": list(DECAY_IMPACTS), "peak_engine": m["decay"], "peak_analytic": suite.decay_ref}
+            decay_t.append(pd.DataFrame({"dt": suite.dt, **decay, "rel_error": e["_decay"][i]}))
         pulse_t.append(
             pd.DataFrame(
                 {
@@ -668,18 +688,9 @@ def tune(
             )
         )
     decay_cols = ["dt", "impacts", "peak_engine", "peak_analytic", "rel_error"]
-    return TuningResult(
-        engine=engine_name,
-        specimen=specimen.name,
-        target_r=target,
-        settings=cls(**candidates[best]).settings() if hasattr(cls, "settings") else candidates[best],
-        table=pd.concat(chosen, ignore_index=True),
-        cost_per_sim_second=float(table["cost_per_sim_second"].iloc[best]),
-        met=bool(table["met"].iloc[best]),
-        candidates=table,
-        pulse_table=pd.concat(pulse_t, ignore_index=True),
-        small_table=pd.concat(small_t, ignore_index=True),
-        decay_table=pd.concat(decay_t, ignore_index=True) if decay_t else pd.DataFrame(columns=decay_cols),
-        rtol=rtol,
-        version=version,
-    )
+    return {
+        "table": pd.concat(chosen, ignore_index=True),
+        "small": pd.concat(small_t, ignore_index=True),
+        "decay": pd.concat(decay_t, ignore_index=True) if decay_t else pd.DataFrame(columns=decay_cols),
+        "pulse": pd.concat(pulse_t, ignore_index=True),
+    }
