@@ -212,9 +212,7 @@ def check_engine(engine: Engine | str, specimen: Specimen | None = None) -> Conf
     specimen = Specimen.bachmann2017() if specimen is None else specimen
     if not isinstance(specimen, Specimen):
         raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
-    alpha, p = specimen.alpha, specimen.p
     report = ConformanceReport(engine=repr(engine), specimen=specimen.name)
-    add = report.checks.append
     seen: list[tuple[Response, GroundMotion]] = []
 
     def run(motion: GroundMotion) -> Response:
@@ -222,7 +220,20 @@ def check_engine(engine: Engine | str, specimen: Specimen | None = None) -> Conf
         seen.append((resp, motion))
         return resp
 
-    # (a) at rest below the uplift threshold
+    report.checks.append(_at_rest(run, specimen))
+    report.checks.extend(_mirror_and_determinism(run, specimen))
+    report.checks.append(_sign_and_overturn(run, specimen))
+    report.checks.append(_free_vibration_period(run, specimen))
+    # (d) finite, on the grid and bounded: every response above
+    bad = [msg for msg in (_bounded(r, m) for r, m in seen) if msg]
+    detail = f"all {len(seen)} responses finite, on the sample grid, |theta| <= pi/2" if not bad else "; ".join(bad)
+    report.checks.append(CheckResult("finite_and_bounded", not bad, float(len(bad)), 0.0, detail))
+    return report
+
+
+def _at_rest(run, specimen: Specimen) -> CheckResult:
+    """(a) At rest below the uplift threshold: ramps to +-REST_LEVEL g tan(alpha) and a slow sine."""
+    alpha, p = specimen.alpha, specimen.p
     rest_motions = [
         _ramp_hold(specimen, REST_LEVEL, 1.0 / p, 8.0 / p, f"ramp to +{REST_LEVEL} g tan(alpha)"),
         _ramp_hold(specimen, -REST_LEVEL, 1.0 / p, 8.0 / p, f"ramp to -{REST_LEVEL} g tan(alpha)"),
@@ -231,23 +242,22 @@ def check_engine(engine: Engine | str, specimen: Specimen | None = None) -> Conf
     worst, where = 0.0, ""
     for m in rest_motions:
         resp = run(m)
-        v = float(np.max(np.abs(resp.theta))) / alpha
-        if resp.overturned:
-            v = math.inf
+        v = math.inf if resp.overturned else float(np.max(np.abs(resp.theta))) / alpha
         if v >= worst:
             worst, where = v, m.name
-    add(
-        CheckResult(
-            "at_rest",
-            worst < REST_TOL,
-            worst,
-            REST_TOL,
-            f"max |theta|/alpha = {worst:.3g} under {REST_LEVEL} g tan(alpha) (worst: {where}); "
-            f"must stay below {REST_TOL:g}",
-        )
+    return CheckResult(
+        "at_rest",
+        worst < REST_TOL,
+        worst,
+        REST_TOL,
+        f"max |theta|/alpha = {worst:.3g} under {REST_LEVEL} g tan(alpha) (worst: {where}); "
+        f"must stay below {REST_TOL:g}",
     )
 
-    # (b) mirror symmetry and (c) determinism on one pulse
+
+def _mirror_and_determinism(run, specimen: Specimen) -> list[CheckResult]:
+    """(b) Mirror symmetry and (c) determinism on one pulse."""
+    alpha, p = specimen.alpha, specimen.p
     (pulse,) = pulse_motions(specimen, pulses=(MIRROR_PULSE,), dt=DT)
     pulse = pulse.with_duration(2.0 * math.pi / (MIRROR_PULSE[0] * p) + 4.0 / p)
     a = run(pulse)
@@ -257,15 +267,13 @@ def check_engine(engine: Engine | str, specimen: Specimen | None = None) -> Conf
         asym = float(np.max(np.abs(a.theta + b.theta))) / scale
     else:
         asym = math.inf
-    add(
-        CheckResult(
-            "mirror_symmetry",
-            asym <= MIRROR_RTOL,
-            asym,
-            MIRROR_RTOL,
-            f"max |theta(t) + theta_mirrored(t)| = {asym:.3g} theta_max on {pulse.name!r} "
-            f"(theta_max {a.theta_max / alpha:.4f} alpha, {a.n_impacts} impacts); must be <= {MIRROR_RTOL:g}",
-        )
+    mirror = CheckResult(
+        "mirror_symmetry",
+        asym <= MIRROR_RTOL,
+        asym,
+        MIRROR_RTOL,
+        f"max |theta(t) + theta_mirrored(t)| = {asym:.3g} theta_max on {pulse.name!r} "
+        f"(theta_max {a.theta_max / alpha:.4f} alpha, {a.n_impacts} impacts); must be <= {MIRROR_RTOL:g}",
     )
     a2 = run(pulse)
     same = (
@@ -275,19 +283,14 @@ def check_engine(engine: Engine | str, specimen: Specimen | None = None) -> Conf
         and a.theta_max == a2.theta_max
     )
     diff = float(np.max(np.abs(a.theta - a2.theta))) if a.theta.shape == a2.theta.shape else math.inf
-    add(
-        CheckResult(
-            "deterministic",
-            bool(same),
-            diff,
-            0.0,
-            f"two runs of {pulse.name!r} " + ("are identical" if same else f"differ (max |dtheta| = {diff:.3g} rad)"),
-        )
-    )
+    how = "are identical" if same else f"differ (max |dtheta| = {diff:.3g} rad)"
+    return [mirror, CheckResult("deterministic", bool(same), diff, 0.0, f"two runs of {pulse.name!r} " + how)]
 
-    # sign convention and overturning
-    push = _ramp_hold(specimen, -3.0, 0.5 / p, 10.0 / p, "ramp to -3 g tan(alpha)")
-    resp = run(push)
+
+def _sign_and_overturn(run, specimen: Specimen) -> CheckResult:
+    """Sign convention and overturning: a ground acceleration of -3 g tan(alpha) lifts to theta > 0 and overturns."""
+    alpha, p = specimen.alpha, specimen.p
+    resp = run(_ramp_hold(specimen, -3.0, 0.5 / p, 10.0 / p, "ramp to -3 g tan(alpha)"))
     moved = np.flatnonzero(np.abs(resp.theta) > REST_TOL * alpha)
     first_sign = float(np.sign(resp.theta[moved[0]])) if moved.size else 0.0
     problems = []
@@ -299,51 +302,38 @@ def check_engine(engine: Engine | str, specimen: Specimen | None = None) -> Conf
         problems.append(f"it ends at theta = {resp.theta[-1]:.6g} rad, not +pi/2")
     if not math.isfinite(resp.overturn_time):
         problems.append("no overturn time")
-    add(
-        CheckResult(
-            "sign_and_overturn",
-            not problems,
-            first_sign,
-            1.0,
-            "ground acceleration -3 g tan(alpha): "
-            + ("; ".join(problems) if problems else f"lifts to theta > 0 and overturns at {resp.overturn_time:.4g} s"),
-        )
+    return CheckResult(
+        "sign_and_overturn",
+        not problems,
+        first_sign,
+        1.0,
+        "ground acceleration -3 g tan(alpha): "
+        + ("; ".join(problems) if problems else f"lifts to theta > 0 and overturns at {resp.overturn_time:.4g} s"),
     )
 
-    # (e) free-vibration period against the exact quadrature
+
+def _free_vibration_period(run, specimen: Specimen) -> CheckResult:
+    """(e) Free-vibration period against the exact quadrature: the first impact and the next half-cycle."""
+    alpha = specimen.alpha
     th0 = PERIOD_AMPLITUDE * alpha
     tq = free_rocking_quarter_period(specimen, th0)
     fv = GroundMotion.free_vibration(th0, 3.2 * tq + 0.05, dt=DT, name=f"free vibration {PERIOD_AMPLITUDE:g} alpha")
     resp = run(fv)
     imp = resp.impact_times
-    if imp.size >= 2:
-        e1 = imp[0] / tq - 1.0
-        th1 = _peak_between(resp.t, resp.theta, imp[0], imp[1])
-        half = 2.0 * free_rocking_quarter_period(specimen, th1)
-        e2 = (imp[1] - imp[0]) / half - 1.0
-        err = max(abs(e1), abs(e2))
-        detail = (
-            f"release at {PERIOD_AMPLITUDE:g} alpha: first impact at {imp[0]:.5f} s vs exact {tq:.5f} s ({e1:+.3%}); "
-            f"next half-cycle {imp[1] - imp[0]:.5f} s vs exact {half:.5f} s for its peak {th1 / alpha:.4f} alpha "
-            f"({e2:+.3%}); must be within {PERIOD_RTOL:.0%}"
-        )
-    else:
-        err = math.inf
+    if imp.size < 2:
         detail = f"release at {PERIOD_AMPLITUDE:g} alpha: only {imp.size} impact(s) in {fv.duration:.3g} s, expected 2"
-    add(CheckResult("free_vibration_period", err <= PERIOD_RTOL, err, PERIOD_RTOL, detail))
-
-    # (d) finite, on the grid and bounded: every response above
-    bad = [msg for msg in (_bounded(r, m) for r, m in seen) if msg]
-    add(
-        CheckResult(
-            "finite_and_bounded",
-            not bad,
-            float(len(bad)),
-            0.0,
-            f"all {len(seen)} responses finite, on the sample grid, |theta| <= pi/2" if not bad else "; ".join(bad),
-        )
+        return CheckResult("free_vibration_period", False, math.inf, PERIOD_RTOL, detail)
+    e1 = imp[0] / tq - 1.0
+    th1 = _peak_between(resp.t, resp.theta, imp[0], imp[1])
+    half = 2.0 * free_rocking_quarter_period(specimen, th1)
+    e2 = (imp[1] - imp[0]) / half - 1.0
+    err = max(abs(e1), abs(e2))
+    detail = (
+        f"release at {PERIOD_AMPLITUDE:g} alpha: first impact at {imp[0]:.5f} s vs exact {tq:.5f} s ({e1:+.3%}); "
+        f"next half-cycle {imp[1] - imp[0]:.5f} s vs exact {half:.5f} s for its peak {th1 / alpha:.4f} alpha "
+        f"({e2:+.3%}); must be within {PERIOD_RTOL:.0%}"
     )
-    return report
+    return CheckResult("free_vibration_period", err <= PERIOD_RTOL, err, PERIOD_RTOL, detail)
 
 
 def assert_conforms(engine: Engine | str, specimen: Specimen | None = None) -> ConformanceReport:
