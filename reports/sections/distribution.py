@@ -120,6 +120,73 @@ def _finite_or_inf(v: float) -> float:
 def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str:
     """The gap to the paper's Table 2, and its measured cause: the record against its own ensemble."""
     cmp = run.comparison.loc[run.reference]
+    ref = run.reference
+    head, gap = _gap_head(run, cmp, paper, spread)
+    parts = [f"<p>{head}</p>"]
+    record, why = _record(run)
+    if run.source != "rdk" or record is None or run.motions is None:
+        why = why or (
+            "motions.npz is missing" if run.motions is None else "the motions are not simulated from a record"
+        )
+        parts.append(
+            html_note(f"No measured cause on this page: {why}, so the record cannot be set against its ensemble.")
+        )
+        return "".join(parts)
+    g = run.record_gap
+    x, pct = g["record_theta_max_over_alpha"], g["record_percentile"]
+    rec_line = _record_line(run, g, cmp, paper)
+    ia_line = _intensity_line(g, cmp, paper, gap)
+    spec_line, lo, hi = _spectrum_line(run, g)
+    verdict = _gap_verdict(gap, pct, lo, hi, x, paper)
+    items = [rec_line, ia_line, spec_line]
+    if gap:
+        items.append(guarded("The equivalent amplitudes", lambda: _factor_line(run)))
+    lis = "".join(f"<li>{t}</li>" for t in items)
+    parts.append(f"<p>Measured cause, on this run's own motions:</p><ul class=cause>{lis}</ul><p>{verdict}</p>")
+    note = (run.meta.get("analysis") or {}).get("paper_note")
+    if gap and note:
+        parts.append(
+            "<p><strong>What this page cannot measure</strong> (from the scenario's <code>paper_note</code>): "
+            f"{esc(note)}</p>"
+        )
+    parts.append(
+        html_note(
+            "Computed by <code>scenarios.analysis.record_against_ensemble</code> when this page was written: the "
+            f"record through {esc(ref)} with the run's settings, the ensemble's {g['n_ensemble']} usable records "
+            f"ranked against it (ties half), spectra at {len(g['band_periods_s'])} log-spaced periods per range."
+        )
+    )
+    return "".join(parts)
+
+
+def _gap_verdict(gap: list[float], pct: float, lo: float, hi: float, x: float, paper: dict[float, float]) -> str:
+    """What the record's rank (``pct`` [%]) and the band's PSa ratios (``lo``, ``hi``) say about the gap."""
+    weak = pct >= 75 and hi < 0.8
+    matched = lo >= 0.8 and hi <= 1.25 and 25 <= pct <= 75
+    if gap and weak:
+        return (
+            "So the gap lies in the motions rather than in the rocking model or the engines: the record's own "
+            "long-period content, which the synthetic motions lack, rocks the block "
+            + (
+                "into the range of the paper's percentiles."
+                if _paper_position(x, paper).startswith("between")
+                else "much further than they do."
+            )
+        )
+    elif gap and matched:
+        return (
+            "So this ensemble stands for its record: it carries the record's spectrum where rocking is decided "
+            "and holds the record's own response near its middle. The remaining gap is not in the spectral shape "
+            "of the motions, and, the engines agreeing, not in an engine."
+        )
+    elif gap:
+        return "These figures do not single out the motions' spectral shape as the cause of the remaining gap."
+    else:
+        return "The paper's percentiles are reproduced within the ensemble's sampling noise."
+
+
+def _gap_head(run: Run, cmp, paper: dict[float, float], spread: dict | None) -> tuple[str, list[float]]:
+    """Where the paper's percentiles stand against this run's noise: the sentence, and the levels outside it."""
     qs = [q for q in _Q if q in paper]
     n = int(cmp["n_ok"])
     ref = run.reference
@@ -169,17 +236,11 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
         )
     else:
         head += f"<strong>The paper's values lie within {noise}</strong>: this run reproduces its Table 2."
-    parts = [f"<p>{head}</p>"]
-    record, why = _record(run)
-    if run.source != "rdk" or record is None or run.motions is None:
-        why = why or (
-            "motions.npz is missing" if run.motions is None else "the motions are not simulated from a record"
-        )
-        parts.append(
-            html_note(f"No measured cause on this page: {why}, so the record cannot be set against its ensemble.")
-        )
-        return "".join(parts)
-    g = run.record_gap
+    return head, gap
+
+
+def _record_line(run: Run, g: dict, cmp, paper: dict[float, float]) -> str:
+    """Where the record's own response falls in its ensemble."""
     x, pct = g["record_theta_max_over_alpha"], g["record_percentile"]
     q75 = json_number(cmp["q75"])
     amp = g.get("amplitude", 1.0)
@@ -192,12 +253,16 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
         rank = f"higher than {pct:.0f} % of the {g['n_ensemble']} motions, above their median"
     else:
         rank = f"higher than only {pct:.0f} % of the {g['n_ensemble']} motions: a typical member of the ensemble"
-    rec_line = (
+    return (
         f"The record itself ({esc(g['record'])}),{scaled} compressed by &radic;S = {math.sqrt(run.S):.3g} and run "
         f"through the same model on the same specimen exactly as every motion of the ensemble, gives "
         f"&theta;<sub>max</sub>/&alpha; = <strong>{fmt_num(x, 2)}</strong>: {rank}"
         + (f", and {_paper_position(x, paper)}." if paper else ".")
     )
+
+
+def _intensity_line(g: dict, cmp, paper: dict[float, float], gap: list[float]) -> str:
+    """Whether the ensemble's Arias intensity explains the gap."""
     ia, ia_rec = g["arias_ensemble_mean_m_s"], g["arias_record_m_s"]
     ia_lo, ia_hi = g["arias_ensemble_5_95_m_s"]
     ia_ok = ia_lo <= ia_rec <= ia_hi
@@ -212,16 +277,20 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
         f"scale; 5&ndash;95 % of the ensemble {ia_lo:.2f}&ndash;{ia_hi:.2f} m/s"
     )
     if ia_ok:
-        ia_line = f"Not the intensity: {facts})."
+        return f"Not the intensity: {facts})."
     elif below and all(below) and ia > ia_rec:
-        ia_line = (
+        return (
             f"Not a lack of intensity: {facts}, so the ensemble carries <em>more</em> energy than the record, "
             f"&times;{ia / ia_rec:.2f}), yet its percentiles stay below the paper's."
         )
     elif below and all(below):
-        ia_line = f"Partly the intensity: {facts}, which leaves the record out, below it)."
+        return f"Partly the intensity: {facts}, which leaves the record out, below it)."
     else:
-        ia_line = f"The intensity differs: {facts}, which leaves the record out)."
+        return f"The intensity differs: {facts}, which leaves the record out)."
+
+
+def _spectrum_line(run: Run, g: dict) -> tuple[str, float, float]:
+    """The ensemble's mean PSa against the record's where rocking is decided; with the band's min and max ratio."""
     b0, b1 = g["band_s"]
     w0, w1 = g["omega_ratio_band"]
     lo, hi, mean = g["band_ratio_min"], g["band_ratio_max"], g["band_ratio_mean"]
@@ -233,68 +302,28 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
     )
     damp = f"{100 * g['damping']:g} %-damped"
     if hi < 0.8:
-        spec_line = (
+        text = (
             f"The spectral shape: {band}, the ensemble's mean {damp} PSa is only <strong>{lo:.2f}&ndash;{hi:.2f}"
             f"</strong> of the record's (mean {mean:.2f}), while at {g['short_s'][0]:g}&ndash;{g['short_s'][1]:g} s "
             f"it reaches {g['short_ratio_max']:.2f} of it (at {g['short_ratio_max_period_s']:.2g} s): the fitted "
             "model puts the record's energy at short periods, which rock a block of this size much less."
         )
     elif lo > 1.25:
-        spec_line = (
+        text = (
             f"The spectral shape: {band}, the ensemble's mean {damp} PSa exceeds the record's, "
             f"{lo:.2f}&ndash;{hi:.2f} of it."
         )
     elif lo >= 0.8 and hi <= 1.25:
-        spec_line = (
+        text = (
             f"The spectral shape: {band}, the ensemble's mean {damp} PSa is {lo:.2f}&ndash;{hi:.2f} of the "
             "record's, within &plusmn;25 %: the ensemble carries the record's content there."
         )
     else:
-        spec_line = (
+        text = (
             f"The spectral shape: {band}, the ensemble's mean {damp} PSa is {lo:.2f}&ndash;{hi:.2f} of the record's "
             f"(mean {mean:.2f})."
         )
-    weak = pct >= 75 and hi < 0.8
-    matched = lo >= 0.8 and hi <= 1.25 and 25 <= pct <= 75
-    if gap and weak:
-        verdict = (
-            "So the gap lies in the motions rather than in the rocking model or the engines: the record's own "
-            "long-period content, which the synthetic motions lack, rocks the block "
-            + (
-                "into the range of the paper's percentiles."
-                if _paper_position(x, paper).startswith("between")
-                else "much further than they do."
-            )
-        )
-    elif gap and matched:
-        verdict = (
-            "So this ensemble stands for its record: it carries the record's spectrum where rocking is decided "
-            "and holds the record's own response near its middle. The remaining gap is not in the spectral shape "
-            "of the motions, and, the engines agreeing, not in an engine."
-        )
-    elif gap:
-        verdict = "These figures do not single out the motions' spectral shape as the cause of the remaining gap."
-    else:
-        verdict = "The paper's percentiles are reproduced within the ensemble's sampling noise."
-    items = [rec_line, ia_line, spec_line]
-    if gap:
-        items.append(guarded("The equivalent amplitudes", lambda: _factor_line(run)))
-    lis = "".join(f"<li>{t}</li>" for t in items)
-    parts.append(f"<p>Measured cause, on this run's own motions:</p><ul class=cause>{lis}</ul><p>{verdict}</p>")
-    note = (run.meta.get("analysis") or {}).get("paper_note")
-    if gap and note:
-        parts.append(
-            "<p><strong>What this page cannot measure</strong> (from the scenario's <code>paper_note</code>): "
-            f"{esc(note)}</p>"
-        )
-    parts.append(
-        html_note(
-            "Computed by <code>scenarios.analysis.record_against_ensemble</code> when this page was written: the "
-            f"record through {esc(ref)} with the run's settings, the ensemble's {g['n_ensemble']} usable records "
-            f"ranked against it (ties half), spectra at {len(g['band_periods_s'])} log-spaced periods per range."
-        )
-    )
-    return "".join(parts)
+    return text, lo, hi
 
 
 def _factor_line(run: Run) -> str:
