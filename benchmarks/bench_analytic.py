@@ -32,15 +32,19 @@ substeps, and the percentiles of theta_max/alpha of both solvers.
 from __future__ import annotations
 
 import argparse
-import math
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.signal import bilinear, butter, lfilter, sosfiltfilt
 
-from housner import G, GroundMotion, Specimen
-from housner.model import simulate, simulate_many, theta_max_many
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+
+from shared import reference_solve_ivp  # noqa: E402
+
+from housner import G, GroundMotion, Specimen  # noqa: E402
+from housner.model import simulate, simulate_many, theta_max_many  # noqa: E402
 
 
 def synthetic_records(n_rec: int = 100, seed: int = 2017, duration: float = 16.0, fs: float = 500.0):
@@ -62,71 +66,12 @@ def synthetic_records(n_rec: int = 100, seed: int = 2017, duration: float = 16.0
 
 
 def baseline_solve_ivp(acc, dt, alpha, p, r, rest_tol=1e-6, rtol=1e-9, atol=1e-12):
-    """Housner's model with scipy's DOP853, restarted at each impact.
+    """Housner's model with scipy's DOP853, restarted at each impact: the tests' reference solver.
 
-    Returns (theta_max [rad], overturned). Uplift: the root of the linear
-    interpolant of ug'' at -+g tan(alpha); rest: after an impact whose
-    free-rocking peak is below rest_tol * alpha.
+    Returns (theta_max [rad], overturned); see tests/shared.py's ``reference_solve_ivp``.
     """
-    ag = np.asarray(acc) / G
-    n = ag.size
-    t_end = (n - 1) * dt
-    tan_a = math.tan(alpha)
-    e_rest = math.cos(alpha - rest_tol * alpha) - math.cos(alpha)
-    p2 = p * p
-
-    def ug(t):
-        k = min(int(t / dt), n - 2)
-        return ag[k] + (ag[k + 1] - ag[k]) * (t / dt - k)
-
-    def rhs(t, y, s):
-        d = s * alpha - y[0]
-        return [y[1], -p2 * (math.sin(d) + ug(t) * math.cos(d))]
-
-    def impact(t, y, s):
-        return y[0]
-
-    def overturn(t, y, s):
-        return abs(y[0]) - math.pi / 2
-
-    def peak(t, y, s):
-        return y[1]
-
-    impact.terminal = True
-    overturn.terminal = True
-    beyond = np.flatnonzero(np.abs(ag) > tan_a)
-    t, th, thd, s, at_rest, theta_max = 0.0, 0.0, 0.0, 1.0, True, 0.0
-    while t < t_end:
-        if at_rest:
-            k0 = min(int(t / dt), n - 2)
-            if abs(ug(t)) > tan_a:
-                s = 1.0 if ug(t) < 0 else -1.0
-            else:
-                nxt = beyond[beyond > k0]
-                if nxt.size == 0:
-                    break
-                k = int(nxt[0])
-                s = 1.0 if ag[k] < 0 else -1.0
-                thr = -s * tan_a
-                t = max(t, (k - 1) * dt + dt * (thr - ag[k - 1]) / (ag[k] - ag[k - 1]))
-            th, thd, at_rest = 0.0, 0.0, False
-        impact.direction = -s
-        sol = solve_ivp(
-            rhs, (t, t_end), [th, thd], method="DOP853", rtol=rtol, atol=atol, events=[impact, overturn, peak],
-            args=(s,),
-        )  # fmt: skip
-        theta_max = max(theta_max, float(np.max(np.abs(sol.y[0]))))
-        if sol.t_events[2].size:
-            theta_max = max(theta_max, float(np.max(np.abs(sol.y_events[2][:, 0]))))
-        if sol.t_events[1].size:
-            return math.pi / 2, True
-        if not sol.t_events[0].size:
-            break
-        t = float(sol.t_events[0][0])
-        th, thd, s = 0.0, math.sqrt(r) * float(sol.y_events[0][0][1]), -s
-        if thd * thd / (2 * p2) < e_rest:
-            at_rest, thd = True, 0.0
-    return theta_max, False
+    theta_max, overturned, _impacts = reference_solve_ivp(acc, dt, alpha, p, r, rest_tol, rtol, atol)
+    return theta_max, overturned
 
 
 def main(argv=None) -> None:

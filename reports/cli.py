@@ -417,11 +417,23 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     p.add_argument("--version", action=_VersionAction, help="print the versions of housner and its engines, and exit")
     p.add_argument("--debug", action="store_true", help="show the traceback of an error (also HOUSNER_DEBUG=1)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-
     s = sub.add_parser("scenarios", help="list the shipped scenarios")
     s.add_argument("-v", "--verbose", action="store_true", help="also print each scenario's file")
     s.set_defaults(func=_cmd_scenarios)
 
+    _add_run(sub, names)
+    rep = sub.add_parser("report", help="rebuild the HTML report of a run directory")
+    rep.add_argument("run_dir")
+    rep.add_argument("--out", help="report file (default RUN_DIR/report.html)")
+    rep.set_defaults(func=_cmd_report)
+
+    _add_tune(sub, names)
+    _add_diagnose(sub, names)
+    return p
+
+
+def _add_run(sub, names: dict) -> None:
+    """The ``run`` command's arguments."""
     r = sub.add_parser(
         "run",
         help="run a scenario on its engines and write results and an HTML report",
@@ -431,7 +443,7 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
             run_failure="a record failed in an engine (unless --allow-failures), ",
             ctrl_c="; finished records stay in the cache, re-run to resume",
         ),
-        formatter_class=raw,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     r.add_argument("scenario", help="catalogue name (see `housner scenarios`) or path to a TOML file")
     r.add_argument(
@@ -452,16 +464,15 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
-    rep = sub.add_parser("report", help="rebuild the HTML report of a run directory")
-    rep.add_argument("run_dir")
-    rep.add_argument("--out", help="report file (default RUN_DIR/report.html)")
-    rep.set_defaults(func=_cmd_report)
 
+
+def _add_tune(sub, names: dict) -> None:
+    """The ``tune`` command's arguments."""
     t = sub.add_parser(
         "tune",
         help="search engine contact settings that reproduce a target r in free vibration",
         epilog=f"engines: {names['engines']}",
-        formatter_class=raw,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     t.add_argument("engine", help="engine name (mujoco, pybullet)")
     t.add_argument("--target-r", type=_ratio, help="kinetic-energy ratio to reach (default: the specimen's Housner r)")
@@ -481,11 +492,15 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     t.add_argument("-q", "--quiet", action="store_true")
     t.set_defaults(func=_cmd_tune)
 
+
+
+def _add_diagnose(sub, names: dict) -> None:
+    """The ``diagnose`` command's arguments."""
     d = sub.add_parser(
         "diagnose",
         help="find the physical effect a measurement campaign needs (error ladder)",
         epilog=f"effects: {names['effects']}",
-        formatter_class=raw,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     d.add_argument("campaign", help="campaign directory (campaign.toml + records/)")
     d.add_argument(
@@ -504,7 +519,6 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=_cmd_diagnose)
-    return p
 
 
 def _one_line(text: str) -> str:

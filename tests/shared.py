@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from scipy.integrate import solve_ivp
 
 from engines.mujoco_engine import MujocoEngine
-from housner import GroundMotion
+from housner import G, GroundMotion
 
 
 def windowed_sines(n: int, seed: int, *, freq=(1.0, 4.0), amp=(1.0, 4.0), scale: float = 1.0, centre=1.2, width=0.7):
@@ -32,3 +35,73 @@ class SoftGroundMujoco(MujocoEngine):
         start = xml.index('<geom name="ground"')
         end = xml.index("/>", start)
         return xml[:start] + xml[start:end].split(" solref=")[0] + xml[end:]
+
+
+def reference_solve_ivp(acc, dt, alpha, p, r, rest_tol=1e-6, rtol=1e-12, atol=1e-14):
+    """Housner's model with scipy's DOP853, restarted at every impact (the tests' reference, the benchmark's baseline).
+
+    Written independently of housner.model: events for impact, overturn and peaks,
+    the same uplift and rest rules. Returns (theta_max [rad], overturned, impact times [s]).
+    """
+    ag = np.asarray(acc) / G
+    n = ag.size
+    t_end = (n - 1) * dt
+    tan_a = math.tan(alpha)
+    e_rest = math.cos(alpha - rest_tol * alpha) - math.cos(alpha)
+
+    def ug(t):
+        k = min(int(t / dt), n - 2)
+        return ag[k] + (ag[k + 1] - ag[k]) * (t / dt - k)
+
+    def rhs(t, y, s):
+        d = s * alpha - y[0]
+        return [y[1], -p * p * (math.sin(d) + ug(t) * math.cos(d))]
+
+    def impact(t, y, s):
+        return y[0]
+
+    def overturn(t, y, s):
+        return abs(y[0]) - math.pi / 2
+
+    def peak(t, y, s):
+        return y[1]
+
+    impact.terminal = True
+    overturn.terminal = True
+    t, th, thd, s = 0.0, 0.0, 0.0, 1.0
+    at_rest, theta_max, impacts = True, 0.0, []
+    while t < t_end:
+        if at_rest:
+            k = min(int(t / dt), n - 2)
+            lift = None
+            while lift is None and k < n - 1:
+                tc = max(t, k * dt)
+                for sgn in (1.0, -1.0):  # theta > 0 when ug'' < -g tan(alpha)
+                    b0, b1, bc = sgn * ag[k], sgn * ag[k + 1], sgn * ug(tc)
+                    if bc < -tan_a:
+                        lift = (tc, sgn)
+                    elif b1 < -tan_a:
+                        lift = (k * dt + dt * (-tan_a - b0) / (b1 - b0), sgn)
+                k += 1
+            if lift is None:
+                break
+            t, s = lift
+            th, thd, at_rest = 0.0, 0.0, False
+        impact.direction = -s
+        sol = solve_ivp(
+            rhs, (t, t_end), [th, thd], method="DOP853", rtol=rtol, atol=atol, events=[impact, overturn, peak],
+            args=(s,),
+        )  # fmt: skip
+        theta_max = max(theta_max, np.max(np.abs(sol.y[0])))
+        if sol.t_events[2].size:
+            theta_max = max(theta_max, np.max(np.abs(sol.y_events[2][:, 0])))
+        if sol.t_events[1].size:
+            return math.pi / 2, True, np.array(impacts)
+        if not sol.t_events[0].size:
+            break
+        t = sol.t_events[0][0]
+        impacts.append(t)
+        th, thd, s = 0.0, math.sqrt(r) * sol.y_events[0][0][1], -s
+        if thd * thd / (2 * p * p) < e_rest:
+            at_rest, thd = True, 0.0
+    return theta_max, False, np.array(impacts)
