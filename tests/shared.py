@@ -72,17 +72,7 @@ def reference_solve_ivp(acc, dt, alpha, p, r, rest_tol=1e-6, rtol=1e-12, atol=1e
     at_rest, theta_max, impacts = True, 0.0, []
     while t < t_end:
         if at_rest:
-            k = min(int(t / dt), n - 2)
-            lift = None
-            while lift is None and k < n - 1:
-                tc = max(t, k * dt)
-                for sgn in (1.0, -1.0):  # theta > 0 when ug'' < -g tan(alpha)
-                    b0, b1, bc = sgn * ag[k], sgn * ag[k + 1], sgn * ug(tc)
-                    if bc < -tan_a:
-                        lift = (tc, sgn)
-                    elif b1 < -tan_a:
-                        lift = (k * dt + dt * (-tan_a - b0) / (b1 - b0), sgn)
-                k += 1
+            lift = _uplift(ag, dt, t, tan_a, ug)
             if lift is None:
                 break
             t, s = lift
@@ -105,3 +95,22 @@ def reference_solve_ivp(acc, dt, alpha, p, r, rest_tol=1e-6, rtol=1e-12, atol=1e
         if thd * thd / (2 * p * p) < e_rest:
             at_rest, thd = True, 0.0
     return theta_max, False, np.array(impacts)
+
+
+def _uplift(ag: np.ndarray, dt: float, t: float, tan_a: float, ug) -> tuple[float, float] | None:
+    """(time [s], side) of the first uplift at or after ``t``: |ug''| / g reaches tan(alpha) on the linear interpolant.
+
+    theta > 0 (side +1) when ug'' < -g tan(alpha). None when it never does. Vectorised: a
+    block at rest for long stretches must not cost the baseline a Python loop per sample.
+    """
+    now = ug(t)
+    if abs(now) > tan_a:
+        return t, (1.0 if now < 0 else -1.0)
+    k0 = min(int(t / dt), ag.size - 2)
+    beyond = np.flatnonzero(np.abs(ag[k0 + 1 :]) > tan_a)
+    if beyond.size == 0:
+        return None
+    k = k0 + int(beyond[0])  # the crossing lies between samples k and k + 1
+    sgn = 1.0 if ag[k + 1] < 0 else -1.0
+    b0, b1 = sgn * ag[k], sgn * ag[k + 1]
+    return max(t, k * dt + dt * (-tan_a - b0) / (b1 - b0)), sgn
