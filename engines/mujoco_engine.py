@@ -78,7 +78,12 @@ Limitations
   resolution of the seed's measurements.
 * A falling block (|theta| well past alpha) slips on its pivot (cm), so the
   overturn time is ~1 % later than the rigid block's.
-* No physical effects are realised yet (``effects_supported`` is empty).
+* Physical effects: ``rotational_damping`` (the viscous moment -c I0 theta'
+  of :class:`housner.effects.RotationalDamping`) is realised as damping
+  c I0 [N m s] on the theta hinge: a generalised force on theta is a pure
+  couple, the same moment about the pivot as about the centre of mass
+  (``tests/test_mujoco.py`` checks it against the analytic engine). Others are
+  refused by name.
 
 References
 ----------
@@ -141,6 +146,10 @@ def initial_qvel(
     rx = -s * B * math.cos(th) + (H - rho) * math.sin(th)
     rz = rho + s * B * math.sin(th) + (H - rho) * math.cos(th)
     return w * rz, -w * rx, w
+
+
+#: Degree of freedom of the theta hinge (joints x, z, theta, one dof each).
+_THETA_DOF = 2
 
 
 class MujocoEngine(Engine):
@@ -227,7 +236,7 @@ class MujocoEngine(Engine):
     """
 
     name: ClassVar[str] = "mujoco"
-    effects_supported: ClassVar[frozenset[str]] = frozenset()
+    effects_supported: ClassVar[frozenset[str]] = frozenset({"rotational_damping"})
 
     #: Tuned defaults (see the class notes for their provenance and measured errors).
     DEFAULTS: ClassVar[dict] = dict(MJCF_DEFAULTS)
@@ -328,6 +337,8 @@ class MujocoEngine(Engine):
         from mujoco import rollout
 
         model, data = self._model(specimen)
+        # every call sets the hinge's damping (the model is cached per specimen): c I0 [N m s], 0 without the effect
+        model.dof_damping[_THETA_DOF] = sum(e.c for e in effects if e.name == "rotational_damping") * specimen.inertia
         n_sub = max(1, math.ceil(motion.dt / self._settings["timestep"] * (1.0 - 1e-12)))
         h = motion.dt / n_sub
         model.opt.timestep = h
