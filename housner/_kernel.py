@@ -22,6 +22,11 @@ of the very integrator that is being used, to machine precision.
 
 Units: time [s], angles [rad], angular velocity [rad/s], ground acceleration
 in units of g [-] (the caller divides by g once).
+
+The pieces that do not depend on the equation of motion (the substep grid,
+the RK4 update, the secant trial point, uplift from rest, the rest rule,
+restitution, the history) are shared with the kernels of the mechanics
+effects (:mod:`housner.effects.sliding`, :mod:`housner.effects.flexible`).
 """
 
 from __future__ import annotations
@@ -59,6 +64,16 @@ def _accel(phi, w, a, alpha, p2, c):
 
 
 @njit(cache=True)
+def _rk4_update(y, v, h, v1, v2, v3, v4, a1, a2, a3, a4):
+    """End (y, v) of an RK4 step of length h [s] for a coordinate y with rate v.
+
+    v1..v4 are the stage rates of y, a1..a4 those of v (weights 1, 2, 2, 1).
+    """
+    h6 = h / 6.0
+    return y + h6 * (v1 + 2.0 * v2 + 2.0 * v3 + v4), v + h6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+
+
+@njit(cache=True)
 def _rk4(phi, w, tau, h, a0, slope, alpha, p2, c):
     """One classic RK4 step of length h [s] from local time tau [s].
 
@@ -75,8 +90,16 @@ def _rk4(phi, w, tau, h, a0, slope, alpha, p2, c):
     k3 = _accel(phi + hh * w2, w3, a_mid, alpha, p2, c)
     w4 = w + h * k3
     k4 = _accel(phi + h * w3, w4, a_end, alpha, p2, c)
-    h6 = h / 6.0
-    return phi + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4), w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return _rk4_update(phi, w, h, w, w2, w3, w4, k1, k2, k3, k4)
+
+
+@njit(cache=True)
+def _secant(hl, gl, hr, gr):
+    """Next trial point of the bracket [hl, hr] [s] with values gl, gr: the secant root, or the midpoint."""
+    h = hr - gr * (hr - hl) / (gr - gl)
+    if not (hl < h < hr):
+        h = 0.5 * (hl + hr)
+    return h
 
 
 @njit(cache=True)
@@ -94,9 +117,7 @@ def _locate(kind, target, hl, gl, hr, gr, phi0, w0, tau, a0, slope, alpha, p2, c
     if gr == 0.0:
         ph, wh = _rk4(phi0, w0, tau, hr, a0, slope, alpha, p2, c)
         return hr, ph, wh
-    h = hr - gr * (hr - hl) / (gr - gl)
-    if not (hl < h < hr):
-        h = 0.5 * (hl + hr)
+    h = _secant(hl, gl, hr, gr)
     ph = 0.0
     wh = 0.0
     for _ in range(200):
@@ -149,6 +170,167 @@ def _grid(j, m, dt):
 
 
 @njit(cache=True)
+def _substep_of(tau, m, dt):
+    """Index of the substep of m that contains local time tau [s] (m - 1 at tau = dt)."""
+    j = int(tau * m / dt)
+    if j > m - 1:
+        j = m - 1
+    return j
+
+
+@njit(cache=True)
+def _pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol):
+    """tan(alpha) [-] and the squared rest speed [rad^2/s^2] of the +x and the -x pivot.
+
+    Rest rule: the free-rocking peak phi_pk of post-impact speed w obeys
+    w^2 / (2 p^2) = cos(alpha - phi_pk) - cos(alpha); below rest_tol*alpha means
+    w^2 < 2 p^2 (cos(alpha - x) - cos(alpha)) = 4 p^2 sin(alpha - x/2) sin(x/2).
+    Returns (tan_p, tan_n, wrest2_p, wrest2_n).
+    """
+    x = rest_tol * alpha_p
+    wrest2_p = 4.0 * p2_p * math.sin(alpha_p - 0.5 * x) * math.sin(0.5 * x)
+    x = rest_tol * alpha_n
+    wrest2_n = 4.0 * p2_n * math.sin(alpha_n - 0.5 * x) * math.sin(0.5 * x)
+    return math.tan(alpha_p), math.tan(alpha_n), wrest2_p, wrest2_n
+
+
+@njit(cache=True)
+def _initial_state(theta0, theta_dot0):
+    """(at_rest, s, phi, w, t_uplift) of a block released at theta0 [rad] with theta_dot0 [rad/s]."""
+    if theta0 == 0.0 and theta_dot0 == 0.0:
+        return True, 1.0, 0.0, 0.0, math.nan
+    s = 1.0
+    if theta0 < 0.0 or (theta0 == 0.0 and theta_dot0 < 0.0):
+        s = -1.0
+    return False, s, s * theta0, s * theta_dot0, 0.0
+
+
+@njit(cache=True)
+def _uplift(g0, g1, tau, dt, thr_p, thr_n):
+    """First local times >= tau [s] at which g0 -> g1 [g] falls below -thr_p and rises above thr_n (inf: not here).
+
+    With thr = tan(alpha) of each pivot: when a block at rest tips onto the +x and onto the -x corner.
+    """
+    return _uplift_side(g0, g1, tau, dt, -thr_p), _uplift_side(-g0, -g1, tau, dt, -thr_n)
+
+
+@njit(cache=True)
+def _reduced_ground(s, g0, g1, dt):
+    """Reduced ground acceleration on pivot s: a0 = s g0 [-] at the sample start and its slope [1/s]."""
+    if s > 0.0:
+        a0 = g0
+        a1 = g1
+    else:
+        a0 = -g0
+        a1 = -g1
+    return a0, (a1 - a0) / dt
+
+
+@njit(cache=True)
+def _restitution(v, r, r_exp, p2, alpha):
+    """Speed [rad/s] after an impact at speed v: sqrt(r_eff) v, r_eff = clip(r (v / (p alpha))^r_exp, 0, 1)."""
+    r_eff = r
+    if r_exp != 0.0 and v > 0.0:
+        r_eff = r * (v / (math.sqrt(p2) * alpha)) ** r_exp
+        if r_eff > 1.0:
+            r_eff = 1.0
+        if r_eff < 0.0:
+            r_eff = 0.0
+    return math.sqrt(r_eff) * v
+
+
+@njit(cache=True)
+def _store(theta_out, theta_dot_out, i, s, phi, w, rocking, overturned):
+    """Write sample i of the history: the state while rocking, +-pi/2 once overturned, else rest."""
+    if rocking:
+        theta_out[i] = s * phi
+        theta_dot_out[i] = s * w
+    elif overturned:
+        theta_out[i] = s * HALF_PI
+        theta_dot_out[i] = 0.0
+    else:
+        theta_out[i] = 0.0
+        theta_dot_out[i] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _crossing(phi, w, phi1, w1, hp, php, tau, H, a0, slope, alpha, p2, c):
+    """Does phi cross zero inside the step (phi, w) -> (phi1, w1) of length H [s]?
+
+    ``hp``, ``php``: time and value of a peak inside the step (hp < 0 if none).
+    Returns (event, hl, gl, hr, gr): ``_EV_IMPACT`` with a bracket [hl, hr] of
+    the first crossing (phi = gl > 0 at hl, gr <= 0 at hr), ``_EV_SETTLE`` or
+    ``_EV_NONE``.
+    """
+    hl = -1.0
+    gl = 0.0
+    hr = H
+    gr = phi1
+    if phi1 < 0.0 or (phi1 == 0.0 and w1 < 0.0):
+        if hp >= 0.0 and php > 0.0:
+            hl = hp
+            gl = php
+        elif phi > 0.0:
+            hl = 0.0
+            gl = phi
+        elif w > 0.0:
+            # just after an impact (phi = 0, w > 0): find a point of the
+            # step with phi > 0 to bracket the next crossing
+            hb = 0.5 * H
+            for _ in range(80):
+                pb, _wb = _rk4(phi, w, tau, hb, a0, slope, alpha, p2, c)
+                if pb > 0.0:
+                    hl = hb
+                    gl = pb
+                    break
+                hb *= 0.5
+        if hl < 0.0:
+            # fresh uplift that did not lift (threshold met to rounding only)
+            return _EV_SETTLE, hl, gl, hr, gr
+    elif w < 0.0 and w1 > 0.0 and phi1 > 0.0 and phi > 0.0:
+        # a minimum inside the step: does it dip below zero?
+        hm, phm, _wm = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, a0, slope, alpha, p2, c)
+        if phm < 0.0:
+            hl = 0.0
+            gl = phi
+            hr = hm
+            gr = phm
+    return (_EV_IMPACT if hl >= 0.0 else _EV_NONE), hl, gl, hr, gr
+
+
+@njit(cache=True, inline="always")
+def _step_event(phi, w, phi1, w1, tau, H, a0, slope, alpha, p2, c, theta_max):
+    """First event of the RK4 step (phi, w) -> (phi1, w1) of length H [s] from local time tau [s].
+
+    Returns (event, h, w_h, theta_max): the event code (``_EV_*``), the time
+    h [s] after tau at which it happens and the speed w_h [rad/s] there (for
+    an impact), and theta_max raised by a peak of phi inside the step.
+    """
+    # a peak of phi inside the step (theta_max between samples)
+    hp = -1.0
+    php = 0.0
+    if w > 0.0 and w1 < 0.0:
+        hp, php, _wp = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, a0, slope, alpha, p2, c)
+    # overturn: phi reaches pi/2
+    if (hp >= 0.0 and php >= HALF_PI) or phi1 >= HALF_PI:
+        hr = H
+        gr = phi1 - HALF_PI
+        if hp >= 0.0 and php >= HALF_PI:
+            hr = hp
+            gr = php - HALF_PI
+        h_o, _ph, _wh = _locate(0, HALF_PI, 0.0, phi - HALF_PI, hr, gr, phi, w, tau, a0, slope, alpha, p2, c)
+        return _EV_OVERTURN, h_o, 0.0, HALF_PI
+    if hp >= 0.0 and php > theta_max:
+        theta_max = php
+    # impact: phi crosses zero inside the step
+    event, hl, gl, hr, gr = _crossing(phi, w, phi1, w1, hp, php, tau, H, a0, slope, alpha, p2, c)
+    if event == _EV_IMPACT:
+        h_i, _ph, w_i = _locate(0, 0.0, hl, gl, hr, gr, phi, w, tau, a0, slope, alpha, p2, c)
+        return _EV_IMPACT, h_i, w_i, theta_max
+    return event, 0.0, 0.0, theta_max
+
+
+@njit(cache=True)
 def run_one(acc_g, dt, m, prm, theta0, theta_dot0, rest_tol, record, theta_out, theta_dot_out, impacts):
     """Simulate one record.
 
@@ -187,218 +369,88 @@ def run_one(acc_g, dt, m, prm, theta0, theta_dot0, rest_tol, record, theta_out, 
     guard : int
         Number of times the per-sample event safety net put the block to rest (0 normally).
     """
-    n = acc_g.size
     alpha_p = prm[I_ALPHA_POS]
     alpha_n = prm[I_ALPHA_NEG]
     p2_p = prm[I_P_POS] * prm[I_P_POS]
     p2_n = prm[I_P_NEG] * prm[I_P_NEG]
-    r_p = prm[I_R_POS]
-    r_n = prm[I_R_NEG]
-    r_exp = prm[I_R_EXP]
     c = prm[I_DAMPING]
-    tan_p = math.tan(alpha_p)
-    tan_n = math.tan(alpha_n)
-    # Rest rule: the free-rocking peak phi_pk of post-impact speed w obeys
-    # w^2 / (2 p^2) = cos(alpha - phi_pk) - cos(alpha); below rest_tol*alpha
-    # means w^2 < 2 p^2 (cos(alpha - x) - cos(alpha)) = 4 p^2 sin(alpha - x/2) sin(x/2).
-    x = rest_tol * alpha_p
-    wrest2_p = 4.0 * p2_p * math.sin(alpha_p - 0.5 * x) * math.sin(0.5 * x)
-    x = rest_tol * alpha_n
-    wrest2_n = 4.0 * p2_n * math.sin(alpha_n - 0.5 * x) * math.sin(0.5 * x)
-
-    s = 1.0
-    phi = 0.0
-    w = 0.0
-    t_uplift = math.nan
-    if theta0 == 0.0 and theta_dot0 == 0.0:
-        mode = REST
-    else:
-        mode = ROCKING
-        if theta0 < 0.0 or (theta0 == 0.0 and theta_dot0 < 0.0):
-            s = -1.0
-        phi = s * theta0
-        w = s * theta_dot0
-        t_uplift = 0.0
+    tan_p, tan_n, wrest2_p, wrest2_n = _pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol)
+    at_rest, s, phi, w, t_uplift = _initial_state(theta0, theta_dot0)
+    mode = REST if at_rest else ROCKING
     theta_max = abs(theta0)
     t_over = math.nan
     n_imp = 0
-    cap = impacts.size
     guard = 0
     if record:
         theta_out[0] = theta0
         theta_dot_out[0] = theta_dot0
 
-    for k in range(n - 1):
-        if mode == OVERTURNED:
-            if not record:
-                break
-            theta_out[k + 1] = s * HALF_PI
-            theta_dot_out[k + 1] = 0.0
-            continue
-        t_k = k * dt
-        g0 = acc_g[k]
-        g1 = acc_g[k + 1]
-        tau = 0.0
-        j = 0
-        n_ev = 0
-        while True:
+    for k in range(acc_g.size - 1):
+        if mode == OVERTURNED and not record:
+            break
+        t_k, g0, g1 = k * dt, acc_g[k], acc_g[k + 1]
+        tau, j, n_ev = 0.0, 0, 0  # local time [s], substep, events in this sample
+        while mode != OVERTURNED:
             if mode == REST:
-                tu_p = _uplift_side(g0, g1, tau, dt, -tan_p)
-                tu_n = _uplift_side(-g0, -g1, tau, dt, -tan_n)
+                tu_p, tu_n = _uplift(g0, g1, tau, dt, tan_p, tan_n)
                 if tu_p == math.inf and tu_n == math.inf:
                     break
-                if tu_p < tu_n:
-                    s = 1.0
-                    tau = tu_p
-                else:
-                    s = -1.0
-                    tau = tu_n
+                s = 1.0 if tu_p < tu_n else -1.0
+                tau = tu_p if tu_p < tu_n else tu_n
                 if math.isnan(t_uplift):
                     t_uplift = t_k + tau
                 mode = ROCKING
                 phi = 0.0
                 w = 0.0
-                j = int(tau * m / dt)
-                if j > m - 1:
-                    j = m - 1
+                j = _substep_of(tau, m, dt)
             tgt = _grid(j + 1, m, dt)
-            if tgt <= tau:
-                j += 1
-                if j >= m:
+            if tgt > tau:
+                a0, slope = _reduced_ground(s, g0, g1, dt)
+                alpha = alpha_p if s > 0.0 else alpha_n
+                p2 = p2_p if s > 0.0 else p2_n
+                H = tgt - tau
+                phi1, w1 = _rk4(phi, w, tau, H, a0, slope, alpha, p2, c)
+                event, h, w_h, theta_max = _step_event(phi, w, phi1, w1, tau, H, a0, slope, alpha, p2, c, theta_max)
+                if event == _EV_OVERTURN:
+                    mode = OVERTURNED
+                    t_over = t_k + tau + h
                     break
-                continue
-            if s > 0.0:
-                alpha = alpha_p
-                p2 = p2_p
-                a0 = g0
-                a1 = g1
-            else:
-                alpha = alpha_n
-                p2 = p2_n
-                a0 = -g0
-                a1 = -g1
-            slope = (a1 - a0) / dt
-            H = tgt - tau
-            phi1, w1 = _rk4(phi, w, tau, H, a0, slope, alpha, p2, c)
-
-            event = _EV_NONE
-            # a peak of phi inside the step (theta_max between samples)
-            hp = -1.0
-            php = 0.0
-            if w > 0.0 and w1 < 0.0:
-                hp, php, _wp = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, a0, slope, alpha, p2, c)
-            # overturn: phi reaches pi/2
-            if (hp >= 0.0 and php >= HALF_PI) or phi1 >= HALF_PI:
-                hr = H
-                gr = phi1 - HALF_PI
-                if hp >= 0.0 and php >= HALF_PI:
-                    hr = hp
-                    gr = php - HALF_PI
-                h_o, _ph, _wh = _locate(0, HALF_PI, 0.0, phi - HALF_PI, hr, gr, phi, w, tau, a0, slope, alpha, p2, c)
-                event = _EV_OVERTURN
-                t_over = t_k + tau + h_o
-                theta_max = HALF_PI
-            else:
-                if hp >= 0.0 and php > theta_max:
-                    theta_max = php
-                # impact: phi crosses zero inside the step
-                hl = -1.0
-                gl = 0.0
-                hr = H
-                gr = phi1
-                if phi1 < 0.0 or (phi1 == 0.0 and w1 < 0.0):
-                    if hp >= 0.0 and php > 0.0:
-                        hl = hp
-                        gl = php
-                    elif phi > 0.0:
-                        hl = 0.0
-                        gl = phi
-                    elif w > 0.0:
-                        # just after an impact (phi = 0, w > 0): find a point of the
-                        # step with phi > 0 to bracket the next crossing
-                        hb = 0.5 * H
-                        for _ in range(80):
-                            pb, _wb = _rk4(phi, w, tau, hb, a0, slope, alpha, p2, c)
-                            if pb > 0.0:
-                                hl = hb
-                                gl = pb
-                                break
-                            hb *= 0.5
-                    if hl < 0.0:
-                        # fresh uplift that did not lift (threshold met to rounding only)
-                        event = _EV_SETTLE
-                elif w < 0.0 and w1 > 0.0 and phi1 > 0.0 and phi > 0.0:
-                    # a minimum inside the step: does it dip below zero?
-                    hm, phm, _wm = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, a0, slope, alpha, p2, c)
-                    if phm < 0.0:
-                        hl = 0.0
-                        gl = phi
-                        hr = hm
-                        gr = phm
-                if hl >= 0.0:
-                    h_i, _ph, w_i = _locate(0, 0.0, hl, gl, hr, gr, phi, w, tau, a0, slope, alpha, p2, c)
-                    event = _EV_IMPACT
-
-            if event == _EV_NONE:
-                phi = phi1
-                w = w1
-                if phi > theta_max:
-                    theta_max = phi
+                if event == _EV_IMPACT:
+                    if n_imp < impacts.size:
+                        impacts[n_imp] = t_k + tau + h
+                    n_imp += 1
+                    tau = tau + h
+                    # restitution: the ratio of the corner that lands (s is still the
+                    # old pivot, so -s is the new one), the amplitude reference of the old pivot
+                    r_imp = prm[I_R_NEG] if s > 0.0 else prm[I_R_POS]
+                    w = _restitution(-w_h, r_imp, prm[I_R_EXP], p2, alpha)
+                    phi = 0.0
+                    s = -s
+                    if w * w < (wrest2_p if s > 0.0 else wrest2_n):
+                        mode = REST
+                        w = 0.0
+                    n_ev += 1
+                    if n_ev > _MAX_EVENTS_PER_SAMPLE:
+                        mode = REST
+                        w = 0.0
+                        guard += 1
+                        break
+                    continue
+                if event == _EV_NONE:
+                    phi = phi1
+                    w = w1
+                    if phi > theta_max:
+                        theta_max = phi
+                else:  # settle
+                    mode = REST
+                    phi = 0.0
+                    w = 0.0
                 tau = tgt
-                j += 1
-                if j >= m:
-                    break
-            elif event == _EV_OVERTURN:
-                mode = OVERTURNED
+            j += 1
+            if j >= m:
                 break
-            elif event == _EV_SETTLE:
-                mode = REST
-                phi = 0.0
-                w = 0.0
-                tau = tgt
-                j += 1
-                if j >= m:
-                    break
-            else:
-                if n_imp < cap:
-                    impacts[n_imp] = t_k + tau + h_i
-                n_imp += 1
-                tau = tau + h_i
-                # restitution: the ratio of the corner that lands (s is still the
-                # old pivot, so -s is the new one), the amplitude reference of the old pivot
-                v = -w_i
-                r_imp = r_n if s > 0.0 else r_p
-                r_eff = r_imp
-                if r_exp != 0.0 and v > 0.0:
-                    pa = math.sqrt(p2) * alpha
-                    r_eff = r_imp * (v / pa) ** r_exp
-                    if r_eff > 1.0:
-                        r_eff = 1.0
-                    if r_eff < 0.0:
-                        r_eff = 0.0
-                w = math.sqrt(r_eff) * v
-                phi = 0.0
-                s = -s
-                wrest2 = wrest2_p if s > 0.0 else wrest2_n
-                if w * w < wrest2:
-                    mode = REST
-                    w = 0.0
-                n_ev += 1
-                if n_ev > _MAX_EVENTS_PER_SAMPLE:
-                    mode = REST
-                    w = 0.0
-                    guard += 1
-                    break
         if record:
-            if mode == ROCKING:
-                theta_out[k + 1] = s * phi
-                theta_dot_out[k + 1] = s * w
-            elif mode == REST:
-                theta_out[k + 1] = 0.0
-                theta_dot_out[k + 1] = 0.0
-            else:
-                theta_out[k + 1] = s * HALF_PI
-                theta_dot_out[k + 1] = 0.0
+            _store(theta_out, theta_dot_out, k + 1, s, phi, w, mode == ROCKING, mode == OVERTURNED)
     return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard
 
 

@@ -201,10 +201,8 @@ def amplitude_from_state(theta, theta_dot, alpha: float, p: float):
         Rotation [rad].
     theta_dot : float or array_like
         Angular velocity [rad/s].
-    alpha : float
-        Slenderness [rad].
-    p : float
-        Frequency parameter [1/s].
+    alpha, p : float
+        Slenderness [rad] and frequency parameter [1/s] of the block.
 
     Returns
     -------

@@ -482,25 +482,11 @@ def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: 
             )  # fmt: skip
         else:
             imp_i = impacts[imp_off[i] : imp_off[i] + n_imp].copy()
-        overturned = bool(out[i, 1])
         info = {"substeps": int(ms_a[i]), "rest_tol": rest_tol, "params": asdict(prm)}
         if out[i, 5]:
             info["rest_guard_trips"] = int(out[i, 5])
-        results.append(
-            Response(
-                t=mo.t,
-                theta=theta[offsets[i] : offsets[i + 1]].copy(),
-                theta_dot=theta_dot[offsets[i] : offsets[i + 1]].copy(),
-                impact_times=imp_i,
-                theta_max=math.pi / 2 if overturned else float(out[i, 0]),
-                alpha=specimen.alpha,
-                overturned=overturned,
-                overturn_time=float(out[i, 2]),
-                uplift_time=float(out[i, 3]),
-                engine="housner",
-                info=info,
-            )
-        )
+        th, thd = theta[offsets[i] : offsets[i + 1]].copy(), theta_dot[offsets[i] : offsets[i + 1]].copy()
+        results.append(Response.from_kernel(mo.t, th, thd, imp_i, out[i], specimen.alpha, info))
     return results
 
 

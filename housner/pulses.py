@@ -199,7 +199,7 @@ def one_sine(
     Returns
     -------
     GroundMotion
-        Accelerations [m/s^2] at t = k dt.
+        Accelerations [m/s^2] at t = k dt: the sine up to T_p, then zeros.
 
     References
     ----------

@@ -53,6 +53,29 @@ class Response:
     engine: str = "housner"
     info: dict = field(default_factory=dict)
 
+    @classmethod
+    def from_kernel(cls, t, theta, theta_dot, impact_times, summary, alpha: float, info: dict) -> Response:
+        """The analytic engine's Response from the summary a compiled kernel returns.
+
+        ``summary`` starts with (theta_max [rad], overturned, overturn time [s],
+        uplift time [s]), as every kernel of :mod:`housner._kernel` and of the
+        mechanics effects returns it; theta_max is set to pi/2 when overturned.
+        """
+        theta_max, overturned, t_over, t_uplift = summary[:4]
+        return cls(
+            t=t,
+            theta=theta,
+            theta_dot=theta_dot,
+            impact_times=impact_times,
+            theta_max=math.pi / 2 if overturned else float(theta_max),
+            alpha=alpha,
+            overturned=bool(overturned),
+            overturn_time=float(t_over),
+            uplift_time=float(t_uplift),
+            engine="housner",
+            info=info,
+        )
+
     @property
     def theta_max_over_alpha(self) -> float:
         """theta_max / alpha [-]; +inf when the block overturned."""

@@ -1,5 +1,5 @@
-"""Pieces shared by the effects that change the mechanics: argument checks, corner geometry, and the
-compiled pieces of their kernels (constants, the ground-acceleration grid).
+"""Pieces shared by the effects that change the mechanics: argument checks, corner geometry, the
+compiled pieces of their kernels (the event bracketing), and the driver that runs a kernel.
 
 Compiled equations of motion for the effects that change the mechanics (private).
 
@@ -31,6 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
+from housner.errors import EngineError
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -68,8 +69,26 @@ def _corner_geometry(specimen: Specimen, params) -> dict:
     return out
 
 
-HALF_PI = 0.5 * math.pi
-EPS = 2.220446049250313e-16
+def run_kernel(kernel, args: tuple, histories: tuple, n_buffers: int, chatter: str):
+    """Run a mechanics kernel recording its histories; rerun it without them if its impact buffers overflow.
+
+    ``kernel(*args, record, *histories, *buffers)`` returns (theta_max,
+    overturned, t_over, t_uplift, n_impacts, guard, ...) and fills ``n_buffers``
+    per-impact buffers (impact times first), here max(64, n) long for n
+    samples. A guard trip (chattering) raises EngineError(``chatter``).
+    Returns the kernel's summary and the buffers cut to the impacts.
+    """
+    cap = max(64, histories[0].size)
+    buffers = [np.empty(cap) for _ in range(n_buffers)]
+    out = kernel(*args, True, *histories, *buffers)
+    if out[5]:
+        raise EngineError(chatter)
+    n_imp = out[4]
+    if n_imp > cap:
+        buffers = [np.empty(n_imp) for _ in range(n_buffers)]
+        kernel(*args, False, *(h[:0] for h in histories), *buffers)
+    return out, [b[:n_imp].copy() for b in buffers]
+
 
 #: Most mode changes allowed in one sample interval before the kernel gives up
 #: (chattering); the Python side turns it into an EngineError.
@@ -77,8 +96,23 @@ MAX_EVENTS_PER_SAMPLE = 20_000
 
 
 @njit(cache=True)
-def _grid(j, m, dt):
-    """Local time of substep boundary j of m [s] (exactly dt at j = m)."""
-    if j >= m:
-        return dt
-    return dt * j / m
+def _illinois(h, v, hl, vl, hr, vr, side):
+    """The bracket after trial h with value v (Illinois false position).
+
+    h replaces the right end when v < 0 (``side`` -1), else the left end
+    (``side`` +1); an end kept twice in a row has its value halved.
+    Returns (hl, vl, hr, vr, side).
+    """
+    if v < 0.0:
+        hr = h
+        vr = v
+        if side == -1:
+            vl *= 0.5
+        side = -1
+    else:
+        hl = h
+        vl = v
+        if side == 1:
+            vr *= 0.5
+        side = 1
+    return hl, vl, hr, vr, side

@@ -9,9 +9,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from housner.effects._mechanics import EPS, HALF_PI, MAX_EVENTS_PER_SAMPLE, _corner_geometry, _grid, _pos_int_or_none
+from housner._kernel import EPS, HALF_PI, _grid, _rk4_update, _secant
+from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, _corner_geometry, _illinois, _pos_int_or_none, run_kernel
 from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
-from housner.errors import EngineError
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -81,13 +81,9 @@ def _ff_rk4(th, thd, w, wd, tau, h, a0, slope, s, ap, an, q):
     v4t = thd + h * k3t
     v4w = wd + h * k3w
     k4t, k4w = _ff_acc(th + h * v3t, v4t, w + h * v3w, v4w, g_end, s, ap, an, q)
-    h6 = h / 6.0
-    return (
-        th + h6 * (thd + 2.0 * v2t + 2.0 * v3t + v4t),
-        thd + h6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t),
-        w + h6 * (wd + 2.0 * v2w + 2.0 * v3w + v4w),
-        wd + h6 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w),
-    )
+    th_h, thd_h = _rk4_update(th, thd, h, thd, v2t, v3t, v4t, k1t, k2t, k3t, k4t)
+    w_h, wd_h = _rk4_update(w, wd, h, wd, v2w, v3w, v4w, k1w, k2w, k3w, k4w)
+    return th_h, thd_h, w_h, wd_h
 
 
 @njit(cache=True)
@@ -132,28 +128,63 @@ def _ff_bracket(kind, th, thd, w, wd, tau, hl, vl, hr, vr, a0, slope, s, ap, an,
     for _ in range(200):
         if hr - hl <= 4.0 * EPS * (tau + hr):
             break
-        h = hr - vr * (hr - hl) / (vr - vl)
-        if not (hl < h < hr):
-            h = 0.5 * (hl + hr)
+        h = _secant(hl, vl, hr, vr)
         z0, z1, z2, z3 = _ff_rk4(th, thd, w, wd, tau, h, a0, slope, s, ap, an, q)
         if kind == 0:
             v = _ff_margin(z0, z1, z2, z3, s, ap, an, q)
         else:
             v = s * z1
         if v < 0.0:
-            hr = h
-            vr = v
             y0, y1, y2, y3 = z0, z1, z2, z3
-            if side == -1:
-                vl *= 0.5
-            side = -1
-        else:
-            hl = h
-            vl = v
-            if side == 1:
-                vr *= 0.5
-            side = 1
+        hl, vl, hr, vr, side = _illinois(h, v, hl, vl, hr, vr, side)
     return hr, y0, y1, y2, y3
+
+
+@njit(cache=True, inline="always")
+def _ff_step(th, thd, w, wd, tau, tend, a0, slope, s, ap, an, q, theta_max):
+    """The RK4 step from local time tau to tend [s], cut at the first change of the contact mode.
+
+    Returns (event, h, theta, theta', w, w', theta_max): whether the step was
+    cut, its length h [s], the state at its end, and theta_max raised by a
+    peak of |theta| inside the step.
+    """
+    hs = tend - tau
+    y0, y1, y2, y3 = _ff_rk4(th, thd, w, wd, tau, hs, a0, slope, s, ap, an, q)
+    mr = _ff_margin(y0, y1, y2, y3, s, ap, an, q)
+    event = mr < 0.0
+    if event:
+        ml = _ff_margin(th, thd, w, wd, s, ap, an, q)
+        if ml < 0.0:
+            ml = 0.0
+        hs, y0, y1, y2, y3 = _ff_bracket(0, th, thd, w, wd, tau, 0.0, ml, hs, mr, a0, slope, s, ap, an, q)
+    # a peak of |theta| inside the accepted step
+    if s * thd > 0.0 and s * y1 < 0.0:
+        _h, p0, _p1, _p2, _p3 = _ff_bracket(1, th, thd, w, wd, tau, 0.0, s * thd, hs, s * y1, a0, slope, s, ap, an, q)
+        if abs(p0) > theta_max:
+            theta_max = abs(p0)
+    if abs(y0) > theta_max:
+        theta_max = abs(y0)
+    return event, hs, y0, y1, y2, y3, theta_max
+
+
+@njit(cache=True)
+def _ff_contacts(th, thd, w, wd, ap, an, q):
+    """The contacts after a mode change: a corner whose margin turned negative switches (on <-> off)."""
+    gp, gn = _ff_gap(th, thd, w, wd, q)
+    if (gp if ap else -gp) < 0.0:
+        ap = not ap
+    if (gn if an else -gn) < 0.0:
+        an = not an
+    return ap, an
+
+
+@njit(cache=True)
+def _ff_store(th_out, thd_out, w_out, wd_out, i, th, thd, w, wd):
+    """Write sample i of the histories."""
+    th_out[i] = th
+    thd_out[i] = thd
+    w_out[i] = w
+    wd_out[i] = wd
 
 
 @njit(cache=True, nogil=True)
@@ -184,42 +215,22 @@ def run_flexible(
     -------
     (theta_max, overturned, t_over, t_uplift, n_impacts, guard, w_min)
     """
-    n = acc.size
-    th = theta0
-    thd = theta_dot0
-    w = w0
-    wd = w_dot0
-    if th > 0.0 or (th == 0.0 and thd >= 0.0):
-        s = 1.0
-    else:
-        s = -1.0
+    th, thd, w, wd = theta0, theta_dot0, w0, w_dot0
+    s = 1.0 if th > 0.0 or (th == 0.0 and thd >= 0.0) else -1.0
     gp, gn = _ff_gap(th, thd, w, wd, q)
     ap = gp > 0.0
     an = gn > 0.0
     lifted = not (ap and an)
     t_uplift = 0.0 if lifted else math.nan
-    t_both = 0.0
-    imp_both = -1
-    theta_max = abs(th)
-    w_min = w
-    over = False
-    t_over = math.nan
-    n_imp = 0
-    cap = impacts.size
-    guard = 0
+    t_both, imp_both, theta_max, w_min = 0.0, -1, abs(th), w
+    over, t_over, n_imp, cap, guard = False, math.nan, 0, impacts.size, 0
     if record:
-        th_out[0] = th
-        thd_out[0] = thd
-        w_out[0] = w
-        wd_out[0] = wd
-    for k in range(n - 1):
+        _ff_store(th_out, thd_out, w_out, wd_out, 0, th, thd, w, wd)
+    for k in range(acc.size - 1):
         if over:
             if not record:
                 break
-            th_out[k + 1] = th
-            thd_out[k + 1] = 0.0
-            w_out[k + 1] = w
-            wd_out[k + 1] = 0.0
+            _ff_store(th_out, thd_out, w_out, wd_out, k + 1, th, 0.0, w, 0.0)
             continue
         t_k = k * dt
         a0 = acc[k]
@@ -229,28 +240,9 @@ def run_flexible(
         for j in range(msub):
             tend = _grid(j + 1, msub, dt)
             while tau < tend and not over:
-                hs = tend - tau
-                y0, y1, y2, y3 = _ff_rk4(th, thd, w, wd, tau, hs, a0, slope, s, ap, an, q)
-                mr = _ff_margin(y0, y1, y2, y3, s, ap, an, q)
-                event = mr < 0.0
-                if event:
-                    ml = _ff_margin(th, thd, w, wd, s, ap, an, q)
-                    if ml < 0.0:
-                        ml = 0.0
-                    hs, y0, y1, y2, y3 = _ff_bracket(0, th, thd, w, wd, tau, 0.0, ml, hs, mr, a0, slope, s, ap, an, q)
-                # a peak of |theta| inside the accepted step
-                if s * thd > 0.0 and s * y1 < 0.0:
-                    _h, p0, _p1, _p2, _p3 = _ff_bracket(
-                        1, th, thd, w, wd, tau, 0.0, s * thd, hs, s * y1, a0, slope, s, ap, an, q
-                    )
-                    if abs(p0) > theta_max:
-                        theta_max = abs(p0)
-                th = y0
-                thd = y1
-                w = y2
-                wd = y3
-                if abs(th) > theta_max:
-                    theta_max = abs(th)
+                event, hs, th, thd, w, wd, theta_max = _ff_step(
+                    th, thd, w, wd, tau, tend, a0, slope, s, ap, an, q, theta_max
+                )
                 if w < w_min:
                     w_min = w
                 if not event:
@@ -281,11 +273,7 @@ def run_flexible(
                         n_imp += 1
                         lifted = False
                 both_before = ap and an
-                gp, gn = _ff_gap(th, thd, w, wd, q)
-                if (gp if ap else -gp) < 0.0:
-                    ap = not ap
-                if (gn if an else -gn) < 0.0:
-                    an = not an
+                ap, an = _ff_contacts(th, thd, w, wd, ap, an, q)
                 if both_before and not (ap and an):
                     lifted = True
                     if math.isnan(t_uplift):
@@ -299,10 +287,7 @@ def run_flexible(
             if over:
                 break
         if record:
-            th_out[k + 1] = th
-            thd_out[k + 1] = thd
-            w_out[k + 1] = w
-            wd_out[k + 1] = wd
+            _ff_store(th_out, thd_out, w_out, wd_out, k + 1, th, thd, w, wd)
     return theta_max, over, t_over, t_uplift, n_imp, guard, w_min
 
 
@@ -317,6 +302,9 @@ def simulate_flexible(
     rest_tol: float = 1e-6,
 ) -> Response:
     """Rocking on a flexible foundation (see :class:`FlexibleFoundation` for the model).
+
+    The solver of that effect: ``run_flexible`` integrates theta and the
+    vertical displacement w with RK4 steps cut at every change of contact.
 
     Parameters
     ----------
@@ -390,19 +378,12 @@ def simulate_flexible(
         w0 = (bp * sn if th0 > 0 else -bn * sn) - G / kappa
     n = motion.n
     th, thd, w, wd = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    cap = max(64, n)
-    imp, dur = np.empty(cap), np.empty(cap)
     acc = np.ascontiguousarray(motion.acc, dtype=np.float64)
-    out = run_flexible(acc, dt, m, q, th0, thd0, w0, 0.0, True, th, thd, w, wd, imp, dur)
-    theta_max, over, t_over, t_up, n_imp, guard, w_min = out
-    if guard:
-        raise EngineError(
-            f"flexible_foundation: contact chattering on motion {motion.name!r} (more than "
-            f"{MAX_EVENTS_PER_SAMPLE} contact changes in one sample); raise the damping ratio"
-        )
-    if n_imp > cap:
-        imp, dur = np.empty(n_imp), np.empty(n_imp)
-        run_flexible(acc, dt, m, q, th0, thd0, w0, 0.0, False, th[:0], thd[:0], w[:0], wd[:0], imp, dur)
+    chatter = (
+        f"flexible_foundation: contact chattering on motion {motion.name!r} (more than "
+        f"{MAX_EVENTS_PER_SAMPLE} contact changes in one sample); raise the damping ratio"
+    )
+    out, (imp, dur) = run_kernel(run_flexible, (acc, dt, m, q, th0, thd0, w0, 0.0), (th, thd, w, wd), 2, chatter)
     info = {
         "kernel": "flexible_foundation",
         "substeps": m,
@@ -413,23 +394,11 @@ def simulate_flexible(
         "c": eta * specimen.mass,
         "w": w,
         "w_dot": wd,
-        "w_min": float(w_min),
-        "impact_durations": dur[:n_imp].copy(),
+        "w_min": float(out[6]),
+        "impact_durations": dur,
         "inertia_mismatch": abs(icp - icn) / ic,
     }
-    return Response(
-        t=motion.t,
-        theta=th,
-        theta_dot=thd,
-        impact_times=imp[:n_imp].copy(),
-        theta_max=math.pi / 2 if over else float(theta_max),
-        alpha=specimen.alpha,
-        overturned=bool(over),
-        overturn_time=float(t_over),
-        uplift_time=float(t_up),
-        engine="housner",
-        info=info,
-    )
+    return Response.from_kernel(motion.t, th, thd, imp, out, specimen.alpha, info)
 
 
 #: Flexible foundation: RK4 step as a fraction of the fastest contact period / (2 pi) [rad].

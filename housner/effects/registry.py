@@ -469,18 +469,11 @@ def simulate_with_effects(
     substeps: int | None = None,
     rest_tol: float = 1e-6,
 ) -> Response:
-    """Simulate ``motion`` on ``specimen`` with ``effects`` (``apply_effects(...).run(...)``).
+    """Simulate ``motion`` on ``specimen`` with ``effects``: ``apply_effects(...).run(...)``.
 
-    Parameters
-    ----------
-    specimen : Specimen
-    motion : GroundMotion
-    effects : iterable of Effect
-    params : RockingParams, optional
-        Starting parameters (default: the specimen's Housner parameters).
-    substeps : int, optional
-        RK4 substeps per sample [-].
-    rest_tol : float
-        Rest rule of :func:`housner.model.simulate` [-].
+    ``specimen``, ``motion``, ``effects`` and ``params`` (the starting
+    parameters, default the specimen's Housner parameters) are those of
+    :func:`apply_effects`; ``substeps`` and ``rest_tol`` those of
+    :meth:`EffectPlan.run`.
     """
     return apply_effects(specimen, motion, effects, params=params).run(substeps=substeps, rest_tol=rest_tol)

@@ -9,10 +9,22 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from housner._kernel import _uplift_side
-from housner.effects._mechanics import EPS, HALF_PI, MAX_EVENTS_PER_SAMPLE, _corner_geometry, _grid, _pos_int_or_none
+from housner._kernel import (
+    EPS,
+    HALF_PI,
+    _grid,
+    _initial_state,
+    _pivot_constants,
+    _reduced_ground,
+    _restitution,
+    _rk4_update,
+    _secant,
+    _store,
+    _substep_of,
+    _uplift,
+)
+from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, _corner_geometry, _illinois, _pos_int_or_none, run_kernel
 from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
-from housner.errors import EngineError
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -82,13 +94,9 @@ def _sl_rk4(mode, s, sig, fric, phi, w, x, xd, tau, h, a0, slope, q):
     w4 = w + h * k3
     v4 = xd + h * l3
     k4, l4 = _sl_acc(mode, s, sig, fric, phi + h * w3, w4, a_end, q)
-    h6 = h / 6.0
-    return (
-        phi + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4),
-        w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4),
-        x + h6 * (xd + 2.0 * v2 + 2.0 * v3 + v4),
-        xd + h6 * (l1 + 2.0 * l2 + 2.0 * l3 + l4),
-    )
+    phi_h, w_h = _rk4_update(phi, w, h, w, w2, w3, w4, k1, k2, k3, k4)
+    x_h, xd_h = _rk4_update(x, xd, h, xd, v2, v3, v4, l1, l2, l3, l4)
+    return phi_h, w_h, x_h, xd_h
 
 
 @njit(cache=True)
@@ -156,28 +164,44 @@ def _sl_bracket(kind, mode, s, sig, fric, jam, phi, w, x, xd, tau, hl, vl, hr, v
     for _ in range(200):
         if hr - hl <= 4.0 * EPS * (tau + hr):
             break
-        h = hr - vr * (hr - hl) / (vr - vl)
-        if not (hl < h < hr):
-            h = 0.5 * (hl + hr)
+        h = _secant(hl, vl, hr, vr)
         z0, z1, z2, z3 = _sl_rk4(mode, s, sig, fric, phi, w, x, xd, tau, h, a0, slope, q)
         if kind == 0:
             v = _sl_margin(mode, s, sig, fric, jam, z0, z1, z3, a0 + slope * (tau + h), q)
         else:
             v = z1
         if v < 0.0:
-            hr = h
-            vr = v
             y0, y1, y2, y3 = z0, z1, z2, z3
-            if side == -1:
-                vl *= 0.5
-            side = -1
-        else:
-            hl = h
-            vl = v
-            if side == 1:
-                vr *= 0.5
-            side = 1
+        hl, vl, hr, vr, side = _illinois(h, v, hl, vl, hr, vr, side)
     return hr, y0, y1, y2, y3
+
+
+@njit(cache=True, inline="always")
+def _sl_step(mode, s, sig, fric, jam, phi, w, x, xd, tau, tgt, a0, slope, q, theta_max):
+    """The RK4 step from local time tau to tgt [s], cut at the first violation of the regime.
+
+    Returns (event, h, phi, w, x, xd, theta_max): whether the step was cut,
+    its length h [s], the state at its end, and theta_max raised by the peak
+    of a rocking block inside the step.
+    """
+    hs = tgt - tau
+    y0, y1, y2, y3 = _sl_rk4(mode, s, sig, fric, phi, w, x, xd, tau, hs, a0, slope, q)
+    mr = _sl_margin(mode, s, sig, fric, jam, y0, y1, y3, a0 + slope * tgt, q)
+    event = mr < 0.0
+    if event:
+        ml = _sl_margin(mode, s, sig, fric, jam, phi, w, xd, a0 + slope * tau, q)
+        if ml < 0.0:
+            ml = 0.0
+        hs, y0, y1, y2, y3 = _sl_bracket(0, mode, s, sig, fric, jam, phi, w, x, xd, tau, 0.0, ml, hs, mr, a0, slope, q)
+    if mode != SLIDE and w > 0.0 and y1 < 0.0:
+        _h, p0, _p1, _p2, _p3 = _sl_bracket(
+            1, mode, s, sig, fric, jam, phi, w, x, xd, tau, 0.0, w, hs, y1, a0, slope, q
+        )
+        if p0 > theta_max:
+            theta_max = p0
+    if mode != SLIDE and y0 > theta_max:
+        theta_max = y0
+    return event, hs, y0, y1, y2, y3, theta_max
 
 
 @njit(cache=True)
@@ -190,6 +214,104 @@ def _sl_rock_or_slip(s, phi, w, a, q):
     if _sl_painleve(s, sig, phi, q) <= 0.0:
         return ROCK, 0.0, True
     return SLIDE_ROCK, sig, False
+
+
+@njit(cache=True)
+def _sl_start_slide(sig, s, fric, tan_p, tan_n, q):
+    """(mode, s, fric) of a base starting to slip toward sig: slide, or slide-rock on that corner if mu > tan(alpha)."""
+    tan_s = tan_p if sig > 0.0 else tan_n
+    if q[S_MU] > tan_s:
+        return SLIDE_ROCK, sig, True
+    return SLIDE, s, fric
+
+
+@njit(cache=True)
+def _sl_slip_stops(s, sig, fric, a, tan_p, tan_n, q):
+    """(mode, s, sig, fric) when the slip of a sliding block stops at reduced ground acc a [-]: rest, or slip again."""
+    a_phys = s * a
+    if abs(a_phys) <= q[S_MU]:
+        return REST, s, sig, fric
+    sig = -1.0 if a_phys > 0.0 else 1.0
+    mode, s, fric = _sl_start_slide(sig, s, fric, tan_p, tan_n, q)
+    return mode, s, sig, fric
+
+
+@njit(cache=True, inline="always")
+def _sl_leave_rest(g0, g1, tau, dt, s, sig, fric, jam, tan_p, tan_n, q):
+    """How a block at rest starts to move at or after local time tau [s] (ground acc g0 -> g1 [g]).
+
+    Returns (tau, mode, s, sig, fric, jam, n_jam, tipped, slipped): the time it
+    starts (inf when it stays at rest through the sample), its new regime,
+    whether the start counts a jam, lifts a corner, slips the base.
+    """
+    mu = q[S_MU]
+    tu_p, tu_n = _uplift(g0, g1, tau, dt, tan_p, tan_n)
+    ts_p, ts_n = _uplift(g0, g1, tau, dt, mu, mu)  # slides toward +x, -x
+    t_tip = min(tu_p, tu_n)
+    t_sl = min(ts_p, ts_n)
+    if t_tip == math.inf and t_sl == math.inf:
+        return math.inf, REST, s, sig, fric, jam, 0, False, False
+    tau = min(t_tip, t_sl)
+    a_now = g0 + (g1 - g0) * (tau / dt)
+    side = 1.0 if a_now < 0.0 else -1.0
+    tan_s = tan_p if side > 0.0 else tan_n
+    if t_sl < t_tip or (t_sl == t_tip and mu < tan_s):
+        mode, s, fric = _sl_start_slide(side, s, fric, tan_p, tan_n, q)
+        return tau, mode, s, side, fric, jam, 0, mode == SLIDE_ROCK, True
+    mode, sig, jam = _sl_rock_or_slip(side, 0.0, 0.0, side * a_now, q)
+    if mode == SLIDE_ROCK:
+        fric = True
+    return tau, mode, side, sig, fric, jam, 1 if jam else 0, True, mode == SLIDE_ROCK
+
+
+@njit(cache=True)
+def _sl_impact(s, sig, fric, jam, w, xd, g_now, wrest2_p, wrest2_n, tan_p, tan_n, q):
+    """Housner's impact law on theta' at ground acc g_now [g]; the slip velocity xd [m/s] is kept.
+
+    Returns (mode, s, sig, fric, jam, w, xd, n_jam) after the impact (the block lands on the other corner, phi = 0).
+    """
+    alpha, _rr, _i0, p2 = _sl_side(q, s)
+    w = _restitution(-w, q[S_R], q[S_REXP], p2, alpha)
+    s = -s
+    if w * w < (wrest2_p if s > 0.0 else wrest2_n):
+        if xd == 0.0:
+            return REST, s, sig, fric, jam, 0.0, xd, 0
+        sig = 1.0 if xd > 0.0 else -1.0
+        mode, s, fric = _sl_start_slide(sig, s, fric, tan_p, tan_n, q)
+        return mode, s, sig, fric, jam, 0.0, xd, 0
+    if xd != 0.0:
+        sig = 1.0 if xd > 0.0 else -1.0
+        if _sl_painleve(s, sig, 0.0, q) <= 0.0:
+            return ROCK, s, sig, True, True, w, 0.0, 1
+        return SLIDE_ROCK, s, sig, True, jam, w, xd, 0
+    mode, sig, jam = _sl_rock_or_slip(s, 0.0, w, s * g_now, q)
+    return mode, s, sig, fric, jam, w, xd, 1 if jam else 0
+
+
+@njit(cache=True)
+def _sl_regime(mode, s, sig, fric, jam, phi, w, xd, a_now, q):
+    """The regime after a margin of rock or slide-rock turned negative (reduced ground acc a_now [-]).
+
+    Returns (mode, sig, fric, jam, xd, n_jam, slipped): the new regime and
+    slip velocity, whether the change counts a jam and starts a slip.
+    """
+    if mode == ROCK:
+        if jam:
+            return ROCK, sig, fric, False, xd, 0, False  # friction suffices again
+        mode, sig, jam = _sl_rock_or_slip(s, phi, w, a_now, q)
+        if mode == SLIDE_ROCK:
+            fric = True
+        return mode, sig, fric, jam, xd, 1 if jam else 0, mode == SLIDE_ROCK
+    # slide-rock: which margin?
+    if sig * xd < 0.0:
+        mode, sig, jam = _sl_rock_or_slip(s, phi, w, a_now, q)
+        if mode == SLIDE_ROCK:
+            fric = True
+        return mode, sig, fric, jam, 0.0, 1 if jam else 0, False
+    if fric and _sl_painleve(s, sig, phi, q) < 0.0:
+        return ROCK, sig, fric, True, 0.0, 1, False
+    _alpha, rr, _i0, _p2 = _sl_side(q, s)
+    return mode, sig, q[S_G] - rr * math.cos(_alpha - phi) * w * w > 0.0, jam, xd, 0, False
 
 
 @njit(cache=True, nogil=True)
@@ -222,146 +344,57 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
     the number of Painleve jams, and t_lift the time spent with a negative
     normal-force demand [s].
     """
-    n = acc_g.size
-    mu = q[S_MU]
-    r = q[S_R]
-    r_exp = q[S_REXP]
-    tan_p = math.tan(q[S_ALPHA_P])
-    tan_n = math.tan(q[S_ALPHA_N])
-    xr = q[S_ALPHA_P] * rest_tol
-    wrest2_p = 4.0 * q[S_P2_P] * math.sin(q[S_ALPHA_P] - 0.5 * xr) * math.sin(0.5 * xr)
-    xr = q[S_ALPHA_N] * rest_tol
-    wrest2_n = 4.0 * q[S_P2_N] * math.sin(q[S_ALPHA_N] - 0.5 * xr) * math.sin(0.5 * xr)
-
-    s = 1.0
-    sig = 0.0
-    fric = True
-    jam = False
-    phi = 0.0
-    w = 0.0
-    x = 0.0
-    xd = 0.0
-    t_uplift = math.nan
-    t_slide = math.nan
-    if theta0 == 0.0 and theta_dot0 == 0.0:
-        mode = REST
-    else:
-        if theta0 < 0.0 or (theta0 == 0.0 and theta_dot0 < 0.0):
-            s = -1.0
-        phi = s * theta0
-        w = s * theta_dot0
-        t_uplift = 0.0
+    tan_p, tan_n, wrest2_p, wrest2_n = _pivot_constants(q[S_ALPHA_P], q[S_ALPHA_N], q[S_P2_P], q[S_P2_N], rest_tol)
+    at_rest, s, phi, w, t_uplift = _initial_state(theta0, theta_dot0)
+    sig, fric, jam, x, xd = 0.0, True, False, 0.0, 0.0
+    mode, t_slide = REST, math.nan
+    if not at_rest:
         mode, sig, jam = _sl_rock_or_slip(s, phi, w, s * acc_g[0], q)
         if mode == SLIDE_ROCK:
             t_slide = 0.0
-    theta_max = abs(theta0)
-    x_max = 0.0
-    t_over = math.nan
-    n_imp = 0
-    n_jam = 0
-    t_lift = 0.0
-    cap = impacts.size
-    guard = 0
+    theta_max, x_max, t_over, t_lift = abs(theta0), 0.0, math.nan, 0.0
+    n_imp, n_jam, guard = 0, 0, 0
     if record:
         th_out[0] = theta0
         thd_out[0] = theta_dot0
         x_out[0] = 0.0
         reg_out[0] = mode
 
-    for k in range(n - 1):
-        if mode == OVERTURNED:
-            if not record:
-                break
-            th_out[k + 1] = s * HALF_PI
-            thd_out[k + 1] = 0.0
-            x_out[k + 1] = x
-            reg_out[k + 1] = mode
-            continue
+    for k in range(acc_g.size - 1):
+        if mode == OVERTURNED and not record:
+            break
         t_k = k * dt
         g0 = acc_g[k]
         g1 = acc_g[k + 1]
         tau = 0.0
         j = 0
         n_ev = 0
-        while True:
+        while mode != OVERTURNED:
             if mode == REST:
-                tu_p = _uplift_side(g0, g1, tau, dt, -tan_p)
-                tu_n = _uplift_side(-g0, -g1, tau, dt, -tan_n)
-                ts_p = _uplift_side(g0, g1, tau, dt, -mu)  # slides toward +x
-                ts_n = _uplift_side(-g0, -g1, tau, dt, -mu)
-                t_tip = min(tu_p, tu_n)
-                t_sl = min(ts_p, ts_n)
-                if t_tip == math.inf and t_sl == math.inf:
+                tau, mode, s, sig, fric, jam, dj, tipped, slipped = _sl_leave_rest(
+                    g0, g1, tau, dt, s, sig, fric, jam, tan_p, tan_n, q
+                )
+                if tau == math.inf:
                     break
-                tau = min(t_tip, t_sl)
-                a_now = g0 + (g1 - g0) * (tau / dt)
-                side = 1.0 if a_now < 0.0 else -1.0
-                tan_s = tan_p if side > 0.0 else tan_n
-                phi = 0.0
-                w = 0.0
-                xd = 0.0
-                if t_sl < t_tip or (t_sl == t_tip and mu < tan_s):
-                    mode = SLIDE
-                    sig = side
-                    if math.isnan(t_slide):
-                        t_slide = t_k + tau
-                    if mu > tan_s:
-                        s = side
-                        mode = SLIDE_ROCK
-                        fric = True
-                        if math.isnan(t_uplift):
-                            t_uplift = t_k + tau
-                else:
-                    s = side
-                    if math.isnan(t_uplift):
-                        t_uplift = t_k + tau
-                    mode, sig, jam = _sl_rock_or_slip(s, 0.0, 0.0, s * a_now, q)
-                    if mode == SLIDE_ROCK:
-                        fric = True
-                        if math.isnan(t_slide):
-                            t_slide = t_k + tau
-                    n_jam += 1 if jam else 0
-                j = int(tau * msub / dt)
-                if j > msub - 1:
-                    j = msub - 1
+                n_jam += dj
+                if tipped and math.isnan(t_uplift):
+                    t_uplift = t_k + tau
+                if slipped and math.isnan(t_slide):
+                    t_slide = t_k + tau
+                phi, w, xd = 0.0, 0.0, 0.0
+                j = _substep_of(tau, msub, dt)
             tgt = _grid(j + 1, msub, dt)
             if tgt <= tau:
                 j += 1
                 if j >= msub:
                     break
                 continue
-            if s > 0.0:
-                a0 = g0
-                a1 = g1
-            else:
-                a0 = -g0
-                a1 = -g1
-            slope = (a1 - a0) / dt
-            hs = tgt - tau
-            y0, y1, y2, y3 = _sl_rk4(mode, s, sig, fric, phi, w, x, xd, tau, hs, a0, slope, q)
-            mr = _sl_margin(mode, s, sig, fric, jam, y0, y1, y3, a0 + slope * tgt, q)
-            event = mr < 0.0
-            if event:
-                ml = _sl_margin(mode, s, sig, fric, jam, phi, w, xd, a0 + slope * tau, q)
-                if ml < 0.0:
-                    ml = 0.0
-                hs, y0, y1, y2, y3 = _sl_bracket(
-                    0, mode, s, sig, fric, jam, phi, w, x, xd, tau, 0.0, ml, hs, mr, a0, slope, q
-                )
-            if mode != SLIDE and w > 0.0 and y1 < 0.0:
-                _h, p0, _p1, _p2, _p3 = _sl_bracket(
-                    1, mode, s, sig, fric, jam, phi, w, x, xd, tau, 0.0, w, hs, y1, a0, slope, q
-                )
-                if p0 > theta_max:
-                    theta_max = p0
+            a0, slope = _reduced_ground(s, g0, g1, dt)
+            event, hs, phi, w, x, xd, theta_max = _sl_step(
+                mode, s, sig, fric, jam, phi, w, x, xd, tau, tgt, a0, slope, q, theta_max
+            )
             if mode == SLIDE_ROCK and not fric:
                 t_lift += hs
-            phi = y0
-            w = y1
-            x = y2
-            xd = y3
-            if mode != SLIDE and phi > theta_max:
-                theta_max = phi
             if abs(x) > x_max:
                 x_max = abs(x)
             if not event:
@@ -371,114 +404,38 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
                     break
                 continue
             tau = tau + hs
-            t = t_k + tau
-            a_now = a0 + slope * tau
             n_ev += 1
             if n_ev > MAX_EVENTS_PER_SAMPLE:
                 guard += 1
                 break
             if mode == SLIDE:
-                # the slip stops
                 xd = 0.0
-                a_phys = s * a_now
-                if abs(a_phys) <= mu:
-                    mode = REST
-                else:
-                    sig = -1.0 if a_phys > 0.0 else 1.0
-                    tan_s = tan_p if sig > 0.0 else tan_n
-                    if mu > tan_s:
-                        s = sig
-                        mode = SLIDE_ROCK
-                        fric = True
-                continue
-            if HALF_PI - phi < 0.0:
+                mode, s, sig, fric = _sl_slip_stops(s, sig, fric, a0 + slope * tau, tan_p, tan_n, q)
+            elif HALF_PI - phi < 0.0:
                 mode = OVERTURNED
-                t_over = t
+                t_over = t_k + tau
                 theta_max = HALF_PI
-                break
-            if phi < 0.0:
-                # impact: Housner's law on theta', the slip velocity is kept
-                if n_imp < cap:
-                    impacts[n_imp] = t
+            elif phi < 0.0:  # impact
+                if n_imp < impacts.size:
+                    impacts[n_imp] = t_k + tau
                 n_imp += 1
-                alpha, _rr, _i0, p2 = _sl_side(q, s)
-                v = -w
-                r_eff = r
-                if r_exp != 0.0 and v > 0.0:
-                    r_eff = r * (v / (math.sqrt(p2) * alpha)) ** r_exp
-                    if r_eff > 1.0:
-                        r_eff = 1.0
-                    if r_eff < 0.0:
-                        r_eff = 0.0
-                w = math.sqrt(r_eff) * v
                 phi = 0.0
-                s = -s
-                wrest2 = wrest2_p if s > 0.0 else wrest2_n
-                if w * w < wrest2:
-                    w = 0.0
-                    if xd == 0.0:
-                        mode = REST
-                        continue
-                    mode = SLIDE
-                    sig = 1.0 if xd > 0.0 else -1.0
-                    tan_s = tan_p if sig > 0.0 else tan_n
-                    if mu > tan_s:
-                        s = sig
-                        mode = SLIDE_ROCK
-                        fric = True
-                    continue
-                if xd != 0.0:
-                    sig = 1.0 if xd > 0.0 else -1.0
-                    mode = SLIDE_ROCK
-                    fric = True
-                    if _sl_painleve(s, sig, phi, q) <= 0.0:
-                        xd = 0.0
-                        mode = ROCK
-                        jam = True
-                        n_jam += 1
-                else:
-                    mode, sig, jam = _sl_rock_or_slip(s, phi, w, s * (g0 + (g1 - g0) * (tau / dt)), q)
-                    n_jam += 1 if jam else 0
-                continue
-            if mode == ROCK:
-                if jam:
-                    jam = False  # friction suffices again
-                    continue
-                mode, sig, jam = _sl_rock_or_slip(s, phi, w, a_now, q)
-                if mode == SLIDE_ROCK:
-                    fric = True
-                    if math.isnan(t_slide):
-                        t_slide = t
-                n_jam += 1 if jam else 0
-                continue
-            # slide-rock: which margin?
-            if sig * xd < 0.0:
-                xd = 0.0
-                mode, sig, jam = _sl_rock_or_slip(s, phi, w, a_now, q)
-                n_jam += 1 if jam else 0
-                if mode == SLIDE_ROCK:
-                    fric = True
-                continue
-            if fric and _sl_painleve(s, sig, phi, q) < 0.0:
-                xd = 0.0
-                mode = ROCK
-                jam = True
-                n_jam += 1
-                continue
-            _alpha, rr, _i0, _p2 = _sl_side(q, s)
-            fric = q[S_G] - rr * math.cos(_alpha - phi) * w * w > 0.0
+                g_now = g0 + (g1 - g0) * (tau / dt)
+                mode, s, sig, fric, jam, w, xd, dj = _sl_impact(
+                    s, sig, fric, jam, w, xd, g_now, wrest2_p, wrest2_n, tan_p, tan_n, q
+                )
+                n_jam += dj
+            else:
+                mode, sig, fric, jam, xd, dj, slipped = _sl_regime(
+                    mode, s, sig, fric, jam, phi, w, xd, a0 + slope * tau, q
+                )
+                n_jam += dj
+                if slipped and math.isnan(t_slide):
+                    t_slide = t_k + tau
         if record:
             x_out[k + 1] = x
             reg_out[k + 1] = mode
-            if mode == ROCK or mode == SLIDE_ROCK:
-                th_out[k + 1] = s * phi
-                thd_out[k + 1] = s * w
-            elif mode == OVERTURNED:
-                th_out[k + 1] = s * HALF_PI
-                thd_out[k + 1] = 0.0
-            else:
-                th_out[k + 1] = 0.0
-                thd_out[k + 1] = 0.0
+            _store(th_out, thd_out, k + 1, s, phi, w, mode == ROCK or mode == SLIDE_ROCK, mode == OVERTURNED)
     return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard, x_max, t_slide, n_jam, t_lift
 
 
@@ -545,19 +502,11 @@ def simulate_sliding(
     n = motion.n
     th, thd, x = np.empty(n), np.empty(n), np.empty(n)
     reg = np.empty(n, dtype=np.int8)
-    cap = max(64, n)
-    imp = np.empty(cap)
     acc_g = np.ascontiguousarray(motion.acc, dtype=np.float64) / G
     args = (acc_g, motion.dt, m, q, motion.theta0, motion.theta_dot0, float(rest_tol))
-    out = run_sliding(*args, True, th, thd, x, reg, imp)
-    theta_max, over, t_over, t_up, n_imp, guard, x_max, t_slide, n_jam, t_lift = out
-    if guard:
-        raise EngineError(
-            f"sliding: more than {MAX_EVENTS_PER_SAMPLE} regime changes in one sample on motion {motion.name!r}"
-        )
-    if n_imp > cap:
-        imp = np.empty(n_imp)
-        run_sliding(*args, False, th[:0], thd[:0], x[:0], reg[:0], imp)
+    chatter = f"sliding: more than {MAX_EVENTS_PER_SAMPLE} regime changes in one sample on motion {motion.name!r}"
+    out, (imp,) = run_kernel(run_sliding, args, (th, thd, x, reg), 1, chatter)
+    x_max, t_slide, n_jam, t_lift = out[6:]
     info = {
         "kernel": "sliding",
         "substeps": m,
@@ -571,19 +520,7 @@ def simulate_sliding(
         "painleve_jams": int(n_jam),
         "lift_off_time": float(t_lift),
     }
-    return Response(
-        t=motion.t,
-        theta=th,
-        theta_dot=thd,
-        impact_times=imp[:n_imp].copy(),
-        theta_max=math.pi / 2 if over else float(theta_max),
-        alpha=specimen.alpha,
-        overturned=bool(over),
-        overturn_time=float(t_over),
-        uplift_time=float(t_up),
-        engine="housner",
-        info=info,
-    )
+    return Response.from_kernel(motion.t, th, thd, imp, out, specimen.alpha, info)
 
 
 @register_effect
