@@ -465,7 +465,6 @@ def _add_run(sub, names: dict) -> None:
     r.set_defaults(func=_cmd_run)
 
 
-
 def _add_tune(sub, names: dict) -> None:
     """The ``tune`` command's arguments."""
     t = sub.add_parser(
@@ -491,7 +490,6 @@ def _add_tune(sub, names: dict) -> None:
     )
     t.add_argument("-q", "--quiet", action="store_true")
     t.set_defaults(func=_cmd_tune)
-
 
 
 def _add_diagnose(sub, names: dict) -> None:

@@ -42,8 +42,6 @@ _MEASURED = "#000000"
 _STEP_COLORS = ("#7f7f7f", "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd")
 
 
-
-
 def _f(x: Any, digits: int = 4) -> str:
     try:
         v = float(x)
@@ -54,10 +52,6 @@ def _f(x: Any, digits: int = 4) -> str:
     if math.isinf(v):
         return "overturn" if v > 0 else "&minus;&infin;"
     return f"{v:.{digits}g}" if abs(v) >= 1e4 or (v != 0 and abs(v) < 1e-3) else f"{v:.{digits}f}"
-
-
-
-
 
 
 def _colors(steps) -> list[str]:
@@ -501,8 +495,6 @@ def _settings(diag) -> str:
     rows.append(["elapsed", f"{diag.elapsed:.1f} s"])
     rows.append(["campaign", f"<code>{esc(diag.campaign.path)}</code>"])
     return html_table(["setting", "value"], rows, cls="kv")
-
-
 
 
 def render_diagnosis(diag) -> str:
