@@ -26,6 +26,7 @@ ENGINES: dict[str, Any] = {
     "housner": "engines.analytic:HousnerEngine",
     "mujoco": "engines.mujoco_engine:MujocoEngine",
     "pybullet": "engines.pybullet_engine:PybulletEngine",
+    "dart": "engines.dart_engine:DartEngine",
 }
 
 
@@ -134,13 +135,20 @@ class Engine:
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
         raise NotImplementedError
 
+    #: The PyPI distribution the engine drives ("" for none): :meth:`version` reports its version.
+    package: ClassVar[str] = ""
+
     def settings(self) -> dict:
-        """The engine's settings as plain data (for reports and the result cache)."""
-        return {}
+        """The engine's settings as plain data (for reports and the result cache): its ``_settings``, if any."""
+        return dict(getattr(self, "_settings", {}))
 
     def version(self) -> str:
         """Version of the underlying package (for provenance and the result cache)."""
-        return ""
+        if not self.package:
+            return ""
+        from importlib.metadata import version
+
+        return version(self.package)
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.settings().items())

@@ -73,6 +73,7 @@ from typing import Any
 
 import numpy as np
 
+from engines._planar import gravity_x, release_state, substeps
 from engines.base import Engine
 from engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 from housner.errors import EngineError
@@ -194,6 +195,7 @@ class PybulletEngine(Engine):
     """
 
     name = "pybullet"
+    package = "pybullet"
     effects_supported = frozenset()
 
     #: Default settings: the choice of ``housner tune pybullet``
@@ -237,16 +239,6 @@ class PybulletEngine(Engine):
         self._urdf: dict[tuple, Path] = {}
 
     # ------------------------------------------------------------------
-    def settings(self) -> dict:
-        """The engine's settings (see the class docstring for units)."""
-        return dict(self._settings)
-
-    def version(self) -> str:
-        """The installed pybullet package's version."""
-        from importlib.metadata import version
-
-        return version("pybullet")
-
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
 
@@ -437,23 +429,18 @@ class PybulletEngine(Engine):
 
         wall0 = time.perf_counter()
         H, B, alpha = specimen.H, specimen.B, specimen.alpha
-        k = max(1, math.ceil(motion.dt / self._settings["timestep"] * (1.0 - 1e-12)))
-        h = motion.dt / k
+        k, h = substeps(motion.dt, self._settings["timestep"])
         cid, body = self.build(specimen, h)
 
         # Release state: rotated by theta0 about the pivot on its side, touching the ground.
         th0, om0 = motion.theta0, motion.theta_dot0
-        s0 = math.copysign(1.0, th0) if th0 != 0.0 else (math.copysign(1.0, om0) if om0 != 0.0 else 0.0)
-        xc, zc, dxc, dzc = _com_state(H, s0 * B, th0, om0)
+        xc, zc, dxc, dzc = release_state(H, B, th0, om0)
         pb.resetJointState(body, 0, xc, dxc, physicsClientId=cid)
         pb.resetJointState(body, 1, zc - H, dzc, physicsClientId=cid)
         pb.resetJointState(body, 2, th0, om0, physicsClientId=cid)
 
         # Gravity x component before each step: minus the exact mean of the linear ug'' over the step.
-        acc = motion.acc
-        frac = (np.arange(k) + 0.5) / k
-        gx = -(acc[:-1, None] + np.diff(acc)[:, None] * frac[None, :])
-        gx_rows = gx.tolist()
+        gx_rows = gravity_x(motion.acc, k)
 
         n = motion.n
         states = np.empty((n, 6))
@@ -637,20 +624,6 @@ def _close_client(cid: int, tmp: str) -> None:
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
-
-def _com_state(H: float, pivot_x: float, theta: float, omega: float) -> tuple[float, float, float, float]:
-    """Centre of mass (x, z) [m] and velocity [m/s] of the block rotated by ``theta`` about the pivot (pivot_x, 0).
-
-    With Rot(theta) the rotation about +y, (x, z) -> (x cos + z sin, -x sin + z cos),
-    the centre of mass is pivot + Rot(theta) (-pivot_x, H).
-    """
-    c, s = math.cos(theta), math.sin(theta)
-    rx, rz = -pivot_x, H
-    x = pivot_x + rx * c + rz * s
-    z = -rx * s + rz * c
-    dx = (-rx * s + rz * c) * omega
-    dz = (-rx * c - rz * s) * omega
-    return x, z, dx, dz
 
 
 def _pivot_z(states: np.ndarray, H: float, B: float) -> np.ndarray:

@@ -6,7 +6,7 @@ import difflib
 from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["DataFileError", "EngineError", "unknown_choice"]
+__all__ = ["DataFileError", "EngineError", "EngineUnavailable", "unknown_choice"]
 
 
 class DataFileError(ValueError):
@@ -35,6 +35,10 @@ class DataFileError(ValueError):
 
 class EngineError(RuntimeError):
     """An engine failed or diverged on a record (the message says which and why)."""
+
+
+class EngineUnavailable(EngineError):
+    """An engine's package (or a system library it needs) is not installed; the message names the install command."""
 
 
 def unknown_choice(kind: str, name: str, choices: Iterable[str]) -> ValueError:

@@ -571,12 +571,12 @@ def main(argv: list[str] | None = None) -> int:
 
 def _classify(e: Exception) -> tuple[int, str]:
     """Exit status and message of an error that reached :func:`main`."""
-    from housner.errors import DataFileError
+    from housner.errors import DataFileError, EngineUnavailable
     from scenarios.runner import SchedulerError
 
     if isinstance(e, SchedulerError):
         return EXIT_FAILURE, str(e)
-    if isinstance(e, (UsageError, DataFileError, ValueError, FileNotFoundError)):  # bad input
+    if isinstance(e, (UsageError, DataFileError, ValueError, FileNotFoundError, EngineUnavailable)):  # bad input
         msg = str(e)
         if isinstance(e, OSError) and e.filename is not None and str(e.filename) not in msg:
             msg = f"{e.filename}: {e.strerror or msg}"

@@ -467,3 +467,18 @@ def test_version_and_help_list_the_registries():
     assert "--allow-failures" in res.stdout and "exit status" in res.stdout
     res = _housner("diagnose", "--help")
     assert res.returncode == 0 and all(name in res.stdout for name in available_effects())
+
+
+def test_missing_engine_package_is_one_line_naming_the_install(tmp_path):
+    """An optional engine whose package is absent: exit 2, one line naming the install command, no run."""
+    code = (
+        "import sys; sys.modules['dartpy'] = None\n"  # as if dartpy were not installed
+        "from reports.cli import main\n"
+        f"sys.exit(main(['run', 'elcentro', '--engines', 'dart', '--out', {str(tmp_path / 'run')!r}, '-q']))"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and "engine 'dart' needs the dartpy package" in lines[0]
+    assert "pip install -e '.[dart]'" in lines[0] and "Traceback" not in p.stderr
+    assert not (tmp_path / "run" / "results.parquet").exists()

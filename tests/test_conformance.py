@@ -12,7 +12,7 @@ import pytest
 from engines import ENGINES, Engine
 from engines.base import engine_class
 from engines.conformance import ConformanceReport, assert_conforms, check_engine
-from housner import Specimen
+from housner import EngineError, Specimen
 from housner.model import simulate as housner_simulate
 
 SEED = Specimen.bachmann2017()
@@ -27,6 +27,10 @@ def _importable(name: str) -> str | None:
             importlib.import_module(module)
         except ImportError as e:  # an engine still being written
             return f"engine {name!r}: module {module} does not import yet ({e})"
+    try:
+        engine_class(name)()
+    except EngineError as e:  # an optional engine whose package is not installed
+        return str(e)
     return None
 
 
