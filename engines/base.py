@@ -29,6 +29,10 @@ ENGINES: dict[str, Any] = {
     "dart": "engines.dart_engine:DartEngine",
 }
 
+#: The PyPI distribution each registered engine drives (read without importing the engine, for
+#: ``housner --version``); an engine absent here is taken to be its own distribution.
+ENGINE_PACKAGES: dict[str, str] = {"housner": "housner", "mujoco": "mujoco", "pybullet": "pybullet", "dart": "dartpy"}
+
 
 def register_engine(name: str) -> Callable[[type], type]:
     """Class decorator that adds an engine to :data:`ENGINES` under ``name``."""

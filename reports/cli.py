@@ -124,11 +124,11 @@ def _versions() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
     import housner
-    from engines.base import ENGINES
+    from engines.base import ENGINE_PACKAGES, ENGINES
 
     parts = []
     for name in ENGINES:
-        pkg = "housner" if name == "housner" else name
+        pkg = ENGINE_PACKAGES.get(name, name)
         try:
             v = housner.__version__ if pkg == "housner" else version(pkg)
         except PackageNotFoundError:
