@@ -114,3 +114,19 @@ def _uplift(ag: np.ndarray, dt: float, t: float, tan_a: float, ug) -> tuple[floa
     sgn = 1.0 if ag[k + 1] < 0 else -1.0
     b0, b1 = sgn * ag[k], sgn * ag[k + 1]
     return max(t, k * dt + dt * (-tan_a - b0) / (b1 - b0)), sgn
+
+
+def optional_engine(name: str, module: str):
+    """``name`` as a pytest parameter, skipped (with the install command) when ``module`` is not installed."""
+    import importlib.util
+
+    import pytest
+
+    missing = importlib.util.find_spec(module) is None
+    return pytest.param(
+        name, marks=pytest.mark.skipif(missing, reason=f"engine {name!r} needs {module}: pip install -e '.[{name}]'")
+    )
+
+
+#: The engines the cross-engine tests run besides the analytic one (optional ones skip when absent).
+OTHER_ENGINES = ["mujoco", "pybullet", optional_engine("dart", "dartpy")]

@@ -12,13 +12,14 @@ import math
 
 import numpy as np
 import pytest
+from shared import OTHER_ENGINES
 
 from engines.base import get_engine
 from housner import Specimen, pulses, simulate
 from reports.assertions import assert_cdf_agreement
 
 SPEC = Specimen.bachmann2017()
-ENGINES = ["mujoco", "pybullet"]
+ENGINES = OTHER_ENGINES
 
 # Symmetric Ricker pulses on both sides of the block, spanning small rocking,
 # large rocking and overturn: (omega_p / p, a_p / (g tan alpha)).

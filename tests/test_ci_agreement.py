@@ -7,7 +7,10 @@ check with the issue's tolerances (KS <= 0.15, overturn within 0.08) is the slow
 test in test_agreement.py.
 """
 
+import importlib.util
+
 import pytest
+from shared import OTHER_ENGINES
 
 from reports.assertions import assert_cdf_agreement
 from scenarios.runner import run_scenario
@@ -20,7 +23,7 @@ def ci_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("ci-elcentro")
     return run_scenario(
         "elcentro",
-        engines=["housner", "mujoco", "pybullet"],
+        engines=["housner", "mujoco", "pybullet"] + (["dart"] if importlib.util.find_spec("dartpy") else []),
         n_motions=N,
         out=out,
         jobs=2,
@@ -29,7 +32,7 @@ def ci_run(tmp_path_factory):
     )
 
 
-@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
+@pytest.mark.parametrize("engine", OTHER_ENGINES)
 def test_engine_distribution_within_ci_tolerance(ci_run, engine):
     # With 30 records the two-sample KS distance has a 5 % critical value of
     # 1.36 sqrt(2/30) = 0.35 for independent samples; the engines see the same
