@@ -212,6 +212,35 @@ class Run:
         )
 
     @cached_property
+    def chaos_floors(self) -> dict:
+        """Engine -> :class:`scenarios.chaos.ChaosFloor` at the report's agreement tolerance.
+
+        The analytic model perturbed by each engine's measured r and p errors (stored by the
+        run in run.json's ``engine_errors``) on the motions that engine and the reference both
+        computed. Empty when the run stored no errors (the reference is not the analytic model,
+        or an older run) or has no motions.
+        """
+        from scenarios.chaos import chaos_floor, errors_from_dict
+
+        stored = self.meta.get("engine_errors") or {}
+        if not stored or self.motions is None or self.reference != "housner":
+            return {}
+        motions = _motion_list(self)
+        r = ((self.meta.get("engines") or {}).get(self.reference, {}).get("settings") or {}).get("r")
+        ref_ok = set(self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int))
+        out = {}
+        for e in self.others:
+            d = stored.get(e)
+            if not d or "error" in d:
+                continue
+            ids = sorted(ref_ok & set(self.ok.loc[self.ok["engine"] == e, "motion_id"].to_numpy(int)))
+            ms = [motions[i] for i in ids if i < len(motions)]
+            if ms:
+                out[e] = chaos_floor(self.specimen_obj, ms, errors_from_dict(d), r=json_number(r) if r else None,
+                                     rtol=RECORD_RTOL, atol=0.0)  # fmt: skip
+        return out
+
+    @cached_property
     def specimen_obj(self):
         """The run's specimen as a :class:`housner.Specimen` (from run.json)."""
         from housner import Specimen

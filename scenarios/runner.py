@@ -31,6 +31,7 @@ from housner.specimen import Specimen
 from scenarios._outputs import check_output_dir
 from scenarios.cache import _load_cached, _log, _store_cached, cache_key, default_cache_dir
 from scenarios.catalogue import Scenario, load_scenario
+from scenarios.chaos import run_engine_errors
 from scenarios.rundir import RESULT_COLUMNS, RUN_FILES, effect_data, provenance, write_run
 from scenarios.schema import effects_label
 from scenarios.workers import (
@@ -382,6 +383,9 @@ def run_scenario(
             progress=progress,
         )
     fails = results[results["status"] != "ok"]
+    # each engine's free-rocking r and p errors: the report's chaos floor perturbs the analytic model by them
+    reference = str(scenario.analysis.get("reference", "housner"))
+    engine_errors = run_engine_errors(scenario.specimen, eng_settings, motions, reference)
     spread = None
     k = int(scenario.analysis.get("seed_spread", 0) or 0)
     if k > 1 and "housner" in names and n_motions is None and seed is None:
@@ -396,6 +400,7 @@ def run_scenario(
         "engines": info,
         "analysis": scenario.analysis,
         "failures": fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records"),
+        "engine_errors": engine_errors,
         "wall_s": {"motions": t_motions, "total": time.perf_counter() - t0},
         "provenance": provenance(),
     }

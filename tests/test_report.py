@@ -20,8 +20,10 @@ from engines.base import ENGINES, register_engine
 from housner import GroundMotion, Specimen, stats
 from housner.errors import DataFileError
 from reports import figures, html, run_view
+from reports.run_view import RECORD_RTOL
 from reports.sections import distribution as distribution_section
 from reports.sections import tuning as tuning_section
+from scenarios.chaos import chaos_floor, errors_from_dict, run_engine_errors
 from scenarios.runner import provenance, run_engines, write_run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -147,7 +149,10 @@ def shaken(tmp_path_factory):
         shaking(),
         {"housner": {}, "report-r80": {}, "report-flaky": {}},
         analysis={"reference": "housner", "paper_percentiles": {"25": 0.37, "50": 0.77, "75": "overturn"}},
-        extra={"table2_spread": SPREAD},
+        extra={
+            "table2_spread": SPREAD,
+            "engine_errors": run_engine_errors(SPEC, {"housner": {}, "report-r80": {}}, shaking()),
+        },
     )
     path = html.write_report(out)
     return out, path, Page(path.read_text(encoding="utf-8"))
@@ -264,6 +269,26 @@ def test_agreement_table_counts_records(shaken):
     row = page.row("agreement", "report-r80")
     assert row[5] == str(len(both))
     assert row[6] == f"{same:.0%}"
+
+
+def test_agreement_table_gives_the_chaos_floor(shaken):
+    """The floor cell: the analytic model's self-agreement under the engine's measured errors, by the report's rule."""
+    out, path, page = shaken
+    text = path.read_text(encoding="utf-8")
+    errs = json.loads((out / "run.json").read_text())["engine_errors"]
+    # the R80 engine keeps r = 0.80: its measured r error is 0.80 / 0.9465 - 1 = -15.5 % at every amplitude
+    assert errs["report-r80"]["eps_r"] == pytest.approx(1 - 0.80 / SPEC.r_housner, abs=2e-3)
+    df = pd.read_parquet(out / "results.parquet")
+    ok = set(df[(df.engine == "housner") & (df.status == "ok")].motion_id) & set(
+        df[(df.engine == "report-r80") & (df.status == "ok")].motion_id
+    )
+    ms = shaking()
+    fl = chaos_floor(
+        SPEC, [ms[i] for i in sorted(ok)], errors_from_dict(errs["report-r80"]), rtol=RECORD_RTOL, atol=0.0
+    )
+    row = page.row("agreement", "report-r80")
+    assert row[8] == f"{fl.share:.0%} {fl.share_min:.0%}\u2013{fl.share_max:.0%}"
+    assert "chaos floor of" in text and ("at the floor" in text or "below the floor" in text)
 
 
 def test_cdf_figure_stops_at_one_minus_overturn_probability():

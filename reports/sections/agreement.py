@@ -16,6 +16,7 @@ import pandas as pd
 from reports import figures
 from reports.page import engine_tag, esc, fmt_g, fmt_num, fmt_p, fmt_pct, html_figure, html_note, html_table
 from reports.run_view import RECORD_RTOL, Run
+from scenarios.chaos import floor_verdict
 from scenarios.rundir import json_number
 
 #: Records with the largest disagreement shown as time histories.
@@ -45,6 +46,13 @@ def _disagreement(run: Run) -> pd.DataFrame:
     return wide
 
 
+def _floor_cell(fl) -> str:
+    """The chaos floor as a table cell: mean share and the range of the four perturbations."""
+    if fl is None:
+        return "&ndash;"
+    return f"{fl.share:.0%}<br><small>{fl.share_min:.0%}&ndash;{fl.share_max:.0%}</small>"
+
+
 def _agreement(run: Run) -> str:
     if not run.others:
         return html_note("Only one engine: no cross-engine comparison.")
@@ -58,10 +66,13 @@ def _agreement(run: Run) -> str:
         "paired records",
         "same verdict",
         f"&theta;<sub>max</sub> within {RECORD_RTOL:.0%}",
+        "chaos floor<br><small>(analytic model with the engine's r, p errors)</small>",
     ]
+    floors = run.chaos_floors
     rows = []
     for e in run.others:
         r = cmp.loc[e]
+        fl = floors.get(e)
         rows.append(
             [
                 engine_tag(e, run),
@@ -72,6 +83,7 @@ def _agreement(run: Run) -> str:
                 fmt_num(r["n_paired"], 0),
                 fmt_pct(r["verdict_share"]),
                 fmt_pct(r["agreement_share"]),
+                _floor_cell(fl),
             ]
         )
     parts = [
@@ -81,9 +93,21 @@ def _agreement(run: Run) -> str:
             caption=f"Each engine against {esc(run.reference)}. &ldquo;Same verdict&rdquo;: both overturned or "
             f"neither did; &ldquo;within {RECORD_RTOL:.0%}&rdquo;: both overturned, or both rocked with "
             f"&theta;<sub>max</sub> within {RECORD_RTOL:.0%} of the reference's. Rocking is sensitive to small "
-            "perturbations (seed Fig. 9), so record-by-record agreement can be low while the distributions agree.",
+            "perturbations (seed Fig. 9), so record-by-record agreement can be low while the distributions agree. "
+            "The chaos floor is how often the analytic model agrees with itself, by the same rule, when its r and p "
+            "are perturbed by the engine's measured free-rocking errors (mean of the four perturbations, their range "
+            "below): agreement at the floor is chaos, agreement below it a model difference.",
         )
     ]
+    lines = []
+    for e in run.others:
+        r, fl = cmp.loc[e], floors.get(e)
+        if fl is None or not (r["n_paired"] > 0):
+            continue
+        n = int(r["n_paired"])
+        lines.append(f"{esc(e)}: {esc(floor_verdict(int(round(r['agreement_share'] * n)), n, fl))}.")
+    if lines:
+        parts.append(html_note("<br>".join(lines)))
     wide = _disagreement(run)
     pairs = {}
     for e in run.others:
