@@ -304,12 +304,22 @@ class TuningResult:
         """Largest |r_engine / r_target - 1| of the chosen settings at 0.2-0.9 alpha [-]."""
         return float(np.max(np.abs(self.table["rel_error"])))
 
+    @property
+    def reached_r(self) -> tuple[float, float, float]:
+        """The chosen settings' r at 0.2-0.9 alpha: (mean, lowest, highest) [-], over every sample step."""
+        r = self.table["r_engine"].to_numpy(float)
+        r = r[np.isfinite(r)]
+        if not r.size:
+            return (math.nan, math.nan, math.nan)
+        return (float(r.mean()), float(r.min()), float(r.max()))
+
     def to_dict(self) -> dict:
         """Plain data (JSON-serialisable) for reports and caches."""
         return {
             "engine": self.engine,
             "specimen": self.specimen,
             "target_r": self.target_r,
+            "reached_r": list(self.reached_r),
             "rtol": self.rtol,
             "settings": {k: list(v) if isinstance(v, tuple) else v for k, v in self.settings.items()},
             "met": bool(self.met),
@@ -334,6 +344,14 @@ class TuningResult:
             f"{verdict} (tolerance {self.rtol:.2%}; {n_ok} of {len(self.candidates)} candidates met it)",
             f"settings: {_settings_text(self.settings)}",
         ]
+        mean, lo, hi = self.reached_r
+        if not self.met:
+            lines.insert(
+                1,
+                f"{self.engine} cannot reach r = {self.target_r:.4f} with the contact settings it offers; the closest "
+                f"it gets: r = {mean:.4f} on average ({lo:.4f}-{hi:.4f} at 0.2-0.9 alpha), "
+                f"{mean / self.target_r - 1:+.2%} from the target",
+            )
         for dt, tab in self.table.groupby("dt", sort=False):
             lines.append(f"sample step {dt * 1e3:.4g} ms:")
             for label, t, tol in (

@@ -473,8 +473,14 @@ def _add_tune(sub, names: dict) -> None:
         epilog=f"engines: {names['engines']}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    t.add_argument("engine", help="engine name (mujoco, pybullet)")
-    t.add_argument("--target-r", type=_ratio, help="kinetic-energy ratio to reach (default: the specimen's Housner r)")
+    t.add_argument("engine", help=f"engine name ({names['engines']})")
+    t.add_argument(
+        "--r",
+        "--target-r",
+        dest="target_r",
+        type=_ratio,
+        help="kinetic-energy ratio to reach, e.g. a measured one (default: the specimen's Housner r)",
+    )
     t.add_argument(
         "--amplitudes", type=_amplitudes, help="release amplitudes theta0/alpha, comma-separated (default 0.2..0.9)"
     )

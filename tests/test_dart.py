@@ -72,3 +72,25 @@ def test_tuning_candidates_divide_the_tuners_samples():
     assert steps and all(abs(1e-3 / h - round(1e-3 / h)) < 1e-9 for h in steps)
     above = DartEngine.tuning_candidates(SEED, 0.99)
     assert any(c.get("restitution", 0.0) > 0 for c in above)
+
+
+def test_a_target_below_housners_r_is_out_of_reach_and_said_so():
+    """Rigid plastic contact loses exactly Housner's energy: r = 0.90 cannot be reached, and the tuner says what is."""
+    from engines.tuning import tune
+
+    res = tune(
+        "dart",
+        SEED,
+        target_r=0.90,
+        amplitudes=(0.3, 0.6),
+        candidates=[{}],
+        progress=False,
+        small_amplitudes=(0.1,),
+        check_decay=False,
+        check_pulses=False,
+        sample_steps=(1e-3,),
+    )
+    assert not res.met
+    # what DART reaches instead is Housner's r (within the 0.3 % of its first-impact test)
+    assert res.reached_r[0] == pytest.approx(SEED.r_housner, rel=3e-3)
+    assert "dart cannot reach r = 0.9000" in res.summary()

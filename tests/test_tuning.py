@@ -164,6 +164,10 @@ def test_tuner_says_so_when_no_candidate_meets_the_target():
     assert res.worst_rel_error == pytest.approx(1 - 0.94 / 0.9532, rel=1e-4)
     assert np.isnan(res.candidates["decay_rel_error"]).all() and len(res.decay_table) == 0
     assert "NOT MET" in res.summary()
+    # it says what it reaches instead: r = 0.94 at every amplitude, -1.38 % from the target
+    assert res.reached_r == pytest.approx((0.94, 0.94, 0.94), rel=1e-5)
+    assert "cannot reach r = 0.9532" in res.summary() and "r = 0.9400 on average" in res.summary()
+    assert res.to_dict()["reached_r"] == pytest.approx([0.94] * 3, rel=1e-5)
     fig = tuning_report_figure(res)
     ax = fig.axes[0]
     assert len(fig.axes) == 1 and "NOT met" in ax.get_title()
