@@ -5,6 +5,13 @@ Run from the repository root::
     python benchmarks/bench_engines.py                         # every engine, 10 motions, 1 process
     python benchmarks/bench_engines.py --engines mujoco --n 100 --processes 2
     python benchmarks/bench_engines.py --engines mujoco --settings '{"timestep": 2.5e-4, "solref": [5e-4, 1]}'
+    python benchmarks/bench_engines.py --scenario elcentro-strong --n 100 --processes 2   # the strong ensemble
+
+Besides the speed, each engine's free-rocking r error is measured at release
+amplitudes 0.005-0.9 alpha (1 ms samples, :data:`R_AMPLITUDES`), and the table
+gives the largest amplitude at which it departs from Housner's r by more than
+1 % (``r>1% below``: "-" when it never does): the small-amplitude limit of the
+engine's contact, where its impacts count for less than the analytic model's.
 
 Motions: the first ``--n`` of the ``elcentro`` scenario (Rezaeian & Der
 Kiureghian motions fitted to El Centro 1940 NS, seed 2017, at model scale,
@@ -46,17 +53,33 @@ from engines import ENGINES, get_engine  # noqa: E402
 from housner import GroundMotion, Specimen  # noqa: E402
 from housner.errors import EngineUnavailable  # noqa: E402
 from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count  # noqa: E402
+from scenarios.chaos import measure_engine_errors  # noqa: E402
+
+#: Release amplitudes theta0 / alpha [-] of the r-error scan, small to large.
+R_AMPLITUDES = (0.005, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 0.9)
+#: |r error| that counts as a departure [-].
+R_DEPARTURE = 0.01
 
 
-def seed_motions(n: int, model: str | None = None) -> list[GroundMotion]:
-    """The first ``n`` motions of the seed study (scenario ``elcentro``), at model scale.
+def r_departure(name: str, settings: dict, specimen: Specimen) -> dict:
+    """The engine's r error at :data:`R_AMPLITUDES` and the largest amplitude where it exceeds 1 %."""
+    err = measure_engine_errors(get_engine(name, **settings), specimen, dt=1e-3, amplitudes=R_AMPLITUDES)
+    bad = [a for a, e in zip(R_AMPLITUDES, err.r_rel_errors, strict=True) if not abs(e) <= R_DEPARTURE]
+    return {
+        "r_rel_errors": dict(zip(R_AMPLITUDES, err.r_rel_errors, strict=True)),
+        "r_departs_below": max(bad) if bad else 0.0,
+    }
+
+
+def seed_motions(n: int, model: str | None = None, scenario: str = "elcentro") -> list[GroundMotion]:
+    """The first ``n`` motions of the seed study (scenario ``elcentro``, or ``scenario``), at model scale.
 
     ``model`` overrides the scenario's RDK model ("matched", or "rdk2010": the published
     model, whose weaker motions the first speed targets were set on).
     """
     from scenarios.catalogue import load_scenario
 
-    scen = load_scenario("elcentro")
+    scen = load_scenario(scenario)
     if model is not None:
         scen.motions = {**scen.motions, "model": model}
     motions, _ = scen.build_motions(n)
@@ -132,11 +155,12 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=1, help="whole runs per engine; the fastest counts (default 1)")
     ap.add_argument("--json", default=None, help="write the rows as JSON here")
     ap.add_argument("--model", default=None, help="RDK model of the motions: matched (the scenario's) or rdk2010")
+    ap.add_argument("--scenario", default="elcentro", help="scenario whose motions to run (default elcentro)")
     args = ap.parse_args(argv)
     names = args.engines or sorted(ENGINES)
     settings = json.loads(args.settings)
     specimen = Specimen.bachmann2017()
-    motions = seed_motions(args.n, args.model)
+    motions = seed_motions(args.n, args.model, args.scenario)
     print(
         f"{len(motions)} motions of {motions[0].duration:.2f} s at dt = {motions[0].dt:.5g} s; "
         f"{args.processes} process(es); specimen {specimen.name}"
@@ -146,6 +170,7 @@ def main(argv=None) -> int:
         if name != "housner":
             try:
                 rows.append(time_engine(name, settings, specimen, motions, args.processes, args.repeat))
+                rows[-1].update(r_departure(name, settings, specimen))
             except (ImportError, EngineUnavailable) as e:
                 print(f"skipping {name}: {e}")
     base = rows[0]["wall_s"]
@@ -153,7 +178,7 @@ def main(argv=None) -> int:
     mean_dur = sum(m.duration for m in motions) / len(motions)
     print(
         f"{'engine':10s} {'wall s':>8s} {'CPU s':>8s} {'x housner':>10s} {'wall/sim s':>11s} {'CPU/sim s':>10s} "
-        f"{'overturned':>10s} {'impacts':>8s} {'>=' + format(IMPACT_RESOLUTION, 'g') + ' a':>9s}   "
+        f"{'overturned':>10s} {'impacts':>8s} {'>=' + format(IMPACT_RESOLUTION, 'g') + ' a':>9s} {'r>1% below':>10s}   "
         f"100 motions on {target} cores (from wall / from CPU)"
     )
     for r in rows:
@@ -164,13 +189,21 @@ def main(argv=None) -> int:
         print(
             f"{r['engine']:10s} {r['wall_s']:8.2f} {r['cpu_s']:8.2f} {r['ratio_to_housner']:10.1f} "
             f"{r['wall_per_sim_s']:11.4f} {r['cpu_s'] / r['simulated_s']:10.4f} {r['overturned']:10d} "
-            f"{r['impacts']:8d} {r['impacts_resolved']:9d}   {r['projected_100_motions_wall_s']:8.1f} s / "
+            f"{r['impacts']:8d} {r['impacts_resolved']:9d} {_departs(r):>10s}   "
+            f"{r['projected_100_motions_wall_s']:8.1f} s / "
             f"{r['projected_100_motions_cpu_s']:6.1f} s"
         )
     if args.json:
         with open(args.json, "w", encoding="utf-8") as fh:
             json.dump(rows, fh, indent=1)
     return 0
+
+
+def _departs(row: dict) -> str:
+    a = row.get("r_departs_below")
+    if a is None:
+        return ""
+    return f"{a:g} a" if a > 0 else "-"
 
 
 if __name__ == "__main__":

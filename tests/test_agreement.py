@@ -84,3 +84,41 @@ def test_elcentro_distributions_agree(engine, tmp_path_factory):
     below = int((x[both] < h[both]).sum())
     p = binomtest(below, int(both.sum())).pvalue
     assert p >= 0.01, f"{engine} below the analytic model on {below} of {int(both.sum())} records (p = {p:.2g})"
+
+
+@pytest.fixture(scope="module")
+def strong_run(tmp_path_factory):
+    """elcentro-strong (100 matched motions x 1.6, 42 overturn in the analytic model) on every installed engine."""
+    from scenarios.runner import run_scenario
+
+    names = ["housner"] + [e if isinstance(e, str) else e.values[0] for e in ENGINES]
+    names = [n for n in names if n == "housner" or _installed(n)]
+    return run_scenario("elcentro-strong", engines=names, out=tmp_path_factory.mktemp("strong"), progress=False)
+
+
+def _installed(name: str) -> bool:
+    from engines.base import engine_class
+    from housner.errors import EngineError
+
+    try:
+        engine_class(name)()
+    except (ImportError, EngineError):
+        return False
+    return True
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("engine", ENGINES)
+def test_strong_ensemble_distributions_agree(engine, strong_run):
+    """Where overturning matters (a third or more overturn): KS <= 0.15 and |dP[overturn]| <= 0.08 (the issue's).
+
+    On this ensemble the engines stay correlated with the analytic model (the same overturn verdict
+    on 85-97 % of the records), so the fixed 0.15 is not the coin toss it is on elcentro.
+    """
+    run = strong_run
+    p_ref = float(run.results[run.results.engine == "housner"].overturned.mean())
+    assert p_ref >= 1 / 3, f"the strong ensemble overturns only {p_ref:.0%} in the analytic model"
+    report = assert_cdf_agreement(run.results, engine=engine, reference="housner", ks_max=0.15, overturn_tol=0.08)
+    print(report)
+    assert run.failures.empty, run.failures.to_string()
+
