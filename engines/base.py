@@ -27,11 +27,20 @@ ENGINES: dict[str, Any] = {
     "mujoco": "engines.mujoco_engine:MujocoEngine",
     "pybullet": "engines.pybullet_engine:PybulletEngine",
     "dart": "engines.dart_engine:DartEngine",
+    "opensees": "engines.opensees_engine:OpenSeesEngine",
+    "drake": "engines.drake_engine:DrakeEngine",
 }
 
 #: The PyPI distribution each registered engine drives (read without importing the engine, for
 #: ``housner --version``); an engine absent here is taken to be its own distribution.
-ENGINE_PACKAGES: dict[str, str] = {"housner": "housner", "mujoco": "mujoco", "pybullet": "pybullet", "dart": "dartpy"}
+ENGINE_PACKAGES: dict[str, str] = {
+    "housner": "housner",
+    "mujoco": "mujoco",
+    "pybullet": "pybullet",
+    "dart": "dartpy",
+    "opensees": "openseespy",
+    "drake": "drake",
+}
 
 
 def register_engine(name: str) -> Callable[[type], type]:

@@ -129,4 +129,10 @@ def optional_engine(name: str, module: str):
 
 
 #: The engines the cross-engine tests run besides the analytic one (optional ones skip when absent).
-OTHER_ENGINES = ["mujoco", "pybullet", optional_engine("dart", "dartpy")]
+OTHER_ENGINES = [
+    "mujoco",
+    "pybullet",
+    optional_engine("dart", "dartpy"),
+    optional_engine("opensees", "openseespy"),
+    optional_engine("drake", "pydrake"),
+]
