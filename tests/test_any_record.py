@@ -21,13 +21,25 @@ from scenarios import catalogue
 from scenarios.catalogue import ScenarioError, load_scenario
 from scenarios.records import ELCENTRO_VARIANTS, elcentro
 
-#: SHA-256 of motions 0-2 of `housner run elcentro` (rdk2010, seed 2017), recorded before
-#: scenarios could name files and models: the default must not move them.
-ELCENTRO_HASHES = [
-    "27709feef54c9ee78adec6ea678a568ddf07a88d3c238c2fc3b441f057784de0",
-    "6a43021442b3e75679f58e24c6043770bd38fb03898bf4ff90a29369258a3912",
-    "5da9696dd6f0480eb9c75f32f731ccaa883be5ebfb12a482076111c08dde268c",
+#: (samples, dt [s], PGA [m/s^2], RMS [m/s^2]) of motions 0-2 of `housner run elcentro` (rdk2010,
+#: seed 2017): the default must not move them. They were SHA-256 hashes of the samples until
+#: 2026-11-24, when a fresh install (numpy 2.4.6, scipy 1.17.1) moved the last bits and the hashes
+#: with them; a relative 1e-9 on these figures still catches any change of the model, its seed or
+#: its scaling (each moves them by more than 1e-3), and no floating-point reordering reaches it.
+ELCENTRO_FIGURES = [
+    (4735, 0.0031622776601683794, 2.315627221382834, 0.46546589199394045),
+    (4735, 0.0031622776601683794, 2.242878273640912, 0.4476640699672257),
+    (4735, 0.0031622776601683794, 2.592116530718005, 0.48086019582424944),
 ]
+
+
+def _figures_match(motions) -> bool:
+    assert len(motions) == len(ELCENTRO_FIGURES)
+    for m, (n, dt, pga, rms) in zip(motions, ELCENTRO_FIGURES, strict=True):
+        assert (m.n, m.dt) == (n, pytest.approx(dt, rel=1e-12))
+        assert float(np.abs(m.acc).max()) == pytest.approx(pga, rel=1e-9)
+        assert float(np.sqrt(np.mean(m.acc**2))) == pytest.approx(rms, rel=1e-9)
+    return True
 
 SCEN = """name = "anyrec"
 [specimen]
@@ -85,7 +97,7 @@ def test_at2_path_gives_the_shipped_records_motions(tmp_path):
     shipped, meta0 = load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"', "a.toml")).build_motions()
     motions, meta = load_scenario(scenario(tmp_path, RDK3 + 'record = "recs/ec.AT2"')).build_motions()
     same(motions, shipped)
-    assert [m.content_hash() for m in motions] == ELCENTRO_HASHES
+    assert _figures_match(motions)
     assert meta["rdk_params"] == meta0["rdk_params"] and meta["model"] == "rdk2010"
     rec = meta["record"]
     assert (rec["name"], rec["dt"], rec["n"], rec["file"]) == ("ec", 0.01, 4000, "recs/ec.AT2")
@@ -156,7 +168,7 @@ def test_default_model_is_the_published_one_unchanged(tmp_path):
     scen = load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"'))
     assert "model" not in scen.motions
     motions, meta = scen.build_motions()
-    assert [m.content_hash() for m in motions] == ELCENTRO_HASHES
+    assert _figures_match(motions)
     assert meta["model"] == "rdk2010" and "band_check" not in meta and "matched_gain" not in meta
     _, meta = scen.build_motions(3, band_check=True)
     check = meta["band_check"]
