@@ -116,16 +116,48 @@ def _uplift(ag: np.ndarray, dt: float, t: float, tan_a: float, ug) -> tuple[floa
     return max(t, k * dt + dt * (-tan_a - b0) / (b1 - b0)), sgn
 
 
+def engine_unavailable(name: str) -> str | None:
+    """Why the registered engine ``name`` cannot run here (its own one-line message), or None when it can.
+
+    The engine is instantiated, which imports its package: a package that is installed but cannot
+    load (OpenSees without Debian's BLAS and LAPACK) is caught too, not only a missing one.
+    """
+    from engines.base import get_engine
+    from housner.errors import EngineUnavailable
+
+    try:
+        get_engine(name)
+    except EngineUnavailable as e:
+        return str(e)
+    except ImportError as e:  # an adapter still being written
+        return f"engine {name!r} does not import: {e}"
+    return None
+
+
 def optional_engine(name: str, module: str):
-    """``name`` as a pytest parameter, skipped (with the install command) when ``module`` is not installed."""
+    """``name`` as a pytest parameter, skipped (naming the install) when its package ``module`` cannot be used."""
     import importlib.util
 
     import pytest
 
-    missing = importlib.util.find_spec(module) is None
-    return pytest.param(
-        name, marks=pytest.mark.skipif(missing, reason=f"engine {name!r} needs {module}: pip install -e '.[{name}]'")
+    why = (
+        f"engine {name!r} needs {module}: pip install -e '.[{name}]'"
+        if importlib.util.find_spec(module) is None
+        else None
     )
+    why = why or engine_unavailable(name)
+    return pytest.param(name, marks=pytest.mark.skipif(why is not None, reason=why or ""))
+
+
+def installed_engines(params) -> list[str]:
+    """The engine names of a list of :func:`optional_engine` parameters (or plain names) that can run here."""
+    out = []
+    for p in params:
+        if isinstance(p, str):
+            out.append(p)
+        elif not any(m.name == "skipif" and m.args and m.args[0] for m in p.marks):
+            out.append(p.values[0])
+    return out
 
 
 #: The engines the cross-engine tests run besides the analytic one (optional ones skip when absent).
@@ -134,5 +166,4 @@ OTHER_ENGINES = [
     "pybullet",
     optional_engine("dart", "dartpy"),
     optional_engine("opensees", "openseespy"),
-    optional_engine("drake", "pydrake"),
 ]

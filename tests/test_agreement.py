@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from shared import OTHER_ENGINES
+from shared import OTHER_ENGINES, installed_engines
 
 from engines.base import get_engine
 from housner import Specimen, pulses, simulate
@@ -91,20 +91,8 @@ def strong_run(tmp_path_factory):
     """elcentro-strong (100 matched motions x 1.6, 42 overturn in the analytic model) on every installed engine."""
     from scenarios.runner import run_scenario
 
-    names = ["housner"] + [e if isinstance(e, str) else e.values[0] for e in ENGINES]
-    names = [n for n in names if n == "housner" or _installed(n)]
+    names = ["housner", *installed_engines(ENGINES)]
     return run_scenario("elcentro-strong", engines=names, out=tmp_path_factory.mktemp("strong"), progress=False)
-
-
-def _installed(name: str) -> bool:
-    from engines.base import engine_class
-    from housner.errors import EngineError
-
-    try:
-        engine_class(name)()
-    except (ImportError, EngineError):
-        return False
-    return True
 
 
 @pytest.mark.slow
@@ -121,4 +109,3 @@ def test_strong_ensemble_distributions_agree(engine, strong_run):
     report = assert_cdf_agreement(run.results, engine=engine, reference="housner", ks_max=0.15, overturn_tol=0.08)
     print(report)
     assert run.failures.empty, run.failures.to_string()
-

@@ -41,6 +41,7 @@ def _figures_match(motions) -> bool:
         assert float(np.sqrt(np.mean(m.acc**2))) == pytest.approx(rms, rel=1e-9)
     return True
 
+
 SCEN = """name = "anyrec"
 [specimen]
 preset = "bachmann2017"

@@ -7,10 +7,8 @@ check with the issue's tolerances (KS <= 0.15, overturn within 0.08) is the slow
 test in test_agreement.py.
 """
 
-import importlib.util
-
 import pytest
-from shared import OTHER_ENGINES
+from shared import OTHER_ENGINES, installed_engines
 
 from reports.assertions import assert_cdf_agreement
 from scenarios.runner import run_scenario
@@ -23,7 +21,7 @@ def ci_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("ci-elcentro")
     return run_scenario(
         "elcentro",
-        engines=["housner", "mujoco", "pybullet"] + (["dart"] if importlib.util.find_spec("dartpy") else []),
+        engines=["housner", *installed_engines(OTHER_ENGINES)],
         n_motions=N,
         out=out,
         jobs=2,

@@ -1,0 +1,347 @@
+"""Drake (pydrake): the rocking block as a planar body on a stiff point contact, SAP discrete solver.
+
+The model, built from a :class:`housner.Specimen` once per specimen and step and
+reused for every record (numbered as in ``engines/models/drake.md``):
+
+1. Plant: a discrete ``MultibodyPlant`` with a fixed step h (``timestep``:
+   each sample interval cut into the fewest equal steps no longer than it),
+   gravity -g along z (g = 9.80665 m/s^2, Drake's default), sampled output
+   ports off (the state is all that is read).
+2. Block: one body, centre of mass at its frame origin, mass m, inertia
+   about the centre of mass I_c = I0 - m R^2 on all three axes (only the one
+   about y enters the planar motion), so p = sqrt(m g R / I0). It moves on a
+   ``PlanarJoint``, whose plane is its frames' x-y plane and whose rotation
+   is about their z: both joint frames are turned so that their x is the
+   world's z, their y the world's x and their z the world's y. The joint's
+   coordinates are then (z, x, theta) with theta the rotation about +y, the
+   suite's theta (theta > 0 turns the top toward +x, rocking on the +x pivot).
+3. Ground: a fixed box, its top face the pivot line z = 0, 100 H wide (a
+   half-space works as well but makes Drake warn that deformable contact
+   ignores it).
+4. Pivots: the only collision shapes of the block, two spheres of radius
+   rho = 10 um at (+-B, -H + rho) in the body frame, touching the ground at
+   (+-B, 0) when the block stands: one contact point per pivot, as in
+   Housner's model. Coulomb friction mu = 1.5 (Drake combines the pair's
+   coefficients as 2 mu1 mu2 / (mu1 + mu2), so both carry mu).
+5. Contact: point contact (``ContactModel.kPoint``) solved by SAP
+   (``DiscreteContactApproximation.kSap``), a convex implicit contact
+   solver, with the pair's stiffness k (``stiffness``, 5e7 N/m per pivot) and
+   linear (Kelvin-Voigt) dissipation time tau (``relaxation_time``, 0 s).
+   Drake combines a pair's stiffnesses in series, k1 k2 / (k1 + k2), and
+   adds their relaxation times, so the ground and the pivots each carry 2 k
+   and tau / 2. With k = 5e7 N/m and h = 0.25 ms the contact is near-rigid
+   (the pivot's contact period, about 1 ms, spans 4 steps): SAP's implicit step
+   ends each impact in one step without a rebound, Housner's plastic impact.
+6. Ground motion: the d'Alembert force -m ug''(t) on the x coordinate,
+   through the plant's applied-generalized-force input port, set before every
+   step to m times the exact mean of the linearly interpolated -ug'' over
+   that step (``engines._planar.gravity_x``). The ground itself does not move.
+7. Stepping: the plant's discrete update is run directly (one
+   ``ExecuteForcedEvents`` per step, no ``Simulator``): the state lands
+   exactly on the sample times, with no event-time rounding, and a record stops
+   at the overturn.
+
+With these settings the first impact's energy ratio after releases at 0.2,
+0.5 and 0.8 alpha is within 0.15 % of Housner's r for the seed specimen
+(``tests/test_drake.py``; ``engines/models/drake.md`` has the measurements).
+
+References
+----------
+Drake: https://drake.mit.edu (MultibodyPlant, PlanarJoint, SAP: Castro, A. et
+al. (2022). An unconstrained convex formulation of compliant contact. IEEE
+Transactions on Robotics 39(2), 1301-1320).
+Housner, G. W. (1963). BSSA 53(2), 403-417.
+Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, ClassVar
+
+import numpy as np
+
+from engines._planar import gravity_x, release_state, substeps
+from engines.base import Engine
+from housner.errors import EngineError, EngineUnavailable, unknown_choice
+from housner.impacts import impact_times, uplift_time
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+
+__all__ = ["DrakeEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL"]
+
+#: How to install the package this engine needs (named in the error when it is missing).
+INSTALL = "pip install -e '.[drake]'  (or: pip install drake)"
+
+#: |theta| above ROCKING_TOL * alpha counts as rocking [-] (impact and uplift detection); below it
+#: the block is at rest. The default contact tilts the block at rest by less than 1e-5 alpha.
+ROCKING_TOL = 5e-3
+
+#: |theta| at which the block has fallen [rad]; the engine stops and holds theta there.
+OVERTURN_ANGLE = math.pi / 2
+
+#: A centre of mass farther than this from its start [m] has run away (slid off or diverged).
+_RUNAWAY_M = 10.0
+
+#: Fraction of the rocking threshold taken as "still at rest" when dating the uplift.
+_QUIET = 2e-3
+
+#: Each setting's accepted range [lo, hi] (SI units); the step must exceed its lower bound.
+_RANGES = {
+    "timestep": (1e-6, 1e-2),
+    "stiffness": (1e3, 1e12),
+    "relaxation_time": (0.0, 1.0),
+    "friction": (0.0, 100.0),
+    "pivot_radius": (1e-7, 1e-2),
+}
+
+
+def _drake():
+    """The pydrake modules the engine uses, or an EngineUnavailable naming the install command."""
+    try:
+        from pydrake import geometry, math as dmath, multibody  # noqa: F401
+        from pydrake.multibody import plant, tree  # noqa: F401
+        from pydrake.systems import framework  # noqa: F401
+    except ImportError as e:
+        raise EngineUnavailable(f"engine 'drake' needs the drake package ({e}); install it with: {INSTALL}") from None
+    import pydrake
+
+    return pydrake
+
+
+class DrakeEngine(Engine):
+    """Drake's block on a stiff point contact (SAP solver), driven by the d'Alembert force.
+
+    Parameters
+    ----------
+    timestep : float
+        Longest step [s]: each sample interval of a motion is cut into the
+        fewest equal steps no longer than this.
+    stiffness : float
+        Point-contact stiffness of each pivot on the ground [N/m] (the pair's
+        combined value; each side of the pair is given twice it).
+    relaxation_time : float
+        SAP's linear dissipation time of the pivot contact [s] (the pair's
+        combined value; each side carries half of it). 0 is no dissipation
+        beyond the implicit step's.
+    friction : float
+        Coulomb friction coefficient pivot/ground [-]; it must exceed
+        max |ug''| / g with a margin for the impacts.
+    pivot_radius : float
+        Radius of the pivot spheres [m], at most 1e-3 H.
+
+    Examples
+    --------
+    >>> from engines.drake_engine import DrakeEngine
+    >>> from housner import GroundMotion, Specimen
+    >>> spec = Specimen.bachmann2017()
+    >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s
+    >>> DrakeEngine().simulate(spec, released).n_impacts > 3
+    True
+    """
+
+    name = "drake"
+    package = "drake"
+    effects_supported: ClassVar[frozenset[str]] = frozenset()
+
+    #: Default settings (2026-11-24, drake 1.51.1, seed specimen): first-impact r within 0.15 % of
+    #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning; about 0.25 CPU s per simulated s.
+    DEFAULTS: ClassVar[dict] = {
+        "timestep": 2.5e-4,
+        "stiffness": 5.0e7,
+        "relaxation_time": 0.0,
+        "friction": 1.5,
+        "pivot_radius": 1.0e-5,
+    }
+
+    def __init__(self, **settings: Any):
+        _drake()  # a missing package is said before any long work
+        unknown = sorted(set(settings) - set(self.DEFAULTS))
+        if unknown:
+            raise unknown_choice("Drake setting", unknown[0], self.DEFAULTS)
+        s = {**self.DEFAULTS, **settings}
+        for key, (lo, hi) in _RANGES.items():
+            try:
+                v = float(s[key])
+            except (TypeError, ValueError):
+                raise ValueError(f"Drake setting `{key}` must be a number, got {s[key]!r}") from None
+            if not (lo <= v <= hi) or (key == "timestep" and v == lo):
+                raise ValueError(f"Drake setting `{key}` must lie in [{lo:g}, {hi:g}], got {s[key]!r}")
+            s[key] = v
+        self._settings = s
+        self._model = None  # (key, plant, diagram context, plant context, input vector), built on first use
+
+    def __getstate__(self) -> dict:
+        return {"settings": dict(self._settings)}  # the Drake model is rebuilt in the receiving process
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(**state["settings"])
+
+    @classmethod
+    def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
+        """Settings to try when tuning the contact to an energy ratio, cheap to expensive.
+
+        Near Housner's r (within 0.2 %): the stiff, undamped contact with steps of
+        1/3 to 1/10 ms (they divide the tuner's 1 ms samples); the step only moves
+        each impact's scatter. Below it: softer pivots with SAP's linear dissipation
+        at the default step, the only knobs that take more energy at an impact
+        (measured on the seed specimen, 2026-11-24: no contact tried keeps r
+        flat below about 0.94; softer ones lose more at small amplitudes than at
+        large, e.g. k = 5e5 N/m, tau = 6 ms: r = 0.886 / 0.916 / 0.921 at 0.2 /
+        0.5 / 0.8 alpha). Above it: softer, undamped pivots, which give back
+        part of the impact's energy (k = 5e5 N/m: r = 0.97-0.98). The tuner
+        reports how close the best comes.
+        """
+        r_h = specimen.r_housner
+        h0 = cls.DEFAULTS["timestep"]
+        if target_r < r_h * 0.998:
+            return [dict(stiffness=k, relaxation_time=tau) for k in (5e6, 1.5e6, 5e5) for tau in (2e-3, 6e-3)] + [
+                dict(stiffness=k, relaxation_time=tau) for k in (5e5, 2.5e5) for tau in (2e-3, 6e-3, 2e-2)
+            ][:6]
+        out = [dict(timestep=1e-3 / n) for n in (3, 4, 5, 6, 8, 10)]
+        if target_r > r_h * 1.002:
+            out = [dict(timestep=h0, stiffness=k) for k in (5e6, 1.5e6, 5e5)] + [
+                dict(timestep=h0, stiffness=k, relaxation_time=tau) for k in (1.5e6, 5e5) for tau in (1e-4, 4e-4)
+            ]
+        return out
+
+    # ------------------------------------------------------------------
+    def build(self, specimen: Specimen, step: float):
+        """Drake's diagram of ``specimen`` (steps 1-5 of the module docstring) and the block's plant.
+
+        Returns
+        -------
+        tuple
+            (diagram, plant): a ``MultibodyPlant`` with step ``step`` [s] inside a
+            diagram with its ``SceneGraph``.
+        """
+        _drake()
+        from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Sphere
+        from pydrake.math import RigidTransform, RotationMatrix
+        from pydrake.multibody.plant import (
+            AddMultibodyPlantSceneGraph,
+            ContactModel,
+            CoulombFriction,
+            DiscreteContactApproximation,
+        )
+        from pydrake.multibody.tree import FixedOffsetFrame, PlanarJoint, SpatialInertia, UnitInertia
+        from pydrake.systems.framework import DiagramBuilder
+
+        s = self._settings
+        H, B, m = specimen.H, specimen.B, specimen.mass
+        rho = s["pivot_radius"]
+        if rho > 1e-3 * H:
+            raise ValueError(f"Drake setting `pivot_radius` ({rho:g} m) must be at most 1e-3 H = {1e-3 * H:g} m")
+        builder = DiagramBuilder()
+        plant, _ = AddMultibodyPlantSceneGraph(builder, time_step=step)
+        plant.set_discrete_contact_approximation(DiscreteContactApproximation.kSap)
+        plant.set_contact_model(ContactModel.kPoint)
+        plant.SetUseSampledOutputPorts(False)
+        ic = specimen.centroidal_inertia / m
+        body = plant.AddRigidBody("block", SpatialInertia(m, np.zeros(3), UnitInertia(ic, ic, ic)))
+        # Joint frames: x = world z, y = world x, z = world y (step 2 of the module docstring).
+        turn = RigidTransform(RotationMatrix(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])), np.zeros(3))
+        frame_f = plant.AddFrame(FixedOffsetFrame("plane_on_world", plant.world_frame(), turn))
+        frame_m = plant.AddFrame(FixedOffsetFrame("plane_on_block", body.body_frame(), turn))
+        plant.AddJoint(PlanarJoint("planar", frame_f, frame_m))
+
+        def material() -> ProximityProperties:
+            # Drake combines a pair's stiffnesses in series and adds its relaxation times (step 5).
+            props = ProximityProperties()
+            mu = s["friction"]
+            AddContactMaterial(None, 2.0 * s["stiffness"], CoulombFriction(mu, mu), props)
+            props.AddProperty("material", "relaxation_time", 0.5 * s["relaxation_time"])
+            return props
+
+        ground = Box(100.0 * H, 100.0 * H, 1.0)
+        plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform([0.0, 0.0, -0.5]), ground, "ground", material())
+        for side, label in ((1.0, "pivot+x"), (-1.0, "pivot-x")):
+            plant.RegisterCollisionGeometry(body, RigidTransform([side * B, 0.0, -H + rho]), Sphere(rho), label, material())
+        plant.Finalize()
+        return builder.Build(), plant
+
+    def _model_for(self, specimen: Specimen, step: float):
+        """The cached (plant, plant context, applied-force vector) of ``specimen`` at ``step``, built if new."""
+        key = (specimen.H, specimen.B, specimen.mass, specimen.centroidal_inertia, step)
+        if self._model is None or self._model[0] != key:
+            diagram, plant = self.build(specimen, step)
+            root = diagram.CreateDefaultContext()
+            ctx = plant.GetMyMutableContextFromRoot(root)
+            fixed = plant.get_applied_generalized_force_input_port().FixValue(ctx, np.zeros(3))
+            # diagram and root context are kept: the plant context lives inside them
+            self._model = (key, plant, ctx, fixed.GetMutableData().get_mutable_value(), diagram, root)
+        return self._model[1:4]
+
+    def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
+        wall0 = time.perf_counter()
+        k, h = substeps(motion.dt, self._settings["timestep"])
+        plant, ctx, force = self._model_for(specimen, h)
+        th0, om0 = motion.theta0, motion.theta_dot0
+        x0, z0, dx0, dz0 = release_state(specimen.H, specimen.B, th0, om0)
+        plant.SetPositionsAndVelocities(ctx, [z0, x0, th0, dz0, dx0, om0])
+        force.SetFromVector(np.zeros(3))
+        m = specimen.mass
+        fx_rows = (m * np.asarray(gravity_x(motion.acc, k))).tolist()  # step 6: m times the mean of -ug''
+        n = motion.n
+        states = np.empty((n, 6))
+        states[0] = (z0, x0, th0, dz0, dx0, om0)
+        last, overturned = n - 1, False
+        set_force, step, state = force.SetAtIndex, plant.ExecuteForcedEvents, ctx.get_discrete_state_vector
+        for i in range(1, n):
+            try:
+                for fx in fx_rows[i - 1]:
+                    set_force(1, fx)
+                    step(ctx, False)
+            except RuntimeError as e:  # SAP did not converge
+                raise EngineError(
+                    f"Drake failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: {e}; "
+                    "try a smaller `timestep` or a softer `stiffness`"
+                ) from None
+            q = states[i] = state().value()
+            if not (abs(q[1] - x0) < _RUNAWAY_M and abs(q[0]) < _RUNAWAY_M and np.isfinite(q).all()):
+                raise EngineError(
+                    f"Drake failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not finite "
+                    f"or ran away (x = {q[1]:.6g} m, z = {q[0]:.6g} m, theta = {q[2]:.6g} rad); a block that "
+                    "slides needs more `friction`, one that diverges a smaller `timestep`"
+                )
+            if abs(q[2]) >= OVERTURN_ANGLE:
+                overturned, last = True, i
+                break
+        return self._response(specimen, motion, states, last, overturned, h, k, time.perf_counter() - wall0)
+
+    def _response(self, specimen, motion, states, last, overturned, h, k, wall) -> Response:
+        """The Response from the sampled states (z, x, theta, z', x', theta'), held at +-pi/2 after an overturn."""
+        alpha, t = specimen.alpha, motion.t
+        theta, theta_dot = states[:, 2].copy(), states[:, 5].copy()
+        overturn_time = math.nan
+        if overturned:
+            a, b = abs(theta[last - 1]), abs(theta[last])
+            f = (OVERTURN_ANGLE - a) / (b - a) if b > a else 1.0
+            overturn_time = float(t[last - 1] + min(max(f, 0.0), 1.0) * motion.dt)
+            theta[last:] = math.copysign(OVERTURN_ANGLE, theta[last])
+            theta_dot[last:] = 0.0
+        tol = ROCKING_TOL * alpha
+        released = motion.theta0 != 0.0 or motion.theta_dot0 != 0.0
+        info = {
+            "settings": self.settings(),
+            "version": self.version(),
+            "step": h,
+            "steps_per_sample": k,
+            "n_steps": last * k,
+            "wall_time_s": wall,
+        }
+        return Response(
+            t=t,
+            theta=theta,
+            theta_dot=theta_dot,
+            impact_times=impact_times(t[: last + 1], theta[: last + 1], tol),
+            theta_max=OVERTURN_ANGLE if overturned else float(np.max(np.abs(theta))),
+            alpha=alpha,
+            overturned=overturned,
+            overturn_time=overturn_time,
+            uplift_time=uplift_time(t[: last + 1], theta[: last + 1], tol, released, _QUIET),
+            engine=self.name,
+            info=info,
+        )

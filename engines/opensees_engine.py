@@ -1,0 +1,398 @@
+"""OpenSees (openseespy): the rocking block as a rigid frame on penalty contacts with Coulomb friction.
+
+The model, built from a :class:`housner.Specimen` for every run (numbered as in
+``engines/models/opensees.md``):
+
+1. Domain: 2D, three dofs per node (ndm 2, ndf 3); x horizontal, y up.
+   Gravity is a constant nodal load -m g at the centre of mass
+   (g = 9.80665 m/s^2). The ground acceleration ug''(t) enters through a
+   ``UniformExcitation`` pattern on a ``Path`` time series of the record's
+   samples (linear between them, as the suite's records are): the
+   displacements OpenSees returns are relative to the ground, as the suite's
+   theta is. OpenSees' rotation is counter-clockwise positive, so the suite's
+   theta (top toward +x) is minus the rotation of the centre-of-mass node.
+2. Block: a node at the centre of mass (0, H) carrying the mass m (both
+   translations) and the centroidal inertia I_c = I0 - m R^2 (rotation), and
+   two massless corner nodes at (+-B, 0), joined to it by elastic beams
+   (E A = 1e10 N, E I = 1e8 N m^2) with the ``Corotational`` transformation:
+   rigid for all purposes (their deformation under the block's weight is
+   below 1e-10 m) and exact for any rotation, unlike ``rigidLink``, whose
+   constraint is linearised in the rotation.
+3. Ground: two fixed nodes at (+-B, 0), one under each corner.
+4. Contact, per corner, two elements between the ground node and the
+   corner node, in parallel:
+
+   * a ``flatSliderBearing`` (local x vertical): normal spring ``Elastic``
+     k_n (the element cuts it off in tension: uplift), Coulomb friction
+     mu = 1.5 on that normal force with a stick stiffness of 1e9 N/m, and a
+     rotational (``-Mz``) material of zero stiffness, so that the corner is a
+     hinge;
+   * a ``zeroLength`` spring, vertical, elastic-no-tension (``ENT``) k_n, with
+     stiffness-proportional Rayleigh damping beta_K on its current stiffness
+     (``-doRayleigh``), so that it damps only while the corner presses on the
+     ground: the loss at impact that Housner's plastic impact stands for.
+
+   The static compression under the block's weight, m g / (4 k_n) =
+   0.64 um per corner for the seed specimen, is the initial state.
+5. Time integration: Newmark average acceleration (gamma 1/2, beta 1/4: no
+   numerical damping), Newton iterations until the unbalanced force is below
+   ``tolerance`` (1 mN, 2.6e-5 of the seed's weight), fixed step ``timestep``
+   (each sample interval cut into the fewest equal steps no longer than it).
+   A sample interval whose step fails is redone in steps ten times shorter,
+   then a hundred times shorter with Krylov-Newton; if that fails too the
+   engine raises an ``EngineError`` naming the motion and the time.
+
+The beta_K and k_n were tuned (``engines/models/opensees.md``): first-impact
+r within 0.07 % of Housner's at 0.2-0.9 alpha (within 0.7 % at 0.01-0.19 alpha)
+with k_n = 1.5e7 N/m, beta_K = 3.5e-4 s and 0.2 ms steps.
+
+References
+----------
+OpenSees: McKenna, F., Scott, M. H. and Fenves, G. L. (2010). Nonlinear
+finite-element analysis software architecture using object composition.
+J. Comput. Civ. Eng. 24(1), 95-107; https://opensees.github.io/OpenSeesDocumentation
+(flatSliderBearing, zeroLength, ENT, Corotational, UniformExcitation, Newmark).
+Housner, G. W. (1963). BSSA 53(2), 403-417.
+Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+import os
+import sys
+import time
+from typing import Any, ClassVar
+
+import numpy as np
+
+from engines._planar import release_state, substeps
+from engines.base import Engine
+from housner.errors import EngineError, EngineUnavailable, unknown_choice
+from housner.impacts import impact_times, uplift_time
+from housner.motion import GroundMotion
+from housner.response import Response
+from housner.specimen import Specimen
+from housner.units import G
+
+__all__ = ["OpenSeesEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL", "SYSTEM_LIBRARIES"]
+
+#: How to install the package this engine needs (named in the error when it is missing).
+INSTALL = "pip install -e '.[opensees]'  (or: pip install 'openseespy>=3.7.1.2,<3.8')"
+
+#: The system libraries openseespy's Linux build loads (named when it fails to load them).
+SYSTEM_LIBRARIES = "apt-get install libblas3 liblapack3"
+
+#: |theta| above ROCKING_TOL * alpha counts as rocking [-] (impact and uplift detection); below it
+#: the block is at rest. The penalty contact tilts the block at rest under 0.9 g tan(alpha) by
+#: about 2e-4 alpha.
+ROCKING_TOL = 5e-3
+
+#: |theta| at which the block has fallen [rad]; the engine stops and holds theta there.
+OVERTURN_ANGLE = math.pi / 2
+
+#: A centre of mass farther than this from its start [m] has run away (slid off or diverged).
+_RUNAWAY_M = 10.0
+
+#: Fraction of the rocking threshold taken as "still at rest" when dating the uplift.
+_QUIET = 2e-3
+
+#: Axial and bending stiffness of the beams from the centre of mass to the corners [N], [N m^2].
+_BEAM_EA, _BEAM_EI = 1.0e10, 1.0e8
+
+#: Stick (elastic) stiffness of the Coulomb friction at a corner [N/m].
+_STICK_K = 1.0e9
+
+#: Most Newton iterations per step, and the retries of a failed sample interval (step divisor, algorithm).
+_MAX_ITER = 25
+_RETRIES = ((10, "Newton"), (100, "KrylovNewton"))
+
+
+def _quiet_exit() -> None:
+    """Send the process's standard streams to /dev/null at exit: openseespy's library prints
+    "Process 0 Terminating" from its teardown, after Python has written everything it had to
+    (an uncaught exception's traceback is printed before the atexit handlers run)."""
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+    except (OSError, ValueError):
+        pass
+
+
+def _opensees():
+    """The openseespy.opensees module, or an EngineUnavailable naming what to install."""
+    if "openseespy.opensees" not in sys.modules:
+        atexit.register(_quiet_exit)
+    try:
+        import openseespy.opensees as ops
+    except ImportError as e:
+        raise EngineUnavailable(
+            f"engine 'opensees' needs the openseespy package ({e}); install it with: {INSTALL}"
+        ) from None
+    except RuntimeError as e:  # the package is there but its library is not loadable (libblas/liblapack)
+        raise EngineUnavailable(
+            f"engine 'opensees' could not load openseespy ({e}); install the system libraries with: "
+            f"{SYSTEM_LIBRARIES} (and the package with: {INSTALL})"
+        ) from None
+    return ops
+
+
+class OpenSeesEngine(Engine):
+    """OpenSees' rigid frame on damped no-tension contact springs with Coulomb friction, uniform excitation.
+
+    Parameters
+    ----------
+    timestep : float
+        Longest step [s]: each sample interval of a motion is cut into the
+        fewest equal steps no longer than this.
+    contact_stiffness : float
+        k_n [N/m]: stiffness of each of the two normal springs per corner (the
+        bearing's and the damped one's), so 2 k_n per corner in contact.
+    contact_damping : float
+        beta_K [s]: stiffness-proportional damping of the no-tension spring
+        (on its current stiffness: none once the corner lifts). More damping,
+        more energy lost at an impact.
+    friction : float
+        Coulomb friction coefficient corner/ground [-]; it must exceed
+        max |ug''| / g with a margin for the impacts.
+    tolerance : float
+        Newton iterations stop when the norm of the unbalanced forces is below
+        this [N, N m].
+
+    Notes
+    -----
+    OpenSees is one interpreter per process: the engine wipes and rebuilds the
+    model for every record, so records run one after the other in a process
+    (use processes, not threads, to run them in parallel).
+
+    Examples
+    --------
+    >>> from engines.opensees_engine import OpenSeesEngine
+    >>> from housner import GroundMotion, Specimen
+    >>> spec = Specimen.bachmann2017()
+    >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s
+    >>> OpenSeesEngine().simulate(spec, released).n_impacts > 3
+    True
+    """
+
+    name = "opensees"
+    package = "openseespy"
+    effects_supported: ClassVar[frozenset[str]] = frozenset()
+
+    #: Default settings (2026-11-24, openseespy 3.7.1.2, seed specimen): first-impact r within
+    #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.2 CPU s per simulated s.
+    DEFAULTS: ClassVar[dict] = {
+        "timestep": 2.0e-4,
+        "contact_stiffness": 1.5e7,
+        "contact_damping": 3.5e-4,
+        "friction": 1.5,
+        "tolerance": 1.0e-3,
+    }
+
+    #: Accepted range of each setting (low, high), low excluded for the timestep and the stiffness.
+    _RANGES: ClassVar[dict] = {
+        "timestep": (1e-6, 1e-2),
+        "contact_stiffness": (1e4, 1e10),
+        "contact_damping": (0.0, 1e-1),
+        "friction": (0.0, 100.0),
+        "tolerance": (1e-9, 1.0),
+    }
+
+    def __init__(self, **settings: Any):
+        _opensees()  # a missing package is said before any long work
+        unknown = sorted(set(settings) - set(self.DEFAULTS))
+        if unknown:
+            raise unknown_choice("OpenSees setting", unknown[0], self.DEFAULTS)
+        s = {**self.DEFAULTS, **settings}
+        for key, (lo, hi) in self._RANGES.items():
+            try:
+                v = float(s[key])
+            except (TypeError, ValueError):
+                raise ValueError(f"OpenSees setting `{key}` must be a number, got {s[key]!r}") from None
+            strict = key in ("timestep", "contact_stiffness")
+            if not (lo <= v <= hi) or (strict and v == lo):
+                raise ValueError(f"OpenSees setting `{key}` must lie in [{lo:g}, {hi:g}], got {s[key]!r}")
+            s[key] = v
+        self._settings = s
+
+    def __getstate__(self) -> dict:
+        return {"settings": dict(self._settings)}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(**state["settings"])
+
+    @classmethod
+    def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
+        """Contact damping beta_K for targets at or below Housner's r, a softer contact for targets above it.
+
+        Measured on the seed specimen (``engines/models/opensees.md``): beta_K = 3.5e-4 s
+        at k_n = 1.5e7 N/m gives Housner's r within 0.07 % at 0.2-0.9 alpha; 5e-4 s gives
+        r = 0.944 (-0.25 %) at every amplitude; from 7e-4 s on r depends on the amplitude
+        (0.940-0.951 at 1e-3 s) and no damping brings it to 0.90. A softer contact keeps
+        more energy (k_n = 3e6 N/m: r = 0.954-0.957). Cheap (0.2 ms step) candidates first.
+        """
+        r_h, target = specimen.r_housner, float(target_r)
+        if target > r_h * 1.002:
+            return [dict(contact_stiffness=k) for k in (1.0e7, 6.0e6, 4.0e6, 3.0e6, 2.0e6)]
+        if target >= r_h * 0.998:
+            return [dict(), dict(contact_damping=4.0e-4), dict(contact_damping=3.0e-4),
+                    dict(timestep=1e-3 / 6)]  # fmt: skip
+        return [dict(contact_damping=b) for b in (4.5e-4, 5.0e-4, 6.0e-4, 7.0e-4, 1.0e-3, 2.0e-3)]
+
+    # ------------------------------------------------------------------
+    def build(self, specimen: Specimen, motion: GroundMotion, step: float):
+        """The OpenSees model of ``specimen`` under ``motion`` (steps 1-5 of the module docstring), at rest.
+
+        Node tags: 1 centre of mass, 2 and 3 the corners at +B and -B, 4 and 5 the ground under them.
+        Returns the module.
+        """
+        ops = _opensees()
+        s = self._settings
+        H, B, m = specimen.H, specimen.B, specimen.mass
+        k, beta = s["contact_stiffness"], s["contact_damping"]
+        ops.wipe()
+        ops.logFile(os.devnull, "-noEcho")  # OpenSees writes warnings to stderr: keep records quiet
+        ops.model("basic", "-ndm", 2, "-ndf", 3)
+        ops.node(1, 0.0, H)
+        ops.node(2, B, 0.0)
+        ops.node(3, -B, 0.0)
+        ops.node(4, B, 0.0)
+        ops.node(5, -B, 0.0)
+        ops.fix(4, 1, 1, 1)
+        ops.fix(5, 1, 1, 1)
+        ops.mass(1, m, m, specimen.centroidal_inertia)
+        ops.geomTransf("Corotational", 1)
+        for tag, corner in ((1, 2), (2, 3)):
+            ops.element("elasticBeamColumn", tag, 1, corner, 1.0, _BEAM_EA, _BEAM_EI / _BEAM_EA, 1)  # A = 1 m^2
+        ops.uniaxialMaterial("Elastic", 1, k)  # the bearing's normal spring (it handles the uplift)
+        ops.uniaxialMaterial("Elastic", 2, 0.0)  # no moment at the corner: a hinge
+        ops.uniaxialMaterial("ENT", 3, k)  # the damped spring
+        ops.frictionModel("Coulomb", 1, s["friction"])
+        for i, (ground, corner) in enumerate(((4, 2), (5, 3))):
+            ops.element("flatSliderBearing", 10 + i, ground, corner, 1, _STICK_K, "-P", 1, "-Mz", 2,
+                        "-orient", 0.0, 1.0, 0.0, -1.0, 0.0, 0.0)  # fmt: skip
+            ops.element("zeroLength", 20 + i, ground, corner, "-mat", 3, "-dir", 2, "-doRayleigh", 1)
+        ops.rayleigh(0.0, beta, 0.0, 0.0)  # current stiffness: only the contact springs opt in
+        ops.timeSeries("Path", 1, "-dt", motion.dt, "-values", *motion.acc.tolist())
+        ops.pattern("UniformExcitation", 1, 1, "-accel", 1)
+        ops.timeSeries("Constant", 2)
+        ops.pattern("Plain", 2, 2)
+        ops.load(1, 0.0, -m * G, 0.0)
+        ops.constraints("Plain")
+        ops.numberer("Plain")
+        ops.system("BandGeneral")
+        ops.test("NormUnbalance", s["tolerance"], _MAX_ITER)
+        ops.algorithm("Newton")
+        ops.integrator("Newmark", 0.5, 0.25)
+        ops.analysis("Transient")
+        return ops
+
+    def _set_initial_state(self, ops, specimen: Specimen, motion: GroundMotion) -> None:
+        """Nodes at the release: turned by theta0 about the pivot on its side, sunk by the static compression."""
+        H, B, m, k = specimen.H, specimen.B, specimen.mass, self._settings["contact_stiffness"]
+        th0, om0 = motion.theta0, motion.theta_dot0
+        x0, z0, dx0, dz0 = release_state(H, B, th0, om0)
+        on_one = th0 != 0.0 or om0 != 0.0
+        sink = m * G / ((2.0 if on_one else 4.0) * k)  # weight on one pivot (two springs) or on both
+        c, sn = math.cos(th0), math.sin(th0)
+        for node, side in ((1, 0.0), (2, 1.0), (3, -1.0)):
+            bx, bz = side * B, (-H if side else 0.0)  # body frame, from the centre of mass
+            rx, rz = bx * c + bz * sn, -bx * sn + bz * c  # Rot(theta) of the suite
+            ux, uz = x0 + rx - bx, z0 + rz - H - bz - sink
+            ops.setNodeDisp(node, 1, ux, "-commit")
+            ops.setNodeDisp(node, 2, uz, "-commit")
+            ops.setNodeDisp(node, 3, -th0, "-commit")
+            if om0 != 0.0:  # rigid-body velocity; the rotation rate about +y is -omega_z of OpenSees
+                ops.setNodeVel(node, 1, dx0 + om0 * rz, "-commit")
+                ops.setNodeVel(node, 2, dz0 - om0 * rx, "-commit")
+                ops.setNodeVel(node, 3, -om0, "-commit")
+
+    def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
+        wall0 = time.perf_counter()
+        k, h = substeps(motion.dt, self._settings["timestep"])
+        ops = self.build(specimen, motion, h)
+        self._set_initial_state(ops, specimen, motion)
+        n = motion.n
+        theta = np.empty(n)
+        theta_dot = np.empty(n)
+        theta[0], theta_dot[0] = motion.theta0, motion.theta_dot0
+        last, overturned, retried = n - 1, False, 0
+        analyze, disp, vel = ops.analyze, ops.nodeDisp, ops.nodeVel
+        try:
+            for i in range(1, n):
+                if analyze(k, h) != 0:
+                    retried += 1
+                    self._retry(ops, motion, i, h)
+                x, th = disp(1, 1), -disp(1, 3)
+                theta[i], theta_dot[i] = th, -vel(1, 3)
+                if not (abs(x) < _RUNAWAY_M and math.isfinite(th) and math.isfinite(x)):
+                    raise EngineError(
+                        f"OpenSees failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not "
+                        f"finite or ran away (x = {x:.6g} m, theta = {th:.6g} rad); a block that slides needs more "
+                        "`friction`, one that diverges a smaller `timestep`"
+                    )
+                if abs(th) >= OVERTURN_ANGLE:
+                    overturned, last = True, i
+                    break
+        finally:
+            ops.wipe()
+        return self._response(specimen, motion, theta, theta_dot, last, overturned, h, k, retried,
+                              time.perf_counter() - wall0)  # fmt: skip
+
+    def _retry(self, ops, motion: GroundMotion, i: int, h: float) -> None:
+        """Redo the rest of sample interval i in shorter steps (then with Krylov-Newton), or raise EngineError."""
+        target = i * motion.dt
+        try:
+            for divisor, algorithm in _RETRIES:
+                rest = target - ops.getTime()
+                if rest <= 1e-12 * motion.dt:
+                    return
+                steps = max(1, round(rest / (h / divisor)))
+                ops.algorithm(algorithm)
+                if ops.analyze(steps, rest / steps) == 0:
+                    return
+        finally:
+            ops.algorithm("Newton")
+        raise EngineError(
+            f"OpenSees failed on motion {motion.name!r} at t = {ops.getTime():.6g} s: Newton did not converge "
+            f"even in steps of {h / _RETRIES[-1][0]:.3g} s; try a smaller `timestep` or a larger `tolerance`"
+        )
+
+    def _response(self, specimen, motion, theta, theta_dot, last, overturned, h, k, retried, wall) -> Response:
+        """The Response from the sampled theta, theta' [rad, rad/s], held at +-pi/2 after an overturn."""
+        alpha, t = specimen.alpha, motion.t
+        overturn_time = math.nan
+        if overturned:
+            a, b = abs(theta[last - 1]), abs(theta[last])
+            f = (OVERTURN_ANGLE - a) / (b - a) if b > a else 1.0
+            overturn_time = float(t[last - 1] + min(max(f, 0.0), 1.0) * motion.dt)
+            theta[last:] = math.copysign(OVERTURN_ANGLE, theta[last])
+            theta_dot[last:] = 0.0
+        tol = ROCKING_TOL * alpha
+        released = motion.theta0 != 0.0 or motion.theta_dot0 != 0.0
+        info = {
+            "settings": self.settings(),
+            "version": self.version(),
+            "step": h,
+            "steps_per_sample": k,
+            "n_steps": last * k,
+            "retried_samples": retried,
+            "wall_time_s": wall,
+        }
+        return Response(
+            t=t,
+            theta=theta,
+            theta_dot=theta_dot,
+            impact_times=impact_times(t[: last + 1], theta[: last + 1], tol),
+            theta_max=OVERTURN_ANGLE if overturned else float(np.max(np.abs(theta))),
+            alpha=alpha,
+            overturned=overturned,
+            overturn_time=overturn_time,
+            uplift_time=uplift_time(t[: last + 1], theta[: last + 1], tol, released, _QUIET),
+            engine=self.name,
+            info=info,
+        )

@@ -1,0 +1,127 @@
+"""OpenSees engine: Housner's r, pulses against the analytic model, conformance and the protocol's promises."""
+
+from __future__ import annotations
+
+import math
+import pickle
+import sys
+
+import numpy as np
+import pytest
+
+pytest.importorskip("openseespy.opensees", reason="the OpenSees engine needs openseespy: pip install -e '.[opensees]'")
+
+from engines import get_engine  # noqa: E402
+from engines.measures import first_impact_ratio  # noqa: E402
+from engines.opensees_engine import OpenSeesEngine  # noqa: E402
+from engines.tuning import pulse_motions  # noqa: E402
+from housner import GroundMotion, Specimen  # noqa: E402
+from housner.effects import make_effect  # noqa: E402
+
+SEED = Specimen.bachmann2017()
+
+
+@pytest.fixture(scope="module")
+def engine() -> OpenSeesEngine:
+    return OpenSeesEngine()
+
+
+# The six conformance checks run over the registry in test_conformance.py (measured here: rest
+# 1.0e-4 alpha, mirror 7e-5 of theta_max, period +0.006 %).
+
+
+@pytest.mark.parametrize("a", [0.2, 0.5, 0.8])
+def test_first_impact_keeps_housners_energy_ratio(engine, a):
+    """Tuned damped penalty contact: r within 0.3 % of Housner's (measured +0.068 / -0.027 / +0.004 %).
+
+    0.3 % is the tolerance the tuned MuJoCo and PyBullet meet over 0.2-0.9 alpha; the
+    scatter of this contact over 0.2-0.9 alpha is 0.07 %, so the margin is four.
+    """
+    res = engine.simulate(SEED, GroundMotion.free_vibration(a * SEED.alpha, 1.2, dt=1e-3))
+    assert first_impact_ratio(res, SEED.alpha) == pytest.approx(SEED.r_housner, rel=3e-3)
+    assert res.engine == "opensees" and res.info["step"] == pytest.approx(2e-4)
+
+
+def test_pulses_match_the_analytic_model(engine):
+    """theta_max of the tuner's three one-sine pulses within 1 % of the analytic model (measured -0.28 to -0.78 %).
+
+    The compliant contact tilts the block slightly before uplift and rocks it a little less far;
+    1 % is a third of the issue's 3 %.
+    """
+    ref = get_engine("housner")
+    for m in pulse_motions(SEED):
+        a, d = ref.simulate(SEED, m), engine.simulate(SEED, m)
+        assert d.overturned == a.overturned, m.name
+        assert d.theta_max == pytest.approx(a.theta_max, rel=0.01), m.name
+        assert d.n_impacts == a.n_impacts, m.name
+
+
+def test_overturns_and_holds(engine):
+    """A -3 g tan(alpha) push overturns the block to +pi/2 and the response holds there."""
+    t = np.arange(0, 3.0, 1e-3)
+    acc = np.where(t > 0.1, -3.0 * 9.80665 * math.tan(SEED.alpha), 0.0)
+    res = engine.simulate(SEED, GroundMotion(acc, 1e-3, name="push"))
+    assert res.overturned and res.theta[-1] == pytest.approx(math.pi / 2)
+    assert np.all(res.theta[res.t >= res.overturn_time + 1e-3] == pytest.approx(math.pi / 2))
+    assert 0.1 < res.overturn_time < 3.0 and math.isfinite(res.uplift_time)
+
+
+def test_settings_are_checked_and_travel(engine):
+    with pytest.raises(ValueError, match="OpenSees setting `timestep`"):
+        OpenSeesEngine(timestep=0.5)
+    with pytest.raises(ValueError, match="OpenSees setting `contact_damping`"):
+        OpenSeesEngine(contact_damping=-1.0)
+    with pytest.raises(ValueError, match="OpenSees setting `friction` must be a number"):
+        OpenSeesEngine(friction="high")
+    with pytest.raises(ValueError, match="unknown OpenSees setting"):
+        OpenSeesEngine(stepsize=1e-4)
+    copy = pickle.loads(pickle.dumps(OpenSeesEngine(timestep=1e-4)))
+    assert copy.settings()["timestep"] == 1e-4 and copy.version() == engine.version()
+    with pytest.raises(ValueError, match="cannot realise effect 'restitution'"):
+        engine.simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.2), [make_effect("restitution", r=0.9)])
+
+
+def test_quiet(engine, capfd):
+    """No OpenSees chatter on stdout/stderr per record."""
+    engine.simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.3))
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+
+
+def test_tuning_candidates():
+    """Short lists; damping for lower targets, a softer contact for higher ones, defaults first at Housner's r."""
+    at = OpenSeesEngine.tuning_candidates(SEED, SEED.r_housner)
+    below = OpenSeesEngine.tuning_candidates(SEED, 0.90)
+    above = OpenSeesEngine.tuning_candidates(SEED, 0.9532)
+    assert at[0] == {} and all(len(c) <= 12 for c in (at, below, above))
+    assert all(c["contact_damping"] > OpenSeesEngine.DEFAULTS["contact_damping"] for c in below)
+    assert all(c["contact_stiffness"] < OpenSeesEngine.DEFAULTS["contact_stiffness"] for c in above)
+    for c in at + below + above:
+        OpenSeesEngine(**c)  # every candidate is a valid setting
+
+
+@pytest.mark.parametrize(
+    "raised, says",
+    [
+        (ImportError("No module named 'openseespy'"), "pip install -e '.[opensees]'"),
+        (RuntimeError("Failed to import openseespy on Linux."), "apt-get install libblas3 liblapack3"),
+    ],
+)
+def test_missing_package_or_library_is_one_line_naming_the_install(monkeypatch, raised, says):
+    """No openseespy, or openseespy without Debian's BLAS/LAPACK: EngineUnavailable naming what to install."""
+    import builtins
+
+    from housner.errors import EngineUnavailable
+
+    real_import = builtins.__import__
+
+    def fake_import(name, *args, **kwargs):
+        if name.startswith("openseespy"):
+            raise raised
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.delitem(sys.modules, "openseespy.opensees", raising=False)
+    monkeypatch.setattr(builtins, "__import__", fake_import)
+    with pytest.raises(EngineUnavailable) as e:
+        OpenSeesEngine()
+    assert says in str(e.value) and "\n" not in str(e.value)
