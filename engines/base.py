@@ -28,6 +28,7 @@ ENGINES: dict[str, Any] = {
     "pybullet": "engines.pybullet_engine:PybulletEngine",
     "dart": "engines.dart_engine:DartEngine",
     "opensees": "engines.opensees_engine:OpenSeesEngine",
+    "drake": "engines.drake_engine:DrakeEngine",
 }
 
 #: The PyPI distribution each registered engine drives (read without importing the engine, for

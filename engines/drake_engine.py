@@ -5,7 +5,7 @@ reused for every record (numbered as in ``engines/models/drake.md``):
 
 1. Plant: a discrete ``MultibodyPlant`` with a fixed step h (``timestep``:
    each sample interval cut into the fewest equal steps no longer than it),
-   gravity -g along z (g = 9.80665 m/s^2, Drake's default), sampled output
+   gravity -g along z (g = 9.80665 m/s^2; Drake's default is 9.81), sampled output
    ports off (the state is all that is read).
 2. Block: one body, centre of mass at its frame origin, mass m, inertia
    about the centre of mass I_c = I0 - m R^2 on all three axes (only the one
@@ -25,13 +25,17 @@ reused for every record (numbered as in ``engines/models/drake.md``):
    coefficients as 2 mu1 mu2 / (mu1 + mu2), so both carry mu).
 5. Contact: point contact (``ContactModel.kPoint``) solved by SAP
    (``DiscreteContactApproximation.kSap``), a convex implicit contact
-   solver, with the pair's stiffness k (``stiffness``, 5e7 N/m per pivot) and
+   solver, with the pair's stiffness k (``stiffness``, 5e8 N/m per pivot) and
    linear (Kelvin-Voigt) dissipation time tau (``relaxation_time``, 0 s).
    Drake combines a pair's stiffnesses in series, k1 k2 / (k1 + k2), and
-   adds their relaxation times, so the ground and the pivots each carry 2 k
-   and tau / 2. With k = 5e7 N/m and h = 0.25 ms the contact is near-rigid
-   (the pivot's contact period, about 1 ms, spans 4 steps): SAP's implicit step
-   ends each impact in one step without a rebound, Housner's plastic impact.
+   adds their relaxation times (and gives each geometry tau = 0.1 s when
+   unset), so the ground and the pivots each carry 2 k and tau / 2. With
+   k = 5e8 N/m, sqrt(k / m) h = 2.8 at h = 0.25 ms: the contact is far too
+   stiff for the step to resolve, SAP treats it as near-rigid and ends each
+   impact within a step without a rebound, Housner's plastic impact. The
+   stiffness still matters before uplift: the block's elastic tilt on softer
+   pivots starts the rocking early (5e7 N/m: first pulse peaks 1-2 % high;
+   5e8 N/m: within 0.12 %).
 6. Ground motion: the d'Alembert force -m ug''(t) on the x coordinate,
    through the plant's applied-generalized-force input port, set before every
    step to m times the exact mean of the linearly interpolated -ug'' over
@@ -42,7 +46,7 @@ reused for every record (numbered as in ``engines/models/drake.md``):
    at the overturn.
 
 With these settings the first impact's energy ratio after releases at 0.2,
-0.5 and 0.8 alpha is within 0.15 % of Housner's r for the seed specimen
+0.5 and 0.8 alpha is within 0.2 % of Housner's r for the seed specimen
 (``tests/test_drake.py``; ``engines/models/drake.md`` has the measurements).
 
 References
@@ -69,6 +73,7 @@ from housner.impacts import impact_times, uplift_time
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
+from housner.units import G
 
 __all__ = ["DrakeEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL"]
 
@@ -76,7 +81,7 @@ __all__ = ["DrakeEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL"]
 INSTALL = "pip install -e '.[drake]'  (or: pip install drake)"
 
 #: |theta| above ROCKING_TOL * alpha counts as rocking [-] (impact and uplift detection); below it
-#: the block is at rest. The default contact tilts the block at rest by less than 1e-5 alpha.
+#: the block is at rest. The default contact tilts the block at rest by 6e-6 alpha under 0.9 g tan(alpha).
 ROCKING_TOL = 5e-3
 
 #: |theta| at which the block has fallen [rad]; the engine stops and holds theta there.
@@ -101,9 +106,7 @@ _RANGES = {
 def _drake():
     """The pydrake modules the engine uses, or an EngineUnavailable naming the install command."""
     try:
-        from pydrake import geometry, math as dmath, multibody  # noqa: F401
-        from pydrake.multibody import plant, tree  # noqa: F401
-        from pydrake.systems import framework  # noqa: F401
+        import pydrake.multibody.plant  # noqa: F401
     except ImportError as e:
         raise EngineUnavailable(f"engine 'drake' needs the drake package ({e}); install it with: {INSTALL}") from None
     import pydrake
@@ -146,11 +149,12 @@ class DrakeEngine(Engine):
     package = "drake"
     effects_supported: ClassVar[frozenset[str]] = frozenset()
 
-    #: Default settings (2026-11-24, drake 1.51.1, seed specimen): first-impact r within 0.15 % of
-    #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning; about 0.25 CPU s per simulated s.
+    #: Default settings (2026-11-24, drake 1.51.1, seed specimen): first-impact r within 0.2 % of
+    #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning, pulses within 0.5 %; about 0.25 CPU s per
+    #: simulated s (0.1 ms steps: 0.6).
     DEFAULTS: ClassVar[dict] = {
         "timestep": 2.5e-4,
-        "stiffness": 5.0e7,
+        "stiffness": 5.0e8,
         "relaxation_time": 0.0,
         "friction": 1.5,
         "pivot_radius": 1.0e-5,
@@ -183,29 +187,47 @@ class DrakeEngine(Engine):
     def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
         """Settings to try when tuning the contact to an energy ratio, cheap to expensive.
 
-        Near Housner's r (within 0.2 %): the stiff, undamped contact with steps of
-        1/3 to 1/10 ms (they divide the tuner's 1 ms samples); the step only moves
-        each impact's scatter. Below it: softer pivots with SAP's linear dissipation
-        at the default step, the only knobs that take more energy at an impact
-        (measured on the seed specimen, 2026-11-24: no contact tried keeps r
-        flat below about 0.94; softer ones lose more at small amplitudes than at
-        large, e.g. k = 5e5 N/m, tau = 6 ms: r = 0.886 / 0.916 / 0.921 at 0.2 /
-        0.5 / 0.8 alpha). Above it: softer, undamped pivots, which give back
-        part of the impact's energy (k = 5e5 N/m: r = 0.97-0.98). The tuner
-        reports how close the best comes.
+        Within 0.2 % of Housner's r: the stiff, undamped default contact with
+        steps of 1/3 to 1/10 ms (they divide the tuner's 1 ms samples); the
+        step moves only each impact's scatter (about +-0.4 % at 1/4 ms, see
+        ``engines/models/drake.md``). Above it: softer undamped pivots at the
+        default step, which give part of the impact's energy back (seed
+        specimen, 2026-11-24: k = 1e7 N/m keeps r = 0.946-0.948, 5e6 N/m
+        0.949-0.958, 2e6 N/m 0.955-0.970 over 0.1-0.8 alpha). Below it: softer
+        pivots with SAP's linear dissipation, the only knob that takes more
+        energy at an impact; none keeps r flat below about 0.94 (k = 2e6 N/m,
+        tau = 1 ms: 0.935-0.944; k = 1e6 N/m, tau = 4 ms: 0.882 at 0.1 alpha,
+        0.933 at 0.8 alpha), and soft pivots tilt before uplift, which puts the
+        pulses' first peaks 14-170 % off; the tuner then reports the closest it found.
+
+        Parameters
+        ----------
+        specimen : Specimen
+        target_r : float
+            Target kinetic-energy ratio at impact [-].
+
+        Returns
+        -------
+        list of dict
+            Keyword settings of :class:`DrakeEngine` (at most 8).
         """
         r_h = specimen.r_housner
-        h0 = cls.DEFAULTS["timestep"]
-        if target_r < r_h * 0.998:
-            return [dict(stiffness=k, relaxation_time=tau) for k in (5e6, 1.5e6, 5e5) for tau in (2e-3, 6e-3)] + [
-                dict(stiffness=k, relaxation_time=tau) for k in (5e5, 2.5e5) for tau in (2e-3, 6e-3, 2e-2)
-            ][:6]
-        out = [dict(timestep=1e-3 / n) for n in (3, 4, 5, 6, 8, 10)]
         if target_r > r_h * 1.002:
-            out = [dict(timestep=h0, stiffness=k) for k in (5e6, 1.5e6, 5e5)] + [
-                dict(timestep=h0, stiffness=k, relaxation_time=tau) for k in (1.5e6, 5e5) for tau in (1e-4, 4e-4)
-            ]
-        return out
+            out = [dict(stiffness=k) for k in (1e7, 7e6, 5e6, 3.5e6, 2.5e6)]
+            return out + [dict(stiffness=k, relaxation_time=1e-4) for k in (5e6, 3.5e6)]
+        if target_r < r_h * 0.998:
+            pairs = (
+                (5e6, 5e-4),
+                (5e6, 2e-3),
+                (2e6, 1e-3),
+                (2e6, 3e-3),
+                (1e6, 2e-3),
+                (1e6, 6e-3),
+                (5e5, 6e-3),
+                (5e5, 2e-2),
+            )
+            return [dict(stiffness=k, relaxation_time=tau) for k, tau in pairs]
+        return [dict(timestep=1e-3 / n) for n in (3, 4, 5, 6, 8, 10)]
 
     # ------------------------------------------------------------------
     def build(self, specimen: Specimen, step: float):
@@ -239,10 +261,12 @@ class DrakeEngine(Engine):
         plant.set_discrete_contact_approximation(DiscreteContactApproximation.kSap)
         plant.set_contact_model(ContactModel.kPoint)
         plant.SetUseSampledOutputPorts(False)
+        plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -G])  # Drake's default is 9.81
         ic = specimen.centroidal_inertia / m
         body = plant.AddRigidBody("block", SpatialInertia(m, np.zeros(3), UnitInertia(ic, ic, ic)))
         # Joint frames: x = world z, y = world x, z = world y (step 2 of the module docstring).
-        turn = RigidTransform(RotationMatrix(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])), np.zeros(3))
+        axes = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])  # columns: world z, x, y
+        turn = RigidTransform(RotationMatrix(axes), np.zeros(3))
         frame_f = plant.AddFrame(FixedOffsetFrame("plane_on_world", plant.world_frame(), turn))
         frame_m = plant.AddFrame(FixedOffsetFrame("plane_on_block", body.body_frame(), turn))
         plant.AddJoint(PlanarJoint("planar", frame_f, frame_m))
@@ -256,9 +280,10 @@ class DrakeEngine(Engine):
             return props
 
         ground = Box(100.0 * H, 100.0 * H, 1.0)
-        plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform([0.0, 0.0, -0.5]), ground, "ground", material())
+        register = plant.RegisterCollisionGeometry
+        register(plant.world_body(), RigidTransform([0.0, 0.0, -0.5]), ground, "ground", material())
         for side, label in ((1.0, "pivot+x"), (-1.0, "pivot-x")):
-            plant.RegisterCollisionGeometry(body, RigidTransform([side * B, 0.0, -H + rho]), Sphere(rho), label, material())
+            register(body, RigidTransform([side * B, 0.0, -H + rho]), Sphere(rho), label, material())
         plant.Finalize()
         return builder.Build(), plant
 

@@ -166,4 +166,5 @@ OTHER_ENGINES = [
     "pybullet",
     optional_engine("dart", "dartpy"),
     optional_engine("opensees", "openseespy"),
+    optional_engine("drake", "pydrake"),
 ]
