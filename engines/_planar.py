@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-__all__ = ["com_state", "gravity_x", "release_state", "substeps"]
+__all__ = ["com_state", "gravity_x", "release_state", "sampled_response", "substeps"]
 
 
 def com_state(H: float, pivot_x: float, theta: float, omega: float) -> tuple[float, float, float, float]:
@@ -44,3 +44,68 @@ def gravity_x(acc: np.ndarray, k: int) -> list[list[float]]:
     """
     frac = (np.arange(k) + 0.5) / k
     return (-(acc[:-1, None] + np.diff(acc)[:, None] * frac[None, :])).tolist()
+
+
+def sampled_response(
+    engine,
+    specimen,
+    motion,
+    theta: np.ndarray,
+    theta_dot: np.ndarray,
+    last: int,
+    overturned: bool,
+    info: dict,
+    *,
+    rocking_tol: float = 5e-3,
+    quiet: float = 2e-3,
+    overturn_angle: float = math.pi / 2,
+):
+    """The :class:`housner.Response` of a planar adapter from theta, theta' read at the motion's samples.
+
+    Parameters
+    ----------
+    engine : Engine
+        The adapter (its name goes into the response).
+    specimen, motion
+        The block (alpha [rad]) and the record (its sample times).
+    theta, theta_dot : ndarray
+        theta [rad] and theta' [rad/s] at every sample up to ``last``; changed in place: after an
+        overturn both are held (at +-``overturn_angle`` and 0) to the end of the record.
+    last : int
+        Index of the last simulated sample (the record's last, or the one where the block fell).
+    overturned : bool
+        Whether |theta| reached ``overturn_angle`` [rad] at sample ``last``.
+    info : dict
+        The engine's own information (settings, steps, wall time).
+    rocking_tol : float
+        |theta| / alpha [-] above which the block rocks, for the shared impact and uplift detector
+        (:mod:`housner.impacts`); the same for every adapter, so that counts mean the same.
+    quiet : float
+        Fraction of the rocking threshold taken as "still at rest" when dating the uplift [-].
+    """
+    from housner.impacts import impact_times, uplift_time
+    from housner.response import Response
+
+    alpha, t = specimen.alpha, motion.t
+    overturn_time = math.nan
+    if overturned:
+        a, b = abs(theta[last - 1]), abs(theta[last])
+        f = (overturn_angle - a) / (b - a) if b > a else 1.0
+        overturn_time = float(t[last - 1] + min(max(f, 0.0), 1.0) * motion.dt)
+        theta[last:] = math.copysign(overturn_angle, theta[last])
+        theta_dot[last:] = 0.0
+    tol = rocking_tol * alpha
+    released = motion.theta0 != 0.0 or motion.theta_dot0 != 0.0
+    return Response(
+        t=t,
+        theta=theta,
+        theta_dot=theta_dot,
+        impact_times=impact_times(t[: last + 1], theta[: last + 1], tol),
+        theta_max=overturn_angle if overturned else float(np.max(np.abs(theta))),
+        alpha=alpha,
+        overturned=overturned,
+        overturn_time=overturn_time,
+        uplift_time=uplift_time(t[: last + 1], theta[: last + 1], tol, released, quiet),
+        engine=engine.name,
+        info=info,
+    )

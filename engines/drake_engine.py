@@ -66,10 +66,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import gravity_x, release_state, substeps
+from engines._planar import gravity_x, release_state, sampled_response, substeps
 from engines.base import Engine
 from housner.errors import EngineError, EngineUnavailable, unknown_choice
-from housner.impacts import impact_times, uplift_time
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -338,17 +337,6 @@ class DrakeEngine(Engine):
 
     def _response(self, specimen, motion, states, last, overturned, h, k, wall) -> Response:
         """The Response from the sampled states (z, x, theta, z', x', theta'), held at +-pi/2 after an overturn."""
-        alpha, t = specimen.alpha, motion.t
-        theta, theta_dot = states[:, 2].copy(), states[:, 5].copy()
-        overturn_time = math.nan
-        if overturned:
-            a, b = abs(theta[last - 1]), abs(theta[last])
-            f = (OVERTURN_ANGLE - a) / (b - a) if b > a else 1.0
-            overturn_time = float(t[last - 1] + min(max(f, 0.0), 1.0) * motion.dt)
-            theta[last:] = math.copysign(OVERTURN_ANGLE, theta[last])
-            theta_dot[last:] = 0.0
-        tol = ROCKING_TOL * alpha
-        released = motion.theta0 != 0.0 or motion.theta_dot0 != 0.0
         info = {
             "settings": self.settings(),
             "version": self.version(),
@@ -357,16 +345,5 @@ class DrakeEngine(Engine):
             "n_steps": last * k,
             "wall_time_s": wall,
         }
-        return Response(
-            t=t,
-            theta=theta,
-            theta_dot=theta_dot,
-            impact_times=impact_times(t[: last + 1], theta[: last + 1], tol),
-            theta_max=OVERTURN_ANGLE if overturned else float(np.max(np.abs(theta))),
-            alpha=alpha,
-            overturned=overturned,
-            overturn_time=overturn_time,
-            uplift_time=uplift_time(t[: last + 1], theta[: last + 1], tol, released, _QUIET),
-            engine=self.name,
-            info=info,
-        )
+        return sampled_response(self, specimen, motion, states[:, 2].copy(), states[:, 5].copy(), last, overturned,
+                                info, rocking_tol=ROCKING_TOL, quiet=_QUIET, overturn_angle=OVERTURN_ANGLE)  # fmt: skip
