@@ -6,7 +6,47 @@ import math
 
 import numpy as np
 
-__all__ = ["com_state", "gravity_x", "release_state", "sampled_response", "substeps"]
+__all__ = ["checked_settings", "com_state", "gravity_x", "release_state", "sampled_response", "substeps"]
+
+
+def checked_settings(
+    label: str, defaults: dict, ranges: dict, settings: dict, strict: tuple[str, ...] = ("timestep",)
+) -> dict:
+    """An adapter's settings: ``defaults`` updated by ``settings``, each numeric one checked against its range.
+
+    Parameters
+    ----------
+    label : str
+        The engine as messages name it ("DART", "OpenSees", "Drake").
+    defaults : dict
+        Every setting the engine takes, with its default.
+    ranges : dict
+        Setting -> (low, high): the accepted closed range (a setting absent here is taken as given).
+    settings : dict
+        The caller's settings.
+    strict : tuple of str
+        Settings whose low end is excluded (a step or a stiffness of exactly zero).
+
+    Raises
+    ------
+    ValueError
+        Naming the setting: unknown (with the closest known one), not a number, or out of range.
+    """
+    from housner.errors import unknown_choice
+
+    unknown = sorted(set(settings) - set(defaults))
+    if unknown:
+        raise unknown_choice(f"{label} setting", unknown[0], defaults)
+    s = {**defaults, **settings}
+    for key, (lo, hi) in ranges.items():
+        try:
+            v = float(s[key])
+        except (TypeError, ValueError):
+            raise ValueError(f"{label} setting `{key}` must be a number, got {s[key]!r}") from None
+        if not (lo <= v <= hi) or (key in strict and v == lo):
+            raise ValueError(f"{label} setting `{key}` must lie in [{lo:g}, {hi:g}], got {s[key]!r}")
+        s[key] = v
+    return s
 
 
 def com_state(H: float, pivot_x: float, theta: float, omega: float) -> tuple[float, float, float, float]:

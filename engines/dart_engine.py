@@ -41,9 +41,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import gravity_x, release_state, sampled_response, substeps
+from engines._planar import checked_settings, gravity_x, release_state, sampled_response, substeps
 from engines.base import Engine
-from housner.errors import EngineError, EngineUnavailable, unknown_choice
+from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -66,6 +66,9 @@ _RUNAWAY_M = 10.0
 
 #: Fraction of the rocking threshold taken as "still at rest" when dating the uplift.
 _QUIET = 2e-3
+
+#: Accepted range of each setting (low, high); the timestep's low end excluded.
+_RANGES = {"timestep": (1e-6, 1e-2), "friction": (0.0, 100.0), "restitution": (0.0, 1.0), "pivot_radius": (1e-7, 1e-2)}
 
 
 def _dart():
@@ -113,20 +116,7 @@ class DartEngine(Engine):
 
     def __init__(self, **settings: Any):
         _dart()  # a missing package is said before any long work
-        unknown = sorted(set(settings) - set(self.DEFAULTS))
-        if unknown:
-            raise unknown_choice("DART setting", unknown[0], self.DEFAULTS)
-        s = {**self.DEFAULTS, **settings}
-        for key, lo, hi in (("timestep", 1e-6, 1e-2), ("friction", 0.0, 100.0), ("restitution", 0.0, 1.0),
-                            ("pivot_radius", 1e-7, 1e-2)):  # fmt: skip
-            try:
-                v = float(s[key])
-            except (TypeError, ValueError):
-                raise ValueError(f"DART setting `{key}` must be a number, got {s[key]!r}") from None
-            if not (lo <= v <= hi) or (key == "timestep" and v == lo):
-                raise ValueError(f"DART setting `{key}` must lie in [{lo:g}, {hi:g}], got {s[key]!r}")
-            s[key] = v
-        self._settings = s
+        self._settings = checked_settings("DART", self.DEFAULTS, _RANGES, settings)
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}

@@ -66,9 +66,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import gravity_x, release_state, sampled_response, substeps
+from engines._planar import checked_settings, gravity_x, release_state, sampled_response, substeps
 from engines.base import Engine
-from housner.errors import EngineError, EngineUnavailable, unknown_choice
+from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -161,19 +161,7 @@ class DrakeEngine(Engine):
 
     def __init__(self, **settings: Any):
         _drake()  # a missing package is said before any long work
-        unknown = sorted(set(settings) - set(self.DEFAULTS))
-        if unknown:
-            raise unknown_choice("Drake setting", unknown[0], self.DEFAULTS)
-        s = {**self.DEFAULTS, **settings}
-        for key, (lo, hi) in _RANGES.items():
-            try:
-                v = float(s[key])
-            except (TypeError, ValueError):
-                raise ValueError(f"Drake setting `{key}` must be a number, got {s[key]!r}") from None
-            if not (lo <= v <= hi) or (key == "timestep" and v == lo):
-                raise ValueError(f"Drake setting `{key}` must lie in [{lo:g}, {hi:g}], got {s[key]!r}")
-            s[key] = v
-        self._settings = s
+        self._settings = checked_settings("Drake", self.DEFAULTS, _RANGES, settings)
         self._model = None  # (key, plant, diagram context, plant context, input vector), built on first use
 
     def __getstate__(self) -> dict:

@@ -67,9 +67,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import release_state, sampled_response, substeps
+from engines._planar import checked_settings, release_state, sampled_response, substeps
 from engines.base import Engine
-from housner.errors import EngineError, EngineUnavailable, unknown_choice
+from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -203,20 +203,9 @@ class OpenSeesEngine(Engine):
 
     def __init__(self, **settings: Any):
         _opensees()  # a missing package is said before any long work
-        unknown = sorted(set(settings) - set(self.DEFAULTS))
-        if unknown:
-            raise unknown_choice("OpenSees setting", unknown[0], self.DEFAULTS)
-        s = {**self.DEFAULTS, **settings}
-        for key, (lo, hi) in self._RANGES.items():
-            try:
-                v = float(s[key])
-            except (TypeError, ValueError):
-                raise ValueError(f"OpenSees setting `{key}` must be a number, got {s[key]!r}") from None
-            strict = key in ("timestep", "contact_stiffness")
-            if not (lo <= v <= hi) or (strict and v == lo):
-                raise ValueError(f"OpenSees setting `{key}` must lie in [{lo:g}, {hi:g}], got {s[key]!r}")
-            s[key] = v
-        self._settings = s
+        self._settings = checked_settings(
+            "OpenSees", self.DEFAULTS, self._RANGES, settings, strict=("timestep", "contact_stiffness")
+        )
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
