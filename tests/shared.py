@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -116,11 +117,13 @@ def _uplift(ag: np.ndarray, dt: float, t: float, tan_a: float, ug) -> tuple[floa
     return max(t, k * dt + dt * (-tan_a - b0) / (b1 - b0)), sgn
 
 
+@functools.cache
 def engine_unavailable(name: str) -> str | None:
     """Why the registered engine ``name`` cannot run here (its own one-line message), or None when it can.
 
-    The engine is instantiated, which imports its package: a package that is installed but cannot
-    load (OpenSees without Debian's BLAS and LAPACK) is caught too, not only a missing one.
+    The engine is instantiated, which imports its package: a missing package and one that is installed
+    but cannot load (OpenSees without Debian's BLAS and LAPACK) both give the engine's own message,
+    which names the install.
     """
     from engines.base import get_engine
     from housner.errors import EngineUnavailable
@@ -134,37 +137,23 @@ def engine_unavailable(name: str) -> str | None:
     return None
 
 
-def optional_engine(name: str, module: str):
-    """``name`` as a pytest parameter, skipped (naming the install) when its package ``module`` cannot be used."""
-    import importlib.util
-
+def optional_engine(name: str):
+    """``name`` as a pytest parameter, skipped with the engine's own message when it cannot run here."""
     import pytest
 
-    why = (
-        f"engine {name!r} needs {module}: pip install -e '.[{name}]'"
-        if importlib.util.find_spec(module) is None
-        else None
-    )
-    why = why or engine_unavailable(name)
+    why = engine_unavailable(name)
     return pytest.param(name, marks=pytest.mark.skipif(why is not None, reason=why or ""))
 
 
-def installed_engines(params) -> list[str]:
-    """The engine names of a list of :func:`optional_engine` parameters (or plain names) that can run here."""
-    out = []
-    for p in params:
-        if isinstance(p, str):
-            out.append(p)
-        elif not any(m.name == "skipif" and m.args and m.args[0] for m in p.marks):
-            out.append(p.values[0])
-    return out
+#: Engines of the package besides the analytic one: MuJoCo and PyBullet are core dependencies, the rest extras.
+OTHER_ENGINE_NAMES = ("mujoco", "pybullet", "dart", "opensees", "drake")
+_CORE = ("mujoco", "pybullet")
+
+
+def installed_engines() -> list[str]:
+    """The names of :data:`OTHER_ENGINE_NAMES` that can run here."""
+    return [n for n in OTHER_ENGINE_NAMES if n in _CORE or engine_unavailable(n) is None]
 
 
 #: The engines the cross-engine tests run besides the analytic one (optional ones skip when absent).
-OTHER_ENGINES = [
-    "mujoco",
-    "pybullet",
-    optional_engine("dart", "dartpy"),
-    optional_engine("opensees", "openseespy"),
-    optional_engine("drake", "pydrake"),
-]
+OTHER_ENGINES = [n if n in _CORE else optional_engine(n) for n in OTHER_ENGINE_NAMES]

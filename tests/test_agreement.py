@@ -91,7 +91,7 @@ def strong_run(tmp_path_factory):
     """elcentro-strong (100 matched motions x 1.6, 42 overturn in the analytic model) on every installed engine."""
     from scenarios.runner import run_scenario
 
-    names = ["housner", *installed_engines(ENGINES)]
+    names = ["housner", *installed_engines()]
     return run_scenario("elcentro-strong", engines=names, out=tmp_path_factory.mktemp("strong"), progress=False)
 
 
