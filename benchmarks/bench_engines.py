@@ -53,7 +53,7 @@ from engines import ENGINES, get_engine  # noqa: E402
 from housner import GroundMotion, Specimen  # noqa: E402
 from housner.errors import EngineUnavailable  # noqa: E402
 from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count  # noqa: E402
-from scenarios.chaos import measure_engine_errors  # noqa: E402
+from scenarios.chaos import measure_engine_errors, rms  # noqa: E402
 
 #: Release amplitudes theta0 / alpha [-] of the r-error scan, small to large.
 R_AMPLITUDES = (0.005, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 0.9)
@@ -68,11 +68,10 @@ def r_departure(name: str, settings: dict, specimen: Specimen) -> dict:
     """The engine's r error at :data:`R_AMPLITUDES` and the largest amplitude where it exceeds 1 %."""
     err = measure_engine_errors(get_engine(name, **settings), specimen, dt=1e-3, amplitudes=R_AMPLITUDES)
     bad = [a for a, e in zip(R_AMPLITUDES, err.r_rel_errors, strict=True) if not abs(e) <= R_DEPARTURE]
-    main = [e for a, e in zip(R_AMPLITUDES, err.r_rel_errors, strict=True) if a >= 0.2 and math.isfinite(e)]
     return {
         "r_rel_errors": dict(zip(R_AMPLITUDES, err.r_rel_errors, strict=True)),
         "r_departs_below": max(bad) if bad else 0.0,
-        "eps_r": math.sqrt(sum(e * e for e in main) / len(main)) if main else math.nan,
+        "eps_r": rms([e for a, e in zip(R_AMPLITUDES, err.r_rel_errors, strict=True) if a >= 0.2]),
     }
 
 

@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from engines.base import Engine, get_engine
+from engines.base import RECORD_ERRORS, Engine, get_engine
 from engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
@@ -49,6 +49,7 @@ __all__ = [
     "errors_from_dict",
     "floor_verdict",
     "measure_engine_errors",
+    "rms",
     "run_engine_errors",
 ]
 
@@ -83,15 +84,16 @@ class EngineErrors:
     @property
     def eps_r(self) -> float:
         """Root mean square of the r errors [-]: the size of the engine's error per impact."""
-        return _rms(self.r_rel_errors)
+        return rms(self.r_rel_errors)
 
     @property
     def eps_p(self) -> float:
         """Root mean square of the p errors [-]."""
-        return _rms(self.p_rel_errors)
+        return rms(self.p_rel_errors)
 
 
-def _rms(x) -> float:
+def rms(x) -> float:
+    """Root mean square of the finite values of ``x`` [same unit]; NaN when none is finite."""
     v = np.asarray(x, dtype=float)
     v = v[np.isfinite(v)]
     return float(np.sqrt(np.mean(v**2))) if v.size else math.nan
@@ -165,8 +167,6 @@ def run_engine_errors(
         Engine name -> ``{"amplitudes", "r_rel_errors", "p_rel_errors", "eps_r", "eps_p", "dt", "r_reference"}``,
         or ``{"error": message}`` for an engine that failed the measurement.
     """
-    from engines.base import RECORD_ERRORS
-
     if reference != "housner" or reference not in engines or not motions:
         return {}
     r_ref = engines[reference].get("r") or specimen.r_housner
