@@ -157,3 +157,36 @@ def installed_engines() -> list[str]:
 
 #: The engines the cross-engine tests run besides the analytic one (optional ones skip when absent).
 OTHER_ENGINES = [n if n in _CORE else optional_engine(n) for n in OTHER_ENGINE_NAMES]
+
+
+def assert_overturns_and_holds(engine, specimen, *, holds: bool = True) -> None:
+    """A -3 g tan(alpha) push from 0.1 s overturns the block to +pi/2, with an uplift and an overturn time.
+
+    ``holds``: theta also stays at +pi/2 from 1 ms after the overturn time to the end of the record.
+    """
+    import pytest
+
+    t = np.arange(0, 3.0, 1e-3)
+    acc = np.where(t > 0.1, -3.0 * G * math.tan(specimen.alpha), 0.0)
+    res = engine.simulate(specimen, GroundMotion(acc, 1e-3, name="push"))
+    assert res.overturned and res.theta[-1] == pytest.approx(math.pi / 2)
+    if holds:
+        assert np.all(res.theta[res.t >= res.overturn_time + 1e-3] == pytest.approx(math.pi / 2))
+    assert 0.1 < res.overturn_time < 3.0 and math.isfinite(res.uplift_time)
+
+
+def assert_pulses_follow_the_analytic_model(engine, specimen, *, rel: float, same_impacts: bool) -> None:
+    """The tuner's three one-sine pulses: same overturn verdict, theta_max within ``rel``, and (when
+    ``same_impacts``) the same impact count as the analytic model."""
+    import pytest
+
+    from engines.base import get_engine
+    from engines.tuning import pulse_motions
+
+    ref = get_engine("housner")
+    for m in pulse_motions(specimen):
+        a, d = ref.simulate(specimen, m), engine.simulate(specimen, m)
+        assert d.overturned == a.overturned, m.name
+        assert d.theta_max == pytest.approx(a.theta_max, rel=rel), m.name
+        if same_impacts:
+            assert d.n_impacts == a.n_impacts, m.name

@@ -9,10 +9,10 @@ import time
 
 import numpy as np
 import pytest
+from shared import assert_overturns_and_holds, assert_pulses_follow_the_analytic_model
 
 pytest.importorskip("pydrake", reason="the Drake engine needs drake: pip install -e '.[drake]'")
 
-from engines import get_engine  # noqa: E402
 from engines.base import engine_class  # noqa: E402
 from engines.conformance import check_engine  # noqa: E402
 from engines.drake_engine import DrakeEngine, _drake  # noqa: E402
@@ -56,21 +56,12 @@ def test_pulses_match_the_analytic_model(engine):
     The issue allows 3 %; 1 % leaves a margin of 2.7 over the worst measured, which is one
     impact's scatter (the first peaks, before any impact, are within 0.1 %).
     """
-    ref = get_engine("housner")
-    for m in pulse_motions(SEED):
-        a, d = ref.simulate(SEED, m), engine.simulate(SEED, m)
-        assert d.overturned == a.overturned, m.name
-        assert d.theta_max == pytest.approx(a.theta_max, rel=0.01), m.name
+    assert_pulses_follow_the_analytic_model(engine, SEED, rel=0.01, same_impacts=False)
 
 
 def test_overturns_and_holds(engine):
     """A -3 g tan(alpha) push overturns the block to +pi/2 and the response holds there."""
-    t = np.arange(0, 3.0, 1e-3)
-    acc = np.where(t > 0.1, -3.0 * 9.80665 * math.tan(SEED.alpha), 0.0)
-    res = engine.simulate(SEED, GroundMotion(acc, 1e-3, name="push"))
-    assert res.overturned and res.theta[-1] == pytest.approx(math.pi / 2)
-    assert np.all(res.theta[res.t >= res.overturn_time + 1e-3] == pytest.approx(math.pi / 2))
-    assert 0.1 < res.overturn_time < 3.0 and math.isfinite(res.uplift_time)
+    assert_overturns_and_holds(engine, SEED)
 
 
 def test_settings_are_checked_and_travel(engine):
