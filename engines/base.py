@@ -103,6 +103,9 @@ class Engine:
             raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
         effects = tuple(effects)
         self._refuse_unrealised(effects)
+        why = self.effect_refusal(specimen, effects)
+        if why:
+            raise ValueError(why)
         return check_response(self._simulate(specimen, motion, effects), self.name, motion)
 
     def simulate_many(
@@ -136,6 +139,14 @@ class Engine:
                     raise
                 out.append(e)
         return out
+
+    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
+        """Why this engine cannot realise these (supported) effects on this specimen, or None.
+
+        For an effect whose value lies out of the engine's reach (a planar adapter realises the
+        ``restitution`` effect only at or below its contact's r). Scenarios ask before any work.
+        """
+        return None
 
     def _refuse_unrealised(self, effects: tuple) -> None:
         """ValueError naming the first effect this engine does not realise, and those it does."""

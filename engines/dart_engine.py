@@ -41,7 +41,17 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import checked_settings, gravity_x, release_state, sampled_response, substeps
+from engines._planar import (
+    IMPACT_LAW_RANGE,
+    ImpactLaw,
+    checked_settings,
+    gravity_x,
+    law_factor,
+    law_refusal,
+    release_state,
+    sampled_response,
+    substeps,
+)
 from engines.base import Engine
 from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
@@ -68,7 +78,13 @@ _RUNAWAY_M = 10.0
 _QUIET = 2e-3
 
 #: Accepted range of each setting (low, high); the timestep's low end excluded.
-_RANGES = {"timestep": (1e-6, 1e-2), "friction": (0.0, 100.0), "restitution": (0.0, 1.0), "pivot_radius": (1e-7, 1e-2)}
+_RANGES = {
+    "timestep": (1e-6, 1e-2),
+    "friction": (0.0, 100.0),
+    "restitution": (0.0, 1.0),
+    "pivot_radius": (1e-7, 1e-2),
+    "impact_energy_factor": IMPACT_LAW_RANGE,
+}
 
 
 def _dart():
@@ -95,6 +111,11 @@ class DartEngine(Engine):
         Newton restitution coefficient at the pivots [-]; 0 is Housner's plastic impact.
     pivot_radius : float
         Radius of the pivot spheres [m], at most 1e-3 H.
+    impact_energy_factor : float
+        Energy the block keeps at each impact as a fraction of what the
+        contact leaves it [-], in (0, 1]: the adapters' impact law
+        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        1 (default): the contact alone.
 
     Examples
     --------
@@ -108,15 +129,27 @@ class DartEngine(Engine):
 
     name = "dart"
     package = "dartpy"
-    effects_supported: ClassVar[frozenset[str]] = frozenset()
+    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
 
     #: Default settings (2026-11-24, dartpy 6.20, seed specimen): first-impact r within 0.1 % of
     #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning (step 0.1 ms; 0.2 ms is 0.11 % off at 0.8 alpha).
-    DEFAULTS: ClassVar[dict] = {"timestep": 1.0e-4, "friction": 1.5, "restitution": 0.0, "pivot_radius": 1.0e-5}
+    DEFAULTS: ClassVar[dict] = {
+        "timestep": 1.0e-4,
+        "friction": 1.5,
+        "restitution": 0.0,
+        "pivot_radius": 1.0e-5,
+        "impact_energy_factor": 1.0,
+    }
 
     def __init__(self, **settings: Any):
         _dart()  # a missing package is said before any long work
-        self._settings = checked_settings("DART", self.DEFAULTS, _RANGES, settings)
+        self._settings = checked_settings(
+            "DART", self.DEFAULTS, _RANGES, settings, strict=("timestep", "impact_energy_factor")
+        )
+
+    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
+        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
+        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
@@ -179,10 +212,13 @@ class DartEngine(Engine):
         states[0] = (z0, x0, th0, dz0, dx0, om0)
         last, overturned = n - 1, False
         set_gravity, step = world.setGravity, world.step
+        law = ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, th0)
         for i in range(1, n):
             for gxi in gx_rows[i - 1]:
                 set_gravity([gxi, 0.0, -G])
                 step()
+                if law.active and (c := law.after_step(block.getPosition(2), block.getVelocity(2))) is not None:
+                    block.setVelocities(c * block.getVelocities())
             q, v = block.getPositions(), block.getVelocities()
             states[i, :3], states[i, 3:] = q, v
             if not (abs(q[1] - x0) < _RUNAWAY_M and abs(q[0]) < _RUNAWAY_M and np.isfinite(q).all()):

@@ -66,7 +66,17 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import checked_settings, gravity_x, release_state, sampled_response, substeps
+from engines._planar import (
+    IMPACT_LAW_RANGE,
+    ImpactLaw,
+    checked_settings,
+    gravity_x,
+    law_factor,
+    law_refusal,
+    release_state,
+    sampled_response,
+    substeps,
+)
 from engines.base import Engine
 from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
@@ -99,6 +109,7 @@ _RANGES = {
     "relaxation_time": (0.0, 1.0),
     "friction": (0.0, 100.0),
     "pivot_radius": (1e-7, 1e-2),
+    "impact_energy_factor": IMPACT_LAW_RANGE,
 }
 
 
@@ -133,6 +144,11 @@ class DrakeEngine(Engine):
         max |ug''| / g with a margin for the impacts.
     pivot_radius : float
         Radius of the pivot spheres [m], at most 1e-3 H.
+    impact_energy_factor : float
+        Energy the block keeps at each impact as a fraction of what the
+        contact leaves it [-], in (0, 1]: the adapters' impact law
+        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        1 (default): the contact alone.
 
     Examples
     --------
@@ -146,7 +162,7 @@ class DrakeEngine(Engine):
 
     name = "drake"
     package = "drake"
-    effects_supported: ClassVar[frozenset[str]] = frozenset()
+    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
 
     #: Default settings (2026-11-24, drake 1.51.1, seed specimen): first-impact r within 0.2 % of
     #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning, pulses within 0.5 %; about 0.25 CPU s per
@@ -157,12 +173,19 @@ class DrakeEngine(Engine):
         "relaxation_time": 0.0,
         "friction": 1.5,
         "pivot_radius": 1.0e-5,
+        "impact_energy_factor": 1.0,
     }
 
     def __init__(self, **settings: Any):
         _drake()  # a missing package is said before any long work
-        self._settings = checked_settings("Drake", self.DEFAULTS, _RANGES, settings)
+        self._settings = checked_settings(
+            "Drake", self.DEFAULTS, _RANGES, settings, strict=("timestep", "impact_energy_factor")
+        )
         self._model = None  # (key, plant, diagram context, plant context, input vector), built on first use
+
+    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
+        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
+        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}  # the Drake model is rebuilt in the receiving process
@@ -301,11 +324,14 @@ class DrakeEngine(Engine):
         states[0] = (z0, x0, th0, dz0, dx0, om0)
         last, overturned = n - 1, False
         set_force, step, state = force.SetAtIndex, plant.ExecuteForcedEvents, ctx.get_discrete_state_vector
+        law = ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, th0)
         for i in range(1, n):
             try:
                 for fx in fx_rows[i - 1]:
                     set_force(1, fx)
                     step(ctx, False)
+                    if law.active and (c := law.after_step(state().GetAtIndex(2), state().GetAtIndex(5))) is not None:
+                        plant.SetVelocities(ctx, c * plant.GetVelocities(ctx))
             except RuntimeError as e:  # SAP did not converge
                 raise EngineError(
                     f"Drake failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: {e}; "

@@ -102,6 +102,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from engines._planar import IMPACT_LAW_RANGE, ImpactLaw, checked_settings, law_factor, law_refusal
 from engines.base import Engine
 from engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 from housner.errors import EngineError, unknown_choice
@@ -121,6 +122,10 @@ ROCKING_EPS = 1e-3
 #: Simulated time per rollout chunk [s]; the run stops at the end of the chunk
 #: in which the block overturns.
 _CHUNK_S = 0.5
+
+#: Chunk [s] while the impact law is on: a chunk is cut at each impact and the rest of it re-run,
+#: so shorter chunks waste fewer steps.
+_LAW_CHUNK_S = 0.02
 
 
 def initial_qvel(
@@ -173,6 +178,11 @@ class MujocoEngine(Engine):
         Frictional-to-normal impedance ratio [-]; above 1 makes friction stiffer.
     noslip_iterations : int
         MuJoCo no-slip post-solver iterations (0 = off).
+    impact_energy_factor : float
+        Energy the block keeps at each impact as a fraction of what the
+        contact leaves it [-], in (0, 1]: the adapters' impact law
+        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        1 (default): the contact alone.
     integrator : {"Euler", "implicitfast", "implicit", "RK4"}
     iterations, tolerance : int, float
         Constraint-solver iterations and tolerance.
@@ -236,10 +246,10 @@ class MujocoEngine(Engine):
     """
 
     name: ClassVar[str] = "mujoco"
-    effects_supported: ClassVar[frozenset[str]] = frozenset({"rotational_damping"})
+    effects_supported: ClassVar[frozenset[str]] = frozenset({"rotational_damping", "restitution"})
 
     #: Tuned defaults (see the class notes for their provenance and measured errors).
-    DEFAULTS: ClassVar[dict] = dict(MJCF_DEFAULTS)
+    DEFAULTS: ClassVar[dict] = {**MJCF_DEFAULTS, "impact_energy_factor": 1.0}
 
     def __init__(self, **settings: Any):
         for key in settings:
@@ -248,9 +258,12 @@ class MujocoEngine(Engine):
         merged = {**self.DEFAULTS, **settings}
         for key in ("solref", "solimp"):
             merged[key] = tuple(float(v) for v in merged[key])
-        # validate now with the seed specimen's geometry (again per specimen when simulating)
-        mjcf_from_specimen(Specimen.bachmann2017(), **merged)
+        law = {"impact_energy_factor": merged["impact_energy_factor"]}
+        law_range = {"impact_energy_factor": IMPACT_LAW_RANGE}
+        merged.update(checked_settings("MuJoCo", {"impact_energy_factor": 1.0}, law_range, law, strict=tuple(law)))
         self._settings = merged
+        # validate now with the seed specimen's geometry (again per specimen when simulating)
+        self.mjcf(Specimen.bachmann2017())
         self._cache: dict = {}
 
     # ------------------------------------------------------------------
@@ -266,7 +279,11 @@ class MujocoEngine(Engine):
 
     def mjcf(self, specimen: Specimen) -> str:
         """The MJCF text of ``specimen`` with this engine's settings."""
-        return mjcf_from_specimen(specimen, **self._settings)
+        return mjcf_from_specimen(specimen, **{k: v for k, v in self._settings.items() if k in MJCF_DEFAULTS})
+
+    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
+        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
+        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def __getstate__(self) -> dict:  # compiled models stay in their process
         return {"_settings": self._settings}
@@ -377,10 +394,22 @@ class MujocoEngine(Engine):
         warm = np.zeros(model.nv)
         done = 0
         overturn_step = None
+        law = ImpactLaw(
+            law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, motion.theta0
+        )
+        if law.active:
+            chunk = min(chunk, max(n_sub, round(_LAW_CHUNK_S / h)))
         while done < nstep:
             k1 = min(nstep, done + chunk)
             out, _ = rollout.rollout(model, data, state, ctrl[done:k1], initial_warmstart=warm)
             out = out[0]
+            if law.active and (hit := law.first_scale(out[:, i_q + 2], out[:, i_v + 2])) is not None:
+                # the chunk ends at the scaling's step; the next one starts from its scaled velocities
+                j, c = hit
+                out = out[: j + 1].copy()
+                out[-1, i_v : i_v + model.nv] *= c
+                k1 = done + 1 + j
+                data.qacc_warmstart[:] = 0.0  # the warm start of a step not kept is no guide
             x[done + 1 : k1 + 1] = out[:, i_q]
             z[done + 1 : k1 + 1] = out[:, i_q + 1]
             th[done + 1 : k1 + 1] = out[:, i_q + 2]

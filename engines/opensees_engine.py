@@ -67,7 +67,16 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import checked_settings, release_state, sampled_response, substeps
+from engines._planar import (
+    IMPACT_LAW_RANGE,
+    ImpactLaw,
+    checked_settings,
+    law_factor,
+    law_refusal,
+    release_state,
+    sampled_response,
+    substeps,
+)
 from engines.base import Engine
 from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
@@ -161,6 +170,11 @@ class OpenSeesEngine(Engine):
     tolerance : float
         Newton iterations stop when the norm of the unbalanced forces is below
         this [N, N m].
+    impact_energy_factor : float
+        Energy the block keeps at each impact as a fraction of what the
+        contact leaves it [-], in (0, 1]: the adapters' impact law
+        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        1 (default): the contact alone.
 
     Notes
     -----
@@ -180,7 +194,7 @@ class OpenSeesEngine(Engine):
 
     name = "opensees"
     package = "openseespy"
-    effects_supported: ClassVar[frozenset[str]] = frozenset()
+    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
 
     #: Default settings (2026-11-24, openseespy 3.7.1.2, seed specimen): first-impact r within
     #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.2 CPU s per simulated s.
@@ -190,6 +204,7 @@ class OpenSeesEngine(Engine):
         "contact_damping": 3.5e-4,
         "friction": 1.5,
         "tolerance": 1.0e-3,
+        "impact_energy_factor": 1.0,
     }
 
     #: Accepted range of each setting (low, high), low excluded for the timestep and the stiffness.
@@ -199,13 +214,22 @@ class OpenSeesEngine(Engine):
         "contact_damping": (0.0, 1e-1),
         "friction": (0.0, 100.0),
         "tolerance": (1e-9, 1.0),
+        "impact_energy_factor": IMPACT_LAW_RANGE,
     }
 
     def __init__(self, **settings: Any):
         _opensees()  # a missing package is said before any long work
         self._settings = checked_settings(
-            "OpenSees", self.DEFAULTS, self._RANGES, settings, strict=("timestep", "contact_stiffness")
+            "OpenSees",
+            self.DEFAULTS,
+            self._RANGES,
+            settings,
+            strict=("timestep", "contact_stiffness", "impact_energy_factor"),
         )
+
+    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
+        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
+        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
@@ -310,9 +334,14 @@ class OpenSeesEngine(Engine):
         theta[0], theta_dot[0] = motion.theta0, motion.theta_dot0
         last, overturned, retried = n - 1, False, 0
         analyze, disp, vel = ops.analyze, ops.nodeDisp, ops.nodeVel
+        law = ImpactLaw(
+            law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, motion.theta0
+        )
         try:
             for i in range(1, n):
-                if analyze(k, h) != 0:
+                if law.active:
+                    retried += self._steps_with_law(ops, motion, i, k, h, law)
+                elif analyze(k, h) != 0:
                     retried += 1
                     self._retry(ops, motion, i, h)
                 x, th = disp(1, 1), -disp(1, 3)
@@ -330,6 +359,19 @@ class OpenSeesEngine(Engine):
             ops.wipe()
         return self._response(specimen, motion, theta, theta_dot, last, overturned, h, k, retried,
                               time.perf_counter() - wall0)  # fmt: skip
+
+    def _steps_with_law(self, ops, motion: GroundMotion, i: int, k: int, h: float, law: ImpactLaw) -> int:
+        """Sample interval i step by step, scaling every node's velocity at an impact; 1 if it was retried."""
+        for _ in range(k):
+            if ops.analyze(1, h) != 0:
+                self._retry(ops, motion, i, h)
+                return 1
+            if (c := law.after_step(-ops.nodeDisp(1, 3), -ops.nodeVel(1, 3))) is not None:
+                for node in (1, 2, 3):
+                    for dof in (1, 2, 3):
+                        ops.setNodeVel(node, dof, c * ops.nodeVel(node, dof), "-commit")
+                ops.domainChange()  # the integrator reads the new velocities back from the nodes
+        return 0
 
     def _retry(self, ops, motion: GroundMotion, i: int, h: float) -> None:
         """Redo the rest of sample interval i in shorter steps (then with Krylov-Newton), or raise EngineError."""

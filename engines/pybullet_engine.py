@@ -73,7 +73,7 @@ from typing import Any
 
 import numpy as np
 
-from engines._planar import gravity_x, release_state, substeps
+from engines._planar import IMPACT_LAW_RANGE, ImpactLaw, gravity_x, law_factor, law_refusal, release_state, substeps
 from engines.base import Engine
 from engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 from housner.errors import EngineError
@@ -129,6 +129,7 @@ _SETTING_DOCS = {
     "contact_damping": "compliant contact damping [N s/m] (None: rigid)",
     "strip_width": "width of each contact strip [m]",
     "bevel": "bevel of the strips' bottom faces [rad]",
+    "impact_energy_factor": "energy kept at each impact, as a fraction of what the contact leaves [-]",
 }
 
 
@@ -175,6 +176,11 @@ class PybulletEngine(Engine):
         Rotation of each strip about its outer bottom edge [rad]: the inner
         edge stands ``strip_width * sin(bevel)`` above the ground, so only the
         outer edges touch (see :func:`engines.urdf.urdf_from_specimen`).
+    impact_energy_factor : float
+        Energy the block keeps at each impact as a fraction of what the
+        contact leaves it [-], in (0, 1]: the adapters' impact law
+        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        1 (default): the contact alone.
 
     Notes
     -----
@@ -196,7 +202,7 @@ class PybulletEngine(Engine):
 
     name = "pybullet"
     package = "pybullet"
-    effects_supported = frozenset()
+    effects_supported = frozenset({"restitution"})
 
     #: Default settings: the choice of ``housner tune pybullet``
     #: (engines.tuning.tune) on 2026-11-21 for Specimen.bachmann2017() and
@@ -223,6 +229,7 @@ class PybulletEngine(Engine):
         "contact_damping": None,
         "strip_width": URDF_DEFAULTS["strip_width"],
         "bevel": URDF_DEFAULTS["bevel"],
+        "impact_energy_factor": 1.0,
     }
 
     def __init__(self, **settings: Any):
@@ -239,6 +246,10 @@ class PybulletEngine(Engine):
         self._urdf: dict[tuple, Path] = {}
 
     # ------------------------------------------------------------------
+    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
+        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
+        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
+
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
 
@@ -450,10 +461,17 @@ class PybulletEngine(Engine):
         g = -G
         last = n - 1
         overturned = False
+        law = ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, th0)
         for i in range(1, n):
             for gxi in gx_rows[i - 1]:
                 set_gravity(gxi, 0.0, g, physicsClientId=cid)
                 step(physicsClientId=cid)
+                if (
+                    law.active
+                    and (c := law.after_step(*pb.getJointState(body, 2, physicsClientId=cid)[:2])) is not None
+                ):
+                    for j, (q, v, *_) in zip(joints, get_states(body, joints, physicsClientId=cid), strict=True):
+                        pb.resetJointState(body, j, q, c * v, physicsClientId=cid)
             (q0, v0, *_), (q1, v1, *_), (q2, v2, *_) = get_states(body, joints, physicsClientId=cid)
             states[i] = (q0, q1, q2, v0, v1, v2)
             if not (abs(q0) < _RUNAWAY_M and abs(q1) < _RUNAWAY_M and math.isfinite(q2) and math.isfinite(v2)):
@@ -547,6 +565,7 @@ def _validated(s: dict) -> dict:
     out["cone_friction"] = bool(out["cone_friction"])
     out["bevel"] = number("bevel", 0.0, 0.1)
     out["strip_width"] = number("strip_width", 0.0, 1.0, lo_open=True)
+    out["impact_energy_factor"] = number("impact_energy_factor", *IMPACT_LAW_RANGE, lo_open=True)
     ks, kd = out["contact_stiffness"], out["contact_damping"]
     if (ks is None) != (kd is None):
         raise ValueError("`contact_stiffness` and `contact_damping` must be given together (or both None: rigid)")
@@ -623,7 +642,6 @@ def _close_client(cid: int, tmp: str) -> None:
             pb.disconnect(physicsClientId=cid)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-
 
 
 def _pivot_z(states: np.ndarray, H: float, B: float) -> np.ndarray:

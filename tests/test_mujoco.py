@@ -131,7 +131,8 @@ def test_inertia_triangle_inequality_and_bad_settings():
 
 
 def test_engine_defaults_are_the_model_defaults(engine):
-    assert MujocoEngine.DEFAULTS == MJCF_DEFAULTS
+    # the model's settings, and the impact law's factor at 1 (the contact alone), which is not the model's
+    assert MujocoEngine.DEFAULTS == {**MJCF_DEFAULTS, "impact_energy_factor": 1.0}
     assert engine.settings()["timestep"] == MJCF_DEFAULTS["timestep"]
     assert engine.version() == mujoco.__version__
 
@@ -414,5 +415,5 @@ def test_rotational_damping_is_realised_as_hinge_damping():
     np.testing.assert_allclose(peaks["mujoco"], peaks["housner"], rtol=0.01)
     assert peaks["mujoco"][4] < 0.95 * peaks["mujoco_plain"][4]
     assert mj.simulate(spec, motion).theta_max == pytest.approx(peaks["mujoco_plain"][0], rel=1e-3)
-    with pytest.raises(ValueError, match="cannot realise effect 'restitution'.*rotational_damping"):
-        mj.simulate(spec, motion, [make_effect("restitution", r=0.9)])
+    with pytest.raises(ValueError, match="cannot realise effect 'sliding'.*restitution, rotational_damping"):
+        mj.simulate(spec, motion, [make_effect("sliding", mu=0.3)])
