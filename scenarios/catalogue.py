@@ -397,6 +397,12 @@ class Scenario:
                         f"{where}: [[effects]] engine {name!r} cannot realise effect {e.name!r} (it realises: {can});"
                         f" run the effects on {', '.join(repr(n) for n in ok) or 'no engine'} (names = [...])"
                     )
+            if self.effects:
+                why = engine_class(name)(**self.engine_settings.get(name, {})).effect_refusal(
+                    self.specimen, tuple(self.effects)
+                )
+                if why:
+                    raise ScenarioError(f"{where}: [[effects]] {why}")
 
     def describe(self) -> dict:
         """The scenario as plain data (for run.json and the cache key)."""

@@ -309,9 +309,9 @@ def test_compare_with_another_engine_and_refused_effects(small):
     # MuJoCo's contact is soft and its restitution tuned only approximately: it follows the
     # measurement far less well than the analytic model, but it does follow it (error < 1 alpha)
     assert 0 < cmp.error(kind=None).value < 1.0
-    # MuJoCo realises rotational_damping only
-    with pytest.raises(ValueError, match="cannot realise effect.*'restitution'"):
-        compare(c, engine="mujoco", effects=[{"name": "restitution", "r": 0.9}])
+    # MuJoCo realises rotational_damping and restitution (below its contact's r) only
+    with pytest.raises(ValueError, match="cannot realise effect.*'sliding'"):
+        compare(c, engine="mujoco", effects=[{"name": "sliding", "mu": 0.3}])
 
 
 def test_compare_accepts_effects_by_name_and_dict(small):

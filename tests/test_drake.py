@@ -72,8 +72,8 @@ def test_settings_are_checked_and_travel(engine):
         DrakeEngine(stepsize=1e-4)
     with pytest.raises(ValueError, match="`pivot_radius`"):
         DrakeEngine(pivot_radius=5e-3).simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.1))
-    with pytest.raises(ValueError, match="cannot realise effect 'restitution'"):
-        engine.simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.2), [make_effect("restitution", r=0.9)])
+    with pytest.raises(ValueError, match="cannot realise effect 'sliding'"):
+        engine.simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.2), [make_effect("sliding", mu=0.3)])
 
 
 def test_pickles_without_its_model_and_is_deterministic(engine):

@@ -103,15 +103,42 @@ def test_the_report_gives_an_effect_no_verdict_only_how_far_it_moves(tmp_path):
     assert "against housner without the effects: median" in head
 
 
+SLIDING = '\n[[effects]]\nname = "sliding"\nmu = 0.3\n'
+
+
 def test_an_engine_that_does_not_realise_an_effect_is_refused_by_name_before_any_work(tmp_path):
     with pytest.raises(ScenarioError) as e:
-        load_scenario(scenario(tmp_path, names='["housner", "mujoco"]'))
+        load_scenario(scenario(tmp_path, SLIDING, names='["housner", "mujoco"]'))
     msg = str(e.value)
-    assert "engine 'mujoco' cannot realise effect 'restitution'" in msg and "'housner'" in msg
+    assert "engine 'mujoco' cannot realise effect 'sliding'" in msg and "'housner'" in msg
     # an --engines override is checked the same way, before the output directory is touched
-    with pytest.raises(ScenarioError, match="cannot realise effect 'restitution'"):
-        run_scenario(scenario(tmp_path), engines=["pybullet"], out=tmp_path / "never", progress=False)
+    with pytest.raises(ScenarioError, match="cannot realise effect 'sliding'"):
+        run_scenario(scenario(tmp_path, SLIDING), engines=["pybullet"], out=tmp_path / "never", progress=False)
     assert not (tmp_path / "never").exists()
+
+
+def test_an_r_above_the_engines_contact_is_refused_before_any_work(tmp_path):
+    # the planar engines realise restitution with their impact law, which only takes energy away:
+    # the seed's calibrated r = 0.9532 lies above Housner's 0.9465, out of their reach
+    refused = r"fx.toml: \[\[effects\]\] engine 'mujoco' cannot realise restitution r = 0.9532"
+    with pytest.raises(ScenarioError, match=refused):
+        run_scenario(scenario(tmp_path), engines=["housner", "mujoco"], out=tmp_path / "never", progress=False)
+    assert not (tmp_path / "never").exists()
+
+
+def test_an_r_below_housners_runs_on_an_engine_and_agrees_with_the_analytic_model(tmp_path):
+    lower = '\n[[effects]]\nname = "restitution"\nr = 0.9\n'
+    run = run_scenario(scenario(tmp_path, lower, names='["housner", "mujoco"]'), out=tmp_path / "run", jobs=1,
+                       cache_dir=tmp_path / "c", progress=False)  # fmt: skip
+    df = run.results.set_index(["engine", "motion_id"]).theta_max_over_alpha
+    with_r = df["mujoco + restitution(r=0.9)"].to_numpy()
+    analytic = df["housner + restitution(r=0.9)"].to_numpy()
+    plain = df["mujoco"].to_numpy()
+    # the effect reaches MuJoCo's records (its own series, labelled), and lowers the median
+    # theta_max/alpha of these 6 motions as it lowers the analytic model's (more energy lost per impact)
+    assert not np.array_equal(with_r, plain)
+    assert np.median(with_r) < np.median(plain)
+    assert np.median(analytic) < np.median(df["housner"].to_numpy())
 
 
 @pytest.mark.parametrize(
@@ -120,7 +147,7 @@ def test_an_engine_that_does_not_realise_an_effect_is_refused_by_name_before_any
         ('\n[[effects]]\nname = "restitutio"\nr = 0.9\n', ["line 13", "unknown effect 'restitutio'", "restitution"]),
         ('\n[[effects]]\nname = "restitution"\nrr = 0.9\n', ["line 13", "'rr'", "did you mean 'r'"]),
         ('\n[[effects]]\nname = "restitution"\nr = 1.5\n', ["line 13", "`r`", "[0, 1]"]),
-        ('\n[[effects]]\nr = 0.9\n', ["line 13", 'needs name = "<effect>"', "rotational_damping"]),
+        ("\n[[effects]]\nr = 0.9\n", ["line 13", 'needs name = "<effect>"', "rotational_damping"]),
         (RESTITUTION + RESTITUTION, ["lists 'restitution' twice"]),
         ('\n[[effects]]\nname = "sliding"\n', ["line 13", "needs `mu`"]),
     ],

@@ -64,8 +64,8 @@ def test_settings_are_checked_and_travel(engine):
         OpenSeesEngine(stepsize=1e-4)
     copy = pickle.loads(pickle.dumps(OpenSeesEngine(timestep=1e-4)))
     assert copy.settings()["timestep"] == 1e-4 and copy.version() == engine.version()
-    with pytest.raises(ValueError, match="cannot realise effect 'restitution'"):
-        engine.simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.2), [make_effect("restitution", r=0.9)])
+    with pytest.raises(ValueError, match="cannot realise effect 'sliding'"):
+        engine.simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.2), [make_effect("sliding", mu=0.3)])
 
 
 def test_quiet(engine, capfd):
