@@ -607,3 +607,12 @@ def _check_percentiles(percentiles) -> list[tuple[float, float]]:
             raise ValueError(f"`percentiles`[{q!r}] must be a finite tolerance >= 0 on theta_max/alpha, got {tol!r}")
         out.append((float(q), float(tol)))
     return out
+
+
+def __getattr__(name: str):
+    """The study assertions live in :mod:`reports.study_assertions` (imported on first use: it imports this)."""
+    if name in ("assert_fragility_agreement", "FragilityAgreementError"):
+        from reports import study_assertions
+
+        return getattr(study_assertions, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -178,9 +178,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 f"(source {scenario.source!r}); {opt} applies to RDK ensembles"
             )
     out = Path(args.out) if args.out else Path("runs") / scenario.name
-    check_output_dir(out, "--out" if args.out else "run directory (--out)", files=RUN_FILES)
+    if scenario.study is not None:
+        from scenarios.study import STUDY_FILES
+
+        check_output_dir(out, "--out" if args.out else "study directory (--out)", files=STUDY_FILES)
+    else:
+        check_output_dir(out, "--out" if args.out else "run directory (--out)", files=RUN_FILES)
     client = connect_scheduler(args.scheduler) if args.scheduler else None
     n = args.n_motions if args.n_motions is not None else scenario.n_motions
+    if scenario.study is not None:
+        return _run_study(args, scenario, engines, out, client, n)
     print(f"scenario {scenario.name}: {n} motions x engines {', '.join(engines)} -> {out}", file=sys.stderr)
     try:
         run = run_scenario(
@@ -229,6 +236,66 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path, client, n: int) -> int:
+    """`housner run` on a scenario with a [study]: every record, the fragility fits, the study report."""
+    from scenarios.study import run_study
+
+    st = scenario.study
+    print(
+        f"study {scenario.name}: {len(st.S)} sizes x {len(st.levels)} stripes x {n} motions x engines "
+        f"{', '.join(engines)} = {len(st.S) * len(st.levels) * n * len(engines)} records -> {out}",
+        file=sys.stderr,
+    )
+    try:
+        res = run_study(
+            scenario,
+            engines=engines,
+            n_motions=args.n_motions,
+            seed=args.seed,
+            out=out,
+            jobs=args.jobs,
+            scheduler=client,
+            use_cache=not args.no_cache,
+            progress=not args.quiet,
+        )
+    finally:
+        if client is not None:
+            client.close(timeout=2)
+    comps = {(c["engine"], c["size"]): c for c in res.comparisons}
+    print(f"fragility ({st.label}; median and beta with {st.ci:.0%} bootstrap intervals):")
+    for f in res.fits:
+        head = f"  {f['engine']:9s} H = {f['size']:g} m: "
+        if f["status"] != "ok":
+            print(head + f"no fit ({f['message']})")
+            continue
+        line = (f"median {f['median']:.3g} [{f['median_low']:.3g}, {f['median_high']:.3g}], "
+                f"beta {f['beta']:.2f} [{f['beta_low']:.2f}, {f['beta_high']:.2f}]")  # fmt: skip
+        c = comps.get((f["engine"], f["size"]))
+        if c is not None:
+            word = "DISAGREES with" if c["disagree"] else "agrees with"
+            line += (
+                f"; {word} {c['reference']}: median x{c['median_ratio']:.3f} "
+                f"[{c['ratio_low']:.3f}, {c['ratio_high']:.3f}], "
+                f"beta {c['beta_diff']:+.2f} [{c['diff_low']:+.2f}, {c['diff_high']:+.2f}]"
+            )
+        print(head + line)
+    failed = res.results[res.results["status"] != "ok"]
+    if len(failed):
+        print(f"{len(failed)} record(s) failed (kept out of the fits):", file=sys.stderr)
+        for r in failed.head(20).itertuples():
+            print(f"  {r.engine} H = {r.size:g} m stripe {r.stripe} motion {r.motion_id}: {r.error}", file=sys.stderr)
+    print(f"results: {out / 'fragility.json'}")
+    if not args.no_report:
+        from reports.study_report import write_study_report
+
+        print(f"report:  {write_study_report(out)}")
+    if len(failed) and not args.allow_failures:
+        print(f"housner: error: {len(failed)} of {len(res.results)} records failed (listed above); exit status 1 "
+              "(--allow-failures: exit 0 when records fail)", file=sys.stderr)  # fmt: skip
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from reports.html import write_report
 
@@ -240,6 +307,10 @@ def _cmd_report(args: argparse.Namespace) -> int:
     if not (run_dir / "results.parquet").is_file():
         raise UsageError(f"{run_dir} holds no results.parquet; run `housner run SCENARIO --out {run_dir}` first")
     out = _check_output_file(args.out, "--out") if args.out else None
+    if (run_dir / "fragility.json").is_file():  # a study directory
+        from reports.study_report import write_study_report
+
+        write_report = write_study_report  # noqa: F811
     if out is None:
         from scenarios._outputs import check_output_dir
 

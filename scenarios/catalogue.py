@@ -88,6 +88,8 @@ class Scenario:
     #: Physical effects of the [[effects]] tables (housner.effects); the runner runs every engine
     #: without them and with them.
     effects: tuple = ()
+    #: The [study] table (scenarios.study.Study): stripes and sizes to run and fit fragility curves to; None: a run.
+    study: Any = None
     #: Record files read from the [motions] table: key -> [(motion, facts)]; None until read.
     _files: dict | None = field(default=None, init=False, repr=False, compare=False)
 
@@ -583,6 +585,10 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         raw_text=text,
         effects=effects,
     )
+    if "study" in raw:
+        from scenarios.study import read_study
+
+        scen.study = read_study(f, raw["study"], mot, specimen, scen.S)
     scen.check_effects()
     if src == "pulses":
         scen.pulse_grid()  # validate the grids now

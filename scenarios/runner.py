@@ -91,9 +91,10 @@ def run_engines(
     scheduler: str | Any | None = None,
     cache_dir: Path | None = None,
     use_cache: bool = True,
-    progress: bool = True,
+    progress: bool | _Progress = True,
     chunk_size: int | None = None,
     effects: tuple = (),
+    histories: bool = True,
 ) -> tuple[pd.DataFrame, dict[tuple[str, int], np.ndarray], dict]:
     """Run every engine on every motion (with ``effects``, if any).
 
@@ -110,13 +111,17 @@ def run_engines(
         Address of a Dask distributed scheduler (or a Client) to run the chunks on.
     cache_dir : Path, optional
         Result cache (default :func:`default_cache_dir`); ``use_cache=False`` ignores it.
-    progress : bool
-        Show a progress bar with the estimated time left (tqdm, on stderr).
+    progress : bool or progress bar
+        Show a progress bar with the estimated time left (tqdm, on stderr); a bar of the caller's
+        (``scenarios.workers._Progress``, e.g. one over a whole study) is advanced, not closed.
     chunk_size : int, optional
         Records per chunk sent to a worker (default: about a quarter of each worker's share, 1 to 10).
     effects : tuple of housner.effects.Effect
         Physical effects every engine realises in every record (``Engine.simulate``'s ``effects``);
         an engine that cannot realise one fails each record, naming it. Part of the cache key.
+    histories : bool
+        Keep each record's theta history (returned, and in memory until then). False keeps only
+        the record's figures, so memory stays flat over many records (the cache still stores it).
 
     Returns
     -------
@@ -153,6 +158,10 @@ def run_engines(
     jobs = jobs or os.cpu_count() or 1
     n_workers = 1 if scheduler is None and jobs == 1 else jobs
     plan = _plan(specimen, motions, engines, effects, cache_dir if use_cache else None, n_workers, chunk_size)
+    plan.histories = histories
+    if not histories:
+        for r in plan.rows.values():
+            r.pop("theta", None)
     elapsed = _execute(plan, specimen, jobs, scheduler, progress)
     for name in plan.info:
         plan.info[name]["elapsed_s"] = elapsed
@@ -169,6 +178,7 @@ class _Plan:
     info: dict[str, dict]  # engine -> settings, version, counters
     chunks: list[_Chunk]
     cache_dir: Path | None  # None: the cache is not used
+    histories: bool = True  # False: a record's theta is dropped once it is cached
 
     def store(self, name: str, r: dict) -> None:
         """Take a computed record: into the rows, its time into the engine's total, into the cache if it is ok."""
@@ -181,6 +191,8 @@ class _Plan:
                 _store_cached(self.cache_dir / k[:2] / f"{k}.npz", k, r)
             except OSError:
                 pass  # a read-only cache must not fail the run
+        if not self.histories:
+            r.pop("theta", None)
 
 
 def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | None, n_workers: int,
@@ -238,7 +250,10 @@ def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress: bool) -> flo
         how = "in this process"
     else:
         how = f"starting {min(jobs, len(chunks))} worker processes"
-    bar = _Progress(total, progress, how)
+    own_bar = not isinstance(progress, _Progress)
+    bar = _Progress(total, progress, how) if own_bar else progress
+    if not own_bar:
+        bar.advance(len(plan.rows))  # the records the cache held count as done
 
     def on_record(name: str, r: dict) -> None:
         plan.store(name, r)
@@ -258,8 +273,9 @@ def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress: bool) -> flo
                 _run_pool(chunks, specimen, jobs, on_record, deaths)
     except KeyboardInterrupt:
         bar.close()
-        raise RunInterrupted(bar.done, total, cached=plan.cache_dir is not None) from None
-    bar.close()
+        raise RunInterrupted(bar.done, total if own_bar else bar.total, cached=plan.cache_dir is not None) from None
+    if own_bar:
+        bar.close()
     for (name, _i), reasons in deaths.items():
         plan.info[name]["worker_deaths"] += len(reasons)
     return time.perf_counter() - t_start
@@ -290,7 +306,7 @@ def _table(rows: dict, engines: list[str], motions: list[GroundMotion], effects:
                 "effects": label,
             }
         )
-        if ok:
+        if ok and "theta" in r:
             histories[(name, i)] = np.asarray(r["theta"], dtype=np.float32)
     return pd.DataFrame(table, columns=RESULT_COLUMNS), histories
 

@@ -37,6 +37,7 @@ _SCHEMA: dict[str, dict[str, Any]] = {
         "engines": dict,
         "analysis": dict,
         "effects": list,
+        "study": dict,
     },
     "specimen": {
         "preset": str,
@@ -67,6 +68,17 @@ _SCHEMA: dict[str, dict[str, Any]] = {
     },
     "engines": {"names": list},
     "analysis": {"reference": str, "paper_percentiles": dict, "paper_note": str, "seed_spread": int},
+    "study": {
+        "intensity": str,
+        "levels": list,
+        "period": float,
+        "prototype_heights": list,
+        "S": list,
+        "thresholds": list,
+        "bootstrap": int,
+        "seed": int,
+        "histories": bool,
+    },
 }
 
 

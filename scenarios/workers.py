@@ -521,6 +521,14 @@ class _Progress:
                 flush=True,
             )
 
+    def advance(self, n: int) -> None:
+        """Count ``n`` records as done without running them (found in the cache)."""
+        if n <= 0:
+            return
+        self.done += n
+        if self.bar is not None:
+            self.bar.update(n)
+
     def update(self, engine: str) -> None:
         self.done += 1
         if not self.enabled:
