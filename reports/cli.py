@@ -270,6 +270,8 @@ def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path
             continue
         line = (f"median {f['median']:.3g} [{f['median_low']:.3g}, {f['median_high']:.3g}], "
                 f"beta {f['beta']:.2f} [{f['beta_low']:.2f}, {f['beta_high']:.2f}]")  # fmt: skip
+        if f.get("caveat"):
+            line += f" (caveat: {f['caveat']})"
         c = comps.get((f["engine"], f["size"]))
         if c is not None:
             word = "DISAGREES with" if c["disagree"] else "agrees with"

@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.legend_handler import HandlerTuple
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from reports.figures import engine_colors
 from scenarios.fragility import fragility_curve
@@ -277,7 +278,7 @@ def plot_size_effect(
     colors = dict(colors) if colors is not None else engine_colors(names, reference)
     sizes = np.array(sorted({json_number(f.get("size")) for f in fits}), dtype=float)
     sizes = sizes[np.isfinite(sizes)]
-    log_x = _use_log(sizes)
+    log_x = _use_log(sizes) or (sizes.size > 2 and float(sizes.max() / sizes.min()) >= 3.0)
     # Sizes are few and far apart (a factor 2 or more): a narrower spread keeps each point near its size.
     shift = _offsets(sizes if sizes.size else np.array([1.0]), len(names), log_x or sizes.size == 0, _SPREAD / 3)
 
@@ -337,8 +338,12 @@ def plot_size_effect(
         if sizes.size <= 12:
             ax.set_xticks(sizes, [f"{v:g}" for v in sizes])
             ax.minorticks_off()
-    if _use_log(medians):
+    if _use_log(medians) or log_x:
+        # a size effect is a power law: straight on log-log axes; ticks as plain numbers, not 4 x 10^0
         ax.set_yscale("log")
+        ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 1.5, 2.0, 3.0, 5.0, 7.0)))
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("prototype height [m]")
     ax.set_ylabel(f"median capacity: {label}")
     ax.set_title(f"Size effect: fitted median with bootstrap {ci:.0%} interval", fontsize=11)

@@ -63,24 +63,10 @@ from reports.page import (
 )
 from reports.sections.tuning import _settings_html
 from scenarios.rundir import json_number
+from scenarios.study import EXCEEDANCE_FILE, FRAGILITY_FILE, REPORT_FILE, RESULTS_FILE, STUDY_FILE
+from scenarios.study import FITS_FILE as FRAGILITY_JSON
 
-__all__ = [
-    "EXCEEDANCE_FILE",
-    "FRAGILITY_FILE",
-    "FRAGILITY_JSON",
-    "REPORT_FILE",
-    "RESULTS_FILE",
-    "STUDY_FILE",
-    "render_study_report",
-    "write_study_report",
-]
-
-STUDY_FILE = "study.json"
-FRAGILITY_FILE = "fragility.parquet"
-EXCEEDANCE_FILE = "exceedance.parquet"
-FRAGILITY_JSON = "fragility.json"
-RESULTS_FILE = "results.parquet"
-REPORT_FILE = "report.html"
+__all__ = ["render_study_report", "write_study_report"]
 
 #: Failed records listed in full; beyond this the table is cut (the counts above it stay complete), so that a
 #: study where an engine failed on thousands of records still gives a page a browser opens.
@@ -466,6 +452,7 @@ def _overview(study: _Study) -> str:
 
 
 def _headline(study: _Study) -> str:
+    each = json_number(study.settings.get("compare_ci", study.ci))  # each comparison interval's level
     parts = [_overview(study)]
     for problem in study.problems.values():
         parts.append(html_note(problem, "warn"))
@@ -519,17 +506,17 @@ def _headline(study: _Study) -> str:
             "fitted medians contains 1 and that of the difference of the betas contains 0. The intervals are "
             f"percentile bootstraps over the motions ({esc(s.get('n_boot', '?'))} replicates, seed "
             f"{esc(s.get('seed', '?'))}), paired: each replicate refits both engines on the same resampled motions, "
-            "so the motion-to-motion scatter common to both cancels. Two intervals are checked per size, so engines "
-            f"that agree are still called in disagreement with a probability up to about {2 * (1 - study.ci):.0%} "
-            "per size."
+            "so the motion-to-motion scatter common to both cancels. Two intervals are checked per size, each at "
+            f"{esc(f'{each:.1%}')} (Bonferroni), so engines that agree are called in disagreement with a probability "
+            f"of at most about {1 - study.ci:.0%} per size."
         )
     )
     return "".join(parts)
 
 
 def _degenerate(study: _Study) -> str:
-    """The fits that are not maximum-likelihood fits, each with its message."""
-    rows = []
+    """The fits that are not maximum-likelihood fits, each with its message, and the caveats of those that are."""
+    rows, caveats = [], []
     for size in study.sizes:
         for engine in study.engines:
             f = study.fit(engine, size)
@@ -539,15 +526,22 @@ def _degenerate(study: _Study) -> str:
                     rows.append(f"<li>{where}: no fit in fragility.json</li>")
                 continue
             if _is_ok(f):
+                if f.get("caveat"):
+                    caveats.append(f"<li>{_tag(engine, study)} at {esc(study.size_title(size))}: "
+                                   f"{esc(f['caveat'])}</li>")  # fmt: skip
                 continue
             msg = str(f.get("message") or "no message")
             rows.append(
                 f"<li>{_tag(engine, study)} at {esc(study.size_title(size))}: <strong>{esc(_status_words(f))}"
                 f"</strong>: {esc(msg)}</li>"
             )
+    extra = ""
+    if caveats:
+        extra = html_note(f"{len(caveats)} fit{'s' if len(caveats) != 1 else ''} with a caveat:", "warn")
+        extra += f'<ul class="cause">{"".join(caveats)}</ul>'
     if not rows:
-        return html_note("Every fit is a maximum-likelihood fit (status ok).", "good")
-    return (
+        return html_note("Every fit is a maximum-likelihood fit (status ok).", "good") + extra
+    return extra + (
         html_note(
             f"{len(rows)} fit{'s are' if len(rows) != 1 else ' is'} degenerate: not a maximum-likelihood lognormal "
             "fit, so no median or beta is reported for it and it is compared with nothing.",

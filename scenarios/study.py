@@ -479,6 +479,17 @@ def _matrices(results: pd.DataFrame, engine: str, size: float, n_stripes: int) -
 _FIT_NUMBERS = ("median", "median_low", "median_high", "beta", "beta_low", "beta_high")
 
 
+def _caveat(fit, im: np.ndarray) -> str:
+    """What a reader must know of an ok fit: a median outside the stripes is an extrapolation ("" if none)."""
+    if fit.status != "ok" or not math.isfinite(fit.median):
+        return ""
+    if fit.median > im.max() or fit.median < im.min():
+        side = "above the highest" if fit.median > im.max() else "below the lowest"
+        return (f"the median {fit.median:.3g} lies {side} stripe ({im.min():g}-{im.max():g}): it is extrapolated "
+                "by the lognormal shape, not bracketed by data; add stripes there")  # fmt: skip
+    return ""
+
+
 def compare_ci(ci: float) -> float:
     """Confidence level of each of the two intervals (median ratio, beta difference) of an engine comparison."""
     return 1.0 - 0.5 * (1.0 - ci)
@@ -516,7 +527,8 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
             fits.append({"engine": e, "size": size, "S": S, "median": b.fit.median, "median_low": b.median_low,
                          "median_high": b.median_high, "beta": b.fit.beta, "beta_low": b.beta_low,
                          "beta_high": b.beta_high, "status": b.fit.status, "message": b.fit.message,
-                         "n_boot": b.n_boot, "n_failed": b.n_failed})  # fmt: skip
+                         "n_boot": b.n_boot, "n_failed": b.n_failed,
+                         "caveat": _caveat(b.fit, im)})  # fmt: skip
         if reference in mats:
             th_r, valid_r = mats[reference]
             for e in engines:
