@@ -157,7 +157,14 @@ def run_engines(
     cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
     jobs = jobs or os.cpu_count() or 1
     n_workers = 1 if scheduler is None and jobs == 1 else jobs
-    plan = _plan(specimen, motions, engines, effects, cache_dir if use_cache else None, n_workers, chunk_size)
+    per_worker = 4
+    if scheduler is not None:
+        # Dask: as many chunks per worker thread as make the last ones short (records differ 10-fold in
+        # length: an overturn ends one early); a task costs milliseconds. With 4 per worker, 2 workers ran
+        # an engine-bound study 1.74 x faster than one, the last chunk keeping one worker alone.
+        n_workers, per_worker = _cluster_threads(scheduler, jobs), 16
+    plan = _plan(specimen, motions, engines, effects, cache_dir if use_cache else None, n_workers, chunk_size,
+                 per_worker)  # fmt: skip
     plan.histories = histories
     if not histories:
         for r in plan.rows.values():
@@ -195,8 +202,16 @@ class _Plan:
             r.pop("theta", None)
 
 
+def _cluster_threads(scheduler, default: int) -> int:
+    """Worker threads of a Dask client's cluster (``default`` for an address, or a cluster that will not say)."""
+    try:
+        return max(1, int(sum(scheduler.nthreads().values())))
+    except Exception:  # an address string, or a cluster that cannot answer now: the chunks are only sized by it
+        return default
+
+
 def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | None, n_workers: int,
-          chunk_size: int | None) -> _Plan:  # fmt: skip
+          chunk_size: int | None, per_worker: int = 4) -> _Plan:  # fmt: skip
     """Probe each engine (settings, version), take what the cache holds, cut the rest into chunks."""
     plan = _Plan({}, {}, {}, [], cache_dir)
     per_engine: list[list[tuple]] = []
@@ -213,7 +228,7 @@ def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | No
                 plan.rows[(name, i)] = row
             else:
                 todo.append((i, m))
-        size = chunk_size or max(1, min(10, math.ceil(len(todo) / (4 * n_workers))))
+        size = chunk_size or max(1, min(10, math.ceil(len(todo) / (per_worker * n_workers))))
         per_engine.append([(name, settings, todo[c : c + size], effects) for c in range(0, len(todo), size)])
     # Engines interleaved, chunk by chunk: the progress bar's rate (and time left) then mixes fast
     # and slow engines from the start instead of extrapolating the fastest one.

@@ -228,3 +228,15 @@ def test_housner_run_on_a_study_prints_the_fits_and_writes_the_report(tmp_path, 
     assert (tmp_path / "cli" / "report.html").is_file()
     # the report command re-renders a study directory as a study
     assert main(["report", str(tmp_path / "cli")]) == 0
+
+
+def test_a_study_on_dask_gives_the_same_fragility(tiny):
+    import distributed
+
+    p, tmp, res = tiny
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as lc:
+        with distributed.Client(lc) as client:
+            dask = run_study(p, out=tmp / "dask", scheduler=client, use_cache=False, progress=False)
+    a = json.loads((tmp / "out" / "fragility.json").read_text())
+    b = json.loads((tmp / "dask" / "fragility.json").read_text())
+    assert a == b and not dask.results["cached"].any()
