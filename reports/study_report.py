@@ -451,6 +451,13 @@ def _overview(study: _Study) -> str:
     )
 
 
+def _widest(study: _Study) -> float:
+    """The largest distance of a median-ratio interval's end from 1 over the comparisons [-] (0 if none)."""
+    ends = [abs(json_number(c.get(k)) - 1.0) for c in study.comparisons for k in ("ratio_low", "ratio_high")]
+    ends = [e for e in ends if math.isfinite(e)]
+    return max(ends, default=0.0)
+
+
 def _headline(study: _Study) -> str:
     each = json_number(study.settings.get("compare_ci", study.ci))  # each comparison interval's level
     parts = [_overview(study)]
@@ -502,8 +509,10 @@ def _headline(study: _Study) -> str:
     s = study.settings
     parts.append(
         html_note(
-            f"An engine agrees with the reference at a size when the {study.ci:.0%} interval of the ratio of the "
-            "fitted medians contains 1 and that of the difference of the betas contains 0. The intervals are "
+            f"An engine agrees with the reference at a size when the {esc(f'{each:.1%}')} interval of the ratio of "
+            "the fitted medians contains 1 and that of the difference of the betas contains 0: no difference beyond "
+            f"what {esc(s.get('n_motions', 'these'))} motions resolve, not proof of none (a difference smaller than "
+            f"the interval, here up to {_widest(study):.0%} on the median, is not excluded). The intervals are "
             f"percentile bootstraps over the motions ({esc(s.get('n_boot', '?'))} replicates, seed "
             f"{esc(s.get('seed', '?'))}), paired: each replicate refits both engines on the same resampled motions, "
             "so the motion-to-motion scatter common to both cancels. Two intervals are checked per size, each at "
