@@ -240,3 +240,10 @@ def test_a_study_on_dask_gives_the_same_fragility(tiny):
     a = json.loads((tmp / "out" / "fragility.json").read_text())
     b = json.loads((tmp / "dask" / "fragility.json").read_text())
     assert a == b and not dask.results["cached"].any()
+
+
+def test_histories_are_kept_only_when_asked(tmp_path):
+    p = scenario_file(tmp_path, "levels = [1.0, 2.0]\nbootstrap = 100\nhistories = true\n", n=3)
+    res = run_study(p, out=tmp_path / "out", jobs=1, cache_dir=tmp_path / "cache", progress=False)
+    assert sorted(res.histories) == [("housner", 0, i) for i in range(6)]  # (engine, size, record of the size)
+    assert all(h.dtype == np.float32 and h.size > 100 for h in res.histories.values())
