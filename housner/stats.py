@@ -59,6 +59,7 @@ __all__ = [
     "percentile_label",
     "percentiles",
     "wasserstein",
+    "wilson_interval",
 ]
 
 #: Bootstrap resamples are drawn in blocks of at most this many values, to bound memory.
@@ -344,6 +345,26 @@ class ProportionCI(NamedTuple):
 _PROPORTION_METHODS = ("wilson", "clopper-pearson")
 
 
+def wilson_interval(k, n, ci: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    """Wilson score interval of k successes in n trials, elementwise [-]; NaN where n = 0.
+
+    (k + z^2/2)/(n + z^2) -+ z/(n + z^2) sqrt(k (n - k)/n + z^2/4) with z = Phi^-1((1 + ci)/2),
+    exactly 0 at k = 0 and 1 at k = n (rounding would leave 3e-17 there, outside [k/n, ...]).
+    ``ci`` is taken as checked.
+    """
+    k = np.asarray(k, dtype=float)
+    n = np.asarray(n, dtype=float)
+    z = NormalDist().inv_cdf(0.5 * (1.0 + ci))
+    z2 = z * z
+    with np.errstate(invalid="ignore", divide="ignore"):
+        centre = (k + 0.5 * z2) / (n + z2)
+        half = z / (n + z2) * np.sqrt(k * (n - k) / n + 0.25 * z2)
+    empty = n == 0
+    low = np.where(empty, np.nan, np.where(k == 0, 0.0, np.clip(centre - half, 0.0, 1.0)))
+    high = np.where(empty, np.nan, np.where(k == n, 1.0, np.clip(centre + half, 0.0, 1.0)))
+    return low, high
+
+
 def overturn_probability(overturned, *, ci: float = 0.95, method: str = "wilson") -> ProportionCI:
     """Probability of overturning with a binomial confidence interval.
 
@@ -392,11 +413,8 @@ def overturn_probability(overturned, *, ci: float = 0.95, method: str = "wilson"
     k = int(np.count_nonzero(o))
     est = k / n
     if method == "wilson":
-        z = NormalDist().inv_cdf(0.5 * (1.0 + ci))
-        z2 = z * z
-        centre = (k + 0.5 * z2) / (n + z2)
-        half = z / (n + z2) * math.sqrt(k * (n - k) / n + 0.25 * z2)
-        return ProportionCI(est, max(0.0, centre - half), min(1.0, centre + half))
+        low, high = wilson_interval(k, n, ci)
+        return ProportionCI(est, float(low), float(high))
     from scipy.special import betaincinv
 
     a = 1.0 - ci

@@ -36,6 +36,8 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, special
 
+from housner.stats import _check_ci, wilson_interval
+
 __all__ = [
     "BETA_BOUNDS",
     "BootstrapFit",
@@ -70,16 +72,6 @@ _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 # ----------------------------------------------------------------------------
 # validation
-def _check_ci(ci: float) -> float:
-    try:
-        c = float(ci)
-    except (TypeError, ValueError):
-        raise ValueError(f"`ci` must be a number in (0, 1), got {ci!r}") from None
-    if not 0.0 < c < 1.0:
-        raise ValueError(f"`ci` must lie in (0, 1) (e.g. 0.95), got {ci!r}")
-    return c
-
-
 def _check_im(im, n_stripes: int | None = None) -> np.ndarray:
     try:
         x = np.asarray(im, dtype=np.float64)
@@ -212,16 +204,9 @@ def proportion_intervals(k, n, ci: float = 0.95) -> tuple[np.ndarray, np.ndarray
     Wilson (1927).
     """
     n_, k_ = _check_counts(n, k)
-    z = special.ndtri(0.5 * (1.0 + _check_ci(ci)))
-    z2 = z * z
     with np.errstate(invalid="ignore", divide="ignore"):
         p = k_ / n_
-        centre = (k_ + 0.5 * z2) / (n_ + z2)
-        half = z / (n_ + z2) * np.sqrt(k_ * (n_ - k_) / n_ + 0.25 * z2)
-    empty = n_ == 0
-    # exactly 0 at k = 0 and 1 at k = n (rounding left 3e-17 there, outside [p, ...])
-    low = np.where(empty, np.nan, np.where(k_ == 0, 0.0, np.clip(centre - half, 0.0, 1.0)))
-    high = np.where(empty, np.nan, np.where(k_ == n_, 1.0, np.clip(centre + half, 0.0, 1.0)))
+    low, high = wilson_interval(k_, n_, _check_ci(ci))
     return p, low, high
 
 
