@@ -11,6 +11,7 @@ __all__ = [
     "IMPACT_LAW_RANGE",
     "IMPACT_LAW_TOL",
     "ImpactLaw",
+    "ImpactLawEngine",
     "checked_settings",
     "com_state",
     "gravity_x",
@@ -318,3 +319,19 @@ class ImpactLaw:
             if c is not None:
                 return i, c
         return None
+
+
+class ImpactLawEngine:
+    """The impact law's two hooks, for an adapter whose ``_settings`` hold ``impact_energy_factor``.
+
+    Mixed in before :class:`engines.base.Engine` by the five planar adapters, which realise the
+    ``restitution`` effect through the law.
+    """
+
+    def effect_refusal(self, specimen, effects: tuple) -> str | None:
+        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
+        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
+
+    def impact_law(self, specimen, effects: tuple, step: float, theta0: float) -> ImpactLaw:
+        """The law of one record: the setting times a ``restitution`` effect's share, at engine step ``step`` [s]."""
+        return ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, step, theta0)

@@ -43,11 +43,9 @@ import numpy as np
 
 from engines._planar import (
     IMPACT_LAW_RANGE,
-    ImpactLaw,
+    ImpactLawEngine,
     checked_settings,
     gravity_x,
-    law_factor,
-    law_refusal,
     release_state,
     sampled_response,
     substeps,
@@ -96,7 +94,7 @@ def _dart():
     return dartpy
 
 
-class DartEngine(Engine):
+class DartEngine(ImpactLawEngine, Engine):
     """DART's rigid block on a rigid ground with boxed-LCP contact, driven by the d'Alembert force.
 
     Parameters
@@ -146,10 +144,6 @@ class DartEngine(Engine):
         self._settings = checked_settings(
             "DART", self.DEFAULTS, _RANGES, settings, strict=("timestep", "impact_energy_factor")
         )
-
-    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
-        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
-        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
@@ -212,7 +206,7 @@ class DartEngine(Engine):
         states[0] = (z0, x0, th0, dz0, dx0, om0)
         last, overturned = n - 1, False
         set_gravity, step = world.setGravity, world.step
-        law = ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, th0)
+        law = self.impact_law(specimen, effects, h, th0)
         for i in range(1, n):
             for gxi in gx_rows[i - 1]:
                 set_gravity([gxi, 0.0, -G])

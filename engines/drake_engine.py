@@ -68,11 +68,9 @@ import numpy as np
 
 from engines._planar import (
     IMPACT_LAW_RANGE,
-    ImpactLaw,
+    ImpactLawEngine,
     checked_settings,
     gravity_x,
-    law_factor,
-    law_refusal,
     release_state,
     sampled_response,
     substeps,
@@ -124,7 +122,7 @@ def _drake():
     return pydrake
 
 
-class DrakeEngine(Engine):
+class DrakeEngine(ImpactLawEngine, Engine):
     """Drake's block on a stiff point contact (SAP solver), driven by the d'Alembert force.
 
     Parameters
@@ -182,10 +180,6 @@ class DrakeEngine(Engine):
             "Drake", self.DEFAULTS, _RANGES, settings, strict=("timestep", "impact_energy_factor")
         )
         self._model = None  # (key, plant, diagram context, plant context, input vector), built on first use
-
-    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
-        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
-        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}  # the Drake model is rebuilt in the receiving process
@@ -324,7 +318,7 @@ class DrakeEngine(Engine):
         states[0] = (z0, x0, th0, dz0, dx0, om0)
         last, overturned = n - 1, False
         set_force, step, state = force.SetAtIndex, plant.ExecuteForcedEvents, ctx.get_discrete_state_vector
-        law = ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, th0)
+        law = self.impact_law(specimen, effects, h, th0)
         for i in range(1, n):
             try:
                 for fx in fx_rows[i - 1]:

@@ -102,7 +102,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engines._planar import IMPACT_LAW_RANGE, ImpactLaw, checked_settings, law_factor, law_refusal
+from engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, checked_settings
 from engines.base import Engine
 from engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 from housner.errors import EngineError, unknown_choice
@@ -157,7 +157,7 @@ def initial_qvel(
 _THETA_DOF = 2
 
 
-class MujocoEngine(Engine):
+class MujocoEngine(ImpactLawEngine, Engine):
     """The planar rocking block in MuJoCo, driven by the d'Alembert force of the ground acceleration.
 
     Parameters
@@ -281,10 +281,6 @@ class MujocoEngine(Engine):
         """The MJCF text of ``specimen`` with this engine's settings."""
         return mjcf_from_specimen(specimen, **{k: v for k, v in self._settings.items() if k in MJCF_DEFAULTS})
 
-    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
-        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
-        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
-
     def __getstate__(self) -> dict:  # compiled models stay in their process
         return {"_settings": self._settings}
 
@@ -394,9 +390,7 @@ class MujocoEngine(Engine):
         warm = np.zeros(model.nv)
         done = 0
         overturn_step = None
-        law = ImpactLaw(
-            law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, motion.theta0
-        )
+        law = self.impact_law(specimen, effects, h, motion.theta0)
         if law.active:
             chunk = min(chunk, max(n_sub, round(_LAW_CHUNK_S / h)))
         while done < nstep:

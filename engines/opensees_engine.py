@@ -70,9 +70,8 @@ import numpy as np
 from engines._planar import (
     IMPACT_LAW_RANGE,
     ImpactLaw,
+    ImpactLawEngine,
     checked_settings,
-    law_factor,
-    law_refusal,
     release_state,
     sampled_response,
     substeps,
@@ -149,7 +148,7 @@ def _opensees():
     return ops
 
 
-class OpenSeesEngine(Engine):
+class OpenSeesEngine(ImpactLawEngine, Engine):
     """OpenSees' rigid frame on damped no-tension contact springs with Coulomb friction, uniform excitation.
 
     Parameters
@@ -226,10 +225,6 @@ class OpenSeesEngine(Engine):
             settings,
             strict=("timestep", "contact_stiffness", "impact_energy_factor"),
         )
-
-    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
-        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
-        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
@@ -334,9 +329,7 @@ class OpenSeesEngine(Engine):
         theta[0], theta_dot[0] = motion.theta0, motion.theta_dot0
         last, overturned, retried = n - 1, False, 0
         analyze, disp, vel = ops.analyze, ops.nodeDisp, ops.nodeVel
-        law = ImpactLaw(
-            law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, motion.theta0
-        )
+        law = self.impact_law(specimen, effects, h, motion.theta0)
         try:
             for i in range(1, n):
                 if law.active:

@@ -73,7 +73,7 @@ from typing import Any
 
 import numpy as np
 
-from engines._planar import IMPACT_LAW_RANGE, ImpactLaw, gravity_x, law_factor, law_refusal, release_state, substeps
+from engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, gravity_x, release_state, substeps
 from engines.base import Engine
 from engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 from housner.errors import EngineError
@@ -133,7 +133,7 @@ _SETTING_DOCS = {
 }
 
 
-class PybulletEngine(Engine):
+class PybulletEngine(ImpactLawEngine, Engine):
     """PyBullet's rigid block on a rigid plane, driven by the d'Alembert force.
 
     Parameters
@@ -246,10 +246,6 @@ class PybulletEngine(Engine):
         self._urdf: dict[tuple, Path] = {}
 
     # ------------------------------------------------------------------
-    def effect_refusal(self, specimen: Specimen, effects: tuple) -> str | None:
-        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
-        return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
-
     def __getstate__(self) -> dict:
         return {"settings": dict(self._settings)}
 
@@ -461,7 +457,7 @@ class PybulletEngine(Engine):
         g = -G
         last = n - 1
         overturned = False
-        law = ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, h, th0)
+        law = self.impact_law(specimen, effects, h, th0)
         for i in range(1, n):
             for gxi in gx_rows[i - 1]:
                 set_gravity(gxi, 0.0, g, physicsClientId=cid)
