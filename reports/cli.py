@@ -189,21 +189,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if scenario.study is not None:
         return _run_study(args, scenario, engines, out, client, n)
     print(f"scenario {scenario.name}: {n} motions x engines {', '.join(engines)} -> {out}", file=sys.stderr)
-    try:
-        run = run_scenario(
-            scenario,
-            engines=engines,
-            n_motions=args.n_motions,
-            seed=args.seed,
-            out=out,
-            jobs=args.jobs,
-            scheduler=client,
-            use_cache=not args.no_cache,
-            progress=not args.quiet,
-        )
-    finally:
-        if client is not None:
-            client.close(timeout=2)
+    run = _call_runner(run_scenario, args, scenario, engines, out, client)
     res = run.results
     for name in dict.fromkeys(res.engine):  # the engines, then the series with the scenario's [[effects]]
         sub = res[res.engine == name]
@@ -236,18 +222,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path, client, n: int) -> int:
-    """`housner run` on a scenario with a [study]: every record, the fragility fits, the study report."""
-    from scenarios.study import run_study
-
-    st = scenario.study
-    print(
-        f"study {scenario.name}: {len(st.S)} sizes x {len(st.levels)} stripes x {n} motions x engines "
-        f"{', '.join(engines)} = {len(st.S) * len(st.levels) * n * len(engines)} records -> {out}",
-        file=sys.stderr,
-    )
+def _call_runner(runner, args: argparse.Namespace, scenario, engines: list[str], out: Path, client):
+    """``runner`` (run_scenario or run_study) with the command's options; the scheduler's client closed after."""
     try:
-        res = run_study(
+        return runner(
             scenario,
             engines=engines,
             n_motions=args.n_motions,
@@ -261,6 +239,19 @@ def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path
     finally:
         if client is not None:
             client.close(timeout=2)
+
+
+def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path, client, n: int) -> int:
+    """`housner run` on a scenario with a [study]: every record, the fragility fits, the study report."""
+    from scenarios.study import run_study
+
+    st = scenario.study
+    print(
+        f"study {scenario.name}: {len(st.S)} sizes x {len(st.levels)} stripes x {n} motions x engines "
+        f"{', '.join(engines)} = {len(st.S) * len(st.levels) * n * len(engines)} records -> {out}",
+        file=sys.stderr,
+    )
+    res = _call_runner(run_study, args, scenario, engines, out, client)
     comps = {(c["engine"], c["size"]): c for c in res.comparisons}
     print(f"fragility ({st.label}; median and beta with {st.ci:.0%} bootstrap intervals):")
     for f in res.fits:

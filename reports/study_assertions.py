@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from reports.assertions import AgreementReport, CDFAgreementError, Criterion, _check_tol
+from reports.assertions import AgreementReport, CDFAgreementError, Criterion, _check_count, _check_tol
 
 __all__ = ["FragilityAgreementError", "assert_fragility_agreement"]
 
@@ -117,8 +117,7 @@ def assert_fragility_agreement(
     __tracebackhide__ = True
     _check_tol("median_rtol", median_rtol, allow_none=False)
     _check_tol("beta_atol", beta_atol, allow_none=False)
-    if max_failed is not None and not (isinstance(max_failed, int) and max_failed >= 0):
-        raise ValueError(f"`max_failed` must be a non-negative integer or None, got {max_failed!r}")
+    _check_count("max_failed", max_failed)
     st = _study(results)
     meta_ref = st.meta.get("study", {}).get("reference")
     if meta_ref is not None and reference != meta_ref:

@@ -254,17 +254,12 @@ def _tuning_series(d: dict) -> tuple[dict, dict]:
     return curves, dec
 
 
-def _settings_differ(tuned: dict, used: dict, defaults: dict | None = None) -> list[str]:
-    """Settings where the run differs from the tuning file (keys the run sets); empty when it runs as tuned.
-
-    A setting the tuning file lacks did not exist when it was written: it counts as the engine's
-    default (``defaults``), which keeps the behaviour of that time (e.g. ``impact_energy_factor`` 1).
-    """
+def _settings_differ(tuned: dict, used: dict) -> list[str]:
+    """Settings where the run differs from the tuning file (keys the run sets); empty when it runs as tuned."""
 
     def norm(v):
         return json.loads(json.dumps(v))
 
-    tuned = {**(defaults or {}), **tuned}
     return [k for k, v in used.items() if k in tuned and norm(tuned[k]) != norm(v)]
 
 
@@ -300,8 +295,10 @@ def _tuning(run: Run) -> str:
             continue
         tuned = d.get("settings") or {}
         used = (engines.get(name) or {}).get("settings") or {}
-        differ = _settings_differ(tuned, used, _engine_defaults(name))
+        # a setting the file lacks did not exist when it was written: the engine's default keeps the
+        # behaviour of that time (e.g. impact_energy_factor 1)
         tuned = {**_engine_defaults(name), **tuned}
+        differ = _settings_differ(tuned, used)
         if not used:
             same = f"{_settings_html(tuned) or '&ndash;'}<br><small>(the run recorded no settings)</small>"
         elif differ:
