@@ -164,11 +164,7 @@ def run_engines(
         # an engine-bound study 1.74 x faster than one, the last chunk keeping one worker alone.
         n_workers, per_worker = _cluster_threads(scheduler, jobs), 16
     plan = _plan(specimen, motions, engines, effects, cache_dir if use_cache else None, n_workers, chunk_size,
-                 per_worker)  # fmt: skip
-    plan.histories = histories
-    if not histories:
-        for r in plan.rows.values():
-            r.pop("theta", None)
+                 per_worker, histories)  # fmt: skip
     elapsed = _execute(plan, specimen, jobs, scheduler, progress)
     for name in plan.info:
         plan.info[name]["elapsed_s"] = elapsed
@@ -211,9 +207,9 @@ def _cluster_threads(scheduler, default: int) -> int:
 
 
 def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | None, n_workers: int,
-          chunk_size: int | None, per_worker: int = 4) -> _Plan:  # fmt: skip
+          chunk_size: int | None, per_worker: int = 4, histories: bool = True) -> _Plan:  # fmt: skip
     """Probe each engine (settings, version), take what the cache holds, cut the rest into chunks."""
-    plan = _Plan({}, {}, {}, [], cache_dir)
+    plan = _Plan({}, {}, {}, [], cache_dir, histories)
     per_engine: list[list[tuple]] = []
     for name, settings in engines.items():
         probe = engine_class(name)(**settings)
@@ -250,6 +246,8 @@ def _cached_row(plan: _Plan, name: str, i: int, k: str) -> dict | None:
         _log.warning("housner: warning: cache entry %s (%s, motion %d) %s; recomputed", path, name, i, problem)
     if row is None:
         return None
+    if not plan.histories:
+        row.pop("theta", None)
     row.update(motion_id=i, cached=True)
     plan.info[name]["cached"] += 1
     return row
