@@ -9,7 +9,7 @@ from concurrent.futures import ThreadPoolExecutor
 import housner
 from engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
 from housner.effects import apply_effects, available_effects
-from housner.model import RockingParams, simulate
+from housner.model import REST_TOL, RockingParams, simulate
 from housner.model import simulate_many as simulate_batch
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -42,18 +42,26 @@ class HousnerEngine(Engine):
         A ``restitution`` effect replaces it.
     substeps : int, optional
         Integrator substeps per motion sample; default: the solver's.
+    rest_tol : float
+        Rest rule of the solver [-]: after an impact, a block whose next peak would stay below
+        ``rest_tol * alpha`` is put at rest (:func:`housner.model.simulate`). The diagnosis' floor
+        varies it, as two correct integrators differ in it.
     """
 
     name = "housner"
 
-    def __init__(self, r: float | None = None, substeps: int | None = None):
+    def __init__(self, r: float | None = None, substeps: int | None = None, rest_tol: float = REST_TOL):
         self.r = r
         self.substeps = substeps
+        self.rest_tol = float(rest_tol)
 
     effects_supported = _RegisteredEffects()  # the registry may grow after import
 
     def settings(self) -> dict:
-        return {"r": self.r, "substeps": self.substeps}
+        out = {"r": self.r, "substeps": self.substeps}
+        if self.rest_tol != REST_TOL:  # only when changed: the default keeps the cache keys of earlier runs
+            out["rest_tol"] = self.rest_tol
+        return out
 
     def version(self) -> str:
         return housner.__version__
@@ -63,9 +71,9 @@ class HousnerEngine(Engine):
             kwargs = {"r": self.r}
             if self.substeps is not None:
                 kwargs["substeps"] = self.substeps
-            return simulate(specimen, motion, **kwargs)
+            return simulate(specimen, motion, rest_tol=self.rest_tol, **kwargs)
         plan = apply_effects(specimen, motion, effects, params=RockingParams.from_specimen(specimen, r=self.r))
-        return plan.run(substeps=self.substeps)
+        return plan.run(substeps=self.substeps, rest_tol=self.rest_tol)
 
     def simulate_many(
         self, specimen: Specimen, motions: Sequence[GroundMotion], effects: Sequence = (), *, errors: str = "raise"
@@ -119,7 +127,8 @@ class HousnerEngine(Engine):
                 groups.setdefault(pl.params, []).append(i)
         for prm, idx in groups.items():
             try:
-                res = simulate_batch(specimen, [plans[i].motion for i in idx], params=prm, substeps=self.substeps)
+                res = simulate_batch(specimen, [plans[i].motion for i in idx], params=prm, substeps=self.substeps,
+                                   rest_tol=self.rest_tol)
             except RECORD_ERRORS:
                 continue  # one record at a time, so that the failing one is named
             for i, r in zip(idx, res, strict=True):
@@ -131,7 +140,7 @@ class HousnerEngine(Engine):
 
         def run_one(plan):
             try:
-                return plan.run(substeps=self.substeps)
+                return plan.run(substeps=self.substeps, rest_tol=self.rest_tol)
             except RECORD_ERRORS as e:
                 return e
 

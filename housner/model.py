@@ -77,7 +77,7 @@ from housner.response import Response
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["RockingParams", "default_substeps", "simulate", "simulate_many", "theta_max_many"]
+__all__ = ["REST_TOL", "RockingParams", "default_substeps", "simulate", "simulate_many", "theta_max_many"]
 
 #: Default accuracy target: the RK4 step h is chosen so that p h <= PH_MAX [-].
 #: RK4's global error scales as (p h)^4; at 0.01 theta_max is converged to
@@ -86,6 +86,8 @@ PH_MAX = 0.01
 
 #: Largest number of substeps per sample accepted [-].
 MAX_SUBSTEPS = 100_000
+#: Default rest rule: a block whose next peak would stay below REST_TOL * alpha is at rest [-].
+REST_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -340,7 +342,7 @@ def simulate(
     duration: float | None = None,
     substeps: int | None = None,
     params: RockingParams | None = None,
-    rest_tol: float = 1e-6,
+    rest_tol: float = REST_TOL,
 ) -> Response:
     """Rocking response of a rigid block to one ground motion (Housner's model).
 
@@ -409,7 +411,7 @@ def simulate_many(
     duration: float | None = None,
     substeps: int | None = None,
     params: RockingParams | None = None,
-    rest_tol: float = 1e-6,
+    rest_tol: float = REST_TOL,
     parallel: bool = True,
 ) -> list[Response]:
     """:func:`simulate` for many motions in one compiled call.
@@ -500,7 +502,7 @@ def theta_max_many(
     r: float | None = None,
     substeps: int | None = None,
     params: RockingParams | Sequence[RockingParams] | None = None,
-    rest_tol: float = 1e-6,
+    rest_tol: float = REST_TOL,
     parallel: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Peak response of many records without building their histories.

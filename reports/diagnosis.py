@@ -4,8 +4,12 @@
 one self-contained HTML page (figures are base64 PNGs, the style sheet is
 inline, no script, no network); :func:`write_diagnosis_report` writes it.
 
-What it shows, top first: a summary (what fails, which effect explains it
-with which parameters, by how much the held-out error fell); the error
+What it shows, top first: the verdict, stated once (what fails, which effect
+explains it), the held-out error before (plain Housner model) and after (final
+model) with their standard errors, and the effects' parameters with their
+units; the measured rotation against both models for the worst and the median
+ground-motion record and a free vibration; the residual against the
+correct-model floor; the error
 ladder (baseline, then each added effect, held-out error with its standard
 error, against the noise floor); the candidates of every greedy round; the
 theta_max/alpha CDFs of the measurement and of the model at every step; the
@@ -35,8 +39,10 @@ from matplotlib.figure import Figure
 from housner.calibration import half_cycle_integral
 from reports import figures
 from reports.page import Section, document, esc, html_figure, html_table, write_page
+from scenarios.compare import on_grid
+from scenarios.diagnosis_results import change_text, fmt_pm, params_text, signed_words
 
-__all__ = ["render_diagnosis", "write_diagnosis_report"]
+__all__ = ["history_records", "render_diagnosis", "write_diagnosis_report"]
 
 _MEASURED = "#000000"
 _STEP_COLORS = ("#7f7f7f", "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd")
@@ -50,8 +56,36 @@ def _f(x: Any, digits: int = 4) -> str:
     if math.isnan(v):
         return "&ndash;"
     if math.isinf(v):
-        return "overturn" if v > 0 else "&minus;&infin;"
+        return "overturned" if v > 0 else "&minus;&infin;"
     return f"{v:.{digits}g}" if abs(v) >= 1e4 or (v != 0 and abs(v) < 1e-3) else f"{v:.{digits}f}"
+
+
+def _pm(value: Any, se: Any) -> str:
+    """A value with its standard error on the page (:func:`scenarios.diagnosis_results.fmt_pm`)."""
+    return fmt_pm(value, se, sep=" &plusmn; ", nan="&ndash;")  # digits, the separator and fixed words: no escaping
+
+
+def _change(improvement: float, se: float) -> str:
+    """A paired improvement in words on the page: "falls by x &plusmn; s" or "rises by x &plusmn; s"."""
+    if not math.isfinite(improvement):
+        return "&ndash;"
+    return change_text(improvement, se, sep=" &plusmn; ")
+
+
+def _params(name: str, params: dict) -> str:
+    """An effect's fitted parameters with their units (each effect's ParamSpec)."""
+    return esc(params_text(name, params))
+
+
+def _candidate_params(c) -> str:
+    """A candidate's parameters with units; a pair's are keyed ``"effect.param"``."""
+    names = c.effect.split(" + ")
+    if len(names) == 1:
+        return _params(c.effect, c.params)
+    return "; ".join(
+        f"{esc(n)}: " + _params(n, {k.split(".", 1)[1]: v for k, v in c.params.items() if k.startswith(n + ".")})
+        for n in names
+    )
 
 
 def _colors(steps) -> list[str]:
@@ -229,26 +263,187 @@ def _cdf_figure(diag) -> Figure:
     return figures.plot_cdfs(samples, reference="measured", colors=colors)
 
 
+def _final_heldout(diag) -> dict[str, float]:
+    """Record id -> the final model's held-out (out-of-fold) error [alpha]; the comparison's error when absent."""
+    f = diag.final
+    if f.heldout_errors is not None and len(f.heldout_errors) == len(diag.heldout_ids):
+        return {rid: float(e) for rid, e in zip(diag.heldout_ids, f.heldout_errors, strict=True)}
+    return {r.id: float(r.error) for r in f.comparison.records}
+
+
+def _baseline_heldout(diag) -> dict[str, float]:
+    b = diag.baseline
+    if b.heldout_errors is not None and len(b.heldout_errors) == len(diag.heldout_ids):
+        return {rid: float(e) for rid, e in zip(diag.heldout_ids, b.heldout_errors, strict=True)}
+    return {r.id: float(r.error) for r in diag.steps[0].comparison.records}
+
+
+def history_records(diag) -> list[tuple[str, str]]:
+    """The records the top figure shows: (record id, role) for the worst and the median ground motion (by the
+    final model's held-out error) and the free vibration the final model fits worst (each when the campaign
+    has one)."""
+    err = _final_heldout(diag)
+    out: list[tuple[str, str]] = []
+    gm = sorted((err[r.id], r.id) for r in diag.campaign.ground_motion if math.isfinite(err.get(r.id, math.nan)))
+    if gm:
+        out.append((gm[-1][1], "worst ground motion"))
+        if len(gm) > 1:
+            med = gm[(len(gm) - 1) // 2][1]
+            out.append((med if med != gm[-1][1] else gm[-2][1], "median ground motion"))
+    fv = sorted((err[r.id], r.id) for r in diag.campaign.free_vibration if math.isfinite(err.get(r.id, math.nan)))
+    if fv:
+        out.append((fv[-1][1], "free vibration"))
+    return out
+
+
+def _histories_figure(diag) -> Figure | None:
+    """theta/alpha against time: measured, the plain Housner model (before) and the final model (after)."""
+    picks = history_records(diag)
+    if not picks:
+        return None
+    alpha = diag.campaign.specimen.alpha
+    before = {r.id: r for r in diag.steps[0].comparison.records}
+    after = {r.id: r for r in diag.final.comparison.records} if len(diag.steps) > 1 else {}
+    e_before, e_after = _baseline_heldout(diag), _final_heldout(diag)
+    c_before, c_after = _colors(diag.steps)[0], _colors(diag.steps)[-1]
+    lab_after = "after: Housner + " + " + ".join(diag.final.names)
+    fig = Figure(figsize=(7.8, 2.15 * len(picks) + 0.7))
+    axes = fig.subplots(len(picks), 1, squeeze=False)[:, 0]
+    for ax, (rid, role) in zip(axes, picks, strict=True):
+        rec = diag.campaign.record(rid)
+        t = rec.t
+        ys = [rec.theta / alpha]
+        styles = (
+            (before.get(rid), "before: Housner (plain)", dict(color=c_before, lw=1.3, ls="--", alpha=0.9, zorder=2)),
+            (after.get(rid), lab_after, dict(color=c_after, lw=2.6, alpha=0.55, zorder=1)),
+        )
+        for rc, lab, style in styles:
+            if rc is None or rc.response is None:
+                continue
+            y = on_grid(rc.response, rec) / alpha
+            ys.append(y)
+            ax.plot(t, y, label=lab, **style)
+        # the measurement on top, thin: where the final model fits, it runs inside the model's band
+        ax.plot(t, rec.theta / alpha, color=_MEASURED, lw=0.8, zorder=3, label="measured")
+        ax.axvline(before[rid].window_end, color="#a94442", lw=0.8, ls=":", label="end of the error window")
+        for sgn in (-1, 1):
+            ax.axhline(sgn, color="#a94442", lw=0.5, ls="--", alpha=0.5)
+        peak = max(float(np.nanmax(np.abs(y))) for y in ys if y.size)
+        lim = min(1.6, max(1.1, 1.05 * peak))
+        ax.set_ylim(-lim, lim)
+        end = float(t[-1])
+        if not rec.is_free_vibration:  # past the window the records are chaotic and not scored
+            end = min(end, before[rid].window_end + 1.5)
+        ax.set_xlim(float(t[0]), end)
+        errs = f"held-out error {_txt(e_before.get(rid))}"
+        if after:
+            errs += f" before, {_txt(e_after.get(rid))} after"
+        over = " (overturned)" if rec.overturned else ""
+        ax.set_title(f"{rid}, {role}{over}: {errs} [$\\alpha$]", fontsize=9, loc="left")
+        ax.set_ylabel(r"$\theta/\alpha$ [-]")
+        ax.grid(True, alpha=0.3)
+    axes[-1].set_xlabel("t [s]" + (" (free vibration: from the release)" if picks[-1][1] == "free vibration" else ""))
+    handles, labels = axes[0].get_legend_handles_labels()
+    order = sorted(range(len(labels)), key=lambda i: labels[i] != "measured")  # the measurement first
+    fig.legend([handles[i] for i in order], [labels[i] for i in order], loc="upper center",
+               ncol=min(len(labels), 4), fontsize=8, frameon=False)  # fmt: skip
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.4 / fig.get_figheight()))
+    return fig
+
+
+def _txt(v) -> str:
+    return "n/a" if v is None or not math.isfinite(v) else f"{v:.3g}"
+
+
 # ----------------------------------------------------------------------------
 # sections
 _STATUS_CLASS = {"no_misfit": "ok", "explained": "ok", "partly_explained": "bad", "unexplained": "bad",
                  "inconclusive": "warn"}  # fmt: skip
 
 
-def _verdict(diag) -> str:
-    """The verdict: status, its paragraph, the residual against the measured floor, where to look next."""
+def _verdict_text(v) -> str:
+    """The verdict's paragraph without its leading status word (the badge before it says it), and without
+    its pointer to where to look when the list under it ("Where to look next") gives every class with its
+    evidence."""
+    head = v.status.replace("_", " ")
+    text = v.text
+    if _shows_next(v) and " Where to look first: " in text:
+        text = text[: text.index(" Where to look first: ")] + " Where to look: see the list below."
+    if text[: len(head) + 1].lower() == head + ":":
+        text = text[len(head) + 1 :].lstrip()
+        text = text[:1].upper() + text[1:]
+    return text
+
+
+def _shows_next(v) -> bool:
+    return bool(v.next) and v.status in ("partly_explained", "unexplained")
+
+
+def _headline(diag) -> str:
+    """The verdict (the only place the page states it), the held-out error before and after, the effects."""
+    v = diag.verdict
+    out = ""
+    if v is not None:
+        out += (f'<p class="lead"><span class="{_STATUS_CLASS.get(v.status, "")}">'
+                f"{esc(v.status.replace('_', ' ').upper())}</span> &mdash; {esc(_verdict_text(v))}</p>")  # fmt: skip
+    b, f = diag.baseline, diag.final
+    if len(diag.steps) > 1:
+        d, se = _paired_fall(diag)
+        pct = 100 * diag.reduction
+        verb = "falls" if pct >= 0 else "rises"
+        eff = "; ".join(f"<code>{esc(n)}</code> ({_params(n, p)})" for n, p in f.effects)
+        out += (
+            f'<p class="lead">Held-out error {verb} by {abs(pct):.0f} %: from {_pm(b.heldout_error, b.heldout_se)} '
+            f"&alpha; (plain Housner model) to {_pm(f.heldout_error, f.heldout_se)} &alpha; (with {eff}); record by "
+            f"record, the error {_change(d, se)} &alpha;.</p>"
+        )
+    else:
+        out += (
+            f'<p class="lead">No effect was added: the plain Housner model\'s held-out error is '
+            f"{_pm(b.heldout_error, b.heldout_se)} &alpha;.</p>"
+        )
+    return out
+
+
+def _paired_fall(diag) -> tuple[float, float]:
+    """Mean paired fall of the held-out error from the baseline to the final model [alpha], and its standard error."""
+    b, f = diag.baseline, diag.final
+    if b.heldout_errors is not None and f.heldout_errors is not None and len(b.heldout_errors) == len(f.heldout_errors):
+        d = np.asarray(b.heldout_errors, float) - np.asarray(f.heldout_errors, float)
+        d = d[np.isfinite(d)]
+        if d.size > 1:
+            return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size))
+    return b.heldout_error - f.heldout_error, math.hypot(b.heldout_se, f.heldout_se)
+
+
+def _histories(diag) -> str:
+    fig = _histories_figure(diag)
+    if fig is None:
+        return ""
+    after = " and the final model with the chosen effects (after)" if len(diag.steps) > 1 else ""
+    return html_figure(
+        fig,
+        "Measured rotation against the plain Housner model (before)" + after + ", for the ground-motion record "
+        "with the largest held-out error of the final model, the median one, and the free-vibration record the "
+        "final model fits worst. The curves are the models fitted on every record; the errors in the titles are "
+        "held out (each record scored by the model fitted without its fold), over the window up to the dotted "
+        "line; a ground motion is drawn to 1.5 s past it (later, chaos alone separates model and measurement).",
+        "measured and modelled theta(t)",
+    )
+
+
+def _verdict_detail(diag) -> str:
+    """The residual against the measured floor, where to look next, how stable the selection is."""
     v = diag.verdict
     if v is None:
         return ""
-    head = (f'<p class="lead"><span class="{_STATUS_CLASS.get(v.status, "")}">'
-            f"{esc(v.status.replace('_', ' ').upper())}</span> &mdash; {esc(v.text)}</p>")  # fmt: skip
     rows = []
     for label, res in (("plain Housner model", v.baseline), ("final model", v.residual)):
         for kind, g in res.groups.items():
             rows.append([esc(label), esc(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
                          f"{g['ratio']:.2f}", f"{g['z']:+.1f}", '<span class="bad">yes</span>' if g["misfit"] else "no",
                          f"{g.get('detectable_ratio', float('nan')):.2f}"])  # fmt: skip
-    from scenarios.verdict import RATIO_MISFIT, Z_MISFIT
+    from scenarios.verdict import RATIO_MISFIT, Z_LOCAL, Z_MISFIT
 
     table = html_table(
         ["model", "records", "n", "held-out error [alpha]", "correct-model floor", "ratio", "z", "misfit",
@@ -257,17 +452,18 @@ def _verdict(diag) -> str:
         caption=(
             "Held-out (out-of-fold) time-history error against the floor a correct model shows on the same records, "
             "measured by a parametric bootstrap of the fitted model (scenarios.verdict). A misfit is z > "
-            f"{Z_MISFIT:g} and ratio > {RATIO_MISFIT:g}; the detectable ratio is what these records would reveal "
+            f"{Z_MISFIT:g} and ratio > {RATIO_MISFIT:g}, or a localisation quantity more than {Z_LOCAL:g} "
+            "standard errors from the measured one; the detectable ratio is what these records would reveal "
             "with 80 % power."
         ),
     )  # fmt: skip
     nxt = ""
-    if v.next and v.status in ("partly_explained", "unexplained"):
+    if _shows_next(v):
         items = []
         for c in v.next:
             ev = "; ".join(
-                f"{esc(e['label'])}: measured {_f(e['measured'])} &plusmn; {_f(e['measured_se'], 2)}, model "
-                f"{_f(e['model'])} &plusmn; {_f(e['model_se'], 2)} (z = {e['z']:+.1f})"
+                f"{esc(e['label'])}: measured {_pm(e['measured'], e['measured_se'])}, model "
+                f"{_pm(e['model'], e['model_se'])} (z = {e['z']:+.1f})"
                 for e in c["evidence"]
             )
             items.append(
@@ -281,9 +477,9 @@ def _verdict(diag) -> str:
                           sorted(diag.selection_frequency.items(), key=lambda kv: -kv[1]))  # fmt: skip
         freq = f'<p class="sub">Best candidate of its round, fold by fold ({k} folds): {cells}.</p>'
     dist = ""
-    if v.distribution:
+    if v.distribution and not all(d in v.text for d in v.distribution):
         dist = '<p class="bad">Distributions: ' + esc("; ".join(v.distribution)) + ".</p>"
-    return head + table + dist + nxt + freq
+    return table + dist + nxt + freq
 
 
 def _summary(diag) -> str:
@@ -293,41 +489,39 @@ def _summary(diag) -> str:
     if c.skipped:
         items = "".join(f"<li><code>{esc(rid)}</code> ({esc(f)}): {esc(msg)}</li>" for rid, f, msg in c.skipped)
         skipped = f'<p class="bad">{len(c.skipped)} record(s) skipped:</p><ul>{items}</ul>'
-    rest = diag.summary().replace(diag.verdict.text, "").strip() if diag.verdict else diag.summary()
     return (
-        _verdict(diag) + f'<p class="sub">{esc(rest)}</p>'
-        f'<p class="sub">Specimen: 2H = {spec.height:g} m, 2B = {spec.width:g} m, m = {spec.mass:g} kg, '
+        _headline(diag) + _histories(diag) + _verdict_detail(diag)
+        + f'<p class="sub">Specimen: 2H = {spec.height:g} m, 2B = {spec.width:g} m, m = {spec.mass:g} kg, '
         f"alpha = {spec.alpha:.4f} rad, p = {spec.p:.4f} 1/s, Housner r = {spec.r_housner:.4f}. "
         f"{len(c.free_vibration)} free-vibration and {len(c.ground_motion)} ground-motion records, "
         f"{diag.settings.get('folds', '?')}-fold cross-validation (seed {esc(diag.settings.get('seed'))}): every "
-        f"record is fitted on in the other folds and held out once.</p>{skipped}"
-    )
+        f"record is fitted on in the other folds and held out once; sensor noise sigma/alpha "
+        f"{diag.noise_floor:.2g}.</p>{skipped}"
+    )  # fmt: skip
 
 
 def _ladder(diag) -> str:
     rows = []
     for s in diag.steps:
-        prm = "<br>".join(
-            f"<code>{esc(n)}</code>: " + ", ".join(f"{esc(k)} = {_f(v)}" for k, v in p.items()) for n, p in s.effects
-        )
+        prm = "<br>".join(f"<code>{esc(n)}</code>: {_params(n, p)}" for n, p in s.effects)
         rows.append(
             [
                 esc(s.label()) + (" <span class=muted>(by hand)</span>" if s.by_hand else ""),
                 prm or "&ndash;",
-                f"{_f(s.heldout_error)} &plusmn; {_f(s.heldout_se, 2)}",
+                _pm(s.heldout_error, s.heldout_se),
                 _f(s.train_error),
-                "&ndash;" if s.added is None else f"{_f(s.improvement)} &plusmn; {_f(s.improvement_se, 2)}",
+                "&ndash;" if s.added is None else _change(s.improvement, s.improvement_se),
                 "&ndash;" if s.added is None else ('<span class="ok">yes</span>' if s.significant else "no"),
             ]
         )
     table = html_table(
-        ["step", "effects (fitted parameters)", "held-out error [alpha]", "training error", "improvement",
-         "significant"],
+        ["step", "effects (fitted parameters)", "held-out error [alpha]", "training error",
+         "held-out error against the previous step [alpha]", "significant"],
         rows,
         caption=(
             "Time-history error over the measured window (see scenarios.compare), mean over every record held "
-            "out once (out-of-fold) with its standard error; the improvement is the mean paired difference to the "
-            f"previous step. The sensor noise alone (sigma/alpha) is {diag.noise_floor:.4f}; the correct-model floor "
+            "out once (out-of-fold) with its standard error; its change is the mean paired difference to the "
+            f"previous step. The sensor noise alone (sigma/alpha) is {diag.noise_floor:.2g}; the correct-model floor "
             "the verdict uses is in the table above."
         ),
     )  # fmt: skip
@@ -342,13 +536,13 @@ def _candidates(diag) -> str:
         rows = [
             [
                 f"<code>{esc(c.effect)}</code>",
-                ", ".join(f"{esc(key)} = {_f(v)}" for key, v in c.params.items()),
+                _candidate_params(c),
                 _f(c.train_error),
-                f"{_f(c.heldout_error)} &plusmn; {_f(c.heldout_se, 2)}",
-                f"{_f(c.improvement)} &plusmn; {_f(c.improvement_se, 2)}",
+                _pm(c.heldout_error, c.heldout_se),
+                _change(c.improvement, c.improvement_se),
                 _f(c.pvalue, 2),
                 ('<span class="ok">yes</span>' if c.significant else "no")
-                + f" <span class=muted>({esc(c.reason)})</span>",
+                + f" <span class=muted>({esc(signed_words(c.reason))})</span>",
             ]
             for c in rnd
         ]  # fmt: skip
@@ -359,8 +553,8 @@ def _candidates(diag) -> str:
                     "effect",
                     "fitted parameters",
                     "training error",
-                    "held-out error",
-                    "improvement",
+                    "held-out error [alpha]",
+                    "held-out error against the model it was added to [alpha]",
                     "p (Wilcoxon)",
                     "significant",
                 ],
@@ -448,25 +642,28 @@ def _localisation(diag) -> str:
 
 def _metric_table(diag) -> str:
     from scenarios.compare import METRICS
+    from scenarios.verdict import Z_LOCAL
 
     header = ["quantity", "unit", "measured"] + [f"model: {esc(_label(s))}" for s in diag.steps]
     rows = []
     locs = [s.comparison.localisation() for s in diag.steps]
     for key, (label, unit) in METRICS.items():
         m = locs[0][key][0]
-        row = [esc(label), esc(unit), f"{_f(m.value)} &plusmn; {_f(m.se, 2)}"]
+        row = [esc(label), esc(unit), _pm(m.value, m.se)]
         for loc in locs:
             x = loc[key][1]
             se = math.hypot(m.se if math.isfinite(m.se) else 0.0, x.se if math.isfinite(x.se) else 0.0)
             z = (x.value - m.value) / se if se > 0 and math.isfinite(x.value) and math.isfinite(m.value) else math.nan
-            flag = ' class="bad"' if math.isfinite(z) and abs(z) > 3 else ""
-            row.append(f"<span{flag}>{_f(x.value)} &plusmn; {_f(x.se, 2)}</span>")
+            beyond = math.isfinite(z) and abs(z) > Z_LOCAL
+            cell = _pm(x.value, x.se) + (f" (z = {z:+.1f})" if beyond else "")
+            row.append(f'<span class="bad">{cell}</span>' if beyond else cell)
         rows.append(row)
     return html_table(
         header,
         rows,
-        caption="Localisation quantities with standard errors; a model value more than 3 combined standard errors "
-        "from the measurement is marked.",
+        caption=f"Localisation quantities with standard errors; a model value more than {Z_LOCAL:g} combined "
+        "standard errors from the measurement is marked, with its z: beyond that the verdict counts the quantity "
+        "as a misfit even when the model's errors are at the floor (scenarios.verdict.Z_LOCAL).",
     )
 
 
@@ -510,7 +707,7 @@ def render_diagnosis(diag) -> str:
         raise ValueError("the diagnosis has no comparisons per step; run diagnose(..., compare_steps=True)")
     t0 = time.perf_counter()
     sections = [
-        ("summary", "Summary", _summary(diag)),
+        ("summary", "Verdict", _summary(diag)),
         ("ladder", "Error ladder", _ladder(diag)),
         ("candidates", "Candidate effects", _candidates(diag)),
         ("where", "Where the model fails, step by step", _localisation(diag)),

@@ -15,7 +15,9 @@ free-vibration release).
 Errors: a malformed ``campaign.toml`` (also a value of the wrong type) raises
 :class:`housner.errors.DataFileError` naming the key (and the line); a malformed record file is reported with its
 file, line and column in :attr:`Campaign.skipped` and left out, the other
-records are kept.
+records are kept, unless more than half of the records cannot be read (theta
+written in degrees, say): then the campaign is refused with one line that
+gives the count and the most common cause, rather than diagnosed on the rest.
 
 References
 ----------
@@ -30,6 +32,7 @@ import difflib
 import math
 import re
 import sys
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -492,8 +495,12 @@ def load_campaign(path: str | Path) -> Campaign:
     Raises
     ------
     housner.errors.DataFileError
-        ``campaign.toml`` is missing or malformed (the message names the key
-        and, where known, the line), or no record could be read.
+        (a ValueError) ``campaign.toml`` is missing or malformed (the message
+        names the key and, where known, the line), or more than half of the
+        records could not be read: then one line names the campaign, the
+        count ("87 of 103 records could not be read") and the most common
+        cause with one example file. A minority of unreadable records is
+        left out and listed in ``skipped``.
 
     Notes
     -----
@@ -517,13 +524,39 @@ def load_campaign(path: str | Path) -> Campaign:
             raise DataFileError(toml, f"{key!r} must be a string, got {v!r}", line=_key_line(text, key))
     specimen = _specimen(toml, text, data)
     entries = _record_entries(toml, text, data)
-    records, skipped = [], []
+    records, skipped, errors = [], [], []
     for rec in entries:
         try:
             records.append(_read_record(root, rec, specimen))
         except DataFileError as e:
             skipped.append((rec["id"], rec["file"], str(e)))
-    if not records:
-        detail = "; ".join(f"{rid}: {msg}" for rid, _f, msg in skipped[:3])
-        raise DataFileError(toml, f"no record could be read ({len(skipped)} skipped: {detail})")
+            errors.append(e)
+    if 2 * len(skipped) > len(entries):
+        raise DataFileError(toml, _unreadable_message(name, len(entries), skipped, errors))
     return Campaign(name=name, specimen=specimen, records=records, skipped=skipped, path=root)
+
+
+def _cause(e: DataFileError) -> tuple[str, str]:
+    """The message of a record's error without its file and line, and that message with its numbers blanked
+    (errors of the same cause share the latter)."""
+    text = " ".join(str(e).split())  # one line
+    where = str(e.path) + (f" line {e.line}" if e.line is not None else "") + (
+        f", column `{e.column}`" if e.column is not None else "")  # fmt: skip
+    msg = text[len(where) + 2 :] if text.startswith(where + ": ") else text
+    return msg, re.sub(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?", "#", msg)
+
+
+def _unreadable_message(name: str, n: int, skipped: list, errors: list[DataFileError]) -> str:
+    """One line: the campaign, how many of its ``n`` records could not be read, the most common cause, an example."""
+    causes = [_cause(e) for e in errors]
+    key, k = Counter(c[1] for c in causes).most_common(1)[0]
+    first = next(i for i, c in enumerate(causes) if c[1] == key)
+    ex = errors[first]
+    where = f"record {skipped[first][0]!r}, {skipped[first][1]}"
+    where += (f" line {ex.line}" if ex.line is not None else "") + (
+        f", column `{ex.column}`" if ex.column is not None else "")  # fmt: skip
+    none = "no record could be read: " if len(errors) == n else ""
+    return (
+        f"campaign {name!r}: {none}{len(errors)} of {n} records could not be read, more than half, so the campaign "
+        f"is not diagnosed; most common cause ({k} of them): {causes[first][0]} (e.g. {where})"
+    )

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -19,7 +20,7 @@ from scenarios.campaign import Campaign
 from scenarios.compare import Comparison
 from scenarios.rundir import jsonable
 
-__all__ = ["Candidate", "Diagnosis", "Step"]
+__all__ = ["Candidate", "Diagnosis", "Step", "change_text", "fmt_pm", "params_text", "signed_words"]
 
 
 @dataclass(frozen=True)
@@ -225,36 +226,41 @@ class Diagnosis:
         return (b - self.final.heldout_error) / b if b > 0 else 0.0
 
     def summary(self) -> str:
-        """One paragraph: the verdict in words, then the ladder with its figures."""
+        """One paragraph: the verdict in words, then the ladder with its figures.
+
+        Every error is in units of alpha with its standard error (:func:`fmt_pm`); a change is said as
+        "falls by" or "rises by" with a positive figure, and a parameter carries its unit.
+        """
         parts = [self.verdict.text if self.verdict is not None else ""]
         chosen = self.steps[1:]
         if chosen:
             ladder = []
             for st in chosen:
-                prm = "; ".join(
-                    ", ".join(f"{k} = {_fmt_num(v)}" for k, v in dict(st.effects)[n].items()) for n in st.added_names
-                )
+                prm = "; ".join(params_text(n, dict(st.effects)[n]) for n in st.added_names)
                 how = " (by hand)" if st.by_hand else ""
                 ladder.append(
-                    f"+ {st.added}{how} ({prm}): held-out error {st.heldout_error:.4f} +- {st.heldout_se:.4f} alpha, "
-                    f"improvement {st.improvement:.4f} +- {st.improvement_se:.4f}"
+                    f"+ {st.added}{how} ({prm}): held-out error {fmt_pm(st.heldout_error, st.heldout_se)} alpha, "
+                    f"which {change_text(st.improvement, st.improvement_se)} alpha"
                     f"{'' if st.significant else ', not significant'}"
                 )
             parts.append("Ladder: " + "; ".join(ladder) + ".")
+            b, f = self.baseline, self.final
+            verb = "falls" if self.reduction >= 0 else "rises"
             parts.append(
-                f"In all the held-out error fell by {100 * self.reduction:.0f} % "
-                f"({self.baseline.heldout_error:.4f} -> {self.final.heldout_error:.4f} alpha)."
+                f"In all the held-out error {verb} by {abs(100 * self.reduction):.0f} %, from "
+                f"{fmt_pm(b.heldout_error, b.heldout_se)} to {fmt_pm(f.heldout_error, f.heldout_se)} alpha."
             )
         elif self.candidates:
             best = self.candidates[0]
             if math.isfinite(best.improvement):
+                verb = "lower" if best.improvement >= 0 else "raise"
                 parts.append(
-                    f"The best candidate, {best.effect}, would change the held-out error by "
-                    f"{best.improvement:+.4f} +- {best.improvement_se:.4f} alpha ({best.reason})."
+                    f"The best candidate, {best.effect}, would {verb} the held-out error by "
+                    f"{fmt_pm(abs(best.improvement), best.improvement_se)} alpha ({signed_words(best.reason)})."
                 )
         k = self.settings.get("folds", "?")
         parts.append(f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha "
-                     f"{self.noise_floor:.4f}.)")  # fmt: skip
+                     f"{self.noise_floor:.2g}.)")  # fmt: skip
         return " ".join(p for p in parts if p)
 
     def to_dict(self) -> dict:
@@ -310,6 +316,113 @@ def _floor(f) -> dict:
 
 def _fmt_num(v: float) -> str:
     return f"{v:.4g}"
+
+
+# ----------------------------------------------------------------------------
+# numbers in words (the summary here, the page in reports.diagnosis)
+def fmt_pm(value, se, *, sep: str = " +- ", inf: str = "overturned", nan: str = "n/a") -> str:
+    """A value with its standard error: the error to 2 significant digits, the value to the same decimal place.
+
+    ``fmt_pm(0.0031234, 0.000423)`` is ``"0.00312 +- 0.00042"``, ``fmt_pm(123.4, 15.6)`` is ``"123 +- 16"``.
+    An infinite value (a theta_max/alpha of an overturned block) is written ``inf`` (``"overturned"``, or
+    ``"-inf"`` when negative) without an uncertainty; a missing value is ``nan``; a value whose
+    standard error is missing or infinite is written to 4 significant digits alone, and one with a
+    zero standard error to 4 significant digits ``+- 0``.
+
+    Parameters
+    ----------
+    value, se : float
+    sep : str
+        Between the two (``" &plusmn; "`` on an HTML page).
+    inf, nan : str
+        What an infinite and a missing value read as.
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return nan
+    if math.isnan(v):
+        return nan
+    if math.isinf(v):
+        return inf if v > 0 else "-inf"
+    try:
+        e = abs(float(se))
+    except (TypeError, ValueError):
+        e = math.nan
+    if not math.isfinite(e):
+        return _sig(v, 4)
+    if e == 0.0:
+        return f"{_sig(v, 4)}{sep}0"
+    decimals = 1 - math.floor(math.log10(e))  # 2 significant digits of the error
+    if math.floor(math.log10(round(e, decimals))) > math.floor(math.log10(e)):  # 0.000996 -> 0.0010
+        decimals -= 1
+    if decimals > 12:  # too small for fixed notation to stay readable
+        return f"{v:.3e}{sep}{e:.1e}"
+    return f"{_fixed(v, decimals)}{sep}{_fixed(e, decimals)}"
+
+
+def _fixed(v: float, decimals: int) -> str:
+    r = round(v, decimals)
+    if r == 0:
+        r = 0.0  # no "-0.000"
+    return f"{r:.{max(decimals, 0)}f}"
+
+
+def _sig(v: float, digits: int) -> str:
+    """``v`` to ``digits`` significant digits in fixed notation where that stays short."""
+    if v == 0:
+        return "0"
+    if not 1e-4 <= abs(v) < 1e6:
+        return f"{v:.{digits - 1}e}"
+    return _fixed(v, max(digits - 1 - math.floor(math.log10(abs(v))), 0))
+
+
+def change_text(improvement: float, se: float, *, sep: str = " +- ") -> str:
+    """A paired improvement (previous error minus this one) in words: ``"falls by X +- s"`` or ``"rises by X +- s"``.
+
+    The figure is always positive: an error that grows "rises by 0.05", never "falls by -0.05".
+    """
+    try:
+        d = float(improvement)
+    except (TypeError, ValueError):
+        d = math.nan
+    if not math.isfinite(d):
+        return "does not change measurably"
+    return f"{'falls' if d >= 0 else 'rises'} by {fmt_pm(abs(d), se, sep=sep)}"
+
+
+_NUM = r"(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)"
+_FALLS = re.compile(r"\bfalls by ([-+])" + _NUM)
+_LOWERS = re.compile(r"\blowers (the [\w ]+?) by ([-+])" + _NUM)
+
+
+def signed_words(text: str) -> str:
+    """Rewrite signed changes in words: "falls by -0.05" -> "rises by 0.05", "falls by +0.05" -> "falls by 0.05".
+
+    For the reasons the search gives (:mod:`scenarios.diagnose`), written with a sign.
+    """
+    text = _FALLS.sub(lambda m: f"{'rises' if m.group(1) == '-' else 'falls'} by {m.group(2)}", text)
+    return _LOWERS.sub(lambda m: f"{'raises' if m.group(2) == '-' else 'lowers'} {m.group(1)} by {m.group(3)}", text)
+
+
+def param_unit(name: str, key: str) -> str:
+    """The unit of parameter ``key`` of effect ``name`` (its ParamSpec's), "" when unknown."""
+    try:
+        from housner.effects import effect_class
+
+        return effect_class(name).params[key].unit
+    except (KeyError, ValueError, AttributeError):
+        return ""
+
+
+def params_text(name: str, params: dict, *, digits: int = 4) -> str:
+    """``"c = 0.5999 1/s"``: an effect's fitted parameters with their units ([-] when dimensionless)."""
+    out = []
+    for k, v in params.items():
+        unit = param_unit(name, k)
+        unit = "[-]" if unit in ("-", "") else unit
+        out.append(f"{k} = {_sig(float(v), digits) if math.isfinite(float(v)) else v} {unit}")
+    return ", ".join(out)
 
 
 def _nan_none(v: float):

@@ -52,7 +52,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import norm
+from scipy.stats import kendalltau, norm
 
 from housner.effects import make_effect
 from housner.model import default_substeps
@@ -66,6 +66,7 @@ from scenarios.compare import (
     simulate_records,
 )
 from scenarios.fitting import param_dims
+from scenarios.model_form import ModelForm, acc_channel_noise
 
 __all__ = [
     "CLASSES",
@@ -78,6 +79,7 @@ __all__ = [
     "decide",
     "distribution_checks",
     "measure_floor",
+    "order_drift",
     "physical_classes",
     "residual_test",
 ]
@@ -99,6 +101,9 @@ RATIO_MISFIT = 1.25
 DETECTABLE_RATIO = 2.0
 #: One-sided z of 80 % power [-].
 Z_POWER = 0.8416
+#: |z| of the rank correlation between the records' excess errors and their recording order beyond
+#: which the campaign is said to drift (two models tested, two-sided: 2 x 4.7e-4) [-].
+Z_DRIFT = 3.5
 #: Share of the ground motions' paired differences trimmed off each end in the robust test [-]: chaos
 #: carries a record or two of 60 far off a correct model's floor (measured: one record at 0.66 alpha
 #: against a floor of 0.38 +- 0.35 while the other 59 sit at it, median ratio 1.00).
@@ -132,6 +137,7 @@ _CLASS_OF: dict[str, str] = {
     "tilt_slope": "compliance",
     "overturn_fraction": "response",
     "theta_max_median": "response",
+    "onset_scatter": "vertical_input",
 }
 #: Physical class -> what it means, in words.
 CLASSES: dict[str, str] = {
@@ -144,6 +150,11 @@ CLASSES: dict[str, str] = {
     "asymmetry": "asymmetry: the two directions differ (mass distribution, pivot geometry, a tilted table)",
     "setup": "set-up or sensor: the block reads a rotation while at rest (sensor offset, a tilted table)",
     "compliance": "base or body compliance: the block rotates before it lifts off (flexible foundation or body)",
+    "vertical_input": "the ground input or the effective gravity: the uplift thresholds depart from g tan alpha in "
+    "both directions alike, or vary from record to record with the table motion (a vertical table acceleration, "
+    "an accelerometer gain, a table that rocks)",
+    "drift": "a drift along the recording order: the block or the set-up changed during the campaign (wear of the "
+    "contact, a fixture loosening, the temperature); the order of the [[record]] tables is the recording order",
     "response": "response amplitude: the peaks or the overturn fraction differ although the records' details "
     "do not say why (an intensity-dependent effect)",
 }
@@ -235,6 +246,7 @@ def measure_floor(
     *,
     n_replicas: int = N_REPLICAS,
     seed: int = 0,
+    family: str = "any",
 ) -> Floor:
     """Parametric bootstrap of the error a correct model shows on each record (module docstring).
 
@@ -250,6 +262,9 @@ def measure_floor(
         Fold of each record.
     n_replicas : int
     seed : int
+    family : str
+        The family of correct integrators each replica's truth is drawn from
+        (:data:`scenarios.model_form.FAMILIES`).
 
     Returns
     -------
@@ -273,14 +288,19 @@ def measure_floor(
             hull[f"{name}.{key}"] = (min(float(vals.min()), p[key]), max(float(vals.max()), p[key]))
     settings = dict(scorer.engine_settings)
     truth_eff = [make_effect(n, **p) for n, p in model_full]
-    truth = simulate_records(spec, recs, "housner", truth_eff, settings)
+    acc_noise = acc_channel_noise(camp)
     # the scoring model integrates with twice the substeps: the measurement was not produced by this
     # integrator, and chaos amplifies such a difference as it amplifies any other
     sub = settings.get("substeps") or default_substeps(spec.frequency_parameter, recs[0].dt)
     model_settings = {**settings, "substeps": 2 * int(sub)}
     errs = np.empty((n_replicas, len(recs)))
+    forms = []
     for b in range(n_replicas):
         rng = np.random.default_rng(np.random.SeedSequence([seed, 4241, b]))
+        # the replica's truth: the fitted model, produced by "another correct integrator" (module docstring)
+        form = ModelForm.draw(np.random.default_rng(np.random.SeedSequence([seed, 4242, b])), acc_noise, family)
+        forms.append(form)
+        truth = form.simulate(spec, recs, truth_eff, settings)
         model = [None] * len(recs)
         model_sens: list = [None] * len(recs)
         for k in range(k_folds):
@@ -302,7 +322,7 @@ def measure_floor(
             if isinstance(tr, str) or isinstance(mo, str) or mo is None:
                 errs[b, i] = 1.0
                 continue
-            th_true = np.asarray(tr.theta, dtype=float)[: rec.theta.size]
+            th_true = tr
             th_mod = np.asarray(mo.theta, dtype=float)[: rec.theta.size]
             meas = th_true + rng.normal(0.0, rec.noise, th_true.size)
             g = model_sens[i]
@@ -311,6 +331,7 @@ def measure_floor(
                                       max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise)  # fmt: skip
     pert = {k: v for k, v in sd.items() if v > 0}
     pert["substeps"] = model_settings["substeps"]
+    pert["model_form"] = {"family": family, "replicas": [f.describe() for f in forms], "acc_noise": acc_noise}
     return Floor(errs.mean(axis=0), errs.std(axis=0, ddof=1) if n_replicas > 1 else np.zeros(len(recs)), n_replicas,
                  pert)  # fmt: skip
 
@@ -392,16 +413,35 @@ def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
         return []
     by: dict[str, dict] = {}
     found = cmp.discrepancies(z)
+    zs = {k: zz for k, zz, *_ in found}
     # The energy ratio of seed eq. 8 is taken peak to peak: it holds the loss at the impact AND the loss
     # while the block rocks. When the loss between impacts (flight ratio) also differs, that is where
-    # the energy goes; only when it agrees is a differing energy ratio the impact's.
-    flight = any(k.startswith("flight_ratio") for k, *_ in found)
+    # the energy goes. When it is not resolved, the share of the extra loss that the flight ratio puts
+    # between the impacts decides (the likelier of the two): a friction moment at the pivot loses
+    # (almost) all of it there, an impact law none.
+    share = _flight_share(cmp.localisation()) if "energy_ratio" in zs else None
+    flight = any(k.startswith("flight_ratio") for k in zs) or (share is not None and share[0] > 0.5)
+    # Uplift thresholds that differ alike in both directions are the input's or gravity's (a gain on
+    # the recorded acceleration, a vertical acceleration); differing one way only, or in opposite ways,
+    # an asymmetry.
+    sides = [(zs.get(f"onset_{d}"), zs.get(f"withstood_{d}")) for d in ("pos", "neg")]
+    sign = [next((math.copysign(1.0, v) for v in side if v is not None), 0.0) for side in sides]
+    symmetric = sign[0] != 0.0 and sign[0] == sign[1]
     for key, zz, m, x in found:
         c = _CLASS_OF.get(key, "response")
         if flight and key.startswith("energy_ratio") and key != "energy_ratio_scatter":
             c = "dissipation"
+        if symmetric and key.startswith(("onset_", "withstood_")):
+            c = "vertical_input"
         entry = by.setdefault(c, {"class": c, "meaning": CLASSES[c], "z": 0.0, "evidence": []})
         entry["z"] = max(entry["z"], abs(zz))
+        if key == "energy_ratio" and share is not None:
+            entry["evidence"].append({
+                "metric": "flight_share", "label": "share of the extra loss per half-cycle that the energy kept "
+                "between impacts puts between them (1: all of it, 0: none, at the impact)",
+                "measured": share[0], "measured_se": share[1], "model": 0.0, "model_se": 0.0,
+                "z": share[0] / share[1] if share[1] > 0 else math.inf,
+            })  # fmt: skip
         entry["evidence"].append(
             {
                 "metric": key,
@@ -414,6 +454,74 @@ def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
             }  # fmt: skip
         )
     return sorted(by.values(), key=lambda d: -d["z"])
+
+
+def _flight_share(loc: dict) -> tuple[float, float] | None:
+    """Share of the extra energy loss per half-cycle that happens between impacts, and its standard error.
+
+    The measured energy ratio c_m falls short of the model's c_x by a factor c_m / c_x; the energy kept
+    between impacts f (flight ratio) says how much of that shortfall is lost while the block rocks:
+    (1 - f_m / f_x) / (1 - c_m / c_x). None when either is not measured or the ratios agree.
+    """
+    try:
+        (cm, cx), (fm, fx) = loc["energy_ratio"], loc["flight_ratio"]
+    except KeyError:
+        return None
+    vals = (cm.value, cx.value, fm.value, fx.value, fm.se, fx.se)
+    if not all(math.isfinite(v) for v in vals) or cx.value <= 0 or fx.value <= 0 or fm.value <= 0:
+        return None
+    deficit = 1.0 - cm.value / cx.value
+    if abs(deficit) < 1e-9:
+        return None
+    q = fm.value / fx.value
+    se = q * math.hypot(fm.se / fm.value, fx.se / fx.value) / abs(deficit)
+    return (1.0 - q) / deficit, se
+
+
+def order_drift(excess: Sequence[np.ndarray]) -> dict | None:
+    """A drift along the recording order, as a physical class of :func:`physical_classes`, or None.
+
+    Parameters
+    ----------
+    excess : sequence of ndarray
+        Per record, in campaign (recording) order: a model's held-out error less its floor [alpha],
+        for each model judged (the plain model, the final one).
+
+    Returns
+    -------
+    dict or None
+        The ``drift`` class with Kendall's tau of the excess against the record's position, for the
+        model where it is strongest, when its two-sided |z| exceeds :data:`Z_DRIFT`. Under a physics
+        that does not change during the campaign the records' excess errors are exchangeable, so the
+        rank test holds its level whatever their (heavy-tailed) distribution.
+    """
+    best = None
+    for e in excess:
+        e = np.asarray(e, dtype=float)
+        ok = np.flatnonzero(np.isfinite(e))
+        if ok.size < MIN_RECORDS:
+            continue
+        res = kendalltau(ok, e[ok])
+        if not math.isfinite(res.statistic):
+            continue
+        z = math.copysign(float(norm.isf(max(res.pvalue, 1e-300) / 2)), res.statistic)
+        n = ok.size
+        if best is None or abs(z) > abs(best[1]):
+            best = (float(res.statistic), z, math.sqrt(2 * (2 * n + 5) / (9 * n * (n - 1))))
+    if best is None or abs(best[1]) <= Z_DRIFT:
+        return None
+    tau, z, se = best
+    trend = "grows" if tau > 0 else "falls"
+    return {
+        "class": "drift",
+        "meaning": CLASSES["drift"],
+        "z": abs(z),
+        "evidence": [{
+            "metric": "error_order",
+            "label": f"the model's excess error {trend} along the recording order (Kendall's tau)",
+            "measured": tau, "measured_se": se, "model": 0.0, "model_se": 0.0, "z": z,
+        }],  # fmt: skip
+    }
 
 
 def _beyond(classes: list[dict], z: float) -> list[dict]:
@@ -528,8 +636,16 @@ def decide(
     baseline_cmp: Comparison | None,
     final_cmp: Comparison | None,
     library: Sequence[str],
+    added: Sequence[str] = (),
+    drift: dict | None = None,
+    family: str = "",
 ) -> Verdict:
-    """The status and its paragraph from the residuals, the effects selected and the localisation."""
+    """The status and its paragraph from the residuals, the effects in the final model and the localisation.
+
+    ``selected`` are the effects the search added, ``added`` those added by hand (both in the final
+    model, which is the one judged); ``drift`` is :func:`order_drift`'s class, if any; ``family`` the
+    correct integrators the floor was measured over (:data:`scenarios.model_form.FAMILIES`).
+    """
     dist_final = distribution_checks(final_cmp)
     dist_base = distribution_checks(baseline_cmp)
     # what differs from Housner's physics (the plain model) names the family; what the final model still
@@ -538,24 +654,36 @@ def decide(
     final_classes = physical_classes(final_cmp)
     have = {c["class"] for c in base_classes}
     classes = base_classes + [c for c in final_classes if c["class"] not in have]
+    if drift is not None:
+        # a physics that changes along the campaign is what no constant effect explains: named first
+        classes = [drift, *[c for c in classes if c["class"] != "drift"]]
     where = [_evidence_text(ev) for c in final_classes for ev in c["evidence"]]
+    if drift is not None:
+        where = [_evidence_text(ev) for ev in drift["evidence"]] + where
     # a localisation quantity beyond Z_LOCAL standard errors is a misfit the errors may not show
     loc_base = _beyond(base_classes, Z_LOCAL)
     loc_final = _beyond(final_classes, Z_LOCAL)
-    base_mis = baseline.misfit or bool(dist_base) or bool(loc_base)
-    fin_mis = final.misfit or bool(dist_final) or bool(loc_final)
+    base_mis = baseline.misfit or bool(dist_base) or bool(loc_base) or drift is not None
+    fin_mis = final.misfit or bool(dist_final) or bool(loc_final) or drift is not None
     powered = final.detectable_ratio <= DETECTABLE_RATIO
-    need = final.records_needed if selected else baseline.records_needed
-    eff = "; ".join(f"{n} ({', '.join(f'{k} = {v:.4g}' for k, v in params.get(n, {}).items())})" for n in selected)
-    figs = f"held-out error {final.error:.4f} alpha against a correct-model floor of {final.floor:.4f} " \
-           f"({_groups_text(final)})"  # fmt: skip
-    base_figs = f"the plain Housner model's held-out error is {baseline.error:.4f} alpha against a correct-model " \
-                f"floor of {baseline.floor:.4f} ({_groups_text(baseline)})"  # fmt: skip
+    model = [*added, *[n for n in selected if n not in added]]
+    need = final.records_needed if model else baseline.records_needed
+    eff = "; ".join(f"{n} ({', '.join(f'{k} = {v:.4g}' for k, v in params.get(n, {}).items())})" for n in model)
+    fam = f" (correct integrators of the family '{family}')" if family else ""
+    figs = f"held-out error {final.error:.4f} alpha, {final.ratio:.2f}x the correct-model floor of " \
+           f"{final.floor:.4f}{fam} ({_groups_text(final)})"  # fmt: skip
+    base_figs = f"the plain Housner model's held-out error is {baseline.error:.4f} alpha, {baseline.ratio:.2f}x " \
+                f"the correct-model floor of {baseline.floor:.4f}{fam} ({_groups_text(baseline)})"  # fmt: skip
+    fall = ""
+    if model:
+        change = "falls" if final.error < baseline.error else "rises"
+        how = "added by hand" if not selected else "found by the search" if not added else "added by hand and found"
+        fall = f"with {eff} ({how}) the held-out error {change} from {baseline.error:.4f} to {final.error:.4f} alpha"
     if n_records < MIN_RECORDS:
         status = "inconclusive"
         text = (f"Inconclusive: {n_records} usable records are too few to tell a misfit from chance (at least "
                 f"{MIN_RECORDS} are needed, with free vibrations among them); {base_figs}.")  # fmt: skip
-    elif not base_mis:
+    elif not model and not base_mis:
         if powered:
             status = "no_misfit"
             text = (f"No misfit: {base_figs}; no group is more than {RATIO_MISFIT}x above it with significance, "
@@ -566,32 +694,33 @@ def decide(
             text = (f"Inconclusive: {base_figs}, not significantly above it, but with these records only a misfit "
                     f"of {final.detectable_ratio:.2f}x the floor or more would show; about {need} more ground-motion "
                     f"records are needed to see one of {DETECTABLE_RATIO}x.")  # fmt: skip
-    elif not selected:
+    elif not model:
         status = "unexplained"
-        text = (f"Unexplained: {base_figs}, a misfit of {baseline.ratio:.1f}x that no effect in the library "
+        text = (f"Unexplained: {base_figs}, a misfit that no effect in the library "
                 f"({', '.join(library)}) reduces significantly.")  # fmt: skip
     elif not fin_mis:
+        small = "" if base_mis else (" The plain model was already within the floor's band, yet the fall is "
+                                     "significant on the held-out records: a small effect that many records prove.")
         if powered:
             status = "explained"
-            text = (
-                f"Explained: {base_figs}; with {eff} the {figs}, no group more than {RATIO_MISFIT}x above "
-                f"it with significance: what a correct model shows. {' + '.join(selected)} explains it."
-            )
+            text = (f"Explained: {base_figs}; {fall}, {final.ratio:.2f}x the floor ({_groups_text(final)}), no group "
+                    f"more than {RATIO_MISFIT}x above it with significance: what a correct model shows. "
+                    f"{' + '.join(model)} explains it.{small}")  # fmt: skip
         else:
             status = "inconclusive"
-            text = (f"Inconclusive: {base_figs}; {eff} lowers it significantly, to a {figs}, but these records "
-                    f"would only show a remaining misfit of {final.detectable_ratio:.2f}x or more; about {need} more "
-                    f"ground-motion records are needed.")  # fmt: skip
+            text = (f"Inconclusive: {base_figs}; {fall}, to a {figs}, but these records would only show a "
+                    f"remaining misfit of {final.detectable_ratio:.2f}x or more; about {need} more ground-motion "
+                    f"records are needed.")  # fmt: skip
     else:
         status = "partly_explained"
         if final.misfit or dist_final:
-            text = (f"Partly explained: {base_figs}; {eff} lowers it significantly, to a {figs}. A misfit of "
-                    f"{final.ratio:.1f}x remains that no effect in the library explains.")  # fmt: skip
-        else:
-            ev = "; ".join(_evidence_text(e) for c in loc_final for e in c["evidence"][:2])
-            text = (f"Partly explained: {base_figs}; {eff} lowers it significantly, to a {figs}, but the "
-                    f"localisation still differs by more than {Z_LOCAL:g} standard errors ({ev}): a misfit "
+            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}. A misfit of {final.ratio:.2f}x the floor "
                     f"remains that no effect in the library explains.")  # fmt: skip
+        else:
+            ev = "; ".join(_evidence_text(e) for c in ([drift] if drift else []) + loc_final for e in c["evidence"][:2])
+            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}, but the localisation still differs by more "
+                    f"than {Z_LOCAL:g} standard errors ({ev}): a misfit remains that no effect in the library "
+                    f"explains.")  # fmt: skip
     if status in ("partly_explained", "unexplained"):
         if dist_final:
             text += " The distributions disagree too: " + "; ".join(dist_final) + "."
@@ -602,7 +731,7 @@ def decide(
             if len(classes) > 1:
                 text += " Then: " + "; ".join(c["class"] for c in classes[1:]) + "."
         else:
-            text += " No localisation quantity differs by more than 3 standard errors: the misfit is in the " \
-                    "time histories only."  # fmt: skip
+            text += f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is " \
+                    "in the time histories only."  # fmt: skip
     return Verdict(status, final, baseline, text, where, classes, dist_final,
                    need if status == "inconclusive" else 0)  # fmt: skip

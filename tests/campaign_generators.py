@@ -86,10 +86,10 @@ OUTSIDE: dict[str, tuple[dict, str]] = {
     # quadratic air drag: theta'' gains -cd theta' |theta'| [cd in 1/rad]; the loss grows with the speed
     "air_drag": ({"cd": 2.0}, "dissipation"),
     # a constant (Coulomb) friction moment at the pivot, m g R mu_r, against the rotation [mu_r in rad]; it
-    # takes a fixed energy per half-cycle, which the free-vibration localisation sees in the energy ratio per
-    # impact (falling with amplitude) while the loss between impacts it resolves stays within 3 standard
-    # errors: the contact class
-    "pivot_friction": ({"mu_r": 0.003}, "impact"),
+    # takes a fixed energy per half-cycle, so the energy ratio per impact that the free-vibration
+    # localisation measures rises with the amplitude (the loss weighs most at small amplitude), where an
+    # impact law that loses more at higher speeds makes it fall: dissipation between impacts
+    "pivot_friction": ({"mu_r": 0.003}, "dissipation"),
     # the impact acts at a different point of the contact strip every time: each impact keeps a random
     # share u ~ U(0.85, 1) of what Housner's impact keeps (energy), drawn per impact
     "random_restitution": ({"u_low": 0.85}, "impact"),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -179,6 +180,55 @@ def test_campaign_toml_errors_name_the_key_and_line(small, tmp_path, text, needl
     assert "campaign.toml" in msg
     for n in needles:
         assert n in msg
+
+
+def _to_degrees(d: Path, ids) -> int:
+    """Rewrite the theta column of records ``ids`` in degrees (header unchanged); how many leave |theta| <= pi/2."""
+    refused = 0
+    for rid in ids:
+        f = d / "records" / f"{rid}.csv"
+        a = np.loadtxt(f, delimiter=",", skiprows=1)
+        a[:, 2] = np.degrees(a[:, 2])
+        np.savetxt(f, a, delimiter=",", header="time,ground_acc,theta", comments="")
+        refused += bool(np.max(np.abs(a[:, 2])) > math.pi / 2 + 0.1)
+    return refused
+
+
+def test_a_campaign_mostly_unreadable_is_refused_in_one_line(small, tmp_path):
+    d = _copy(small, tmp_path)
+    ids = [f.stem for f in sorted((d / "records").glob("*.csv"))]
+    refused = _to_degrees(d, ids)
+    assert 2 * refused > len(ids) == 7  # the free vibrations and the ground motions that rock
+    with pytest.raises(ValueError) as err:
+        load_campaign(d)
+    msg = str(err.value)
+    assert "\n" not in msg
+    assert "campaign 'synthetic campaign, hidden effect: none'" in msg and "campaign.toml" in msg
+    assert f"{refused} of 7 records could not be read" in msg
+    # the most common cause, with one example file
+    assert f"most common cause ({refused} of them): |theta| = " in msg and "beyond pi/2" in msg
+    assert "`theta [deg]`" in msg
+    assert re.search(r"\(e\.g\. record '\w+', records/\w+\.csv line \d+, column `theta`\)$", msg), msg
+
+
+def test_a_minority_of_unreadable_records_is_skipped_and_listed(small, tmp_path):
+    d = _copy(small, tmp_path)
+    assert _to_degrees(d, ["fv01", "fv02", "fv03"]) == 3  # 3 of 7: fewer than half
+    c = load_campaign(d)
+    assert [r.id for r in c.records] == ["gm001", "gm002", "gm003", "gm004"]
+    assert [rid for rid, _f, _m in c.skipped] == ["fv01", "fv02", "fv03"]
+    assert all("beyond pi/2" in m for _r, _f, m in c.skipped)
+
+
+def test_cli_refuses_a_mostly_unreadable_campaign_with_one_line(small, tmp_path, capsys):
+    from reports.cli import main
+
+    d = _copy(small, tmp_path)
+    refused = _to_degrees(d, [f.stem for f in sorted((d / "records").glob("*.csv"))])
+    assert main(["diagnose", str(d), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{refused} of 7 records could not be read" in err[0], err
+    assert "skipped record" not in err[0]
 
 
 def test_all_records_bad_raises_and_overturn_flag(small, tmp_path):

@@ -22,7 +22,7 @@ import pytest
 
 from housner.effects import available_effects
 from scenarios.campaign import load_campaign
-from scenarios.diagnose import NOISE_MARGIN, _judge, diagnose, fit_effect, split_records
+from scenarios.diagnose import PRACTICAL, _judge, diagnose, fit_effect, split_records
 
 DEFAULT_CASES = ("none", "rotational_damping", "sensor_offset")
 _RESULTS: dict[str, tuple] = {}
@@ -163,8 +163,8 @@ def test_report_is_self_contained(base, tmp_path):
     text = path.read_text()
     assert text.startswith("<!DOCTYPE html>")
     assert "Error ladder" in text and "rotational_damping" in text and "explains it" in text
-    # nine figures (ladder, CDFs, seven localisation figures), all embedded
-    assert text.count('src="data:image/png;base64,') == 9
+    # ten figures (measured and modelled theta(t), ladder, CDFs, seven localisation figures), all embedded
+    assert text.count('src="data:image/png;base64,') == 10
     assert "http://" not in text.replace("http://www.w3.org", "") and "https://" not in text
     assert "<script" not in text
 
@@ -191,7 +191,7 @@ def test_cli_diagnose(base, tmp_path):
     assert res.returncode == 0, res.stderr
     assert "sensor_offset" in res.stdout and "explains it" in res.stdout
     assert json.loads(out_json.read_text())["selected"] == ["sensor_offset"]
-    assert out_html.read_text().count("data:image/png;base64,") == 9
+    assert out_html.read_text().count("data:image/png;base64,") == 10
     bad = subprocess.run([sys.executable, "-m", "reports.cli", "diagnose", str(tmp_path / "none")],
                          capture_output=True, text=True, env=env, timeout=120)  # fmt: skip
     assert bad.returncode == 2 and "campaign.toml" in bad.stderr
@@ -233,15 +233,18 @@ def test_fit_finds_the_minimum_of_a_known_objective():
     assert p2["frequency"] == pytest.approx(31.6, rel=0.05) and p2["damping_ratio"] == pytest.approx(0.3, abs=0.03)
 
 
-def test_improvement_below_the_noise_floor_is_not_significant():
+def test_a_small_fall_that_many_records_prove_is_significant_a_negligible_one_is_not():
     rng = np.random.default_rng(0)
     floor = 0.0054
     cur = floor + rng.normal(0, 1e-4, 200)
-    # every record better by 0.2 floor: overwhelming statistics, but below the noise-floor margin
-    sig, d, se, _z, p, why = _judge(cur, cur - 0.2 * floor, 0.005, floor)
-    assert p < 1e-10 and not sig and "noise floor" in why
-    sig, *_ = _judge(cur, cur - (NOISE_MARGIN + 0.1) * floor, 0.005, floor)
-    assert sig
+    # every record better by 0.05 sigma: overwhelming statistics, but below the practical margin
+    sig, d, se, _z, p, why = _judge(cur, cur - 0.5 * PRACTICAL * floor, 0.005, floor)
+    assert p < 1e-10 and not sig and "tenth of the sensor noise" in why
+    # a 12 ms sensor lag's fall (0.0046 alpha, less than one sigma per record) over 100 records that
+    # scatter by 0.01 alpha: z ~ 4.6, significant (the old one-sigma gate dropped it)
+    cur100 = floor + np.abs(rng.normal(0, 0.01, 100))
+    new100 = cur100 - 0.0046 + rng.normal(0, 0.002, 100)
+    assert _judge(cur100, new100, 0.05 / 9, floor)[0]
     # a large but inconsistent change is not significant either
     noisy = cur + rng.normal(0, 0.05, 200)
     assert not _judge(cur, noisy, 0.005, floor)[0]

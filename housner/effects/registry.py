@@ -159,6 +159,16 @@ class Effect:
             kwargs[key] = v if v is not None else spec.default
         return cls(**kwargs)
 
+    @classmethod
+    def start_from_measurement(cls, metrics: dict, specimen: Specimen) -> dict | None:
+        """Parameters a campaign's localisation measures directly: where a fit of this effect starts.
+
+        ``metrics`` maps the localisation quantities of :data:`scenarios.compare.METRICS` (for example
+        ``"tilt_offset"``, the rotation read at rest [alpha]) to objects with ``value`` and ``se``.
+        Default: None (the fit searches the whole bounds).
+        """
+        return None
+
     def describe(self) -> dict:
         """Plain data: ``{"name": ..., <param>: value, ...}`` (for results tables and the cache)."""
         return {"name": self.name, **{k: getattr(self, k) for k in self.params}}

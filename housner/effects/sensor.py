@@ -41,6 +41,14 @@ class SensorOffset(Effect):
     stage = STAGE_SENSOR
     offset: float = 0.0
 
+    @classmethod
+    def start_from_measurement(cls, metrics, specimen):
+        """The rotation read at rest (``tilt_offset`` [alpha]) when it is measured beyond 3 standard errors."""
+        m = metrics.get("tilt_offset")
+        if m is None or not (math.isfinite(m.value) and math.isfinite(m.se)) or abs(m.value) <= 3.0 * m.se:
+            return None
+        return {"offset": float(m.value) * specimen.alpha}
+
     def transform_input(self, motion):
         # a block released from a measured tilt was released from the measured angle less the offset
         if self.offset == 0.0 or motion.theta0 == 0.0:
