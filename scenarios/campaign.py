@@ -2,7 +2,7 @@
 
 A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one
 ``[[record]]`` per test) and one CSV per record with the columns ``time``
-[s], ``ground_acc`` [m/s^2] and ``theta`` [rad] (see campaign-format.md). A
+[s], ``ground_acc`` [m/s^2] and ``theta`` [rad] (see docs/campaign-format.md). A
 header cell may name another unit in brackets (``time [ms]``,
 ``ground_acc [g]``, ``theta [deg]``, see :func:`housner.motion.parse_unit`);
 the reader converts once, to SI. A time column without a unit whose step is

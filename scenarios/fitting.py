@@ -109,6 +109,7 @@ def fit_effect(
     start: dict[str, float] | None = None,
     local_only: bool = False,
     local_iterations: int = 14,
+    pinned: dict[str, dict] | None = None,
 ) -> tuple[dict[str, float], float, int]:
     """Fit one effect's parameters by minimising ``objective(effect)`` within the bounds.
 
@@ -127,6 +128,8 @@ def fit_effect(
     local_iterations : int
         Budget of the local search: Brent iterations (one parameter); Powell
         evaluations are 10/14 of it per parameter (more).
+    pinned : dict, optional
+        Effect name -> parameters measured directly (``Effect.measured_params``): kept, not fitted.
 
     Returns
     -------
@@ -142,11 +145,12 @@ def fit_effect(
     :data:`N_ZOOM_MULTI` points per parameter over +-1 step around the best,
     then a bounded Powell search of at most 10 d evaluations.
     """
-    dims = param_dims(name, specimen)
+    fixed = dict((pinned or {}).get(name, {}))
+    dims = [d for d in param_dims(name, specimen) if d.key not in fixed]
     cache: dict[tuple, float] = {}
 
     def f_u(u) -> float:
-        params = {d.key: d.from_u(float(x)) for d, x in zip(dims, np.atleast_1d(u), strict=True)}
+        params = {**fixed, **{d.key: d.from_u(float(x)) for d, x in zip(dims, np.atleast_1d(u), strict=True)}}
         key = tuple(round(v, 12) for v in params.values())
         if key not in cache:
             try:
@@ -156,7 +160,7 @@ def fit_effect(
         return cache[key]
 
     if not dims:
-        return {}, float(objective(make_effect(name))), 1
+        return fixed, float(objective(make_effect(name, **fixed))), 1
     lo = np.array([d.u_bounds[0] for d in dims])
     hi = np.array([d.u_bounds[1] for d in dims])
     if start is not None:
@@ -168,7 +172,7 @@ def fit_effect(
     else:
         step = (hi - lo) / (N_GRID - 1)
     best_u = _local_search(f_u, best_u, lo, hi, step, local_iterations)
-    params = {d.key: d.from_u(float(x)) for d, x in zip(dims, best_u, strict=True)}
+    params = {**fixed, **{d.key: d.from_u(float(x)) for d, x in zip(dims, best_u, strict=True)}}
     return params, f_u(best_u), len(cache)
 
 
@@ -235,17 +239,20 @@ def effect_objective(scorer, before: list, after: list) -> Callable[[Any], float
 
 
 def joint_refit(
-    model: list[tuple[str, dict]], scorer, specimen, maxfev_per_dim: int = 15, free_from: int = 0
+    model: list[tuple[str, dict]], scorer, specimen, maxfev_per_dim: int = 15, free_from: int = 0,
+    pinned: dict[str, dict] | None = None,
 ) -> tuple[list[tuple[str, dict]], float]:  # fmt: skip
     """Local search over the parameters of the model's effects ``free_from`` on, from their current values.
 
-    Bounded Nelder-Mead; the effects before ``free_from`` keep their parameters. ``scorer.loss`` of a
-    list of effects is the objective [alpha]. Returns the model and its training error.
+    Bounded Nelder-Mead; the effects before ``free_from`` keep their parameters, and so do the
+    parameters in ``pinned`` (effect name -> measured parameters). ``scorer.loss`` of a list of
+    effects is the objective [alpha]. Returns the model and its training error.
     """
     dims: list[tuple[int, ParamDim]] = []
     for i, (name, _p) in enumerate(model):
         if i >= free_from:
-            dims += [(i, d) for d in param_dims(name, specimen)]
+            keep = (pinned or {}).get(name, {})
+            dims += [(i, d) for d in param_dims(name, specimen) if d.key not in keep]
 
     def build(u) -> list[tuple[str, dict]]:
         out = [(n, dict(p)) for n, p in model]

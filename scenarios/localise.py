@@ -79,6 +79,8 @@ class Features:
     energy_amplitude, energy_ratio, energy_sign : ndarray
         Free vibration, per impact: amplitude before it [alpha], energy ratio
         c (seed eq. 8) [-], sign of theta in the half-cycle it ends.
+    energy_record : ndarray
+        Free vibration, per impact: position of its record in the campaign (the recording order) [-].
     half_cycle_amplitude, half_cycle_duration : ndarray
         Free vibration, per complete half-cycle: amplitude [alpha], duration [s].
     flight_amplitude, flight_ratio : ndarray
@@ -110,6 +112,7 @@ class Features:
     energy_amplitude: np.ndarray
     energy_ratio: np.ndarray
     energy_sign: np.ndarray
+    energy_record: np.ndarray
     half_cycle_amplitude: np.ndarray
     half_cycle_duration: np.ndarray
     flight_amplitude: np.ndarray
@@ -399,7 +402,7 @@ def features(
     difference between the two is a difference of the physics.
     """
     pool = _Pool(campaign.specimen.alpha, campaign.specimen.tan_alpha)
-    for rec in campaign.records:
+    for position, rec in enumerate(campaign.records):
         if histories is None:
             th = rec.theta
         elif rec.id in histories:
@@ -407,7 +410,7 @@ def features(
         else:
             continue
         if rec.kind == "free_vibration":
-            pool.add_free_vibration(rec, th)
+            pool.add_free_vibration(rec, th, position)
             continue
         if histories is None:
             over = rec.overturned
@@ -433,12 +436,13 @@ class _Pool:
     def __init__(self, alpha: float, tan_alpha: float):
         self.alpha, self.tan_alpha = alpha, tan_alpha
         self.e_amp, self.e_c, self.e_s, self.h_amp, self.h_dur, self.f_amp, self.f_rat = ([] for _ in range(7))
+        self.e_rec: list[np.ndarray] = []
         self.cals: dict[str, Any] = {}
         self.on_s, self.on_r, self.tm, self.st_p, self.st_n = [], [], [], [], []
         self.npos = self.nneg = 0
         self.tilt_th, self.tilt_acc = [], []
 
-    def add_free_vibration(self, rec: MeasuredRecord, th: np.ndarray) -> None:
+    def add_free_vibration(self, rec: MeasuredRecord, th: np.ndarray, position: int = 0) -> None:
         """Calibration, energy ratios, half-cycles and energy kept between impacts of one free vibration."""
         try:
             cal, (a1, c1, s1), (ha, hd), (fa, fr) = _fv_features(rec.t, th, self.alpha, rec.noise)
@@ -449,6 +453,7 @@ class _Pool:
         self.e_amp.append(a1)
         self.e_c.append(c1)
         self.e_s.append(s1)
+        self.e_rec.append(np.full(np.size(c1), position))
         self.h_amp.append(ha)
         self.h_dur.append(hd)
         self.f_amp.append(fa)
@@ -487,6 +492,7 @@ class _Pool:
             energy_amplitude=cat(self.e_amp),
             energy_ratio=cat(self.e_c),
             energy_sign=cat(self.e_s, int),
+            energy_record=cat(self.e_rec, int),
             half_cycle_amplitude=cat(self.h_amp),
             half_cycle_duration=cat(self.h_dur),
             flight_amplitude=cat(self.f_amp),

@@ -38,6 +38,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from housner.calibration import estimate_noise
 from housner.model import REST_TOL, default_substeps
 from housner.motion import GroundMotion
 from scenarios.compare import simulate_records
@@ -69,22 +70,34 @@ SUBSTEP_FACTORS = (1, 2, 4)
 #: the acceleration channel's noise differ), "close" (a tenth of the ranges, linear input), "any"
 #: (the whole ranges, held or linear input).
 FAMILIES = {"same": 0.0, "close": 0.1, "any": 1.0}
+#: Share of a ground motion's samples at each end where the table may be still [-].
+QUIET_SHARE = 0.1
 #: The truth runs on a grid this many times finer than the record's, so that "held" and a sub-sample
 #: shift are inputs the (linear-in-sample) kernel realises [-].
 UPSAMPLE = 4
 
 
 def acc_channel_noise(campaign) -> float:
-    """Noise of the ground-acceleration channel [m/s^2], read off the free vibrations (the table is still).
+    """Noise of the ground-acceleration channel [m/s^2], read where the table is still.
 
-    The root mean square about its mean of every free-vibration record's ``ground_acc``; 0 for a
-    campaign without free vibrations (nothing then tells the channel's noise from the table's motion).
+    The root mean square about its mean of the free vibrations' ``ground_acc`` when it was recorded
+    (not all zeros). Otherwise, per ground motion, the robust third-difference estimate
+    (:func:`housner.calibration.estimate_noise`) on its first and on its last :data:`QUIET_SHARE`
+    of samples, the smaller of the two (a record starts or ends with the table at rest), and the
+    median over the records; 0 when nothing is still.
     """
     fv = [np.asarray(r.motion.acc, dtype=float) for r in campaign.free_vibration]
-    fv = [a for a in fv if a.size > 1]
-    if not fv:
-        return 0.0
-    return float(math.sqrt(np.mean(np.concatenate([(a - a.mean()) ** 2 for a in fv]))))
+    fv = [a for a in fv if a.size > 1 and np.any(a != 0.0)]
+    if fv:
+        return float(math.sqrt(np.mean(np.concatenate([(a - a.mean()) ** 2 for a in fv]))))
+    est = []
+    for r in campaign.ground_motion:
+        a = np.asarray(r.motion.acc, dtype=float)
+        k = max(int(QUIET_SHARE * a.size), 50)
+        if a.size < 2 * k:
+            continue
+        est.append(min(estimate_noise(a[:k]), estimate_noise(a[-k:])))
+    return float(np.median(est)) if est else 0.0
 
 
 @dataclass(frozen=True)

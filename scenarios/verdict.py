@@ -478,7 +478,34 @@ def _flight_share(loc: dict) -> tuple[float, float] | None:
     return (1.0 - q) / deficit, se
 
 
-def order_drift(excess: Sequence[np.ndarray]) -> dict | None:
+def _energy_drift(energy) -> tuple[float, float, float] | None:
+    """Slope of the free vibrations' energy ratio per impact against the recording position [1/record],
+    its standard error and z, with the amplitude dependence (a quadratic in the amplitude) held out.
+
+    ``energy`` is (record position, amplitude [alpha], energy ratio [-]) per impact. None when fewer
+    than two records or too few impacts carry it.
+    """
+    if energy is None:
+        return None
+    pos, amp, c = (np.asarray(v, dtype=float) for v in energy)
+    ok = np.isfinite(pos) & np.isfinite(amp) & np.isfinite(c)
+    pos, amp, c = pos[ok], amp[ok], c[ok]
+    if np.unique(pos).size < 2 or c.size < 8:
+        return None
+    A = np.column_stack((np.ones_like(amp), amp, amp**2, pos))
+    coef, *_ = np.linalg.lstsq(A, c, rcond=None)
+    res = c - A @ coef
+    s2 = float(res @ res) / (c.size - A.shape[1])
+    try:
+        se = math.sqrt(max(float(s2 * np.linalg.inv(A.T @ A)[3, 3]), 0.0))
+    except np.linalg.LinAlgError:
+        return None
+    if not se > 0:
+        return None
+    return float(coef[3]), se, float(coef[3]) / se
+
+
+def order_drift(excess: Sequence[np.ndarray], energy=None) -> dict | None:
     """A drift along the recording order, as a physical class of :func:`physical_classes`, or None.
 
     Parameters
@@ -486,15 +513,24 @@ def order_drift(excess: Sequence[np.ndarray]) -> dict | None:
     excess : sequence of ndarray
         Per record, in campaign (recording) order: a model's held-out error less its floor [alpha],
         for each model judged (the plain model, the final one).
+    energy : tuple of ndarray, optional
+        The measured free vibrations' (record position, amplitude [alpha], energy ratio [-]) per
+        impact (:class:`scenarios.localise.Features`).
 
     Returns
     -------
     dict or None
-        The ``drift`` class with Kendall's tau of the excess against the record's position, for the
-        model where it is strongest, when its two-sided |z| exceeds :data:`Z_DRIFT`. Under a physics
-        that does not change during the campaign the records' excess errors are exchangeable, so the
-        rank test holds its level whatever their (heavy-tailed) distribution.
+        The ``drift`` class, when either test's two-sided |z| exceeds :data:`Z_DRIFT`:
+
+        * Kendall's tau of the excess error against the record's position, for the model where it
+          is strongest. Under a physics that does not change during the campaign the records' excess
+          errors are exchangeable, so the rank test holds its level whatever their (heavy-tailed,
+          chaotic) distribution;
+        * the slope of the free vibrations' energy ratio per impact against the position of their
+          record, the amplitude dependence held out (a restitution that wears shows here first: the
+          free vibrations are not chaotic).
     """
+    evidence = []
     best = None
     for e in excess:
         e = np.asarray(e, dtype=float)
@@ -508,20 +544,27 @@ def order_drift(excess: Sequence[np.ndarray]) -> dict | None:
         n = ok.size
         if best is None or abs(z) > abs(best[1]):
             best = (float(res.statistic), z, math.sqrt(2 * (2 * n + 5) / (9 * n * (n - 1))))
-    if best is None or abs(best[1]) <= Z_DRIFT:
-        return None
-    tau, z, se = best
-    trend = "grows" if tau > 0 else "falls"
-    return {
-        "class": "drift",
-        "meaning": CLASSES["drift"],
-        "z": abs(z),
-        "evidence": [{
+    if best is not None:
+        tau, z, se = best
+        trend = "grows" if tau > 0 else "falls"
+        evidence.append({
             "metric": "error_order",
             "label": f"the model's excess error {trend} along the recording order (Kendall's tau)",
             "measured": tau, "measured_se": se, "model": 0.0, "model_se": 0.0, "z": z,
-        }],  # fmt: skip
-    }
+        })  # fmt: skip
+    ed = _energy_drift(energy)
+    if ed is not None:
+        slope, se, z = ed
+        evidence.append({
+            "metric": "energy_ratio_order",
+            "label": "energy ratio per impact of the free vibrations against their record's position in the "
+                     "recording order, amplitude held out (slope per record)",
+            "measured": slope, "measured_se": se, "model": 0.0, "model_se": 0.0, "z": z,
+        })  # fmt: skip
+    evidence = sorted((ev for ev in evidence if abs(ev["z"]) > Z_DRIFT), key=lambda ev: -abs(ev["z"]))
+    if not evidence:
+        return None
+    return {"class": "drift", "meaning": CLASSES["drift"], "z": abs(evidence[0]["z"]), "evidence": evidence}
 
 
 def _beyond(classes: list[dict], z: float) -> list[dict]:

@@ -42,21 +42,6 @@ def _generator(name: str):
     return gen, {k: v[1] for k, v in gen.CASES.items()}
 
 
-def judge(expected, diag) -> tuple[bool, str]:
-    """Whether a diagnosis is right for its expectation, and why not."""
-    v = diag.verdict
-    if isinstance(expected, str):  # outside the library: the class that should come first
-        first = v.next[0]["class"] if v.next else "none"
-        ok = v.status in ("partly_explained", "unexplained") and first == expected
-        return ok, "" if ok else f"status {v.status}, first class {first} (expected {expected})"
-    if not expected:
-        ok = v.status == "no_misfit" and v.residual.ratio <= 1.25
-        return ok, "" if ok else f"status {v.status}, ratio {v.residual.ratio:.2f}"
-    named = set(diag.selected) | set(diag.added)
-    ok = v.status == "explained" and named == set(expected)
-    return ok, "" if ok else f"status {v.status}, named {sorted(named)} (expected {sorted(expected)})"
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--generator", choices=("a", "b"), default="b")
@@ -66,6 +51,8 @@ def main(argv=None) -> int:
     ap.add_argument("--base", default="/tmp/housner-matrix", help="where the campaigns are written")
     ap.add_argument("--json", help="write the matrix to this file")
     args = ap.parse_args(argv)
+
+    from matrix import judge
 
     from scenarios.campaign import load_campaign
     from scenarios.diagnose import diagnose

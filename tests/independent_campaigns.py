@@ -75,8 +75,8 @@ Conventions, and how they differ from the first generator
   6 s, releases 0.8, -0.65, 0.5 alpha, all free vibrations first.
 
 Cases: :data:`CASES` maps a name to (the generator's own truth parameters, the expected diagnosis): a tuple
-of registry effect names, or the localisation class (``scenarios.verdict.CLASSES``, plus "drift" and
-"vertical") that should come first for an effect the library does not have. :func:`library_parameters`
+of registry effect names, or the localisation class (``scenarios.verdict.CLASSES``, "drift" and
+"vertical_input" among them) that should come first for an effect the library does not have. :func:`library_parameters`
 gives the library's parameterisation of each case the library can represent.
 """
 
@@ -151,7 +151,7 @@ CASES: dict[str, tuple[dict, tuple[str, ...] | str]] = {
                                                                                        "sensor_offset")),
     # outside the library
     "pivot_friction": ({"pivot_moment": 0.09}, "dissipation"),
-    "vertical_table": ({"vertical_ratio": 0.25, "vertical_cutoff": 8.0, "vertical_delay": 0.03}, "vertical"),
+    "vertical_table": ({"vertical_ratio": 0.25, "vertical_cutoff": 8.0, "vertical_delay": 0.03}, "vertical_input"),
     "restitution_drift": ({"r": 0.947, "r_end": 0.852}, "drift"),
 }  # fmt: skip
 

@@ -160,12 +160,13 @@ class Effect:
         return cls(**kwargs)
 
     @classmethod
-    def start_from_measurement(cls, metrics: dict, specimen: Specimen) -> dict | None:
-        """Parameters a campaign's localisation measures directly: where a fit of this effect starts.
+    def measured_params(cls, metrics: dict, specimen: Specimen) -> dict | None:
+        """Parameters a campaign's localisation measures directly, better than a fit to the histories can.
 
         ``metrics`` maps the localisation quantities of :data:`scenarios.compare.METRICS` (for example
         ``"tilt_offset"``, the rotation read at rest [alpha]) to objects with ``value`` and ``se``.
-        Default: None (the fit searches the whole bounds).
+        The diagnosis takes the parameters returned as measured and fits only the others. Default:
+        None (every parameter is fitted within its bounds).
         """
         return None
 

@@ -42,7 +42,7 @@ class SensorOffset(Effect):
     offset: float = 0.0
 
     @classmethod
-    def start_from_measurement(cls, metrics, specimen):
+    def measured_params(cls, metrics, specimen):
         """The rotation read at rest (``tilt_offset`` [alpha]) when it is measured beyond 3 standard errors."""
         m = metrics.get("tilt_offset")
         if m is None or not (math.isfinite(m.value) and math.isfinite(m.se)) or abs(m.value) <= 3.0 * m.se:
