@@ -9,6 +9,7 @@ runner. Location: ``$HOUSNER_CACHE_DIR`` or ``~/.cache/housner``.
 from __future__ import annotations
 
 import hashlib
+import inspect
 import json
 import logging
 import os
@@ -48,6 +49,33 @@ def code_version() -> str:
     return _CODE_VERSION
 
 
+def effect_code_hash(effect) -> str | None:
+    """SHA-256 (16 hex digits) of the source file of a user's effect; None for the library's own.
+
+    The library's effects are covered by :func:`code_version`; an effect defined elsewhere (a
+    ``--plugin`` file, an installed package's entry point) is keyed by its module's file, so that a
+    changed effect is recomputed, not read back from the cache.
+    """
+    import housner
+
+    cls = type(effect)
+    try:
+        path = Path(inspect.getsourcefile(cls) or "")
+    except (TypeError, OSError):
+        path = Path()
+    lib = Path(housner.__file__).resolve().parent
+    if path.is_file():
+        rp = path.resolve()
+        if lib in rp.parents:
+            return None
+        return hashlib.sha256(rp.read_bytes()).hexdigest()[:16]
+    # defined where no file says what it does (an interactive session): its source, if it can be read
+    try:
+        return hashlib.sha256(inspect.getsource(cls).encode()).hexdigest()[:16]
+    except (TypeError, OSError):
+        return f"unreadable:{cls.__module__}.{cls.__qualname__}"
+
+
 def cache_key(
     specimen: Specimen, motion: GroundMotion, engine: str, settings: dict, version: str, effects: tuple = ()
 ) -> str:
@@ -62,6 +90,9 @@ def cache_key(
     }
     if effects:  # no key for none: results without effects keep their cache entries
         content["effects"] = [effect_data(e) for e in effects]
+        user = {type(e).name: h for e in effects if (h := effect_code_hash(e))}
+        if user:  # a user's effect (plugin, entry point): its code is part of the result
+            content["effect_code"] = user
     payload = json.dumps(jsonable(content), sort_keys=True)
     return hashlib.sha256(payload.encode()).hexdigest()
 

@@ -65,11 +65,19 @@ SCALE_SD = 1e-3
 REST_TOL_RANGE = (1e-9, 1e-4)
 #: Multiples of the library's integrator substeps.
 SUBSTEP_FACTORS = (1, 2, 4)
-#: Families of correct integrators, nested, by the share lambda of the input's timing and amplitude
-#: ranges they span [-]: "same" input conventions as the library's (only the rest rule, the step and
-#: the acceleration channel's noise differ), "close" (a tenth of the ranges, linear input), "any"
-#: (the whole ranges, held or linear input).
-FAMILIES = {"same": 0.0, "close": 0.1, "any": 1.0}
+#: Families of correct integrators, nested, closest to the library's first: name -> (share lambda of
+#: the input's timing and amplitude ranges they span [-], whether their rest rule and step differ).
+#: "exact": the library's own integrator (only the acceleration channel's noise); "solver": another
+#: rest rule and step on the same input; "input-x": and the input's timing and amplitude within x of
+#: their ranges, linear between samples; "any": the whole ranges, held or linear.
+FAMILIES: dict[str, tuple[float, bool]] = {
+    "exact": (0.0, False),
+    "solver": (0.0, True),
+    "input-0.03": (0.03, True),
+    "input-0.1": (0.1, True),
+    "input-0.3": (0.3, True),
+    "any": (1.0, True),
+}
 #: Share of a ground motion's samples at each end where the table may be still [-].
 QUIET_SHARE = 0.1
 #: The truth runs on a grid this many times finer than the record's, so that "held" and a sub-sample
@@ -135,15 +143,19 @@ class ModelForm:
         """A random integrator of ``family`` (:data:`FAMILIES`); ``rng`` makes it reproducible."""
         if family not in FAMILIES:
             raise ValueError(f"`family` must be one of {list(FAMILIES)}, got {family!r}")
-        lam = FAMILIES[family]
+        lam, solver = FAMILIES[family]
         lo, hi = (math.log(v) for v in REST_TOL_RANGE)
         held = lam >= 1.0 and rng.random() < 0.5
+        shift = float(lam * rng.uniform(-SHIFT_SAMPLES, SHIFT_SAMPLES))
+        scale = float(1.0 + lam * SCALE_SD * rng.standard_normal())
+        rest_tol = float(math.exp(rng.uniform(lo, hi)))
+        factor = int(SUBSTEP_FACTORS[int(rng.integers(len(SUBSTEP_FACTORS)))])
         return cls(
             convention="held" if held else "linear",
-            shift=float(lam * rng.uniform(-SHIFT_SAMPLES, SHIFT_SAMPLES)),
-            scale=float(1.0 + lam * SCALE_SD * rng.standard_normal()),
-            rest_tol=float(math.exp(rng.uniform(lo, hi))),
-            substep_factor=int(SUBSTEP_FACTORS[int(rng.integers(len(SUBSTEP_FACTORS)))]),
+            shift=shift,
+            scale=scale,
+            rest_tol=rest_tol if solver else REST_TOL,
+            substep_factor=factor if solver else 1,
             acc_noise=float(acc_noise),
             noise_seed=int(rng.integers(2**31)),
         )

@@ -54,10 +54,13 @@ def test_a_shift_delays_the_input_and_held_holds_each_sample():
 
 def test_families_are_nested_and_draws_are_seeded():
     rng = np.random.default_rng(0)
-    same = [ModelForm.draw(rng, 0.0, "same") for _ in range(50)]
+    exact = [ModelForm.draw(rng, 0.0, "exact") for _ in range(20)]
+    assert all(f == ModelForm(noise_seed=f.noise_seed) for f in exact)  # the library's own integrator
+    same = [ModelForm.draw(rng, 0.0, "solver") for _ in range(50)]
     assert all(f.convention == "linear" and f.shift == 0.0 and f.scale == 1.0 for f in same)
-    close = [ModelForm.draw(rng, 0.0, "close") for _ in range(200)]
-    assert max(abs(f.shift) for f in close) <= FAMILIES["close"] * SHIFT_SAMPLES
+    assert len({f.rest_tol for f in same}) > 1 and {f.substep_factor for f in same} == {1, 2, 4}
+    close = [ModelForm.draw(rng, 0.0, "input-0.1") for _ in range(200)]
+    assert max(abs(f.shift) for f in close) <= FAMILIES["input-0.1"][0] * SHIFT_SAMPLES
     assert all(f.convention == "linear" for f in close)
     anyf = [ModelForm.draw(rng, 0.0, "any") for _ in range(200)]
     assert {f.convention for f in anyf} == {"linear", "held"}
