@@ -8,7 +8,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import housner
 from engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
-from housner.effects import apply_effects, available_effects
+from housner.effects import EFFECTS, apply_effects, discover_effects
 from housner.model import REST_TOL, RockingParams, simulate
 from housner.model import simulate_many as simulate_batch
 from housner.motion import GroundMotion
@@ -22,18 +22,20 @@ class _RegisteredEffects:
     """``effects_supported`` read live from the effect registry, on the class and on instances."""
 
     def __get__(self, obj, objtype=None) -> frozenset[str]:
-        return frozenset(available_effects())
+        discover_effects()
+        return frozenset(EFFECTS)  # probes included: the diagnosis runs them here
 
 
 class HousnerEngine(Engine):
     """Housner's rigid block on rigid ground, solved event-accurately (``housner.model``).
 
     It realises every effect of :data:`housner.effects.EFFECTS`, including
-    those registered later by users (``@register_effect``) or by installed
-    packages (entry-point group ``housner.effects``): parameter effects
-    through :class:`housner.model.RockingParams`, mechanics effects through
-    their own kernels, sensor effects on the response
-    (:func:`housner.effects.apply_effects`).
+    those registered later by users (``@register_effect``, plugin files,
+    installed packages in the entry-point group ``housner.effects``):
+    parameter effects through :class:`housner.model.RockingParams`, term
+    effects through a kernel generated with their terms
+    (:mod:`housner.effects.terms`), mechanics effects through their own
+    kernels, sensor effects on the response (:func:`housner.effects.apply_effects`).
 
     Parameters
     ----------
@@ -80,10 +82,10 @@ class HousnerEngine(Engine):
     ) -> list:
         """Simulate several records; the same results as calling ``simulate`` on each.
 
-        Records whose effects keep Housner's equation of motion (parameter and
-        sensor effects, or none) are solved together in one compiled call per
-        parameter set (:func:`housner.model.simulate_many`, parallel over
-        records); a batch that fails is redone record by record so that the
+        Records whose effects keep Housner's equation of motion (parameter,
+        term and sensor effects, or none) are solved together in one compiled
+        call per parameter set and term set (:func:`housner.model.simulate_many`,
+        parallel over records); a batch that fails is redone record by record so that the
         failing one is named. Effects that replace the equation of motion
         (flexible foundation, sliding) run one record at a time in kernels
         that release the GIL, on threads. Every response passes
@@ -123,12 +125,12 @@ class HousnerEngine(Engine):
         out: list = [None] * len(plans)
         groups: dict = {}
         for i, pl in enumerate(plans):
-            if pl.solver is None:
-                groups.setdefault(pl.params, []).append(i)
-        for prm, idx in groups.items():
+            if pl.solver is None:  # Housner's kernel, with the effects' terms if any
+                groups.setdefault((pl.params, pl.terms), []).append(i)
+        for (prm, terms), idx in groups.items():
             try:
                 res = simulate_batch(specimen, [plans[i].motion for i in idx], params=prm, substeps=self.substeps,
-                                   rest_tol=self.rest_tol)
+                                   rest_tol=self.rest_tol, terms=terms)
             except RECORD_ERRORS:
                 continue  # one record at a time, so that the failing one is named
             for i, r in zip(idx, res, strict=True):

@@ -51,6 +51,13 @@ late response of a long record (whether a chatter sequence ends at rest, the
 phase of small free rocking) differs between any two accurate solutions:
 rocking is chaotic, so verdicts should rest on distributions over ensembles.
 
+Effects may add *terms* to this equation (an extra moment, a dry Coulomb moment
+with sticking, a change of the impact law, a vertical input read from the
+motion's ``ground_acc_vertical`` channel); :func:`simulate` and
+:func:`simulate_many` then run a kernel generated with those terms
+(:mod:`housner.effects.terms`), with the same numerics and events. Without
+terms the kernel is this module's, unchanged.
+
 References
 ----------
 Housner, G. W. (1963). The behavior of inverted pendulum structures during
@@ -343,6 +350,7 @@ def simulate(
     substeps: int | None = None,
     params: RockingParams | None = None,
     rest_tol: float = REST_TOL,
+    terms=None,
 ) -> Response:
     """Rocking response of a rigid block to one ground motion (Housner's model).
 
@@ -373,13 +381,18 @@ def simulate(
     rest_tol : float
         Rest rule threshold [-], in (0, 1): after an impact whose free-rocking
         peak would stay below ``rest_tol * alpha`` the block is at rest.
+    terms : housner.effects.terms.TermSet, optional
+        The effects' terms (extra moments, dry moments, impact laws); they run
+        in a kernel generated for them (:mod:`housner.effects.terms`). None
+        (default) runs the plain kernel.
 
     Returns
     -------
     Response
         Histories on the motion's sample grid, impact times, theta_max, and
         the overturn and uplift times; ``alpha`` is ``specimen.alpha`` and
-        ``info`` holds ``substeps``, ``rest_tol`` and ``params`` (as a dict).
+        ``info`` holds ``substeps``, ``rest_tol`` and ``params`` (as a dict),
+        and ``terms`` when there are terms.
         ``uplift_time`` is 0 for a block released off its rest position.
 
     Notes
@@ -398,7 +411,7 @@ def simulate(
     )
     m = _check_substeps(substeps, prm.p_max, motion.dt)
     tol = _check_rest_tol(rest_tol)
-    return _simulate_batch(specimen, [motion], [(th0, thd0)], prm, [m], tol, parallel=False)[0]
+    return _simulate_batch(specimen, [motion], [(th0, thd0)], prm, [m], tol, parallel=False, terms=terms or None)[0]
 
 
 def simulate_many(
@@ -413,11 +426,12 @@ def simulate_many(
     params: RockingParams | None = None,
     rest_tol: float = REST_TOL,
     parallel: bool = True,
+    terms=None,
 ) -> list[Response]:
     """:func:`simulate` for many motions in one compiled call.
 
-    Parameters are those of :func:`simulate`, applied to every motion
-    (``theta0``/``theta_dot0`` default to each motion's own), plus
+    Parameters are those of :func:`simulate` (``terms`` included), applied to
+    every motion (``theta0``/``theta_dot0`` default to each motion's own), plus
     ``parallel`` : bool, spread the records over numba threads.
 
     Returns
@@ -447,15 +461,42 @@ def simulate_many(
         ms.append(_check_substeps(substeps, prm.p_max, mo.dt))
     if not prepared:
         return []
-    return _simulate_batch(specimen, prepared, inits, prm, ms, tol, parallel=bool(parallel))
+    return _simulate_batch(specimen, prepared, inits, prm, ms, tol, parallel=bool(parallel), terms=terms or None)
 
 
-def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: float, parallel: bool):
+def _vertical(motions, terms) -> np.ndarray:
+    """The terms' v [-]: each motion's vertical channel over g when the terms read it, else zeros."""
+    from housner.motion import VERTICAL
+
+    if not terms.vertical:
+        return np.zeros(sum(mo.n for mo in motions))
+    for mo in motions:
+        if VERTICAL not in mo.channels:
+            raise ValueError(f"the terms read the channel {VERTICAL!r}, which motion {mo.name!r} does not carry")
+    return np.concatenate([mo.channels[VERTICAL] for mo in motions]) / G
+
+
+def _run_kernel(terms, parallel: bool, acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta,
+                theta_dot, impacts, imp_off, out) -> None:  # fmt: skip
+    """Run the plain kernel (``terms`` None) or the one generated for ``terms`` (which also take v_g and q)."""
+    if terms is None:
+        kern = _kernel.run_batch_parallel if parallel else _kernel.run_batch
+        kern(acc_g, offsets, dts, ms, prm_a, th0, thd0, rest_tol, record, theta, theta_dot, impacts, imp_off, out)
+    else:
+        mod = terms.kernel()
+        kern = mod.run_batch_parallel if parallel else mod.run_batch
+        kern(acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta, theta_dot, impacts, imp_off,
+             out)  # fmt: skip
+
+
+def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: float, parallel: bool, terms=None):
     n_rec = len(motions)
     sizes = np.array([mo.n for mo in motions], dtype=np.int64)
     offsets = np.zeros(n_rec + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
     acc_g = np.concatenate([mo.acc for mo in motions]) / G
+    v_g = None if terms is None else _vertical(motions, terms)
+    q = None if terms is None else np.tile(terms.q_array(), (n_rec, 1))
     dts = np.array([mo.dt for mo in motions], dtype=np.float64)
     ms_a = np.asarray(ms, dtype=np.int64)
     prm_a = np.tile(prm.as_array(), (n_rec, 1))
@@ -469,22 +510,25 @@ def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: 
     np.cumsum(caps, out=imp_off[1:])
     impacts = np.empty(imp_off[-1])
     out = np.empty((n_rec, 6))
-    kern = _kernel.run_batch_parallel if parallel and n_rec > 1 else _kernel.run_batch
-    kern(acc_g, offsets, dts, ms_a, prm_a, th0, thd0, rest_tol, True, theta, theta_dot, impacts, imp_off, out)
+    _run_kernel(terms, parallel and n_rec > 1, acc_g, v_g, offsets, dts, ms_a, prm_a, q, th0, thd0, rest_tol, True,
+                theta, theta_dot, impacts, imp_off, out)  # fmt: skip
     results = []
     for i, mo in enumerate(motions):
         n_imp = int(out[i, 4])
         if n_imp > caps[i]:
             imp_i = np.empty(n_imp)
             one = np.array([0, mo.n], dtype=np.int64)
-            _kernel.run_batch(
-                acc_g[offsets[i] : offsets[i + 1]], one, dts[i : i + 1], ms_a[i : i + 1], prm_a[i : i + 1],
-                th0[i : i + 1], thd0[i : i + 1], rest_tol, False, theta[:0], theta_dot[:0], imp_i,
-                np.array([0, n_imp], dtype=np.int64), np.empty((1, 6)),
+            ab = slice(offsets[i], offsets[i + 1])
+            _run_kernel(
+                terms, False, acc_g[ab], None if v_g is None else v_g[ab], one, dts[i : i + 1], ms_a[i : i + 1],
+                prm_a[i : i + 1], None if q is None else q[i : i + 1], th0[i : i + 1], thd0[i : i + 1], rest_tol,
+                False, theta[:0], theta_dot[:0], imp_i, np.array([0, n_imp], dtype=np.int64), np.empty((1, 6)),
             )  # fmt: skip
         else:
             imp_i = impacts[imp_off[i] : imp_off[i] + n_imp].copy()
         info = {"substeps": int(ms_a[i]), "rest_tol": rest_tol, "params": asdict(prm)}
+        if terms is not None:
+            info["terms"] = terms.describe()
         if out[i, 5]:
             info["rest_guard_trips"] = int(out[i, 5])
         th, thd = theta[offsets[i] : offsets[i + 1]].copy(), theta_dot[offsets[i] : offsets[i + 1]].copy()

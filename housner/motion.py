@@ -31,7 +31,18 @@ import numpy as np
 from housner.errors import DataFileError
 from housner.units import G
 
-__all__ = ["QUANTITIES", "CsvColumns", "GroundMotion", "parse_unit", "read_csv_columns", "read_csv_si", "uniform_step"]
+__all__ = [
+    "CHANNEL_PREFIX",
+    "QUANTITIES",
+    "VERTICAL",
+    "CsvColumns",
+    "GroundMotion",
+    "parse_unit",
+    "read_csv_columns",
+    "read_csv_header",
+    "read_csv_si",
+    "uniform_step",
+]
 
 #: Relative tolerance on sample spacing for a CSV time column to count as uniform.
 _UNIFORM_RTOL = 1e-6
@@ -46,6 +57,11 @@ QUANTITIES = {"time": "time", "ground_acc": "acceleration", "theta": "angle"}
 
 #: SI unit of each quantity.
 SI_UNITS = {"time": "s", "acceleration": "m/s^2", "angle": "rad"}
+
+#: Extra measured channels of a motion are accelerations named ``ground_acc_<what>`` [m/s^2].
+CHANNEL_PREFIX = "ground_acc_"
+#: The vertical table acceleration [m/s^2], positive upward (g -> g + a_v).
+VERTICAL = "ground_acc_vertical"
 
 _LENGTH = {"m": 1.0, "cm": 0.01, "mm": 1e-3, "in": 0.0254, "inch": 0.0254, "inches": 0.0254, "ft": 0.3048}
 _ACC_EXPR = re.compile(r"^(m|cm|mm|in|inch|inches|ft)(?:/(?:s|sec)(?:\^2|2|/s|/sec)|\.?(?:s|sec)\^-2)$")
@@ -98,6 +114,18 @@ def parse_unit(text: str) -> tuple[str, str, float] | None:
     return None
 
 
+class _Channels(dict):
+    """A motion's channels: a dict that cannot be changed once built (and pickles as one)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("a GroundMotion's channels cannot be changed; build a new motion (dataclasses.replace)")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = __ior__ = _refuse
+
+    def __reduce__(self):
+        return (_Channels, (dict(self),))
+
+
 _NPTS_DT = re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([0-9.EeDd+-]+)", re.IGNORECASE)
 
 
@@ -118,6 +146,14 @@ class GroundMotion:
     theta0, theta_dot0 : float
         Initial state of the block at t = 0 [rad, rad/s]; non-zero for a
         free-vibration release. Engines start from it.
+    channels : mapping of str to array_like, optional
+        Extra measured accelerations [m/s^2] on the same sample grid, each as
+        long as ``acc``, named ``ground_acc_<what>``: :data:`VERTICAL`
+        (``"ground_acc_vertical"``, the vertical table acceleration, positive
+        up) is the one the library's kernel reads. Effects declare the channels
+        they read (``Effect.channels``). Carried through :meth:`scaled` (scaled
+        with the amplitude, like ``acc``), :meth:`with_duration`,
+        :meth:`sliced`, ``dataclasses.replace`` and :meth:`content_hash`.
 
     Notes
     -----
@@ -130,6 +166,7 @@ class GroundMotion:
     provenance: str = ""
     theta0: float = 0.0
     theta_dot0: float = 0.0
+    channels: Mapping[str, np.ndarray] = field(default_factory=dict)
     _hash: str | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -157,6 +194,34 @@ class GroundMotion:
         acc.setflags(write=False)
         object.__setattr__(self, "acc", acc)
         object.__setattr__(self, "dt", dt)
+        object.__setattr__(self, "channels", self._checked_channels(self.channels, acc.size))
+
+    def _checked_channels(self, channels, n: int) -> Mapping[str, np.ndarray]:
+        if not isinstance(channels, Mapping):
+            raise ValueError(f"`channels` of motion {self.name!r} must be a mapping of name -> samples")
+        out = {}
+        for key in sorted(channels):
+            if not (isinstance(key, str) and key.startswith(CHANNEL_PREFIX) and key.isidentifier()
+                    and len(key) > len(CHANNEL_PREFIX)):  # fmt: skip
+                raise ValueError(
+                    f"channel {key!r} of motion {self.name!r}: a channel is an acceleration named "
+                    f"'{CHANNEL_PREFIX}<what>' (e.g. {VERTICAL!r})"
+                )
+            try:
+                a = np.array(channels[key], dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ValueError(f"channel {key!r} of motion {self.name!r} must be numeric") from None
+            if a.shape != (n,):
+                raise ValueError(
+                    f"channel {key!r} of motion {self.name!r} must have one sample per sample of `acc` ({n}), "
+                    f"got shape {a.shape}"
+                )
+            bad = np.flatnonzero(~np.isfinite(a))
+            if bad.size:
+                raise ValueError(f"channel {key!r} of motion {self.name!r} is not finite at sample {bad[0]}")
+            a.setflags(write=False)
+            out[key] = a
+        return _Channels(out)
 
     # ------------------------------------------------------------------
     @property
@@ -183,13 +248,19 @@ class GroundMotion:
         return float(np.max(np.abs(self.acc)))
 
     def content_hash(self) -> str:
-        """SHA-256 of samples, step and initial state (for result caching)."""
+        """SHA-256 of samples, step, initial state and channels (for result caching).
+
+        A motion without channels hashes as it did before channels existed.
+        """
         if self._hash is None:
             import hashlib
 
             h = hashlib.sha256()
             h.update(np.ascontiguousarray(self.acc).tobytes())
             h.update(np.array([self.dt, self.theta0, self.theta_dot0]).tobytes())
+            for key, a in self.channels.items():  # sorted by name
+                h.update(b"\0channel\0" + key.encode() + b"\0")
+                h.update(np.ascontiguousarray(a).tobytes())
             object.__setattr__(self, "_hash", h.hexdigest())
         return self._hash
 
@@ -222,6 +293,7 @@ class GroundMotion:
             provenance=prov,
             theta0=self.theta0,
             theta_dot0=self.theta_dot0 / time,
+            channels={k: a * amplitude for k, a in self.channels.items()},
         )
 
     def to_model_scale(self, S: float) -> GroundMotion:
@@ -235,10 +307,27 @@ class GroundMotion:
         if not (math.isfinite(duration) and duration > 0):
             raise ValueError(f"`duration` must be positive and finite, got {duration!r}")
         n = int(round(duration / self.dt)) + 1
-        acc = np.zeros(n)
         k = min(n, self.n)
-        acc[:k] = self.acc[:k]
-        return GroundMotion(acc, self.dt, self.name, self.provenance, self.theta0, self.theta_dot0)
+
+        def fit(a):
+            out = np.zeros(n)
+            out[:k] = a[:k]
+            return out
+
+        channels = {key: fit(a) for key, a in self.channels.items()}
+        return GroundMotion(fit(self.acc), self.dt, self.name, self.provenance, self.theta0, self.theta_dot0, channels)
+
+    def sliced(self, start: int = 0, stop: int | None = None) -> GroundMotion:
+        """Samples ``start:stop`` (Python slice rules, step 1) of the motion and of its channels.
+
+        The new motion starts at t = 0 with this one's initial state (theta0, theta_dot0).
+        """
+        k = range(self.n)[slice(start, stop)]
+        if len(k) == 0:
+            raise ValueError(f"`sliced({start!r}, {stop!r})` of motion {self.name!r} ({self.n} samples) is empty")
+        sl = slice(k.start, k.stop)
+        return GroundMotion(self.acc[sl], self.dt, self.name, self.provenance, self.theta0, self.theta_dot0,
+                            {key: a[sl] for key, a in self.channels.items()})  # fmt: skip
 
     @classmethod
     def free_vibration(cls, theta0: float, duration: float, dt: float = 0.002, name: str | None = None) -> GroundMotion:
@@ -468,6 +557,20 @@ def _read_text(path: Path) -> str:
         raise DataFileError(
             path, f"not UTF-8 text (byte 0x{raw[e.start]:02x}); save the file as UTF-8", line=line
         ) from None
+
+
+def read_csv_header(path: str | Path) -> list[str]:
+    """The column names of a CSV's header line, without their bracketed units.
+
+    Raises :class:`DataFileError` (naming the file) when it cannot be read, is not UTF-8 or is empty.
+    """
+    path = Path(path)
+    reader = csv.reader(io.StringIO(_read_text(path), newline=""))
+    try:
+        raw_header = next(reader)
+    except StopIteration:
+        raise DataFileError(path, "file is empty (expected a header line)", line=1) from None
+    return [_split_header_cell(h)[0] for h in raw_header]
 
 
 def read_csv_si(

@@ -525,6 +525,8 @@ def _add_run(sub, names: dict) -> None:
         action="store_true",
         help="exit 0 even when records failed (they are listed, and kept out of the statistics)",
     )
+    r.add_argument("--plugin", action="append", metavar="FILE.py",
+                   help="load the effects this Python file registers (@register_effect; repeatable)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
@@ -585,6 +587,8 @@ def _add_diagnose(sub, names: dict) -> None:
                    help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
     d.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the fold assignment (0)")
     d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
+    d.add_argument("--plugin", action="append", metavar="FILE.py",
+                   help="load the effects this Python file registers (@register_effect; repeatable)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=_cmd_diagnose)
 
@@ -598,12 +602,32 @@ def _error(message: str) -> None:
     print(f"housner: error: {_one_line(message)}", file=sys.stderr)
 
 
+def _plugin_args(argv: list[str]) -> list[str]:
+    """The files named by ``--plugin FILE`` / ``--plugin=FILE`` on the command line, in order."""
+    out = []
+    for i, a in enumerate(argv):
+        if a == "--plugin" and i + 1 < len(argv):
+            out.append(argv[i + 1])
+        elif a.startswith("--plugin="):
+            out.append(a.split("=", 1)[1])
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``housner`` command; returns the exit status (see the module docstring)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = os.environ.get("HOUSNER_DEBUG", "").strip().lower() not in ("", "0", "false", "no") or "--debug" in argv
     argv = [a for a in argv if a != "--debug"]  # accepted anywhere on the line
     try:
+        # effect plugins load first, so that their effects are known to the parser's help and checks
+        for path in _plugin_args(argv):
+            from housner.effects import load_plugin
+
+            try:
+                load_plugin(path)
+            except ValueError as e:
+                _error(f"--plugin: {e}")
+                return EXIT_USAGE
         try:
             parser = build_parser(full_help=any(a in ("-h", "--help") for a in argv))
             args = parser.parse_args(argv)

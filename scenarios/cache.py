@@ -59,6 +59,9 @@ def effect_code_hash(effect) -> str | None:
     import housner
 
     cls = type(effect)
+    loaded = cls.__dict__.get("_housner_code_hash")  # a plugin's class: the code it was loaded from
+    if loaded is not None:
+        return loaded
     try:
         path = Path(inspect.getsourcefile(cls) or "")
     except (TypeError, OSError):

@@ -2,7 +2,10 @@
 
 A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one
 ``[[record]]`` per test) and one CSV per record with the columns ``time``
-[s], ``ground_acc`` [m/s^2] and ``theta`` [rad] (see docs/campaign-format.md). A
+[s], ``ground_acc`` [m/s^2] and ``theta`` [rad], and optional extra measured
+channels ``ground_acc_<what>`` [m/s^2] (``ground_acc_vertical``: the vertical
+table acceleration), which the record's motion carries in ``channels`` (see
+docs/campaign-format.md). A
 header cell may name another unit in brackets (``time [ms]``,
 ``ground_acc [g]``, ``theta [deg]``, see :func:`housner.motion.parse_unit`);
 the reader converts once, to SI. A time column without a unit whose step is
@@ -40,7 +43,7 @@ import numpy as np
 
 from housner.calibration import estimate_noise
 from housner.errors import DataFileError
-from housner.motion import QUANTITIES, GroundMotion, read_csv_si, uniform_step
+from housner.motion import CHANNEL_PREFIX, QUANTITIES, GroundMotion, read_csv_header, read_csv_si, uniform_step
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):
@@ -422,8 +425,12 @@ def estimate_release(t, theta, noise: float) -> tuple[int, float]:
 
 def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord:
     path = (root / rec["file"]).resolve() if not Path(rec["file"]).is_absolute() else Path(rec["file"])
-    table = read_csv_si(path, QUANTITIES)  # converted to SI from the units in the header (none: SI)
-    (t, acc, theta), lines = table.values, table.lines
+    # optional extra channels: every column named ground_acc_<what> (e.g. ground_acc_vertical [m/s^2])
+    extra = [c for c in dict.fromkeys(read_csv_header(path)) if c.startswith(CHANNEL_PREFIX)]
+    quantities = {**QUANTITIES, **{c: "acceleration" for c in extra}}
+    table = read_csv_si(path, quantities)  # converted to SI from the units in the header (none: SI)
+    (t, acc, theta), lines = table.values[:3], table.lines
+    channels = dict(zip(extra, table.values[3:], strict=True))
     dt = uniform_step(path, t, lines, "time", assumed_seconds=table.units[0] is None)
     bad = np.flatnonzero(np.abs(theta) > math.pi / 2 + _THETA_SLACK)
     if bad.size:
@@ -457,14 +464,18 @@ def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord:
     t_off = float(t[k_rel])
     acc = acc[k_rel:]
     theta = theta[k_rel:]
-    motion = GroundMotion(
-        acc=acc,
-        dt=dt,
-        name=rec["id"],
-        provenance=f"{path.name} (campaign record, {rec['kind']})",
-        theta0=theta0,
-        theta_dot0=0.0,
-    )
+    try:
+        motion = GroundMotion(
+            acc=acc,
+            dt=dt,
+            name=rec["id"],
+            provenance=f"{path.name} (campaign record, {rec['kind']})",
+            theta0=theta0,
+            theta_dot0=0.0,
+            channels={c: a[k_rel:] for c, a in channels.items()},
+        )
+    except ValueError as e:  # a channel name the format does not allow
+        raise DataFileError(path, str(e), line=1) from None
     return MeasuredRecord(
         id=rec["id"],
         kind=rec["kind"],

@@ -85,6 +85,7 @@ from scenarios.diagnosis_results import Candidate, Diagnosis, Step
 from scenarios.fitting import FIT_BOUNDS, build_model, effect_objective, fit_effect, joint_refit
 from scenarios.localise import measured_features
 from scenarios.model_form import FAMILIES
+from scenarios.probes import PROBES
 from scenarios.scoring import DEFAULT_FOLDS, Scorer, check_train_fraction, cv_folds, split_records
 from scenarios.verdict import N_REPLICAS, RATIO_MISFIT, decide, measure_floor, order_drift, residual_test
 
@@ -566,6 +567,7 @@ class _Search:
         floor_base = floor_fin if not self.cur.full else measure_floor(
             self.allsc, [], self.base.folds, self.fold_of, n_replicas=n_rep, seed=seed_int, family=family)  # fmt: skip
         self.say(f"floor: correct integrators of the family {family!r}")
+        probes = self.probe()
         mf = measured_features(self.campaign)
         drift = order_drift([self.base_held - floor_base.mean, self.cur_held - floor_fin.mean],
                             (mf.energy_record, mf.energy_amplitude, mf.energy_ratio))  # fmt: skip
@@ -573,10 +575,36 @@ class _Search:
             n_records=len(self.ids), baseline=residual_test(self.base_held, floor_base, kinds),
             final=residual_test(self.cur_held, floor_fin, kinds), selected=selected, params=dict(self.cur.full),
             baseline_cmp=self.steps[0].comparison, final_cmp=self.steps[-1].comparison, library=library,
-            added=added, drift=drift, family=family,
+            added=added, drift=drift, family=family, probes=probes,
         )  # fmt: skip
         self.say(f"verdict: {verdict.status}")
         return verdict, (floor_base, floor_fin)
+
+    def probe(self) -> list[dict]:
+        """Physics outside the library tried on top of the final model (:mod:`scenarios.probes`).
+
+        Each probe is fitted on top of the final model and judged on its out-of-fold errors like a
+        candidate (Bonferroni over the probes). Returns, for each that lowers the error
+        significantly: {probe, class, params, error, error_with, improvement, se, z, p}.
+        """
+        if self.cur_train - self.noise_loss <= PRACTICAL * self.floor:
+            return []  # nothing above the sensor noise for a probe to take (as a round of the search)
+        out = []
+        level = self.level_for(len(PROBES))
+        fixed = build_model(self.cur.full)
+        for name, cls_name in PROBES.items():
+            params, tr_err, _n = fit_effect(name, effect_objective(self.allsc, fixed, []), self.spec)
+            if self._not_held_out(name, params, fixed, tr_err):
+                continue
+            he = self.oof(self.add_cv(self.cur, name, params))
+            sig, d, se, z, pval, _why = _judge(self.cur_held, he, level, self.floor)
+            self.say(f"probe {name} {_fmt_params(params)}: held-out {he.mean():.4f} improvement {d:+.4f} "
+                     f"+- {se:.4f} {'*' if sig else ' '}")  # fmt: skip
+            if sig:
+                out.append({"probe": name, "class": cls_name, "params": params, "error": float(self.cur_held.mean()),
+                            "error_with": float(he.mean()), "improvement": d, "se": se, "z": z,
+                            "p": pval})  # fmt: skip
+        return out
 
     def selection_frequency(self, rounds: list[list[Candidate]]) -> dict[str, float]:
         """Effect -> share of the folds in which it was the best candidate of its round [-]."""

@@ -171,20 +171,24 @@ class ModelForm:
         }
 
     def felt(self, motion: GroundMotion, rng: np.random.Generator | None = None) -> GroundMotion:
-        """The input the block felt, on a grid :data:`UPSAMPLE` times finer than ``motion``'s [m/s^2]."""
+        """The input the block felt, on a grid :data:`UPSAMPLE` times finer than ``motion``'s [m/s^2].
+
+        Extra channels (a vertical acceleration) go through the same convention, timing and scale.
+        """
         a = np.asarray(motion.acc, dtype=float)
         if self.acc_noise > 0.0 and rng is not None:
             a = a - rng.normal(0.0, self.acc_noise, a.size)
         n = a.size
         dt = motion.dt
         tf = np.arange((n - 1) * UPSAMPLE + 1) * (dt / UPSAMPLE) - self.shift * dt
-        if self.convention == "held":
-            k = np.clip(np.floor(tf / dt + 1e-9).astype(np.int64), 0, n - 1)
-            af = a[k]
-        else:
-            af = np.interp(tf, np.arange(n) * dt, a)
-        return GroundMotion(self.scale * af, dt / UPSAMPLE, motion.name, motion.provenance, motion.theta0,
-                            motion.theta_dot0)  # fmt: skip
+        k = np.clip(np.floor(tf / dt + 1e-9).astype(np.int64), 0, n - 1)
+
+        def fine(x: np.ndarray) -> np.ndarray:
+            x = np.asarray(x, dtype=float)
+            return self.scale * (x[k] if self.convention == "held" else np.interp(tf, np.arange(n) * dt, x))
+
+        return GroundMotion(fine(a), dt / UPSAMPLE, motion.name, motion.provenance, motion.theta0, motion.theta_dot0,
+                            {key: fine(c) for key, c in motion.channels.items()})  # fmt: skip
 
     def simulate(self, specimen, records: Sequence, effects: Sequence, settings: dict) -> list[np.ndarray | str]:
         """theta [rad] of each record on its own sample grid as this integrator produces it (or an error text)."""

@@ -16,7 +16,6 @@ from typing import Any
 
 import numpy as np
 
-from housner.motion import GroundMotion
 from scenarios.campaign import Campaign, MeasuredRecord
 from scenarios.compare import release_sensitivities, simulate_records
 from scenarios.history_error import ERROR_CLIP, error_window, scored_error
@@ -162,9 +161,7 @@ def _truncated(rec: MeasuredRecord, end: int) -> MeasuredRecord:
     n = min(rec.theta.size, end + int(math.ceil(_WINDOW_SLACK / rec.dt)))
     if n >= rec.theta.size:
         return rec
-    mo = rec.motion
-    motion = GroundMotion(mo.acc[:n], mo.dt, mo.name, mo.provenance, mo.theta0, mo.theta_dot0)
-    return replace(rec, motion=motion, t=rec.t[:n], theta=rec.theta[:n])
+    return replace(rec, motion=rec.motion.sliced(0, n), t=rec.t[:n], theta=rec.theta[:n])
 
 
 def cv_folds(campaign: Campaign, folds: int = DEFAULT_FOLDS, seed=0) -> list[list[str]]:

@@ -711,6 +711,7 @@ def decide(
     added: Sequence[str] = (),
     drift: dict | None = None,
     family: str = "",
+    probes: Sequence[dict] = (),
 ) -> Verdict:
     """The status and its paragraph from the residuals, the effects in the final model and the localisation.
 
@@ -726,6 +727,21 @@ def decide(
     final_classes = physical_classes(final_cmp)
     have = {c["class"] for c in base_classes}
     classes = base_classes + [c for c in final_classes if c["class"] not in have]
+    # a probe of physics outside the library that lowers the error significantly is the most direct
+    # pointer there is: its class first (scenarios.probes)
+    for pr in sorted(probes, key=lambda p: p["z"]):
+        pr_ev = {
+            "metric": f"probe:{pr['probe']}",
+            "label": f"held-out error with the probe {pr['probe']} ("
+                     + ", ".join(f"{k} = {v:.3g}" for k, v in pr["params"].items())
+                     + f"), against {pr['error']:.4g} without it",
+            "measured": pr["error_with"], "measured_se": pr["se"], "model": pr["error"], "model_se": 0.0, "z": pr["z"],
+        }  # fmt: skip
+        entry = {"class": pr["class"], "meaning": CLASSES[pr["class"]], "z": abs(pr["z"]), "evidence": [pr_ev]}
+        old = [c for c in classes if c["class"] == pr["class"]]
+        if old:
+            entry["evidence"] += old[0]["evidence"]
+        classes = [entry, *[c for c in classes if c["class"] != pr["class"]]]
     if drift is not None:
         # a physics that changes along the campaign is what no constant effect explains: named first
         classes = [drift, *[c for c in classes if c["class"] != "drift"]]
@@ -735,8 +751,9 @@ def decide(
     # a localisation quantity beyond Z_LOCAL standard errors is a misfit the errors may not show
     loc_base = _beyond(base_classes, Z_LOCAL)
     loc_final = _beyond(final_classes, Z_LOCAL)
-    base_mis = baseline.misfit or bool(dist_base) or bool(loc_base) or drift is not None
-    fin_mis = final.misfit or bool(dist_final) or bool(loc_final) or drift is not None
+    # a significant probe is physics the final model misses, whatever the residual test says
+    base_mis = baseline.misfit or bool(dist_base) or bool(loc_base) or drift is not None or bool(probes)
+    fin_mis = final.misfit or bool(dist_final) or bool(loc_final) or drift is not None or bool(probes)
     powered = final.detectable_ratio <= DETECTABLE_RATIO
     model = [*added, *[n for n in selected if n not in added]]
     need = final.records_needed if model else baseline.records_needed
@@ -786,14 +803,16 @@ def decide(
                     f"records are needed.")  # fmt: skip
     else:
         status = "partly_explained"
-        if final.misfit or dist_final:
+        if final.misfit or dist_final or not (loc_final or drift or probes):
             text = (f"Partly explained: {base_figs}; {fall}, to a {figs}. A misfit of {final.ratio:.2f}x the floor "
                     f"(the typical record) remains that no effect in the library explains.")  # fmt: skip
         else:
-            ev = "; ".join(_evidence_text(e) for c in ([drift] if drift else []) + loc_final for e in c["evidence"][:2])
-            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}, but the localisation still differs by more "
-                    f"than {Z_LOCAL:g} standard errors ({ev}): a misfit remains that no effect in the library "
-                    f"explains.")  # fmt: skip
+            probed = [c for c in classes if any(e["metric"].startswith("probe:") for e in c["evidence"])]
+            ev = "; ".join(_evidence_text(e) for c in ([drift] if drift else []) + probed + loc_final
+                           for e in c["evidence"][:2])  # fmt: skip
+            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}, but the localisation (beyond {Z_LOCAL:g} "
+                    f"standard errors), the recording order or a probe of physics outside the library still "
+                    f"points to a misfit ({ev}) that no effect in the library explains.")  # fmt: skip
     if status in ("partly_explained", "unexplained"):
         if dist_final:
             text += " The distributions disagree too: " + "; ".join(dist_final) + "."

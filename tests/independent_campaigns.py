@@ -77,7 +77,10 @@ Conventions, and how they differ from the first generator
 Cases: :data:`CASES` maps a name to (the generator's own truth parameters, the expected diagnosis): a tuple
 of registry effect names, or the localisation class (``scenarios.verdict.CLASSES``, "drift" and
 "vertical_input" among them) that should come first for an effect the library does not have. :func:`library_parameters`
-gives the library's parameterisation of each case the library can represent.
+gives the library's parameterisation of each case the library can represent. :data:`EXAMPLE_CASES` are the
+campaigns of the effects shipped as plugins in ``examples/effects`` (pivot friction with asymmetric pivots, an
+accelerometer that reads 12 % high, a vertical table whose acceleration is recorded in a ``ground_acc_vertical``
+column): they are not part of the diagnosis matrix.
 """
 
 from __future__ import annotations
@@ -155,7 +158,18 @@ CASES: dict[str, tuple[dict, tuple[str, ...] | str]] = {
     "restitution_drift": ({"r": 0.947, "r_end": 0.852}, "drift"),
 }  # fmt: skip
 
-_INPUT_KEYS = ("convention", "acc_noise", "fv_releases")
+#: Campaigns of the example effects (examples/effects, loaded as plugins), not diagnosed: name -> truth parameters.
+#: acc_gain [-]: the written ground_acc is acc_gain times the acceleration the block felt; vertical_channel: the
+#: vertical acceleration the block felt is written as a `ground_acc_vertical [m/s^2]` column (zeros in the free
+#: vibrations). The vertical input is four times the ``vertical_table`` case's, so that its gain is well measured.
+EXAMPLE_CASES: dict[str, dict] = {
+    "pivot_friction+asymmetric_pivots": {"pivot_moment": 0.09, "e": 0.25 * B_HALF, "fv_releases": (0.6, -0.2, 0.4)},
+    "accelerometer_gain": {"acc_gain": 1.12},
+    "vertical_table_measured": {"vertical_ratio": 1.0, "vertical_cutoff": 8.0, "vertical_delay": 0.03,
+                                "vertical_channel": True},
+}  # fmt: skip
+
+_INPUT_KEYS = ("convention", "acc_noise", "fv_releases", "acc_gain", "vertical_channel")
 
 
 # ----------------------------------------------------------------------------
@@ -263,10 +277,17 @@ def momentum_ratio(b_pos: float, b_neg: float, height: float, i_c: float, mass: 
 
 
 def case_parameters(case: str) -> dict:
-    """The generator's own truth parameters of ``case`` (a copy of :data:`CASES`' entry)."""
+    """The generator's own truth parameters of ``case`` (a copy of :data:`CASES`' or :data:`EXAMPLE_CASES`' entry)."""
+    if case in EXAMPLE_CASES:
+        return dict(EXAMPLE_CASES[case])
     if case not in CASES:
-        raise KeyError(f"unknown case {case!r}; known: {', '.join(CASES)}")
+        raise KeyError(f"unknown case {case!r}; known: {', '.join([*CASES, *EXAMPLE_CASES])}")
     return dict(CASES[case][0])
+
+
+def expected_diagnosis(case: str):
+    """What the diagnosis should say of ``case`` (:data:`CASES`), None for an example case."""
+    return None if case in EXAMPLE_CASES else CASES[case][1]
 
 
 def truth_for(case: str, n_records: int = 0) -> Truth:
@@ -305,10 +326,20 @@ def library_parameters(case: str) -> dict[str, dict[str, float]]:
     """The case in the library's parameterisation: registry effect name -> its parameters (SI).
 
     Empty for the controls; effects outside the library are given in the generator's own terms under
-    their case name.
+    their case name, but for the example cases, which name the example effects (examples/effects).
     """
     kw = case_parameters(case)
     out: dict[str, dict[str, float]] = {}
+    if case in EXAMPLE_CASES:
+        if "e" in kw:
+            out["asymmetric_pivots"] = {"e": kw["e"]}
+        if "pivot_moment" in kw:
+            out["pivot_friction"] = {"moment": kw["pivot_moment"]}
+        if "acc_gain" in kw:
+            out["accelerometer_gain"] = {"gain": kw["acc_gain"]}
+        if kw.get("vertical_channel"):
+            out["vertical_table"] = {"gain": 1.0}  # the block feels the recorded channel
+        return out
     if "r" in kw and "r_end" not in kw:
         out["restitution"] = {"r": kw["r"]}
     if "r_exponent" in kw:
@@ -965,10 +996,14 @@ def _observe(truth: Truth, theta: np.ndarray, dt: float, rng: np.random.Generato
     return th + truth.offset + rng.normal(0.0, NOISE, th.size)
 
 
-def _write_csv(path: Path, acc: np.ndarray, theta: np.ndarray, dt: float) -> None:
+def _write_csv(path: Path, acc: np.ndarray, theta: np.ndarray, dt: float, vertical: np.ndarray | None = None) -> None:
     t = np.arange(acc.size) * dt
-    np.savetxt(path, np.column_stack((t, acc, theta)), fmt=("%.6f", "%.10g", "%.10g"), delimiter=",",
-               header="time,ground_acc,theta", comments="")  # fmt: skip
+    cols, fmt, header = [t, acc, theta], ["%.6f", "%.10g", "%.10g"], "time,ground_acc,theta"
+    if vertical is not None:
+        cols.append(vertical)
+        fmt.append("%.10g")
+        header += ",ground_acc_vertical [m/s^2]"
+    np.savetxt(path, np.column_stack(cols), fmt=fmt, delimiter=",", header=header, comments="")
 
 
 def recording_order(n_ground: int) -> list[tuple[str, str, int]]:
@@ -1001,7 +1036,7 @@ def write_campaign(
     root : path
         Directory to create (campaign.toml and records/).
     case : str
-        Key of :data:`CASES`.
+        Key of :data:`CASES` or :data:`EXAMPLE_CASES`.
     n_ground : int
         Number of ground-motion records.
     seed : int
@@ -1014,8 +1049,9 @@ def write_campaign(
     Returns
     -------
     dict
-        ``root``, ``case``, ``expected``, ``truth``, ``overturned`` (bool array per ground-motion record),
-        ``gm_ids``, ``theta_max`` (the block's largest sampled |theta| per ground-motion record [rad]).
+        ``root``, ``case``, ``expected`` (None for an example case), ``truth``, ``overturned`` (bool array per
+        ground-motion record), ``gm_ids``, ``theta_max`` (the block's largest sampled |theta| per ground-motion
+        record [rad]).
     """
     root = Path(root)
     (root / "records").mkdir(parents=True, exist_ok=True)
@@ -1037,11 +1073,13 @@ def write_campaign(
             acc = np.zeros(int(round(FV_DURATION / DT)))
             theta0 = kw.get("fv_releases", FV_RELEASES)[i] * ALPHA
         theta, over = simulate(truth, acc, DT, theta0=theta0, record_index=k, convention=convention)
-        written = acc
+        written = acc * kw.get("acc_gain", 1.0)  # the table's accelerometer reads the gain times what was felt
         if acc_noise > 0.0 and kind == "ground_motion":
-            written = acc + np.random.default_rng(acc_noise_ss).normal(0.0, acc_noise, acc.size)
+            written = written + np.random.default_rng(acc_noise_ss).normal(0.0, acc_noise, acc.size)
+        vertical = vertical_input(truth, acc, DT) if kw.get("vertical_channel") else None
         _write_csv(root / "records" / f"{rid}.csv", written, _observe(truth, theta, DT,
-                                                                     np.random.default_rng(noise_ss)), DT)  # fmt: skip
+                                                                     np.random.default_rng(noise_ss)), DT,
+                   vertical)  # fmt: skip
         lines += ["[[record]]", f'id = "{rid}"', f'kind = "{kind}"', f'file = "records/{rid}.csv"']
         if kind == "ground_motion":
             overturned.append(over)
@@ -1051,7 +1089,7 @@ def write_campaign(
     return {
         "root": root,
         "case": case,
-        "expected": CASES[case][1],
+        "expected": expected_diagnosis(case),
         "truth": truth,
         "overturned": np.array(overturned, dtype=bool),
         "gm_ids": gm_ids,
@@ -1066,7 +1104,7 @@ def cached_campaign(base: str | Path, case: str, *, n_ground: int = 60, seed: in
     done = root / ".complete"
     if done.exists():
         n_rec = len(recording_order(n_ground))
-        return {"root": root, "case": case, "expected": CASES[case][1], "truth": truth_for(case, n_rec)}
+        return {"root": root, "case": case, "expected": expected_diagnosis(case), "truth": truth_for(case, n_rec)}
     info = write_campaign(root, case, n_ground=n_ground, seed=seed)
     done.write_text("ok\n")
     return info

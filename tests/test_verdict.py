@@ -131,7 +131,7 @@ def test_an_effect_outside_the_library_is_not_called_explained(base):
     assert v.status in ("partly_explained", "unexplained"), diag.summary()
     assert "no effect in the library" in v.text and "explains it" not in v.text
     # what remains shows in the errors (above the floor) or in the localisation (beyond Z_LOCAL)
-    assert (v.residual.misfit and v.residual.ratio > RATIO_MISFIT) or "localisation still differs" in v.text
+    assert (v.residual.misfit and v.residual.ratio > RATIO_MISFIT) or "still points to a misfit" in v.text
     assert v.next and v.next[0]["class"] == info["expected"], v.next
     assert "explains it" not in diag.summary()
 

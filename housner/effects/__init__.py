@@ -13,14 +13,24 @@ only the hooks it needs; the others are no-ops:
     returns the ground motion the block really feels;
 ``observe(response)``
     returns what a sensor would record (angle offset, channel time lag);
+``terms(params, specimen)``
+    returns terms of the one compiled analytic kernel (:mod:`housner.effects.terms`):
+    an extra moment (damping, drag, a vertical input), a dry (Coulomb) moment that
+    makes the block stick and raises its uplift threshold, a change of the impact
+    law. Terms of several effects compose in one kernel;
 ``solver()``
     returns a different equation of motion, a callable
     ``solve(specimen, motion, params, *, substeps=None, rest_tol=1e-6) -> Response``,
-    for the effects that change the mechanics (flexible foundation, sliding);
-    None keeps Housner's rigid block.
+    for the effects that change the mechanics beyond terms (flexible foundation,
+    sliding: other degrees of freedom); None keeps Housner's rigid block.
+
+An effect that reads an extra measured channel of the motion (``GroundMotion.channels``,
+e.g. ``"ground_acc_vertical"``) names it in its ``channels``; a motion without it is
+refused by name before any simulation.
 
 Effects live in the registry :data:`EFFECTS` (name -> class). Add your own
-with the :func:`register_effect` decorator, or from an installed package
+with the :func:`register_effect` decorator, from a file with
+:func:`load_plugin` (``examples/effects/*.py``), or from an installed package
 through the entry-point group ``housner.effects`` (each entry point names an
 :class:`Effect` subclass, or a module that registers its effects on import)::
 
@@ -45,10 +55,14 @@ within a stage, in the order given, so that the built-in effects commute:
    ``amplitude_dependent_restitution`` sets the exponent and
    ``rotational_damping`` adds its rate;
 2. ``transform_input`` of every effect;
-3. the solver: Housner's (``housner.model.simulate``) or the one mechanics
-   effect's; at most one mechanics-changing effect may be given (their
-   kernels do not compose: a block that both slides and sits on springs
-   would need a third kernel);
+3. ``terms`` of every effect, from the final parameters, in that order; the
+   solver: Housner's kernel with those terms (``housner.model.simulate``), or
+   the one mechanics effect's; at most one mechanics-changing effect may be
+   given, and it takes no terms (those kernels do not compose: a block that
+   both slides and sits on springs would need a third kernel). The effects
+   with a fast path (``restitution``, ``amplitude_dependent_restitution``,
+   ``rotational_damping``) change the parameters instead of adding their
+   terms, unless ``prefer_terms``;
 4. ``observe`` of every effect (``sensor_offset`` and ``time_lag`` commute).
 
 References
@@ -85,6 +99,7 @@ from housner.effects.registry import (
     available_effects,
     discover_effects,
     effect_class,
+    load_plugin,
     make_effect,
     make_effects,
     register_effect,
@@ -92,27 +107,33 @@ from housner.effects.registry import (
 )
 from housner.effects.sensor import SensorOffset, TimeLag
 from housner.effects.sliding import Sliding, simulate_sliding
+from housner.effects.terms import CoulombTerm, ImpactTerm, MomentTerm, TermSet
 
 __all__ = [
     "EFFECTS",
     "ENTRY_POINT_GROUP",
     "AmplitudeDependentRestitution",
     "AsymmetricPivots",
+    "CoulombTerm",
     "Effect",
     "EffectPlan",
     "FlexibleFoundation",
     "FrequencyParameter",
+    "ImpactTerm",
+    "MomentTerm",
     "ParamSpec",
     "Restitution",
     "RotationalDamping",
     "SensorOffset",
     "Sliding",
+    "TermSet",
     "TimeLag",
     "apply_effects",
     "asymmetric_impact_ratios",
     "available_effects",
     "discover_effects",
     "effect_class",
+    "load_plugin",
     "make_effect",
     "make_effects",
     "register_effect",

@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+from numba import njit
+
 from housner.effects.registry import (
     STAGE_DISSIPATION,
     STAGE_GEOMETRY,
@@ -14,8 +16,36 @@ from housner.effects.registry import (
     ParamSpec,
     register_effect,
 )
+from housner.effects.terms import ImpactTerm, MomentTerm
 from housner.specimen import Specimen
 from housner.units import G
+
+
+# ----------------------------------------------------------------------
+# the same physics as kernel terms (the routes the tests compare with the parameter vector's)
+@njit(cache=True)
+def restitution_law(w, r, s, alpha, p2, q):
+    """Energy ratio [-] of an impact that ends rocking on pivot s: q = (r_pos, r_neg), of the landing corner."""
+    return q[1] if s > 0.0 else q[0]
+
+
+@njit(cache=True)
+def amplitude_law(w, r, s, alpha, p2, q):
+    """r (w / (p alpha))^n clipped to [0, 1], q = (n,): :func:`housner._kernel._restitution`'s arithmetic."""
+    r_eff = r
+    if q[0] != 0.0 and w > 0.0:
+        r_eff = r * (w / (math.sqrt(p2) * alpha)) ** q[0]
+        if r_eff > 1.0:
+            r_eff = 1.0
+        if r_eff < 0.0:
+            r_eff = 0.0
+    return r_eff
+
+
+@njit(cache=True)
+def damping_moment(phi, w, t, a, v, s, alpha, p2, q):
+    """Viscous moment per unit I0 [rad/s^2], -c w, q = (c,) [1/s]."""
+    return -(q[0] * w)
 
 
 # ----------------------------------------------------------------------
@@ -44,11 +74,17 @@ class Restitution(Effect):
     name = "restitution"
     params = {"r": ParamSpec("-", (0.0, 1.0), lambda s: s.r_housner, doc="kinetic-energy ratio at impact")}
     stage = STAGE_DISSIPATION
+    fast_path = True
     r: float
 
     def modify_params(self, params, specimen):
         # with_r keeps the split of an asymmetric block's two impacts (r_pos / r_neg)
         return params.with_r(self.r)
+
+    def terms(self, params, specimen):
+        """The same law as an impact term: each landing corner's ratio of ``params.with_r(r)``."""
+        p = params.with_r(self.r)
+        return (ImpactTerm(restitution_law, (p.r_impact_pos, p.r_impact_neg), replaces=True),)
 
 
 @register_effect
@@ -81,12 +117,17 @@ class AmplitudeDependentRestitution(Effect):
     name = "amplitude_dependent_restitution"
     params = {"exponent": ParamSpec("-", (-2.0, 2.0), 0.0, 0.0, "exponent n of r (|theta'|/(p alpha))^n")}
     stage = STAGE_DISSIPATION
+    fast_path = True
     exponent: float = 0.0
 
     def modify_params(self, params, specimen):
         if self.exponent == 0.0:
             return params
         return replace(params, r_amp_exponent=self.exponent)
+
+    def terms(self, params, specimen):
+        """The same law as an impact term that scales the ratio in force."""
+        return () if self.exponent == 0.0 else (ImpactTerm(amplitude_law, (self.exponent,)),)
 
 
 @register_effect
@@ -114,12 +155,17 @@ class RotationalDamping(Effect):
     name = "rotational_damping"
     params = {"c": ParamSpec("1/s", (0.0, 5.0), 0.0, 0.0, "viscous damping rate of the rotation")}
     stage = STAGE_DISSIPATION
+    fast_path = True
     c: float = 0.0
 
     def modify_params(self, params, specimen):
         if self.c == 0.0:
             return params
         return replace(params, damping=params.damping + self.c)
+
+    def terms(self, params, specimen):
+        """The same moment as a kernel term, -c w (zero at rest: the uplift rule is unchanged)."""
+        return () if self.c == 0.0 else (MomentTerm(damping_moment, (self.c,), at_rest=False),)
 
 
 def asymmetric_impact_ratios(specimen: Specimen, e: float) -> tuple[float, float]:

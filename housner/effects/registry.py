@@ -24,6 +24,8 @@ STAGE_GEOMETRY, STAGE_INERTIA, STAGE_DISSIPATION, STAGE_MECHANICS, STAGE_SENSOR 
 
 #: Registry: effect name -> Effect subclass.
 EFFECTS: dict[str, type[Effect]] = {}
+#: Module name -> the file of every effect plugin loaded (:func:`load_plugin`).
+PLUGIN_FILES: dict[str, str] = {}
 
 _discovered = False
 
@@ -92,6 +94,20 @@ class Effect:
         campaign's release alignment cannot show (its time axis starts at the
         release seen in its own theta channel); the campaign comparison leaves
         such an effect out of those records.
+    makes_channels : tuple of str
+        Channels this effect's ``transform_input`` adds to the motion (they then satisfy the
+        ``channels`` of the effects given with it, and ``"ground_acc_vertical"`` drives the terms' v).
+    probe : bool
+        A localisation probe (a physical class tried to say where a misfit lies, never offered as an
+        explanation): left out of :func:`available_effects`, so never a candidate of a search.
+    channels : tuple of str
+        The extra channels of the motion this effect reads (``GroundMotion.channels``,
+        e.g. ``"ground_acc_vertical"``); a motion without one of them is refused by name
+        before any simulation. ``"ground_acc_vertical"`` drives the terms' v.
+    fast_path : bool
+        True for an effect whose ``modify_params`` realises the same physics as its
+        ``terms`` (faster, batched with the plain kernel): it is the default route, and
+        ``apply_effects(..., prefer_terms=True)`` takes the terms instead.
 
     The dataclass fields are validated on construction against the static
     bounds (a value outside them raises a ValueError naming the parameter,
@@ -106,6 +122,10 @@ class Effect:
     conflicts: ClassVar[frozenset[str]] = frozenset()
     conflict_reason: ClassVar[str] = ""
     seen_in_free_vibration: ClassVar[bool] = True
+    channels: ClassVar[tuple[str, ...]] = ()
+    makes_channels: ClassVar[tuple[str, ...]] = ()
+    probe: ClassVar[bool] = False
+    fast_path: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         for key, spec in self.params.items():
@@ -170,6 +190,13 @@ class Effect:
         """
         return None
 
+    def __reduce__(self):
+        # An effect travels to worker processes (spawned, or on a Dask cluster) by its class's module and
+        # name and its fields; a plugin's class by its file, which the worker loads first.
+        cls = type(self)
+        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.init}
+        return _rebuild_effect, (cls.__module__, cls.__qualname__, PLUGIN_FILES.get(cls.__module__), values)
+
     def describe(self) -> dict:
         """Plain data: ``{"name": ..., <param>: value, ...}`` (for results tables and the cache)."""
         return {"name": self.name, **{k: getattr(self, k) for k in self.params}}
@@ -190,6 +217,16 @@ class Effect:
     def solver(self) -> Callable[..., Response] | None:
         """Equation of motion replacing Housner's rigid block, or None (default)."""
         return None
+
+    def terms(self, params, specimen: Specimen) -> tuple:
+        """Terms this effect adds to the analytic kernel (default: none).
+
+        ``params`` are the rocking parameters after every ``modify_params`` (so a term can use the
+        final p and alpha of each pivot). Returns :class:`housner.effects.terms.MomentTerm`,
+        :class:`~housner.effects.terms.CoulombTerm` and :class:`~housner.effects.terms.ImpactTerm`
+        instances (see :mod:`housner.effects.terms`).
+        """
+        return ()
 
 
 # ----------------------------------------------------------------------
@@ -228,6 +265,13 @@ def _register(cls: type, name: str | None = None) -> type:
     for key, spec in cls.params.items():
         if not isinstance(spec, ParamSpec):
             raise TypeError(f"effect {name!r}: params[{key!r}] must be a ParamSpec, got {spec!r}")
+    from housner.motion import CHANNEL_PREFIX
+
+    chans = cls.channels
+    if not isinstance(chans, tuple) or not all(isinstance(c, str) and c.startswith(CHANNEL_PREFIX) for c in chans):
+        raise ValueError(
+            f"effect {name!r}: `channels` must be a tuple of channel names '{CHANNEL_PREFIX}<what>', got {chans!r}"
+        )
     old = EFFECTS.get(name)
     if old is not None and old is not cls and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
         raise ValueError(f"effect name {name!r} is already registered by {old.__module__}.{old.__qualname__}")
@@ -268,9 +312,85 @@ def discover_effects(*, force: bool = False) -> tuple[str, ...]:
     return tuple(EFFECTS)
 
 
+def load_plugin(path) -> tuple[str, ...]:
+    """Import a Python file as a module so that its ``@register_effect`` classes join :data:`EFFECTS`.
+
+    The module is named ``housner_plugin_<stem>_<hash of the resolved path>`` and kept in
+    ``sys.modules`` (so that its ``@njit`` term functions can be found by the generated kernels
+    and numba can cache them); loading the same file again re-executes it.
+
+    Parameters
+    ----------
+    path : str or path
+        A ``.py`` file.
+
+    Returns
+    -------
+    tuple of str
+        The names of the effects it registers.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file: it does not exist, is not a ``.py`` file, or registers no effect.
+        An exception raised by the file itself propagates.
+    """
+    import hashlib
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    p = Path(path).expanduser()
+    if not p.is_file():
+        raise ValueError(f"effect plugin {str(p)!r}: no such file")
+    if p.suffix != ".py":
+        raise ValueError(f"effect plugin {str(p)!r}: not a Python file (.py)")
+    p = p.resolve()
+    digest = hashlib.sha256(str(p).encode()).hexdigest()[:12]
+    stem = "".join(ch if ch.isalnum() else "_" for ch in p.stem)
+    modname = f"housner_plugin_{stem}_{digest}"
+    spec = importlib.util.spec_from_file_location(modname, p)
+    module = importlib.util.module_from_spec(spec)
+    # the code the effects were loaded from (a result cache keys on it: scenarios.cache.effect_code_hash)
+    module._housner_code_hash = hashlib.sha256(p.read_bytes()).hexdigest()[:16]
+    sys.modules[modname] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(modname, None)
+        raise
+    names = tuple(n for n, cls in EFFECTS.items() if cls.__module__ == modname)
+    if names:
+        PLUGIN_FILES[modname] = str(p)
+        for n in names:  # each class keeps the hash of the code it came from, even once the file is reloaded
+            EFFECTS[n]._housner_code_hash = module._housner_code_hash
+    if not names:
+        sys.modules.pop(modname, None)
+        raise ValueError(
+            f"effect plugin {str(p)!r} registers no effect (decorate an Effect subclass with @register_effect)"
+        )
+    return names
+
+
+def _rebuild_effect(module: str, qualname: str, plugin: str | None, values: dict) -> Effect:
+    """The effect of :meth:`Effect.__reduce__`: its class imported (a plugin loaded from its file), then built."""
+    import importlib
+    import sys
+
+    if module not in sys.modules:
+        if plugin is not None:
+            load_plugin(plugin)
+        else:
+            importlib.import_module(module)
+    obj: Any = sys.modules[module]
+    for part in qualname.split("."):
+        obj = getattr(obj, part)
+    return obj(**values)
+
+
 def available_effects() -> tuple[str, ...]:
-    """Names of every registered effect (built-in, decorated and installed), sorted."""
-    return tuple(sorted(discover_effects()))
+    """Names of every registered effect (built-in, decorated and installed), sorted; probes left out."""
+    return tuple(sorted(n for n in discover_effects() if not EFFECTS[n].probe))
 
 
 def effect_class(name: str) -> type[Effect]:
@@ -364,6 +484,8 @@ class EffectPlan:
         The mechanics effect's equation of motion; None for Housner's.
     mechanics : Effect or None
         The effect that supplied ``solver``.
+    terms : TermSet or None
+        The effects' terms for the analytic kernel (:mod:`housner.effects.terms`); None for none.
     """
 
     specimen: Specimen
@@ -372,6 +494,7 @@ class EffectPlan:
     motion: GroundMotion
     solver: Callable[..., Response] | None = None
     mechanics: Effect | None = None
+    terms: Any = None
 
     def observe(self, response: Response) -> Response:
         """Apply every ``observe`` hook and list the effects in ``response.info['effects']``."""
@@ -395,15 +518,17 @@ class EffectPlan:
         if self.solver is None:
             from housner.model import simulate
 
-            res = simulate(self.specimen, self.motion, params=self.params, substeps=substeps, rest_tol=rest_tol)
+            res = simulate(self.specimen, self.motion, params=self.params, substeps=substeps, rest_tol=rest_tol,
+                           terms=self.terms)  # fmt: skip
         else:
             res = self.solver(self.specimen, self.motion, self.params, substeps=substeps, rest_tol=rest_tol)
         return self.observe(res)
 
 
 def apply_effects(
-    specimen: Specimen, motion: GroundMotion, effects: Iterable[Effect] = (), *, params=None
-) -> EffectPlan:
+    specimen: Specimen, motion: GroundMotion, effects: Iterable[Effect] = (), *, params=None,
+    prefer_terms: bool = False,
+) -> EffectPlan:  # fmt: skip
     """Resolve ``effects`` for one simulation (see the module docstring for the order).
 
     Parameters
@@ -414,12 +539,23 @@ def apply_effects(
         At most one of each name, and at most one that changes the mechanics.
     params : RockingParams, optional
         Starting parameters; default ``RockingParams.from_specimen(specimen)``.
+    prefer_terms : bool
+        Realise the effects that have a fast path (``Effect.fast_path``: restitution, its
+        amplitude dependence, rotational damping) through their kernel terms instead; the same
+        physics (the tests check it), for comparisons and benchmarks.
 
     Returns
     -------
     EffectPlan
         Call its ``run()`` to simulate.
+
+    Raises
+    ------
+    ValueError
+        An effect given twice, two mechanics effects, a mechanics effect with terms, a value out
+        of bounds, or a channel an effect reads that ``motion`` does not carry (naming both).
     """
+    from housner.effects.terms import TermSet
     from housner.model import RockingParams
 
     if not isinstance(specimen, Specimen):
@@ -438,6 +574,12 @@ def apply_effects(
             raise ValueError(f"effect {e.name!r} given twice (effects[{seen[e.name]}] and effects[{i}]); give it once")
         seen[e.name] = i
         e.check(specimen)
+        made = {c for x in effects if isinstance(x, Effect) for c in type(x).makes_channels}
+        for ch in type(e).channels:
+            if ch not in motion.channels and ch not in made:
+                raise ValueError(
+                    f"effect {e.name!r} reads the channel {ch!r}, which motion {motion.name!r} does not carry"
+                )
     mech = [e.name for e in effects if e.changes_mechanics]
     if len(mech) > 1:
         raise ValueError(
@@ -446,7 +588,10 @@ def apply_effects(
         )
     ordered = tuple(sorted(effects, key=lambda e: e.stage))
     prm = RockingParams.from_specimen(specimen) if params is None else params
-    for e in ordered:
+    by_terms = [prefer_terms and type(e).fast_path for e in ordered]
+    for e, skip in zip(ordered, by_terms, strict=True):
+        if skip:
+            continue
         prm = e.modify_params(prm, specimen)
         if not isinstance(prm, RockingParams):
             raise TypeError(f"effect {e.name!r}: modify_params() must return a RockingParams, got {type(prm).__name__}")
@@ -468,7 +613,25 @@ def apply_effects(
                 f"effect {mechanics.name!r} cannot be combined with {', '.join(repr(c) for c in clash)}: "
                 f"{mechanics.conflict_reason}"
             )
-    return EffectPlan(specimen, ordered, prm, mo, solver, mechanics)
+    terms, with_terms = [], []
+    for e, by in zip(ordered, by_terms, strict=True):
+        if type(e).fast_path and not by:
+            continue  # realised by its parameters
+        ts = e.terms(prm, specimen)
+        if not isinstance(ts, (tuple, list)):
+            raise TypeError(f"effect {e.name!r}: terms() must return a tuple of terms, got {type(ts).__name__}")
+        if ts:
+            terms += list(ts)
+            with_terms.append(e.name)
+    if mechanics is not None and with_terms:
+        raise ValueError(
+            f"effect {mechanics.name!r} replaces the equation of motion and cannot take the kernel terms of "
+            f"{', '.join(repr(n) for n in with_terms)}: give it alone or drop those"
+        )
+    from housner.motion import VERTICAL
+
+    vertical = any(VERTICAL in type(e).channels or VERTICAL in type(e).makes_channels for e in ordered)
+    return EffectPlan(specimen, ordered, prm, mo, solver, mechanics, TermSet(tuple(terms), vertical) if terms else None)
 
 
 def simulate_with_effects(
@@ -479,12 +642,14 @@ def simulate_with_effects(
     params=None,
     substeps: int | None = None,
     rest_tol: float = 1e-6,
+    prefer_terms: bool = False,
 ) -> Response:
     """Simulate ``motion`` on ``specimen`` with ``effects``: ``apply_effects(...).run(...)``.
 
-    ``specimen``, ``motion``, ``effects`` and ``params`` (the starting
-    parameters, default the specimen's Housner parameters) are those of
-    :func:`apply_effects`; ``substeps`` and ``rest_tol`` those of
+    ``specimen``, ``motion``, ``effects``, ``params`` (the starting
+    parameters, default the specimen's Housner parameters) and ``prefer_terms``
+    are those of :func:`apply_effects`; ``substeps`` and ``rest_tol`` those of
     :meth:`EffectPlan.run`.
     """
-    return apply_effects(specimen, motion, effects, params=params).run(substeps=substeps, rest_tol=rest_tol)
+    plan = apply_effects(specimen, motion, effects, params=params, prefer_terms=prefer_terms)
+    return plan.run(substeps=substeps, rest_tol=rest_tol)

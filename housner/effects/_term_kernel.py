@@ -1,0 +1,615 @@
+"""The analytic kernel with the effects' terms (private; the template that :mod:`housner.effects.terms` fills in).
+
+The same rocking equation, events and numerics as :mod:`housner._kernel` (read its docstring first),
+in the same reduced coordinates on the current pivot ``s``
+(phi = s theta, w = s theta', a = s ug''/g, and v = a_v/g the vertical table acceleration, which is
+not mirrored), with four hooks that the effects' terms fill in::
+
+    phi'' = -p_s^2 (sin(alpha_s - phi) + a cos(alpha_s - phi)) - c w
+            + _moment(phi, w, t, a, v, s, alpha_s, p_s^2, q)          smooth moments (sum of the terms)
+            - sig * _dry(phi, t, a, v, s, alpha_s, p_s^2, q)           Coulomb moments, sig = sgn(w)
+
+    at an impact: r = _impact(w_before, r, s, alpha_s, p_s^2, q)      the energy ratio, chained
+
+``q`` is every term's parameters in one array; a generated hook passes each term its own slice.
+The section between the ``hooks`` markers below is what a generated kernel replaces; as written
+here it holds the no-op hooks, and this module is then the plain kernel computed by other code:
+with no term it gives bit for bit what :func:`housner._kernel.run_one` gives (tested).
+
+Block states and the events between them:
+
+* ROCKING -> impact (phi = 0), overturn (phi = pi/2), as in the plain kernel;
+* ROCKING -> STUCK, with a dry term only: the direction of motion ``sig`` is frozen over a step (so
+  that RK4 integrates a smooth right-hand side); a step in which w reaches 0 is cut there (the
+  root of w on the RK4 step, located by the plain kernel's Newton iteration, to machine
+  precision), and the block sticks when the other moments at w = 0 stay within the dry capacity,
+  ``|phi''(w = 0, without the dry terms)| <= _dry``; otherwise it turns back with ``sig`` reversed
+  (a peak of phi is such a reversal);
+* STUCK -> ROCKING and REST -> ROCKING: when a term acts at rest (``AT_REST``: a moment that is
+  not zero at phi = w = 0, e.g. a vertical input, or any dry term) the block held still starts to
+  move at the first instant at which ``phi''`` at w = 0 leaves the dry capacity (at rest on a
+  corner: ``phi''(0, 0) > _dry`` on that corner, which is a < -tan(alpha)(1 + v) for a vertical
+  input, and a threshold raised by M_f / (m g R cos(alpha)) for pivot friction). The margin is
+  checked at every substep boundary of the sample and its root located by Illinois false
+  position to a few ulps; for inputs linear between samples and terms affine in them (all the
+  library's) the margin is affine in time and the root exact to rounding. Without such a term
+  the plain kernel's uplift rule is used, exactly.
+* REST is entered by the plain rest rule after an impact, or at a reversal at phi <= 0.
+
+Units: time [s], angles [rad], angular velocity [rad/s], accelerations in units of g [-]
+(ground) and of 1/s^2 (the hooks' reduced angular accelerations).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, prange
+
+from housner._kernel import (
+    _EV_IMPACT,
+    _EV_NONE,
+    _EV_OVERTURN,
+    _EV_SETTLE,
+    _MAX_EVENTS_PER_SAMPLE,
+    EPS,
+    HALF_PI,
+    I_ALPHA_NEG,
+    I_ALPHA_POS,
+    I_DAMPING,
+    I_P_NEG,
+    I_P_POS,
+    I_R_EXP,
+    I_R_NEG,
+    I_R_POS,
+    OVERTURNED,
+    REST,
+    ROCKING,
+    STUCK,
+    _grid,
+    _initial_state,
+    _pivot_constants,
+    _reduced_ground,
+    _restitution,
+    _rk4_update,
+    _secant,
+    _store,
+    _substep_of,
+    _uplift,
+)
+
+#: Event codes of a step beyond the plain kernel's: the velocity reaches zero (dry terms), and a
+#: block released at w = 0 that does not move within the step.
+_EV_REVERSE, _EV_STALL = 4, 5
+
+# <hooks>
+#: Whether the kernel has smooth moment terms, dry (Coulomb) terms, impact terms, and a term that
+#: acts at rest (the uplift and release rule is then the net moment's).
+HAS_MOMENT = False
+HAS_DRY = False
+HAS_IMPACT = False
+AT_REST = False
+
+
+@njit(cache=True)
+def _moment(phi, w, t, a, v, s, alpha, p2, q):
+    """Sum of the smooth moment terms: extra phi'' [rad/s^2]."""
+    return 0.0
+
+
+@njit(cache=True)
+def _dry(phi, t, a, v, s, alpha, p2, q):
+    """Sum of the dry terms' capacities [rad/s^2] (>= 0)."""
+    return 0.0
+
+
+@njit(cache=True)
+def _impact(w, r, s, alpha, p2, q):
+    """Energy ratio [-] of an impact at speed w [rad/s] after the impact terms, from the ratio r in force."""
+    return r
+
+
+# </hooks>
+
+
+# ----------------------------------------------------------------------
+# the right-hand side on one step: a frame of constants
+@njit(cache=True)
+def _frame(s, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, sig):
+    """Constants of a step on pivot s: (a0, a slope, v0, v slope, t_k, s, alpha, p^2, c, sig).
+
+    a = a0 + slope tau and v = v0 + v_slope tau at local time tau [s] of the sample that starts at
+    t_k [s]; sig is the frozen direction of motion (dry terms), 0 for none.
+    """
+    a0, slope = _reduced_ground(s, g0, g1, dt)
+    alpha = alpha_p if s > 0.0 else alpha_n
+    p2 = p2_p if s > 0.0 else p2_n
+    return (a0, slope, v0, (v1 - v0) / dt, t_k, s, alpha, p2, c, sig)
+
+
+@njit(cache=True)
+def _with_sig(fr, sig):
+    """The frame ``fr`` with direction of motion ``sig``."""
+    return (fr[0], fr[1], fr[2], fr[3], fr[4], fr[5], fr[6], fr[7], fr[8], sig)
+
+
+@njit(cache=True)
+def _accel(phi, w, tau, fr, q):
+    """phi'' [rad/s^2] at local time tau [s]: Housner's, the viscous rate, and the terms."""
+    a = fr[0] + fr[1] * tau
+    d = fr[6] - phi
+    acc = -fr[7] * (math.sin(d) + a * math.cos(d)) - fr[8] * w
+    if HAS_MOMENT or HAS_DRY:
+        v = fr[2] + fr[3] * tau
+        t = fr[4] + tau
+        if HAS_MOMENT:
+            acc = acc + _moment(phi, w, t, a, v, fr[5], fr[6], fr[7], q)
+        if HAS_DRY:
+            acc = acc - fr[9] * _dry(phi, t, a, v, fr[5], fr[6], fr[7], q)
+    return acc
+
+
+@njit(cache=True)
+def _capacity(phi, tau, fr, q):
+    """The dry terms' capacity [rad/s^2] at local time tau [s] (0 without dry terms)."""
+    if not HAS_DRY:
+        return 0.0
+    return _dry(phi, fr[4] + tau, fr[0] + fr[1] * tau, fr[2] + fr[3] * tau, fr[5], fr[6], fr[7], q)
+
+
+@njit(cache=True)
+def _rk4(phi, w, tau, h, fr, q):
+    """One classic RK4 step of length h [s] from local time tau [s] (the plain kernel's arithmetic)."""
+    hh = 0.5 * h
+    k1 = _accel(phi, w, tau, fr, q)
+    w2 = w + hh * k1
+    k2 = _accel(phi + hh * w, w2, tau + hh, fr, q)
+    w3 = w + hh * k2
+    k3 = _accel(phi + hh * w2, w3, tau + hh, fr, q)
+    w4 = w + h * k3
+    k4 = _accel(phi + h * w3, w4, tau + h, fr, q)
+    return _rk4_update(phi, w, h, w, w2, w3, w4, k1, k2, k3, k4)
+
+
+@njit(cache=True)
+def _locate(kind, target, hl, gl, hr, gr, phi0, w0, tau, fr, q):
+    """Root h in [hl, hr] [s] of phi(h) - target (kind 0) or w(h) (kind 1) on one RK4 step from tau.
+
+    :func:`housner._kernel._locate` with the terms; returns (h, phi(h), w(h)).
+    """
+    if gr == 0.0:
+        ph, wh = _rk4(phi0, w0, tau, hr, fr, q)
+        return hr, ph, wh
+    h = _secant(hl, gl, hr, gr)
+    ph = 0.0
+    wh = 0.0
+    for _ in range(200):
+        ph, wh = _rk4(phi0, w0, tau, h, fr, q)
+        if kind == 0:
+            g = ph - target
+            d = wh
+        else:
+            g = wh
+            d = _accel(ph, wh, tau + h, fr, q)
+        if g == 0.0:
+            break
+        if (g > 0.0) == (gl > 0.0):
+            hl = h
+            gl = g
+        else:
+            hr = h
+            gr = g
+        hn = h - g / d if d != 0.0 else 0.5 * (hl + hr)
+        if not (hl < hn < hr):
+            hn = 0.5 * (hl + hr)
+        if abs(hn - h) <= 4.0 * EPS * (tau + h) or hr - hl <= 4.0 * EPS * (tau + hr):
+            break
+        h = hn
+    return h, ph, wh
+
+
+# ----------------------------------------------------------------------
+# events of a step without dry terms: the plain kernel's
+@njit(cache=True, inline="always")
+def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
+    """:func:`housner._kernel._crossing` with the terms."""
+    hl = -1.0
+    gl = 0.0
+    hr = H
+    gr = phi1
+    if phi1 < 0.0 or (phi1 == 0.0 and w1 < 0.0):
+        if hp >= 0.0 and php > 0.0:
+            hl = hp
+            gl = php
+        elif phi > 0.0:
+            hl = 0.0
+            gl = phi
+        elif w > 0.0:
+            hb = 0.5 * H
+            for _ in range(80):
+                pb, _wb = _rk4(phi, w, tau, hb, fr, q)
+                if pb > 0.0:
+                    hl = hb
+                    gl = pb
+                    break
+                hb *= 0.5
+        if hl < 0.0:
+            return _EV_SETTLE, hl, gl, hr, gr
+    elif w < 0.0 and w1 > 0.0 and phi1 > 0.0 and phi > 0.0:
+        hm, phm, _wm = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, fr, q)
+        if phm < 0.0:
+            hl = 0.0
+            gl = phi
+            hr = hm
+            gr = phm
+    return (_EV_IMPACT if hl >= 0.0 else _EV_NONE), hl, gl, hr, gr
+
+
+@njit(cache=True, inline="always")
+def _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max):
+    """:func:`housner._kernel._step_event` with the terms: (event, h, w_h, theta_max)."""
+    hp = -1.0
+    php = 0.0
+    if w > 0.0 and w1 < 0.0:
+        hp, php, _wp = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, fr, q)
+    if (hp >= 0.0 and php >= HALF_PI) or phi1 >= HALF_PI:
+        hr = H
+        gr = phi1 - HALF_PI
+        if hp >= 0.0 and php >= HALF_PI:
+            hr = hp
+            gr = php - HALF_PI
+        h_o, _ph, _wh = _locate(0, HALF_PI, 0.0, phi - HALF_PI, hr, gr, phi, w, tau, fr, q)
+        return _EV_OVERTURN, h_o, 0.0, HALF_PI
+    if hp >= 0.0 and php > theta_max:
+        theta_max = php
+    event, hl, gl, hr, gr = _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q)
+    if event == _EV_IMPACT:
+        h_i, _ph, w_i = _locate(0, 0.0, hl, gl, hr, gr, phi, w, tau, fr, q)
+        return _EV_IMPACT, h_i, w_i, theta_max
+    return event, 0.0, 0.0, theta_max
+
+
+# ----------------------------------------------------------------------
+# events of a step with dry terms: phi is monotone between reversals
+@njit(cache=True, inline="always")
+def _step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max):
+    """First event of the step (phi, w) -> (phi1, w1) of length H [s] with the direction sig = fr[9] frozen.
+
+    Returns (event, h, phi_h, w_h, theta_max): ``_EV_REVERSE`` at the first zero of w (h, phi
+    there), ``_EV_IMPACT`` (h, w there), ``_EV_OVERTURN``, ``_EV_STALL`` (released at w = 0, the
+    block does not move in the direction sig), ``_EV_SETTLE`` (reaches phi = 0 at w = 0) or
+    ``_EV_NONE``. Until its first zero w keeps the sign sig, so phi is monotone there and every
+    bracket below is a bracket of the only root.
+    """
+    sig = fr[9]
+    h_end = H
+    p_end = phi1
+    rev = False
+    if sig * w1 <= 0.0:
+        hl = 0.0
+        gl = w
+        if sig * w <= 0.0:
+            # released at w = 0: find a point of the step at which it moves in direction sig
+            hl = -1.0
+            hb = 0.5 * H
+            for _ in range(80):
+                _pb, wb = _rk4(phi, w, tau, hb, fr, q)
+                if sig * wb > 0.0:
+                    hl = hb
+                    gl = wb
+                    break
+                hb *= 0.5
+            if hl < 0.0:
+                return _EV_STALL, 0.0, phi, 0.0, theta_max
+        if w1 == 0.0:
+            h_end = H
+        else:
+            h_end, p_end, _w = _locate(1, 0.0, hl, gl, H, w1, phi, w, tau, fr, q)
+        rev = True
+    if sig > 0.0:
+        if p_end >= HALF_PI:
+            h_o, _ph, _wh = _locate(0, HALF_PI, 0.0, phi - HALF_PI, h_end, p_end - HALF_PI, phi, w, tau, fr, q)
+            return _EV_OVERTURN, h_o, HALF_PI, 0.0, HALF_PI
+        if rev and p_end > theta_max:
+            theta_max = p_end
+    elif p_end < 0.0 or (p_end == 0.0 and not rev):
+        if phi > 0.0:
+            h_i, _ph, w_i = _locate(0, 0.0, 0.0, phi, h_end, p_end, phi, w, tau, fr, q)
+            return _EV_IMPACT, h_i, 0.0, w_i, theta_max
+        return _EV_SETTLE, 0.0, 0.0, 0.0, theta_max
+    elif p_end == 0.0:
+        return _EV_SETTLE, 0.0, 0.0, 0.0, theta_max
+    if rev:
+        return _EV_REVERSE, h_end, p_end, 0.0, theta_max
+    return _EV_NONE, 0.0, 0.0, 0.0, theta_max
+
+
+# ----------------------------------------------------------------------
+# a block held still: when does it start to move?
+@njit(cache=True)
+def _hold_margin(phi, stuck, tau, fr, q):
+    """> 0 when a block held at phi (w = 0) starts to move at local time tau [s] [rad/s^2].
+
+    At rest on the ground (``stuck`` False) it lifts onto the frame's pivot when phi'' > capacity;
+    stuck at phi > 0 it moves either way when |phi''| > capacity (phi'' without the dry terms).
+    """
+    acc = _accel(phi, 0.0, tau, fr, q)
+    if stuck:
+        acc = abs(acc)
+    return acc - _capacity(phi, tau, fr, q)
+
+
+@njit(cache=True)
+def _first_positive(phi, stuck, tl, fl, th, fh, fr, q, scale):
+    """Earliest local time in (tl, th] [s] at which the hold margin is positive (fl <= 0 < fh).
+
+    Illinois false position on the margin, to 4 ulps of ``scale`` [s]; returns the bracket's right
+    end, where the margin is positive, so that the block does move.
+    """
+    side = 0
+    for _ in range(200):
+        if th - tl <= 4.0 * EPS * scale:
+            break
+        t = th - fh * (th - tl) / (fh - fl)
+        if not (tl < t < th):
+            t = 0.5 * (tl + th)
+        f = _hold_margin(phi, stuck, t, fr, q)
+        if f > 0.0:
+            th = t
+            fh = f
+            if side == 1:
+                fl *= 0.5
+            side = 1
+        else:
+            tl = t
+            fl = f
+            if side == -1:
+                fh *= 0.5
+            side = -1
+    return th
+
+
+@njit(cache=True)
+def _leave(stuck, phi, s, tau, m, dt, g0, g1, v0, v1, t_k, alpha_p, alpha_n, p2_p, p2_n, c, q):
+    """(local time [s], pivot, direction) at which a block held still starts to move in [tau, dt].
+
+    At rest (``stuck`` False, phi = 0) both corners are tried and the earlier wins; stuck at
+    phi > 0 it stays on pivot s. The margin (:func:`_hold_margin`) is checked at tau and at every
+    substep boundary after it. Time inf when the block stays put through the sample.
+    """
+    best = math.inf
+    s_best = s
+    for i in range(1 if stuck else 2):
+        sd = s if stuck else (1.0 if i == 0 else -1.0)
+        fr = _frame(sd, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
+        tl = tau
+        fl = _hold_margin(phi, stuck, tl, fr, q)
+        t_go = math.inf
+        if fl > 0.0:
+            t_go = tau
+        else:
+            j = _substep_of(tau, m, dt)
+            while j < m:
+                th = _grid(j + 1, m, dt)
+                if th > tl:
+                    fh = _hold_margin(phi, stuck, th, fr, q)
+                    if fh > 0.0:
+                        t_go = _first_positive(phi, stuck, tl, fl, th, fh, fr, q, dt)
+                        break
+                    tl = th
+                    fl = fh
+                j += 1
+        if t_go < best:
+            best = t_go
+            s_best = sd
+    sig = 0.0
+    if best < math.inf:
+        fr = _frame(s_best, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
+        sig = 1.0 if _accel(phi, 0.0, best, fr, q) > 0.0 else -1.0
+    return best, s_best, sig
+
+
+@njit(cache=True)
+def _after_reversal(phi, tau, fr, q, sig_before):
+    """The direction after w reached 0 at phi > 0 moving in sig_before: 0 (stuck) or -sig_before.
+
+    It turns back when phi'' at w = 0 without the dry terms exceeds their capacity; a phi'' that
+    still points along sig_before (it was slowing down, so only by rounding) counts as stuck.
+    """
+    fr = _with_sig(fr, 0.0)
+    acc = _accel(phi, 0.0, tau, fr, q)
+    if abs(acc) <= _capacity(phi, tau, fr, q) or (acc > 0.0) == (sig_before > 0.0):
+        return 0.0
+    return -sig_before
+
+
+# ----------------------------------------------------------------------
+@njit(cache=True)
+def run_one(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_out, theta_dot_out, impacts):
+    """Simulate one record: :func:`housner._kernel.run_one` with the terms.
+
+    ``v_g`` [-] is the vertical table acceleration over g at the samples (zeros when no term
+    reads it), ``q`` the terms' parameters; the other arguments and the returned tuple are those
+    of :func:`housner._kernel.run_one`.
+    """
+    alpha_p = prm[I_ALPHA_POS]
+    alpha_n = prm[I_ALPHA_NEG]
+    p2_p = prm[I_P_POS] * prm[I_P_POS]
+    p2_n = prm[I_P_NEG] * prm[I_P_NEG]
+    c = prm[I_DAMPING]
+    tan_p, tan_n, wrest2_p, wrest2_n = _pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol)
+    at_rest, s, phi, w, t_uplift = _initial_state(theta0, theta_dot0)
+    mode = REST if at_rest else ROCKING
+    sig = 0.0
+    if HAS_DRY and not at_rest:
+        if w != 0.0:
+            sig = 1.0 if w > 0.0 else -1.0
+        else:
+            k1 = 1 if acc_g.size > 1 else 0
+            fr = _frame(s, acc_g[0], acc_g[k1], v_g[0], v_g[k1], dt, 0.0, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
+            if _hold_margin(phi, True, 0.0, fr, q) <= 0.0:
+                mode = STUCK
+            else:
+                sig = 1.0 if _accel(phi, 0.0, 0.0, fr, q) > 0.0 else -1.0
+    theta_max = abs(theta0)
+    t_over = math.nan
+    n_imp = 0
+    guard = 0
+    if record:
+        theta_out[0] = theta0
+        theta_dot_out[0] = theta_dot0
+
+    for k in range(acc_g.size - 1):
+        if mode == OVERTURNED and not record:
+            break
+        t_k, g0, g1 = k * dt, acc_g[k], acc_g[k + 1]
+        u0, u1 = v_g[k], v_g[k + 1]
+        tau, j, n_ev = 0.0, 0, 0
+        while mode != OVERTURNED:
+            if mode == REST or mode == STUCK:
+                if AT_REST:
+                    tl, sd, sg = _leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n,
+                                        p2_p, p2_n, c, q)  # fmt: skip
+                    if tl == math.inf:
+                        break
+                    if mode == REST:
+                        s = sd
+                        phi = 0.0
+                        if math.isnan(t_uplift):
+                            t_uplift = t_k + tl
+                    tau = tl
+                    sig = sg
+                else:
+                    tu_p, tu_n = _uplift(g0, g1, tau, dt, tan_p, tan_n)
+                    if tu_p == math.inf and tu_n == math.inf:
+                        break
+                    s = 1.0 if tu_p < tu_n else -1.0
+                    tau = tu_p if tu_p < tu_n else tu_n
+                    if math.isnan(t_uplift):
+                        t_uplift = t_k + tau
+                    phi = 0.0
+                    sig = 1.0
+                mode = ROCKING
+                w = 0.0
+                j = _substep_of(tau, m, dt)
+            tgt = _grid(j + 1, m, dt)
+            if tgt > tau:
+                fr = _frame(s, g0, g1, u0, u1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, sig)
+                H = tgt - tau
+                phi1, w1 = _rk4(phi, w, tau, H, fr, q)
+                ph_h = 0.0
+                if HAS_DRY:
+                    event, h, ph_h, w_h, theta_max = _step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max)
+                else:
+                    event, h, w_h, theta_max = _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max)
+                if event == _EV_OVERTURN:
+                    mode = OVERTURNED
+                    t_over = t_k + tau + h
+                    break
+                if event == _EV_IMPACT or event == _EV_REVERSE:
+                    if event == _EV_IMPACT:
+                        if n_imp < impacts.size:
+                            impacts[n_imp] = t_k + tau + h
+                        n_imp += 1
+                        tau = tau + h
+                        r_imp = prm[I_R_NEG] if s > 0.0 else prm[I_R_POS]
+                        if HAS_IMPACT:
+                            r_imp = _impact(-w_h, r_imp, s, fr[6], fr[7], q)
+                        w = _restitution(-w_h, r_imp, prm[I_R_EXP], fr[7], fr[6])
+                        phi = 0.0
+                        s = -s
+                        sig = 1.0
+                        if w * w < (wrest2_p if s > 0.0 else wrest2_n):
+                            mode = REST
+                            w = 0.0
+                    else:  # the velocity reached zero at phi = ph_h (dry terms)
+                        tau = tau + h
+                        phi = ph_h
+                        w = 0.0
+                        sig = _after_reversal(phi, tau, fr, q, sig) if phi > 0.0 else 0.0
+                        if sig == 0.0:
+                            mode = STUCK if phi > 0.0 else REST
+                            if mode == REST:
+                                phi = 0.0
+                    n_ev += 1
+                    if n_ev > _MAX_EVENTS_PER_SAMPLE:
+                        mode = REST
+                        phi = 0.0
+                        w = 0.0
+                        guard += 1
+                        break
+                    continue
+                if event == _EV_NONE:
+                    phi = phi1
+                    w = w1
+                    if phi > theta_max:
+                        theta_max = phi
+                elif event == _EV_STALL:
+                    mode = STUCK if phi > 0.0 else REST
+                    w = 0.0
+                else:  # settle
+                    mode = REST
+                    phi = 0.0
+                    w = 0.0
+                tau = tgt
+            j += 1
+            if j >= m:
+                break
+        if record:
+            _store(theta_out, theta_dot_out, k + 1, s, phi, w, mode == ROCKING or mode == STUCK, mode == OVERTURNED)
+    return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard
+
+
+@njit(cache=True)
+def run_batch(
+    acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
+    imp_offsets, out,
+):  # fmt: skip
+    """Serial batch over records i (samples offsets[i]:offsets[i+1]); ``q`` [n_rec, n_q]: each record's terms.
+
+    ``out`` [n_rec, 6] receives (theta_max, overturned, t_over, t_uplift, n_imp, guard), as
+    :func:`housner._kernel.run_batch`.
+    """
+    for i in range(offsets.size - 1):
+        _one_of_batch(
+            i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
+            imp_offsets, out,
+        )  # fmt: skip
+
+
+@njit(cache=True, parallel=True)
+def run_batch_parallel(
+    acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
+    imp_offsets, out,
+):  # fmt: skip
+    """:func:`run_batch` with the records spread over threads (numba ``prange``)."""
+    for i in prange(offsets.size - 1):
+        _one_of_batch(
+            i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
+            imp_offsets, out,
+        )  # fmt: skip
+
+
+@njit(cache=True)
+def _one_of_batch(
+    i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
+    imp_offsets, out,
+):  # fmt: skip
+    a = offsets[i]
+    b = offsets[i + 1]
+    if record:
+        th = theta[a:b]
+        thd = theta_dot[a:b]
+    else:
+        th = theta[0:0]
+        thd = theta_dot[0:0]
+    res = run_one(
+        acc_g[a:b], v_g[a:b], dts[i], ms[i], prm[i], q[i], theta0s[i], theta_dot0s[i], rest_tol, record, th, thd,
+        impacts[imp_offsets[i] : imp_offsets[i + 1]],
+    )  # fmt: skip
+    out[i, 0] = res[0]
+    out[i, 1] = 1.0 if res[1] else 0.0
+    out[i, 2] = res[2]
+    out[i, 3] = res[3]
+    out[i, 4] = res[4]
+    out[i, 5] = res[5]

@@ -1,0 +1,399 @@
+"""Mechanics as composable terms of the one compiled analytic kernel.
+
+An effect that changes the rocking mechanics without replacing the whole equation of motion
+returns *terms* from its ``terms(params, specimen)`` hook; the analytic engine compiles one
+kernel with every term of a simulation in it, so that several compose (a Coulomb moment at the
+pivot, asymmetric pivots, viscous damping and a vertical input at once). A term is a module-level
+``@njit`` function and its parameter array ``q`` (floats). Everything is in the kernel's reduced
+coordinates on the current pivot s (+1: the +x corner): phi = s theta [rad], w = s theta'
+[rad/s], a = s ug''/g [-], v = a_v/g [-] (vertical table acceleration, positive up; 0 unless an
+effect reads the ``ground_acc_vertical`` channel), t the time [s], alpha and p2 = p^2 [1/s^2] of
+pivot s:
+
+:class:`MomentTerm` ``fn(phi, w, t, a, v, s, alpha, p2, q) -> float``
+    an extra phi'' [rad/s^2], added to Housner's -p^2 (sin(alpha - phi) + a cos(alpha - phi)):
+    a viscous or aerodynamic moment, or a vertical input, -p^2 v sin(alpha - phi) (g -> g + a_v
+    in the restoring moment). ``at_rest=False`` declares it zero at phi = w = 0 (a damping
+    moment): the uplift rule is then left as it is.
+:class:`CoulombTerm` ``fn(phi, t, a, v, s, alpha, p2, q) -> float``
+    the capacity C >= 0 [rad/s^2] of a dry moment (M_f / I0 for a Coulomb moment M_f at the
+    pivot): while the block turns it adds -C sgn(w); at w = 0 it holds the block while the other
+    moments stay within +-C (the block is then STUCK, or at REST on the ground), and it raises
+    the uplift threshold.
+:class:`ImpactTerm` ``fn(w, r, s, alpha, p2, q) -> float``
+    the impact map, w_after = sqrt(r') w_before: given the speed before the impact w > 0 and the
+    energy ratio r in force (the rocking parameters' ratio of the landing corner, then each
+    impact term's in turn), it returns the new ratio r'. A law that sets the ratio outright
+    (``replaces=True``: a restitution, an impact at an interior point) runs before those that
+    modify it (an amplitude dependence), whatever the order of the effects. s is the pivot
+    before the impact (the block lands on -s), alpha and p2 are that pivot's.
+
+The kernel (:mod:`housner.effects._term_kernel`) is Housner's event-driven kernel with these
+hooks; its states are REST, ROCKING, STUCK and OVERTURNED, and it locates every event (impact,
+overturn, the zero of w under a dry term, uplift and release from a stick) to the precision of
+the plain kernel (see that module's docstring). With no term it is the plain kernel, bit for bit.
+
+Route: generated code, cached on disk
+-------------------------------------
+For each *structure* (which functions, of which kind) this module writes a Python module, the
+kernel template with its hook section replaced by calls to the terms' functions (their
+parameters are run-time data, so a new value of M_f recompiles nothing), into
+``$HOUSNER_CACHE_DIR/kernels`` (default ``~/.cache/housner/kernels``; ``HOUSNER_KERNEL_DIR``
+overrides), named by a SHA-256 of its text, of the plain kernel's and of every term's module
+source, and imports it. Numba compiles it with ``cache=True`` next to the file, so the machine
+code is reused by every later process, and a changed term (or kernel) gets a new file instead of
+a stale cache. Measured on this project's shared 2-core machine (numba 0.68; the routes on a
+prototype RK4 loop of 100 records x 4000 samples with one moment term, the chosen one on the
+whole kernel with ``benchmarks/bench_terms.py``):
+
+* dispatcher-argument specialisation (the term passed as an argument of an ``@njit`` kernel):
+  as fast as generated code warm (1.03-1.14x the plain loop), but numba does not cache a
+  function specialised on a dispatcher: every process (every worker of a run) compiles it again,
+  0.6 s for the prototype as for a cold compile, so the kernel's ~3 s each time;
+* numba first-class functions (``cfunc`` pointers passed as ``types.FunctionType``): cached, but
+  each call is indirect and cannot be inlined, 1.22-1.23x the plain loop, with one fixed scalar
+  signature (no array for q);
+* generated code (chosen): the calls are direct and inlined, 1.02-1.04x the plain loop; cached
+  across processes. The whole kernel with a term compiles in 2.7-3.1 s once per structure and
+  machine (its parallel batch 1.6-1.7 s more, when used), and a new process loads it from
+  numba's cache in 0.01-0.02 s. Warm, serial, on 100 records of 16 s (two runs; the machine was
+  shared, so +-10 %): the kernel's own overhead, on identical trajectories, is 1.03x without
+  terms, 1.11-1.13x for ``rotational_damping`` as a moment term and 1.13-1.18x for
+  ``restitution`` as an impact term against their fast paths; a user drag moment, pivot
+  friction and a vertical input cost 1.05-1.14x, 1.19-1.27x and 1.12-1.13x plain Housner (their
+  physics differ: other impacts, fewer overturns).
+
+A term's function must be importable by its module and qualified name (a module-level
+``@njit`` function of an installed module or of a plugin loaded with
+:func:`housner.effects.load_plugin`), and should be written ``@njit(cache=True)``. Only the term
+function's own module source enters the file name: a helper it calls from another module that
+changes needs the kernel directory cleared (numba's own rule for cached callers).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import inspect
+import math
+import os
+import sys
+import tempfile
+import threading
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+__all__ = ["CoulombTerm", "ImpactTerm", "MomentTerm", "TermSet", "kernel_dir", "kernel_module"]
+
+_TEMPLATE = Path(__file__).with_name("_term_kernel.py")
+_PLAIN = Path(__file__).resolve().parent.parent / "_kernel.py"
+_BEGIN, _END = "# <hooks>\n", "# </hooks>\n"
+
+
+def _check_fn(kind: str, fn: Any, n_args: int) -> tuple[str, str]:
+    """(module, qualified name) of a term function; ValueError unless it is a module-level @njit function."""
+    py = getattr(fn, "py_func", None)
+    if py is None:
+        raise ValueError(f"a {kind} term's function must be a numba @njit function, got {fn!r}")
+    n = len(inspect.signature(py).parameters)
+    if n != n_args:
+        raise ValueError(f"{kind} term function {py.__qualname__!r} must take {n_args} arguments, it takes {n}")
+    mod, qual = py.__module__, py.__qualname__
+    found = _import_term(mod, qual, missing=None)
+    # the same function, or the same code re-executed (a plugin loaded again)
+    same = found is fn or getattr(getattr(found, "py_func", None), "__code__", None) == py.__code__
+    if "<locals>" in qual or not same:
+        raise ValueError(
+            f"{kind} term function {qual!r} must be defined at the top level of an importable module "
+            f"(or of a plugin loaded with housner.effects.load_plugin); {mod!r} does not hold it"
+        )
+    return mod, qual
+
+
+def _params(kind: str, q) -> tuple[float, ...]:
+    out = []
+    for x in tuple(q):
+        if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) or not math.isfinite(x):
+            raise ValueError(f"the parameters `q` of a {kind} term must be finite numbers, got {q!r}")
+        out.append(float(x))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class MomentTerm:
+    """A smooth extra angular acceleration phi'' [rad/s^2] (see the module docstring).
+
+    Parameters
+    ----------
+    fn : numba dispatcher
+        ``fn(phi, w, t, a, v, s, alpha, p2, q) -> float``, defined at the top level of a module.
+    q : sequence of float
+        Its parameters (units as the function says).
+    at_rest : bool
+        The moment may be non-zero at phi = w = 0, so the uplift rule becomes the net moment's
+        (default True; False for a moment proportional to w).
+    """
+
+    fn: Any
+    q: tuple = ()
+    at_rest: bool = True
+
+    def __post_init__(self) -> None:
+        _check_fn("moment", self.fn, 9)
+        object.__setattr__(self, "q", _params("moment", self.q))
+        object.__setattr__(self, "at_rest", bool(self.at_rest))
+
+
+@dataclass(frozen=True)
+class CoulombTerm:
+    """A dry moment of capacity C >= 0 [rad/s^2]: -C sgn(w) while turning, sticking within +-C at w = 0.
+
+    Parameters
+    ----------
+    fn : numba dispatcher
+        ``fn(phi, t, a, v, s, alpha, p2, q) -> float`` (the capacity, >= 0).
+    q : sequence of float
+    """
+
+    fn: Any
+    q: tuple = ()
+
+    def __post_init__(self) -> None:
+        _check_fn("Coulomb", self.fn, 8)
+        object.__setattr__(self, "q", _params("Coulomb", self.q))
+
+
+@dataclass(frozen=True)
+class ImpactTerm:
+    """A change of the impact map through its energy ratio: r' = fn(w, r, s, alpha, p2, q) [-].
+
+    Parameters
+    ----------
+    fn : numba dispatcher
+        ``fn(w, r, s, alpha, p2, q) -> float``: w the speed before the impact [rad/s] (> 0), r
+        the ratio in force; the speed after is sqrt(r') w.
+    q : sequence of float
+    replaces : bool
+        The law sets the ratio without reading r; such laws run before the others.
+    """
+
+    fn: Any
+    q: tuple = ()
+    replaces: bool = False
+
+    def __post_init__(self) -> None:
+        _check_fn("impact", self.fn, 6)
+        object.__setattr__(self, "q", _params("impact", self.q))
+        object.__setattr__(self, "replaces", bool(self.replaces))
+
+
+_KINDS = {MomentTerm: "moment", CoulombTerm: "coulomb", ImpactTerm: "impact"}
+
+
+@dataclass(frozen=True)
+class TermSet:
+    """The terms of one simulation, in kernel order, and whether the kernel reads the vertical channel.
+
+    Parameters
+    ----------
+    terms : sequence of MomentTerm, CoulombTerm, ImpactTerm
+        In the order of the effects; impact terms that ``replaces`` are moved before the others.
+    vertical : bool
+        Drive v with the motion's ``ground_acc_vertical`` channel (else v = 0).
+    """
+
+    terms: tuple
+    vertical: bool = False
+
+    def __post_init__(self) -> None:
+        terms = tuple(self.terms)
+        for i, t in enumerate(terms):
+            if type(t) not in _KINDS:
+                raise TypeError(f"term {i} must be a MomentTerm, CoulombTerm or ImpactTerm, got {type(t).__name__}")
+        impacts = [t for t in terms if isinstance(t, ImpactTerm)]
+        ordered = [t for t in impacts if t.replaces] + [t for t in impacts if not t.replaces]
+        it = iter(ordered)
+        terms = tuple(next(it) if isinstance(t, ImpactTerm) else t for t in terms)
+        object.__setattr__(self, "terms", terms)
+        object.__setattr__(self, "vertical", bool(self.vertical))
+
+    def __bool__(self) -> bool:
+        return bool(self.terms)
+
+    @property
+    def structure(self) -> tuple:
+        """What the compiled kernel depends on: each term's kind, function, parameter count and flag."""
+        return tuple(
+            (_KINDS[type(t)], t.fn.py_func.__module__, t.fn.py_func.__qualname__, len(t.q),
+             getattr(t, "at_rest", getattr(t, "replaces", False)))
+            for t in self.terms
+        )  # fmt: skip
+
+    def q_array(self) -> np.ndarray:
+        """Every term's parameters in one float64 array, in kernel order."""
+        return np.array([x for t in self.terms for x in t.q], dtype=np.float64)
+
+    def kernel(self) -> ModuleType:
+        """The compiled kernel module of this structure (generated, imported and cached once)."""
+        return kernel_module(self.structure)
+
+    def describe(self) -> list[dict]:
+        """Plain data for ``Response.info``: each term's kind, function and parameters."""
+        return [{"term": k, "fn": f"{m}.{n}", "q": list(t.q)} for (k, m, n, _nq, _f), t in
+                zip(self.structure, self.terms, strict=True)]  # fmt: skip
+
+
+# ----------------------------------------------------------------------
+# the generated kernels
+def _import_term(module: str, qualname: str, missing: Any = ...) -> Any:
+    """The object ``qualname`` of ``module`` (imported if need be); ``missing`` when absent, if given."""
+    try:
+        obj = sys.modules.get(module) or importlib.import_module(module)
+        for part in qualname.split("."):
+            obj = getattr(obj, part)
+    except (ImportError, AttributeError):
+        if missing is not ...:
+            return missing
+        raise
+    return obj
+
+
+def kernel_dir() -> Path:
+    """Where generated kernels (and numba's cache of them) are written.
+
+    ``HOUSNER_KERNEL_DIR``, else ``$HOUSNER_CACHE_DIR/kernels``, else ``~/.cache/housner/kernels``;
+    a private temporary folder when that cannot be written (then nothing is kept across processes).
+    """
+    global _FALLBACK
+    env = os.environ.get("HOUSNER_KERNEL_DIR")
+    if env:
+        d = Path(env).expanduser()
+    else:
+        base = os.environ.get("HOUSNER_CACHE_DIR")
+        d = (Path(base).expanduser() if base else Path.home() / ".cache" / "housner") / "kernels"
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        if os.access(d, os.W_OK):
+            return d
+    except OSError:
+        pass
+    if _FALLBACK is None:
+        _FALLBACK = Path(tempfile.mkdtemp(prefix="housner-kernels-"))
+    return _FALLBACK
+
+
+_FALLBACK: Path | None = None
+_MODULES: dict[tuple, ModuleType] = {}
+_LOCK = threading.Lock()
+
+
+def _source_bytes(module: str) -> bytes:
+    """The source file of ``module`` (empty when it has none, e.g. an interactive session)."""
+    try:
+        path = inspect.getsourcefile(sys.modules.get(module) or importlib.import_module(module))
+        return Path(path).read_bytes() if path else b""
+    except (TypeError, OSError, ImportError):
+        return b""
+
+
+def _hooks(structure: tuple) -> str:
+    """The hook section of the kernel template for ``structure`` (see :attr:`TermSet.structure`)."""
+    lo = 0
+    calls: dict[str, list[str]] = {"moment": [], "coulomb": [], "impact": []}
+    imports = []
+    for i, (kind, mod, qual, nq, _flag) in enumerate(structure):
+        imports.append(f"_term{i} = _import_term({mod!r}, {qual!r})")
+        sl = f"q[{lo}:{lo + nq}]"
+        lo += nq
+        if kind == "moment":
+            calls[kind].append(f"_term{i}(phi, w, t, a, v, s, alpha, p2, {sl})")
+        elif kind == "coulomb":
+            calls[kind].append(f"_term{i}(phi, t, a, v, s, alpha, p2, {sl})")
+        else:
+            calls[kind].append(f"    r = _term{i}(w, r, s, alpha, p2, {sl})")
+    at_rest = any(k == "coulomb" or (k == "moment" and flag) for k, _m, _q, _n, flag in structure)
+    return "\n".join([
+        _BEGIN.rstrip("\n"),
+        f"HAS_MOMENT = {bool(calls['moment'])}",
+        f"HAS_DRY = {bool(calls['coulomb'])}",
+        f"HAS_IMPACT = {bool(calls['impact'])}",
+        f"AT_REST = {at_rest}",
+        "",
+        "from housner.effects.terms import _import_term  # noqa: E402",
+        "",
+        *imports,
+        "",
+        "",
+        "@njit(cache=True)",
+        "def _moment(phi, w, t, a, v, s, alpha, p2, q):",
+        "    return " + (" + ".join(calls["moment"]) or "0.0"),
+        "",
+        "",
+        "@njit(cache=True)",
+        "def _dry(phi, t, a, v, s, alpha, p2, q):",
+        "    return " + (" + ".join(calls["coulomb"]) or "0.0"),
+        "",
+        "",
+        "@njit(cache=True)",
+        "def _impact(w, r, s, alpha, p2, q):",
+        *calls["impact"],
+        "    return r",
+        "",
+        "",
+        _END,
+    ])  # fmt: skip
+
+
+def generated_source(structure: tuple) -> str:
+    """The text of the kernel module for ``structure``: the template with its hooks replaced."""
+    text = _TEMPLATE.read_text()
+    i, j = text.index(_BEGIN), text.index(_END) + len(_END)
+    head = (
+        "# Generated by housner.effects.terms from housner/effects/_term_kernel.py; do not edit.\n"
+        f"# Terms: {', '.join(f'{k} {m}.{q}' for k, m, q, _n, _f in structure) or 'none'}\n"
+    )
+    return head + text[:i] + _hooks(structure) + text[j:]
+
+
+def kernel_module(structure: tuple) -> ModuleType:
+    """The compiled kernel for ``structure``: written to :func:`kernel_dir` once, imported once per process."""
+    with _LOCK:
+        mod = _MODULES.get(structure)
+        if mod is not None:
+            return mod
+        src = generated_source(structure)
+        h = hashlib.sha256(src.encode())
+        h.update(_PLAIN.read_bytes())
+        for m in sorted({s[1] for s in structure}):
+            h.update(m.encode() + b"\0" + _source_bytes(m))
+        name = f"housner_terms_{h.hexdigest()[:24]}"
+        d = kernel_dir()
+        path = d / f"{name}.py"
+        if not path.exists():
+            # write once, atomically: rewriting an existing file would change its stamp and void numba's cache
+            fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
+            with os.fdopen(fd, "w") as f:
+                f.write(src)
+            os.replace(tmp, path)
+        spec = importlib.util.spec_from_file_location(name, path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        try:
+            spec.loader.exec_module(mod)
+        except BaseException:
+            sys.modules.pop(name, None)
+            raise
+        _MODULES[structure] = mod
+        return mod
+
+
+def term_set(terms: Sequence, vertical: bool = False) -> TermSet | None:
+    """A :class:`TermSet` of ``terms``, or None when there is none."""
+    terms = tuple(terms)
+    return TermSet(terms, vertical) if terms else None
