@@ -21,6 +21,7 @@ import difflib
 import io
 import math
 import re
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +47,9 @@ __all__ = [
 
 #: Relative tolerance on sample spacing for a CSV time column to count as uniform.
 _UNIFORM_RTOL = 1e-6
+#: Jitter of a rounded time column accepted as uniform: this share of the step, or half a unit of the
+#: last written digit, whichever is larger [-].
+_ROUNDING_SHARE = 0.01
 
 #: A time column written without a unit is read in seconds only if its step lies in this range [s]:
 #: 10 Hz to 100 kHz covers every strong-motion and shake-table record; a step outside it is far
@@ -692,6 +696,15 @@ def read_csv_columns(
     return table.values, table.lines
 
 
+def _written_unit(t: np.ndarray) -> float:
+    """The unit of the last digit the time stamps were written with [s] (10^-k, the coarsest that fits them)."""
+    for k in range(13):
+        u = 10.0**-k
+        if np.max(np.abs(t / u - np.round(t / u))) < 1e-6:
+            return u
+    return 0.0
+
+
 def uniform_step(
     path: Path, t: np.ndarray, lines: np.ndarray, column: str = "time", *, assumed_seconds: bool = False
 ) -> float:
@@ -710,10 +723,26 @@ def uniform_step(
         raise DataFileError(path, f"time does not increase (median step {dt})", line=2, column=column)
     bad = np.flatnonzero(np.abs(d - dt) > _UNIFORM_RTOL * dt + 1e-12 * abs(t[-1]))
     if bad.size:
+        # time stamps written rounded (acquisition software writes a fixed number of digits): uniform if
+        # every sample lies within the rounding of a uniform grid fitted to them
+        k_all = np.arange(t.size, dtype=float)
+        dt_fit, t0 = np.polyfit(k_all, t, 1)
+        dev = t - (t0 + dt_fit * k_all)
+        tol = max(_ROUNDING_SHARE * dt_fit, 0.5 * _written_unit(t)) * (1 + 1e-9)
+        if dt_fit > 0 and np.all(np.abs(dev) <= tol):
+            warnings.warn(
+                f"{path}: `{column}` is rounded (largest deviation {np.max(np.abs(dev)):.3g} s from a uniform step "
+                f"of {dt_fit:.9g} s): read as uniform",
+                stacklevel=2,
+            )
+            dt = float(dt_fit)
+            bad = np.empty(0, dtype=int)
+    if bad.size:
         k = int(bad[0])
         raise DataFileError(
             path,
-            f"non-uniform sampling: step {d[k]:.9g} s between t={t[k]:.9g} and t={t[k + 1]:.9g}, expected {dt:.9g} s",
+            f"non-uniform sampling: step {d[k]:.9g} s between t={t[k]:.9g} and t={t[k + 1]:.9g}, expected {dt:.9g} s "
+            f"(beyond the rounding of a uniform grid: resample the record to a uniform step)",
             line=int(lines[k + 1]),
             column=column,
         )

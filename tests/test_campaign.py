@@ -384,3 +384,27 @@ def test_simulated_free_vibration_starts_at_the_measured_release(small):
     ref = simulate(c.specimen, GroundMotion.free_vibration(0.8 * ALPHA, r.motion.duration, cg.DT))
     # released 0.1-0.2 mrad off: the histories stay within 1 mrad over the first second
     assert np.max(np.abs(res.theta[:500] - ref.theta[:500])) < 1e-3
+
+
+def test_time_stamps_rounded_to_nine_digits_are_read_as_uniform_and_an_irregular_column_is_not():
+    import warnings
+    from pathlib import Path
+
+    from housner.errors import DataFileError
+    from housner.motion import uniform_step
+
+    # acquisition software writes a fixed number of significant digits: a sqrt(10) ms step to 9 digits
+    # deviates from its grid by up to 5e-9 s, far within 1 % of the step (3e-5 s)
+    dt = 0.00316227766
+    t = np.array([float(f"{x:.9g}") for x in np.arange(3000) * dt])
+    lines = np.arange(2, t.size + 2)
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        step = uniform_step(Path("gm01.csv"), t, lines)
+    assert step == pytest.approx(dt, rel=1e-9)
+    assert len(w) == 1 and "rounded" in str(w[0].message) and "gm01.csv" in str(w[0].message)
+    # a sample 0.3 ms off a 2 ms grid written to 0.1 ms: beyond half a unit (0.05 ms) and 1 % of the step
+    t2 = np.round(np.arange(3000) * 0.002, 4)
+    t2[1500] += 0.0003
+    with pytest.raises(DataFileError, match="line 1502.*non-uniform sampling"):
+        uniform_step(Path("gm02.csv"), t2, lines)
