@@ -16,7 +16,9 @@ import argparse
 import json
 import math
 import os
+import signal
 import sys
+import threading
 import traceback
 from pathlib import Path
 
@@ -24,12 +26,23 @@ __all__ = ["main"]
 
 #: Exit statuses of the command (see the module docstring).
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+#: Exit status after SIGTERM (128 + 15), which a batch scheduler or a container runtime sends.
+EXIT_TERMINATED = 143
+_TERMINATED = False
+
+
+def _on_sigterm(signum, frame) -> None:
+    """SIGTERM is handled like Ctrl-C (workers stopped, finished records cached), with its own status."""
+    global _TERMINATED
+    _TERMINATED = True
+    raise KeyboardInterrupt
 
 _EXIT_HELP = """exit status:
   0    done
   1    runtime failure: {run_failure}an unreachable scheduler, an unexpected error
   2    bad input: arguments, scenario/campaign/record files, output paths (checked before any work)
-  130  interrupted (Ctrl-C){ctrl_c}"""
+  130  interrupted (Ctrl-C){ctrl_c}
+  143  terminated (SIGTERM), handled as Ctrl-C"""
 
 
 class UsageError(ValueError):
@@ -618,6 +631,8 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = os.environ.get("HOUSNER_DEBUG", "").strip().lower() not in ("", "0", "false", "no") or "--debug" in argv
     argv = [a for a in argv if a != "--debug"]  # accepted anywhere on the line
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         # effect plugins load first, so that their effects are known to the parser's help and checks
         for path in _plugin_args(argv):
@@ -652,7 +667,7 @@ def main(argv: list[str] | None = None) -> int:
             )
         else:
             print("housner: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return EXIT_TERMINATED if _TERMINATED else EXIT_INTERRUPTED
     except Exception as e:
         if debug:
             traceback.print_exc()

@@ -147,18 +147,22 @@ def _worker_main(conn: Any) -> None:
     _IN_WORKER = True
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    conn.send(("ready", None, None))
-    while True:
-        try:
-            msg = conn.recv()
-        except (EOFError, OSError):
-            return
-        if msg is None:
-            return
-        chunk_id, name, settings, specimen, items, effects = msg
-        for row in _iter_chunk(name, settings, specimen, items, effects):
-            conn.send(("rec", chunk_id, row))
-        conn.send(("done", chunk_id, None))
+    try:
+        conn.send(("ready", None, None))
+        while True:
+            try:
+                msg = conn.recv()
+            except (EOFError, OSError):
+                return
+            if msg is None:
+                return
+            chunk_id, name, settings, specimen, items, effects = msg
+            for row in _iter_chunk(name, settings, specimen, items, effects):
+                conn.send(("rec", chunk_id, row))
+            conn.send(("done", chunk_id, None))
+    except (BrokenPipeError, ConnectionResetError, EOFError):
+        # the parent is gone or stopping (Ctrl-C, SIGTERM): nothing to report to, nothing to print
+        return
 
 
 # --------------------------------------------------------------------------

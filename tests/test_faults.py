@@ -174,3 +174,29 @@ def test_ctrl_c_exits_fast_with_130_and_keeps_the_cache(tmp_path):
     assert last.startswith("housner: interrupted:") and "cached" in last
     done = int(last.split("interrupted:")[1].split()[0])
     assert done >= 2 and len(list(cache.rglob("*.npz"))) >= done  # the finished records are in the cache
+
+
+def test_sigterm_is_handled_like_ctrl_c_with_143(tmp_path):
+    # A batch scheduler or a container runtime sends SIGTERM to the command alone, often while its
+    # workers are still starting: nothing printed from them, the finished records cached, status 143.
+    cache = tmp_path / "cache"
+    env = dict(os.environ, HOUSNER_CACHE_DIR=str(cache))
+    env.pop(CRASH_ENV, None)
+    cmd = [sys.executable, "-m", "reports.cli", "run", "elcentro", "--engines", "housner,mujoco", "--n-motions", "24",
+           "--out", str(tmp_path / "run"), "--jobs", "2", "--no-report"]  # fmt: skip
+    proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)  # fmt: skip
+    try:
+        deadline = time.monotonic() + 90
+        while time.monotonic() < deadline and len(list(cache.rglob("*.npz"))) < 2 and proc.poll() is None:
+            time.sleep(0.05)
+        assert proc.poll() is None, "the run ended before it could be terminated"
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err and "BrokenPipeError" not in err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("housner: interrupted:") and "cached" in last
