@@ -391,8 +391,8 @@ class _Search:
         its own kernel, whose numerics differ from the rigid block's as another correct integrator's
         do; on a chaotic record that alone changes the error. So its out-of-fold errors must also
         beat those of the same kernel with the physics faded out (each parameter at the end of its
-        bounds nearest its neutral value: a friction coefficient of 2, a 2000 Hz foundation) at the
-        round's level.
+        fit bounds nearest its neutral value: the highest friction coefficient, the stiffest
+        foundation fitted) at the round's level.
         """
         if not cand.significant:
             return cand
