@@ -793,9 +793,12 @@ def decide(
                                      "significant on the held-out records: a small effect that many records prove.")
         if powered:
             status = "explained"
+            doubt = "" if final.ratio <= RATIO_MISFIT else (
+                f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
+                f"(z = {final.z:+.1f} <= {Z_MISFIT:g}): these records cannot tell it from the floor.")  # fmt: skip
             text = (f"Explained: {base_figs}; {fall}, residual ratio {final.ratio:.2f} ({_groups_text(final)}), "
                     f"no group more than {RATIO_MISFIT}x above it with significance: what a correct model shows. "
-                    f"{' + '.join(model)} explains it.{small}")  # fmt: skip
+                    f"{' + '.join(model)} explains it.{small}{doubt}")  # fmt: skip
         else:
             status = "inconclusive"
             text = (f"Inconclusive: {base_figs}; {fall}, to a {figs}, but these records would only show a "
