@@ -518,8 +518,8 @@ class _Search:
                 first_level = zc
             if self.cur_train - self.noise_loss <= PRACTICAL * self.floor:
                 why = (f"the training error {self.cur_train:.4f} alpha is within {PRACTICAL * self.floor:.4f} of "
-                       f"the sensor noise ({self.noise_loss:.4f}): no effect can lower it by the noise margin; "
-                       "not searched")  # fmt: skip
+                       f"the sensor noise ({self.noise_loss:.4f}): nothing is left for an effect to lower by a "
+                       "tenth of the noise; not searched")  # fmt: skip
                 rounds.append([self.candidate(n, {}, rnd, math.nan, zc, reason=why) for n in pool])
                 self.say(f"round {rnd}: {why}")
                 break
