@@ -77,7 +77,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats as sps
 
-from housner.effects import apply_effects, available_effects, effect_class, make_effect
+from housner.effects import Effect, apply_effects, available_effects, effect_class, make_effect
 from housner.errors import unknown_choice
 from scenarios.campaign import Campaign, load_campaign
 from scenarios.compare import compare, features, observe, on_grid, simulate_records
@@ -87,7 +87,7 @@ from scenarios.localise import measured_features
 from scenarios.model_form import FAMILIES
 from scenarios.probes import PROBES
 from scenarios.scoring import DEFAULT_FOLDS, Scorer, check_train_fraction, cv_folds, split_records
-from scenarios.verdict import N_REPLICAS, RATIO_MISFIT, decide, measure_floor, order_drift, residual_test
+from scenarios.verdict import N_REPLICAS, RATIO_MISFIT, Z_MISFIT, decide, measure_floor, order_drift, residual_test
 
 __all__ = [
     "DEFAULT_FOLDS",
@@ -396,21 +396,36 @@ class _Search:
         """
         if not cand.significant:
             return cand
+        why = self._kernel_control(fixed, members, he, test_level)
+        return replace(cand, significant=False, reason=why) if why else cand
+
+    def _kernel_control(self, fixed: list, members: list, he: np.ndarray, test_level: float) -> str:
+        """'' when ``members`` (name, params) beat their own kernel with their physics faded out, else why not.
+
+        A mechanics effect fades at the end of its fit bounds nearest its neutral value (its own kernel
+        stays in use); an effect that brings kernel terms (a probe, a user's term) fades to a millionth
+        of its range off its neutral value, so that the terms' kernel stays in use too.
+        """
         for k, (name, _params) in enumerate(members):
-            if not effect_class(name).changes_mechanics:
+            cls = effect_class(name)
+            uses_terms = cls.terms is not Effect.terms
+            if not (cls.changes_mechanics or (uses_terms and not cls.fast_path)):
                 continue
             faded = {}
             for d in param_dims(name, self.spec):
                 n = d.neutral
-                faded[d.key] = d.hi if n is None or n >= d.hi else (d.lo if n <= d.lo else n)
+                if cls.changes_mechanics:
+                    faded[d.key] = d.hi if n is None or n >= d.hi else (d.lo if n <= d.lo else n)
+                else:
+                    base = n if n is not None and math.isfinite(n) else d.lo
+                    faded[d.key] = min(max(base + 1e-6 * (d.hi - d.lo), d.lo), d.hi)
             ctrl_model = [*fixed, *[make_effect(m, **(faded if i == k else p)) for i, (m, p) in enumerate(members)]]
             ctrl = self.allsc.errors(ctrl_model)
-            sig, d_, _se, _z, pval, _why = _judge(ctrl, he, test_level, self.floor)
+            sig, _d, _se, _z, pval, _why = _judge(ctrl, he, test_level, self.floor)
             if not sig:
-                return replace(cand, significant=False, reason=(
-                    f"its kernel's numerics, not its physics: the same kernel with {name} faded out "
-                    f"({_fmt_params(faded)}) does as well (p = {pval:.2g})"))  # fmt: skip
-        return cand
+                return (f"its kernel's numerics, not its physics: the same kernel with {name} faded out "
+                        f"({_fmt_params(faded)}) does as well (p = {pval:.2g})")  # fmt: skip
+        return ""
 
     def _not_held_out(self, name: str, params: dict, fixed: list, tr_err: float) -> str:
         """Why a candidate fitted on all records is not held out ('' when it is)."""
@@ -614,13 +629,17 @@ class _Search:
         """Physics outside the library tried on top of the final model (:mod:`scenarios.probes`).
 
         Each probe is fitted on top of the final model and judged on its out-of-fold errors like a
-        candidate (Bonferroni over the probes). Returns, for each that lowers the error
+        candidate, at the verdict's level (Bonferroni over the probes), and against its kernel with
+        its physics faded out. Returns, for each that lowers the error
         significantly: {probe, class, params, error, error_with, improvement, se, z, p}.
         """
         if self.cur_train - self.noise_loss <= PRACTICAL * self.floor:
             return []  # nothing above the sensor noise for a probe to take (as a round of the search)
         out = []
-        level = self.level_for(len(PROBES))
+        # a significant probe turns the verdict into a misfit: it is held to the verdict's own level,
+        # z > Z_MISFIT one-sided (1.3e-3), over the probes (Bonferroni); at the search's 5 % one correct
+        # campaign in twenty would be called a misfit
+        level = float(sps.norm.sf(Z_MISFIT)) / len(PROBES)
         fixed = build_model(self.cur.full)
         for name, cls_name in PROBES.items():
             params, tr_err, _n = fit_effect(name, effect_objective(self.allsc, fixed, []), self.spec)
@@ -628,6 +647,8 @@ class _Search:
                 continue
             he = self.oof(self.add_cv(self.cur, name, params))
             sig, d, se, z, pval, _why = _judge(self.cur_held, he, level, self.floor)
+            if sig and self._kernel_control(fixed, [(name, params)], he, level):
+                sig = False
             self.say(f"probe {name} {_fmt_params(params)}: held-out {he.mean():.4f} improvement {d:+.4f} "
                      f"+- {se:.4f} {'*' if sig else ' '}")  # fmt: skip
             if sig:
