@@ -361,7 +361,7 @@ class _Search:
         cv_new = self.add_cv(self.cur, name, params)
         he = self.oof(cv_new)
         cand = self.candidate(name, params, rnd, tr_err, test_level, he)
-        return self._beyond_kernel(cand, [*fixed], [(name, params)], he, test_level), cv_new
+        return self._beyond_kernel(cand, fixed, [(name, params)], he, test_level), cv_new
 
     def _mechanics_start(self, name: str, fixed: list, rnd: int, test_level: float) -> tuple[dict, Candidate | None]:
         """Where a mechanics effect's fit starts, or the candidate it stays when its basin does not pay.
@@ -640,21 +640,15 @@ class _Search:
         # z > Z_MISFIT one-sided (1.3e-3), over the probes (Bonferroni); at the search's 5 % one correct
         # campaign in twenty would be called a misfit
         level = float(sps.norm.sf(Z_MISFIT)) / len(PROBES)
-        fixed = build_model(self.cur.full)
         for name, cls_name in PROBES.items():
-            params, tr_err, _n = fit_effect(name, effect_objective(self.allsc, fixed, []), self.spec)
-            if self._not_held_out(name, params, fixed, tr_err):
-                continue
-            he = self.oof(self.add_cv(self.cur, name, params))
-            sig, d, se, z, pval, _why = _judge(self.cur_held, he, level, self.floor)
-            if sig and self._kernel_control(fixed, [(name, params)], he, level):
-                sig = False
-            self.say(f"probe {name} {_fmt_params(params)}: held-out {he.mean():.4f} improvement {d:+.4f} "
-                     f"+- {se:.4f} {'*' if sig else ' '}")  # fmt: skip
-            if sig:
-                out.append({"probe": name, "class": cls_name, "params": params, "error": float(self.cur_held.mean()),
-                            "error_with": float(he.mean()), "improvement": d, "se": se, "z": z,
-                            "p": pval})  # fmt: skip
+            c, _cv = self.try_candidate(name, 0, level)  # fitted, screened and judged as a candidate is
+            held = (f"held-out {c.heldout_error:.4f} improvement {c.improvement:+.4f} +- {c.improvement_se:.4f} "
+                    f"{'*' if c.significant else ' '}") if _cv is not None else c.reason  # fmt: skip
+            self.say(f"probe {name} {_fmt_params(c.params)}: {held}")
+            if c.significant:
+                out.append({"probe": name, "class": cls_name, "params": c.params, "error": float(self.cur_held.mean()),
+                            "error_with": c.heldout_error, "improvement": c.improvement, "se": c.improvement_se,
+                            "z": c.z, "p": c.pvalue})  # fmt: skip
         return out
 
     def selection_frequency(self, rounds: list[list[Candidate]]) -> dict[str, float]:

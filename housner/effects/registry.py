@@ -336,9 +336,10 @@ def load_plugin(path) -> tuple[str, ...]:
         An exception raised by the file itself propagates.
     """
     import hashlib
-    import importlib.util
     import sys
     from pathlib import Path
+
+    from housner.effects.terms import import_file
 
     p = Path(path).expanduser()
     if not p.is_file():
@@ -349,26 +350,19 @@ def load_plugin(path) -> tuple[str, ...]:
     digest = hashlib.sha256(str(p).encode()).hexdigest()[:12]
     stem = "".join(ch if ch.isalnum() else "_" for ch in p.stem)
     modname = f"housner_plugin_{stem}_{digest}"
-    spec = importlib.util.spec_from_file_location(modname, p)
-    module = importlib.util.module_from_spec(spec)
-    # the code the effects were loaded from (a result cache keys on it: scenarios.cache.effect_code_hash)
-    module._housner_code_hash = hashlib.sha256(p.read_bytes()).hexdigest()[:16]
-    sys.modules[modname] = module
-    try:
-        spec.loader.exec_module(module)
-    except BaseException:
-        sys.modules.pop(modname, None)
-        raise
+    code_hash = hashlib.sha256(p.read_bytes()).hexdigest()[:16]
+    import_file(modname, p)
     names = tuple(n for n, cls in EFFECTS.items() if cls.__module__ == modname)
-    if names:
-        PLUGIN_FILES[modname] = str(p)
-        for n in names:  # each class keeps the hash of the code it came from, even once the file is reloaded
-            EFFECTS[n]._housner_code_hash = module._housner_code_hash
     if not names:
         sys.modules.pop(modname, None)
         raise ValueError(
             f"effect plugin {str(p)!r} registers no effect (decorate an Effect subclass with @register_effect)"
         )
+    PLUGIN_FILES[modname] = str(p)
+    for n in names:
+        # the code each class was loaded from, kept even once the file is reloaded: a result cache keys
+        # on it (scenarios.cache.effect_code_hash)
+        EFFECTS[n]._housner_code_hash = code_hash
     return names
 
 
@@ -564,6 +558,7 @@ def apply_effects(
         raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
     effects = tuple(effects)
     seen: dict[str, int] = {}
+    made = {c for x in effects if isinstance(x, Effect) for c in type(x).makes_channels}
     for i, e in enumerate(effects):
         if not isinstance(e, Effect):
             raise TypeError(
@@ -574,7 +569,6 @@ def apply_effects(
             raise ValueError(f"effect {e.name!r} given twice (effects[{seen[e.name]}] and effects[{i}]); give it once")
         seen[e.name] = i
         e.check(specimen)
-        made = {c for x in effects if isinstance(x, Effect) for c in type(x).makes_channels}
         for ch in type(e).channels:
             if ch not in motion.channels and ch not in made:
                 raise ValueError(

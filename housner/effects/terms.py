@@ -361,6 +361,20 @@ def generated_source(structure: tuple) -> str:
     return head + text[:i] + _hooks(structure) + text[j:]
 
 
+def import_file(name: str, path: Path) -> ModuleType:
+    """Import the Python file ``path`` as module ``name``, kept in ``sys.modules`` (so that numba finds
+    its functions by module and qualified name); a file that raises leaves nothing behind."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    try:
+        spec.loader.exec_module(mod)
+    except BaseException:
+        sys.modules.pop(name, None)
+        raise
+    return mod
+
+
 def kernel_module(structure: tuple) -> ModuleType:
     """The compiled kernel for ``structure``: written to :func:`kernel_dir` once, imported once per process."""
     with _LOCK:
@@ -381,14 +395,7 @@ def kernel_module(structure: tuple) -> ModuleType:
             with os.fdopen(fd, "w") as f:
                 f.write(src)
             os.replace(tmp, path)
-        spec = importlib.util.spec_from_file_location(name, path)
-        mod = importlib.util.module_from_spec(spec)
-        sys.modules[name] = mod
-        try:
-            spec.loader.exec_module(mod)
-        except BaseException:
-            sys.modules.pop(name, None)
-            raise
+        mod = import_file(name, path)
         _MODULES[structure] = mod
         return mod
 
