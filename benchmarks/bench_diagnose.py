@@ -32,10 +32,9 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 import campaign_generators as cg  # noqa: E402
-
-from scenarios.campaign import load_campaign  # noqa: E402
-from scenarios.compare import compare  # noqa: E402
-from scenarios.diagnose import diagnose  # noqa: E402
+from housner.scenarios.campaigns.campaign import load_campaign  # noqa: E402
+from housner.scenarios.campaigns.compare import compare  # noqa: E402
+from housner.scenarios.campaigns.diagnose import diagnose  # noqa: E402
 
 TARGET_S = 60.0
 
@@ -63,7 +62,7 @@ def main(argv=None) -> int:
         t_diag = time.perf_counter() - t0
         t_rep = float("nan")
         if args.report:
-            from reports.diagnosis import write_diagnosis_report
+            from housner.reports.diagnosis import write_diagnosis_report
 
             t0 = time.perf_counter()
             write_diagnosis_report(diag, args.report)

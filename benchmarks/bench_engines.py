@@ -15,7 +15,7 @@ engine's contact, where its impacts count for less than the analytic model's.
 
 Motions: the first ``--n`` of the ``elcentro`` scenario (Rezaeian & Der
 Kiureghian motions fitted to El Centro 1940 NS, seed 2017, at model scale,
-time compressed by sqrt(10)), built by ``scenarios.catalogue``; the seed
+time compressed by sqrt(10)), built by ``housner.scenarios.catalogue.scenario``; the seed
 specimen. Each engine runs once on a short record first (compilation, model
 building), then on all motions, whole-run timed: wall time, process CPU time
 (``--processes 1``) and simulated time. The baseline is the analytic Housner
@@ -49,11 +49,12 @@ from concurrent.futures import ProcessPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from engines import ENGINES, get_engine  # noqa: E402
+from housner.engines import ENGINES, get_engine  # noqa: E402
+from housner.scenarios.runs.chaos import measure_engine_errors, rms  # noqa: E402
+
 from housner import GroundMotion, Specimen  # noqa: E402
 from housner.errors import EngineUnavailable  # noqa: E402
 from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count  # noqa: E402
-from scenarios.chaos import measure_engine_errors, rms  # noqa: E402
 
 #: Release amplitudes theta0 / alpha [-] of the r-error scan, small to large.
 R_AMPLITUDES = (0.005, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 0.9)
@@ -90,7 +91,7 @@ def seed_motions(n: int, model: str | None = None, scenario: str = "elcentro") -
     ``model`` overrides the scenario's RDK model ("matched", or "rdk2010": the published
     model, whose weaker motions the first speed targets were set on).
     """
-    from scenarios.catalogue import load_scenario
+    from housner.scenarios.catalogue.scenario import load_scenario
 
     scen = load_scenario(scenario)
     if model is not None:

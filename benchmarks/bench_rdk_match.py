@@ -36,7 +36,7 @@ TARGET_S = 10.0
 
 
 def _husid_summary(motions, record) -> str:
-    from scenarios.records import arias_intensity, husid_time, significant_duration
+    from housner.scenarios.motions.records import arias_intensity, husid_time, significant_duration
 
     ia = np.array([arias_intensity(m) for m in motions])
     d = np.array([significant_duration(m) for m in motions])
@@ -51,9 +51,10 @@ def _husid_summary(motions, record) -> str:
 
 def _record_rank(record, ensembles: dict, sizes) -> None:
     """The record's theta_max/alpha percentile within each ensemble at each prototype size."""
-    from engines.analytic import HousnerEngine
+    from housner.engines.analytic import HousnerEngine
+    from housner.scenarios.runs.spread import record_against_ensemble
+
     from housner import Specimen
-    from scenarios.analysis import record_against_ensemble
 
     spec, eng = Specimen.bachmann2017(), HousnerEngine()
     print(f"  the record within its ensemble (analytic model, specimen 2H = {spec.height:g} m):")
@@ -84,9 +85,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = ap.parse_args(argv)
 
-    from scenarios import rdk
-    from scenarios.rdk_match import band_check, fit_matched, simulate_matched
-    from scenarios.records import elcentro
+    from housner.scenarios.motions import rdk
+    from housner.scenarios.motions.rdk_match import band_check, fit_matched, simulate_matched
+    from housner.scenarios.motions.records import elcentro
 
     if args.seed == rdk.DEFAULT_FIT_SEED:
         print(f"warning: --seed {args.seed} is the fit's seed: the band table is in sample")

@@ -63,7 +63,7 @@ def _write(tmp: Path, n: int, engines: list[str], levels: list[float], heights: 
 
 def _child_study(toml: str, out: str, cache: str, jobs: int) -> None:
     """Run one study in this (fresh) process and print its wall time and peak RSS as JSON."""
-    from scenarios.study import run_study
+    from housner.scenarios.studies.study import run_study
 
     t0 = time.perf_counter()
     res = run_study(toml, out=out, jobs=jobs, cache_dir=cache, progress=False)
@@ -81,9 +81,9 @@ def _run_child(toml: Path, out: Path, cache: Path, jobs: int) -> dict:
 
 
 def part_scale(jobs: int) -> None:
-    from engines import get_engine
-    from scenarios.catalogue import load_scenario
-    from scenarios.study import study_motions
+    from housner.engines import get_engine
+    from housner.scenarios.catalogue.scenario import load_scenario
+    from housner.scenarios.studies.study import study_motions
 
     levels = [round(0.5 + 0.15 * i, 2) for i in range(20)]
     heights = [2.5, 4.0, 5.0, 7.5, 10.0]
@@ -120,8 +120,7 @@ def part_scale(jobs: int) -> None:
 
 def part_dask(engine: str, n: int) -> None:
     from distributed import Client, LocalCluster
-
-    from scenarios.study import run_study
+    from housner.scenarios.studies.study import run_study
 
     levels = [1.0, 1.5, 2.0, 2.5]
     walls = {}

@@ -324,7 +324,7 @@ class ImpactLaw:
 class ImpactLawEngine:
     """The impact law's two hooks, for an adapter whose ``_settings`` hold ``impact_energy_factor``.
 
-    Mixed in before :class:`engines.base.Engine` by the five planar adapters, which realise the
+    Mixed in before :class:`housner.engines.base.Engine` by the five planar adapters, which realise the
     ``restitution`` effect through the law.
     """
 

@@ -6,8 +6,9 @@ import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 
+from housner.engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
+
 import housner
-from engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
 from housner.effects import EFFECTS, apply_effects, discover_effects
 from housner.model import REST_TOL, RockingParams, simulate
 from housner.model import simulate_many as simulate_batch
@@ -89,12 +90,12 @@ class HousnerEngine(Engine):
         failing one is named. Effects that replace the equation of motion
         (flexible foundation, sliding) run one record at a time in kernels
         that release the GIL, on threads. Every response passes
-        :func:`engines.base.check_response`.
+        :func:`housner.engines.base.check_response`.
 
         Parameters
         ----------
         specimen, motions, effects, errors
-            As for :meth:`engines.base.Engine.simulate_many`.
+            As for :meth:`housner.engines.base.Engine.simulate_many`.
         """
         _check_errors(errors)
         motions = list(motions)

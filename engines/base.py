@@ -21,14 +21,14 @@ from housner.specimen import Specimen
 __all__ = ["ENGINES", "RECORD_ERRORS", "Engine", "check_response", "get_engine", "register_engine"]
 
 #: Registry: engine name -> class, or "module:Class" imported on first use
-#: (so that `import engines` does not import MuJoCo or PyBullet).
+#: (so that `import housner.engines` does not import MuJoCo or PyBullet).
 ENGINES: dict[str, Any] = {
-    "housner": "engines.analytic:HousnerEngine",
-    "mujoco": "engines.mujoco_engine:MujocoEngine",
-    "pybullet": "engines.pybullet_engine:PybulletEngine",
-    "dart": "engines.dart_engine:DartEngine",
-    "opensees": "engines.opensees_engine:OpenSeesEngine",
-    "drake": "engines.drake_engine:DrakeEngine",
+    "housner": "housner.engines.analytic:HousnerEngine",
+    "mujoco": "housner.engines.mujoco_engine:MujocoEngine",
+    "pybullet": "housner.engines.pybullet_engine:PybulletEngine",
+    "dart": "housner.engines.dart_engine:DartEngine",
+    "opensees": "housner.engines.opensees_engine:OpenSeesEngine",
+    "drake": "housner.engines.drake_engine:DrakeEngine",
 }
 
 #: The PyPI distribution each registered engine drives (read without importing the engine, for

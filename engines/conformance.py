@@ -33,7 +33,7 @@ Checks and tolerances
 ``free_vibration_period``
     Release at rest from 0.5 alpha: the time to the first impact within 1 %
     of the exact quarter period of Housner's equation
-    (:func:`engines.tuning.free_rocking_quarter_period`), and the next
+    (:func:`housner.engines.tuning.free_rocking_quarter_period`), and the next
     half-cycle (first to second impact) within 1 % of the exact duration for
     the peak the engine reached in it. This checks p without involving r.
 
@@ -51,10 +51,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from housner.engines.base import Engine, get_engine
+from housner.engines.measures import free_rocking_quarter_period, parabolic_peak
+from housner.engines.tuning import pulse_motions
 
-from engines.base import Engine, get_engine
-from engines.measures import free_rocking_quarter_period, parabolic_peak
-from engines.tuning import pulse_motions
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -148,14 +148,15 @@ def _ramp_hold(specimen: Specimen, level: float, ramp: float, duration: float, n
     n = int(math.ceil(duration / DT)) + 1
     t = np.arange(n) * DT
     shape = np.where(t < ramp, 0.5 * (1.0 - np.cos(math.pi * t / ramp)), 1.0)
-    return GroundMotion(level * specimen.uplift_acceleration * shape, DT, name=name, provenance="engines.conformance")
+    acc = level * specimen.uplift_acceleration * shape
+    return GroundMotion(acc, DT, name=name, provenance="housner.engines.conformance")
 
 
 def _slow_sine(specimen: Specimen, level: float, period: float) -> GroundMotion:
     n = int(math.ceil(period / DT)) + 1
     t = np.arange(n) * DT
     acc = level * specimen.uplift_acceleration * np.sin(2.0 * math.pi * t / period)
-    return GroundMotion(acc, DT, name=f"slow sine {level:g} g tan(alpha)", provenance="engines.conformance")
+    return GroundMotion(acc, DT, name=f"slow sine {level:g} g tan(alpha)", provenance="housner.engines.conformance")
 
 
 def _mirror(motion: GroundMotion) -> GroundMotion:

@@ -40,8 +40,7 @@ import time
 from typing import Any, ClassVar
 
 import numpy as np
-
-from engines._planar import (
+from housner.engines._planar import (
     IMPACT_LAW_RANGE,
     ImpactLawEngine,
     checked_settings,
@@ -50,7 +49,8 @@ from engines._planar import (
     sampled_response,
     substeps,
 )
-from engines.base import Engine
+from housner.engines.base import Engine
+
 from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -112,12 +112,12 @@ class DartEngine(ImpactLawEngine, Engine):
     impact_energy_factor : float
         Energy the block keeps at each impact as a fraction of what the
         contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
         1 (default): the contact alone.
 
     Examples
     --------
-    >>> from engines import get_engine
+    >>> from housner.engines import get_engine
     >>> from housner import GroundMotion, Specimen
     >>> spec = Specimen.bachmann2017()
     >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s

@@ -39,7 +39,7 @@ reused for every record (numbered as in ``engines/models/drake.md``):
 6. Ground motion: the d'Alembert force -m ug''(t) on the x coordinate,
    through the plant's applied-generalized-force input port, set before every
    step to m times the exact mean of the linearly interpolated -ug'' over
-   that step (``engines._planar.gravity_x``). The ground itself does not move.
+   that step (``housner.engines._planar.gravity_x``). The ground itself does not move.
 7. Stepping: the plant's discrete update is run directly (one
    ``ExecuteForcedEvents`` per step, no ``Simulator``): the state lands
    exactly on the sample times, with no event-time rounding, and a record stops
@@ -65,8 +65,7 @@ import time
 from typing import Any, ClassVar
 
 import numpy as np
-
-from engines._planar import (
+from housner.engines._planar import (
     IMPACT_LAW_RANGE,
     ImpactLawEngine,
     checked_settings,
@@ -75,7 +74,8 @@ from engines._planar import (
     sampled_response,
     substeps,
 )
-from engines.base import Engine
+from housner.engines.base import Engine
+
 from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -145,12 +145,12 @@ class DrakeEngine(ImpactLawEngine, Engine):
     impact_energy_factor : float
         Energy the block keeps at each impact as a fraction of what the
         contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
         1 (default): the contact alone.
 
     Examples
     --------
-    >>> from engines.drake_engine import DrakeEngine
+    >>> from housner.engines.drake_engine import DrakeEngine
     >>> from housner import GroundMotion, Specimen
     >>> spec = Specimen.bachmann2017()
     >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s

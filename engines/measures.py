@@ -1,7 +1,7 @@
 """Free-rocking measures of a simulated response: peaks, first-impact energy ratio, exact quarter period and decay.
 
-What the contact tuning (:mod:`engines.tuning`) and the conformance check
-(:mod:`engines.conformance`) measure on an engine's noise-free response, and
+What the contact tuning (:mod:`housner.engines.tuning`) and the conformance check
+(:mod:`housner.engines.conformance`) measure on an engine's noise-free response, and
 the exact values of Housner's equation they are compared with. Peaks are
 refined by a parabola through the samples around the largest one.
 

@@ -65,7 +65,7 @@ __all__ = [
 ETH_SPECIMEN_PATH = Path(__file__).resolve().parent / "models" / "eth_specimen.xml"
 
 #: Model settings used when a keyword is not given. The contact numbers are the
-#: tuned defaults of :class:`engines.mujoco_engine.MujocoEngine` (see there for
+#: tuned defaults of :class:`housner.engines.mujoco_engine.MujocoEngine` (see there for
 #: how they were found); ``strip_width``, ``strip_height`` (drawn strips) and
 #: ``pivot_radius`` (contact spheres at their outer edges) are geometry [m].
 MJCF_DEFAULTS: dict = {
@@ -278,7 +278,7 @@ def _scene_xml(s: dict, H: float) -> str:
     """Options (steps 1-3), visual settings, the ground (step 4) and the camera."""
     return f"""  <!-- (1) g = housner.units.G = 9.80665 m/s^2 downward. (2) timestep: engine setting [s].
        (3) cone, impratio, noslip_iterations, iterations, tolerance: contact solver settings
-       (engines.mujoco_engine.MujocoEngine documents the tuned values). -->
+       (housner.engines.mujoco_engine.MujocoEngine documents the tuned values). -->
   <option timestep="{_num(s["timestep"])}" gravity="0 0 {_num(-G)}" integrator="{s["integrator"]}" cone="{s["cone"]}"
           impratio="{_num(s["impratio"])}" noslip_iterations="{s["noslip_iterations"]}"
           iterations="{s["iterations"]}" tolerance="{_num(s["tolerance"])}">

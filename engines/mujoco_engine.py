@@ -1,6 +1,6 @@
 """The rocking block in MuJoCo.
 
-The block is the planar model of :mod:`engines.mjcf`: one body with slide x,
+The block is the planar model of :mod:`housner.engines.mjcf`: one body with slide x,
 slide z and a hinge about y from the world, touching the ground only at its two
 pivots, 10 um spheres at the outer bottom edges of its 2 mm contact strips,
 x = +-B. The hinge angle is theta (theta > 0 leans toward +x, rocking on the
@@ -57,7 +57,7 @@ MuJoCo's default contact (timestep 2 ms, solref (0.02, 1), elliptic cone,
 impratio 1) loses too much energy per impact (r 2 % low at 0.8 alpha, 7 % at
 0.2 alpha) and lets the block rock too far under a pulse. The defaults of
 :class:`MujocoEngine` come from ``housner tune mujoco``
-(:func:`engines.tuning.tune` over :meth:`MujocoEngine.tuning_candidates`); the
+(:func:`housner.engines.tuning.tune` over :meth:`MujocoEngine.tuning_candidates`); the
 class notes give the measured errors and what each setting does. MuJoCo
 averages the solref and solimp of the two geoms in contact, so the ground
 carries the pivots' values: in the first tuned model it did not, and every
@@ -101,10 +101,10 @@ import math
 from typing import Any, ClassVar
 
 import numpy as np
+from housner.engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, checked_settings
+from housner.engines.base import Engine
+from housner.engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 
-from engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, checked_settings
-from engines.base import Engine
-from engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 from housner.errors import EngineError, unknown_choice
 from housner.impacts import impact_times
 from housner.motion import GroundMotion
@@ -138,7 +138,7 @@ def initial_qvel(
     of radius rho = ``pivot_radius`` [m] (0: the corner itself), so the
     instantaneous centre of rotation is the contact point (s B, 0) and the
     centre of mass moves as omega x r, with r the vector from that point to the
-    centre of mass (placed by :func:`engines.mjcf.initial_qpos`):
+    centre of mass (placed by :func:`housner.engines.mjcf.initial_qpos`):
     (vx, vz) = theta_dot0 (r_z, -r_x).
     """
     th, w = float(theta0), float(theta_dot0)
@@ -181,7 +181,7 @@ class MujocoEngine(ImpactLawEngine, Engine):
     impact_energy_factor : float
         Energy the block keeps at each impact as a fraction of what the
         contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
         1 (default): the contact alone.
     integrator : {"Euler", "implicitfast", "implicit", "RK4"}
     iterations, tolerance : int, float
@@ -197,7 +197,7 @@ class MujocoEngine(ImpactLawEngine, Engine):
     Defaults (``DEFAULTS``) came from ``housner tune mujoco``
     (``housner tune mujoco``) on 2026-11-21 with MuJoCo 4.0.0, for the seed
     specimen and Housner's r = 0.94652: of the 120 candidates, 26 passed every
-    check of :mod:`engines.tuning` at both sample steps (1 ms and 3.16 ms);
+    check of :mod:`housner.engines.tuning` at both sample steps (1 ms and 3.16 ms);
     the tuner took the one with the widest margin among those within 15 % of
     the cheapest cost. Measured there (worst of the two sample steps):
 

@@ -66,8 +66,7 @@ import time
 from typing import Any, ClassVar
 
 import numpy as np
-
-from engines._planar import (
+from housner.engines._planar import (
     IMPACT_LAW_RANGE,
     ImpactLaw,
     ImpactLawEngine,
@@ -76,7 +75,8 @@ from engines._planar import (
     sampled_response,
     substeps,
 )
-from engines.base import Engine
+from housner.engines.base import Engine
+
 from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -172,7 +172,7 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
     impact_energy_factor : float
         Energy the block keeps at each impact as a fraction of what the
         contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
         1 (default): the contact alone.
 
     Notes
@@ -183,7 +183,7 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
 
     Examples
     --------
-    >>> from engines.opensees_engine import OpenSeesEngine
+    >>> from housner.engines.opensees_engine import OpenSeesEngine
     >>> from housner import GroundMotion, Specimen
     >>> spec = Specimen.bachmann2017()
     >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s

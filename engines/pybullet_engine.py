@@ -1,6 +1,6 @@
 """The rocking block in PyBullet (Bullet's Featherstone multibody with a sequential-impulse contact solver).
 
-Model. The block is the URDF of :func:`engines.urdf.urdf_from_specimen` (a
+Model. The block is the URDF of :func:`housner.engines.urdf.urdf_from_specimen` (a
 massless x-slide, a massless z-slide and a hinge about +y through the centre of
 mass, two 2 mm contact strips whose outer edges are the pivots at x = +-B),
 written to a private temporary folder and loaded with ``loadURDF`` (the
@@ -72,10 +72,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from housner.engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, gravity_x, release_state, substeps
+from housner.engines.base import Engine
+from housner.engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 
-from engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, gravity_x, release_state, substeps
-from engines.base import Engine
-from engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 from housner.errors import EngineError
 from housner.impacts import impact_times, uplift_time
 from housner.motion import GroundMotion
@@ -175,16 +175,16 @@ class PybulletEngine(ImpactLawEngine, Engine):
     bevel : float
         Rotation of each strip about its outer bottom edge [rad]: the inner
         edge stands ``strip_width * sin(bevel)`` above the ground, so only the
-        outer edges touch (see :func:`engines.urdf.urdf_from_specimen`).
+        outer edges touch (see :func:`housner.engines.urdf.urdf_from_specimen`).
     impact_energy_factor : float
         Energy the block keeps at each impact as a fraction of what the
         contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`engines._planar.ImpactLaw`) for an r below the contact's own.
+        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
         1 (default): the contact alone.
 
     Notes
     -----
-    The defaults come from the contact tuner (:mod:`engines.tuning`) run on
+    The defaults come from the contact tuner (:mod:`housner.engines.tuning`) run on
     2026-11-21 for the seed specimen and Housner's r: see :attr:`DEFAULTS` for
     the measured errors. Each instance owns one PyBullet ``DIRECT`` client
     (opened on first use and reused by every :meth:`simulate` call, which
@@ -193,7 +193,7 @@ class PybulletEngine(ImpactLawEngine, Engine):
     Examples
     --------
     >>> from housner import GroundMotion, Specimen
-    >>> from engines.pybullet_engine import PybulletEngine
+    >>> from housner.engines.pybullet_engine import PybulletEngine
     >>> spec = Specimen.bachmann2017()
     >>> res = PybulletEngine().simulate(spec, GroundMotion.free_vibration(0.5 * spec.alpha, 1.0))
     >>> res.n_impacts >= 2
@@ -205,7 +205,7 @@ class PybulletEngine(ImpactLawEngine, Engine):
     effects_supported = frozenset({"restitution"})
 
     #: Default settings: the choice of ``housner tune pybullet``
-    #: (engines.tuning.tune) on 2026-11-21 for Specimen.bachmann2017() and
+    #: (housner.engines.tuning.tune) on 2026-11-21 for Specimen.bachmann2017() and
     #: r_housner = 0.94652, pybullet 3.2.7: first-impact r within 0.29 % of
     #: Housner's at the tuner's 15 amplitudes 0.2 ... 0.9 alpha (mean -0.05 %),
     #: first peaks of its two one-sine pulses within 0.02 % of the analytic

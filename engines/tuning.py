@@ -63,7 +63,7 @@ alpha), 40th decay peak -91 %, near-threshold first peaks +4 % and +10 %.
 energy than Housner's plastic impact (its damping knobs saturate near r = 0.94
 or make r depend on the amplitude: ``engines/models/README.md``). Below
 Housner's r the tuner therefore also tries each engine's default contact with
-the adapters' impact law (:class:`engines._planar.ImpactLaw`, setting
+the adapters' impact law (:class:`housner.engines._planar.ImpactLaw`, setting
 ``impact_energy_factor`` = target / Housner's r and 0.3 % either side): the
 block keeps that fraction of the kinetic energy the contact leaves it at each
 impact. A contact setting that meets the target alone is preferred to the law;
@@ -89,15 +89,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-
-from engines.base import engine_class
-from engines.measures import (
+from housner.engines.base import engine_class
+from housner.engines.measures import (
     decay_peaks,
     first_impact_ratio,
     first_peak,
     free_rocking_quarter_period,
     half_cycle_peaks,
 )
+
 from housner.errors import EngineError
 from housner.motion import GroundMotion
 from housner.pulses import one_sine
@@ -227,7 +227,7 @@ def pulse_motions(specimen: Specimen, pulses=PULSES, dt: float = _DT) -> list[Gr
                 g.acc,
                 dt,
                 name=f"one-sine omega_p={w_ratio:g}p a_p={a_ratio:g}g tan(alpha)",
-                provenance="engines.tuning.pulse_motions",
+                provenance="housner.engines.tuning.pulse_motions",
             )
         )
     return out
@@ -375,7 +375,7 @@ class TuningResult:
         """What the impact law does in the chosen settings, and how close the contact alone got."""
         line = (
             f"with the adapters' impact law: the block keeps {law:.4f} of the energy its contact leaves "
-            f"it at each impact (engines._planar.ImpactLaw); the contact itself loses Housner's share"
+            f"it at each impact (housner.engines._planar.ImpactLaw); the contact itself loses Housner's share"
         )
         alone = self.contact_alone
         if alone is not None:

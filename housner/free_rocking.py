@@ -5,7 +5,7 @@ impacts its energy is conserved, so the duration of a half-cycle and the
 potential energy at its peaks follow in closed form (up to one quadrature).
 These are the relations the free-vibration calibration
 (:mod:`housner.calibration`) and the engines' contact tuning
-(:mod:`engines.tuning`) are built on.
+(:mod:`housner.engines.tuning`) are built on.
 
 Angles in rad, times in s, p in 1/s, r dimensionless.
 

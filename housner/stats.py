@@ -12,7 +12,7 @@ Array functions: :func:`ecdf` (+ :func:`dkw_band`), :func:`percentiles` (with
 percentile-bootstrap intervals), :func:`overturn_probability` (Wilson or
 Clopper-Pearson intervals), :func:`ks_2samp`, :func:`wasserstein`,
 :func:`per_record_agreement`. Their use on the runner's results table (one
-row per engine and motion) is :mod:`scenarios.tables`'.
+row per engine and motion) is :mod:`housner.scenarios.execution.tables`'.
 
 References
 ----------

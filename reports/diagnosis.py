@@ -1,6 +1,6 @@
 """The diagnosis report: which effect the Housner model misses, and the error falling as it is added.
 
-:func:`render_diagnosis` turns a :class:`scenarios.diagnose.Diagnosis` into
+:func:`render_diagnosis` turns a :class:`housner.scenarios.campaigns.diagnose.Diagnosis` into
 one self-contained HTML page (figures are base64 PNGs, the style sheet is
 inline, no script, no network); :func:`write_diagnosis_report` writes it.
 
@@ -34,13 +34,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from housner.reports import figures
+from housner.reports.page import Section, document, esc, html_figure, html_table, write_page
+from housner.scenarios.campaigns.compare import on_grid
+from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
 from matplotlib.figure import Figure
 
 from housner.calibration import half_cycle_integral
-from reports import figures
-from reports.page import Section, document, esc, html_figure, html_table, write_page
-from scenarios.compare import on_grid
-from scenarios.diagnosis_results import change_text, fmt_pm, params_text, signed_words
 
 __all__ = ["history_records", "render_diagnosis", "write_diagnosis_report"]
 
@@ -61,7 +61,7 @@ def _f(x: Any, digits: int = 4) -> str:
 
 
 def _pm(value: Any, se: Any) -> str:
-    """A value with its standard error on the page (:func:`scenarios.diagnosis_results.fmt_pm`)."""
+    """A value with its standard error on the page (:func:`housner.scenarios.campaigns.results.fmt_pm`)."""
     return fmt_pm(value, se, sep=" &plusmn; ", nan="&ndash;")  # digits, the separator and fixed words: no escaping
 
 
@@ -443,7 +443,7 @@ def _verdict_detail(diag) -> str:
             rows.append([esc(label), esc(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
                          f"{g['ratio']:.2f}", f"{g['z']:+.1f}", '<span class="bad">yes</span>' if g["misfit"] else "no",
                          f"{g.get('detectable_ratio', float('nan')):.2f}"])  # fmt: skip
-    from scenarios.verdict import RATIO_MISFIT, Z_LOCAL, Z_MISFIT
+    from housner.scenarios.campaigns.verdict import RATIO_MISFIT, Z_LOCAL, Z_MISFIT
 
     table = html_table(
         ["model", "records", "n", "held-out error [alpha]", "correct-model floor", "ratio", "z", "misfit",
@@ -451,7 +451,8 @@ def _verdict_detail(diag) -> str:
         rows,
         caption=(
             "Held-out (out-of-fold) time-history error against the floor a correct model shows on the same records, "
-            "measured by a parametric bootstrap of the fitted model (scenarios.verdict). A misfit is z > "
+            "measured by a parametric bootstrap of the fitted model (housner.scenarios.campaigns.verdict). "
+            "A misfit is z > "
             f"{Z_MISFIT:g} and ratio > {RATIO_MISFIT:g}, or a localisation quantity more than {Z_LOCAL:g} "
             "standard errors from the measured one; the detectable ratio is what these records would reveal "
             "with 80 % power."
@@ -519,7 +520,8 @@ def _ladder(diag) -> str:
          "held-out error against the previous step [alpha]", "significant"],
         rows,
         caption=(
-            "Time-history error over the measured window (see scenarios.compare), mean over every record held "
+            "Time-history error over the measured window (see housner.scenarios.campaigns.compare), mean over every "
+            "record held "
             "out once (out-of-fold) with its standard error; its change is the mean paired difference to the "
             f"previous step. The sensor noise alone (sigma/alpha) is {diag.noise_floor:.2g}; the correct-model floor "
             "the verdict uses is in the table above."
@@ -641,8 +643,8 @@ def _localisation(diag) -> str:
 
 
 def _metric_table(diag) -> str:
-    from scenarios.compare import METRICS
-    from scenarios.verdict import Z_LOCAL
+    from housner.scenarios.campaigns.compare import METRICS
+    from housner.scenarios.campaigns.verdict import Z_LOCAL
 
     header = ["quantity", "unit", "measured"] + [f"model: {esc(_label(s))}" for s in diag.steps]
     rows = []
@@ -663,7 +665,7 @@ def _metric_table(diag) -> str:
         rows,
         caption=f"Localisation quantities with standard errors; a model value more than {Z_LOCAL:g} combined "
         "standard errors from the measurement is marked, with its z: beyond that the verdict counts the quantity "
-        "as a misfit even when the model's errors are at the floor (scenarios.verdict.Z_LOCAL).",
+        "as a misfit even when the model's errors are at the floor (housner.scenarios.campaigns.verdict.Z_LOCAL).",
     )
 
 
@@ -699,8 +701,8 @@ def render_diagnosis(diag) -> str:
 
     Parameters
     ----------
-    diag : scenarios.diagnose.Diagnosis
-        From :func:`scenarios.diagnose.diagnose` with ``compare_steps=True``
+    diag : housner.scenarios.campaigns.diagnose.Diagnosis
+        From :func:`housner.scenarios.campaigns.diagnose.diagnose` with ``compare_steps=True``
         (every step carries its comparison with the campaign).
     """
     if any(s.comparison is None for s in diag.steps):

@@ -1,4 +1,4 @@
-"""HTML pieces shared by the run report (:mod:`reports.html`) and the diagnosis report (:mod:`reports.diagnosis`).
+"""HTML pieces shared by the run, study and diagnosis reports (:mod:`housner.reports.run`, ...).
 
 Cells (:func:`fmt_num`, :func:`fmt_p`, :func:`fmt_g`, :func:`ci_cell`), blocks
 (:func:`html_table`, :func:`html_figure`, :func:`html_note`, :func:`status_badge`),
@@ -17,12 +17,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-
-from reports import figures
-from scenarios.rundir import json_number
+from housner.reports import figures
+from housner.scenarios.execution.rundir import json_number
 
 if TYPE_CHECKING:
-    from reports.run_view import Run
+    from housner.reports.run.view import Run
 
 
 def esc(x: Any) -> str:

@@ -6,7 +6,7 @@ Installed with the package (entry point ``pytest11``), it adds
   ``results.parquet``), also read from the ``HOUSNER_RESULTS`` environment
   variable or the ``housner_results`` ini option, in that order of precedence;
 * the fixture ``housner_results``: the results table as a pandas DataFrame
-  (see :func:`reports.assertions.load_results`), a fresh copy for every test;
+  (see :func:`housner.reports.assertions.runs.load_results`), a fresh copy for every test;
   a test that uses it is skipped, with a message saying how to give a path,
   when no path is given;
 * the fixture ``housner_results_factory``: a function ``load(path=None)``
@@ -16,7 +16,7 @@ Installed with the package (entry point ``pytest11``), it adds
 Example::
 
     # test_engines.py, run with: pytest --housner-results runs/elcentro
-    from reports.assertions import assert_cdf_agreement
+    from housner.reports.assertions import assert_cdf_agreement
 
     def test_mujoco(housner_results):
         assert_cdf_agreement(housner_results, "mujoco", "housner", percentiles={50: 0.1})
@@ -92,7 +92,7 @@ class _Loader:
             if self.default is None:
                 _skip_no_path()
             path = self.default
-        from reports.assertions import load_results
+        from housner.reports.assertions.runs import load_results
 
         key = Path(path).expanduser().resolve()
         if key not in self._cache:

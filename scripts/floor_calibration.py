@@ -40,9 +40,8 @@ def main(argv=None) -> int:
 
     import campaign_generators
     import independent_campaigns
-
-    from scenarios.campaign import load_campaign
-    from scenarios.diagnose import diagnose
+    from housner.scenarios.campaigns.campaign import load_campaign
+    from housner.scenarios.campaigns.diagnose import diagnose
 
     gens = {"a": campaign_generators, "b": independent_campaigns}
     rows = []

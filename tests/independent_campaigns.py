@@ -1,6 +1,6 @@
 """A second, independent generator of synthetic measurement campaigns with a known ("true") physical effect.
 
-Its purpose is to check that :func:`scenarios.diagnose.diagnose` holds on data that none of the project's own
+Its purpose is to check that :func:`housner.scenarios.diagnose` holds on data that none of the project's own
 code produced. It is written from the equations alone: nothing is imported or copied from :mod:`housner` nor
 from ``tests/campaign_generators.py`` (the first generator); the effects' docstrings in
 ``housner/effects`` were read only for each effect's physical definition and parameterisation.
@@ -75,7 +75,7 @@ Conventions, and how they differ from the first generator
   6 s, releases 0.8, -0.65, 0.5 alpha, all free vibrations first.
 
 Cases: :data:`CASES` maps a name to (the generator's own truth parameters, the expected diagnosis): a tuple
-of registry effect names, or the localisation class (``scenarios.verdict.CLASSES``, "drift" and
+of registry effect names, or the localisation class (``housner.scenarios.campaigns.verdict.CLASSES``, "drift" and
 "vertical_input" among them) that should come first for an effect the library does not have. :func:`library_parameters`
 gives the library's parameterisation of each case the library can represent. :data:`EXAMPLE_CASES` are the
 campaigns of the effects shipped as plugins in ``examples/effects`` (pivot friction with asymmetric pivots, an

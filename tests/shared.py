@@ -6,9 +6,9 @@ import functools
 import math
 
 import numpy as np
+from housner.engines.mujoco_engine import MujocoEngine
 from scipy.integrate import solve_ivp
 
-from engines.mujoco_engine import MujocoEngine
 from housner import G, GroundMotion
 
 
@@ -125,7 +125,8 @@ def engine_unavailable(name: str) -> str | None:
     but cannot load (OpenSees without Debian's BLAS and LAPACK) both give the engine's own message,
     which names the install.
     """
-    from engines.base import get_engine
+    from housner.engines.base import get_engine
+
     from housner.errors import EngineUnavailable
 
     try:
@@ -179,9 +180,8 @@ def assert_pulses_follow_the_analytic_model(engine, specimen, *, rel: float, sam
     """The tuner's three one-sine pulses: same overturn verdict, theta_max within ``rel``, and (when
     ``same_impacts``) the same impact count as the analytic model."""
     import pytest
-
-    from engines.base import get_engine
-    from engines.tuning import pulse_motions
+    from housner.engines.base import get_engine
+    from housner.engines.tuning import pulse_motions
 
     ref = get_engine("housner")
     for m in pulse_motions(specimen):

@@ -12,11 +12,11 @@ import math
 
 import numpy as np
 import pytest
+from housner.engines.base import get_engine
+from housner.reports.assertions.runs import assert_cdf_agreement
 from shared import OTHER_ENGINES, installed_engines
 
-from engines.base import get_engine
 from housner import Specimen, pulses, simulate
-from reports.assertions import assert_cdf_agreement
 
 SPEC = Specimen.bachmann2017()
 ENGINES = OTHER_ENGINES
@@ -58,9 +58,8 @@ def test_pulse_responses_agree(engine, reference):
 @pytest.mark.slow
 @pytest.mark.parametrize("engine", ENGINES)
 def test_elcentro_distributions_agree(engine, tmp_path_factory):
+    from housner.scenarios.runs.run import run_scenario
     from scipy.stats import binomtest
-
-    from scenarios.runner import run_scenario
 
     out = tmp_path_factory.mktemp("elcentro")
     run = run_scenario("elcentro", engines=["housner", engine], out=out, progress=False)
@@ -89,7 +88,7 @@ def test_elcentro_distributions_agree(engine, tmp_path_factory):
 @pytest.fixture(scope="module")
 def strong_run(tmp_path_factory):
     """elcentro-strong (100 matched motions x 1.6, 42 overturn in the analytic model) on every installed engine."""
-    from scenarios.runner import run_scenario
+    from housner.scenarios.runs.run import run_scenario
 
     names = ["housner", *installed_engines()]
     return run_scenario("elcentro-strong", engines=names, out=tmp_path_factory.mktemp("strong"), progress=False)

@@ -1,4 +1,4 @@
-"""scenarios.analysis.equivalent_amplitude: the factor on an ensemble that reaches another study's percentiles.
+"""runs.spread.equivalent_amplitude: the factor on an ensemble that reaches another study's percentiles.
 
 Checked against its definition by direct simulation, and by undoing a known
 scaling of the ensemble (the analytic model is deterministic, so multiplying
@@ -11,11 +11,11 @@ import math
 
 import numpy as np
 import pytest
+from housner.engines.analytic import HousnerEngine
+from housner.scenarios.runs.spread import equivalent_amplitude
 from shared import windowed_sines
 
-from engines.analytic import HousnerEngine
 from housner import Specimen
-from scenarios.analysis import equivalent_amplitude
 
 SPEC = Specimen.bachmann2017()
 
@@ -88,8 +88,8 @@ def test_bad_arguments_are_named(motions_, targets, says):
 
 def test_seed_spread_runs_through_the_runner_and_its_cache(tmp_path):
     """k ensembles of n motions: percentiles as computed directly with the analytic model, cached on the way."""
-    from scenarios.analysis import ensemble_seeds, seed_spread
-    from scenarios.catalogue import load_scenario
+    from housner.scenarios.catalogue.scenario import load_scenario
+    from housner.scenarios.runs.spread import ensemble_seeds, seed_spread
 
     scen = load_scenario("elcentro")
     got = seed_spread(scen, 2, n=6, cache_dir=tmp_path)

@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from housner.scenarios.catalogue import scenario as catalogue
+from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
+from housner.scenarios.motions.records import ELCENTRO_VARIANTS, elcentro
 
-from reports.cli import main
-from scenarios import catalogue
-from scenarios.catalogue import ScenarioError, load_scenario
-from scenarios.records import ELCENTRO_VARIANTS, elcentro
+from housner.cli import main
 
 #: (samples, dt [s], PGA [m/s^2], RMS [m/s^2]) of motions 0-2 of `housner run elcentro` (rdk2010,
 #: seed 2017): the default must not move them. They were SHA-256 hashes of the samples until
@@ -58,7 +58,7 @@ RDK3 = 'source = "rdk"\nn = 3\nseed = 2017\n'
 def write_at2(path: Path) -> Path:
     """A byte copy of the shipped PEER 1999 El Centro AT2."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    src = resources.files("scenarios").joinpath("data", ELCENTRO_VARIANTS["peer1999"][0])
+    src = resources.files("housner.scenarios.catalogue").joinpath("data", ELCENTRO_VARIANTS["peer1999"][0])
     with resources.as_file(src) as p:
         shutil.copyfile(p, path)
     return path
@@ -190,7 +190,7 @@ def test_the_seed_scenario_runs_the_matched_model_and_its_bands_pass():
 
 
 def test_matched_model_gives_the_matched_ensemble_and_its_band_check(tmp_path):
-    from scenarios.rdk_match import fit_matched, simulate_matched
+    from housner.scenarios.motions.rdk_match import fit_matched, simulate_matched
 
     scen = load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"\nmodel = "matched"'))
     motions, meta = scen.build_motions(band_check=True)
@@ -213,8 +213,8 @@ def test_matched_model_gives_the_matched_ensemble_and_its_band_check(tmp_path):
 
 
 def test_report_shows_the_band_check_of_a_file_record(tmp_path):
-    from reports import html
-    from scenarios.runner import run_scenario
+    from housner.reports.run import page as html
+    from housner.scenarios.runs.run import run_scenario
 
     path = write_at2(tmp_path / "ec.AT2")
     scen = scenario(tmp_path, 'source = "rdk"\nn = 2\nseed = 5\nrecord = "ec.AT2"')

@@ -1,4 +1,4 @@
-"""Tolerance assertions (reports.assertions) and the pytest plugin (reports.pytest_plugin)."""
+"""Tolerance assertions (housner.reports.assertions) and the pytest plugin (housner.reports.pytest_plugin)."""
 
 from __future__ import annotations
 
@@ -10,10 +10,7 @@ from importlib.metadata import entry_points
 import numpy as np
 import pandas as pd
 import pytest
-
-from housner import stats
-from housner.errors import DataFileError
-from reports.assertions import (
+from housner.reports.assertions.runs import (
     AgreementReport,
     CDFAgreementError,
     RecordAgreementError,
@@ -21,6 +18,9 @@ from reports.assertions import (
     assert_record_agreement,
     load_results,
 )
+
+from housner import stats
+from housner.errors import DataFileError
 
 pytest_plugins = ["pytester"]
 
@@ -197,7 +197,7 @@ def test_message_points_to_the_report_next_to_the_results(tmp_path, base):
 
 
 def test_accepts_the_runners_run_result(tmp_path, base):
-    from scenarios.runner import RunResult
+    from housner.scenarios.runs.run import RunResult
 
     df = table({"housner": base, "mujoco": np.where(np.isinf(base), INF, base * 2)})
     (tmp_path / "report.html").write_text("<html></html>")
@@ -277,9 +277,9 @@ def test_record_agreement(base):
 # ----------------------------------------------------------------------------
 # the pytest plugin
 def _plugin_args() -> list[str]:
-    """`-p reports.pytest_plugin` unless the package's entry point already loads it (twice would clash)."""
-    installed = any(ep.value == "reports.pytest_plugin" for ep in entry_points(group="pytest11"))
-    return [] if installed else ["-p", "reports.pytest_plugin"]
+    """`-p housner.reports.pytest_plugin` unless the entry point already loads it (twice would clash)."""
+    installed = any(ep.value == "housner.reports.pytest_plugin" for ep in entry_points(group="pytest11"))
+    return [] if installed else ["-p", "housner.reports.pytest_plugin"]
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -303,7 +303,7 @@ def write_run(directory, df):
 
 
 USER_TESTS = """
-from reports.assertions import assert_cdf_agreement
+from housner.reports.assertions.runs import assert_cdf_agreement
 
 def test_engines_agree(housner_results):
     assert len(housner_results) == 200
@@ -357,8 +357,8 @@ def test_plugin_skips_without_a_path_and_errors_on_a_bad_one(pytester, monkeypat
 
 def test_plugin_imports_nothing_heavy():
     code = (
-        "import sys, reports.pytest_plugin\n"
-        "print([m for m in ('numpy', 'pandas', 'scipy', 'pyarrow', 'housner') if m in sys.modules])"
+        "import sys, housner.reports.pytest_plugin\n"
+        "print([m for m in ('numpy', 'pandas', 'scipy', 'pyarrow', 'housner.motion') if m in sys.modules])"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

@@ -1,4 +1,4 @@
-"""Measurement campaigns (scenarios.campaign) and model-against-measurement comparison (scenarios.compare)."""
+"""Measurement campaigns and model-against-measurement comparison (housner.scenarios.campaigns)."""
 
 from __future__ import annotations
 
@@ -10,13 +10,8 @@ from pathlib import Path
 import campaign_generators as cg
 import numpy as np
 import pytest
-
-from housner import GroundMotion, Specimen
-from housner.calibration import half_cycle_integral
-from housner.errors import DataFileError
-from housner.model import simulate
-from scenarios.campaign import OVERTURN_ANGLE, estimate_release, load_campaign
-from scenarios.compare import (
+from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, estimate_release, load_campaign
+from housner.scenarios.campaigns.compare import (
     ERROR_CLIP,
     compare,
     divergence_time,
@@ -25,6 +20,11 @@ from scenarios.compare import (
     measured_impacts,
     record_error,
 )
+
+from housner import GroundMotion, Specimen
+from housner.calibration import half_cycle_integral
+from housner.errors import DataFileError
+from housner.model import simulate
 
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha
@@ -221,7 +221,7 @@ def test_a_minority_of_unreadable_records_is_skipped_and_listed(small, tmp_path)
 
 
 def test_cli_refuses_a_mostly_unreadable_campaign_with_one_line(small, tmp_path, capsys):
-    from reports.cli import main
+    from housner.cli import main
 
     d = _copy(small, tmp_path)
     refused = _to_degrees(d, [f.stem for f in sorted((d / "records").glob("*.csv"))])

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from engines import get_engine
-from scenarios.catalogue import load_scenario
-from scenarios.chaos import (
+from housner.engines import get_engine
+from housner.scenarios.catalogue.scenario import load_scenario
+from housner.scenarios.runs.chaos import (
     ChaosFloor,
     EngineErrors,
     chaos_floor,

@@ -8,10 +8,9 @@ test in test_agreement.py.
 """
 
 import pytest
+from housner.reports.assertions.runs import assert_cdf_agreement
+from housner.scenarios.runs.run import run_scenario
 from shared import OTHER_ENGINES, installed_engines
-
-from reports.assertions import assert_cdf_agreement
-from scenarios.runner import run_scenario
 
 N = 30
 

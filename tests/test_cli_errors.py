@@ -1,7 +1,7 @@
 """Malformed input through the public command: one line, the culprit named, a non-zero exit, never a traceback.
 
 Each case builds its input in a fresh folder and runs ``housner ...`` in this
-process (``reports.cli.main``), a few as a real subprocess. The inputs cover
+process (``housner.cli.main``), a few as a real subprocess. The inputs cover
 scenario files, campaign files and their CSV records, command-line arguments
 and output paths. Nearly all fail before any simulation; the few that need a
 run directory share one, made once.
@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from housner.scenarios.catalogue.scenario import load_scenario
 
-from reports.cli import main
-from scenarios.catalogue import load_scenario
+from housner.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -432,7 +432,7 @@ def test_unbroken_campaign_passes_the_checks_before_load(tmp_path, capsys):
 def _housner(*args: str, env_extra: dict | None = None) -> subprocess.CompletedProcess:
     env = dict(os.environ, **(env_extra or {}))
     return subprocess.run(
-        [sys.executable, "-m", "reports.cli", *args], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
+        [sys.executable, "-m", "housner.cli", *args], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
     )
 
 
@@ -453,14 +453,16 @@ def test_debug_shows_the_traceback(tmp_path):
 
 
 def test_version_and_help_list_the_registries():
-    from engines.base import ENGINES
+    from housner.engines.base import ENGINES
+    from housner.scenarios.catalogue.scenario import SCENARIOS
+
     from housner.effects import available_effects, effect_class
-    from scenarios.catalogue import SCENARIOS
 
     res = _housner("--version")
     assert res.returncode == 0 and res.stdout.startswith("housner 0.") and "mujoco" in res.stdout
     # The package's own engines (other test modules register test engines in this process only).
-    shipped = [n for n, e in ENGINES.items() if (e if isinstance(e, str) else e.__module__).startswith("engines.")]
+    home = {n: e if isinstance(e, str) else e.__module__ for n, e in ENGINES.items()}
+    shipped = [n for n, m in home.items() if m.startswith("housner.engines.")]
     assert {"housner", "mujoco", "pybullet"} <= set(shipped)
     res = _housner("run", "--help")
     assert res.returncode == 0 and all(name in res.stdout for name in [*shipped, *SCENARIOS])
@@ -475,7 +477,7 @@ def test_missing_engine_package_is_one_line_naming_the_install(tmp_path):
     """An optional engine whose package is absent: exit 2, one line naming the install command, no run."""
     code = (
         "import sys; sys.modules['dartpy'] = None\n"  # as if dartpy were not installed
-        "from reports.cli import main\n"
+        "from housner.cli import main\n"
         f"sys.exit(main(['run', 'elcentro', '--engines', 'dart', '--out', {str(tmp_path / 'run')!r}, '-q']))"
     )
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

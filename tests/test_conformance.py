@@ -8,10 +8,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from housner.engines import ENGINES, Engine
+from housner.engines.base import engine_class
+from housner.engines.conformance import ConformanceReport, assert_conforms, check_engine
 
-from engines import ENGINES, Engine
-from engines.base import engine_class
-from engines.conformance import ConformanceReport, assert_conforms, check_engine
 from housner import EngineError, Specimen
 from housner.model import simulate as housner_simulate
 

@@ -9,9 +9,10 @@ from shared import assert_overturns_and_holds, assert_pulses_follow_the_analytic
 
 pytest.importorskip("dartpy", reason="the DART engine needs dartpy: pip install -e '.[dart]'")
 
-from engines import get_engine  # noqa: E402
-from engines.dart_engine import DartEngine  # noqa: E402
-from engines.measures import first_impact_ratio  # noqa: E402
+from housner.engines import get_engine  # noqa: E402
+from housner.engines.dart_engine import DartEngine  # noqa: E402
+from housner.engines.measures import first_impact_ratio  # noqa: E402
+
 from housner import GroundMotion, Specimen  # noqa: E402
 from housner.effects import make_effect  # noqa: E402
 
@@ -65,7 +66,7 @@ def test_tuning_candidates_divide_the_tuners_samples():
 
 def test_a_target_below_housners_r_is_out_of_reach_and_said_so():
     """Rigid plastic contact loses exactly Housner's energy: r = 0.90 cannot be reached, and the tuner says what is."""
-    from engines.tuning import tune
+    from housner.engines.tuning import tune
 
     res = tune(
         "dart",

@@ -1,4 +1,4 @@
-"""Which effect is missing (scenarios.diagnose), its report and CLI, on campaigns with a hidden effect.
+"""Which effect is missing (campaigns.diagnose), its report and CLI, on campaigns with a hidden effect.
 
 The campaigns come from tests/campaign_generators.py, an integrator written
 apart from the effect library: the seed specimen, 3 free-vibration and 60
@@ -19,10 +19,10 @@ import sys
 import campaign_generators as cg
 import numpy as np
 import pytest
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.diagnose import PRACTICAL, _judge, diagnose, fit_effect, split_records
 
 from housner.effects import available_effects
-from scenarios.campaign import load_campaign
-from scenarios.diagnose import PRACTICAL, _judge, diagnose, fit_effect, split_records
 
 DEFAULT_CASES = ("none", "rotational_damping", "sensor_offset")
 _RESULTS: dict[str, tuple] = {}
@@ -156,7 +156,7 @@ def test_json_has_the_promised_fields(base, tmp_path):
 
 
 def test_report_is_self_contained(base, tmp_path):
-    from reports.diagnosis import write_diagnosis_report
+    from housner.reports.diagnosis import write_diagnosis_report
 
     _info, diag = _diagnosis(base, "rotational_damping", True)
     path = write_diagnosis_report(diag, tmp_path / "r.html")
@@ -185,14 +185,14 @@ def test_cli_diagnose(base, tmp_path):
     root = cg.cached_campaign(base, "sensor_offset")["root"]
     out_json, out_html = tmp_path / "d.json", tmp_path / "d.html"
     env = dict(os.environ)
-    cmd = [sys.executable, "-m", "reports.cli", "diagnose", str(root), "--effects", "sensor_offset,time_lag",
+    cmd = [sys.executable, "-m", "housner.cli", "diagnose", str(root), "--effects", "sensor_offset,time_lag",
            "--json", str(out_json), "--report", str(out_html), "-q"]  # fmt: skip
     res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
     assert res.returncode == 0, res.stderr
     assert "sensor_offset" in res.stdout and "explains it" in res.stdout
     assert json.loads(out_json.read_text())["selected"] == ["sensor_offset"]
     assert out_html.read_text().count("data:image/png;base64,") == 10
-    bad = subprocess.run([sys.executable, "-m", "reports.cli", "diagnose", str(tmp_path / "none")],
+    bad = subprocess.run([sys.executable, "-m", "housner.cli", "diagnose", str(tmp_path / "none")],
                          capture_output=True, text=True, env=env, timeout=120)  # fmt: skip
     assert bad.returncode == 2 and "campaign.toml" in bad.stderr
 

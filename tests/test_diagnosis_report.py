@@ -1,4 +1,4 @@
-"""The diagnosis page (reports.diagnosis) and text (scenarios.diagnosis_results) as a researcher reads them.
+"""The diagnosis page (housner.reports.diagnosis) and text (campaigns.results) as a researcher reads them.
 
 One small campaign (3 free vibrations, 12 ground motions, hidden rotational damping) is
 diagnosed once for the module with two candidates and a short floor bootstrap (~5 s);
@@ -16,14 +16,13 @@ from dataclasses import replace
 from pathlib import Path
 
 import campaign_generators as cg
+import housner.scenarios.campaigns.verdict as verdict_mod
 import numpy as np
 import pytest
-
-import scenarios.verdict as verdict_mod
-from reports.diagnosis import _histories_figure, history_records, render_diagnosis
-from scenarios.campaign import load_campaign
-from scenarios.diagnose import diagnose
-from scenarios.diagnosis_results import change_text, fmt_pm, params_text, signed_words
+from housner.reports.diagnosis import _histories_figure, history_records, render_diagnosis
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 

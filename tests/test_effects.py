@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from housner.engines.analytic import HousnerEngine
 from scipy.optimize import brentq
 
-from engines.analytic import HousnerEngine
 from housner import GroundMotion, Specimen
 from housner.effects import (
     EFFECTS,
@@ -674,7 +674,7 @@ def test_user_effect_from_an_entry_point(tmp_path, monkeypatch):
 
 
 def test_other_engines_refuse_effects_by_name():
-    from engines.base import Engine
+    from housner.engines.base import Engine
 
     class Bare(Engine):
         name = "bare"

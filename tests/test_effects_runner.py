@@ -14,12 +14,13 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from housner.reports.run import page as html
+from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
+from housner.scenarios.execution.cache import cache_key
+from housner.scenarios.runs import run as runner
+from housner.scenarios.runs.run import run_scenario
 
 from housner import simulate
-from reports import html
-from scenarios import runner
-from scenarios.catalogue import ScenarioError, load_scenario
-from scenarios.runner import cache_key, run_scenario
 
 SCEN = """name = "fx"
 [specimen]

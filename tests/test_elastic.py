@@ -7,12 +7,17 @@ import math
 import numpy as np
 import pyrotd
 import pytest
+from housner.scenarios.motions.elastic import (
+    ensemble_spectra,
+    linear_step_coefficients,
+    response_spectrum,
+    sdof_history,
+)
+from housner.scenarios.motions.records import elcentro
 from scipy import signal
 
 from housner import GroundMotion
 from housner.units import G
-from scenarios.elastic import ensemble_spectra, linear_step_coefficients, response_spectrum, sdof_history
-from scenarios.records import elcentro
 
 
 @pytest.fixture(scope="module")

@@ -19,13 +19,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from housner.engines.analytic import HousnerEngine
+from housner.engines.base import ENGINES, register_engine
+from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.execution.workers import CRASH_ENV
 from test_runner import motions  # the same short pulse-like motions
 
-from engines.analytic import HousnerEngine
-from engines.base import ENGINES, register_engine
 from housner import GroundMotion, Specimen
-from reports.cli import main
-from scenarios.runner import CRASH_ENV, run_engines
+from housner.cli import main
 
 SPEC = Specimen.bachmann2017()
 ROOT = Path(__file__).resolve().parent.parent
@@ -148,7 +149,7 @@ def test_ctrl_c_exits_fast_with_130_and_keeps_the_cache(tmp_path):
     cache = tmp_path / "cache"
     env = dict(os.environ, HOUSNER_CACHE_DIR=str(cache))
     env.pop(CRASH_ENV, None)
-    cmd = [sys.executable, "-m", "reports.cli", "run", "elcentro", "--engines", "mujoco", "--n-motions", "24"]
+    cmd = [sys.executable, "-m", "housner.cli", "run", "elcentro", "--engines", "mujoco", "--n-motions", "24"]
     cmd += ["--out", str(tmp_path / "run"), "--jobs", "2", "--no-report"]
     # A session of its own, signalled as a whole: what a terminal does on Ctrl-C (workers get SIGINT too).
     # SIGINT back to its default in the child: a test run started in the background of a non-interactive shell
@@ -182,7 +183,7 @@ def test_sigterm_is_handled_like_ctrl_c_with_143(tmp_path):
     cache = tmp_path / "cache"
     env = dict(os.environ, HOUSNER_CACHE_DIR=str(cache))
     env.pop(CRASH_ENV, None)
-    cmd = [sys.executable, "-m", "reports.cli", "run", "elcentro", "--engines", "housner,mujoco", "--n-motions", "24",
+    cmd = [sys.executable, "-m", "housner.cli", "run", "elcentro", "--engines", "housner,mujoco", "--n-motions", "24",
            "--out", str(tmp_path / "run"), "--jobs", "2", "--no-report"]  # fmt: skip
     proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)  # fmt: skip

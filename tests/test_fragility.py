@@ -1,4 +1,4 @@
-"""scenarios.fragility against brute force, published values, scipy and synthetic data of known fragility."""
+"""studies.fragility against brute force, published values, scipy and synthetic data of known fragility."""
 
 from __future__ import annotations
 
@@ -6,11 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from scipy import stats as sps
-
-from housner.stats import overturn_probability
-from scenarios import fragility
-from scenarios.fragility import (
+from housner.scenarios.studies import fragility
+from housner.scenarios.studies.fragility import (
     BETA_BOUNDS,
     bootstrap_fit,
     compare_fits,
@@ -20,6 +17,9 @@ from scenarios.fragility import (
     proportion_intervals,
     stripe_counts,
 )
+from scipy import stats as sps
+
+from housner.stats import overturn_probability
 
 MEDIAN, BETA = 1.3, 0.4
 STRIPES = np.geomspace(0.3, 3.0, 20)

@@ -1,4 +1,4 @@
-"""The adapters' impact law (engines._planar.ImpactLaw): detection, energy, every planar engine, the tuner."""
+"""The adapters' impact law (housner.engines._planar.ImpactLaw): detection, energy, every planar engine, the tuner."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from housner.engines import get_engine
+from housner.engines._planar import IMPACT_LAW_DELAY, IMPACT_LAW_TOL, ImpactLaw
+from housner.engines.measures import decay_peaks, first_impact_ratio, half_cycle_peaks
+from housner.engines.tuning import DECAY_IMPACTS, _best, _suite, tune
 from shared import optional_engine
 
-from engines import get_engine
-from engines._planar import IMPACT_LAW_DELAY, IMPACT_LAW_TOL, ImpactLaw
-from engines.measures import decay_peaks, first_impact_ratio, half_cycle_peaks
-from engines.tuning import DECAY_IMPACTS, _best, _suite, tune
 from housner import GroundMotion, Specimen
 from housner.impacts import impact_times
 

@@ -59,10 +59,11 @@ def test_resolved_impact_count_leaves_out_the_small_tail():
     """Free rocking from 0.1 alpha: an impact counts when the half-cycle before it peaked at 0.01 alpha or more.
 
     The count must equal the number of half-cycle peaks at or above the resolution (an independent
-    measure, engines.measures.half_cycle_peaks): 42 of the analytic model's 209 impacts at 0.01 alpha,
+    measure, housner.engines.measures.half_cycle_peaks): 42 of the analytic model's 209 impacts at 0.01 alpha,
     83 at 0.001 alpha; the rest is the rest rule's tail of ever smaller impacts.
     """
-    from engines.measures import half_cycle_peaks
+    from housner.engines.measures import half_cycle_peaks
+
     from housner import GroundMotion, Specimen, simulate
     from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count
 

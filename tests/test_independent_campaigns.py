@@ -2,7 +2,7 @@
 
 The generator is checked against Housner's closed forms and the energy integral, not against the library
 (only the slow cross-check at the end compares it with :func:`housner.model.simulate`). Each case's campaign
-must be readable by :func:`scenarios.campaign.load_campaign` without a skipped record.
+must be readable by :func:`housner.scenarios.campaigns.campaign.load_campaign` without a skipped record.
 """
 
 from __future__ import annotations
@@ -252,7 +252,7 @@ def test_deterministic_and_stable_in_n(tmp_path):
 
 @pytest.mark.parametrize("case", list(ic.CASES))
 def test_case_loads(tmp_path, case):
-    from scenarios.campaign import load_campaign
+    from housner.scenarios.campaigns.campaign import load_campaign
 
     info = ic.write_campaign(tmp_path / "c", case, n_ground=4, seed=1)
     camp = load_campaign(info["root"])

@@ -14,10 +14,9 @@ from __future__ import annotations
 
 import independent_campaigns as ic
 import pytest
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.diagnose import diagnose
 from matrix import judge
-
-from scenarios.campaign import load_campaign
-from scenarios.diagnose import diagnose
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,7 @@ from shared import reference_solve_ivp
 from housner import G, GroundMotion, Specimen
 from housner.model import RockingParams, default_substeps, simulate, simulate_many, theta_max_many
 
-DATA = Path(__file__).resolve().parents[1] / "scenarios" / "data"
+DATA = Path(__file__).resolve().parents[1] / "scenarios" / "catalogue" / "data"
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha
 P = SPEC.p

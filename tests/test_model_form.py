@@ -1,4 +1,4 @@
-"""The model-form part of the diagnosis' floor (scenarios.model_form) and the verdict's new pointers.
+"""The model-form part of the diagnosis' floor (housner.scenarios.campaigns.model_form) and the verdict's new pointers.
 
 Closed forms first: the input a correct integrator feels under each
 convention, the acceleration channel's noise read off still records, the
@@ -13,14 +13,21 @@ import math
 
 import numpy as np
 import pytest
+from housner.engines import get_engine
+from housner.scenarios.campaigns.localise import Metric
+from housner.scenarios.campaigns.model_form import (
+    FAMILIES,
+    SCALE_SD,
+    SHIFT_SAMPLES,
+    UPSAMPLE,
+    ModelForm,
+    acc_channel_noise,
+)
+from housner.scenarios.campaigns.verdict import Z_DRIFT, _flight_share, order_drift, physical_classes
 
-from engines import get_engine
 from housner import GroundMotion, Specimen
 from housner.effects import SensorOffset
 from housner.model import REST_TOL
-from scenarios.localise import Metric
-from scenarios.model_form import FAMILIES, SCALE_SD, SHIFT_SAMPLES, UPSAMPLE, ModelForm, acc_channel_noise
-from scenarios.verdict import Z_DRIFT, _flight_share, order_drift, physical_classes
 
 DT = 0.002
 
@@ -199,7 +206,7 @@ def test_a_restitution_that_wears_shows_in_the_free_vibrations_energy_ratio_alon
 
 
 def test_a_measured_parameter_is_kept_by_the_fits():
-    from scenarios.fitting import fit_effect, joint_refit
+    from housner.scenarios.campaigns.fitting import fit_effect, joint_refit
 
     spec = Specimen.bachmann2017()
     # an objective whose optimum is elsewhere: the pinned offset stays as measured

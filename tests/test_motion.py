@@ -8,7 +8,7 @@ import pytest
 
 from housner import DataFileError, G, GroundMotion
 
-DATA = Path(__file__).resolve().parents[1] / "scenarios" / "data"
+DATA = Path(__file__).resolve().parents[1] / "scenarios" / "catalogue" / "data"
 
 
 @pytest.mark.parametrize(

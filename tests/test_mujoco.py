@@ -8,10 +8,8 @@ import pickle
 import mujoco
 import numpy as np
 import pytest
-from shared import SoftGroundMujoco
-
-from engines import get_engine
-from engines.mjcf import (
+from housner.engines import get_engine
+from housner.engines.mjcf import (
     ETH_SPECIMEN_PATH,
     MJCF_DEFAULTS,
     block_inertia,
@@ -19,8 +17,8 @@ from engines.mjcf import (
     mjcf_from_specimen,
     write_mjcf,
 )
-from engines.mujoco_engine import MujocoEngine, initial_qvel
-from engines.tuning import (
+from housner.engines.mujoco_engine import MujocoEngine, initial_qvel
+from housner.engines.tuning import (
     DECAY_IMPACTS,
     DECAY_RTOL,
     DECAY_START,
@@ -34,6 +32,8 @@ from engines.tuning import (
     free_vibration_motions,
     half_cycle_peaks,
 )
+from shared import SoftGroundMujoco
+
 from housner import EngineError, GroundMotion, Specimen
 from housner.effects import make_effect
 from housner.model import simulate as housner_simulate
@@ -76,7 +76,8 @@ def test_model_compiles_and_steps_without_warnings():
 
 def test_shipped_model_is_the_generators_output_and_loads_standalone():
     assert ETH_SPECIMEN_PATH.read_text(encoding="utf-8") == mjcf_from_specimen(SEED), (
-        "engines/models/eth_specimen.xml is stale: run `python -c 'from engines.mjcf import write_eth_specimen; "
+        "engines/models/eth_specimen.xml is stale: run `python -c "
+        "'from housner.engines.mjcf import write_eth_specimen; "
         "write_eth_specimen()'`"
     )
     model = mujoco.MjModel.from_xml_path(str(ETH_SPECIMEN_PATH))  # what `python -m mujoco.viewer --mjcf=` loads

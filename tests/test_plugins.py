@@ -15,12 +15,12 @@ from pathlib import Path
 import independent_campaigns as ic
 import numpy as np
 import pytest
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.execution.cache import cache_key, effect_code_hash
 
 from housner import GroundMotion, Specimen
 from housner.effects import effect_class, load_plugin
-from scenarios.cache import cache_key, effect_code_hash
-from scenarios.campaign import load_campaign
-from scenarios.diagnose import diagnose
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples" / "effects"
@@ -54,12 +54,12 @@ def test_each_example_explains_its_campaign(base, example):
 
 def test_cli_loads_a_plugin_and_refuses_a_missing_one(base, tmp_path):
     root = ic.cached_campaign(base, "pivot_friction")["root"]
-    cmd = [sys.executable, "-m", "reports.cli", "diagnose", str(root), "--plugin", str(EXAMPLES / "pivot_friction.py"),
+    cmd = [sys.executable, "-m", "housner.cli", "diagnose", str(root), "--plugin", str(EXAMPLES / "pivot_friction.py"),
            "--add", "pivot_friction", "--effects", "none", "-q"]  # fmt: skip
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
     assert "Explained" in res.stdout and "pivot_friction" in res.stdout
-    bad = subprocess.run([sys.executable, "-m", "reports.cli", "diagnose", str(root), "--plugin", "nope.py"],
+    bad = subprocess.run([sys.executable, "-m", "housner.cli", "diagnose", str(root), "--plugin", "nope.py"],
                          capture_output=True, text=True, timeout=120)  # fmt: skip
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "nope.py" in bad.stderr
     assert "Traceback" not in bad.stderr

@@ -15,9 +15,9 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pybullet as pb
 import pytest
+from housner.engines.pybullet_engine import OVERTURN_ANGLE, ROCKING_TOL, PybulletEngine
+from housner.engines.urdf import ETH_SPECIMEN_PATH, JOINTS, urdf_from_specimen, write_urdf
 
-from engines.pybullet_engine import OVERTURN_ANGLE, ROCKING_TOL, PybulletEngine
-from engines.urdf import ETH_SPECIMEN_PATH, JOINTS, urdf_from_specimen, write_urdf
 from housner import G, GroundMotion, Specimen
 from housner.calibration import energy_ratios, free_vibration_peaks, half_cycle_integral
 from housner.errors import EngineError
@@ -61,7 +61,7 @@ def _first_ratio(res) -> float:
 # the URDF
 def test_shipped_urdf_matches_generator():
     assert ETH_SPECIMEN_PATH.read_text(encoding="utf-8") == urdf_from_specimen(SPEC), (
-        "engines/models/eth_specimen.urdf is stale: run engines.urdf.write_eth_specimen()"
+        "engines/models/eth_specimen.urdf is stale: run housner.engines.urdf.write_eth_specimen()"
     )
 
 

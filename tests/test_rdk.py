@@ -7,14 +7,14 @@ import math
 
 import numpy as np
 import pytest
+from housner.scenarios.motions import rdk
+from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
+from housner.scenarios.motions.rdk import RDKParams, fit, pmnm_count, settle_time, simulate, upcrossing_count
+from housner.scenarios.motions.records import arias_intensity, elcentro, husid_time, significant_duration
 from scipy import signal
 from scipy.integrate import cumulative_trapezoid
 
 from housner.units import G
-from scenarios import rdk
-from scenarios.elastic import ensemble_spectra, response_spectrum
-from scenarios.rdk import RDKParams, fit, pmnm_count, settle_time, simulate, upcrossing_count
-from scenarios.records import arias_intensity, elcentro, husid_time, significant_duration
 
 # A mid-size, mid-frequency motion used where El Centro's own fit is not needed.
 KNOWN = dict(Ia=1.2, D5_95=15.0, t_mid=7.0, omega_mid=2 * np.pi * 4.0, omega_prime=-0.25, zeta_f=0.3, duration=35.0)
@@ -309,9 +309,8 @@ def test_ensemble_mean_spectra_match_the_record_on_average(spectra):
 # Figure 8
 # ----------------------------------------------------------------------
 def test_ensemble_figure_draws(record, ensemble):
+    from housner.reports.run.ground_figures import plot_ensemble_spectra, plot_record
     from matplotlib.figure import Figure
-
-    from reports.ground_figures import plot_ensemble_spectra, plot_record
 
     fig = plot_ensemble_spectra(record, ensemble[:10], S=10.0, periods=np.logspace(-2, 0.4, 15))
     assert isinstance(fig, Figure)

@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.integrate import cumulative_trapezoid
-
-from scenarios import rdk, rdk_match
-from scenarios.elastic import ensemble_spectra, response_spectrum
-from scenarios.rdk_match import (
+from housner.scenarios.motions import rdk, rdk_match
+from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
+from housner.scenarios.motions.rdk_match import (
     BAND_BOUNDS,
     MatchedRDK,
     band_centres,
@@ -17,7 +15,8 @@ from scenarios.rdk_match import (
     fit_matched,
     simulate_matched,
 )
-from scenarios.records import elcentro
+from housner.scenarios.motions.records import elcentro
+from scipy.integrate import cumulative_trapezoid
 
 VARIANTS = ("peer1999", "ngawest2")
 
@@ -249,7 +248,7 @@ def test_simulated_motions_end_at_rest(variant, ensembles):
 # The published model is unchanged
 # ----------------------------------------------------------------------
 def test_published_fit_and_simulate_are_unchanged(records, models):
-    # Values recorded from rdk.fit / rdk.simulate before scenarios.rdk gained
+    # Values recorded from rdk.fit / rdk.simulate before housner.scenarios.motions.rdk gained
     # the _modulated_noise / _highpass hook (commit e88a637); they matched bit
     # for bit after it. rtol 1e-12 leaves room only for libm differences.
     p = rdk.fit(records["peer1999"])

@@ -8,10 +8,7 @@ from importlib import resources
 
 import numpy as np
 import pytest
-
-from housner import DataFileError, GroundMotion
-from housner.units import G
-from scenarios.records import (
+from housner.scenarios.motions.records import (
     ELCENTRO_VARIANTS,
     RECORDS,
     arias_intensity,
@@ -22,6 +19,9 @@ from scenarios.records import (
     significant_duration,
     t_mid,
 )
+
+from housner import DataFileError, GroundMotion
+from housner.units import G
 
 # Values from shared/data/README.md (computed there independently of this code).
 # PGA and Ia are printed to 4 significant digits, so their tolerance is half a
@@ -61,7 +61,7 @@ def test_record_statistics_match_the_data_table(variant):
 
 @pytest.mark.parametrize("variant", sorted(SHA256))
 def test_shipped_files_are_the_documented_bytes(variant):
-    data = resources.files("scenarios").joinpath("data", ELCENTRO_VARIANTS[variant][0]).read_bytes()
+    data = resources.files("housner.scenarios.catalogue").joinpath("data", ELCENTRO_VARIANTS[variant][0]).read_bytes()
     assert hashlib.sha256(data).hexdigest() == SHA256[variant]
 
 

@@ -12,19 +12,22 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 import pytest
+from housner.engines.analytic import HousnerEngine
+from housner.engines.base import ENGINES, register_engine
+from housner.reports import figures
+from housner.reports.run import page as html
+from housner.reports.run import view as run_view
+from housner.reports.run.sections import distribution as distribution_section
+from housner.reports.run.sections import tuning as tuning_section
+from housner.reports.run.view import RECORD_RTOL
+from housner.scenarios.execution.rundir import provenance, write_run
+from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict, run_engine_errors
 from scipy import stats as sps
 from shared import windowed_sines
 
-from engines.analytic import HousnerEngine
-from engines.base import ENGINES, register_engine
 from housner import GroundMotion, Specimen, stats
 from housner.errors import DataFileError
-from reports import figures, html, run_view
-from reports.run_view import RECORD_RTOL
-from reports.sections import distribution as distribution_section
-from reports.sections import tuning as tuning_section
-from scenarios.chaos import chaos_floor, errors_from_dict, run_engine_errors
-from scenarios.runner import provenance, run_engines, write_run
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = Specimen.bachmann2017()
@@ -63,7 +66,7 @@ def shaking(n=12, seed=7):
     return windowed_sines(n, seed)
 
 
-SPREAD = {  # the layout of scenarios.analysis.seed_spread after run.json
+SPREAD = {  # the layout of housner.scenarios.runs.spread.seed_spread after run.json
     "k": 3,
     "seeds": [1, 2, 3],
     "percentiles": {"25": [0.3, 0.35, 0.4], "50": [0.7, 0.75, 0.8], "75": ["inf", "inf", "inf"]},
@@ -222,7 +225,7 @@ def test_verdict_marks_failed_records(shaken):
     _, path, page = shaken
     # The flaky engine is the reference model itself, one record short: its KS distance to the reference
     # is at most 1/12 (one record moves an ECDF of 12 by 1/12), so it meets the KS tolerance; it still
-    # fails, because a failed record fails the verdict (as in reports.assertions).
+    # fails, because a failed record fails the verdict (as in housner.reports.assertions.runs).
     row = page.row("verdict", "report-flaky")
     assert float(row[2].split()[0]) <= 1 / 12 + 1e-9
     assert row[-1] == "FAIL"
@@ -388,7 +391,7 @@ def test_written_tables_from_any_engines(tmp_path, monkeypatch):
 
 def test_ensemble_spectra_get_the_prototype_motions(tmp_path, monkeypatch):
     """motions.npz holds model-scale motions; the spectra figure is given them back at prototype scale."""
-    from reports import ground_figures
+    from housner.reports.run import ground_figures
 
     S = 10.0
     model = [m.to_model_scale(S) for m in shaking(3)]
@@ -423,7 +426,7 @@ def test_missing_run_directory_names_the_path(tmp_path):
 
 
 def test_verdict_tolerances_are_those_of_the_assertions():
-    from reports.assertions import assert_cdf_agreement
+    from housner.reports.assertions.runs import assert_cdf_agreement
 
     params = inspect.signature(assert_cdf_agreement).parameters
     assert html.DEFAULT_KS_MAX == params["ks_max"].default
@@ -624,8 +627,8 @@ def test_cdf_legend_names_the_overturn_strip_and_the_line_at_one():
 # ----------------------------------------------------------------------------
 # Table 2: the gap to the paper and its measured cause
 def test_record_against_itself_is_the_median_with_the_same_spectrum():
-    from engines.analytic import HousnerEngine as Analytic
-    from scenarios.analysis import record_against_ensemble
+    from housner.engines.analytic import HousnerEngine as Analytic
+    from housner.scenarios.runs.spread import record_against_ensemble
 
     rec = shaking(1)[0]
     S = 10.0
@@ -678,9 +681,9 @@ def rdk_run(tmp_path_factory):
 
 
 def test_table2_states_the_records_own_peak_and_rank(rdk_run):
-    from engines.analytic import HousnerEngine as Analytic
-    from scenarios.elastic import ensemble_spectra, response_spectrum
-    from scenarios.records import RECORDS
+    from housner.engines.analytic import HousnerEngine as Analytic
+    from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
+    from housner.scenarios.motions.records import RECORDS
 
     out, model, S = rdk_run
     text = html.render_report(out)
@@ -703,7 +706,7 @@ def test_table2_states_the_records_own_peak_and_rank(rdk_run):
 
 
 def test_table2_gives_the_factors_that_reach_the_papers_percentiles(rdk_run):
-    from scenarios.analysis import equivalent_amplitude
+    from housner.scenarios.runs.spread import equivalent_amplitude
 
     out, model, S = rdk_run
     gap = html.render_report(out).split('id="table2-gap"')[1].split("</section>")[0]

@@ -6,11 +6,12 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from housner.engines.analytic import HousnerEngine
+from housner.engines.base import ENGINES, register_engine
+from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.runs.run import run_scenario
 
-from engines.analytic import HousnerEngine
-from engines.base import ENGINES, register_engine
 from housner import GroundMotion, Specimen
-from scenarios.runner import run_engines, run_scenario
 
 SPEC = Specimen.bachmann2017()
 
@@ -121,8 +122,8 @@ def test_run_scenario_writes_the_run_directory(tmp_path):
 # ----------------------------------------------------------------------------
 # cache integrity: every entry carries its key and a SHA-256 of its payload
 def _entry(cache_dir, motion):
-    from engines.base import get_engine
-    from scenarios.runner import cache_key
+    from housner.engines.base import get_engine
+    from housner.scenarios.execution.cache import cache_key
 
     eng = get_engine("housner")
     k = cache_key(SPEC, motion, "housner", eng.settings(), eng.version())
@@ -188,7 +189,8 @@ class NanEngine(HousnerEngine):
 
 
 def test_the_engine_base_checks_every_response_and_the_runner_keeps_the_others(tmp_path):
-    from engines.base import check_response
+    from housner.engines.base import check_response
+
     from housner.errors import EngineError
 
     ms = motions()

@@ -7,14 +7,14 @@ import math
 
 import numpy as np
 import pytest
+from housner.reports.assertions import assert_fragility_agreement
+from housner.reports.assertions.studies import FragilityAgreementError
+from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
+from housner.scenarios.motions.elastic import response_spectrum
+from housner.scenarios.studies.study import StudyResult, intensity_measure, load_study, run_study, study_motions
 from scipy.integrate import cumulative_trapezoid
 
 from housner import G, simulate
-from reports.assertions import assert_fragility_agreement
-from reports.study_assertions import FragilityAgreementError
-from scenarios.catalogue import ScenarioError, load_scenario
-from scenarios.elastic import response_spectrum
-from scenarios.study import StudyResult, intensity_measure, load_study, run_study, study_motions
 
 HEAD = """name = "tiny-study"
 [specimen]
@@ -89,7 +89,7 @@ def test_stripes_scale_each_motion_to_its_target_at_each_size(tmp_path):
                     if kind == "amplitude":
                         np.testing.assert_allclose(m.acc, level * b.acc, rtol=1e-12)
                         continue
-                    # each measure recomputed independently of scenarios.study
+                    # each measure recomputed independently of housner.scenarios.studies.study
                     if kind == "pga":
                         im = np.max(np.abs(m.acc)) / g_tan
                     elif kind == "pgv":
@@ -204,7 +204,7 @@ def test_fragility_assertion_reports_every_size_and_fails_honestly(tiny):
 
 
 def test_a_worker_that_dies_loses_one_record_labelled_and_the_study_goes_on(tmp_path, monkeypatch):
-    from scenarios.runner import CRASH_ENV
+    from housner.scenarios.execution.workers import CRASH_ENV
 
     p = scenario_file(tmp_path, "levels = [1.5, 3.0]\nprototype_heights = [2.5, 10.0]\nbootstrap = 100\n", n=5)
     monkeypatch.setenv(CRASH_ENV, "housner:6:SEGV")  # record 6 of each size's batch: stripe 1, motion 1
@@ -218,7 +218,7 @@ def test_a_worker_that_dies_loses_one_record_labelled_and_the_study_goes_on(tmp_
 
 
 def test_housner_run_on_a_study_prints_the_fits_and_writes_the_report(tmp_path, capsys):
-    from reports.cli import main
+    from housner.cli import main
 
     p = scenario_file(tmp_path, "levels = [1.5, 2.5, 4.0]\nbootstrap = 100\n", n=8)
     assert main(["run", str(p), "--out", str(tmp_path / "cli"), "-q", "--jobs", "1"]) == 0

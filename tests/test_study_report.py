@@ -1,4 +1,4 @@
-"""reports.study_report and reports.study_figures on small synthetic study directories of known fragility.
+"""housner.reports.study.page and housner.reports.study.figures on small synthetic study directories of known fragility.
 
 The directories follow the study format (study.json, fragility.parquet, exceedance.parquet,
 fragility.json, results.parquet): outcomes are drawn from lognormal capacities (seeded), the
@@ -18,15 +18,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from housner.reports.page import fmt_g, fmt_signed
+from housner.reports.study import figures as study_figures
+from housner.reports.study import page as study_report
+from housner.reports.study.page import DISAGREE, render_study_report, write_study_report
+from housner.scenarios.execution.rundir import jsonable
+from housner.scenarios.studies.fragility import exceedance, proportion_intervals
 from matplotlib.figure import Figure
 from scipy import stats as sps
 
 from housner.errors import DataFileError
-from reports import study_figures, study_report
-from reports.page import fmt_g, fmt_signed
-from reports.study_report import DISAGREE, render_study_report, write_study_report
-from scenarios.fragility import exceedance, proportion_intervals
-from scenarios.rundir import jsonable
 
 REF = "housner"
 LEVELS = (0.5, 0.8, 1.2, 1.8, 2.7)  # spans 5.4x: a log intensity axis
@@ -81,7 +82,7 @@ def comparison(engine: str, size: float, ratio=(1.02, 0.95, 1.10), diff=(0.01, -
         "beta_diff": diff[0],
         "diff_low": diff[1],
         "diff_high": diff[2],
-        # the runner's rule (scenarios.fragility.compare_fits): an interval excludes 1 or 0; NaN never disagrees
+        # the runner's rule (studies.fragility.compare_fits): an interval excludes 1 or 0; NaN never disagrees
         "disagree": bool(ratio[1] > 1 or ratio[2] < 1 or diff[1] > 0 or diff[2] < 0),
     }
 

@@ -198,7 +198,7 @@ def test_ground_motion_channels():
 
 
 def test_campaign_reads_extra_channels(tmp_path):
-    from scenarios.campaign import load_campaign
+    from housner.scenarios.campaigns.campaign import load_campaign
 
     info = ic.write_campaign(tmp_path / "c", "vertical_table_measured", n_ground=2, seed=3)
     camp = load_campaign(info["root"])
@@ -215,7 +215,7 @@ def test_campaign_reads_extra_channels(tmp_path):
 
 
 def test_a_missing_channel_is_refused_by_name_before_any_simulation(plugins, monkeypatch):
-    from engines.analytic import HousnerEngine
+    from housner.engines.analytic import HousnerEngine
 
     with_v = GroundMotion(np.zeros(50), DT, name="gm000", channels={"ground_acc_vertical": np.zeros(50)})
     without = GroundMotion(np.zeros(50), DT, name="gm001")
@@ -224,7 +224,7 @@ def test_a_missing_channel_is_refused_by_name_before_any_simulation(plugins, mon
     with pytest.raises(ValueError, match=re.escape(msg)):
         simulate_with_effects(SPEC, without, fx)
     calls = []
-    monkeypatch.setattr("engines.analytic.simulate_batch", lambda *a, **k: calls.append(1))
+    monkeypatch.setattr("housner.engines.analytic.simulate_batch", lambda *a, **k: calls.append(1))
     with pytest.raises(ValueError, match=re.escape(msg)):
         HousnerEngine().simulate_many(SPEC, [with_v, without], fx, errors="return")
     assert calls == []
@@ -254,8 +254,8 @@ def test_examples_are_short_and_documented():
 
 
 def test_the_analytic_engine_realises_term_effects_and_others_refuse_them(plugins):
-    from engines.analytic import HousnerEngine
-    from engines.base import engine_class
+    from housner.engines.analytic import HousnerEngine
+    from housner.engines.base import engine_class
 
     fx = [make_effect("pivot_friction", moment=0.05)]
     assert "pivot_friction" in HousnerEngine.effects_supported
@@ -392,10 +392,10 @@ def test_pivot_friction_composes_with_other_mechanics(plugins, combo):
 # ----------------------------------------------------------------------------
 # the examples fitted on campaigns written with their physics
 def _objective(camp, ids):
-    """Per-record time-history errors [alpha] (scenarios.history_error.scored_error, the diagnosis' measure) of
+    """Per-record time-history errors [alpha] (campaigns.history_error.scored_error, the diagnosis' measure) of
     an effect on the records ``ids``, whole records (the channels travel with them), and their noise [alpha]."""
-    from scenarios.compare import simulate_records
-    from scenarios.history_error import error_window, scored_error
+    from housner.scenarios.campaigns.compare import simulate_records
+    from housner.scenarios.campaigns.history_error import error_window, scored_error
 
     recs = [camp.record(i) for i in ids]
     ends = [error_window(r, ALPHA) for r in recs]
@@ -422,11 +422,11 @@ FITS = {
 
 @pytest.mark.parametrize("example", list(FITS))
 def test_example_fitted_on_its_campaign(plugins, base, example):
-    """Fit the example's parameter (scenarios.fitting.fit_effect: grid, zoom, Brent) on its independent
+    """Fit the example's parameter (campaigns.fitting.fit_effect: grid, zoom, Brent) on its independent
     campaign: it recovers the truth, and the error falls to the sensor noise (pivot friction: on the free
     vibrations, which the other two do not touch: there on the ground motions, median over the records)."""
-    from scenarios.campaign import load_campaign
-    from scenarios.fitting import fit_effect
+    from housner.scenarios.campaigns.campaign import load_campaign
+    from housner.scenarios.campaigns.fitting import fit_effect
 
     case, n_ground, key, truth, rel = FITS[example]
     camp = load_campaign(ic.cached_campaign(base, case, n_ground=n_ground, seed=0)["root"])

@@ -16,10 +16,10 @@ from pathlib import Path
 import campaign_generators as cg
 import numpy as np
 import pytest
+from housner.scenarios.campaigns.campaign import load_campaign
 
 from housner import DataFileError, GroundMotion
-from reports.cli import main
-from scenarios.campaign import load_campaign
+from housner.cli import main
 
 G0 = 9.80665  # standard gravity [m/s^2], by definition
 PER_UNIT = {  # value of one unit in SI
@@ -85,7 +85,8 @@ def test_at2_in_gal_is_not_read_as_g(tmp_path):
 
 
 def test_shipped_chopra_file_finds_g_in_its_free_text():
-    m = GroundMotion.from_at2(Path(__file__).resolve().parents[1] / "scenarios/data/elcentro_1940_ns_chopra_dt002.txt")
+    data = Path(__file__).resolve().parents[1] / "scenarios/catalogue/data"
+    m = GroundMotion.from_at2(data / "elcentro_1940_ns_chopra_dt002.txt")
     assert "g -> m/s^2" in m.provenance and "header line 5" in m.provenance  # "The units are (g)"
     assert m.pga / G0 == pytest.approx(0.31882, abs=5e-6)  # the file's largest |value| is 0.31882
 

@@ -1,4 +1,4 @@
-"""The diagnosis' verdict (scenarios.verdict): the measured correct-model floor, the residual test, and
+"""The diagnosis' verdict (campaigns.verdict): the measured correct-model floor, the residual test, and
 campaigns whose hidden effect is NOT in the effect library.
 
 The campaigns come from tests/campaign_generators.py (an integrator written apart from the library):
@@ -17,10 +17,9 @@ import math
 import campaign_generators as cg
 import numpy as np
 import pytest
-
-from scenarios.campaign import load_campaign
-from scenarios.diagnose import cv_folds, diagnose
-from scenarios.verdict import RATIO_MISFIT, STATUSES, Floor, decide, residual_test
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.diagnose import cv_folds, diagnose
+from housner.scenarios.campaigns.verdict import RATIO_MISFIT, STATUSES, Floor, decide, residual_test
 
 _CACHE: dict = {}
 
@@ -81,8 +80,9 @@ def test_residual_at_the_floor_is_no_misfit_and_twice_it_is():
 def test_the_floors_parameter_draws_stay_within_the_fold_fits():
     # a sliding block's mu fitted at 0.139 with a jackknife spread of 0.02: Gaussian draws would cross
     # tan(alpha) = 0.15 (where the block rocks) 29 % of the time; the folds chose 0.132-0.141
+    from housner.scenarios.campaigns.verdict import _perturbed
+
     from housner.specimen import Specimen
-    from scenarios.verdict import _perturbed
 
     spec = Specimen.bachmann2017()
     rng = np.random.default_rng(0)

@@ -183,7 +183,7 @@ class Effect:
     def measured_params(cls, metrics: dict, specimen: Specimen) -> dict | None:
         """Parameters a campaign's localisation measures directly, better than a fit to the histories can.
 
-        ``metrics`` maps the localisation quantities of :data:`scenarios.compare.METRICS` (for example
+        ``metrics`` maps the localisation quantities of :data:`housner.scenarios.campaigns.compare.METRICS` (for example
         ``"tilt_offset"``, the rotation read at rest [alpha]) to objects with ``value`` and ``se``.
         The diagnosis takes the parameters returned as measured and fits only the others. Default:
         None (every parameter is fitted within its bounds).
@@ -361,7 +361,7 @@ def load_plugin(path) -> tuple[str, ...]:
     PLUGIN_FILES[modname] = str(p)
     for n in names:
         # the code each class was loaded from, kept even once the file is reloaded: a result cache keys
-        # on it (scenarios.cache.effect_code_hash)
+        # on it (housner.scenarios.execution.cache.effect_code_hash)
         EFFECTS[n]._housner_code_hash = code_hash
     return names
 

@@ -103,7 +103,7 @@ class TimeLag(Effect):
     params = {"tau": ParamSpec("s", (-0.1, 0.1), 0.0, 0.0, "lag of the theta channel behind ground_acc")}
     stage = STAGE_SENSOR
     # a free vibration has no ground channel to lag behind, and a measured one starts at the release
-    # its theta channel shows (scenarios.campaign.estimate_release), which already carries the lag
+    # its theta channel shows (housner.scenarios.campaigns.campaign.estimate_release), which already carries the lag
     seen_in_free_vibration = False
     tau: float = 0.0
 

@@ -1,0 +1,142 @@
+"""The HTML report of a scenario run: one self-contained page, figures embedded.
+
+:func:`write_report` reads a run directory written by
+:func:`housner.scenarios.execution.rundir.write_run` (``results.parquet``, ``histories.parquet``,
+``motions.npz``, ``run.json``) and writes ``report.html`` next to it. The page
+needs no network: figures are base64 PNGs, the style sheet is inline, and there
+is no script.
+
+What it answers, top first: how far each engine is from the reference (the
+analytic Housner model) and how sure we are; then the specimen and engine
+settings, the ground motions, the distribution of theta_max/alpha (seed Fig. 10
+and Table 2), record-by-record agreement, rocking spectra for pulse scenarios,
+free rocking for release scenarios, failed records and provenance.
+
+All statistics come from :mod:`housner.stats`; theta_max/alpha is +inf for an
+overturned block and failed records are left out of every statistic (and
+listed).
+
+References
+----------
+Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
+(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from housner.reports.page import Section, document, engine_tag, esc, guarded, write_page
+from housner.reports.run.sections.agreement import _agreement, _free_vibration, _spectra
+from housner.reports.run.sections.distribution import _distribution
+from housner.reports.run.sections.ensemble import _ensemble
+from housner.reports.run.sections.headline import _headline, _specimen
+from housner.reports.run.sections.run_info import _failures, _provenance
+from housner.reports.run.view import DEFAULT_KS_MAX, DEFAULT_OVERTURN_TOL, RECORD_RTOL, Run
+from housner.scenarios.execution.rundir import REPORT_FILE
+
+__all__ = [
+    "DEFAULT_KS_MAX",
+    "DEFAULT_OVERTURN_TOL",
+    "RECORD_RTOL",
+    "render_report",
+    "write_report",
+]
+
+
+# ----------------------------------------------------------------------------
+# public API
+def render_report(run_dir: str | Path) -> str:
+    """The HTML report of a run directory, as a string.
+
+    Parameters
+    ----------
+    run_dir : str or pathlib.Path
+        Directory written by :func:`housner.scenarios.execution.rundir.write_run`; it must hold
+        ``results.parquet``; ``run.json``, ``motions.npz`` and
+        ``histories.parquet`` add sections when present.
+
+    Returns
+    -------
+    str
+        A complete HTML5 document with every figure embedded.
+
+    Raises
+    ------
+    housner.errors.DataFileError
+        When the directory or its results table is missing or unreadable.
+    """
+    t0 = time.perf_counter()
+    run = Run.load(run_dir)
+    sections = _build_sections(run)
+    return _page(run, sections, time.perf_counter() - t0)
+
+
+def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
+    """Write the HTML report of a run directory.
+
+    Parameters
+    ----------
+    run_dir : str or pathlib.Path
+        A run directory (see :func:`render_report`).
+    out : str or pathlib.Path, optional
+        File to write; default ``run_dir/report.html``.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    path = Path(out) if out is not None else Path(run_dir) / REPORT_FILE
+    return write_page(path, render_report(run_dir))
+
+
+# ----------------------------------------------------------------------------
+# the run directory
+
+
+# ----------------------------------------------------------------------------
+# HTML helpers
+
+
+# ----------------------------------------------------------------------------
+# sections
+def _build_sections(run: Run) -> list[Section]:
+    out = [
+        Section("verdict", "How far is each engine from the reference?", _headline(run)),
+        Section("specimen", "Specimen and engines", _specimen(run)),
+        Section("ensemble", "Ground motions", _ensemble(run)),
+        Section("distribution", "Distribution of the peak rotation", _distribution(run)),
+        Section("agreement", "Cross-engine agreement", _agreement(run)),
+    ]
+    if run.source == "pulses":
+        out.append(Section("rocking-spectra", "Rocking spectra", guarded("The rocking spectra", lambda: _spectra(run))))
+    if run.source == "free_vibration":
+        out.append(Section("free-vibration", "Free rocking", guarded("Free rocking", lambda: _free_vibration(run))))
+    out.append(Section("failures", "Failed records", _failures(run)))
+    out.append(Section("provenance", "Provenance", _provenance(run)))
+    return out
+
+
+# ----------------------------------------------------------------------------
+# the page
+
+
+def _page(run: Run, sections: list[Section], seconds: float) -> str:
+    scen = run.meta.get("scenario") or {}
+    name = scen.get("name") or run.path.name
+    spec = run.specimen.get("name", "")
+    n_motions = run.meta.get("n_motions", run.results["motion_id"].nunique())
+    created = (run.meta.get("provenance") or {}).get("created", "")
+    subtitle = (
+        f'<p class="sub">{esc(scen.get("description", ""))}</p>'
+        f'<p class="sub">{esc(spec)} &middot; {esc(n_motions)} motions &middot; engines '
+        f"{', '.join(engine_tag(e, run) for e in run.engines)} &middot; reference {esc(run.reference)}"
+        f"{' &middot; run ' + esc(created) if created else ''}</p>"
+    )
+    footer = (
+        f"Written by <code>housner.reports.run.write_report</code> from <code>{esc(run.path)}</code> "
+        f"in {seconds:.1f} s."
+    )
+    return document(f"{name}: housner report", f"Scenario <code>{esc(name)}</code>", subtitle, sections, footer)

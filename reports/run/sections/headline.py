@@ -1,0 +1,196 @@
+"""Report sections on the verdict and the specimen: how far each engine is from the reference, and with what.
+
+The headline gives each engine's PASS/FAIL against the default tolerances (the
+same as :func:`housner.reports.assertions.runs.assert_cdf_agreement`'s, so the page says what
+users' CI says) with the figures behind it, and for a scenario with effects how
+far they moved the distribution; the specimen section lists the geometry and
+every engine's settings.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from housner.reports.page import (
+    ci_cell,
+    engine_tag,
+    esc,
+    fmt_g,
+    fmt_num,
+    fmt_p,
+    fmt_signed,
+    guarded,
+    html_note,
+    html_table,
+    status_badge,
+)
+from housner.reports.run.sections.tuning import _settings_html, _tuning, _tuning_caveats
+from housner.reports.run.view import BOOT_SEED, DEFAULT_KS_MAX, DEFAULT_OVERTURN_TOL, N_BOOT, Run, _verdict
+
+from housner import stats
+from housner.units import G
+
+
+def _effect_series(run: Run) -> dict[str, str]:
+    """Series of the run that are an engine with the scenario's [[effects]]: series -> engine without them."""
+    info = run.meta.get("engines") or {}
+    return {n: str(v["engine"]) for n, v in info.items() if isinstance(v, dict) and v.get("effects") and "engine" in v}
+
+
+def _moved(run: Run, base: str, series: str) -> str:
+    """How an effect moves an engine's distribution: median, P[overturn] and KS distance, without -> with."""
+
+    a, b = run.values(base), run.values(series)
+    if not (a.size and b.size):
+        return "no usable records to compare"
+    ks = stats.ks_2samp(a, b)
+    med = [float(run.comparison.loc[n, "q50"]) for n in (base, series)]  # as in the table below
+    po = [float(np.mean(np.isinf(v))) for v in (a, b)]
+    return (
+        f"against {esc(base)} without the effects: median &theta;<sub>max</sub>/&alpha; {fmt_num(med[0], 3)} &rarr; "
+        f"{fmt_num(med[1], 3)}, P[overturn] {fmt_num(po[0], 2)} &rarr; {fmt_num(po[1], 2)}, KS distance "
+        f"{fmt_num(ks.distance, 3)} (p = {fmt_p(ks.pvalue)})"
+    )
+
+
+def _headline(run: Run) -> str:
+    cmp = run.comparison
+    ref = run.reference
+    parts = []
+    if not run.reference_is_requested:
+        want = (run.meta.get("analysis") or {}).get("reference") or "housner"
+        parts.append(
+            html_note(
+                f"The reference engine {esc(want)!s} is not in this run; {esc(ref)} stands in as the reference.", "warn"
+            )
+        )
+    # one line per engine, the answer first
+    lines = []
+    try:
+        caveats = _tuning_caveats(run)
+    except Exception as e:  # an unreadable tuning file must not lose the verdict; say so instead
+        caveats = {}
+        parts.append(
+            html_note(f"The tuning files could not be checked: <code>{esc(type(e).__name__)}: {esc(e)}</code>", "warn")
+        )
+    effects = _effect_series(run)
+    if effects:
+        label = esc((run.meta.get("effects") or {}).get("label", ""))
+        parts.append(
+            html_note(
+                f"This run adds physical effects (the scenario's <code>[[effects]]</code>): <strong>{label}</strong>. "
+                "Each series &ldquo;ENGINE + effects&rdquo; is that engine with them, beside the same engine "
+                "without them: an effect is meant to move the distribution, so it gets no pass or fail, only "
+                "how far it moves it."
+            )
+        )
+    for name in run.others:
+        row = cmp.loc[name]
+        if name in effects:
+            base = effects[name]
+            lines.append(
+                f'<li><span class="badge na">effect</span> {engine_tag(name, run)}: {_moved(run, base, name)}</li>'
+            )
+            continue
+        ok, reasons = _verdict(row)
+        extra = f'<div class="caveat">{caveats[name]}</div>' if name in caveats else ""
+        lines.append(f"<li>{status_badge(ok)} {engine_tag(name, run)}: {'; '.join(reasons)}{extra}</li>")
+    if lines:
+        parts.append(f'<ul class="verdicts">{"".join(lines)}</ul>')
+    else:
+        parts.append(html_note(f"Only one engine ({esc(ref)}) in this run: nothing to compare it with."))
+    header = [
+        "engine",
+        "records<br>ok / failed",
+        "KS distance<br>(p-value)",
+        "P[overturn]<br>[95 % CI]",
+        "&Delta;P[overturn]",
+        "median &theta;<sub>max</sub>/&alpha;<br>[90 % CI]",
+        "verdict",
+    ]
+    rows = []
+    for name in run.engines:
+        row = cmp.loc[name]
+        is_ref = name == ref
+        ok, _ = _verdict(row) if not is_ref else (None, [])
+        nf = int(row["n_failed"])
+        rows.append(
+            [
+                engine_tag(name, run) + (" <small>(reference)</small>" if is_ref else ""),
+                f"{int(row['n_ok'])} / " + (f'<span class="bad">{nf}</span>' if nf else "0"),
+                "&ndash;" if is_ref else f"{fmt_num(row['ks_distance'])} (p = {fmt_p(row['ks_pvalue'])})",
+                ci_cell(row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"], 2),
+                "&ndash;" if is_ref else fmt_signed(row["overturn_diff"], 3),
+                ci_cell(row["q50"], row["q50_low"], row["q50_high"], 3),
+                "reference"
+                if is_ref
+                else "effect"
+                if name in effects
+                else status_badge(ok) + (_caveat_mark(caveats[name]) if name in caveats else ""),
+            ]
+        )
+    parts.append(html_table(header, rows, cls="headline"))
+    n = int(cmp.loc[ref, "n_ok"]) if ref in cmp.index else 0
+    # Smirnov's asymptotic 5 % critical distance for two samples of n: sqrt(-ln(0.025) / 2) sqrt(2 / n).
+    crit = math.sqrt(-math.log(0.025) / 2.0) * math.sqrt(2.0 / n) if n else math.nan
+    parts.append(
+        html_note(
+            f"Pass means KS distance &le; {DEFAULT_KS_MAX}, |&Delta;P[overturn]| &le; {DEFAULT_OVERTURN_TOL} and no "
+            "failed record (the defaults of <code>housner.reports.assertions.runs.assert_cdf_agreement</code>). "
+            "P[overturn] intervals are Wilson score intervals; median intervals are percentile bootstraps "
+            f"({N_BOOT} resamples, seed {BOOT_SEED}). How sure: two <em>independent</em> ensembles of "
+            f"n = {n} records from one distribution differ by a KS distance above {fmt_num(crit, 2)} one time in "
+            "twenty; here every engine sees the very same motions, so engines that agree should sit well below "
+            "that, and the p-value (which assumes independent samples) is conservative."
+        )
+    )
+    return "".join(parts)
+
+
+def _caveat_mark(text: str) -> str:
+    n = text.count('class="bad"')
+    return f"<br><small>{n} tuning check{'s' if n != 1 else ''} not met (above)</small>" if n else ""
+
+
+_SPECIMEN_ROWS = {
+    "name": ("name", ""),
+    "height_m": ("height 2H", "m"),
+    "width_m": ("width 2B (between pivots)", "m"),
+    "depth_m": ("depth", "m"),
+    "mass_kg": ("mass m", "kg"),
+    "I0_kgm2": ("moment of inertia about a pivot I<sub>0</sub>", "kg m&sup2;"),
+    "alpha_rad": ("slenderness &alpha; = atan(B/H)", "rad"),
+    "R_m": ("semi-diagonal R", "m"),
+    "p_1_s": ("frequency parameter p = &radic;(m g R / I<sub>0</sub>)", "1/s"),
+    "r_housner": ("Housner's energy ratio r (seed eq. 4)", "&ndash;"),
+}
+
+
+def _specimen(run: Run) -> str:
+    spec = run.specimen
+    parts = []
+    if spec:
+        rows = []
+        for key, value in spec.items():
+            label, unit = _SPECIMEN_ROWS.get(key, (esc(key), ""))
+            cell = esc(value) if isinstance(value, str) else fmt_g(value, 6)
+            rows.append([label, cell, unit])
+        a = run.alpha
+        if math.isfinite(a):
+            rows.append(["&alpha; in degrees", f"{math.degrees(a):.4g}", "deg"])
+            rows.append(["uplift acceleration g tan &alpha;", f"{G * math.tan(a):.4g}", "m/s&sup2;"])
+        parts.append(html_table(["quantity", "value", "unit"], rows, cls="kv"))
+    else:
+        parts.append(html_note("run.json holds no specimen.", "warn"))
+    engines = run.meta.get("engines") or {}
+    rows = []
+    for name in run.engines:
+        info = engines.get(name, {})
+        settings = info.get("settings") or {}
+        sset = _settings_html(settings) or "defaults"
+        rows.append([engine_tag(name, run), esc(info.get("version", "")) or "&ndash;", sset])
+    parts.append("<h3>Engines</h3>")
+    parts.append(html_table(["engine", "version", "settings"], rows))
+    parts.append(guarded("The tuning summary", lambda: _tuning(run)))
+    return "".join(parts)

@@ -1,0 +1,381 @@
+"""Report section on the engines' tuning: the contact settings tuned to reproduce r, checked against the run's.
+
+Reads ``tuning-<engine>.json`` (written by ``housner tune``) from
+:data:`TUNING_DIR`: the energy ratio against release amplitude and time step,
+the free-rocking decay, the checks the tuner ran, and whether the run used the
+settings that were tuned (a caveat on the headline when not).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from housner.reports import figures
+from housner.reports.page import engine_tag, esc, fmt_g, fmt_num, html_figure, html_note, html_table, status_badge
+from housner.reports.run.view import DEFAULT_KS_MAX, Run, _verdict
+from housner.scenarios.execution.rundir import json_number
+
+#: Folder of the tuning results ``tuning-<engine>.json`` written by ``housner tune``;
+#: None means ``engines/models`` of the installed package.
+TUNING_DIR: Path | None = None
+
+
+def _tuning_caveats(run: Run) -> dict[str, str]:
+    """engine -> HTML: the tuning checks its tuning file did not meet, by how much, and what that means here."""
+    out = {}
+    cmp = run.comparison
+    for name, (f, d) in _tuning_data(run).items():
+        if name not in run.others or d.get("met") is not False:
+            continue
+        failed = [c for c in _tuning_checks(d) if not c.met]
+        if not failed:
+            continue
+        row = cmp.loc[name]
+        ok, _ = _verdict(row)
+        what = "; ".join(f'<span class="bad">{c.short}</span>' for c in failed)
+        text = f"Tuning not met (<code>{esc(f.name)}</code>, {esc(d.get('date', ''))}): {what}. "
+        names = {c.name for c in failed}
+        first_impact_ok = all(c.met for c in _tuning_checks(d) if c.name.startswith("r of the first impact"))
+        if any(n.startswith("free decay") for n in names) and first_impact_ok:
+            text += (
+                "The first-impact r is within tolerance at every amplitude checked, so the missing energy is lost "
+                "between impacts and piles up only over many small rockings (the measured cause is in "
+                "<code>engines/models/README.md</code>). "
+            )
+        decay = _frame(d, "decay_table")
+        small_limit = math.nan
+        if {"rel_error", "peak_analytic"} <= set(decay.columns):
+            from housner.engines.tuning import DECAY_RTOL
+
+            bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
+            if len(bad):
+                small_limit = float(bad["peak_analytic"].max())
+        ks = float(row["ks_distance"])
+        if ok:
+            text += (
+                f"It does not change this verdict, which is measured on this run's own motions (KS {ks:.3f} "
+                f"&le; {DEFAULT_KS_MAX}): a loss that mattered for them would show there"
+            )
+            if math.isfinite(small_limit):
+                v = run.values(run.reference)
+                k = int(np.sum(v <= small_limit))
+                text += (
+                    f"; the loss exceeds the tolerance at peaks of {small_limit:.3f} &alpha; and below, and "
+                    f"{k} of the {v.size} records peak there in the reference (smallest peak "
+                    f"{fmt_num(np.min(v) if v.size else math.nan, 3)} &alpha;)"
+                )
+            text += (
+                ". It does limit the engine where small free rocking matters (long free decays, motions that keep "
+                "the block rocking at a few hundredths of &alpha;): check such uses against the analytic model."
+            )
+        else:
+            text += "This run's verdict fails on its own criteria as well."
+        out[name] = text
+    return out
+
+
+def _settings_html(settings: dict) -> str:
+    """Engine settings one per line; None (the engine's default) is written as such."""
+    return "<br>".join(
+        f"<code>{esc(k)} = {'default' if v is None else esc(json.dumps(v))}</code>" for k, v in settings.items()
+    )
+
+
+def _tuning_file(engine: str) -> Path:
+    if TUNING_DIR is not None:
+        return Path(TUNING_DIR) / f"tuning-{engine}.json"
+    from housner import engines
+
+    return Path(engines.__file__).resolve().parent / "models" / f"tuning-{engine}.json"
+
+
+def _tuning_data(run: Run) -> dict[str, tuple[Path, dict]]:
+    """engine -> (file, parsed tuning-<engine>.json) for the run's engines that have one."""
+    found = {}
+    for name in run.engines:
+        f = _tuning_file(name)
+        if f.is_file():
+            try:
+                found[name] = (f, json.loads(f.read_text(encoding="utf-8")))
+            except (OSError, json.JSONDecodeError) as e:
+                found[name] = (f, {"error": f"cannot read: {e}"})
+    return found
+
+
+def _step_label(dt: float) -> str:
+    return f"{dt * 1e3:.3g} ms sampling" if math.isfinite(dt) else "sample step not recorded"
+
+
+@dataclass
+class _Check:
+    """One tuning check of a tuned engine, evaluated from its tuning file."""
+
+    name: str
+    measured: str  # HTML, the worst error and where it was measured
+    accepted: str  # HTML
+    met: bool
+    short: str  # HTML, one phrase for the verdict line: the worst error, where, and what is accepted
+
+
+def _frame(d: dict, key: str) -> pd.DataFrame:
+    t = d.get(key) or {}
+    try:
+        df = pd.DataFrame(t)
+    except ValueError:  # columns of different lengths: unusable
+        return pd.DataFrame()
+    if "dt" not in df.columns:
+        df["dt"] = math.nan
+    return df
+
+
+def _tuning_checks(d: dict) -> list[_Check]:
+    """The tuner's checks (``housner.engines.tuning``) re-evaluated from the tables of a tuning file.
+
+    Each check is judged with the tuner's own tolerances, so a check said "not met"
+    here is the one ``housner tune`` counted; tables absent from the file give no row.
+    """
+    from housner.engines.tuning import DECAY_RTOL, SMALL_WORST_FACTOR
+
+    rtol = json_number(d.get("rtol"))
+    out: list[_Check] = []
+
+    def worst_row(df: pd.DataFrame, col: str) -> pd.Series:
+        return df.iloc[int(np.argmax(np.abs(df[col].to_numpy(float))))]
+
+    table = _frame(d, "table")
+    target = json_number(d.get("target_r"))
+    if "rel_error" not in table.columns and "r_engine" in table.columns and math.isfinite(target):
+        table["rel_error"] = table["r_engine"].astype(float) / target - 1.0  # files older than the error column
+    if {"amplitude", "rel_error"} <= set(table.columns) and len(table):
+        w = worst_row(table, "rel_error")
+        amps = table["amplitude"].to_numpy(float)
+        rng = f"{amps.min():g}-{amps.max():g} &alpha;"
+        ok = abs(w.rel_error) <= rtol
+        out.append(
+            _Check(
+                f"r of the first impact, {rng}",
+                f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); "
+                f"mean {table['rel_error'].mean():+.2%}",
+                f"&plusmn;{rtol:.2%}",
+                bool(ok),
+                f"r at {rng} worst {w.rel_error:+.2%} (accepted &plusmn;{rtol:.2%})",
+            )
+        )
+    small = _frame(d, "small_table")
+    if {"amplitude", "rel_error"} <= set(small.columns) and len(small):
+        w = worst_row(small, "rel_error")
+        means = small.groupby("dt", dropna=False, sort=False)["rel_error"].mean()
+        m = float(means.iloc[int(np.argmax(np.abs(means.to_numpy(float))))])
+        amps = small["amplitude"].to_numpy(float)
+        rng = f"{amps.min():g}-{amps.max():g} &alpha;"
+        tol_w = SMALL_WORST_FACTOR * rtol
+        ok = abs(w.rel_error) <= tol_w and abs(m) <= rtol
+        out.append(
+            _Check(
+                f"r of the first impact, {rng}",
+                f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); worst mean {m:+.2%}",
+                f"worst &plusmn;{tol_w:.2%}, mean &plusmn;{rtol:.2%}",
+                bool(ok),
+                f"r at {rng} worst {w.rel_error:+.2%}, mean {m:+.2%} (accepted &plusmn;{tol_w:.2%} and "
+                f"&plusmn;{rtol:.2%})",
+            )
+        )
+    decay = _frame(d, "decay_table")
+    if {"impacts", "rel_error", "peak_engine", "peak_analytic"} <= set(decay.columns) and len(decay):
+        w = worst_row(decay, "rel_error")
+        bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
+        where = ""
+        if len(bad):
+            where = (
+                f"; beyond the tolerance from {int(bad['impacts'].min())} impacts on, i.e. at peaks of "
+                f"{bad['peak_analytic'].max():.3f} &alpha; and below"
+            )
+        out.append(
+            _Check(
+                "free decay: peaks after " + ", ".join(str(int(k)) for k in sorted(set(decay["impacts"]))) + " impacts",
+                f"worst {w.rel_error:+.1%} after {int(w.impacts)} impacts ({w.peak_engine:.4f} &alpha; against "
+                f"{w.peak_analytic:.4f} &alpha;, {_step_label(w['dt'])}){where}",
+                f"&plusmn;{DECAY_RTOL:.0%}",
+                bool(abs(w.rel_error) <= DECAY_RTOL),
+                f"a free decay's peak after {int(w.impacts)} impacts is {w.rel_error:+.1%} off the analytic "
+                f"{w.peak_analytic:.4f} &alpha; ({_step_label(w['dt'])}; accepted &plusmn;{DECAY_RTOL:.0%})",
+            )
+        )
+    pulses = _frame(d, "pulse_table")
+    if {"rel_error", "theta_max_rel_error", "theta_max_rtol"} <= set(pulses.columns) and len(pulses):
+        w = worst_row(pulses, "rel_error")
+        scaled = np.abs(pulses["theta_max_rel_error"].to_numpy(float)) / pulses["theta_max_rtol"].to_numpy(float)
+        k = int(np.argmax(scaled))
+        wt = pulses.iloc[k]
+        ok = abs(w.rel_error) <= rtol and scaled[k] <= 1.0
+        n = pulses["pulse"].nunique() if "pulse" in pulses.columns else len(pulses)
+        out.append(
+            _Check(
+                f"{n} one-sine pulses: first peak and &theta;<sub>max</sub>",
+                f"first peak worst {w.rel_error:+.2%}; &theta;<sub>max</sub> worst {wt.theta_max_rel_error:+.2%} "
+                f"({esc(wt.get('pulse', ''))}, {_step_label(wt['dt'])})",
+                f"first peak &plusmn;{rtol:.2%}; &theta;<sub>max</sub> &plusmn;"
+                + ", &plusmn;".join(f"{x:.2%}" for x in sorted(set(pulses["theta_max_rtol"]))),
+                bool(ok),
+                f"pulse &theta;<sub>max</sub> worst {wt.theta_max_rel_error:+.2%} "
+                f"(accepted &plusmn;{wt.theta_max_rtol:.2%})",
+            )
+        )
+    return out
+
+
+def _tuning_series(d: dict) -> tuple[dict, dict]:
+    """r against amplitude per sample step (large and small amplitudes joined), and decay errors per step."""
+    parts = [t for t in (_frame(d, "small_table"), _frame(d, "table")) if {"amplitude", "r_engine"} <= set(t.columns)]
+    curves: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    if parts:
+        both = pd.concat(parts, ignore_index=True)
+        for dt, g in both.groupby("dt", dropna=False, sort=False):
+            g = g.sort_values("amplitude", kind="stable")
+            curves[_step_label(float(dt)) if math.isfinite(float(dt)) else ""] = (
+                g["amplitude"].to_numpy(float),
+                g["r_engine"].to_numpy(float),
+            )
+    decay = _frame(d, "decay_table")
+    dec: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    if {"impacts", "rel_error"} <= set(decay.columns):
+        for dt, g in decay.groupby("dt", dropna=False, sort=False):
+            g = g.sort_values("impacts", kind="stable")
+            dec[_step_label(float(dt)) if math.isfinite(float(dt)) else ""] = (
+                g["impacts"].to_numpy(float),
+                g["rel_error"].to_numpy(float),
+            )
+    return curves, dec
+
+
+def _settings_differ(tuned: dict, used: dict) -> list[str]:
+    """Settings where the run differs from the tuning file (keys the run sets); empty when it runs as tuned."""
+
+    def norm(v):
+        return json.loads(json.dumps(v))
+
+    return [k for k, v in used.items() if k in tuned and norm(tuned[k]) != norm(v)]
+
+
+def _engine_defaults(name: str) -> dict:
+    """The registered engine's DEFAULTS, or none for an engine the registry does not know."""
+    try:
+        from housner.engines.base import engine_class
+
+        return dict(getattr(engine_class(name), "DEFAULTS", {}) or {})
+    except (ValueError, ImportError):  # an unknown or unloadable engine: compare only what the file has
+        return {}
+
+
+def _tuning(run: Run) -> str:
+    """Tuned contact checks and r against amplitude, from housner.engines/models/tuning-<engine>.json when present."""
+    found = _tuning_data(run)
+    if not found:
+        return html_note(
+            "No tuning results (engines/models/tuning-&lt;engine&gt;.json) for these engines: "
+            "they run with the settings above. <code>housner tune ENGINE</code> finds contact settings that "
+            "reproduce a target r."
+        )
+    from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR
+
+    parts = ["<h3>Tuned contact parameters</h3>"]
+    rows = []
+    curves, decays = {}, {}
+    target = rtol = None
+    engines = run.meta.get("engines") or {}
+    for name, (f, d) in found.items():
+        if "error" in d and len(d) == 1:
+            rows.append([engine_tag(name, run), f"<code>{esc(f.name)}</code>: {esc(d['error'])}", "", "", "", ""])
+            continue
+        tuned = d.get("settings") or {}
+        used = (engines.get(name) or {}).get("settings") or {}
+        # a setting the file lacks did not exist when it was written: the engine's default keeps the
+        # behaviour of that time (e.g. impact_energy_factor 1)
+        tuned = {**_engine_defaults(name), **tuned}
+        differ = _settings_differ(tuned, used)
+        if not used:
+            same = f"{_settings_html(tuned) or '&ndash;'}<br><small>(the run recorded no settings)</small>"
+        elif differ:
+            same = '<span class="bad">the run differs:</span><br>' + "<br>".join(
+                f"<code>{esc(k)}</code>: tuned {esc(json.dumps(tuned[k]))}, run {esc(json.dumps(used[k]))}"
+                for k in differ
+            )
+        else:
+            same = "the run's settings (above)"
+        checks = _tuning_checks(d)
+        met = d.get("met")
+        check_cells = "<br>".join(
+            f'<span class="{"ok" if c.met else "bad"}">{"met" if c.met else "NOT MET"}</span>: {c.name}: '
+            f"{c.measured} <span class=muted>(accepted {c.accepted})</span>"
+            for c in checks
+        )
+        rows.append(
+            [
+                engine_tag(name, run),
+                same,
+                fmt_g(d.get("target_r"), 5),
+                check_cells or "&ndash;",
+                status_badge(bool(met), "MET", "NOT MET") if met is not None else "&ndash;",
+                f"{esc(d.get('date', ''))}, version {esc(d.get('version', ''))}",
+            ]
+        )
+        c, dec = _tuning_series(d)
+        if not c:  # older files: one table without sample steps
+            table = d.get("table") or {}
+            amp, r = table.get("amplitude"), table.get("r_engine")
+            if isinstance(amp, list) and isinstance(r, list) and len(amp) == len(r) and amp:
+                c = {"": (np.array([json_number(x) for x in amp]), np.array([json_number(x) for x in r]))}
+        if c:
+            curves[name] = c
+        if dec:
+            decays[name] = dec
+        t = json_number(d.get("target_r"))
+        if math.isfinite(t):
+            target = t
+        if math.isfinite(json_number(d.get("rtol"))):
+            rtol = json_number(d.get("rtol"))
+    parts.append(
+        html_table(
+            ["engine", "tuned settings", "target r", "the tuner's checks (worst case)", "verdict", "tuned on"],
+            rows,
+            caption="Contact settings chosen by <code>housner tune</code> so that free rocking loses the target "
+            "energy per impact at every release amplitude, and each of its checks against the analytic model "
+            "re-read from <code>engines/models/tuning-&lt;engine&gt;.json</code>. &ldquo;NOT MET&rdquo; means at "
+            "least one check is outside its tolerance; what that means for this run is said under the verdict at "
+            "the top.",
+        )
+    )
+    if curves:
+        bands = []
+        if rtol is not None:
+            amps = [a for c in curves.values() for a, _ in c.values()]
+            lo = min(float(np.nanmin(a)) for a in amps)
+            bands = [(0.2, 0.9, rtol)]
+            if lo < 0.2:
+                bands.insert(0, (lo, 0.2, SMALL_WORST_FACTOR * rtol))
+        fig = figures.plot_tuning(
+            curves,
+            target_r=target,
+            bands=bands,
+            decay=decays or None,
+            decay_rtol=DECAY_RTOL,
+            decay_start=DECAY_START,
+            colors=run.colors,
+        )
+        parts.append(
+            html_figure(
+                fig,
+                "Left: energy ratio r of the first impact after a release from rest against the release amplitude, "
+                "one line per engine and sample step, with the accepted band around the target. A flat line on the "
+                "target means the contact dissipates like Housner's impact at every amplitude; a trend means its "
+                "losses depend on the impact velocity. Right: a free decay, the engine's peak after 10-40 impacts "
+                "against the exact sequence; energy lost between impacts accumulates here.",
+                "r against amplitude for the tuned engines, and the free-decay check",
+            )
+        )
+    return "".join(parts)

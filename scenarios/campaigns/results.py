@@ -1,0 +1,432 @@
+"""The diagnosis' results: candidates, the error ladder and the whole diagnosis, as text and JSON.
+
+:class:`Diagnosis` is what :func:`housner.scenarios.campaigns.diagnose.diagnose` returns; its
+:meth:`Diagnosis.to_json` is strict JSON (NaN and infinities written as null).
+Errors are time-history errors in units of alpha (see :mod:`housner.scenarios.campaigns.compare`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from housner.scenarios.campaigns.campaign import Campaign
+from housner.scenarios.campaigns.compare import Comparison
+from housner.scenarios.execution.rundir import jsonable
+
+__all__ = ["Candidate", "Diagnosis", "Step", "change_text", "fmt_pm", "params_text", "signed_words"]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate effect, fitted on the training records and scored on the held-out ones.
+
+    Attributes
+    ----------
+    effect : str
+        Registered name.
+    params : dict
+        Fitted parameters (units of the effect's ParamSpec).
+    base : tuple of str
+        Effects already in the model it was added to.
+    round : int
+        Greedy round (1 = against the starting model).
+    train_error : float
+        Mean training error [alpha].
+    heldout_error, heldout_se : float
+        Mean held-out error [alpha] and its standard error.
+    improvement, improvement_se : float
+        Mean paired held-out improvement over the model it was added to [alpha], and its standard error.
+    z : float
+        improvement / improvement_se.
+    pvalue : float
+        One-sided Wilcoxon signed-rank p-value of the paired held-out differences.
+    significant : bool
+        See the module docstring (p-value below the Bonferroni level and improvement above the noise floor).
+    reason : str
+        Why it is (not) significant, in words.
+    heldout_errors : ndarray
+        Per record, out of fold [alpha] (None when not held out).
+    fold_wins : ndarray
+        Per fold: mean improvement on that fold's records [alpha] (None when not held out).
+    """
+
+    effect: str
+    params: dict
+    base: tuple
+    round: int
+    train_error: float
+    heldout_error: float
+    heldout_se: float
+    improvement: float
+    improvement_se: float
+    z: float
+    pvalue: float
+    significant: bool
+    reason: str
+    heldout_errors: np.ndarray = field(repr=False, compare=False, default=None)
+    fold_wins: np.ndarray = field(repr=False, compare=False, default=None)
+
+    def to_dict(self) -> dict:
+        return {
+            "effect": self.effect,
+            "params": _clean(self.params),
+            "base": list(self.base),
+            "round": self.round,
+            "train_error": self.train_error,
+            "heldout_error": self.heldout_error,
+            "heldout_se": self.heldout_se,
+            "improvement": self.improvement,
+            "improvement_se": self.improvement_se,
+            "z": self.z,
+            "pvalue": self.pvalue,
+            "significant": self.significant,
+            "reason": self.reason,
+            "fold_improvements": None if self.fold_wins is None else [float(x) for x in self.fold_wins],
+        }
+
+
+@dataclass(frozen=True)
+class Step:
+    """One rung of the error ladder: the model with the effects so far.
+
+    Attributes
+    ----------
+    effects : tuple of (str, dict)
+        (name, fitted parameters) of each effect in the model, in the order added.
+    added : str or None
+        The effect this step added (None for the baseline); two effects that
+        only help together enter in one step, written ``"a + b"``.
+    by_hand : bool
+        Added with ``add`` rather than by the greedy search.
+    train_error, heldout_error, heldout_se : float
+        [alpha].
+    improvement, improvement_se : float
+        Mean paired held-out improvement over the previous step [alpha] (NaN for the baseline).
+    significant : bool
+    heldout_errors : ndarray
+        Per held-out record [alpha].
+    comparison : Comparison or None
+        The full comparison of this model with the campaign (localisation included).
+    """
+
+    effects: tuple
+    added: str | None
+    by_hand: bool
+    train_error: float
+    heldout_error: float
+    heldout_se: float
+    improvement: float
+    improvement_se: float
+    significant: bool
+    heldout_errors: np.ndarray = field(repr=False, compare=False, default=None)
+    comparison: Comparison | None = field(repr=False, compare=False, default=None)
+
+    @property
+    def names(self) -> list[str]:
+        return [n for n, _p in self.effects]
+
+    @property
+    def added_names(self) -> tuple[str, ...]:
+        """The registered names of the effect(s) this step added."""
+        return tuple(self.added.split(" + ")) if self.added else ()
+
+    def label(self) -> str:
+        return "Housner (baseline)" if not self.effects else " + ".join(self.names)
+
+    def to_dict(self) -> dict:
+        return {
+            "effects": [{"name": n, "params": _clean(p)} for n, p in self.effects],
+            "added": self.added,
+            "by_hand": self.by_hand,
+            "train_error": self.train_error,
+            "heldout_error": self.heldout_error,
+            "heldout_se": self.heldout_se,
+            "improvement": _nan_none(self.improvement),
+            "improvement_se": _nan_none(self.improvement_se),
+            "significant": self.significant,
+        }
+
+
+@dataclass(eq=False)
+class Diagnosis:
+    """The result of :func:`diagnose`.
+
+    Attributes
+    ----------
+    campaign : Campaign
+    baseline : Step
+        The plain Housner model.
+    steps : list of Step
+        The error ladder: baseline, then each added effect.
+    candidates : list of Candidate
+        The first round: every candidate against the starting model, best first.
+    rounds : list of list of Candidate
+        Every greedy round, each best first.
+    selected : list of str
+        Effects the greedy search added (after the hand-added ones).
+    added : list of str
+        Effects added by hand.
+    noise_floor : float
+        Mean sigma/alpha of the records [-]: the sensor noise alone (the verdict uses the measured
+        correct-model floor, ``floors``).
+    test_level : float
+        The per-test significance level of the first round, ``level`` / candidates [-].
+    train_ids, heldout_ids : list of str
+        Every record (cross-validation: each trains in K - 1 folds and is held out in one).
+    settings : dict
+    folds : list of list of str
+        Record ids of each fold.
+    verdict : housner.scenarios.campaigns.verdict.Verdict
+    floors : (Floor, Floor)
+        The measured correct-model floor of the plain and of the final model.
+    selection_frequency : dict
+        Effect -> share of the folds in which it was the best candidate of its round [-].
+    elapsed : float
+        Wall time [s].
+    """
+
+    campaign: Campaign
+    baseline: Step
+    steps: list[Step]
+    candidates: list[Candidate]
+    rounds: list[list[Candidate]]
+    selected: list[str]
+    added: list[str]
+    noise_floor: float
+    test_level: float
+    train_ids: list[str]
+    heldout_ids: list[str]
+    settings: dict
+    folds: list = field(default_factory=list)
+    verdict: Any = None
+    floors: tuple = ()
+    selection_frequency: dict = field(default_factory=dict)
+    elapsed: float = math.nan
+
+    @property
+    def status(self) -> str:
+        """The verdict's status (see :data:`housner.scenarios.campaigns.verdict.STATUSES`)."""
+        return self.verdict.status if self.verdict is not None else "inconclusive"
+
+    @property
+    def final(self) -> Step:
+        return self.steps[-1]
+
+    @property
+    def reduction(self) -> float:
+        """Fraction of the baseline held-out error removed by the final model [-]."""
+        b = self.baseline.heldout_error
+        return (b - self.final.heldout_error) / b if b > 0 else 0.0
+
+    def summary(self) -> str:
+        """One paragraph: the verdict in words, then the ladder with its figures.
+
+        Every error is in units of alpha with its standard error (:func:`fmt_pm`); a change is said as
+        "falls by" or "rises by" with a positive figure, and a parameter carries its unit.
+        """
+        parts = [self.verdict.text if self.verdict is not None else ""]
+        chosen = self.steps[1:]
+        if chosen:
+            ladder = []
+            for st in chosen:
+                prm = "; ".join(params_text(n, dict(st.effects)[n]) for n in st.added_names)
+                how = " (by hand)" if st.by_hand else ""
+                ladder.append(
+                    f"+ {st.added}{how} ({prm}): held-out error {fmt_pm(st.heldout_error, st.heldout_se)} alpha, "
+                    f"which {change_text(st.improvement, st.improvement_se)} alpha"
+                    f"{'' if st.significant else ', not significant'}"
+                )
+            parts.append("Ladder: " + "; ".join(ladder) + ".")
+            b, f = self.baseline, self.final
+            verb = "falls" if self.reduction >= 0 else "rises"
+            parts.append(
+                f"In all the held-out error {verb} by {abs(100 * self.reduction):.0f} %, from "
+                f"{fmt_pm(b.heldout_error, b.heldout_se)} to {fmt_pm(f.heldout_error, f.heldout_se)} alpha."
+            )
+        elif self.candidates:
+            best = self.candidates[0]
+            if math.isfinite(best.improvement):
+                verb = "lower" if best.improvement >= 0 else "raise"
+                parts.append(
+                    f"The best candidate, {best.effect}, would {verb} the held-out error by "
+                    f"{fmt_pm(abs(best.improvement), best.improvement_se)} alpha ({signed_words(best.reason)})."
+                )
+        k = self.settings.get("folds", "?")
+        parts.append(f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha "
+                     f"{self.noise_floor:.2g}.)")  # fmt: skip
+        return " ".join(p for p in parts if p)
+
+    def to_dict(self) -> dict:
+        """Plain data for JSON: baseline, candidates, selected, final, ladder, rounds, settings."""
+
+        def err(step: Step) -> dict:
+            return {
+                "heldout_error": step.heldout_error,
+                "heldout_se": step.heldout_se,
+                "train_error": step.train_error,
+                "noise_floor": self.noise_floor,
+                "effects": [{"name": n, "params": _clean(p)} for n, p in step.effects],
+            }
+
+        return {
+            "campaign": self.campaign.name,
+            "baseline": err(self.baseline),
+            "candidates": [c.to_dict() for c in self.candidates],
+            "selected": list(self.selected),
+            "added": list(self.added),
+            "final": {**err(self.final), "reduction": self.reduction},
+            "ladder": [s.to_dict() for s in self.steps],
+            "rounds": [[c.to_dict() for c in r] for r in self.rounds],
+            "test_level": self.test_level,
+            "train_ids": list(self.train_ids),
+            "heldout_ids": list(self.heldout_ids),
+            "skipped": [list(s) for s in self.campaign.skipped],
+            "settings": self.settings,
+            "folds": [list(f) for f in self.folds],
+            "selection_frequency": dict(self.selection_frequency),
+            "verdict": None if self.verdict is None else self.verdict.to_dict(),
+            "floor": None if not self.floors else {"baseline": _floor(self.floors[0]), "final": _floor(self.floors[1])},
+            "localisation": {
+                "baseline": self.baseline.comparison.summary() if self.baseline.comparison is not None else None,
+                "final": self.final.comparison.summary() if self.final.comparison is not None else None,
+            },
+            "summary": self.summary(),
+            "elapsed_s": self.elapsed,
+        }
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """The JSON text of :meth:`to_dict`; also written to ``path`` when given."""
+        text = json.dumps(jsonable(self.to_dict(), nonfinite="null"), indent=2, allow_nan=False)
+        if path is not None:
+            Path(path).write_text(text + "\n")
+        return text
+
+
+def _floor(f) -> dict:
+    """A verdict ``Floor`` as plain data: per-record floor [alpha], perturbation, replicas."""
+    return {"per_record": [float(x) for x in f.mean], "perturbation": f.perturbation, "replicas": f.n_replicas}
+
+
+def _fmt_num(v: float) -> str:
+    return f"{v:.4g}"
+
+
+# ----------------------------------------------------------------------------
+# numbers in words (the summary here, the page in housner.reports.diagnosis)
+def fmt_pm(value, se, *, sep: str = " +- ", inf: str = "overturned", nan: str = "n/a") -> str:
+    """A value with its standard error: the error to 2 significant digits, the value to the same decimal place.
+
+    ``fmt_pm(0.0031234, 0.000423)`` is ``"0.00312 +- 0.00042"``, ``fmt_pm(123.4, 15.6)`` is ``"123 +- 16"``.
+    An infinite value (a theta_max/alpha of an overturned block) is written ``inf`` (``"overturned"``, or
+    ``"-inf"`` when negative) without an uncertainty; a missing value is ``nan``; a value whose
+    standard error is missing or infinite is written to 4 significant digits alone, and one with a
+    zero standard error to 4 significant digits ``+- 0``.
+
+    Parameters
+    ----------
+    value, se : float
+    sep : str
+        Between the two (``" &plusmn; "`` on an HTML page).
+    inf, nan : str
+        What an infinite and a missing value read as.
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return nan
+    if math.isnan(v):
+        return nan
+    if math.isinf(v):
+        return inf if v > 0 else "-inf"
+    try:
+        e = abs(float(se))
+    except (TypeError, ValueError):
+        e = math.nan
+    if not math.isfinite(e):
+        return _sig(v, 4)
+    if e == 0.0:
+        return f"{_sig(v, 4)}{sep}0"
+    decimals = 1 - math.floor(math.log10(e))  # 2 significant digits of the error
+    if math.floor(math.log10(round(e, decimals))) > math.floor(math.log10(e)):  # 0.000996 -> 0.0010
+        decimals -= 1
+    if decimals > 12:  # too small for fixed notation to stay readable
+        return f"{v:.3e}{sep}{e:.1e}"
+    return f"{_fixed(v, decimals)}{sep}{_fixed(e, decimals)}"
+
+
+def _fixed(v: float, decimals: int) -> str:
+    r = round(v, decimals)
+    if r == 0:
+        r = 0.0  # no "-0.000"
+    return f"{r:.{max(decimals, 0)}f}"
+
+
+def _sig(v: float, digits: int) -> str:
+    """``v`` to ``digits`` significant digits in fixed notation where that stays short."""
+    if v == 0:
+        return "0"
+    if not 1e-4 <= abs(v) < 1e6:
+        return f"{v:.{digits - 1}e}"
+    return _fixed(v, max(digits - 1 - math.floor(math.log10(abs(v))), 0))
+
+
+def change_text(improvement: float, se: float, *, sep: str = " +- ") -> str:
+    """A paired improvement (previous error minus this one) in words: ``"falls by X +- s"`` or ``"rises by X +- s"``.
+
+    The figure is always positive: an error that grows "rises by 0.05", never "falls by -0.05".
+    """
+    try:
+        d = float(improvement)
+    except (TypeError, ValueError):
+        d = math.nan
+    if not math.isfinite(d):
+        return "does not change measurably"
+    return f"{'falls' if d >= 0 else 'rises'} by {fmt_pm(abs(d), se, sep=sep)}"
+
+
+_NUM = r"(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)"
+_FALLS = re.compile(r"\bfalls by ([-+])" + _NUM)
+_LOWERS = re.compile(r"\blowers (the [\w ]+?) by ([-+])" + _NUM)
+
+
+def signed_words(text: str) -> str:
+    """Rewrite signed changes in words: "falls by -0.05" -> "rises by 0.05", "falls by +0.05" -> "falls by 0.05".
+
+    For the reasons the search gives (:mod:`housner.scenarios.campaigns.diagnose`), written with a sign.
+    """
+    text = _FALLS.sub(lambda m: f"{'rises' if m.group(1) == '-' else 'falls'} by {m.group(2)}", text)
+    return _LOWERS.sub(lambda m: f"{'raises' if m.group(2) == '-' else 'lowers'} {m.group(1)} by {m.group(3)}", text)
+
+
+def param_unit(name: str, key: str) -> str:
+    """The unit of parameter ``key`` of effect ``name`` (its ParamSpec's), "" when unknown."""
+    try:
+        from housner.effects import effect_class
+
+        return effect_class(name).params[key].unit
+    except (KeyError, ValueError, AttributeError):
+        return ""
+
+
+def params_text(name: str, params: dict, *, digits: int = 4) -> str:
+    """``"c = 0.5999 1/s"``: an effect's fitted parameters with their units ([-] when dimensionless)."""
+    out = []
+    for k, v in params.items():
+        unit = param_unit(name, k)
+        unit = "[-]" if unit in ("-", "") else unit
+        out.append(f"{k} = {_sig(float(v), digits) if math.isfinite(float(v)) else v} {unit}")
+    return ", ".join(out)
+
+
+def _nan_none(v: float):
+    return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v
+
+
+def _clean(params: dict) -> dict:
+    return {k: _nan_none(float(v)) for k, v in params.items()}

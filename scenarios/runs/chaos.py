@@ -1,0 +1,319 @@
+"""The chaos floor: how well the analytic model agrees with itself, record by record, when nudged.
+
+Rocking under a long random record is sensitive to small perturbations
+(Bachmann et al. 2017, Fig. 9): two models that differ by a tenth of a percent
+in r drift apart after a few dozen impacts. So an engine's record-by-record
+agreement with the analytic model cannot be judged against 100 %. The chaos
+floor is the agreement to expect from chaos alone: the analytic model run on
+the same motions with its r perturbed by the engine's *measured* r error, and
+its p by the engine's measured p error, each in both directions, and compared
+with itself by the same rule (:func:`housner.stats.per_record_agreement`).
+
+An engine whose agreement reaches the floor (within the binomial uncertainty
+of its own share) disagrees record by record no more than its measured
+contact error explains; one below it has a difference beyond that error: a
+forcing, uplift or contact effect the free-rocking measurement does not see.
+
+The engine's errors are measured on free rocking (:func:`measure_engine_errors`):
+releases from rest at :data:`RELEASE_AMPLITUDES`, sampled at the ensemble's
+step; r from the first impact (seed eq. 8) against the analytic model's r
+measured from its own samples in the same way, p from the time to the first
+impact against the exact quarter period of Housner's equation.
+
+References
+----------
+Bachmann, J. A. et al. (2017). COMPDYN 2017, eq. 8 and Fig. 9.
+Yim, C.-S., Chopra, A. K. and Penzien, J. (1980). Rocking response of rigid
+blocks to earthquakes. Earthquake Engineering & Structural Dynamics 8, 565-587.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from housner.engines.base import RECORD_ERRORS, Engine, get_engine
+from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
+from housner.motion import GroundMotion
+from housner.specimen import Specimen
+from housner.stats import overturn_probability, per_record_agreement
+
+__all__ = [
+    "RELEASE_AMPLITUDES",
+    "ChaosFloor",
+    "EngineErrors",
+    "chaos_floor",
+    "errors_from_dict",
+    "floor_verdict",
+    "measure_engine_errors",
+    "rms",
+    "run_engine_errors",
+]
+
+#: Release amplitudes theta0 / alpha [-] of the free-rocking measurement: the range where the
+#: tuner checks r (0.2-0.9 alpha), five points so that a step-phase scatter averages out.
+RELEASE_AMPLITUDES = (0.2, 0.35, 0.5, 0.65, 0.8)
+
+
+@dataclass(frozen=True)
+class EngineErrors:
+    """An engine's measured free-rocking errors against the analytic model.
+
+    Attributes
+    ----------
+    engine : str
+    amplitudes : tuple of float
+        Release amplitudes theta0 / alpha [-].
+    r_rel_errors : tuple of float
+        r_engine / r_reference - 1 at each amplitude [-] (NaN where not measurable).
+    p_rel_errors : tuple of float
+        p_engine / p - 1 at each amplitude [-], from the time to the first impact.
+    dt : float
+        Sample step of the measurement [s] (the ensemble's).
+    """
+
+    engine: str
+    amplitudes: tuple
+    r_rel_errors: tuple
+    p_rel_errors: tuple
+    dt: float
+
+    @property
+    def eps_r(self) -> float:
+        """Root mean square of the r errors [-]: the size of the engine's error per impact."""
+        return rms(self.r_rel_errors)
+
+    @property
+    def eps_p(self) -> float:
+        """Root mean square of the p errors [-]."""
+        return rms(self.p_rel_errors)
+
+
+def rms(x) -> float:
+    """Root mean square of the finite values of ``x`` [same unit]; NaN when none is finite."""
+    v = np.asarray(x, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(np.sqrt(np.mean(v**2))) if v.size else math.nan
+
+
+def measure_engine_errors(
+    engine: Engine,
+    specimen: Specimen,
+    *,
+    r_reference: float | None = None,
+    dt: float = 1e-3,
+    amplitudes: Sequence[float] = RELEASE_AMPLITUDES,
+) -> EngineErrors:
+    """Measure an engine's r and p errors on free rocking.
+
+    Parameters
+    ----------
+    engine : Engine
+        The engine, with the settings it runs the ensemble with.
+    specimen : Specimen
+    r_reference : float, optional
+        The r the engine should reproduce [-] (default: Housner's, ``specimen.r_housner``).
+    dt : float
+        Sample step [s] of the releases (use the ensemble's: the engines cut it into their steps).
+    amplitudes : sequence of float
+        Release amplitudes theta0 / alpha [-], each in (0, 1).
+
+    Returns
+    -------
+    EngineErrors
+    """
+    r_ref = specimen.r_housner if r_reference is None else float(r_reference)
+    reference = get_engine("housner", r=r_ref)
+    r_err, p_err = [], []
+    for a in amplitudes:
+        th0 = float(a) * specimen.alpha
+        quarter = free_rocking_quarter_period(specimen, th0)
+        # two quarter periods of this amplitude and the next half-cycle's rise, plus margin
+        duration = 5.0 * quarter + 0.05
+        release = GroundMotion.free_vibration(th0, duration, dt=dt, name=f"release {a:g}")
+        res = engine.simulate(specimen, release)
+        # against the analytic model measured the same way: the peaks read from samples carry an error
+        # of their own at small amplitudes (1.5 % at 0.01 alpha with 1 ms samples), the same for both
+        r_meas = first_impact_ratio(reference.simulate(specimen, release), specimen.alpha)
+        r_err.append(first_impact_ratio(res, specimen.alpha) / r_meas - 1.0)
+        t1 = res.impact_times[0] if len(res.impact_times) else math.nan
+        p_err.append(quarter / t1 - 1.0 if t1 > 0 else math.nan)
+    return EngineErrors(engine.name, tuple(float(a) for a in amplitudes), tuple(r_err), tuple(p_err), float(dt))
+
+
+def run_engine_errors(
+    specimen: Specimen, engines: dict[str, dict], motions: Sequence[GroundMotion], reference: str = "housner"
+) -> dict[str, dict]:
+    """Every engine's measured free-rocking errors for a run, as plain data for run.json.
+
+    Parameters
+    ----------
+    specimen : Specimen
+    engines : dict
+        Engine name -> its settings, as the run used them. Only when the
+        reference is the analytic model (``"housner"``) is there a floor to
+        compute: otherwise the result is empty.
+    motions : sequence of GroundMotion
+        The ensemble; its median sample step is the measurement's.
+    reference : str
+        The run's reference engine.
+
+    Returns
+    -------
+    dict
+        Engine name -> ``{"amplitudes", "r_rel_errors", "p_rel_errors", "eps_r", "eps_p", "dt", "r_reference"}``,
+        or ``{"error": message}`` for an engine that failed the measurement.
+    """
+    if reference != "housner" or reference not in engines or not motions:
+        return {}
+    r_ref = engines[reference].get("r") or specimen.r_housner
+    dt = float(np.median([m.dt for m in motions]))
+    out: dict[str, dict] = {}
+    for name, settings in engines.items():
+        if name == reference:
+            continue
+        try:
+            err = measure_engine_errors(get_engine(name, **settings), specimen, r_reference=r_ref, dt=dt)
+        except RECORD_ERRORS as e:
+            out[name] = {"error": f"{type(e).__name__}: {e}"}
+            continue
+        out[name] = {**asdict(err), "eps_r": err.eps_r, "eps_p": err.eps_p, "r_reference": float(r_ref)}
+    return out
+
+
+def errors_from_dict(d: dict) -> EngineErrors:
+    """The :class:`EngineErrors` stored by :func:`run_engine_errors`."""
+    return EngineErrors(
+        d["engine"], tuple(d["amplitudes"]), tuple(d["r_rel_errors"]), tuple(d["p_rel_errors"]), float(d["dt"])
+    )
+
+
+@dataclass(frozen=True)
+class ChaosFloor:
+    """Self-agreement of the analytic model under an engine's measured errors.
+
+    Attributes
+    ----------
+    engine : str
+        The engine whose errors set the perturbation.
+    eps_r, eps_p : float
+        The relative perturbations of r and p [-] (the engine's RMS errors).
+    shares : dict
+        Per perturbation ("r+", "r-", "p+", "p-"): the share of records on
+        which the perturbed analytic model agrees with the unperturbed one [-].
+    verdict_shares : dict
+        The same for the overturn verdict alone [-].
+    share : float
+        The floor: the mean of ``shares`` [-].
+    share_min, share_max : float
+        The lowest and highest of ``shares`` [-].
+    n : int
+        Records compared.
+    """
+
+    engine: str
+    eps_r: float
+    eps_p: float
+    shares: dict
+    verdict_shares: dict
+    share: float
+    share_min: float
+    share_max: float
+    n: int
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def chaos_floor(
+    specimen: Specimen,
+    motions: Sequence[GroundMotion],
+    errors: EngineErrors,
+    *,
+    r: float | None = None,
+    rtol: float = 0.1,
+    atol: float = 0.05,
+) -> ChaosFloor:
+    """The analytic model's record-by-record agreement with itself under an engine's errors.
+
+    Parameters
+    ----------
+    specimen : Specimen
+    motions : sequence of GroundMotion
+        The ensemble (the same motions the engines ran).
+    errors : EngineErrors
+        The engine's measured errors (:func:`measure_engine_errors`).
+    r : float, optional
+        The analytic model's r [-] (default: Housner's).
+    rtol, atol : float
+        Agreement tolerances of :func:`housner.stats.per_record_agreement`
+        (use the same as for the engine's own agreement).
+
+    Returns
+    -------
+    ChaosFloor
+    """
+    r0 = specimen.r_housner if r is None else float(r)
+
+    def theta(spec: Specimen, rr: float) -> np.ndarray:
+        out = get_engine("housner", r=rr).simulate_many(spec, motions)
+        return np.array([resp.theta_max_over_alpha for resp in out], dtype=float)
+
+    base = theta(specimen, r0)
+    shares, verdicts = {}, {}
+    for label, eps in (("r", errors.eps_r), ("p", errors.eps_p)):
+        if not (math.isfinite(eps) and eps > 0):
+            continue
+        for sign, tag in ((1.0, "+"), (-1.0, "-")):
+            if label == "r":
+                rr = min(r0 * (1.0 + sign * eps), 1.0)
+                got = theta(specimen, rr)
+            else:
+                got = theta(specimen.with_p(specimen.p * (1.0 + sign * eps)), r0)
+            ag = per_record_agreement(got, base, rtol=rtol, atol=atol)
+            shares[label + tag] = ag.share
+            verdicts[label + tag] = ag.verdict_share
+    vals = list(shares.values()) or [1.0]
+    return ChaosFloor(
+        engine=errors.engine,
+        eps_r=errors.eps_r,
+        eps_p=errors.eps_p,
+        shares=shares,
+        verdict_shares=verdicts,
+        share=float(np.mean(vals)),
+        share_min=float(min(vals)),
+        share_max=float(max(vals)),
+        n=int(base.size),
+    )
+
+
+def floor_verdict(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) -> str:
+    """One sentence: is an engine's record-by-record agreement at the chaos floor or below it?
+
+    The engine's share gets a Wilson interval; it is "at the chaos floor" when
+    that interval reaches the lowest perturbed share, "below the chaos floor"
+    otherwise (a difference its measured r and p errors do not explain).
+
+    Parameters
+    ----------
+    n_agree, n : int
+        Records on which the engine agrees with the analytic model, and records compared.
+    floor : ChaosFloor
+    ci : float
+        Confidence level of the interval [-].
+    """
+    if n <= 0:
+        return "no paired records"
+    est = overturn_probability(np.arange(n) < n_agree, ci=ci, method="wilson")
+    lo, hi = floor.share_min, floor.share_max
+    span = f"{lo:.0%}" if lo == hi else f"{lo:.0%}-{hi:.0%}"
+    head = (
+        f"agreement {n_agree / n:.0%} [{est.low:.0%}, {est.high:.0%}] against a chaos floor of {floor.share:.0%} "
+        f"({span}; analytic model with r x (1 +- {floor.eps_r:.2%}), p x (1 +- {floor.eps_p:.2%}))"
+    )
+    if est.high >= floor.share_min:
+        return head + ": at the floor, record-by-record differences no larger than its measured r and p errors give"
+    return head + ": below the floor, a difference beyond its measured r and p errors"

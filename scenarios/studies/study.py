@@ -1,0 +1,602 @@
+"""Studies: one ensemble at intensity stripes and structure sizes, on every engine, to fragility curves.
+
+A scenario with a ``[study]`` table is a study::
+
+    [study]
+    intensity = "amplitude"          # or "pga", "pgv", "sa" (then `period`, prototype s)
+    levels = [0.5, 0.75, 1.0, 1.5]   # amplitude factors, or target values of the intensity measure
+    prototype_heights = [2.5, 5, 10] # m; or S = [...] (prototype / model size ratios)
+    thresholds = [0.5, 0.8, 1.0]     # theta_max / alpha levels of the exceedance curves
+    bootstrap = 1000                 # resamples of the motions for the intervals
+    seed = 0                         # of the bootstrap
+    histories = false                # keep theta histories (memory grows with the records)
+
+Each (size, stripe, motion) is one record, run on every engine through the shared
+runner (:func:`housner.scenarios.execution.runner.run_engines`: its cache, process pool or Dask
+cluster, fault tolerance), one size after another so that memory stays flat,
+under one progress bar. The sizes change the time scale: a prototype S times
+larger than the model is seen by the model with its time compressed by sqrt(S)
+(seed eq. 9), so the scenario's motions (built at its own S0) are stretched by
+sqrt(S0 / S). A stripe scales every motion by the same amplitude factor
+(``intensity = "amplitude"``), or each motion to the stripe's value of a
+dimensionless intensity measure at that size:
+
+* ``pga``: PGA / (g tan alpha), the uplift threshold's multiple;
+* ``pgv``: PGV p / (g tan alpha), with p the model's frequency parameter and PGV
+  that of the model-scale motion (the same number as the prototype's PGV and p);
+* ``sa``: Sa(T, 5 %) / (g tan alpha), T = ``period`` at prototype scale (T / sqrt(S)
+  at model scale; Sa is unchanged by the time scaling).
+
+The analysis (:mod:`housner.scenarios.studies.fragility`): per engine and size, P[overturn] per
+stripe with Wilson intervals, a lognormal fragility fitted by maximum likelihood
+(Baker 2015, multiple-stripe analysis) with bootstrap intervals over the motions,
+the engines' median ratio and beta difference to the reference with paired
+bootstrap intervals, and exceedance curves of theta_max / alpha.
+
+This module owns the study directory: ``results.parquet`` (every record),
+``fragility.parquet``, ``exceedance.parquet``, ``fragility.json``, ``study.json``
+(and ``report.html``, written by :mod:`housner.reports.study.page`).
+
+References
+----------
+Baker, J. W. (2015). Efficient analytical fragility function fitting using dynamic
+structural analysis. Earthquake Spectra 31(1), 579-599.
+Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
+model. COMPDYN 2017, section 4 and eq. 9 (time scaling by sqrt(S)).
+Dimitrakopoulos, E. G. & DeJong, M. J. (2012). Revisiting the rocking block:
+closed-form solutions and similarity laws. Proc. R. Soc. A 468, 2294-2318.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from housner.motion import GroundMotion
+from housner.units import G
+
+__all__ = [
+    "INTENSITIES",
+    "STUDY_FILES",
+    "Study",
+    "StudyResult",
+    "intensity_measure",
+    "load_study",
+    "read_study",
+    "compare_ci",
+    "run_study",
+    "study_motions",
+]
+
+#: Intensity measures of a study's stripes: name -> label (dimensionless).
+INTENSITIES = {
+    "amplitude": "amplitude factor on the ensemble [-]",
+    "pga": "PGA / (g tan alpha) [-]",
+    "pgv": "PGV p / (g tan alpha) [-]",
+    "sa": "Sa(T, 5 %) / (g tan alpha) [-]",
+}
+
+#: The files of a study directory, owned by this module (the report is written by housner.reports.study.page).
+STUDY_FILES = ("results.parquet", "fragility.parquet", "exceedance.parquet", "fragility.json", "study.json",
+               "report.html")  # fmt: skip
+RESULTS_FILE, FRAGILITY_FILE, EXCEEDANCE_FILE, FITS_FILE, STUDY_FILE, REPORT_FILE = STUDY_FILES
+
+#: Motion sources a study can scale (ground motions; not free vibration or pulse grids).
+_SOURCES = ("rdk", "record", "records")
+
+#: Columns of results.parquet.
+RESULT_COLUMNS = ["engine", "size", "S", "stripe", "intensity", "motion_id", "motion_name", "amplitude_factor",
+                  "theta_max_over_alpha", "overturned", "n_impacts", "wall_s", "status", "error", "cached"]  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Study:
+    """The ``[study]`` table of a scenario.
+
+    Attributes
+    ----------
+    intensity : str
+        A key of :data:`INTENSITIES`.
+    levels : tuple of float
+        The stripes: amplitude factors [-] or target values of the intensity measure [-], increasing.
+    S : tuple of float
+        Size ratios prototype / model [-], one per size, increasing.
+    prototype_heights : tuple of float
+        The same sizes as prototype heights [m] (S times the model's height).
+    thresholds : tuple of float
+        theta_max / alpha levels of the exceedance curves [-].
+    period : float or None
+        T [s] at prototype scale of ``intensity = "sa"``.
+    n_boot : int
+        Bootstrap resamples of the motions.
+    seed : int
+        Seed of the bootstrap.
+    histories : bool
+        Keep the records' theta histories in memory (off: memory stays flat).
+    ci : float
+        Confidence level of every interval.
+    """
+
+    intensity: str
+    levels: tuple[float, ...]
+    S: tuple[float, ...]
+    prototype_heights: tuple[float, ...]
+    thresholds: tuple[float, ...] = (0.5, 0.8, 1.0)
+    period: float | None = None
+    n_boot: int = 1000
+    seed: int = 0
+    histories: bool = False
+    ci: float = 0.95
+
+    @property
+    def label(self) -> str:
+        """The intensity measure's axis label."""
+        label = INTENSITIES[self.intensity]
+        return label.replace("T,", f"T = {self.period:g} s,") if self.intensity == "sa" else label
+
+    def describe(self) -> dict:
+        """Plain data for study.json."""
+        return {
+            "intensity": self.intensity,
+            "intensity_label": self.label,
+            "levels": list(self.levels),
+            "S": list(self.S),
+            "prototype_heights": list(self.prototype_heights),
+            "thresholds": list(self.thresholds),
+            "period": self.period,
+            "n_boot": self.n_boot,
+            "seed": self.seed,
+            "histories": self.histories,
+            "ci": self.ci,
+        }
+
+
+def _positive_list(f, key: str, value: Any, *, increasing: bool = True) -> tuple[float, ...]:
+    """A non-empty list of positive finite numbers (sorted, distinct when ``increasing``), or a ScenarioError."""
+    ok = isinstance(value, list) and value and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in value
+    )
+    if not ok:
+        raise f.error("study", key, f"[study] {key!r} must be a non-empty list of positive numbers, got {value!r}")
+    out = tuple(float(v) for v in value)
+    if increasing and any(b <= a for a, b in zip(out, out[1:], strict=False)):
+        raise f.error("study", key, f"[study] {key!r} must increase (each value once), got {value!r}")
+    return out
+
+
+def read_study(f, table: dict, motions: dict, specimen, S0: float) -> Study:
+    """Check a scenario's ``[study]`` table (types already checked by the schema) and build the :class:`Study`.
+
+    Parameters
+    ----------
+    f : housner.scenarios.catalogue.schema._File
+        The scenario file (messages name it, the key and its line).
+    table : dict
+        The ``[study]`` table.
+    motions : dict
+        The ``[motions]`` table (the source must be ground motions).
+    specimen : Specimen
+        The model (its height turns S into prototype heights).
+    S0 : float
+        The scenario's own size ratio [-] (the default size).
+    """
+    src = motions.get("source")
+    if src not in _SOURCES:
+        raise f.error("motions", "source", f"a [study] scales ground motions: [motions] source must be one of "
+                      f"{', '.join(_SOURCES)}, got {src!r}")  # fmt: skip
+    intensity = table.get("intensity", "amplitude")
+    if intensity not in INTENSITIES:
+        from housner.errors import unknown_choice
+
+        raise f.error("study", "intensity", f"[study] {unknown_choice('intensity', intensity, INTENSITIES)}")
+    if "levels" not in table:
+        raise f.error("study", None, "[study] needs `levels` (the stripes: amplitude factors or intensity values)")
+    levels = _positive_list(f, "levels", table["levels"])
+    period = table.get("period")
+    if intensity == "sa":
+        if period is None or not period > 0:
+            msg = f'[study] intensity "sa" needs `period` > 0 [s, prototype scale], got {period!r}'
+            raise f.error("study", "period" if period is not None else None, msg)
+        period = float(period)
+    elif period is not None:
+        raise f.error("study", "period", f"[study] `period` belongs to intensity \"sa\", not {intensity!r}")
+    if "prototype_heights" in table and "S" in table:
+        raise f.error("study", "S", "[study] give the sizes as `prototype_heights` or as `S`, not both")
+    if "prototype_heights" in table:
+        heights = _positive_list(f, "prototype_heights", table["prototype_heights"])
+        sizes = tuple(h / specimen.height for h in heights)
+    elif "S" in table:
+        sizes = _positive_list(f, "S", table["S"])
+    else:
+        sizes = (float(S0),)
+    thresholds = _positive_list(f, "thresholds", table.get("thresholds", [0.5, 0.8, 1.0]))
+    n_boot = table.get("bootstrap", 1000)
+    if not 100 <= n_boot <= 100_000:
+        raise f.error("study", "bootstrap", f"[study] `bootstrap` must lie in [100, 100000], got {n_boot!r}")
+    seed = table.get("seed", 0)
+    if seed < 0:
+        raise f.error("study", "seed", f"[study] `seed` must be a non-negative integer, got {seed!r}")
+    return Study(
+        intensity=intensity,
+        levels=levels,
+        S=sizes,
+        prototype_heights=tuple(s * specimen.height for s in sizes),
+        thresholds=thresholds,
+        period=period,
+        n_boot=int(n_boot),
+        seed=int(seed),
+        histories=bool(table.get("histories", False)),
+    )
+
+
+# --------------------------------------------------------------------------
+def intensity_measure(motion: GroundMotion, kind: str, specimen, period: float | None = None) -> float:
+    """A model-scale motion's dimensionless intensity [-] (see the module notes).
+
+    Parameters
+    ----------
+    motion : GroundMotion
+        At model scale.
+    kind : {"pga", "pgv", "sa"}
+    specimen : Specimen
+        alpha [rad] and p [1/s].
+    period : float, optional
+        T [s] at model scale for "sa".
+    """
+    a = np.asarray(motion.acc, dtype=float)
+    g_tan = G * math.tan(specimen.alpha)
+    if kind == "pga":
+        return float(np.max(np.abs(a))) / g_tan
+    if kind == "pgv":
+        v = np.concatenate(([0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * motion.dt)))  # exact for linear ug''
+        return float(np.max(np.abs(v))) * specimen.frequency_parameter / g_tan
+    if kind == "sa":
+        from housner.scenarios.motions.elastic import response_spectrum
+
+        psa, _ = response_spectrum(motion, [period], 0.05)
+        return float(psa[0]) / g_tan
+    raise ValueError(f"`kind` must be one of pga, pgv, sa, got {kind!r}")
+
+
+def study_motions(study: Study, base: list[GroundMotion], S0: float, size: int, specimen) -> tuple[list, np.ndarray]:
+    """The records of one size: every stripe of every motion, stripe-major.
+
+    Parameters
+    ----------
+    study : Study
+    base : list of GroundMotion
+        The scenario's motions at model scale for its own size ratio ``S0``.
+    S0 : float
+        The size ratio [-] ``base`` was built for.
+    size : int
+        Index into ``study.S``.
+    specimen : Specimen
+
+    Returns
+    -------
+    motions : list of GroundMotion
+        Record ``j * len(base) + i`` is motion i at stripe j.
+    factors : ndarray
+        (stripes, motions) amplitude factors applied [-].
+    """
+    S = study.S[size]
+    stretch = math.sqrt(S0 / S)
+    at_size = [m.scaled(time=stretch) if stretch != 1.0 else m for m in base]
+    levels = np.asarray(study.levels)
+    if study.intensity == "amplitude":
+        factors = np.repeat(levels[:, None], len(base), axis=1)
+    else:
+        period = study.period / math.sqrt(S) if study.period is not None else None
+        im = np.array([intensity_measure(m, study.intensity, specimen, period) for m in at_size])
+        if not np.all(im > 0):
+            bad = int(np.flatnonzero(~(im > 0))[0])
+            raise ValueError(f"motion {base[bad].name!r} has no {study.intensity} (zero): it cannot be scaled")
+        factors = levels[:, None] / im[None, :]
+    out = []
+    for j in range(len(levels)):
+        for i, m in enumerate(at_size):
+            f = float(factors[j, i])
+            out.append(m.scaled(amplitude=f, name=f"{base[i].name} S={S:g} x{f:.4g}"))
+    return out, factors
+
+
+# --------------------------------------------------------------------------
+@dataclass
+class StudyResult:
+    """What :func:`run_study` returns (and :func:`load_study` reads back).
+
+    Attributes
+    ----------
+    results : DataFrame
+        One row per (engine, size, stripe, motion): :data:`RESULT_COLUMNS`.
+    fragility : DataFrame
+        Per (engine, size, stripe): engine, size [m], S, stripe, intensity, n, n_overturned, p, p_low, p_high.
+    exceedance : DataFrame
+        Per (engine, size, stripe, threshold): ..., threshold, n, k, p, p_low, p_high.
+    fits : list of dict
+        Per (engine, size): median, beta and their intervals, status, message.
+    comparisons : list of dict
+        Per (engine, size) against the reference: median ratio, beta difference, intervals, disagree.
+    meta : dict
+        study.json.
+    out : Path or None
+        The study directory.
+    """
+
+    results: pd.DataFrame
+    fragility: pd.DataFrame
+    exceedance: pd.DataFrame
+    fits: list[dict]
+    comparisons: list[dict]
+    meta: dict
+    out: Path | None = None
+    histories: dict = field(default_factory=dict, repr=False)
+
+    def fit(self, engine: str, size: float | None = None) -> dict:
+        """The fit of ``engine`` at prototype height ``size`` [m] (the only size when omitted)."""
+        return _pick(self.fits, engine, size, "fit")
+
+    def comparison(self, engine: str, size: float | None = None) -> dict:
+        """The comparison of ``engine`` with the reference at prototype height ``size`` [m]."""
+        return _pick(self.comparisons, engine, size, "comparison")
+
+
+def _pick(rows: list[dict], engine: str, size: float | None, what: str) -> dict:
+    mine = [r for r in rows if r["engine"] == engine]
+    if not mine:
+        have = sorted({r["engine"] for r in rows})
+        raise ValueError(f"no {what} for engine {engine!r} (engines: {', '.join(have) or 'none'})")
+    sizes = sorted({r["size"] for r in mine})
+    if size is None:
+        if len(sizes) > 1:
+            raise ValueError(f"`size` is needed: the study has prototype heights {sizes} m")
+        return mine[0]
+    hit = [r for r in mine if math.isclose(r["size"], float(size), rel_tol=1e-9)]
+    if not hit:
+        raise ValueError(f"no {what} for engine {engine!r} at size {size!r} m (sizes: {sizes})")
+    return hit[0]
+
+
+def run_study(
+    scenario,
+    *,
+    engines: list[str] | None = None,
+    n_motions: int | None = None,
+    seed: int | None = None,
+    out: str | Path | None = None,
+    jobs: int | None = None,
+    scheduler: str | Any | None = None,
+    cache_dir: Path | None = None,
+    use_cache: bool = True,
+    progress: bool = True,
+) -> StudyResult:
+    """Run a scenario's ``[study]``: every (engine, size, stripe, motion), then the fragility analysis.
+
+    Parameters
+    ----------
+    scenario : Scenario or str or Path
+        A loaded scenario with a ``[study]`` table, a catalogue name or a TOML file.
+    engines, n_motions, seed, out, jobs, scheduler, cache_dir, use_cache, progress
+        As :func:`housner.scenarios.runs.run.run_scenario`; ``out`` defaults to ``runs/<scenario>``.
+
+    Returns
+    -------
+    StudyResult
+        Also written to ``out`` (see the module notes).
+    """
+    from housner.scenarios.catalogue.scenario import Scenario, load_scenario
+    from housner.scenarios.execution.outputs import check_output_dir
+    from housner.scenarios.execution.rundir import provenance
+    from housner.scenarios.execution.runner import run_engines
+    from housner.scenarios.execution.workers import _Progress
+
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    study = scenario.study
+    if study is None:
+        raise ValueError(f"scenario {scenario.name!r} has no [study] table")
+    names = list(engines) if engines else list(scenario.engines)
+    scenario.check_engines(names)
+    out = Path(out) if out else Path("runs") / scenario.name
+    check_output_dir(out, "study directory", files=STUDY_FILES)
+    t0 = time.perf_counter()
+    base, mmeta = scenario.build_motions(n_motions, seed=seed)
+    n = len(base)
+    eng_settings = {e: dict(scenario.engine_settings.get(e, {})) for e in names}
+    total = len(names) * n * len(study.levels) * len(study.S)
+    how = "on the Dask cluster" if scheduler is not None else ("in this process" if jobs == 1 else "worker processes")
+    bar = _Progress(total, progress, f"{len(study.S)} sizes x {len(study.levels)} stripes x {n} motions, {how}")
+    parts, info, hist = [], {}, {}
+    try:
+        for k, S in enumerate(study.S):
+            motions, factors = study_motions(study, base, scenario.S, k, scenario.specimen)
+            res, h, inf = run_engines(scenario.specimen, motions, eng_settings, jobs=jobs, scheduler=scheduler,
+                                      cache_dir=cache_dir, use_cache=use_cache, progress=bar,
+                                      effects=scenario.effects, histories=study.histories)  # fmt: skip
+            idx = res["motion_id"].to_numpy()
+            stripe, motion_id = idx // n, idx % n
+            parts.append(
+                res.assign(
+                    size=study.prototype_heights[k],
+                    S=S,
+                    stripe=stripe,
+                    intensity=np.asarray(study.levels)[stripe],
+                    motion_id=motion_id,
+                    motion_name=[base[i].name for i in motion_id],
+                    amplitude_factor=factors[stripe, motion_id],
+                )[RESULT_COLUMNS]
+            )
+            for e, v in inf.items():
+                tot = info.setdefault(e, {"settings": v["settings"], "version": v["version"], "wall_s": 0.0,
+                                          "cached": 0, "worker_deaths": 0})  # fmt: skip
+                tot["wall_s"] += v["wall_s"]
+                tot["cached"] += v["cached"]
+                tot["worker_deaths"] += v.get("worker_deaths", 0)
+            if study.histories:
+                hist.update({(e, k, i): th for (e, i), th in h.items()})
+            del motions, res, h
+    finally:
+        bar.close()
+    results = pd.concat(parts, ignore_index=True)
+    reference = str(scenario.analysis.get("reference", "housner"))
+    analysis = analyse(results, study, names, reference)
+    meta = {
+        "scenario": scenario.describe(),
+        "specimen": scenario.specimen.describe(),
+        "motions": mmeta,
+        "study": {**study.describe(), "n_motions": n, "reference": reference, "compare_ci": compare_ci(study.ci)},
+        "engines": info,
+        "n_records": int(len(results)),
+        "n_failed": int((results["status"] != "ok").sum()),
+        "wall_s": time.perf_counter() - t0,
+        "provenance": provenance(),
+    }
+    result = StudyResult(results, analysis["fragility"], analysis["exceedance"], analysis["fits"],
+                         analysis["comparisons"], meta, out, hist)  # fmt: skip
+    write_study(out, result)
+    return result
+
+
+def _matrices(results: pd.DataFrame, engine: str, size: float, n_stripes: int) -> tuple[np.ndarray, np.ndarray]:
+    """(motions, stripes) theta_max / alpha (inf: overturned, NaN: failed) and the valid mask of one engine and size."""
+    d = results[(results["engine"] == engine) & (results["size"] == size)]
+    n = int(d["motion_id"].max()) + 1 if len(d) else 0
+    th = np.full((n, n_stripes), np.nan)
+    ok = (d["status"] == "ok").to_numpy()
+    v = np.where(d["overturned"].to_numpy(bool), np.inf, d["theta_max_over_alpha"].to_numpy(float))
+    th[d["motion_id"].to_numpy()[ok], d["stripe"].to_numpy()[ok]] = v[ok]
+    return th, ~np.isnan(th)
+
+
+#: The numbers of a fit (NaN when there is none).
+_FIT_NUMBERS = ("median", "median_low", "median_high", "beta", "beta_low", "beta_high")
+
+
+def _caveat(fit, im: np.ndarray) -> str:
+    """What a reader must know of an ok fit: a median outside the stripes is an extrapolation ("" if none)."""
+    if fit.status != "ok" or not math.isfinite(fit.median):
+        return ""
+    if fit.median > im.max() or fit.median < im.min():
+        side = "above the highest" if fit.median > im.max() else "below the lowest"
+        return (f"the median {fit.median:.3g} lies {side} stripe ({im.min():g}-{im.max():g}): it is extrapolated "
+                "by the lognormal shape, not bracketed by data; add stripes there")  # fmt: skip
+    return ""
+
+
+def compare_ci(ci: float) -> float:
+    """Confidence level of each of the two intervals (median ratio, beta difference) of an engine comparison."""
+    return 1.0 - 0.5 * (1.0 - ci)
+
+
+def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: str) -> dict:
+    """The fragility analysis of a study's records (see the module notes).
+
+    Returns
+    -------
+    dict
+        ``fragility`` and ``exceedance`` (DataFrames), ``fits`` and ``comparisons`` (lists of dicts).
+    """
+    from housner.scenarios.studies import fragility as fr
+
+    im = np.asarray(study.levels, dtype=float)
+    frag, exc, fits, comps = [], [], [], []
+    for size, S in zip(study.prototype_heights, study.S, strict=True):
+        mats = {e: _matrices(results, e, size, len(im)) for e in engines}
+        for e in engines:
+            th, valid = mats[e]
+            over = np.isinf(th)
+            n, k = fr.stripe_counts(over, valid)
+            p, lo, hi = fr.proportion_intervals(k, n, study.ci)
+            frag.append(pd.DataFrame({"engine": e, "size": size, "S": S, "stripe": np.arange(len(im)), "intensity": im,
+                                      "n": n, "n_overturned": k, "p": p, "p_low": lo, "p_high": hi}))  # fmt: skip
+            ex = fr.exceedance(th, study.thresholds, valid, study.ci)
+            exc.append(ex.assign(engine=e, size=size, S=S, intensity=im[ex["stripe"].to_numpy()]))
+            if not valid.any():  # every record of this engine and size failed: nothing to fit
+                fits.append({"engine": e, "size": size, "S": S, **dict.fromkeys(_FIT_NUMBERS, math.nan),
+                             "status": "no_data", "message": "no valid record at any stripe (every record failed)",
+                             "n_boot": 0, "n_failed": 0})  # fmt: skip
+                continue
+            b = fr.bootstrap_fit(im, over, valid, n_boot=study.n_boot, seed=study.seed, ci=study.ci)
+            fits.append({"engine": e, "size": size, "S": S, "median": b.fit.median, "median_low": b.median_low,
+                         "median_high": b.median_high, "beta": b.fit.beta, "beta_low": b.beta_low,
+                         "beta_high": b.beta_high, "status": b.fit.status, "message": b.fit.message,
+                         "n_boot": b.n_boot, "n_failed": b.n_failed,
+                         "caveat": _caveat(b.fit, im)})  # fmt: skip
+        if reference in mats:
+            th_r, valid_r = mats[reference]
+            for e in engines:
+                if e == reference:
+                    continue
+                th, valid = mats[e]
+                if th.shape != th_r.shape or not valid.any() or not valid_r.any():
+                    continue  # no records on one side (or not the same motions): no paired comparison
+                # two intervals decide "disagree": each at 1 - (1 - ci) / 2 (Bonferroni), so that agreeing
+                # engines are called different at most 1 - ci of the time (at ci each: 14 % measured, not 5 %)
+                c = fr.compare_fits(im, np.isinf(th), np.isinf(th_r), valid, valid_r, n_boot=study.n_boot,
+                                    seed=study.seed, ci=compare_ci(study.ci))  # fmt: skip
+                comps.append({"engine": e, "reference": reference, "size": size, "S": S,
+                              "median_ratio": c.median_ratio, "ratio_low": c.ratio_low, "ratio_high": c.ratio_high,
+                              "beta_diff": c.beta_diff, "diff_low": c.diff_low, "diff_high": c.diff_high,
+                              "disagree": bool(c.disagree)})  # fmt: skip
+    ex_cols = ["engine", "size", "S", "stripe", "intensity", "threshold", "n", "k", "p", "p_low", "p_high"]
+    return {
+        "fragility": pd.concat(frag, ignore_index=True),
+        "exceedance": pd.concat(exc, ignore_index=True)[ex_cols],
+        "fits": fits,
+        "comparisons": comps,
+    }
+
+
+# --------------------------------------------------------------------------
+def _plain(x: Any) -> Any:
+    """JSON data with NaN / inf written as null / "inf" strings (JSON has neither)."""
+    from housner.scenarios.execution.rundir import jsonable
+
+    return jsonable(x, nonfinite="null")
+
+
+def write_study(out: Path, result: StudyResult) -> None:
+    """Write a study directory (results, fragility, exceedance, fits, meta) and its report."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    result.results.to_parquet(out / RESULTS_FILE, index=False)
+    result.fragility.to_parquet(out / FRAGILITY_FILE, index=False)
+    result.exceedance.to_parquet(out / EXCEEDANCE_FILE, index=False)
+    (out / FITS_FILE).write_text(json.dumps(_plain({"fits": result.fits, "comparisons": result.comparisons}),
+                                            indent=1))  # fmt: skip
+    (out / STUDY_FILE).write_text(json.dumps(_plain(result.meta), indent=1))
+
+
+def load_study(path: str | Path) -> StudyResult:
+    """Read a study directory written by :func:`run_study`.
+
+    Raises
+    ------
+    ValueError
+        Naming the directory and the file that is missing.
+    """
+    out = Path(path)
+    for name in STUDY_FILES[:-1]:
+        if not (out / name).is_file():
+            raise ValueError(f"{out}: not a study directory (no {name}; run `housner run` on a scenario with [study])")
+    fits = json.loads((out / FITS_FILE).read_text())
+
+    def num(rows):
+        return [{k: (math.nan if v is None else v) for k, v in r.items()} for r in rows]
+
+    return StudyResult(
+        results=pd.read_parquet(out / RESULTS_FILE),
+        fragility=pd.read_parquet(out / FRAGILITY_FILE),
+        exceedance=pd.read_parquet(out / EXCEEDANCE_FILE),
+        fits=num(fits["fits"]),
+        comparisons=num(fits["comparisons"]),
+        meta=json.loads((out / STUDY_FILE).read_text()),
+        out=out,
+    )

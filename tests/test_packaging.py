@@ -1,0 +1,69 @@
+"""One import name: every package is in the wheel's list, and 0.1's import names answer for one release."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+FOLDERS = {"housner": "housner", "engines": "housner.engines", "scenarios": "housner.scenarios",
+           "reports": "housner.reports"}  # fmt: skip
+
+
+def test_every_package_and_data_folder_is_listed_for_the_wheel():
+    conf = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(conf["packages"])
+    assert {k: v for k, v in conf["package-dir"].items()} == {v: k for k, v in FOLDERS.items()}
+    found = set()
+    for folder, name in FOLDERS.items():
+        for init in (ROOT / folder).rglob("__init__.py"):
+            rel = init.parent.relative_to(ROOT / folder).parts
+            found.add(".".join((name, *rel)))
+    assert found <= listed, f"packages missing from pyproject's list: {sorted(found - listed)}"
+    for data in ("engines/models", "scenarios/catalogue/data"):  # folders of data files, listed as packages
+        folder, *rest = data.split("/")
+        assert ".".join((FOLDERS[folder], *rest)) in listed
+
+
+def _run(code: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-W", "always", "-c", code], cwd=cwd, capture_output=True, text=True,
+                          timeout=120)  # fmt: skip
+
+
+def test_the_old_import_names_answer_with_a_warning(tmp_path):
+    r = _run(
+        "import housner\n"
+        "from scenarios.campaign import load_campaign\n"
+        "from scenarios import rdk\n"
+        "import reports.sections.tuning as t\n"
+        "from housner.scenarios.campaigns.campaign import load_campaign as new\n"
+        "import housner.scenarios.motions.rdk as rdk2\n"
+        "assert load_campaign is new and rdk is rdk2 and t.__name__ == 'housner.reports.run.sections.tuning'\n",
+        tmp_path,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "`scenarios.campaign` is now `housner.scenarios.campaigns.campaign`" in r.stderr
+    assert "FutureWarning" in r.stderr
+
+
+def test_a_users_own_package_of_an_old_name_wins(tmp_path):
+    (tmp_path / "scenarios").mkdir()
+    (tmp_path / "scenarios" / "__init__.py").write_text("MINE = 1\n")
+    r = _run("import housner, scenarios\nassert scenarios.MINE == 1\n", tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "FutureWarning" not in r.stderr
+
+
+@pytest.mark.parametrize("name", ["engines", "scenarios", "reports"])
+def test_a_checkout_folder_imported_first_by_its_old_name_is_one_module(name):
+    """From the repository's root, `import scenarios` (before housner) finds the folder itself: it hands over."""
+    r = _run(f"import {name}, sys\nimport housner.{name} as new\nassert sys.modules['{name}'].__doc__ == new.__doc__\n"
+             f"assert 'housner.{name}' in sys.modules\n", ROOT)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "FutureWarning" in r.stderr
