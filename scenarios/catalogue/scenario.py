@@ -47,6 +47,7 @@ from housner.scenarios.catalogue.schema import (
     read_engines,
     read_specimen,
 )
+from housner.scenarios.catalogue.study_table import read_study
 
 __all__ = ["SCENARIOS", "Scenario", "ScenarioError", "list_scenarios", "load_scenario"]
 
@@ -587,8 +588,6 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         effects=effects,
     )
     if "study" in raw:
-        from housner.scenarios.studies.study import read_study
-
         scen.study = read_study(f, raw["study"], mot, specimen, scen.S)
     scen.check_effects()
     if src == "pulses":
