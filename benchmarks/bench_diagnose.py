@@ -32,6 +32,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 import campaign_generators as cg  # noqa: E402
+
 from housner.scenarios.campaigns.campaign import load_campaign  # noqa: E402
 from housner.scenarios.campaigns.compare import compare  # noqa: E402
 from housner.scenarios.campaigns.diagnose import diagnose  # noqa: E402

@@ -49,12 +49,12 @@ from concurrent.futures import ProcessPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from housner.engines import ENGINES, get_engine  # noqa: E402
-from housner.scenarios.runs.chaos import measure_engine_errors, rms  # noqa: E402
-
 from housner import GroundMotion, Specimen  # noqa: E402
+from housner.engines import ENGINES, get_engine  # noqa: E402
 from housner.errors import EngineUnavailable  # noqa: E402
 from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count  # noqa: E402
+from housner.scenarios.motions.build import build_motions
+from housner.scenarios.runs.chaos import measure_engine_errors, rms  # noqa: E402
 
 #: Release amplitudes theta0 / alpha [-] of the r-error scan, small to large.
 R_AMPLITUDES = (0.005, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 0.9)
@@ -96,7 +96,7 @@ def seed_motions(n: int, model: str | None = None, scenario: str = "elcentro") -
     scen = load_scenario(scenario)
     if model is not None:
         scen.motions = {**scen.motions, "model": model}
-    motions, _ = scen.build_motions(n)
+    motions, _ = build_motions(scen, n)
     return motions
 
 

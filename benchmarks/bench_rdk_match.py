@@ -51,10 +51,9 @@ def _husid_summary(motions, record) -> str:
 
 def _record_rank(record, ensembles: dict, sizes) -> None:
     """The record's theta_max/alpha percentile within each ensemble at each prototype size."""
+    from housner import Specimen
     from housner.engines.analytic import HousnerEngine
     from housner.scenarios.runs.spread import record_against_ensemble
-
-    from housner import Specimen
 
     spec, eng = Specimen.bachmann2017(), HousnerEngine()
     print(f"  the record within its ensemble (analytic model, specimen 2H = {spec.height:g} m):")

@@ -63,10 +63,11 @@ def _write(tmp: Path, n: int, engines: list[str], levels: list[float], heights: 
 
 def _child_study(toml: str, out: str, cache: str, jobs: int) -> None:
     """Run one study in this (fresh) process and print its wall time and peak RSS as JSON."""
+    from housner.scenarios.execution import RunOptions
     from housner.scenarios.studies.study import run_study
 
     t0 = time.perf_counter()
-    res = run_study(toml, out=out, jobs=jobs, cache_dir=cache, progress=False)
+    res = run_study(toml, out=out, options=RunOptions(jobs=jobs, cache_dir=cache, progress=False))
     wall = time.perf_counter() - t0
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(json.dumps({"wall_s": wall, "records": len(res.results), "peak_rss_mb": rss_mb,
@@ -83,6 +84,7 @@ def _run_child(toml: Path, out: Path, cache: Path, jobs: int) -> dict:
 def part_scale(jobs: int) -> None:
     from housner.engines import get_engine
     from housner.scenarios.catalogue.scenario import load_scenario
+    from housner.scenarios.motions.build import build_motions
     from housner.scenarios.studies.study import study_motions
 
     levels = [round(0.5 + 0.15 * i, 2) for i in range(20)]
@@ -95,7 +97,7 @@ def part_scale(jobs: int) -> None:
         r_big = _run_child(big, tmp / "big", tmp / "cache-big", jobs)
         # baseline: the same records in one plain loop in this process
         scen = load_scenario(big)
-        base, _ = scen.build_motions()
+        base, _ = build_motions(scen)
         eng = get_engine("housner")
         t0 = time.perf_counter()
         n = 0
@@ -120,6 +122,8 @@ def part_scale(jobs: int) -> None:
 
 def part_dask(engine: str, n: int) -> None:
     from distributed import Client, LocalCluster
+
+    from housner.scenarios.execution import RunOptions
     from housner.scenarios.studies.study import run_study
 
     levels = [1.0, 1.5, 2.0, 2.5]
@@ -133,9 +137,10 @@ def part_dask(engine: str, n: int) -> None:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
             with cluster, Client(cluster) as client:
                 # warm-up: the workers import the engine and build its model outside the timing
-                run_study(warm, out=tmp / f"warm{workers}", scheduler=client, use_cache=False, progress=False)
+                opts = RunOptions(scheduler=client, use_cache=False, progress=False)
+                run_study(warm, out=tmp / f"warm{workers}", options=opts)
                 t0 = time.perf_counter()
-                res = run_study(toml, out=tmp / f"d{workers}", scheduler=client, use_cache=False, progress=False)
+                res = run_study(toml, out=tmp / f"d{workers}", options=opts)
                 walls[workers] = time.perf_counter() - t0
             print(
                 f"{engine} study on a local Dask cluster of {workers} worker(s): {len(res.results)} records "

@@ -1,25 +1,69 @@
-"""Kinematics shared by the adapters that model the block as a planar body with its own pivots."""
+"""What the adapters that model the block as a planar body with its own pivots share.
+
+:class:`PlanarEngine`, the base of the five planar adapters (MuJoCo, PyBullet, DART, OpenSees, Drake):
+settings checked against their ranges, pickling by settings, the sample loop of a rigid-body state
+with its runaway and overturn checks, and the :class:`housner.Response` from the sampled theta. The
+kinematics of a release (:func:`release_state`), the ground motion as a gravity component
+(:func:`gravity_x`), and the impact law (:class:`ImpactLaw`) through which every planar adapter
+realises an energy ratio below its contact's own.
+"""
 
 from __future__ import annotations
 
+import importlib
 import math
+import time
+from collections.abc import Callable
+from typing import Any, ClassVar
 
 import numpy as np
+
+from housner.engines.base import Engine
+from housner.errors import EngineError, EngineUnavailable, unknown_choice
+from housner.impacts import impact_times, uplift_time
+from housner.response import Response
 
 __all__ = [
     "IMPACT_LAW_DELAY",
     "IMPACT_LAW_RANGE",
     "IMPACT_LAW_TOL",
+    "OVERTURN_ANGLE",
+    "QUIET",
+    "ROCKING_TOL",
+    "RUNAWAY_M",
     "ImpactLaw",
-    "ImpactLawEngine",
+    "PlanarEngine",
     "checked_settings",
     "com_state",
     "gravity_x",
     "law_factor",
+    "optional_package",
     "release_state",
     "sampled_response",
+    "start_states",
     "substeps",
 ]
+
+#: |theta| above ROCKING_TOL * alpha counts as rocking [-] for the shared impact and uplift detector
+#: (:mod:`housner.impacts`), the same for every adapter so that counts mean the same; below it the
+#: block is at rest. The contacts tilt a block at rest by far less: DART's rigid contact by less than
+#: 1e-6 alpha; Drake's default contact by 6e-6 alpha and OpenSees' penalty contact by about 2e-4 alpha
+#: under 0.9 g tan(alpha); PyBullet's rigid contact lets each pivot sink about 10 um into the ground,
+#: and when the load shifts to one pivot (ground acceleration near g tan alpha) the block tilts by up
+#: to about 2e-3 alpha without any uplift. 5e-3 alpha is 0.74 mrad for the seed specimen, just below
+#: the 0.8 mrad accuracy of the seed's camera (0.0053 alpha).
+ROCKING_TOL = 5e-3
+
+#: |theta| at which the block has fallen [rad]: it lies on its side; the adapter stops and holds theta there.
+OVERTURN_ANGLE = math.pi / 2
+
+#: A centre of mass farther than this from its start [m] has run away (slid off or diverged).
+RUNAWAY_M = 10.0
+
+#: Fraction of the rocking threshold taken as "still at rest" when dating the uplift: 2e-3 * 5e-3
+#: alpha = 1e-5 alpha, four times the largest tilt of PyBullet's block at rest under load (the two
+#: pivots sink by different nanometres).
+QUIET = 2e-3
 
 #: |theta| / alpha [-] a swing must exceed for the impact law to count its next sign change as an
 #: impact. The tuner's free decay reaches 0.0011 alpha after 40 impacts, so the law must act down to
@@ -64,8 +108,6 @@ def checked_settings(
     ValueError
         Naming the setting: unknown (with the closest known one), not a number, or out of range.
     """
-    from housner.errors import unknown_choice
-
     unknown = sorted(set(settings) - set(defaults))
     if unknown:
         raise unknown_choice(f"{label} setting", unknown[0], defaults)
@@ -160,10 +202,10 @@ def sampled_response(
     overturned: bool,
     info: dict,
     *,
-    rocking_tol: float = 5e-3,
-    quiet: float = 2e-3,
-    overturn_angle: float = math.pi / 2,
-):
+    rocking_tol: float = ROCKING_TOL,
+    quiet: float = QUIET,
+    overturn_angle: float = OVERTURN_ANGLE,
+) -> Response:
     """The :class:`housner.Response` of a planar adapter from theta, theta' read at the motion's samples.
 
     Parameters
@@ -187,9 +229,6 @@ def sampled_response(
     quiet : float
         Fraction of the rocking threshold taken as "still at rest" when dating the uplift [-].
     """
-    from housner.impacts import impact_times, uplift_time
-    from housner.response import Response
-
     alpha, t = specimen.alpha, motion.t
     overturn_time = math.nan
     if overturned:
@@ -321,12 +360,85 @@ class ImpactLaw:
         return None
 
 
-class ImpactLawEngine:
-    """The impact law's two hooks, for an adapter whose ``_settings`` hold ``impact_energy_factor``.
+def optional_package(engine: str, package: str, module: str, install: str) -> Any:
+    """The module ``module`` of an optional engine's ``package``, imported on first use, or EngineUnavailable.
 
-    Mixed in before :class:`housner.engines.base.Engine` by the five planar adapters, which realise the
-    ``restitution`` effect through the law.
+    The message names the ``engine``, the import error and the ``install`` command.
     """
+    try:
+        importlib.import_module(module.partition(".")[0])  # the package first, as an import statement does
+        return importlib.import_module(module)
+    except ImportError as e:
+        raise EngineUnavailable(
+            f"engine {engine!r} needs the {package} package ({e}); install it with: {install}"
+        ) from None
+
+
+def start_states(specimen, motion) -> np.ndarray:
+    """Room for the sampled rigid-body states (z, x, theta [m, m, rad], z', x', theta' [m/s, m/s, rad/s]) of a
+    record, one row per sample, the first that of its release (:func:`release_state`)."""
+    th0, om0 = motion.theta0, motion.theta_dot0
+    x0, z0, dx0, dz0 = release_state(specimen.H, specimen.B, th0, om0)
+    states = np.empty((motion.n, 6))
+    states[0] = (z0, x0, th0, dz0, dx0, om0)
+    return states
+
+
+class PlanarEngine(Engine):
+    """The base of the planar adapters: settings and pickling, the impact law's hooks, the sample loop, the response.
+
+    A subclass sets :attr:`DEFAULTS` (every setting, ``impact_energy_factor`` among them),
+    :attr:`LABEL`, :attr:`RANGES` and :attr:`STRICT` for :func:`checked_settings`, and an optional
+    engine its :attr:`MODULE` and :attr:`INSTALL` (:meth:`require`); or its own ``__init__``. An
+    instance pickles as its settings: models, contexts and clients are rebuilt in the receiving
+    process. The ``restitution`` effect is realised through the impact law (:class:`ImpactLaw`). A
+    subclass that keeps the rigid-body state (z, x, theta, z', x', theta') implements
+    :meth:`_stepper`; the others their own ``_simulate``.
+
+    Parameters
+    ----------
+    timestep : float
+        Longest step [s]: each sample interval of a motion is cut into the
+        fewest equal steps no longer than this (:func:`substeps`).
+    impact_energy_factor : float
+        Energy the block keeps at each impact as a fraction of what the
+        contact leaves it [-], in (0, 1]: the adapters' impact law
+        (:class:`ImpactLaw`) for an r below the contact's own.
+        1 (default): the contact alone.
+    **settings
+        The adapter's others (its ``DEFAULTS``).
+    """
+
+    #: The ``restitution`` effect, through the impact law.
+    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
+    #: Every setting and its default.
+    DEFAULTS: ClassVar[dict] = {}
+    #: The engine as messages name it ("DART", "OpenSees", "Drake").
+    LABEL: ClassVar[str] = ""
+    #: Accepted closed range (low, high) of each numeric setting.
+    RANGES: ClassVar[dict] = {}
+    #: Settings whose low end is excluded.
+    STRICT: ClassVar[tuple[str, ...]] = ("timestep", "impact_energy_factor")
+    #: The optional engine's module, imported on first use (:meth:`require`); "" for none.
+    MODULE: ClassVar[str] = ""
+    #: How to install the engine's package (named when it is missing).
+    INSTALL: ClassVar[str] = ""
+
+    def __init__(self, **settings: Any):
+        self.require()  # a missing package is said before any long work
+        self._settings = checked_settings(self.LABEL, self.DEFAULTS, self.RANGES, settings, strict=self.STRICT)
+
+    @classmethod
+    def require(cls) -> Any:
+        """The engine's :attr:`MODULE`, imported on first use, or :class:`housner.errors.EngineUnavailable`
+        naming :attr:`INSTALL`; None for an engine without one."""
+        return optional_package(cls.name, cls.package, cls.MODULE, cls.INSTALL) if cls.MODULE else None
+
+    def __getstate__(self) -> dict:
+        return {"settings": dict(self._settings)}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(**state["settings"])
 
     def effect_refusal(self, specimen, effects: tuple) -> str | None:
         """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
@@ -335,3 +447,71 @@ class ImpactLawEngine:
     def impact_law(self, specimen, effects: tuple, step: float, theta0: float) -> ImpactLaw:
         """The law of one record: the setting times a ``restitution`` effect's share, at engine step ``step`` [s]."""
         return ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, step, theta0)
+
+    def _pivot_radius(self, specimen) -> float:
+        """The ``pivot_radius`` setting [m] of an adapter with pivot spheres; ValueError above 1e-3 H."""
+        rho = self._settings["pivot_radius"]
+        if rho > 1e-3 * specimen.H:
+            raise ValueError(
+                f"{self.LABEL} setting `pivot_radius` ({rho:g} m) must be at most 1e-3 H = {1e-3 * specimen.H:g} m"
+            )
+        return rho
+
+    def diverged(self, motion, i: int, state: str, friction: str = "friction") -> EngineError:
+        """The error of a record whose state, read at sample ``i``, is not finite or ran away (``state`` says it)."""
+        return EngineError(
+            f"{self.LABEL} failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not finite "
+            f"or ran away ({state}); a block that slides needs more `{friction}`, one that diverges a smaller "
+            "`timestep`"
+        )
+
+    def _simulate(self, specimen, motion, effects: tuple) -> Response:
+        """The record sample by sample (:meth:`_run_samples`) with the steps of :meth:`_stepper`, and its response."""
+        wall0 = time.perf_counter()
+        k, h = substeps(motion.dt, self._settings["timestep"])
+        states = start_states(specimen, motion)
+        advance = self._stepper(specimen, motion, effects, states, k, h)
+        last, overturned = self._run_samples(motion, states, advance)
+        wall = time.perf_counter() - wall0
+        return self._response(specimen, motion, states[:, 2].copy(), states[:, 5].copy(), last, overturned, h, k, wall)
+
+    def _stepper(self, specimen, motion, effects: tuple, states: np.ndarray, k: int, h: float) -> Callable:
+        """The engine's model of ``specimen`` at the release ``states[0]``, and its ``advance(i)`` (see
+        :meth:`_run_samples`) through k steps of h [s] per sample interval with the impact law of ``effects``.
+        An adapter that keeps the rigid-body state (z, x, theta, z', x', theta') implements it; the others
+        their own ``_simulate``."""
+        raise NotImplementedError
+
+    def _run_samples(self, motion, states: np.ndarray, advance: Callable[[int], np.ndarray]) -> tuple[int, bool]:
+        """Sample intervals 1, 2, ... of ``motion`` until its end or the overturn: (last sample, overturned).
+
+        ``advance(i)`` steps through interval i, writes the state at sample i into ``states[i]``
+        (the rows of :func:`start_states`) and returns what is checked: (z, x, theta, ...) all
+        finite, the centre of mass within :data:`RUNAWAY_M` of its start; an overturn at
+        |theta| >= :data:`OVERTURN_ANGLE`.
+        """
+        x0 = states[0, 1]
+        for i in range(1, motion.n):
+            q = advance(i)
+            if not (abs(q[1] - x0) < RUNAWAY_M and abs(q[0]) < RUNAWAY_M and np.isfinite(q).all()):
+                raise self.diverged(motion, i, f"x = {q[1]:.6g} m, z = {q[0]:.6g} m, theta = {q[2]:.6g} rad")
+            if abs(q[2]) >= OVERTURN_ANGLE:
+                return i, True
+        return motion.n - 1, False
+
+    def _response(self, specimen, motion, theta, theta_dot, last, overturned, h, k, wall, **extra: Any) -> Response:
+        """The Response from theta, theta' [rad, rad/s] at the samples (:func:`sampled_response`).
+
+        ``info`` holds the settings, the version, the step h [s], the k steps per sample, the steps
+        run, ``extra`` and the wall time ``wall`` [s].
+        """
+        info = {
+            "settings": self.settings(),
+            "version": self.version(),
+            "step": h,
+            "steps_per_sample": k,
+            "n_steps": last * k,
+            **extra,
+            "wall_time_s": wall,
+        }
+        return sampled_response(self, specimen, motion, theta, theta_dot, last, overturned, info)

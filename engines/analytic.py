@@ -6,10 +6,9 @@ import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 
-from housner.engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
-
 import housner
 from housner.effects import EFFECTS, apply_effects, discover_effects
+from housner.engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
 from housner.model import REST_TOL, RockingParams, simulate
 from housner.model import simulate_many as simulate_batch
 from housner.motion import GroundMotion

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Sequence
+from importlib import metadata
 from typing import Any, ClassVar
 
 import numpy as np
@@ -170,9 +171,7 @@ class Engine:
         """Version of the underlying package (for provenance and the result cache)."""
         if not self.package:
             return ""
-        from importlib.metadata import version
-
-        return version(self.package)
+        return metadata.version(self.package)
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.settings().items())

@@ -51,10 +51,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from housner.engines.base import Engine, get_engine
 from housner.engines.measures import free_rocking_quarter_period, parabolic_peak
 from housner.engines.tuning import pulse_motions
-
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen

@@ -35,25 +35,12 @@ Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
 
 from __future__ import annotations
 
-import math
-import time
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
-from housner.engines._planar import (
-    IMPACT_LAW_RANGE,
-    ImpactLawEngine,
-    checked_settings,
-    gravity_x,
-    release_state,
-    sampled_response,
-    substeps,
-)
-from housner.engines.base import Engine
 
-from housner.errors import EngineError, EngineUnavailable
+from housner.engines._planar import IMPACT_LAW_RANGE, OVERTURN_ANGLE, ROCKING_TOL, PlanarEngine, gravity_x
 from housner.motion import GroundMotion
-from housner.response import Response
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -62,46 +49,14 @@ __all__ = ["DartEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL"]
 #: How to install the package this engine needs (named in the error when it is missing).
 INSTALL = "pip install -e '.[dart]'  (or: pip install dartpy)"
 
-#: |theta| above ROCKING_TOL * alpha counts as rocking [-] (impact and uplift detection); below it
-#: the block is at rest. The rigid contact tilts the block at rest by less than 1e-6 alpha.
-ROCKING_TOL = 5e-3
 
-#: |theta| at which the block has fallen [rad]; the engine stops and holds theta there.
-OVERTURN_ANGLE = math.pi / 2
-
-#: A centre of mass farther than this from its start [m] has run away (slid off or diverged).
-_RUNAWAY_M = 10.0
-
-#: Fraction of the rocking threshold taken as "still at rest" when dating the uplift.
-_QUIET = 2e-3
-
-#: Accepted range of each setting (low, high); the timestep's low end excluded.
-_RANGES = {
-    "timestep": (1e-6, 1e-2),
-    "friction": (0.0, 100.0),
-    "restitution": (0.0, 1.0),
-    "pivot_radius": (1e-7, 1e-2),
-    "impact_energy_factor": IMPACT_LAW_RANGE,
-}
-
-
-def _dart():
-    """The dartpy module, or an EngineError naming the install command."""
-    try:
-        import dartpy
-    except ImportError as e:
-        raise EngineUnavailable(f"engine 'dart' needs the dartpy package ({e}); install it with: {INSTALL}") from None
-    return dartpy
-
-
-class DartEngine(ImpactLawEngine, Engine):
+class DartEngine(PlanarEngine):
     """DART's rigid block on a rigid ground with boxed-LCP contact, driven by the d'Alembert force.
 
     Parameters
     ----------
     timestep : float
-        Longest step [s]: each sample interval of a motion is cut into the
-        fewest equal steps no longer than this.
+        Longest step [s] (:class:`housner.engines._planar.PlanarEngine`).
     friction : float
         Coulomb friction coefficient pivot/ground [-]; it must exceed
         max |ug''| / g with a margin for the impacts.
@@ -110,10 +65,7 @@ class DartEngine(ImpactLawEngine, Engine):
     pivot_radius : float
         Radius of the pivot spheres [m], at most 1e-3 H.
     impact_energy_factor : float
-        Energy the block keeps at each impact as a fraction of what the
-        contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
-        1 (default): the contact alone.
+        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
 
     Examples
     --------
@@ -127,7 +79,6 @@ class DartEngine(ImpactLawEngine, Engine):
 
     name = "dart"
     package = "dartpy"
-    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
 
     #: Default settings (2026-11-24, dartpy 6.20, seed specimen): first-impact r within 0.1 % of
     #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning (step 0.1 ms; 0.2 ms is 0.11 % off at 0.8 alpha).
@@ -139,17 +90,16 @@ class DartEngine(ImpactLawEngine, Engine):
         "impact_energy_factor": 1.0,
     }
 
-    def __init__(self, **settings: Any):
-        _dart()  # a missing package is said before any long work
-        self._settings = checked_settings(
-            "DART", self.DEFAULTS, _RANGES, settings, strict=("timestep", "impact_energy_factor")
-        )
-
-    def __getstate__(self) -> dict:
-        return {"settings": dict(self._settings)}
-
-    def __setstate__(self, state: dict) -> None:
-        self.__init__(**state["settings"])
+    LABEL = "DART"
+    MODULE = "dartpy"
+    INSTALL: ClassVar[str] = INSTALL
+    RANGES: ClassVar[dict] = {
+        "timestep": (1e-6, 1e-2),
+        "friction": (0.0, 100.0),
+        "restitution": (0.0, 1.0),
+        "pivot_radius": (1e-7, 1e-2),
+        "impact_energy_factor": IMPACT_LAW_RANGE,
+    }
 
     @classmethod
     def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
@@ -168,11 +118,9 @@ class DartEngine(ImpactLawEngine, Engine):
     # ------------------------------------------------------------------
     def build(self, specimen: Specimen, step: float):
         """The DART world of ``specimen`` (steps 1-5 of the module docstring) and the block's skeleton."""
-        dart = _dart()
+        dart = self.require()
         H, B, m = specimen.H, specimen.B, specimen.mass
-        rho = self._settings["pivot_radius"]
-        if rho > 1e-3 * H:
-            raise ValueError(f"DART setting `pivot_radius` ({rho:g} m) must be at most 1e-3 H = {1e-3 * H:g} m")
+        rho = self._pivot_radius(specimen)
         world = dart.simulation.World()
         world.setGravity([0.0, 0.0, -G])
         world.setTimeStep(step)
@@ -192,52 +140,25 @@ class DartEngine(ImpactLawEngine, Engine):
         world.addSkeleton(block)
         return world, block
 
-    def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
-        wall0 = time.perf_counter()
-        k, h = substeps(motion.dt, self._settings["timestep"])
+    def _stepper(self, specimen: Specimen, motion: GroundMotion, effects: tuple, states, k: int, h: float):
         world, block = self.build(specimen, h)
-        th0, om0 = motion.theta0, motion.theta_dot0
-        x0, z0, dx0, dz0 = release_state(specimen.H, specimen.B, th0, om0)
-        block.setPositions([z0, x0, th0])
-        block.setVelocities([dz0, dx0, om0])
+        block.setPositions(states[0, :3].tolist())
+        block.setVelocities(states[0, 3:].tolist())
         gx_rows = gravity_x(motion.acc, k)  # step 1 of the module docstring
-        n = motion.n
-        states = np.empty((n, 6))
-        states[0] = (z0, x0, th0, dz0, dx0, om0)
-        last, overturned = n - 1, False
         set_gravity, step = world.setGravity, world.step
-        law = self.impact_law(specimen, effects, h, th0)
-        for i in range(1, n):
+        law = self.impact_law(specimen, effects, h, motion.theta0)
+
+        def advance(i: int) -> np.ndarray:
             for gxi in gx_rows[i - 1]:
                 set_gravity([gxi, 0.0, -G])
                 step()
                 if law.active and (c := law.after_step(block.getPosition(2), block.getVelocity(2))) is not None:
                     block.setVelocities(c * block.getVelocities())
-            q, v = block.getPositions(), block.getVelocities()
-            states[i, :3], states[i, 3:] = q, v
-            if not (abs(q[1] - x0) < _RUNAWAY_M and abs(q[0]) < _RUNAWAY_M and np.isfinite(q).all()):
-                raise EngineError(
-                    f"DART failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not finite "
-                    f"or ran away (x = {q[1]:.6g} m, z = {q[0]:.6g} m, theta = {q[2]:.6g} rad); a block that "
-                    "slides needs more `friction`, one that diverges a smaller `timestep`"
-                )
-            if abs(q[2]) >= OVERTURN_ANGLE:
-                overturned, last = True, i
-                break
-        return self._response(specimen, motion, states, last, overturned, h, k, time.perf_counter() - wall0)
+            q = states[i, :3] = block.getPositions()
+            states[i, 3:] = block.getVelocities()
+            return q
 
-    def _response(self, specimen, motion, states, last, overturned, h, k, wall) -> Response:
-        """The Response from the sampled states (z, x, theta, z', x', theta'), held at +-pi/2 after an overturn."""
-        info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": last * k,
-            "wall_time_s": wall,
-        }
-        return sampled_response(self, specimen, motion, states[:, 2].copy(), states[:, 5].copy(), last, overturned,
-                                info, rocking_tol=ROCKING_TOL, quiet=_QUIET, overturn_angle=OVERTURN_ANGLE)  # fmt: skip
+        return advance
 
 
 def _collider(dart, body, shape, pos, settings: dict) -> None:

@@ -60,25 +60,13 @@ Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
 
 from __future__ import annotations
 
-import math
-import time
 from typing import Any, ClassVar
 
 import numpy as np
-from housner.engines._planar import (
-    IMPACT_LAW_RANGE,
-    ImpactLawEngine,
-    checked_settings,
-    gravity_x,
-    release_state,
-    sampled_response,
-    substeps,
-)
-from housner.engines.base import Engine
 
-from housner.errors import EngineError, EngineUnavailable
+from housner.engines._planar import IMPACT_LAW_RANGE, OVERTURN_ANGLE, ROCKING_TOL, PlanarEngine, gravity_x
+from housner.errors import EngineError
 from housner.motion import GroundMotion
-from housner.response import Response
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -87,49 +75,19 @@ __all__ = ["DrakeEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL"]
 #: How to install the package this engine needs (named in the error when it is missing).
 INSTALL = "pip install -e '.[drake]'  (or: pip install drake)"
 
-#: |theta| above ROCKING_TOL * alpha counts as rocking [-] (impact and uplift detection); below it
-#: the block is at rest. The default contact tilts the block at rest by 6e-6 alpha under 0.9 g tan(alpha).
-ROCKING_TOL = 5e-3
 
-#: |theta| at which the block has fallen [rad]; the engine stops and holds theta there.
-OVERTURN_ANGLE = math.pi / 2
-
-#: A centre of mass farther than this from its start [m] has run away (slid off or diverged).
-_RUNAWAY_M = 10.0
-
-#: Fraction of the rocking threshold taken as "still at rest" when dating the uplift.
-_QUIET = 2e-3
-
-#: Each setting's accepted range [lo, hi] (SI units); the step must exceed its lower bound.
-_RANGES = {
-    "timestep": (1e-6, 1e-2),
-    "stiffness": (1e3, 1e12),
-    "relaxation_time": (0.0, 1.0),
-    "friction": (0.0, 100.0),
-    "pivot_radius": (1e-7, 1e-2),
-    "impact_energy_factor": IMPACT_LAW_RANGE,
-}
+def _drake() -> Any:
+    """pydrake's multibody plant module (the first the engine needs), or an EngineUnavailable naming the install."""
+    return DrakeEngine.require()
 
 
-def _drake():
-    """The pydrake modules the engine uses, or an EngineUnavailable naming the install command."""
-    try:
-        import pydrake.multibody.plant  # noqa: F401
-    except ImportError as e:
-        raise EngineUnavailable(f"engine 'drake' needs the drake package ({e}); install it with: {INSTALL}") from None
-    import pydrake
-
-    return pydrake
-
-
-class DrakeEngine(ImpactLawEngine, Engine):
+class DrakeEngine(PlanarEngine):
     """Drake's block on a stiff point contact (SAP solver), driven by the d'Alembert force.
 
     Parameters
     ----------
     timestep : float
-        Longest step [s]: each sample interval of a motion is cut into the
-        fewest equal steps no longer than this.
+        Longest step [s] (:class:`housner.engines._planar.PlanarEngine`).
     stiffness : float
         Point-contact stiffness of each pivot on the ground [N/m] (the pair's
         combined value; each side of the pair is given twice it).
@@ -143,10 +101,7 @@ class DrakeEngine(ImpactLawEngine, Engine):
     pivot_radius : float
         Radius of the pivot spheres [m], at most 1e-3 H.
     impact_energy_factor : float
-        Energy the block keeps at each impact as a fraction of what the
-        contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
-        1 (default): the contact alone.
+        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
 
     Examples
     --------
@@ -160,7 +115,6 @@ class DrakeEngine(ImpactLawEngine, Engine):
 
     name = "drake"
     package = "drake"
-    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
 
     #: Default settings (2026-11-24, drake 1.51.1, seed specimen): first-impact r within 0.2 % of
     #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning, pulses within 0.5 %; about 0.25 CPU s per
@@ -174,18 +128,21 @@ class DrakeEngine(ImpactLawEngine, Engine):
         "impact_energy_factor": 1.0,
     }
 
+    LABEL = "Drake"
+    MODULE = "pydrake.multibody.plant"
+    INSTALL: ClassVar[str] = INSTALL
+    RANGES: ClassVar[dict] = {
+        "timestep": (1e-6, 1e-2),
+        "stiffness": (1e3, 1e12),
+        "relaxation_time": (0.0, 1.0),
+        "friction": (0.0, 100.0),
+        "pivot_radius": (1e-7, 1e-2),
+        "impact_energy_factor": IMPACT_LAW_RANGE,
+    }
+
     def __init__(self, **settings: Any):
-        _drake()  # a missing package is said before any long work
-        self._settings = checked_settings(
-            "Drake", self.DEFAULTS, _RANGES, settings, strict=("timestep", "impact_energy_factor")
-        )
+        super().__init__(**settings)
         self._model = None  # (key, plant, diagram context, plant context, input vector), built on first use
-
-    def __getstate__(self) -> dict:
-        return {"settings": dict(self._settings)}  # the Drake model is rebuilt in the receiving process
-
-    def __setstate__(self, state: dict) -> None:
-        self.__init__(**state["settings"])
 
     @classmethod
     def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
@@ -203,17 +160,8 @@ class DrakeEngine(ImpactLawEngine, Engine):
         tau = 1 ms: 0.935-0.944; k = 1e6 N/m, tau = 4 ms: 0.882 at 0.1 alpha,
         0.933 at 0.8 alpha), and soft pivots tilt before uplift, which puts the
         pulses' first peaks 14-170 % off; the tuner then reports the closest it found.
-
-        Parameters
-        ----------
-        specimen : Specimen
-        target_r : float
-            Target kinetic-energy ratio at impact [-].
-
-        Returns
-        -------
-        list of dict
-            Keyword settings of :class:`DrakeEngine` (at most 8).
+        Returns keyword settings of :class:`DrakeEngine` (at most 8) for ``target_r``,
+        the target kinetic-energy ratio at impact [-].
         """
         r_h = specimen.r_housner
         if target_r > r_h * 1.002:
@@ -244,22 +192,20 @@ class DrakeEngine(ImpactLawEngine, Engine):
             diagram with its ``SceneGraph``.
         """
         _drake()
-        from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Sphere
-        from pydrake.math import RigidTransform, RotationMatrix
-        from pydrake.multibody.plant import (
+        from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Sphere  # optional engine
+        from pydrake.math import RigidTransform, RotationMatrix  # optional engine
+        from pydrake.multibody.plant import (  # optional engine
             AddMultibodyPlantSceneGraph,
             ContactModel,
             CoulombFriction,
             DiscreteContactApproximation,
         )
-        from pydrake.multibody.tree import FixedOffsetFrame, PlanarJoint, SpatialInertia, UnitInertia
-        from pydrake.systems.framework import DiagramBuilder
+        from pydrake.multibody.tree import FixedOffsetFrame, PlanarJoint, SpatialInertia, UnitInertia  # optional engine
+        from pydrake.systems.framework import DiagramBuilder  # optional engine
 
         s = self._settings
         H, B, m = specimen.H, specimen.B, specimen.mass
-        rho = s["pivot_radius"]
-        if rho > 1e-3 * H:
-            raise ValueError(f"Drake setting `pivot_radius` ({rho:g} m) must be at most 1e-3 H = {1e-3 * H:g} m")
+        rho = self._pivot_radius(specimen)
         builder = DiagramBuilder()
         plant, _ = AddMultibodyPlantSceneGraph(builder, time_step=step)
         plant.set_discrete_contact_approximation(DiscreteContactApproximation.kSap)
@@ -303,23 +249,16 @@ class DrakeEngine(ImpactLawEngine, Engine):
             self._model = (key, plant, ctx, fixed.GetMutableData().get_mutable_value(), diagram, root)
         return self._model[1:4]
 
-    def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
-        wall0 = time.perf_counter()
-        k, h = substeps(motion.dt, self._settings["timestep"])
+    def _stepper(self, specimen: Specimen, motion: GroundMotion, effects: tuple, states, k: int, h: float):
         plant, ctx, force = self._model_for(specimen, h)
-        th0, om0 = motion.theta0, motion.theta_dot0
-        x0, z0, dx0, dz0 = release_state(specimen.H, specimen.B, th0, om0)
-        plant.SetPositionsAndVelocities(ctx, [z0, x0, th0, dz0, dx0, om0])
+        plant.SetPositionsAndVelocities(ctx, states[0].tolist())
         force.SetFromVector(np.zeros(3))
         m = specimen.mass
         fx_rows = (m * np.asarray(gravity_x(motion.acc, k))).tolist()  # step 6: m times the mean of -ug''
-        n = motion.n
-        states = np.empty((n, 6))
-        states[0] = (z0, x0, th0, dz0, dx0, om0)
-        last, overturned = n - 1, False
         set_force, step, state = force.SetAtIndex, plant.ExecuteForcedEvents, ctx.get_discrete_state_vector
-        law = self.impact_law(specimen, effects, h, th0)
-        for i in range(1, n):
+        law = self.impact_law(specimen, effects, h, motion.theta0)
+
+        def advance(i: int) -> np.ndarray:
             try:
                 for fx in fx_rows[i - 1]:
                     set_force(1, fx)
@@ -332,26 +271,6 @@ class DrakeEngine(ImpactLawEngine, Engine):
                     "try a smaller `timestep` or a softer `stiffness`"
                 ) from None
             q = states[i] = state().value()
-            if not (abs(q[1] - x0) < _RUNAWAY_M and abs(q[0]) < _RUNAWAY_M and np.isfinite(q).all()):
-                raise EngineError(
-                    f"Drake failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not finite "
-                    f"or ran away (x = {q[1]:.6g} m, z = {q[0]:.6g} m, theta = {q[2]:.6g} rad); a block that "
-                    "slides needs more `friction`, one that diverges a smaller `timestep`"
-                )
-            if abs(q[2]) >= OVERTURN_ANGLE:
-                overturned, last = True, i
-                break
-        return self._response(specimen, motion, states, last, overturned, h, k, time.perf_counter() - wall0)
+            return q
 
-    def _response(self, specimen, motion, states, last, overturned, h, k, wall) -> Response:
-        """The Response from the sampled states (z, x, theta, z', x', theta'), held at +-pi/2 after an overturn."""
-        info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": last * k,
-            "wall_time_s": wall,
-        }
-        return sampled_response(self, specimen, motion, states[:, 2].copy(), states[:, 5].copy(), last, overturned,
-                                info, rocking_tol=ROCKING_TOL, quiet=_QUIET, overturn_angle=OVERTURN_ANGLE)  # fmt: skip
+        return advance

@@ -85,31 +85,8 @@ Limitations
   (``tests/test_mujoco.py`` checks it against the analytic engine).
   ``restitution`` is realised by the impact law (``impact_energy_factor``).
 * Term effects (:mod:`housner.effects.terms`) whose terms are all moment
-  terms that vanish at rest (``MomentTerm(..., at_rest=False)``: a viscous
-  or aerodynamic moment, of a user's or a plugin's effect) are realised as a
-  couple on the theta hinge (``data.qfrc_applied``): before each engine step
-  the terms are evaluated from MuJoCo's state in the kernel's reduced
-  coordinates of the pivot s = sgn(theta) (phi = s theta, w = s theta',
-  a = s ug''(t)/g with ug'' at the step's start, v = 0, alpha and p^2 of that
-  pivot from the rocking parameters), and the couple s I0 (sum of the terms)
-  [N m] acts over the step (explicit, as MuJoCo's Euler step takes its
-  forces); I0 = ``specimen.inertia``, the model's inertia about a pivot, so
-  the block turns with the acceleration the terms return. The record is then
-  stepped from Python (``mj_step``, bit for bit what the rollout does:
-  5.8 us per step with one term against the rollout's 3.1 us). With
-  eulerdamp disabled (:mod:`housner.engines.mjcf`) the hinge damping of
-  ``rotational_damping`` is the same explicit force: a viscous moment term
-  gives its response to rounding. Refused by name: effects whose terms include a
-  ``CoulombTerm`` (a dry moment that holds the block: a joint
-  ``frictionloss`` is a regularised constraint that creeps where the rigid
-  model sticks: measured 0.2 % of alpha per second at MuJoCo's default
-  solreffriction, 0.004 %/s at a stiff 0.4 ms one), an ``ImpactTerm`` (the
-  contact makes the impacts), or a moment that acts at rest
-  (``at_rest=True``: it changes the uplift rule, which needs the pivot a
-  block at rest on both corners does not have); effects that read or make
-  a motion channel, or change the parameters, the input, the sensors or the
-  equation of motion; and every other effect. ``tests/test_mujoco_terms.py``
-  checks the realised ones against the analytic engine.
+  terms that vanish at rest are realised as a couple on the theta hinge;
+  the others are refused by name (:mod:`housner.engines.mujoco_terms`).
 
 References
 ----------
@@ -126,11 +103,21 @@ from __future__ import annotations
 import math
 from typing import Any, ClassVar
 
+import mujoco
 import numpy as np
-from housner.engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, checked_settings
-from housner.engines.base import Engine
-from housner.engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
+from mujoco import rollout
 
+from housner.engines._planar import IMPACT_LAW_RANGE, PlanarEngine, checked_settings
+from housner.engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
+from housner.engines.mujoco_terms import (
+    _OWN_EFFECTS,
+    _THETA_DOF,
+    _moment_couple,
+    _RealisedEffects,
+    _roll_with_couple,
+    _term_refusal,
+    _terms_of,
+)
 from housner.errors import EngineError, unknown_choice
 from housner.impacts import impact_times
 from housner.motion import GroundMotion
@@ -179,188 +166,7 @@ def initial_qvel(
     return w * rz, -w * rx, w
 
 
-#: Degree of freedom of the theta hinge (joints x, z, theta, one dof each).
-_THETA_DOF = 2
-
-#: Effects with a route of their own (hinge damping, the impact law); the others are realised through their terms.
-_OWN_EFFECTS = frozenset({"rotational_damping", "restitution"})
-
-#: The hooks of an effect realised through its terms that must stay :class:`housner.effects.Effect`'s no-ops.
-_NO_OP_HOOKS = ("modify_params", "transform_input", "observe", "solver")
-
-#: Effect class -> whether MuJoCo realises it through its terms (:func:`_realised_by_terms`).
-_BY_TERMS: dict[type, bool] = {}
-
-
-def _term_refusal(engine: str, effect: Any, terms: tuple) -> str | None:
-    """One line naming ``effect`` when one of its ``terms`` is not a moment term that vanishes at rest, else None."""
-    from housner.effects.terms import CoulombTerm, ImpactTerm, MomentTerm
-
-    for t in terms:
-        if isinstance(t, MomentTerm) and not t.at_rest:
-            continue
-        if isinstance(t, CoulombTerm):
-            what = "a Coulomb term (a dry moment that holds the block; a joint frictionloss creeps instead)"
-        elif isinstance(t, ImpactTerm):
-            what = "an impact term (MuJoCo's contact makes the impacts)"
-        elif isinstance(t, MomentTerm):
-            what = "a moment term that acts at rest (at_rest=True: it changes the uplift rule)"
-        else:
-            what = f"a {type(t).__name__}"
-        return (
-            f"engine {engine!r} cannot realise effect {effect.name!r}: its terms include {what}; "
-            "it realises moment terms that vanish at rest only"
-        )
-    return None
-
-
-def _active_value(spec: Any, specimen: Specimen) -> float:
-    """A value [spec.unit] of a parameter at which its effect acts: its default, else an end or the middle of its
-    bounds, the first that differs from the neutral value (the neutral value when none does)."""
-    neutral = spec.neutral_for(specimen)
-    lo, hi = spec.bounds_for(specimen)
-    for x in (spec.default, hi, lo, 0.5 * (lo + hi)):
-        if x is not None and math.isfinite(x) and x != neutral:
-            return float(x)
-    return neutral
-
-
-def _realised_by_terms(cls: type) -> bool:
-    """Whether MuJoCo realises the effect class ``cls`` through its terms (decided once per class).
-
-    Its only hook is ``terms`` (no change of the parameters, the input, the sensors or the equation of
-    motion), it reads and makes no motion channel, and with every parameter active
-    (:func:`_active_value`) on the seed specimen it returns terms, all of them moment terms that vanish
-    at rest. A class that fails to build or to give terms there is not realised.
-    :meth:`MujocoEngine.effect_refusal` checks each instance's own terms on the specimen simulated.
-    """
-    ok = _BY_TERMS.get(cls)
-    if ok is not None:
-        return ok
-    from housner.effects import Effect
-    from housner.model import RockingParams
-
-    ok = (
-        not cls.changes_mechanics
-        and not cls.channels
-        and not cls.makes_channels
-        and cls.terms is not Effect.terms
-        and all(getattr(cls, h) is getattr(Effect, h) for h in _NO_OP_HOOKS)
-    )
-    if ok:
-        seed = Specimen.bachmann2017()
-        try:
-            effect = cls(**{k: _active_value(p, seed) for k, p in cls.params.items()})
-            terms = tuple(effect.terms(RockingParams.from_specimen(seed), seed))
-            ok = bool(terms) and _term_refusal("mujoco", effect, terms) is None
-        except Exception:  # a user's effect that breaks here is not realised; it must not break the others
-            ok = False
-    _BY_TERMS[cls] = ok
-    return ok
-
-
-class _RealisedEffects:
-    """``effects_supported`` read live from the effect registry (it may grow after import), on the class and on
-    instances: the effects with a route of their own and those realised through their moment terms."""
-
-    def __get__(self, obj: Any, objtype: Any = None) -> frozenset[str]:
-        from housner.effects import EFFECTS, discover_effects
-
-        discover_effects()
-        return _OWN_EFFECTS | frozenset(n for n, cls in tuple(EFFECTS.items()) if _realised_by_terms(cls))
-
-
-def _terms_of(specimen: Specimen, effects: tuple) -> tuple[Any, list]:
-    """The rocking parameters and, for each effect realised through terms, (effect, its terms).
-
-    As :func:`housner.effects.apply_effects` forms them: the parameters after every ``modify_params`` in the
-    order of the stages, then each effect's ``terms`` from them, in that order.
-    """
-    from housner.model import RockingParams
-
-    ordered = sorted(effects, key=lambda e: e.stage)
-    prm = RockingParams.from_specimen(specimen)
-    for e in ordered:
-        prm = e.modify_params(prm, specimen)
-    out = []
-    for e in ordered:
-        if e.name not in _OWN_EFFECTS:
-            e.check(specimen)
-            out.append((e, tuple(e.terms(prm, specimen))))
-    return prm, out
-
-
-def _moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: float, nstep: int) -> tuple | None:
-    """The couple of the effects' moment terms on the theta hinge, and the terms described; None without terms.
-
-    Returns ``(couple, described)``: ``couple(i, theta, theta_dot) -> float`` is the couple [N m] over engine
-    step i (of length ``h`` [s], from t = i h) from the state at its start, theta [rad] and theta_dot [rad/s]:
-    s I0 times the sum of the terms [rad/s^2] in the kernel's reduced coordinates on pivot
-    s = sgn(theta) (sgn(theta_dot) at theta = 0): phi = s theta, w = s theta_dot, a = s ug''(i h)/g,
-    v = 0, alpha and p^2 of pivot s. I0 = ``specimen.inertia`` [kg m^2] is the model's inertia about a
-    pivot (the rocking parameters of an effect MuJoCo realises are the specimen's, p^2 = m g R / I0), so the
-    couple turns the block with the acceleration the terms give; a generalised force on theta is a pure
-    couple, the same moment about the pivot as about the centre of mass.
-    """
-    if all(e.name in _OWN_EFFECTS for e in effects):
-        return None
-    from housner.effects.terms import TermSet
-    from housner.units import G
-
-    prm, by_effect = _terms_of(specimen, effects)
-    terms = tuple(t for _e, ts in by_effect for t in ts)
-    if not terms:
-        return None
-    fns = tuple((t.fn, np.array(t.q, dtype=np.float64)) for t in terms)
-    i0 = specimen.inertia
-    pos = (prm.alpha_pos, prm.p_pos * prm.p_pos)
-    neg = (prm.alpha_neg, prm.p_neg * prm.p_neg)
-    t_start = np.arange(nstep) * h
-    times = t_start.tolist()
-    ug = (np.interp(t_start, motion.t, motion.acc) / G).tolist()  # ug''/g at the start of each step [-]
-
-    def couple(i: int, theta: float, theta_dot: float) -> float:
-        if theta > 0.0 or (theta == 0.0 and theta_dot >= 0.0):
-            s, (alpha, p2) = 1.0, pos
-        else:
-            s, (alpha, p2) = -1.0, neg
-        phi, w, t, a = s * theta, s * theta_dot, times[i], s * ug[i]
-        acc = 0.0
-        for fn, q in fns:
-            acc += fn(phi, w, t, a, 0.0, s, alpha, p2, q)
-        return s * i0 * acc
-
-    return couple, TermSet(terms).describe()
-
-
-def _roll_with_couple(model: Any, data: Any, state: np.ndarray, ctrl: np.ndarray, warm: np.ndarray,
-                      couple: Any, first: int) -> np.ndarray:  # fmt: skip
-    """One chunk as :func:`mujoco.rollout.rollout` runs it, with the couple [N m] on the theta hinge.
-
-    The chunk's steps are steps ``first``, ``first + 1``, ... of the record; before each, ``couple(i,
-    theta, theta_dot)`` is evaluated from the state and set in ``data.qfrc_applied`` (reset to 0 at the
-    end). Returns the full physics state after each step, rollout's ``out[0]``; with a zero couple it is
-    the rollout's, bit for bit (``tests/test_mujoco_terms.py``).
-    """
-    import mujoco
-
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    mujoco.mj_setState(model, data, state, spec)
-    data.qacc_warmstart[:] = warm
-    out = np.empty((ctrl.shape[0], state.size))
-    qpos, qvel, qfrc, dctrl = data.qpos, data.qvel, data.qfrc_applied, data.ctrl
-    try:
-        for i in range(ctrl.shape[0]):
-            dctrl[:] = ctrl[i]
-            qfrc[_THETA_DOF] = couple(first + i, float(qpos[_THETA_DOF]), float(qvel[_THETA_DOF]))
-            mujoco.mj_step(model, data)
-            mujoco.mj_getState(model, data, out[i], spec)
-    finally:
-        qfrc[_THETA_DOF] = 0.0
-    return out
-
-
-class MujocoEngine(ImpactLawEngine, Engine):
+class MujocoEngine(PlanarEngine):
     """The planar rocking block in MuJoCo, driven by the d'Alembert force of the ground acceleration.
 
     Parameters
@@ -382,10 +188,7 @@ class MujocoEngine(ImpactLawEngine, Engine):
     noslip_iterations : int
         MuJoCo no-slip post-solver iterations (0 = off).
     impact_energy_factor : float
-        Energy the block keeps at each impact as a fraction of what the
-        contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
-        1 (default): the contact alone.
+        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
     integrator : {"Euler", "implicitfast", "implicit", "RK4"}
     iterations, tolerance : int, float
         Constraint-solver iterations and tolerance.
@@ -477,24 +280,13 @@ class MujocoEngine(ImpactLawEngine, Engine):
 
     def version(self) -> str:
         """The MuJoCo package version."""
-        import mujoco
-
         return mujoco.__version__
 
     def mjcf(self, specimen: Specimen) -> str:
         """The MJCF text of ``specimen`` with this engine's settings."""
         return mjcf_from_specimen(specimen, **{k: v for k, v in self._settings.items() if k in MJCF_DEFAULTS})
 
-    def __getstate__(self) -> dict:  # compiled models stay in their process
-        return {"_settings": self._settings}
-
-    def __setstate__(self, state: dict) -> None:
-        self._settings = state["_settings"]
-        self._cache = {}
-
     def _model(self, specimen: Specimen):
-        import mujoco
-
         entry = self._cache.get(specimen)
         if entry is None:
             model = mujoco.MjModel.from_xml_string(self.mjcf(specimen))
@@ -518,18 +310,8 @@ class MujocoEngine(ImpactLawEngine, Engine):
         lies above Housner's r, lightly damped contacts are added (dampratio
         0.1, and direct stiffness with little damping): the only knobs that
         could give energy back at an impact. Below Housner's r, over-damped
-        contacts (dampratio 1-8) at the default step.
-
-        Parameters
-        ----------
-        specimen : Specimen
-        target_r : float
-            Target kinetic-energy ratio at impact [-].
-
-        Returns
-        -------
-        list of dict
-            Keyword settings of :class:`MujocoEngine`.
+        contacts (dampratio 1-8) at the default step. Returns keyword settings of :class:`MujocoEngine`
+        for ``target_r``, the target kinetic-energy ratio at impact [-].
         """
         soft = (0.9, 0.95, 0.001, 0.5, 2.0)
         stiff = (0.99, 0.999, 0.0001, 0.5, 2.0)
@@ -571,9 +353,6 @@ class MujocoEngine(ImpactLawEngine, Engine):
         return super().effect_refusal(specimen, effects)
 
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
-        import mujoco
-        from mujoco import rollout
-
         model, data = self._model(specimen)
         # every call sets the hinge's damping (the model is cached per specimen): c I0 [N m s], 0 without the effect
         model.dof_damping[_THETA_DOF] = sum(e.c for e in effects if e.name == "rotational_damping") * specimen.inertia

@@ -63,20 +63,20 @@ import math
 import os
 import sys
 import time
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
+
 from housner.engines._planar import (
     IMPACT_LAW_RANGE,
+    OVERTURN_ANGLE,
+    ROCKING_TOL,
+    RUNAWAY_M,
     ImpactLaw,
-    ImpactLawEngine,
-    checked_settings,
+    PlanarEngine,
     release_state,
-    sampled_response,
     substeps,
 )
-from housner.engines.base import Engine
-
 from housner.errors import EngineError, EngineUnavailable
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -90,20 +90,6 @@ INSTALL = "pip install -e '.[opensees]'  (or: pip install 'openseespy>=3.7.1.2,<
 
 #: The system libraries openseespy's Linux build loads (named when it fails to load them).
 SYSTEM_LIBRARIES = "apt-get install libblas3 liblapack3"
-
-#: |theta| above ROCKING_TOL * alpha counts as rocking [-] (impact and uplift detection); below it
-#: the block is at rest. The penalty contact tilts the block at rest under 0.9 g tan(alpha) by
-#: about 2e-4 alpha.
-ROCKING_TOL = 5e-3
-
-#: |theta| at which the block has fallen [rad]; the engine stops and holds theta there.
-OVERTURN_ANGLE = math.pi / 2
-
-#: A centre of mass farther than this from its start [m] has run away (slid off or diverged).
-_RUNAWAY_M = 10.0
-
-#: Fraction of the rocking threshold taken as "still at rest" when dating the uplift.
-_QUIET = 2e-3
 
 #: Axial and bending stiffness of the beams from the centre of mass to the corners [N], [N m^2].
 _BEAM_EA, _BEAM_EI = 1.0e10, 1.0e8
@@ -135,7 +121,7 @@ def _opensees():
     if "openseespy.opensees" not in sys.modules:
         atexit.register(_quiet_exit)
     try:
-        import openseespy.opensees as ops
+        import openseespy.opensees as ops  # optional engine
     except ImportError as e:
         raise EngineUnavailable(
             f"engine 'opensees' needs the openseespy package ({e}); install it with: {INSTALL}"
@@ -148,14 +134,13 @@ def _opensees():
     return ops
 
 
-class OpenSeesEngine(ImpactLawEngine, Engine):
+class OpenSeesEngine(PlanarEngine):
     """OpenSees' rigid frame on damped no-tension contact springs with Coulomb friction, uniform excitation.
 
     Parameters
     ----------
     timestep : float
-        Longest step [s]: each sample interval of a motion is cut into the
-        fewest equal steps no longer than this.
+        Longest step [s] (:class:`housner.engines._planar.PlanarEngine`).
     contact_stiffness : float
         k_n [N/m]: stiffness of each of the two normal springs per corner (the
         bearing's and the damped one's), so 2 k_n per corner in contact.
@@ -170,10 +155,7 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
         Newton iterations stop when the norm of the unbalanced forces is below
         this [N, N m].
     impact_energy_factor : float
-        Energy the block keeps at each impact as a fraction of what the
-        contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
-        1 (default): the contact alone.
+        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
 
     Notes
     -----
@@ -193,7 +175,6 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
 
     name = "opensees"
     package = "openseespy"
-    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
 
     #: Default settings (2026-11-24, openseespy 3.7.1.2, seed specimen): first-impact r within
     #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.2 CPU s per simulated s.
@@ -206,8 +187,8 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
         "impact_energy_factor": 1.0,
     }
 
-    #: Accepted range of each setting (low, high), low excluded for the timestep and the stiffness.
-    _RANGES: ClassVar[dict] = {
+    LABEL = "OpenSees"
+    RANGES: ClassVar[dict] = {
         "timestep": (1e-6, 1e-2),
         "contact_stiffness": (1e4, 1e10),
         "contact_damping": (0.0, 1e-1),
@@ -215,22 +196,11 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
         "tolerance": (1e-9, 1.0),
         "impact_energy_factor": IMPACT_LAW_RANGE,
     }
+    STRICT = ("timestep", "contact_stiffness", "impact_energy_factor")
 
-    def __init__(self, **settings: Any):
-        _opensees()  # a missing package is said before any long work
-        self._settings = checked_settings(
-            "OpenSees",
-            self.DEFAULTS,
-            self._RANGES,
-            settings,
-            strict=("timestep", "contact_stiffness", "impact_energy_factor"),
-        )
-
-    def __getstate__(self) -> dict:
-        return {"settings": dict(self._settings)}
-
-    def __setstate__(self, state: dict) -> None:
-        self.__init__(**state["settings"])
+    @classmethod
+    def require(cls):
+        return _opensees()
 
     @classmethod
     def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
@@ -339,19 +309,15 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
                     self._retry(ops, motion, i, h)
                 x, th = disp(1, 1), -disp(1, 3)
                 theta[i], theta_dot[i] = th, -vel(1, 3)
-                if not (abs(x) < _RUNAWAY_M and math.isfinite(th) and math.isfinite(x)):
-                    raise EngineError(
-                        f"OpenSees failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not "
-                        f"finite or ran away (x = {x:.6g} m, theta = {th:.6g} rad); a block that slides needs more "
-                        "`friction`, one that diverges a smaller `timestep`"
-                    )
+                if not (abs(x) < RUNAWAY_M and math.isfinite(th) and math.isfinite(x)):
+                    raise self.diverged(motion, i, f"x = {x:.6g} m, theta = {th:.6g} rad")
                 if abs(th) >= OVERTURN_ANGLE:
                     overturned, last = True, i
                     break
         finally:
             ops.wipe()
-        return self._response(specimen, motion, theta, theta_dot, last, overturned, h, k, retried,
-                              time.perf_counter() - wall0)  # fmt: skip
+        wall = time.perf_counter() - wall0
+        return self._response(specimen, motion, theta, theta_dot, last, overturned, h, k, wall, retried_samples=retried)
 
     def _steps_with_law(self, ops, motion: GroundMotion, i: int, k: int, h: float, law: ImpactLaw) -> int:
         """Sample interval i step by step, scaling every node's velocity at an impact; 1 if it was retried."""
@@ -384,17 +350,3 @@ class OpenSeesEngine(ImpactLawEngine, Engine):
             f"OpenSees failed on motion {motion.name!r} at t = {ops.getTime():.6g} s: Newton did not converge "
             f"even in steps of {h / _RETRIES[-1][0]:.3g} s; try a smaller `timestep` or a larger `tolerance`"
         )
-
-    def _response(self, specimen, motion, theta, theta_dot, last, overturned, h, k, retried, wall) -> Response:
-        """The Response from the sampled theta, theta' [rad, rad/s], held at +-pi/2 after an overturn."""
-        info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": last * k,
-            "retried_samples": retried,
-            "wall_time_s": wall,
-        }
-        return sampled_response(self, specimen, motion, theta, theta_dot, last, overturned, info,
-                                rocking_tol=ROCKING_TOL, quiet=_QUIET, overturn_angle=OVERTURN_ANGLE)  # fmt: skip

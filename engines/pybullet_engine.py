@@ -62,9 +62,11 @@ model. COMPDYN 2017, eqs. 2, 4 and 8.
 
 from __future__ import annotations
 
+import ctypes
 import math
 import os
 import shutil
+import sys
 import tempfile
 import time
 import weakref
@@ -72,12 +74,19 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from housner.engines._planar import IMPACT_LAW_RANGE, ImpactLawEngine, gravity_x, release_state, substeps
-from housner.engines.base import Engine
-from housner.engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
 
-from housner.errors import EngineError
-from housner.impacts import impact_times, uplift_time
+from housner.engines._planar import (
+    IMPACT_LAW_RANGE,
+    OVERTURN_ANGLE,
+    ROCKING_TOL,
+    RUNAWAY_M,
+    PlanarEngine,
+    gravity_x,
+    release_state,
+    substeps,
+)
+from housner.engines.urdf import JOINTS, URDF_DEFAULTS, write_urdf
+from housner.errors import EngineError, unknown_choice
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -85,34 +94,12 @@ from housner.units import G
 
 __all__ = ["PybulletEngine", "ROCKING_TOL", "OVERTURN_ANGLE"]
 
-#: |theta| above ROCKING_TOL * alpha counts as rocking [-]. Below it the block is
-#: taken to be at rest: the rigid contact lets each pivot sink about 10 um into
-#: the ground, and when the load shifts to one pivot (ground acceleration near
-#: g tan alpha) the block tilts by up to about 2e-3 alpha without any uplift.
-#: 5e-3 alpha is 0.74 mrad for the seed specimen, just below the 0.8 mrad
-#: accuracy of the seed's camera (0.0053 alpha).
-ROCKING_TOL = 5e-3
-
-#: |theta| at which the block is "fallen" [rad]: it lies on its side (its
-#: collision strips are then the only thing below the pivot line, so the
-#: engine stops there and holds theta at +-pi/2).
-OVERTURN_ANGLE = math.pi / 2
-
-#: Fraction of the rocking threshold taken as "still at rest" when dating the
-#: uplift: 2e-3 * 5e-3 alpha = 1e-5 alpha, four times the largest tilt of the
-#: block at rest under load (the two pivots sink by different nanometres).
-_QUIET = 2e-3
-
 #: Sliding is measured while |theta| stays below this [rad]: past it a falling
 #: block's normal force fades and it slides, as a real one does.
 _SLIP_ANGLE = math.pi / 4
 
 #: The seed specimen's p [1/s]: tuning candidates are scaled from it.
 _P_SEED = 4.8883
-
-#: A centre of mass displaced farther than this [m] has run away (diverged, or
-#: slid off for want of friction): the engine stops with an EngineError.
-_RUNAWAY_M = 10.0
 
 _SETTING_DOCS = {
     "timestep": "largest engine step [s]",
@@ -133,7 +120,7 @@ _SETTING_DOCS = {
 }
 
 
-class PybulletEngine(ImpactLawEngine, Engine):
+class PybulletEngine(PlanarEngine):
     """PyBullet's rigid block on a rigid plane, driven by the d'Alembert force.
 
     Parameters
@@ -177,10 +164,7 @@ class PybulletEngine(ImpactLawEngine, Engine):
         edge stands ``strip_width * sin(bevel)`` above the ground, so only the
         outer edges touch (see :func:`housner.engines.urdf.urdf_from_specimen`).
     impact_energy_factor : float
-        Energy the block keeps at each impact as a fraction of what the
-        contact leaves it [-], in (0, 1]: the adapters' impact law
-        (:class:`housner.engines._planar.ImpactLaw`) for an r below the contact's own.
-        1 (default): the contact alone.
+        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
 
     Notes
     -----
@@ -202,7 +186,7 @@ class PybulletEngine(ImpactLawEngine, Engine):
 
     name = "pybullet"
     package = "pybullet"
-    effects_supported = frozenset({"restitution"})
+    LABEL = "PyBullet"
 
     #: Default settings: the choice of ``housner tune pybullet``
     #: (housner.engines.tuning.tune) on 2026-11-21 for Specimen.bachmann2017() and
@@ -235,8 +219,6 @@ class PybulletEngine(ImpactLawEngine, Engine):
     def __init__(self, **settings: Any):
         unknown = sorted(set(settings) - set(self.DEFAULTS))
         if unknown:
-            from housner.errors import unknown_choice
-
             raise unknown_choice("PyBullet setting", unknown[0], self.DEFAULTS)
         s = dict(self.DEFAULTS)
         s.update(settings)
@@ -246,12 +228,6 @@ class PybulletEngine(ImpactLawEngine, Engine):
         self._urdf: dict[tuple, Path] = {}
 
     # ------------------------------------------------------------------
-    def __getstate__(self) -> dict:
-        return {"settings": dict(self._settings)}
-
-    def __setstate__(self, state: dict) -> None:
-        self.__init__(**state["settings"])
-
     def close(self) -> None:
         """Disconnect the PyBullet client and delete the temporary URDF files (reopened on next use)."""
         if self._finalizer is not None:
@@ -435,7 +411,7 @@ class PybulletEngine(ImpactLawEngine, Engine):
         pb = _pybullet()
 
         wall0 = time.perf_counter()
-        H, B, alpha = specimen.H, specimen.B, specimen.alpha
+        H, B = specimen.H, specimen.B
         k, h = substeps(motion.dt, self._settings["timestep"])
         cid, body = self.build(specimen, h)
 
@@ -470,62 +446,25 @@ class PybulletEngine(ImpactLawEngine, Engine):
                         pb.resetJointState(body, j, q, c * v, physicsClientId=cid)
             (q0, v0, *_), (q1, v1, *_), (q2, v2, *_) = get_states(body, joints, physicsClientId=cid)
             states[i] = (q0, q1, q2, v0, v1, v2)
-            if not (abs(q0) < _RUNAWAY_M and abs(q1) < _RUNAWAY_M and math.isfinite(q2) and math.isfinite(v2)):
-                raise EngineError(
-                    f"PyBullet failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: the state is not "
-                    f"finite or ran away (x = {q0:.6g} m, z = {q1:.6g} m, theta = {q2:.6g} rad; limit "
-                    f"{_RUNAWAY_M:g} m); a block that slides needs more `lateral_friction`, one that diverges "
-                    f"a smaller `timestep`"
-                )
+            if not (abs(q0) < RUNAWAY_M and abs(q1) < RUNAWAY_M and math.isfinite(q2) and math.isfinite(v2)):
+                state = f"x = {q0:.6g} m, z = {q1:.6g} m, theta = {q2:.6g} rad; limit {RUNAWAY_M:g} m"
+                raise self.diverged(motion, i, state, friction="lateral_friction")
             if abs(q2) >= OVERTURN_ANGLE:
                 overturned = True
                 last = i
                 break
 
-        t = motion.t
-        theta = states[:, 2].copy()
-        theta_dot = states[:, 5].copy()
-        overturn_time = math.nan
-        if overturned:
-            a, b = abs(theta[last - 1]), abs(theta[last])
-            frac_ot = (OVERTURN_ANGLE - a) / (b - a) if b > a else 1.0
-            overturn_time = float(t[last - 1] + min(max(frac_ot, 0.0), 1.0) * motion.dt)
-            sign = math.copysign(1.0, theta[last])
-            theta[last:] = sign * OVERTURN_ANGLE
-            theta_dot[last:] = 0.0
-            states[last + 1 :] = states[last]
         # Sliding: the x drift of the pivot carrying the block, while |theta| < pi/4 (a falling block slides).
         upright = np.abs(states[: last + 1, 2]) < _SLIP_ANGLE
         x_com, th = states[: last + 1, 0][upright], states[: last + 1, 2][upright]
         sgn = np.sign(th)
         slip = x_com + sgn * B * np.cos(th) - H * np.sin(th) - sgn * B
-        impacts = impact_times(t[: last + 1], theta[: last + 1], ROCKING_TOL * alpha)
-        uplift = uplift_time(t[: last + 1], theta[: last + 1], ROCKING_TOL * alpha, th0 != 0.0 or om0 != 0.0, _QUIET)
-        theta_max = OVERTURN_ANGLE if overturned else float(np.max(np.abs(theta)))
-        n_steps = (last) * k
-        info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": n_steps,
-            "max_pivot_slip_m": float(np.max(np.abs(slip), initial=0.0)),
-            "max_penetration_m": float(max(0.0, -np.min(_pivot_z(states[: last + 1], H, B)))),
-            "wall_time_s": time.perf_counter() - wall0,
-        }
-        return Response(
-            t=t,
-            theta=theta,
-            theta_dot=theta_dot,
-            impact_times=impacts,
-            theta_max=theta_max,
-            alpha=alpha,
-            overturned=overturned,
-            overturn_time=overturn_time,
-            uplift_time=uplift,
-            engine=self.name,
-            info=info,
-        )
+        return self._response(
+            specimen, motion, states[:, 2].copy(), states[:, 5].copy(), last, overturned, h, k,
+            time.perf_counter() - wall0,
+            max_pivot_slip_m=float(np.max(np.abs(slip), initial=0.0)),
+            max_penetration_m=float(max(0.0, -np.min(_pivot_z(states[: last + 1], H, B)))),
+        )  # fmt: skip
 
 
 # ----------------------------------------------------------------------
@@ -585,8 +524,6 @@ def _pybullet():
     file descriptors 1 and 2 pointed at the null device, C's stdio flushed before
     they are restored. Where that cannot be done, the module is imported plainly.
     """
-    import sys
-
     pb = sys.modules.get("pybullet")
     if pb is not None:
         return pb
@@ -600,7 +537,7 @@ def _pybullet():
     except (OSError, ValueError, AttributeError):
         for _fd, copy in saved:
             os.close(copy)
-        import pybullet as pb
+        import pybullet as pb  # lazy: imported with its build banner silenced
 
         return pb
     try:
@@ -610,7 +547,7 @@ def _pybullet():
                 os.dup2(devnull, fd)
         finally:
             os.close(devnull)
-        import pybullet as pb
+        import pybullet as pb  # lazy: imported with its build banner silenced
 
         _flush_c_stdio()
     finally:
@@ -623,8 +560,6 @@ def _pybullet():
 def _flush_c_stdio() -> None:
     """fflush(NULL): push C stdio buffers (the banner) out while fds 1 and 2 are still the null device."""
     try:
-        import ctypes
-
         ctypes.CDLL(None).fflush(None)
     except (OSError, AttributeError, TypeError):
         pass

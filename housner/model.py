@@ -73,14 +73,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict
 
 import numpy as np
 
 from housner import _kernel
 from housner._validate import finite as _finite
-from housner.motion import GroundMotion
+from housner.motion import VERTICAL, GroundMotion
 from housner.response import Response
+from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -95,185 +96,6 @@ PH_MAX = 0.01
 MAX_SUBSTEPS = 100_000
 #: Default rest rule: a block whose next peak would stay below REST_TOL * alpha is at rest [-].
 REST_TOL = 1e-6
-
-
-@dataclass(frozen=True)
-class RockingParams:
-    """Parameters of the rocking equation, per pivot.
-
-    Parameters
-    ----------
-    alpha_pos, alpha_neg : float
-        Slenderness [rad] when rocking on the +x corner (theta > 0) and on the
-        -x corner (theta < 0); equal for a symmetric block.
-    p_pos, p_neg : float
-        Frequency parameter [1/s] when rocking on each corner.
-    r : float
-        Kinetic-energy ratio at impact [-], in [0, 1]: theta'_after =
-        sqrt(r_eff) theta'_before. Used for the impacts of a side whose own
-        ratio (``r_pos``, ``r_neg``) is None.
-    r_amp_exponent : float
-        Exponent n of an amplitude-dependent restitution [-]:
-        r_eff = clip(r_s' (|theta'_before| / (p_s alpha_s))^n, 0, 1), where
-        r_s' is the ratio of the impact (``r_pos``, ``r_neg`` or ``r``), p_s
-        and alpha_s belong to the corner the block rocked on before the
-        impact; p_s alpha_s is the impact speed of a block released from
-        theta = alpha in the linearised model, so r_eff = r at that reference
-        speed. n = 0 (default) is Housner's constant r; n > 0 makes small
-        impacts more dissipative.
-    damping : float
-        Rotational viscous damping rate c [1/s]: the equation of motion gains
-        the term -c theta'. Equivalent to a viscous moment -c I0 theta' about
-        the pivot; the rocking energy E = theta'^2/2 + p^2 (cos(alpha - |theta|)
-        - cos(alpha)) then decays as dE/dt = -c theta'^2. 0 (default) is
-        Housner's model.
-    r_pos, r_neg : float or None
-        Restitution [-], in [0, 1], of the impact that lands on the +x corner
-        (it ends a half-cycle on the -x corner, theta < 0, and starts one on
-        the +x corner, theta > 0), and of the impact that lands on the -x
-        corner: theta'_after = sqrt(r_pos) theta'_before, and likewise. None
-        (default) means ``r``. Like ``r`` this is the ratio of the squared
-        angular velocities, which is the kinetic-energy ratio when both
-        corners have the same inertia; with inertias I+ and I- about the
-        corners the kinetic energy changes by r_pos I+ / I- (and r_neg I- / I+).
-        A block whose centre of mass is off-centre has r_pos != r_neg (see
-        :class:`housner.effects.AsymmetricPivots`).
-
-    Notes
-    -----
-    With alpha_pos == alpha_neg, p_pos == p_neg, r_pos and r_neg None (or
-    equal to r), r_amp_exponent == 0 and damping == 0 the model is exactly
-    Housner's (seed eq. 2 with eq. 4).
-
-    ``dataclasses.replace(params, r=x)`` changes only the impacts of sides
-    without their own ratio; :meth:`with_r` rescales the per-side ratios too.
-    """
-
-    alpha_pos: float
-    alpha_neg: float
-    p_pos: float
-    p_neg: float
-    r: float
-    r_amp_exponent: float = 0.0
-    damping: float = 0.0
-    r_pos: float | None = None
-    r_neg: float | None = None
-
-    def __post_init__(self) -> None:
-        for key in ("alpha_pos", "alpha_neg"):
-            v = _finite(key, getattr(self, key))
-            if not 0.0 < v < math.pi / 2:
-                raise ValueError(f"`{key}` must lie in (0, pi/2) rad, got {v!r}")
-            object.__setattr__(self, key, v)
-        for key in ("p_pos", "p_neg"):
-            v = _finite(key, getattr(self, key))
-            if v <= 0.0:
-                raise ValueError(f"`{key}` must be positive [1/s], got {v!r}")
-            object.__setattr__(self, key, v)
-        r = _finite("r", self.r)
-        if not 0.0 <= r <= 1.0:
-            raise ValueError(f"`r` must lie in [0, 1], got {r!r}")
-        object.__setattr__(self, "r", r)
-        for key in ("r_pos", "r_neg"):
-            v = getattr(self, key)
-            if v is None:
-                continue
-            v = _finite(key, v)
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"`{key}` must lie in [0, 1] or be None, got {v!r}")
-            object.__setattr__(self, key, v)
-        object.__setattr__(self, "r_amp_exponent", _finite("r_amp_exponent", self.r_amp_exponent))
-        c = _finite("damping", self.damping)
-        if c < 0.0:
-            raise ValueError(f"`damping` must be >= 0 [1/s], got {c!r}")
-        object.__setattr__(self, "damping", c)
-
-    @classmethod
-    def from_specimen(cls, specimen: Specimen, r: float | None = None) -> RockingParams:
-        """Housner's symmetric parameters of ``specimen``; ``r`` [-] defaults to ``specimen.r_housner``."""
-        if not isinstance(specimen, Specimen):
-            raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
-        alpha = specimen.alpha
-        p = specimen.frequency_parameter
-        return cls(alpha, alpha, p, p, specimen.r_housner if r is None else r)
-
-    @property
-    def is_housner(self) -> bool:
-        """True for the plain symmetric Housner model (no asymmetry, constant r, no damping)."""
-        return (
-            self.alpha_pos == self.alpha_neg
-            and self.p_pos == self.p_neg
-            and self.r_impact_pos == self.r
-            and self.r_impact_neg == self.r
-            and self.r_amp_exponent == 0.0
-            and self.damping == 0.0
-        )
-
-    @property
-    def r_impact_pos(self) -> float:
-        """Kinetic-energy ratio [-] of an impact that lands on the +x corner (``r_pos``, else ``r``)."""
-        return self.r if self.r_pos is None else self.r_pos
-
-    @property
-    def r_impact_neg(self) -> float:
-        """Kinetic-energy ratio [-] of an impact that lands on the -x corner (``r_neg``, else ``r``)."""
-        return self.r if self.r_neg is None else self.r_neg
-
-    def with_r(self, r: float) -> RockingParams:
-        """These parameters with restitution ``r`` [-], keeping the split between the sides.
-
-        ``r`` replaces the common ratio; each per-side ratio that is set is
-        scaled by r / self.r (clipped to 1), so that a block with r_pos !=
-        r_neg keeps the ratio r_pos / r_neg of its two impacts. When r is the
-        geometric mean of r_pos and r_neg (as :class:`housner.effects.
-        AsymmetricPivots` sets it) it stays so, up to the clip. With
-        self.r == 0 the set per-side ratios become ``r``.
-        """
-        r = _finite("r", r)
-        if not 0.0 <= r <= 1.0:
-            raise ValueError(f"`r` must lie in [0, 1], got {r!r}")
-
-        def scaled(v):
-            if v is None:
-                return None
-            return r if self.r == 0.0 else min(1.0, v * (r / self.r))
-
-        return replace(self, r=r, r_pos=scaled(self.r_pos), r_neg=scaled(self.r_neg))
-
-    def mirrored(self) -> RockingParams:
-        """The same block seen in a mirror (x -> -x): the +x and -x sides swapped.
-
-        Simulating the mirrored parameters under the negated ground motion
-        gives exactly (bit for bit) the negated rotation history.
-        """
-        return replace(
-            self,
-            alpha_pos=self.alpha_neg,
-            alpha_neg=self.alpha_pos,
-            p_pos=self.p_neg,
-            p_neg=self.p_pos,
-            r_pos=self.r_neg,
-            r_neg=self.r_pos,
-        )
-
-    @property
-    def p_max(self) -> float:
-        """The larger frequency parameter of the two corners [1/s]."""
-        return max(self.p_pos, self.p_neg)
-
-    def as_array(self) -> np.ndarray:
-        """The kernel's parameter vector (float64, layout of ``housner._kernel``)."""
-        v = np.empty(_kernel.N_PARAMS)
-        v[_kernel.I_ALPHA_POS] = self.alpha_pos
-        v[_kernel.I_ALPHA_NEG] = self.alpha_neg
-        v[_kernel.I_P_POS] = self.p_pos
-        v[_kernel.I_P_NEG] = self.p_neg
-        v[_kernel.I_R] = self.r
-        v[_kernel.I_R_POS] = self.r_impact_pos
-        v[_kernel.I_R_NEG] = self.r_impact_neg
-        v[_kernel.I_R_EXP] = self.r_amp_exponent
-        v[_kernel.I_DAMPING] = self.damping
-        return v
 
 
 def default_substeps(p: float, dt: float) -> int:
@@ -466,8 +288,6 @@ def simulate_many(
 
 def _vertical(motions, terms) -> np.ndarray:
     """The terms' v [-]: each motion's vertical channel over g when the terms read it, else zeros."""
-    from housner.motion import VERTICAL
-
     if not terms.vertical:
         return np.zeros(sum(mo.n for mo in motions))
     for mo in motions:
@@ -478,15 +298,17 @@ def _vertical(motions, terms) -> np.ndarray:
 
 def _run_kernel(terms, parallel: bool, acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta,
                 theta_dot, impacts, imp_off, out) -> None:  # fmt: skip
-    """Run the plain kernel (``terms`` None) or the one generated for ``terms`` (which also take v_g and q)."""
+    """Run the plain kernel (``terms`` None: no v_g nor q) or the one generated for ``terms``."""
+    mod = _kernel if terms is None else terms.kernel()
+    kern = mod.run_batch_parallel if parallel else mod.run_batch
     if terms is None:
-        kern = _kernel.run_batch_parallel if parallel else _kernel.run_batch
-        kern(acc_g, offsets, dts, ms, prm_a, th0, thd0, rest_tol, record, theta, theta_dot, impacts, imp_off, out)
-    else:
-        mod = terms.kernel()
-        kern = mod.run_batch_parallel if parallel else mod.run_batch
-        kern(acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta, theta_dot, impacts, imp_off,
-             out)  # fmt: skip
+        v_g, q = acc_g, _no_terms(dts.size)
+    kern(acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta, theta_dot, impacts, imp_off, out)
+
+
+def _no_terms(n_rec: int) -> np.ndarray:
+    """The terms' parameters of ``n_rec`` records without terms (the plain kernel reads none)."""
+    return np.empty((n_rec, 0))
 
 
 def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: float, parallel: bool, terms=None):
@@ -620,7 +442,8 @@ def theta_max_many(
     out = np.empty((n_rec, 6))
     empty = np.empty(0)
     kern = _kernel.run_batch_parallel if parallel and n_rec > 1 else _kernel.run_batch
-    kern(acc_g, offsets, dts, ms, prm_a, th0, thd0, tol, False, empty, empty, empty, np.zeros(n_rec + 1, np.int64), out)
+    kern(acc_g, acc_g, offsets, dts, ms, prm_a, _no_terms(n_rec), th0, thd0, tol, False, empty, empty, empty,
+         np.zeros(n_rec + 1, np.int64), out)  # fmt: skip
     overturned = out[:, 1] != 0.0
     ratio = np.where(overturned, np.inf, out[:, 0] / specimen.alpha)
     return ratio, overturned, out[:, 4].astype(np.int64)

@@ -1,36 +1,32 @@
-"""Ground motions: uniformly sampled horizontal ground acceleration.
+"""Ground motions: uniformly sampled horizontal ground acceleration [m/s^2], and optional extra channels.
 
-Accelerations are stored in m/s^2 (SI inside). The readers convert once: a PEER
-AT2 file in the units its header names (g, cm/s^2, m/s^2, in/s^2, ...), a CSV
-column in the unit written in its header (``time [ms]``, ``ground_acc [g]``,
-``theta [deg]``; SI when none is written). Between samples the acceleration is
-taken as linear in time.
-
-Units understood (:func:`parse_unit`), with the factor to SI:
-
-* time: ``s`` (sec, seconds) 1, ``ms`` (msec) 1e-3, ``us`` (µs) 1e-6;
-* acceleration: ``m/s^2`` 1, ``g`` 9.80665, ``cm/s^2`` (gal, CM/S/S,
-  CM/SEC/SEC, cm/s2) 0.01, ``mm/s^2`` 1e-3, ``in/s^2`` 0.0254, ``ft/s^2`` 0.3048;
-* angle: ``rad`` 1, ``mrad`` 1e-3, ``urad`` (µrad) 1e-6, ``deg`` (°, degrees) pi/180.
+Accelerations are stored in m/s^2 (SI inside); the readers (:mod:`housner.readers`) convert
+once, from the units a file's header names. Between samples the acceleration is taken as
+linear in time.
 """
 
 from __future__ import annotations
 
-import csv
-import difflib
-import io
+import hashlib
 import math
-import re
-import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 
-from housner.errors import DataFileError
-from housner.units import G
+from housner.readers import (
+    CHANNEL_PREFIX,
+    QUANTITIES,
+    CsvColumns,
+    parse_unit,
+    read_at2,
+    read_csv_columns,
+    read_csv_header,
+    read_csv_motion,
+    read_csv_si,
+    uniform_step,
+)
 
 __all__ = [
     "CHANNEL_PREFIX",
@@ -45,77 +41,8 @@ __all__ = [
     "uniform_step",
 ]
 
-#: Relative tolerance on sample spacing for a CSV time column to count as uniform.
-_UNIFORM_RTOL = 1e-6
-#: Jitter of a rounded time column accepted as uniform: this share of the step, or half a unit of the
-#: last written digit, whichever is larger [-].
-_ROUNDING_SHARE = 0.01
-
-#: A time column written without a unit is read in seconds only if its step lies in this range [s]:
-#: 10 Hz to 100 kHz covers every strong-motion and shake-table record; a step outside it is far
-#: more likely milliseconds (or microseconds) taken for seconds than a real record.
-PLAUSIBLE_STEP = (1e-5, 0.1)
-
-#: The quantity each column of the suite's CSV formats measures (docs/campaign-format.md), SI unit in brackets.
-QUANTITIES = {"time": "time", "ground_acc": "acceleration", "theta": "angle"}
-
-#: SI unit of each quantity.
-SI_UNITS = {"time": "s", "acceleration": "m/s^2", "angle": "rad"}
-
-#: Extra measured channels of a motion are accelerations named ``ground_acc_<what>`` [m/s^2].
-CHANNEL_PREFIX = "ground_acc_"
 #: The vertical table acceleration [m/s^2], positive upward (g -> g + a_v).
 VERTICAL = "ground_acc_vertical"
-
-_LENGTH = {"m": 1.0, "cm": 0.01, "mm": 1e-3, "in": 0.0254, "inch": 0.0254, "inches": 0.0254, "ft": 0.3048}
-_ACC_EXPR = re.compile(r"^(m|cm|mm|in|inch|inches|ft)(?:/(?:s|sec)(?:\^2|2|/s|/sec)|\.?(?:s|sec)\^-2)$")
-_NAMED_UNITS: dict[str, tuple[str, str, float]] = {}
-for _q, _names, _label, _f in (
-    ("time", ("s", "sec", "secs", "second", "seconds"), "s", 1.0),
-    ("time", ("ms", "msec", "millisecond", "milliseconds"), "ms", 1e-3),
-    ("time", ("us", "usec", "microsecond", "microseconds"), "us", 1e-6),
-    ("acceleration", ("g", "g's"), "g", G),
-    ("acceleration", ("gal", "gals"), "cm/s^2", 0.01),
-    ("angle", ("rad", "rads", "radian", "radians"), "rad", 1.0),
-    ("angle", ("mrad", "milliradian", "milliradians"), "mrad", 1e-3),
-    ("angle", ("urad", "microradian", "microradians"), "urad", 1e-6),
-    ("angle", ("deg", "degs", "degree", "degrees", "°"), "deg", math.pi / 180.0),
-):
-    for _n in _names:
-        _NAMED_UNITS[_n] = (_q, _label, _f)
-_UNIT_CHOICES = {
-    "time": "s, ms, us",
-    "acceleration": "m/s^2, g, cm/s^2 (gal), mm/s^2, in/s^2, ft/s^2",
-    "angle": "rad, mrad, urad, deg",
-}
-
-
-def parse_unit(text: str) -> tuple[str, str, float] | None:
-    """Read a unit as written in a file header.
-
-    Parameters
-    ----------
-    text : str
-        The unit, e.g. ``"ms"``, ``"CM/SEC/SEC"``, ``"m/s²"``, ``"gal"``, ``"deg"``
-        (case, spaces, ``**2``, ``^2``, ``2`` and ``²`` are all accepted).
-
-    Returns
-    -------
-    (quantity, label, factor) or None
-        ``quantity`` is ``"time"``, ``"acceleration"`` or ``"angle"``, ``label``
-        the canonical unit, ``factor`` what multiplies a value in that unit to
-        give SI (s, m/s^2, rad). None when the unit is not understood.
-    """
-    s = str(text).strip().lower().replace(" ", "")
-    s = s.replace("\u00b5", "u").replace("\u03bc", "u").replace("\u00b2", "^2").replace("**2", "^2")
-    if s in _NAMED_UNITS:
-        return _NAMED_UNITS[s]
-    m = _ACC_EXPR.match(s)
-    if m:
-        length = m.group(1)
-        label = {"inch": "in", "inches": "in"}.get(length, length) + "/s^2"
-        return "acceleration", label, _LENGTH[length]
-    return None
 
 
 class _Channels(dict):
@@ -128,9 +55,6 @@ class _Channels(dict):
 
     def __reduce__(self):
         return (_Channels, (dict(self),))
-
-
-_NPTS_DT = re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([0-9.EeDd+-]+)", re.IGNORECASE)
 
 
 @dataclass(frozen=True, eq=False)
@@ -257,8 +181,6 @@ class GroundMotion:
         A motion without channels hashes as it did before channels existed.
         """
         if self._hash is None:
-            import hashlib
-
             h = hashlib.sha256()
             h.update(np.ascontiguousarray(self.acc).tobytes())
             h.update(np.array([self.dt, self.theta0, self.theta_dot0]).tobytes())
@@ -342,85 +264,16 @@ class GroundMotion:
         return cls(np.zeros(n), dt, name or f"free vibration theta0={theta0:.4g}", "free-vibration release", theta0)
 
     # ------------------------------------------------------------------
+
     @classmethod
     def from_at2(cls, path: str | Path, name: str | None = None, *, units: str | None = None) -> GroundMotion:
-        """Read a PEER AT2 record and convert it to m/s^2 in the units its header names.
+        """Read a PEER AT2 record in the units its header names (:func:`housner.readers.read_at2`).
 
-        Accepts the 1999 PEER layout and the NGA-West2 layout (4 header lines,
-        the fourth with ``NPTS= n, DT= dt``), CRLF line endings, and files
-        with more free-text header lines before the NPTS line or a trailing
-        ``***`` end marker.
-
-        The acceleration unit is read from the header lines up to the NPTS
-        line: a phrase ``UNITS OF <unit>`` / ``units are (<unit>)`` /
-        ``UNITS: <unit>``, or an acceleration unit written out (``CM/SEC/SEC``,
-        ``GAL``, ...); g, cm/s^2, m/s^2, mm/s^2, in/s^2 and ft/s^2 are understood
-        (:func:`parse_unit`). A header that names no unit, names one that is not
-        an acceleration (a velocity file in ``CM/SEC``), or names two different
-        ones is refused with an error naming the file and the line.
-
-        Parameters
-        ----------
-        path : path
-            The file.
-        name : str, optional
-            Name of the motion (default: the file's stem).
-        units : str, optional
-            Acceleration unit to use when the header names none (e.g. ``"g"``);
-            if the header names one, it must agree.
+        ``units``: the acceleration unit when the header names none (e.g. ``"g"``); if the header
+        names one, it must agree. ``name`` defaults to the file's stem.
         """
-        path = Path(path)
-        given = _acc_unit_arg(units)
-        try:
-            text = path.read_bytes().decode("utf-8", errors="replace")
-        except OSError as e:
-            raise DataFileError(path, f"cannot read: {e.strerror or e}") from None
-        lines = text.splitlines()
-        header_line = None
-        for i, line in enumerate(lines[:50]):
-            m = _NPTS_DT.search(line)
-            if m:
-                header_line = i
-                break
-        if header_line is None:
-            raise DataFileError(
-                path, "no 'NPTS= n, DT= dt' header line in the first 50 lines; is this a PEER AT2 file?"
-            )
-        npts = int(m.group(1))
-        try:
-            dt = float(m.group(2).replace("D", "E").replace("d", "e"))
-        except ValueError:
-            raise DataFileError(path, f"cannot read DT from {m.group(0)!r}", line=header_line + 1) from None
-        unit_label, factor, unit_where = _at2_units(path, lines[: header_line + 1], given)
-        values: list[float] = []
-        for i in range(header_line + 1, len(lines)):
-            line = lines[i].strip()
-            if not line:
-                continue
-            if line.startswith("*"):
-                break
-            for tok in line.split():
-                try:
-                    v = float(tok.replace("D", "E"))
-                except ValueError:
-                    raise DataFileError(path, f"not a number: {tok!r}", line=i + 1) from None
-                if not math.isfinite(v):
-                    raise DataFileError(path, f"acceleration is not finite: {tok!r}", line=i + 1)
-                values.append(v)
-        if not values:
-            raise DataFileError(path, "no acceleration samples after the header", line=header_line + 1)
-        if len(values) != npts:
-            raise DataFileError(path, f"header says NPTS={npts} but {len(values)} samples follow", line=header_line + 1)
-        if not (dt > 0 and math.isfinite(dt)):
-            raise DataFileError(path, f"DT must be positive, got {dt}", line=header_line + 1)
-        title = " / ".join(s.strip() for s in lines[1:header_line] if s.strip())[:200]
-        conv = f"g -> m/s^2 with g = {G}" if unit_label == "g" else f"{unit_label} -> m/s^2 x {factor:g}"
-        return cls(
-            acc=np.asarray(values) * factor,
-            dt=dt,
-            name=name or path.stem,
-            provenance=f"{path.name} (PEER AT2, {conv}; units {unit_where}); {title}",
-        )
+        acc, dt, provenance = read_at2(path, units=units)
+        return cls(acc=acc, dt=dt, name=name or Path(path).stem, provenance=provenance)
 
     @classmethod
     def from_csv(
@@ -432,326 +285,8 @@ class GroundMotion:
         units: str | None = None,
         name: str | None = None,
     ) -> GroundMotion:
-        """Read a CSV with a header line, a time column and an acceleration column.
-
-        The header may give each column's unit in brackets: ``time [ms]``,
-        ``ground_acc [g]`` (see :func:`parse_unit` for the units understood);
-        the values are converted once, here, to s and m/s^2. Without a unit the
-        time column is read in seconds (a step outside 1e-5 .. 0.1 s is then
-        refused as implausible) and the acceleration in ``units``.
-
-        Parameters
-        ----------
-        path : path
-            The file (UTF-8, with or without a byte-order mark).
-        time_column, acc_column : str
-            Column names (without the bracketed unit).
-        units : str, optional
-            Unit of the acceleration column when the header gives none
-            (default m/s^2); if the header gives one, it must agree.
-        name : str, optional
-            Name of the motion (default: the file's stem).
-
-        Sampling must be uniform to a relative 1e-6 of the step; errors name the
-        file, line and column.
-        """
-        path = Path(path)
-        default = _acc_unit_arg(units)
-        quantities = {time_column: "time", acc_column: "acceleration"}
-        table = read_csv_si(path, quantities, default_units={acc_column: units} if units else None)
-        t, a = table.values
-        dt = uniform_step(path, t, table.lines, time_column, assumed_seconds=table.units[0] is None)
-        unit = table.units[1] or (default[1] if default else "m/s^2")
-        return cls(acc=a, dt=dt, name=name or path.stem, provenance=f"{path.name} (CSV, {unit} -> m/s^2)")
-
-
-def _acc_unit_arg(units: str | None) -> tuple[str, str, float] | None:
-    """Check a ``units`` argument of the readers: None or an acceleration unit."""
-    if units is None:
-        return None
-    u = parse_unit(units)
-    if u is None or u[0] != "acceleration":
-        raise ValueError(f"`units` must be an acceleration unit ({_UNIT_CHOICES['acceleration']}), got {units!r}")
-    return u
-
-
-_UNITS_PHRASE = re.compile(r"\bUNITS?\b\s*(?:(?:OF|ARE|IS|IN|=|:)\s*)*\(?\s*([^\s,;()]+)", re.IGNORECASE)
-_ACC_WRITTEN = re.compile(
-    r"(?<![A-Za-z])(?:cm|mm|m|in|ft)\s*/\s*(?:s|sec)\s*(?:/\s*(?:s|sec)|\^\s*2|\*\*\s*2|2|\u00b2)(?![A-Za-z0-9])"
-    r"|(?<![A-Za-z])gals?(?![A-Za-z])",
-    re.IGNORECASE,
-)
-
-
-def _at2_units(path: Path, header: list[str], given: tuple[str, str, float] | None) -> tuple[str, float, str]:
-    """Acceleration unit of an AT2 header: (label, factor to m/s^2, where it was found)."""
-    found: dict[str, tuple[float, int]] = {}
-    unread: list[tuple[str, int]] = []
-    for i, line in enumerate(header):
-        for m in _UNITS_PHRASE.finditer(line):
-            tok = m.group(1).rstrip(".:")
-            u = parse_unit(tok)
-            if u is not None and u[0] == "acceleration":
-                found.setdefault(u[1], (u[2], i + 1))
-            else:
-                unread.append((tok, i + 1))
-        for m in _ACC_WRITTEN.finditer(line):
-            u = parse_unit(m.group(0))
-            if u is not None:
-                found.setdefault(u[1], (u[2], i + 1))
-    if len(found) > 1:
-        (a, (_, la)), (b, (_, lb)) = list(found.items())[:2]
-        raise DataFileError(
-            path, f"the header names two acceleration units, {a} (line {la}) and {b} (line {lb})", line=lb
-        )
-    if found:
-        label, (factor, line) = next(iter(found.items()))
-        if given is not None and given[1] != label:
-            raise DataFileError(path, f"the header says {label} but units={given[1]!r} was given", line=line)
-        return label, factor, f"from header line {line}"
-    if given is not None:
-        return given[1], given[2], "given by the caller"
-    if unread:
-        tok, line = unread[0]
-        raise DataFileError(
-            path,
-            f"cannot read the acceleration units {tok!r} in the header (understood: "
-            f"{_UNIT_CHOICES['acceleration']}; pass units=... if the file is an acceleration record)",
-            line=line,
-        )
-    raise DataFileError(
-        path,
-        f"the header (lines 1-{len(header)}) names no acceleration units (expected e.g. 'UNITS OF G' or "
-        "'CM/SEC/SEC'); pass units=... to read it anyway",
-        line=len(header),
-    )
-
-
-class CsvColumns(NamedTuple):
-    """Columns read by :func:`read_csv_si`, converted to SI."""
-
-    #: One array per requested column, in SI (s, m/s^2, rad).
-    values: list[np.ndarray]
-    #: 1-based file line of each row.
-    lines: np.ndarray
-    #: Unit of each column as the header (or ``default_units``) gave it, canonical label; None when not given.
-    units: list[str | None]
-
-
-_HEADER_UNIT = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$")
-
-
-def _split_header_cell(cell: str) -> tuple[str, str | None]:
-    cell = cell.replace("\ufeff", "").strip()
-    m = _HEADER_UNIT.match(cell)
-    if m and m.group(1):
-        return m.group(1).strip(), m.group(2)
-    return cell, None
-
-
-def _read_text(path: Path) -> str:
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise DataFileError(path, f"cannot read: {e.strerror or e}") from None
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        line = raw[: e.start].count(b"\n") + 1
-        raise DataFileError(
-            path, f"not UTF-8 text (byte 0x{raw[e.start]:02x}); save the file as UTF-8", line=line
-        ) from None
-
-
-def read_csv_header(path: str | Path) -> list[str]:
-    """The column names of a CSV's header line, without their bracketed units.
-
-    Raises :class:`DataFileError` (naming the file) when it cannot be read, is not UTF-8 or is empty.
-    """
-    path = Path(path)
-    reader = csv.reader(io.StringIO(_read_text(path), newline=""))
-    try:
-        raw_header = next(reader)
-    except StopIteration:
-        raise DataFileError(path, "file is empty (expected a header line)", line=1) from None
-    return [_split_header_cell(h)[0] for h in raw_header]
-
-
-def read_csv_si(
-    path: str | Path,
-    columns: Mapping[str, str | None],
-    *,
-    default_units: Mapping[str, str] | None = None,
-) -> CsvColumns:
-    """Read named numeric columns from a CSV with a header line, in SI.
-
-    Parameters
-    ----------
-    path : path
-        The file: UTF-8 (a byte-order mark is skipped), a header line, then one
-        row per sample. A header cell may carry its unit in brackets,
-        ``time [ms]`` or ``theta (deg)``; the values are converted once, here.
-    columns : mapping
-        Column name -> quantity (``"time"``, ``"acceleration"``, ``"angle"``,
-        or None for a dimensionless column that may carry no unit).
-    default_units : mapping, optional
-        Column name -> unit used when the header gives none (SI otherwise);
-        a unit in the header must agree with it.
-
-    Returns
-    -------
-    CsvColumns
-        The columns in SI, the file line of each row, and the unit each column
-        was read in (None where SI was assumed).
-
-    Raises
-    ------
-    DataFileError
-        Naming the file, line and column of a missing column, an unknown or
-        mismatched unit, an unparsable or non-finite value, or a short row.
-    """
-    path = Path(path)
-    text = _read_text(path)
-    reader = csv.reader(io.StringIO(text, newline=""))
-    try:
-        raw_header = next(reader)
-    except StopIteration:
-        raise DataFileError(path, "file is empty (expected a header line)", line=1) from None
-    cells = [_split_header_cell(h) for h in raw_header]
-    names = [n for n, _u in cells]
-    idx: list[int] = []
-    factors: list[float] = []
-    units: list[str | None] = []
-    for c, quantity in columns.items():
-        if c not in names:
-            close = difflib.get_close_matches(c, names, n=1)
-            hint = f"; did you mean `{close[0]}`?" if close else ""
-            raise DataFileError(path, f"missing column `{c}`{hint} (header has: {', '.join(names)})", line=1)
-        j = names.index(c)
-        written = cells[j][1]
-        default = (default_units or {}).get(c)
-        factor, label = 1.0, None
-        for source, u_text in (("header", written), ("default", default)):
-            if u_text is None:
-                continue
-            u = parse_unit(u_text)
-            if quantity is None:
-                raise DataFileError(path, f"column `{c}` takes no unit, got [{u_text}]", line=1, column=c)
-            if u is None or u[0] != quantity:
-                what = "unknown unit" if u is None else f"{u[0]} unit"
-                raise DataFileError(
-                    path,
-                    f"{what} [{u_text}] for {quantity} (use {_UNIT_CHOICES[quantity]}; SI {SI_UNITS[quantity]})",
-                    line=1,
-                    column=c,
-                )
-            if source == "default" and label is not None and label != u[1]:
-                raise DataFileError(
-                    path, f"the header says [{written}] but units={default!r} was given", line=1, column=c
-                )
-            if label is None:
-                factor, label = u[2], u[1]
-        idx.append(j)
-        factors.append(factor)
-        units.append(label)
-    out: list[list[float]] = [[] for _ in idx]
-    lines: list[int] = []
-    for row in reader:
-        lineno = reader.line_num
-        if not row or all(not x.strip() for x in row):
-            continue
-        for k, (c, j) in enumerate(zip(columns, idx, strict=True)):
-            if j >= len(row):
-                raise DataFileError(path, f"row has {len(row)} fields, expected {len(names)}", line=lineno, column=c)
-            tok = row[j].strip()
-            try:
-                v = float(tok)
-            except ValueError:
-                raise DataFileError(path, f"not a number: {tok!r}", line=lineno, column=c) from None
-            if not math.isfinite(v):
-                raise DataFileError(path, f"value is not finite: {tok!r}", line=lineno, column=c)
-            out[k].append(v)
-        lines.append(lineno)
-    if not lines:
-        raise DataFileError(path, "no data rows after the header", line=2)
-    values = [np.asarray(v) * f if f != 1.0 else np.asarray(v) for v, f in zip(out, factors, strict=True)]
-    return CsvColumns(values, np.asarray(lines), units)
-
-
-def read_csv_columns(
-    path: str | Path, columns: Sequence[str], quantities: Mapping[str, str | None] | None = None
-) -> tuple[list[np.ndarray], np.ndarray]:
-    """Read named numeric columns from a CSV with a header line, in SI.
-
-    Returns the columns and the 1-based file line of each row. A column's
-    quantity comes from ``quantities`` or, for the format's names, from
-    :data:`QUANTITIES`; a unit in its header is converted (see
-    :func:`read_csv_si`, which also says which units were given).
-
-    Raises :class:`DataFileError` naming the file, line and column of the first
-    missing column, unknown unit, unparsable or non-finite value, or short row.
-    """
-    q = {c: (quantities or {}).get(c, QUANTITIES.get(c)) for c in columns}
-    table = read_csv_si(path, q)
-    return table.values, table.lines
-
-
-def _written_unit(t: np.ndarray) -> float:
-    """The unit of the last digit the time stamps were written with [s] (10^-k, the coarsest that fits them)."""
-    for k in range(13):
-        u = 10.0**-k
-        if np.max(np.abs(t / u - np.round(t / u))) < 1e-6:
-            return u
-    return 0.0
-
-
-def uniform_step(
-    path: Path, t: np.ndarray, lines: np.ndarray, column: str = "time", *, assumed_seconds: bool = False
-) -> float:
-    """The step of a uniformly sampled time column [s]; errors name the first bad line.
-
-    ``lines`` holds the 1-based file line of each sample. With
-    ``assumed_seconds`` (the header gave no unit and seconds were assumed) a
-    step outside :data:`PLAUSIBLE_STEP` is refused: it is much more likely a
-    column in milliseconds than a record sampled that slowly (or fast).
-    """
-    if t.size < 2:
-        raise DataFileError(path, "need at least two samples", line=int(lines[0]) if lines.size else 2, column=column)
-    d = np.diff(t)
-    dt = float(np.median(d))
-    if not dt > 0:
-        raise DataFileError(path, f"time does not increase (median step {dt})", line=2, column=column)
-    bad = np.flatnonzero(np.abs(d - dt) > _UNIFORM_RTOL * dt + 1e-12 * abs(t[-1]))
-    if bad.size:
-        # time stamps written rounded (acquisition software writes a fixed number of digits): uniform if
-        # every sample lies within the rounding of a uniform grid fitted to them
-        k_all = np.arange(t.size, dtype=float)
-        dt_fit, t0 = np.polyfit(k_all, t, 1)
-        dev = t - (t0 + dt_fit * k_all)
-        tol = max(_ROUNDING_SHARE * dt_fit, 0.5 * _written_unit(t)) * (1 + 1e-9)
-        if dt_fit > 0 and np.all(np.abs(dev) <= tol):
-            warnings.warn(
-                f"{path}: `{column}` is rounded (largest deviation {np.max(np.abs(dev)):.3g} s from a uniform step "
-                f"of {dt_fit:.9g} s): read as uniform",
-                stacklevel=2,
-            )
-            dt = float(dt_fit)
-            bad = np.empty(0, dtype=int)
-    if bad.size:
-        k = int(bad[0])
-        raise DataFileError(
-            path,
-            f"non-uniform sampling: step {d[k]:.9g} s between t={t[k]:.9g} and t={t[k + 1]:.9g}, expected {dt:.9g} s "
-            f"(beyond the rounding of a uniform grid: resample the record to a uniform step)",
-            line=int(lines[k + 1]),
-            column=column,
-        )
-    lo, hi = PLAUSIBLE_STEP
-    if assumed_seconds and not (lo * (1 - 1e-9) <= dt <= hi * (1 + 1e-9)):
-        what = f"time step {dt:.6g} read in seconds (no unit in the header) is implausible (outside {lo:g} .. {hi:g} s)"
-        if dt > hi:
-            fix = f"if the column is in milliseconds write `{column} [ms]` in the header; if in seconds, `{column} [s]`"
-        else:
-            fix = f"write its unit in the header (`{column} [s]` to confirm seconds)"
-        raise DataFileError(path, f"{what}: {fix}", line=int(lines[1]), column=column)
-    return dt
+        """Read a CSV record: time and acceleration columns, units in the header, extra ``ground_acc_<what>``
+        columns as channels (:func:`housner.readers.read_csv_motion`). ``name`` defaults to the file's stem."""
+        acc, dt, provenance, channels = read_csv_motion(path, time_column=time_column, acc_column=acc_column,
+                                                        units=units)  # fmt: skip
+        return cls(acc=acc, dt=dt, name=name or Path(path).stem, provenance=provenance, channels=channels)

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from housner.errors import unknown_choice
+from housner.model import simulate_many
 from housner.motion import GroundMotion
 from housner.pulses import RICKER_KINDS, one_sine, ricker, ricker_half_width, ricker_shape
 from housner.specimen import Specimen
@@ -390,8 +391,6 @@ def rocking_spectrum(
     ----------
     Makris & Konstantinidis (2003); Bachmann et al. (2017), eq. 6 and Figure 2.
     """
-    from housner.model import simulate_many
-
     if not isinstance(specimen, Specimen):
         raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
     if pulse not in PULSES:

@@ -11,17 +11,16 @@ from __future__ import annotations
 
 import html
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
+
 from housner.reports import figures
 from housner.scenarios.execution.rundir import json_number
-
-if TYPE_CHECKING:
-    from housner.reports.run.view import Run
 
 
 def esc(x: Any) -> str:
@@ -89,7 +88,8 @@ def status_badge(ok: bool | None, yes: str = "PASS", no: str = "FAIL") -> str:
     return f'<span class="badge {"pass" if ok else "fail"}">{yes if ok else no}</span>'
 
 
-def engine_tag(name: str, run: Run) -> str:
+def engine_tag(name: str, run: Any) -> str:
+    """An engine's name with its colour swatch; ``run`` is anything with ``colors`` (engine -> colour)."""
     c = run.colors.get(name, "#000")
     return f'<span class="eng"><span class="swatch" style="background:{c}"></span>{esc(name)}</span>'
 
@@ -206,3 +206,31 @@ def write_page(path: str | Path, text: str) -> Path:
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(path)
     return path
+
+
+def render_directory(
+    directory: str | Path,
+    load: Callable[[str | Path], Any],
+    sections: Callable[[Any], list[Section]],
+    page: Callable[[Any, list[Section], float], str],
+) -> str:
+    """The report of a run or study directory: ``load`` it, build its ``sections``, lay out its ``page``.
+
+    ``page`` is given the view, the sections and the seconds taken (for :func:`written_by`).
+    """
+    t0 = time.perf_counter()
+    view = load(directory)
+    return page(view, sections(view), time.perf_counter() - t0)
+
+
+def write_directory_report(
+    directory: str | Path, out: str | Path | None, render: Callable[[str | Path], str], name: str
+) -> Path:
+    """Write ``render(directory)`` to ``out``, by default to the file ``name`` in ``directory``; returns the file."""
+    path = Path(out) if out is not None else Path(directory) / name
+    return write_page(path, render(directory))
+
+
+def written_by(writer: str, source: str | Path, seconds: float) -> str:
+    """The footer of a report: the function that wrote it, from which directory, in how long."""
+    return f"Written by <code>{writer}</code> from <code>{esc(source)}</code> in {seconds:.1f} s."

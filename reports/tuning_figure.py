@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pandas as pd
+
 from housner.engines.tuning import SMALL_WORST_FACTOR
 
 __all__ = ["tuning_report_figure"]

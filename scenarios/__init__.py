@@ -17,18 +17,21 @@ if __name__ != "housner.scenarios":  # this folder imported by its 0.1 name from
 
 from housner.scenarios.campaigns import Campaign, compare, diagnose, load_campaign
 from housner.scenarios.catalogue import Scenario, list_scenarios, load_scenario
-from housner.scenarios.execution import run_engines
+from housner.scenarios.execution import RunOptions, compare_engines, load_results, run_engines
 from housner.scenarios.runs import RunResult, run_scenario
 from housner.scenarios.studies import load_study, run_study
 
 __all__ = [
     "Campaign",
     "RunResult",
+    "RunOptions",
     "Scenario",
     "compare",
+    "compare_engines",
     "diagnose",
     "list_scenarios",
     "load_campaign",
+    "load_results",
     "load_scenario",
     "load_study",
     "run_engines",

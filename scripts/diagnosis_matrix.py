@@ -52,9 +52,10 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="write the matrix to this file")
     args = ap.parse_args(argv)
 
+    from matrix import judge
+
     from housner.scenarios.campaigns.campaign import load_campaign
     from housner.scenarios.campaigns.diagnose import diagnose
-    from matrix import judge
 
     gen, cases = _generator(args.generator)
     names = args.cases or list(cases)

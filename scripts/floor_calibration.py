@@ -40,6 +40,7 @@ def main(argv=None) -> int:
 
     import campaign_generators
     import independent_campaigns
+
     from housner.scenarios.campaigns.campaign import load_campaign
     from housner.scenarios.campaigns.diagnose import diagnose
 

@@ -6,10 +6,10 @@ import functools
 import math
 
 import numpy as np
-from housner.engines.mujoco_engine import MujocoEngine
 from scipy.integrate import solve_ivp
 
 from housner import G, GroundMotion
+from housner.engines.mujoco_engine import MujocoEngine
 
 
 def windowed_sines(n: int, seed: int, *, freq=(1.0, 4.0), amp=(1.0, 4.0), scale: float = 1.0, centre=1.2, width=0.7):
@@ -126,7 +126,6 @@ def engine_unavailable(name: str) -> str | None:
     which names the install.
     """
     from housner.engines.base import get_engine
-
     from housner.errors import EngineUnavailable
 
     try:
@@ -180,6 +179,7 @@ def assert_pulses_follow_the_analytic_model(engine, specimen, *, rel: float, sam
     """The tuner's three one-sine pulses: same overturn verdict, theta_max within ``rel``, and (when
     ``same_impacts``) the same impact count as the analytic model."""
     import pytest
+
     from housner.engines.base import get_engine
     from housner.engines.tuning import pulse_motions
 

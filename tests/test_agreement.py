@@ -12,11 +12,11 @@ import math
 
 import numpy as np
 import pytest
-from housner.engines.base import get_engine
-from housner.reports.assertions.runs import assert_cdf_agreement
 from shared import OTHER_ENGINES, installed_engines
 
 from housner import Specimen, pulses, simulate
+from housner.engines.base import get_engine
+from housner.reports.assertions.runs import assert_cdf_agreement
 
 SPEC = Specimen.bachmann2017()
 ENGINES = OTHER_ENGINES
@@ -58,8 +58,9 @@ def test_pulse_responses_agree(engine, reference):
 @pytest.mark.slow
 @pytest.mark.parametrize("engine", ENGINES)
 def test_elcentro_distributions_agree(engine, tmp_path_factory):
-    from housner.scenarios.runs.run import run_scenario
     from scipy.stats import binomtest
+
+    from housner.scenarios.runs.run import run_scenario
 
     out = tmp_path_factory.mktemp("elcentro")
     run = run_scenario("elcentro", engines=["housner", engine], out=out, progress=False)

@@ -11,11 +11,12 @@ import math
 
 import numpy as np
 import pytest
-from housner.engines.analytic import HousnerEngine
-from housner.scenarios.runs.spread import equivalent_amplitude
 from shared import windowed_sines
 
 from housner import Specimen
+from housner.engines.analytic import HousnerEngine
+from housner.scenarios.motions.build import build_motions
+from housner.scenarios.runs.spread import equivalent_amplitude
 
 SPEC = Specimen.bachmann2017()
 
@@ -95,7 +96,7 @@ def test_seed_spread_runs_through_the_runner_and_its_cache(tmp_path):
     got = seed_spread(scen, 2, n=6, cache_dir=tmp_path)
     assert got["seeds"] == ensemble_seeds(2017, 2) and got["n_failed"] == 0
     for j, s in enumerate(got["seeds"]):
-        ms, _ = scen.build_motions(6, seed=s)
+        ms, _ = build_motions(scen, 6, seed=s)
         v = np.array([r.theta_max_over_alpha for r in HousnerEngine().simulate_many(SPEC, ms)])
         for q in (25, 50, 75):
             assert got["percentiles"][q][j] == float(np.percentile(v, q, method="inverted_cdf"))

@@ -15,11 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from housner.scenarios.catalogue import scenario as catalogue
-from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
-from housner.scenarios.motions.records import ELCENTRO_VARIANTS, elcentro
 
 from housner.cli import main
+from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
+from housner.scenarios.motions import build as motion_build
+from housner.scenarios.motions.build import build_motions
+from housner.scenarios.motions.records import ELCENTRO_VARIANTS, elcentro
 
 #: (samples, dt [s], PGA [m/s^2], RMS [m/s^2]) of motions 0-2 of `housner run elcentro` (rdk2010,
 #: seed 2017): the default must not move them. They were SHA-256 hashes of the samples until
@@ -95,8 +96,8 @@ def same(a, b, rtol: float = 0.0) -> None:
 # ----------------------------------------------------------------------
 def test_at2_path_gives_the_shipped_records_motions(tmp_path):
     write_at2(tmp_path / "recs" / "ec.AT2")
-    shipped, meta0 = load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"', "a.toml")).build_motions()
-    motions, meta = load_scenario(scenario(tmp_path, RDK3 + 'record = "recs/ec.AT2"')).build_motions()
+    shipped, meta0 = build_motions(load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"', "a.toml")))
+    motions, meta = build_motions(load_scenario(scenario(tmp_path, RDK3 + 'record = "recs/ec.AT2"')))
     same(motions, shipped)
     assert _figures_match(motions)
     assert meta["rdk_params"] == meta0["rdk_params"] and meta["model"] == "rdk2010"
@@ -106,22 +107,22 @@ def test_at2_path_gives_the_shipped_records_motions(tmp_path):
     assert "ec.AT2" in rec["provenance"] and "PEER AT2" in rec["provenance"]
     # source = "record", the path absolute: the record itself, time-compressed by sqrt(S)
     one = f'source = "record"\nrecord = "{tmp_path / "recs" / "ec.AT2"}"\namplitude = 1.5'
-    (m,), _ = load_scenario(scenario(tmp_path, one, "b.toml")).build_motions()
-    (m0,), _ = load_scenario(
+    (m,), _ = build_motions(load_scenario(scenario(tmp_path, one, "b.toml")))
+    (m0,), _ = build_motions(load_scenario(
         scenario(tmp_path, one.split("\n")[0] + '\nrecord = "elcentro"\namplitude = 1.5', "c.toml")
-    ).build_motions()
+    ))
     same([m], [m0])
     assert m.dt == pytest.approx(0.01 / np.sqrt(10.0), rel=1e-12) and m.pga == pytest.approx(1.5 * elcentro().pga)
 
 
 def test_csv_path_gives_the_shipped_records_motions(tmp_path):
     write_csv(tmp_path / "ec.csv")
-    shipped, _ = load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"', "a.toml")).build_motions(2)
-    motions, meta = load_scenario(scenario(tmp_path, RDK3 + 'record = "ec.csv"')).build_motions(2)
+    shipped, _ = build_motions(load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"', "a.toml")), 2)
+    motions, meta = build_motions(load_scenario(scenario(tmp_path, RDK3 + 'record = "ec.csv"')), 2)
     same(motions, shipped, rtol=1e-12)
     assert meta["record"]["name"] == "ec" and meta["record"]["n"] == 4000
-    (m,), _ = load_scenario(scenario(tmp_path, 'source = "record"\nrecord = "ec.csv"', "b.toml")).build_motions()
-    (m0,), _ = load_scenario(scenario(tmp_path, 'source = "record"', "c.toml")).build_motions()
+    (m,), _ = build_motions(load_scenario(scenario(tmp_path, 'source = "record"\nrecord = "ec.csv"', "b.toml")))
+    (m0,), _ = build_motions(load_scenario(scenario(tmp_path, 'source = "record"', "c.toml")))
     same([m], [m0], rtol=1e-12)
 
 
@@ -129,9 +130,9 @@ def test_the_fit_follows_the_files_content(tmp_path):
     """The fit cache is keyed by the record's samples: a file rewritten in place is fitted again."""
     path = write_csv(tmp_path / "rec.csv")
     scen = scenario(tmp_path, 'source = "rdk"\nn = 1\nrecord = "rec.csv"')
-    _, before = load_scenario(scen).build_motions()
+    _, before = build_motions(load_scenario(scen))
     write_csv(path, scale=2.0)
-    _, after = load_scenario(scen).build_motions()
+    _, after = build_motions(load_scenario(scen))
     assert after["record"]["sha256"] != before["record"]["sha256"]
     assert after["rdk_params"]["Ia_m_s"] == pytest.approx(4.0 * before["rdk_params"]["Ia_m_s"], rel=1e-9)
 
@@ -145,18 +146,18 @@ def test_records_folder_and_list(tmp_path):
     (tmp_path / "suite" / "notes.txt").write_text("not a record")
     scen = load_scenario(scenario(tmp_path, 'source = "records"\nrecords = "suite"\namplitude = 2.0'))
     assert scen.n_motions == 2
-    motions, meta = scen.build_motions()
+    motions, meta = build_motions(scen)
     assert [m.name for m in motions] == ["a", "b"]  # sorted by name, the .txt left out
     assert [r["file"] for r in meta["records"]] == ["suite/a.AT2", "suite/b.csv"]
     assert "a.AT2" in motions[0].provenance and "b.csv" in motions[1].provenance
     # each as source = "record" gives it: the same code path (amplitude, then sqrt(S) in time)
     for m, f in zip(motions, ["suite/a.AT2", "suite/b.csv"], strict=True):
         one = scenario(tmp_path, f'source = "record"\nrecord = "{f}"\namplitude = 2.0', "one.toml")
-        same([m], load_scenario(one).build_motions()[0])
+        same([m], build_motions(load_scenario(one))[0])
     assert motions[0].pga == pytest.approx(2.0 * elcentro().pga) and motions[0].dt == pytest.approx(0.01 / 10**0.5)
     # a list keeps its order; an absolute path is allowed
     listed = f'source = "records"\nrecords = ["suite/b.csv", "{tmp_path / "suite" / "a.AT2"}"]\namplitude = 2.0'
-    motions2, meta2 = load_scenario(scenario(tmp_path, listed, "list.toml")).build_motions()
+    motions2, meta2 = build_motions(load_scenario(scenario(tmp_path, listed, "list.toml")))
     assert [m.name for m in motions2] == ["b", "a"]
     same(motions2, motions[::-1])
     assert "model" not in meta2 and "band_check" not in meta2
@@ -168,10 +169,10 @@ def test_records_folder_and_list(tmp_path):
 def test_default_model_is_the_published_one_unchanged(tmp_path):
     scen = load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"'))
     assert "model" not in scen.motions
-    motions, meta = scen.build_motions()
+    motions, meta = build_motions(scen)
     assert _figures_match(motions)
     assert meta["model"] == "rdk2010" and "band_check" not in meta and "matched_gain" not in meta
-    _, meta = scen.build_motions(3, band_check=True)
+    _, meta = build_motions(scen, 3, band_check=True)
     check = meta["band_check"]
     assert len(check["psa"]["bands"]) == 19 and len(check["sd"]["bands"]) == 9
     assert check["psa"]["range_s"] == [0.05, 3.0] and check["sd"]["range_s"] == [0.5, 3.0]
@@ -183,7 +184,7 @@ def test_the_seed_scenario_runs_the_matched_model_and_its_bands_pass():
     """`housner run elcentro` (issue 11): 100 matched motions, every third-octave band within [0.8, 1.25]."""
     scen = load_scenario("elcentro")
     assert scen.motions["model"] == "matched" and scen.n_motions == 100
-    motions, meta = scen.build_motions(band_check=True)
+    motions, meta = build_motions(scen, band_check=True)
     assert len(motions) == 100 and meta["model"] == "matched"
     check = meta["band_check"]
     assert check["passed"], [b for b in check["psa"]["bands"] + check["sd"]["bands"] if b["verdict"] != "PASS"]
@@ -193,14 +194,14 @@ def test_matched_model_gives_the_matched_ensemble_and_its_band_check(tmp_path):
     from housner.scenarios.motions.rdk_match import fit_matched, simulate_matched
 
     scen = load_scenario(scenario(tmp_path, RDK3 + 'record = "elcentro"\nmodel = "matched"'))
-    motions, meta = scen.build_motions(band_check=True)
+    motions, meta = build_motions(scen, band_check=True)
     assert meta["model"] == "matched"
-    fit = catalogue._fit("matched", elcentro())  # the cached fit: the same as fitting from scratch
+    fit = motion_build._fit("matched", elcentro())  # the cached fit: the same as fitting from scratch
     assert fit.gain == fit_matched(elcentro()).gain
     same(motions, [g.to_model_scale(10.0) for g in simulate_matched(fit, 3, 2017)])
     gain = meta["matched_gain"]
     assert len(gain["gain"]) == len(gain["gain_centres_s"]) == 19 and gain["n_fit"] == 100
-    assert meta["rdk_params"] == catalogue._fit("rdk2010", elcentro()).describe()
+    assert meta["rdk_params"] == motion_build._fit("rdk2010", elcentro()).describe()
     check = meta["band_check"]
     rows = check["psa"]["bands"] + check["sd"]["bands"]
     assert {r["verdict"] for r in rows} <= {"PASS", "FAIL"} and len(rows) == 28

@@ -10,6 +10,9 @@ from importlib.metadata import entry_points
 import numpy as np
 import pandas as pd
 import pytest
+
+from housner import stats
+from housner.errors import DataFileError
 from housner.reports.assertions.runs import (
     AgreementReport,
     CDFAgreementError,
@@ -18,9 +21,6 @@ from housner.reports.assertions.runs import (
     assert_record_agreement,
     load_results,
 )
-
-from housner import stats
-from housner.errors import DataFileError
 
 pytest_plugins = ["pytester"]
 

@@ -10,6 +10,13 @@ from pathlib import Path
 import campaign_generators as cg
 import numpy as np
 import pytest
+
+from housner import GroundMotion, Specimen
+from housner.calibration import half_cycle_integral
+from housner.cli import main
+from housner.errors import DataFileError
+from housner.model import simulate
+from housner.motion import uniform_step
 from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, estimate_release, load_campaign
 from housner.scenarios.campaigns.compare import (
     ERROR_CLIP,
@@ -20,11 +27,6 @@ from housner.scenarios.campaigns.compare import (
     measured_impacts,
     record_error,
 )
-
-from housner import GroundMotion, Specimen
-from housner.calibration import half_cycle_integral
-from housner.errors import DataFileError
-from housner.model import simulate
 
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha
@@ -221,8 +223,6 @@ def test_a_minority_of_unreadable_records_is_skipped_and_listed(small, tmp_path)
 
 
 def test_cli_refuses_a_mostly_unreadable_campaign_with_one_line(small, tmp_path, capsys):
-    from housner.cli import main
-
     d = _copy(small, tmp_path)
     refused = _to_degrees(d, [f.stem for f in sorted((d / "records").glob("*.csv"))])
     assert main(["diagnose", str(d), "-q"]) == 2
@@ -389,9 +389,6 @@ def test_simulated_free_vibration_starts_at_the_measured_release(small):
 def test_time_stamps_rounded_to_nine_digits_are_read_as_uniform_and_an_irregular_column_is_not():
     import warnings
     from pathlib import Path
-
-    from housner.errors import DataFileError
-    from housner.motion import uniform_step
 
     # acquisition software writes a fixed number of significant digits: a sqrt(10) ms step to 9 digits
     # deviates from its grid by up to 5e-9 s, far within 1 % of the step (3e-5 s)

@@ -1,9 +1,9 @@
 """Scenario files: the shipped catalogue loads; bad files get helpful errors."""
 
 import pytest
-from housner.scenarios.catalogue.scenario import SCENARIOS, ScenarioError, load_scenario
 
 from housner.cli import main
+from housner.scenarios.catalogue.scenario import SCENARIOS, ScenarioError, load_scenario
 
 
 @pytest.mark.parametrize("name", sorted(SCENARIOS))

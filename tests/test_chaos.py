@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from housner.engines import get_engine
 from housner.scenarios.catalogue.scenario import load_scenario
+from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs.chaos import (
     ChaosFloor,
     EngineErrors,
@@ -22,7 +24,7 @@ SPEC = SCENARIO.specimen
 
 @pytest.fixture(scope="module")
 def motions():
-    return SCENARIO.build_motions(30)[0]
+    return build_motions(SCENARIO, 30)[0]
 
 
 def test_measurement_recovers_a_known_r_error():

@@ -8,9 +8,10 @@ test in test_agreement.py.
 """
 
 import pytest
+from shared import OTHER_ENGINES, installed_engines
+
 from housner.reports.assertions.runs import assert_cdf_agreement
 from housner.scenarios.runs.run import run_scenario
-from shared import OTHER_ENGINES, installed_engines
 
 N = 30
 

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from housner.scenarios.catalogue.scenario import load_scenario
 
 from housner.cli import main
+from housner.scenarios.catalogue.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -453,10 +453,9 @@ def test_debug_shows_the_traceback(tmp_path):
 
 
 def test_version_and_help_list_the_registries():
+    from housner.effects import available_effects, effect_class
     from housner.engines.base import ENGINES
     from housner.scenarios.catalogue.scenario import SCENARIOS
-
-    from housner.effects import available_effects, effect_class
 
     res = _housner("--version")
     assert res.returncode == 0 and res.stdout.startswith("housner 0.") and "mujoco" in res.stdout

@@ -8,11 +8,11 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+
+from housner import EngineError, Specimen
 from housner.engines import ENGINES, Engine
 from housner.engines.base import engine_class
 from housner.engines.conformance import ConformanceReport, assert_conforms, check_engine
-
-from housner import EngineError, Specimen
 from housner.model import simulate as housner_simulate
 
 SEED = Specimen.bachmann2017()

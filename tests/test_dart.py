@@ -9,12 +9,11 @@ from shared import assert_overturns_and_holds, assert_pulses_follow_the_analytic
 
 pytest.importorskip("dartpy", reason="the DART engine needs dartpy: pip install -e '.[dart]'")
 
+from housner import GroundMotion, Specimen  # noqa: E402
+from housner.effects import make_effect  # noqa: E402
 from housner.engines import get_engine  # noqa: E402
 from housner.engines.dart_engine import DartEngine  # noqa: E402
 from housner.engines.measures import first_impact_ratio  # noqa: E402
-
-from housner import GroundMotion, Specimen  # noqa: E402
-from housner.effects import make_effect  # noqa: E402
 
 SEED = Specimen.bachmann2017()
 

@@ -19,10 +19,12 @@ import sys
 import campaign_generators as cg
 import numpy as np
 import pytest
+
+from housner import Specimen
+from housner.effects import available_effects
+from housner.reports.diagnosis import write_diagnosis_report
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.diagnose import PRACTICAL, _judge, diagnose, fit_effect, split_records
-
-from housner.effects import available_effects
 
 DEFAULT_CASES = ("none", "rotational_damping", "sensor_offset")
 _RESULTS: dict[str, tuple] = {}
@@ -156,8 +158,6 @@ def test_json_has_the_promised_fields(base, tmp_path):
 
 
 def test_report_is_self_contained(base, tmp_path):
-    from housner.reports.diagnosis import write_diagnosis_report
-
     _info, diag = _diagnosis(base, "rotational_damping", True)
     path = write_diagnosis_report(diag, tmp_path / "r.html")
     text = path.read_text()
@@ -213,8 +213,6 @@ def test_split_is_seeded_and_keeps_free_vibration_in_training(base):
 
 
 def test_fit_finds_the_minimum_of_a_known_objective():
-    from housner import Specimen
-
     spec = Specimen.bachmann2017()
 
     # a rough objective with its minimum at c = 1.234 1/s (the kind of bumps chaos puts on the real one)

@@ -16,10 +16,12 @@ from dataclasses import replace
 from pathlib import Path
 
 import campaign_generators as cg
-import housner.scenarios.campaigns.verdict as verdict_mod
 import numpy as np
 import pytest
-from housner.reports.diagnosis import _histories_figure, history_records, render_diagnosis
+
+import housner.scenarios.campaigns.verdict as verdict_mod
+from housner.reports.diagnosis import history_records, render_diagnosis
+from housner.reports.diagnosis.figures import histories_figure
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.diagnose import diagnose
 from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
@@ -106,7 +108,7 @@ def test_histories_show_worst_and_median_ground_motion_and_a_free_vibration(diag
     assert [role for _rid, role in picks] == ["worst ground motion", "median ground motion", "free vibration"]
     assert picks[0][0] == gm[-1][1] and picks[1][0] == gm[(len(gm) - 1) // 2][1]
     assert diag.campaign.record(picks[2][0]).kind == "free_vibration"
-    fig = _histories_figure(diag)
+    fig = histories_figure(diag)
     axes = fig.get_axes()
     assert len(axes) == 3
     for ax, (rid, _role) in zip(axes, picks, strict=True):
@@ -122,7 +124,7 @@ def test_histories_show_worst_and_median_ground_motion_and_a_free_vibration(diag
 def test_without_an_effect_the_histories_show_the_plain_model_only(diag):
     plain = copy.copy(diag)
     plain.steps = diag.steps[:1]
-    labels = {ln.get_label() for ax in _histories_figure(plain).get_axes() for ln in ax.get_lines()}
+    labels = {ln.get_label() for ax in histories_figure(plain).get_axes() for ln in ax.get_lines()}
     assert "measured" in labels and "before: Housner (plain)" in labels
     assert not any(lab.startswith("after") for lab in labels)
     assert "No effect was added" in _text(render_diagnosis(plain))

@@ -13,14 +13,13 @@ from shared import assert_overturns_and_holds, assert_pulses_follow_the_analytic
 
 pytest.importorskip("pydrake", reason="the Drake engine needs drake: pip install -e '.[drake]'")
 
+from housner import GroundMotion, Specimen  # noqa: E402
+from housner.effects import make_effect  # noqa: E402
 from housner.engines.base import engine_class  # noqa: E402
 from housner.engines.conformance import check_engine  # noqa: E402
 from housner.engines.drake_engine import DrakeEngine, _drake  # noqa: E402
 from housner.engines.measures import first_impact_ratio  # noqa: E402
 from housner.engines.tuning import pulse_motions, tune  # noqa: E402
-
-from housner import GroundMotion, Specimen  # noqa: E402
-from housner.effects import make_effect  # noqa: E402
 from housner.errors import EngineUnavailable  # noqa: E402
 
 SEED = Specimen.bachmann2017()

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from housner.engines.analytic import HousnerEngine
 from scipy.optimize import brentq
 
 from housner import GroundMotion, Specimen
@@ -30,6 +29,7 @@ from housner.effects import (
     simulate_flexible,
     simulate_with_effects,
 )
+from housner.engines.analytic import HousnerEngine
 from housner.model import RockingParams, simulate
 from housner.units import G
 

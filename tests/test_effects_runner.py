@@ -14,13 +14,14 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+
+from housner import simulate
 from housner.reports.run import page as html
 from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
 from housner.scenarios.execution.cache import cache_key
+from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs import run as runner
 from housner.scenarios.runs.run import run_scenario
-
-from housner import simulate
 
 SCEN = """name = "fx"
 [specimen]
@@ -80,7 +81,7 @@ def test_effects_are_cached_apart_and_reused(tmp_path):
     plain = run_scenario(scenario(tmp_path, effects=""), out=tmp_path / "p", **kw).results
     assert plain.cached.all() and len(plain) == 6
     scen = load_scenario(scenario(tmp_path))
-    m = scen.build_motions()[0][0]
+    m = build_motions(scen)[0][0]
     k0 = cache_key(scen.specimen, m, "housner", {"r": None, "substeps": None}, "v")
     assert k0 == cache_key(scen.specimen, m, "housner", {"r": None, "substeps": None}, "v", ())
     assert k0 != cache_key(scen.specimen, m, "housner", {"r": None, "substeps": None}, "v", scen.effects)

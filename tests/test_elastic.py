@@ -7,6 +7,9 @@ import math
 import numpy as np
 import pyrotd
 import pytest
+from scipy import signal
+
+from housner import GroundMotion
 from housner.scenarios.motions.elastic import (
     ensemble_spectra,
     linear_step_coefficients,
@@ -14,9 +17,6 @@ from housner.scenarios.motions.elastic import (
     sdof_history,
 )
 from housner.scenarios.motions.records import elcentro
-from scipy import signal
-
-from housner import GroundMotion
 from housner.units import G
 
 

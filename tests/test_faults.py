@@ -19,14 +19,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from housner.engines.analytic import HousnerEngine
-from housner.engines.base import ENGINES, register_engine
-from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.execution.workers import CRASH_ENV
 from test_runner import motions  # the same short pulse-like motions
 
 from housner import GroundMotion, Specimen
 from housner.cli import main
+from housner.engines.analytic import HousnerEngine
+from housner.engines.base import ENGINES, register_engine
+from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.execution.workers import CRASH_ENV
 
 SPEC = Specimen.bachmann2017()
 ROOT = Path(__file__).resolve().parent.parent

@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from housner.scenarios.studies import fragility
+from scipy import stats as sps
+
 from housner.scenarios.studies.fragility import (
     BETA_BOUNDS,
     bootstrap_fit,
@@ -14,11 +15,12 @@ from housner.scenarios.studies.fragility import (
     exceedance,
     fit_lognormal,
     fragility_curve,
+    interval_disagreement,
     proportion_intervals,
     stripe_counts,
 )
-from scipy import stats as sps
-
+from housner.scenarios.studies.fragility import bootstrap as fragility_bootstrap
+from housner.scenarios.studies.fragility import lognormal as fragility_lognormal
 from housner.stats import overturn_probability
 
 MEDIAN, BETA = 1.3, 0.4
@@ -156,15 +158,15 @@ def test_objective_handed_to_scipy_is_the_negative_log_likelihood():
     im, n, k = np.array([0.4, 0.7, 1.0, 1.4, 2.0]), np.array([20.0, 20, 15, 20, 20]), np.array([1.0, 4, 6, 12, 18])
     lx, scale = np.log(im), 1.0 / n.sum()
     for t in ([0.1, math.log(0.5)], [-0.4, math.log(1.7)], [0.6, math.log(0.08)]):
-        f, g = fragility._neg_loglik(np.array(t), lx, n, k, scale)
+        f, g = fragility_lognormal._neg_loglik(np.array(t), lx, n, k, scale)
         ll = _loglik_grid(np.array([t[0]]), np.exp([t[1]]), im, n, k)[0, 0]
         const = sps.binom.logpmf(k, n, 0.5).sum() - n.sum() * math.log(0.5)  # sum of ln C(n, k)
         assert f == pytest.approx(-(ll - const) * scale, rel=1e-12)
         h = 1e-6
         num = [
             (
-                fragility._neg_loglik(np.array(t) + e, lx, n, k, scale)[0]
-                - fragility._neg_loglik(np.array(t) - e, lx, n, k, scale)[0]
+                fragility_lognormal._neg_loglik(np.array(t) + e, lx, n, k, scale)[0]
+                - fragility_lognormal._neg_loglik(np.array(t) - e, lx, n, k, scale)[0]
             )
             / (2 * h)
             for e in np.eye(2) * h
@@ -265,7 +267,7 @@ def test_bootstrap_replicates_are_the_maximum_likelihood_fits_of_the_resamples()
     # (both converge to ~1e-9 relative, so 1e-6 leaves room for rounding, not for another optimum).
     rng = np.random.default_rng(11)
     o = outcomes(capacities(40, seed=5)).astype(float)
-    st = fragility._stripes(STRIPES)
+    st = fragility_bootstrap._stripes(STRIPES)
     w = rng.multinomial(40, np.full(40, 1 / 40), size=60).astype(float)
     n, k = w @ np.ones_like(o) @ st.pool, w @ o @ st.pool
     # Two rows without dependence on intensity, whose Newton optimum lies beyond beta = 5 (the bounded fallback),
@@ -273,7 +275,7 @@ def test_bootstrap_replicates_are_the_maximum_likelihood_fits_of_the_resamples()
     n = np.vstack([n, np.full(20, 10.0), np.full(20, 10.0), np.full(20, 10.0)])
     k = np.vstack([k, np.full(20, 5.0), np.linspace(9, 1, 20).round(), (STRIPES > 1.0) * 10.0])
     point = fit_lognormal(STRIPES, *stripe_counts(o))
-    est = fragility._replicate_fits(st, n, k, point)
+    est = fragility_bootstrap._replicate_fits(st, n, k, point)
     for i in range(n.shape[0]):
         ref = fit_lognormal(STRIPES, n[i], k[i])
         if ref.status in ("ok", "beta_at_bound"):
@@ -342,6 +344,29 @@ def test_compare_detects_a_median_scaled_by_one_and_a_half():
     assert c.disagree is True
     again = compare_fits(STRIPES, outcomes(1.5 * cap), outcomes(cap), n_boot=1000, seed=2)
     assert again[:7] == c[:7]
+
+
+@pytest.mark.parametrize(
+    "ends, parts",
+    [
+        ((0.9, 1.1, -0.1, 0.1), (False, False)),
+        ((1.0, 1.2, 0.0, 0.2), (False, False)),  # an interval that touches 1 (or 0) contains it
+        ((1.01, 1.2, -0.1, 0.1), (True, False)),
+        ((0.8, 0.99, -0.1, 0.1), (True, False)),
+        ((0.9, 1.1, 0.01, 0.2), (False, True)),
+        ((0.9, 1.1, -0.2, -0.01), (False, True)),
+        ((math.nan, math.nan, math.nan, math.nan), (False, False)),  # no interval claims no disagreement
+    ],
+)
+def test_the_verdict_rule_names_the_interval_that_excludes_no_difference(ends, parts):
+    assert interval_disagreement(*ends) == parts
+
+
+def test_compare_decides_disagree_by_the_verdict_rule():
+    cap = capacities(60, seed=3)
+    for scale in (1.0, 1.05, 1.5):
+        c = compare_fits(STRIPES, outcomes(scale * cap), outcomes(cap), n_boot=200, seed=0)
+        assert c.disagree == any(interval_disagreement(c.ratio_low, c.ratio_high, c.diff_low, c.diff_high))
 
 
 def test_compare_leaves_out_failed_records_of_each_engine():

@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from shared import optional_engine
+
+from housner import GroundMotion, Specimen
 from housner.engines import get_engine
 from housner.engines._planar import IMPACT_LAW_DELAY, IMPACT_LAW_TOL, ImpactLaw
 from housner.engines.measures import decay_peaks, first_impact_ratio, half_cycle_peaks
 from housner.engines.tuning import DECAY_IMPACTS, _best, _suite, tune
-from shared import optional_engine
-
-from housner import GroundMotion, Specimen
 from housner.impacts import impact_times
 
 SPEC = Specimen.bachmann2017()

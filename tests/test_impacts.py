@@ -62,9 +62,8 @@ def test_resolved_impact_count_leaves_out_the_small_tail():
     measure, housner.engines.measures.half_cycle_peaks): 42 of the analytic model's 209 impacts at 0.01 alpha,
     83 at 0.001 alpha; the rest is the rest rule's tail of ever smaller impacts.
     """
-    from housner.engines.measures import half_cycle_peaks
-
     from housner import GroundMotion, Specimen, simulate
+    from housner.engines.measures import half_cycle_peaks
     from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count
 
     spec = Specimen.bachmann2017()

@@ -15,6 +15,11 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
+from housner.model import simulate
+from housner.motion import GroundMotion
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.specimen import Specimen
+
 ALPHA, P = ic.ALPHA, ic.P_STATED
 G_TAN = ic.G * math.tan(ALPHA)  # uplift acceleration of the stated specimen [m/s^2]
 
@@ -252,8 +257,6 @@ def test_deterministic_and_stable_in_n(tmp_path):
 
 @pytest.mark.parametrize("case", list(ic.CASES))
 def test_case_loads(tmp_path, case):
-    from housner.scenarios.campaigns.campaign import load_campaign
-
     info = ic.write_campaign(tmp_path / "c", case, n_ground=4, seed=1)
     camp = load_campaign(info["root"])
     assert camp.skipped == []
@@ -292,10 +295,6 @@ def test_library_parameters():
 def test_free_vibrations_match_library(housner):
     """The ``none`` free vibrations agree with :func:`housner.model.simulate` to 1e-4 alpha over 10 s (free
     rocking is not chaotic: both integrators are accurate to ~1e-9 rad, the rest rules differ below 1e-8 rad)."""
-    from housner.model import simulate
-    from housner.motion import GroundMotion
-    from housner.specimen import Specimen
-
     spec = Specimen.bachmann2017()
     n = int(round(10.0 / ic.DT)) + 1
     for x in ic.FV_RELEASES:

@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import independent_campaigns as ic
 import pytest
+from matrix import judge
+
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.diagnose import diagnose
-from matrix import judge
 
 
 @pytest.fixture(scope="module")

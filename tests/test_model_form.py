@@ -13,7 +13,12 @@ import math
 
 import numpy as np
 import pytest
+
+from housner import GroundMotion, Specimen
+from housner.effects import SensorOffset
 from housner.engines import get_engine
+from housner.model import REST_TOL
+from housner.scenarios.campaigns.fitting import fit_effect, joint_refit
 from housner.scenarios.campaigns.localise import Metric
 from housner.scenarios.campaigns.model_form import (
     FAMILIES,
@@ -23,11 +28,7 @@ from housner.scenarios.campaigns.model_form import (
     ModelForm,
     acc_channel_noise,
 )
-from housner.scenarios.campaigns.verdict import Z_DRIFT, _flight_share, order_drift, physical_classes
-
-from housner import GroundMotion, Specimen
-from housner.effects import SensorOffset
-from housner.model import REST_TOL
+from housner.scenarios.campaigns.pointers import Z_DRIFT, _flight_share, order_drift, physical_classes
 
 DT = 0.002
 
@@ -206,8 +207,6 @@ def test_a_restitution_that_wears_shows_in_the_free_vibrations_energy_ratio_alon
 
 
 def test_a_measured_parameter_is_kept_by_the_fits():
-    from housner.scenarios.campaigns.fitting import fit_effect, joint_refit
-
     spec = Specimen.bachmann2017()
     # an objective whose optimum is elsewhere: the pinned offset stays as measured
     params, _v, n = fit_effect("sensor_offset", lambda e: (e.offset - 0.01) ** 2, spec,

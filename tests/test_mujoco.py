@@ -8,6 +8,10 @@ import pickle
 import mujoco
 import numpy as np
 import pytest
+from shared import SoftGroundMujoco
+
+from housner import EngineError, GroundMotion, Specimen
+from housner.effects import make_effect
 from housner.engines import get_engine
 from housner.engines.mjcf import (
     ETH_SPECIMEN_PATH,
@@ -32,10 +36,6 @@ from housner.engines.tuning import (
     free_vibration_motions,
     half_cycle_peaks,
 )
-from shared import SoftGroundMujoco
-
-from housner import EngineError, GroundMotion, Specimen
-from housner.effects import make_effect
 from housner.model import simulate as housner_simulate
 from housner.units import G
 
@@ -213,9 +213,9 @@ def test_free_vibration_quarter_period_gives_the_specimens_p(engine, amplitude):
 
 
 def test_energy_ratio_at_impact_is_housners_at_every_amplitude(engine):
-    # Check 1 of the tuner (engines/tuning.py) at its first sample step: 0.5 % at 71 amplitudes 0.2-0.9 alpha, half
-    # the 0.7 % gap between the seed's calibrated and Housner's r. Measured at the defaults: worst -0.285 %
-    # (0.25 alpha), mean -0.012 %.
+    # Check 1 of the tuner (engines/tuning/checks.py) at its first sample step: 0.5 % at 71 amplitudes 0.2-0.9
+    # alpha, half the 0.7 % gap between the seed's calibrated and Housner's r. Measured at the defaults: worst
+    # -0.285 % (0.25 alpha), mean -0.012 %.
     r = np.array(
         [first_impact_ratio(engine.simulate(SEED, m)) for m in free_vibration_motions(SEED, DEFAULT_AMPLITUDES)]
     )

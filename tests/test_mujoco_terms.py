@@ -25,9 +25,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from housner.engines import get_engine
-from housner.engines.measures import half_cycle_peaks
-from housner.engines.mujoco_engine import MujocoEngine
 from numba import njit
 
 from housner import GroundMotion, Specimen
@@ -41,6 +38,9 @@ from housner.effects import (
     make_effect,
     register_effect,
 )
+from housner.engines import get_engine
+from housner.engines.measures import half_cycle_peaks
+from housner.engines.mujoco_engine import MujocoEngine
 
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha

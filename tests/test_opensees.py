@@ -10,11 +10,10 @@ from shared import assert_overturns_and_holds, assert_pulses_follow_the_analytic
 
 pytest.importorskip("openseespy.opensees", reason="the OpenSees engine needs openseespy: pip install -e '.[opensees]'")
 
-from housner.engines.measures import first_impact_ratio  # noqa: E402
-from housner.engines.opensees_engine import OpenSeesEngine  # noqa: E402
-
 from housner import GroundMotion, Specimen  # noqa: E402
 from housner.effects import make_effect  # noqa: E402
+from housner.engines.measures import first_impact_ratio  # noqa: E402
+from housner.engines.opensees_engine import OpenSeesEngine  # noqa: E402
 
 SEED = Specimen.bachmann2017()
 

@@ -15,12 +15,12 @@ from pathlib import Path
 import independent_campaigns as ic
 import numpy as np
 import pytest
-from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
-from housner.scenarios.execution.cache import cache_key, effect_code_hash
 
 from housner import GroundMotion, Specimen
 from housner.effects import effect_class, load_plugin
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.execution.cache import cache_key, effect_code_hash
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples" / "effects"

@@ -15,11 +15,11 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pybullet as pb
 import pytest
-from housner.engines.pybullet_engine import OVERTURN_ANGLE, ROCKING_TOL, PybulletEngine
-from housner.engines.urdf import ETH_SPECIMEN_PATH, JOINTS, urdf_from_specimen, write_urdf
 
 from housner import G, GroundMotion, Specimen
 from housner.calibration import energy_ratios, free_vibration_peaks, half_cycle_integral
+from housner.engines.pybullet_engine import OVERTURN_ANGLE, ROCKING_TOL, PybulletEngine
+from housner.engines.urdf import ETH_SPECIMEN_PATH, JOINTS, urdf_from_specimen, write_urdf
 from housner.errors import EngineError
 from housner.model import simulate as housner_simulate
 from housner.pulses import one_sine

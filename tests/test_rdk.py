@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
+from scipy import signal
+from scipy.integrate import cumulative_trapezoid
+
 from housner.scenarios.motions import rdk
 from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 from housner.scenarios.motions.rdk import RDKParams, fit, pmnm_count, settle_time, simulate, upcrossing_count
 from housner.scenarios.motions.records import arias_intensity, elcentro, husid_time, significant_duration
-from scipy import signal
-from scipy.integrate import cumulative_trapezoid
-
 from housner.units import G
 
 # A mid-size, mid-frequency motion used where El Centro's own fit is not needed.
@@ -309,8 +309,9 @@ def test_ensemble_mean_spectra_match_the_record_on_average(spectra):
 # Figure 8
 # ----------------------------------------------------------------------
 def test_ensemble_figure_draws(record, ensemble):
-    from housner.reports.run.ground_figures import plot_ensemble_spectra, plot_record
     from matplotlib.figure import Figure
+
+    from housner.reports.run.ground_figures import plot_ensemble_spectra, plot_record
 
     fig = plot_ensemble_spectra(record, ensemble[:10], S=10.0, periods=np.logspace(-2, 0.4, 15))
     assert isinstance(fig, Figure)

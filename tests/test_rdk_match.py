@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.integrate import cumulative_trapezoid
+
 from housner.scenarios.motions import rdk, rdk_match
 from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 from housner.scenarios.motions.rdk_match import (
@@ -16,7 +18,6 @@ from housner.scenarios.motions.rdk_match import (
     simulate_matched,
 )
 from housner.scenarios.motions.records import elcentro
-from scipy.integrate import cumulative_trapezoid
 
 VARIANTS = ("peer1999", "ngawest2")
 

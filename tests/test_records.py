@@ -8,6 +8,8 @@ from importlib import resources
 
 import numpy as np
 import pytest
+
+from housner import DataFileError, GroundMotion
 from housner.scenarios.motions.records import (
     ELCENTRO_VARIANTS,
     RECORDS,
@@ -19,8 +21,6 @@ from housner.scenarios.motions.records import (
     significant_duration,
     t_mid,
 )
-
-from housner import DataFileError, GroundMotion
 from housner.units import G
 
 # Values from shared/data/README.md (computed there independently of this code).

@@ -12,8 +12,13 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 import pytest
+from scipy import stats as sps
+from shared import windowed_sines
+
+from housner import GroundMotion, Specimen, stats
 from housner.engines.analytic import HousnerEngine
 from housner.engines.base import ENGINES, register_engine
+from housner.errors import DataFileError
 from housner.reports import figures
 from housner.reports.run import page as html
 from housner.reports.run import view as run_view
@@ -23,11 +28,6 @@ from housner.reports.run.view import RECORD_RTOL
 from housner.scenarios.execution.rundir import provenance, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict, run_engine_errors
-from scipy import stats as sps
-from shared import windowed_sines
-
-from housner import GroundMotion, Specimen, stats
-from housner.errors import DataFileError
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = Specimen.bachmann2017()
@@ -392,6 +392,7 @@ def test_written_tables_from_any_engines(tmp_path, monkeypatch):
 def test_ensemble_spectra_get_the_prototype_motions(tmp_path, monkeypatch):
     """motions.npz holds model-scale motions; the spectra figure is given them back at prototype scale."""
     from housner.reports.run import ground_figures
+    from housner.reports.run.sections import ensemble
 
     S = 10.0
     model = [m.to_model_scale(S) for m in shaking(3)]
@@ -406,7 +407,7 @@ def test_ensemble_spectra_get_the_prototype_motions(tmp_path, monkeypatch):
         seen.update(dt=[m.dt for m in motions], n=[m.n for m in motions], S=kw.get("S"), record=record.name)
         return real(record, motions, **kw)
 
-    monkeypatch.setattr(ground_figures, "plot_ensemble_spectra", spy)
+    monkeypatch.setattr(ensemble, "plot_ensemble_spectra", spy)
     page = Page(html.render_report(out))
     # time stretched back by sqrt(S) (seed eq. 9), samples untouched
     assert seen["dt"] == pytest.approx([0.002] * 3, rel=1e-12)

@@ -6,12 +6,12 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+
+from housner import GroundMotion, Specimen
 from housner.engines.analytic import HousnerEngine
 from housner.engines.base import ENGINES, register_engine
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.runs.run import run_scenario
-
-from housner import GroundMotion, Specimen
 
 SPEC = Specimen.bachmann2017()
 
@@ -190,7 +190,6 @@ class NanEngine(HousnerEngine):
 
 def test_the_engine_base_checks_every_response_and_the_runner_keeps_the_others(tmp_path):
     from housner.engines.base import check_response
-
     from housner.errors import EngineError
 
     ms = motions()

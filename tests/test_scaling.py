@@ -9,9 +9,9 @@ dimensionless group, hence theta_model(t) = theta_prototype(t sqrt(S)).
 import math
 
 import numpy as np
-from housner.scenarios.motions.records import RECORDS
 
 from housner import GroundMotion, Specimen, simulate
+from housner.scenarios.motions.records import RECORDS
 
 
 def test_prototype_and_model_rock_alike():

@@ -8,10 +8,10 @@ from statistics import NormalDist
 import numpy as np
 import pandas as pd
 import pytest
-from housner.scenarios.execution import tables
 from scipy import stats as sps
 
 from housner import stats
+from housner.scenarios.execution import tables
 
 INF = np.inf
 

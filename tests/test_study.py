@@ -7,14 +7,15 @@ import math
 
 import numpy as np
 import pytest
-from housner.reports.assertions import assert_fragility_agreement
-from housner.reports.assertions.studies import FragilityAgreementError
-from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
-from housner.scenarios.motions.elastic import response_spectrum
-from housner.scenarios.studies.study import StudyResult, intensity_measure, load_study, run_study, study_motions
 from scipy.integrate import cumulative_trapezoid
 
 from housner import G, simulate
+from housner.reports.assertions import assert_fragility_agreement
+from housner.reports.assertions.studies import FragilityAgreementError
+from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
+from housner.scenarios.motions.build import build_motions
+from housner.scenarios.motions.elastic import response_spectrum
+from housner.scenarios.studies.study import StudyResult, intensity_measure, load_study, run_study, study_motions
 
 HEAD = """name = "tiny-study"
 [specimen]
@@ -72,7 +73,7 @@ def test_a_study_needs_ground_motions(tmp_path):
 
 def test_stripes_scale_each_motion_to_its_target_at_each_size(tmp_path):
     scen = load_scenario(scenario_file(tmp_path, "levels = [1.0]\nprototype_heights = [2.5, 10.0]\n", n=3))
-    base, _ = scen.build_motions()
+    base, _ = build_motions(scen)
     spec = scen.specimen
     g_tan = G * math.tan(spec.alpha)
     for kind, levels, period in (("amplitude", [0.5, 2.0], None), ("pga", [1.5, 3.0], None),
@@ -136,7 +137,7 @@ def test_a_study_runs_every_record_and_writes_its_directory(tiny):
 def test_study_records_are_the_analytic_model_of_the_scaled_motion(tiny):
     p, _, res = tiny
     scen = load_scenario(p)
-    base, _ = scen.build_motions()
+    base, _ = build_motions(scen)
     d = res.results[(res.results.engine == "housner") & (res.results["size"] == 10.0) & (res.results.stripe == 2)]
     for row in d.itertuples():
         m = base[row.motion_id].scaled(time=math.sqrt(scen.S / 20.0)).scaled(amplitude=4.0)

@@ -1,4 +1,4 @@
-"""housner.reports.study.page and housner.reports.study.figures on small synthetic study directories of known fragility.
+"""housner.reports.study (page, verdict, sections, figures) on small synthetic study directories of known fragility.
 
 The directories follow the study format (study.json, fragility.parquet, exceedance.parquet,
 fragility.json, results.parquet): outcomes are drawn from lognormal capacities (seeded), the
@@ -18,16 +18,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from housner.reports.page import fmt_g, fmt_signed
-from housner.reports.study import figures as study_figures
-from housner.reports.study import page as study_report
-from housner.reports.study.page import DISAGREE, render_study_report, write_study_report
-from housner.scenarios.execution.rundir import jsonable
-from housner.scenarios.studies.fragility import exceedance, proportion_intervals
 from matplotlib.figure import Figure
 from scipy import stats as sps
 
-from housner.errors import DataFileError
+from housner.reports.page import fmt_g, fmt_signed
+from housner.reports.study import figures as study_figures
+from housner.reports.study import sections as study_sections
+from housner.reports.study.page import render_study_report, write_study_report
+from housner.reports.study.verdict import DISAGREE
+from housner.scenarios.execution.rundir import jsonable
+from housner.scenarios.studies.fragility import exceedance, proportion_intervals
+from housner.scenarios.studies.study import load_study
 
 REF = "housner"
 LEVELS = (0.5, 0.8, 1.2, 1.8, 2.7)  # spans 5.4x: a log intensity axis
@@ -320,6 +321,21 @@ def test_agreeing_engines_get_no_disagreement_sentence(tmp_path):
     assert '<span class="badge pass">AGREE</span> <span class="eng">' in section(page, "verdict")
 
 
+def test_the_verdict_is_the_studys_flag_and_a_file_whose_intervals_contradict_it_says_so(tmp_path):
+    # the runner decides `disagree` by the rule that words the intervals; only an edited file can differ
+    d = make_study(tmp_path / "s")
+    fj = json.loads((d / "fragility.json").read_text())
+    assert not any(c["disagree"] for c in fj["comparisons"])
+    fj["comparisons"][0]["disagree"] = True  # mujoco at 0.5 m, whose intervals contain 1 and 0
+    (d / "fragility.json").write_text(json.dumps(fj))
+    page = render_study_report(d)
+    assert "DISAGREE" in table_row(section(page, "fits"), "mujoco", "Prototype height 0.5 m")
+    assert "AGREE" in table_row(section(page, "fits"), "mujoco", "Prototype height 4 m")
+    items = verdict_items(page)
+    assert "median within the interval" in items[("mujoco", 0.5)] and DISAGREE not in items[("mujoco", 0.5)]
+    assert "fragility.json marks this comparison disagree = true, but its intervals say otherwise" in page
+
+
 @pytest.mark.parametrize("nonfinite", ["null", "string"])
 def test_degenerate_fit_shows_its_message_and_no_fitted_number(tmp_path, nonfinite):
     no_over = (
@@ -394,7 +410,7 @@ def test_failed_records_are_listed(tmp_path):
 
 
 def test_engine_that_failed_entirely_is_reported_not_raised(tmp_path, monkeypatch):
-    monkeypatch.setattr(study_report, "MAX_FAILURE_ROWS", 50)
+    monkeypatch.setattr(study_sections, "MAX_FAILURE_ROWS", 50)
     engines = (REF, "mujoco", "pybullet")
     fits = [ok_fit(e, s) for e in engines[:2] for s in SIZES]
     fits += [degenerate_fit("pybullet", s, "no_data", "no valid record at any stripe") for s in SIZES]
@@ -410,17 +426,18 @@ def test_engine_that_failed_entirely_is_reported_not_raised(tmp_path, monkeypatc
     assert f"First 50 of {n} failed records." in page  # ... and says so
 
 
-def test_missing_study_json_raises_and_missing_optional_files_are_noted(tmp_path):
+@pytest.mark.parametrize("missing", ["study.json", "fragility.parquet", "exceedance.parquet", "results.parquet"])
+def test_a_study_directory_is_read_by_load_study_and_a_missing_file_is_named(tmp_path, missing):
+    # one reader of the format (load_study), so one message, whichever of the two is asked
     d = make_study(tmp_path / "s")
-    (d / "exceedance.parquet").unlink()
-    (d / "results.parquet").unlink()
-    page = render_study_report(d)
-    assert "<code>exceedance.parquet</code> is missing" in section(page, "exceedance")
-    assert "<code>results.parquet</code> is missing" in section(page, "failures")
-    (d / "study.json").unlink()
-    with pytest.raises(DataFileError, match="study.json"):
+    (d / missing).unlink()
+    with pytest.raises(ValueError) as page_error:
         render_study_report(d)
-    with pytest.raises(DataFileError, match="no such directory"):
+    with pytest.raises(ValueError) as load_error:
+        load_study(d)
+    assert str(page_error.value) == str(load_error.value)
+    assert f"not a study directory (no {missing}" in str(page_error.value)
+    with pytest.raises(ValueError, match="not a study directory"):
         render_study_report(tmp_path / "nowhere")
 
 
@@ -520,3 +537,15 @@ def test_exceedance_figure_has_one_panel_per_threshold(tmp_path):
         "mujoco",
         "pybullet",
     ]
+
+
+def test_a_corrupt_study_file_is_one_line_naming_it(tmp_path):
+    from housner.errors import DataFileError
+    from housner.scenarios.studies.study import STUDY_FILES, load_study
+
+    for name in STUDY_FILES[:-1]:
+        (tmp_path / name).write_text("{ not what it should be")
+    with pytest.raises(DataFileError) as e:
+        load_study(tmp_path)
+    msg = str(e.value)
+    assert "\n" not in msg and "fragility.json" in msg and "run the study again" in msg

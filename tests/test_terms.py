@@ -33,10 +33,13 @@ from housner.effects import (
     make_effect,
     simulate_with_effects,
 )
-from housner.effects import _term_kernel as template
 from housner.effects.parameters import damping_moment, restitution_law
 from housner.effects.terms import kernel_dir, kernel_module
 from housner.model import RockingParams, simulate
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.compare import simulate_records
+from housner.scenarios.campaigns.fitting import fit_effect
+from housner.scenarios.campaigns.history_error import error_window, scored_error
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples" / "effects"
@@ -68,7 +71,8 @@ def gm(seed: int) -> GroundMotion:
 # ----------------------------------------------------------------------------
 # without terms, and the fast-path effects as terms: the plain kernel's results
 def test_the_template_without_terms_is_the_plain_kernel():
-    """The kernel template with its no-op hooks computes bit for bit what housner._kernel computes."""
+    """The kernel generated from the template (housner._kernel_steps, housner._kernel) with no term computes bit
+    for bit what the plain kernel computes."""
     prm = RockingParams(ALPHA * 0.9, ALPHA * 1.1, 4.7, 5.1, 0.93, r_amp_exponent=0.2, damping=0.1, r_pos=0.95)
     motions = [gm(s) for s in (1, 2, 3)] + [GroundMotion.free_vibration(-0.6 * ALPHA, 6.0)]
     n_rec = len(motions)
@@ -78,15 +82,12 @@ def test_the_template_without_terms_is_the_plain_kernel():
     args = (np.full(n_rec, DT), np.full(n_rec, 2, np.int64), np.tile(prm.as_array(), (n_rec, 1)))
     th0 = np.array([m.theta0 for m in motions])
     runs = []
-    for kern, extra in ((_kernel.run_batch, False), (template.run_batch, True)):
+    for kern in (_kernel.run_batch, kernel_module(()).run_batch):
         theta, thd = np.empty(off[-1]), np.empty(off[-1])
         imp_off = np.arange(n_rec + 1, dtype=np.int64) * 4000
         imp, out = np.zeros(imp_off[-1]), np.empty((n_rec, 6))
-        if extra:
-            kern(acc_g, np.zeros_like(acc_g), off, *args, np.zeros((n_rec, 0)), th0, np.zeros(n_rec), 1e-6, True,
-                 theta, thd, imp, imp_off, out)  # fmt: skip
-        else:
-            kern(acc_g, off, *args, th0, np.zeros(n_rec), 1e-6, True, theta, thd, imp, imp_off, out)
+        kern(acc_g, np.zeros_like(acc_g), off, *args, np.zeros((n_rec, 0)), th0, np.zeros(n_rec), 1e-6, True,
+             theta, thd, imp, imp_off, out)  # fmt: skip
         runs.append((theta, thd, imp, out))
     assert runs[0][3][:, 4].sum() > 50  # the records rock
     for a, b in zip(*runs, strict=True):
@@ -198,8 +199,6 @@ def test_ground_motion_channels():
 
 
 def test_campaign_reads_extra_channels(tmp_path):
-    from housner.scenarios.campaigns.campaign import load_campaign
-
     info = ic.write_campaign(tmp_path / "c", "vertical_table_measured", n_ground=2, seed=3)
     camp = load_campaign(info["root"])
     rec = camp.record("gm001")
@@ -394,9 +393,6 @@ def test_pivot_friction_composes_with_other_mechanics(plugins, combo):
 def _objective(camp, ids):
     """Per-record time-history errors [alpha] (campaigns.history_error.scored_error, the diagnosis' measure) of
     an effect on the records ``ids``, whole records (the channels travel with them), and their noise [alpha]."""
-    from housner.scenarios.campaigns.compare import simulate_records
-    from housner.scenarios.campaigns.history_error import error_window, scored_error
-
     recs = [camp.record(i) for i in ids]
     ends = [error_window(r, ALPHA) for r in recs]
 
@@ -425,9 +421,6 @@ def test_example_fitted_on_its_campaign(plugins, base, example):
     """Fit the example's parameter (campaigns.fitting.fit_effect: grid, zoom, Brent) on its independent
     campaign: it recovers the truth, and the error falls to the sensor noise (pivot friction: on the free
     vibrations, which the other two do not touch: there on the ground motions, median over the records)."""
-    from housner.scenarios.campaigns.campaign import load_campaign
-    from housner.scenarios.campaigns.fitting import fit_effect
-
     case, n_ground, key, truth, rel = FITS[example]
     camp = load_campaign(ic.cached_campaign(base, case, n_ground=n_ground, seed=0)["root"])
     errors, noise = _objective(camp, [r.id for r in camp.records])

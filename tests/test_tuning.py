@@ -7,6 +7,11 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
+from shared import SoftGroundMujoco
+
+from housner import GroundMotion, Specimen
+from housner.calibration import half_cycle_time
 from housner.engines.base import ENGINES
 from housner.engines.mujoco_engine import MujocoEngine
 from housner.engines.tuning import (
@@ -27,13 +32,8 @@ from housner.engines.tuning import (
     pulse_motions,
     tune,
 )
-from housner.reports.tuning_figure import tuning_report_figure
-from scipy.integrate import solve_ivp
-from shared import SoftGroundMujoco
-
-from housner import GroundMotion, Specimen
-from housner.calibration import half_cycle_time
 from housner.model import simulate as housner_simulate
+from housner.reports.tuning_figure import tuning_report_figure
 
 SEED = Specimen.bachmann2017()
 

@@ -16,10 +16,10 @@ from pathlib import Path
 import campaign_generators as cg
 import numpy as np
 import pytest
-from housner.scenarios.campaigns.campaign import load_campaign
 
 from housner import DataFileError, GroundMotion
 from housner.cli import main
+from housner.scenarios.campaigns.campaign import load_campaign
 
 G0 = 9.80665  # standard gravity [m/s^2], by definition
 PER_UNIT = {  # value of one unit in SI
@@ -332,3 +332,51 @@ def test_campaign_toml_with_a_byte_order_mark_reads(si_campaign, tmp_path):
     toml = d / "campaign.toml"
     toml.write_bytes(b"\xef\xbb\xbf" + toml.read_bytes())
     assert len(load_campaign(d).records) == 7
+
+
+# ----------------------------------------------------------------------------
+# plausibility: an acceleration read in m/s^2 because nothing said otherwise, with a peak above 5 g
+def test_csv_record_in_gal_without_a_unit_is_refused_naming_the_unit(tmp_path):
+    t = np.arange(200) * 0.01
+    gal = 320.0 * np.sin(2 * np.pi * t)  # 0.33 g written in cm/s^2, read as m/s^2 it would be 33 g
+    p = _csv(tmp_path / "rec.csv", "time,ground_acc", [t, gal])
+    with pytest.raises(DataFileError) as e:
+        GroundMotion.from_csv(p)
+    msg = str(e.value)
+    assert "\n" not in msg and "rec.csv line" in msg and "column `ground_acc`" in msg
+    assert "look like cm/s^2" in msg and "`ground_acc [cm/s^2]`" in msg
+    ok = GroundMotion.from_csv(_csv(tmp_path / "ok.csv", "time,ground_acc [cm/s^2]", [t, gal]))
+    assert np.max(np.abs(ok.acc)) == pytest.approx(3.2, rel=1e-3)
+    # a plausible peak (4 g) in m/s^2 without a unit is read as before
+    assert GroundMotion.from_csv(_csv(tmp_path / "g4.csv", "time,ground_acc", [t, gal / 8.0])).n == 200
+
+
+def test_campaign_ground_acc_a_hundred_times_too_large_is_refused(si_campaign, tmp_path):
+    d = tmp_path / "c"
+    shutil.copytree(si_campaign, d)
+    for f in sorted((d / "records").glob("gm*.csv")):
+        t, a, th = np.loadtxt(f, delimiter=",", skiprows=1).T
+        _csv(f, "time,ground_acc,theta", [t, a * 100.0 + np.sign(a) * 60.0, th])  # cm/s^2, peak above 5 g
+    # 4 of 7 records unreadable: the campaign is refused as a whole, its message naming the likely unit
+    with pytest.raises(DataFileError) as e:
+        load_campaign(d)
+    msg = str(e.value)
+    assert "\n" not in msg and "4 of 7 records could not be read" in msg
+    assert "the values look like cm/s^2" in msg and "`ground_acc [cm/s^2]`" in msg
+
+
+def test_a_scenario_declares_the_unit_of_a_bare_at2(tmp_path):
+    from housner.scenarios import load_scenario
+    from housner.scenarios.catalogue import ScenarioError
+
+    _at2(tmp_path / "bare.AT2", ["X", "Y", "Z"], ACC_SI / 0.01)
+    body = '[specimen]\npreset = "bachmann2017"\n[motions]\nsource = "record"\nrecord = "bare.AT2"\n'
+    (tmp_path / "a.toml").write_text(body)
+    with pytest.raises(ScenarioError, match=r"declare the unit: `units = \"g\"`.*\[motions\] table"):
+        load_scenario(tmp_path / "a.toml")
+    (tmp_path / "b.toml").write_text(body + 'units = "cm/s^2"\n')
+    m, _facts = load_scenario(tmp_path / "b.toml").record_files()["record"][0]
+    np.testing.assert_allclose(m.acc, ACC_SI, rtol=1e-7)
+    (tmp_path / "c.toml").write_text(body + 'units = "cm/s"\n')
+    with pytest.raises(ScenarioError, match=r"line 6: \[motions\] 'units' must be an acceleration unit"):
+        load_scenario(tmp_path / "c.toml")

@@ -17,9 +17,12 @@ import math
 import campaign_generators as cg
 import numpy as np
 import pytest
+
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.diagnose import cv_folds, diagnose
+from housner.scenarios.campaigns.floor import _perturbed
 from housner.scenarios.campaigns.verdict import RATIO_MISFIT, STATUSES, Floor, decide, residual_test
+from housner.specimen import Specimen
 
 _CACHE: dict = {}
 
@@ -80,10 +83,6 @@ def test_residual_at_the_floor_is_no_misfit_and_twice_it_is():
 def test_the_floors_parameter_draws_stay_within_the_fold_fits():
     # a sliding block's mu fitted at 0.139 with a jackknife spread of 0.02: Gaussian draws would cross
     # tan(alpha) = 0.15 (where the block rocks) 29 % of the time; the folds chose 0.132-0.141
-    from housner.scenarios.campaigns.verdict import _perturbed
-
-    from housner.specimen import Specimen
-
     spec = Specimen.bachmann2017()
     rng = np.random.default_rng(0)
     draws = [_perturbed("sliding", {"mu": 0.139}, {"sliding.mu": 0.02}, rng, spec, {"sliding.mu": (0.132, 0.141)})["mu"]

@@ -75,6 +75,7 @@ Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
 
 from __future__ import annotations
 
+from housner.effects.composition import EffectPlan, apply_effects, simulate_with_effects
 from housner.effects.flexible import FlexibleFoundation, simulate_flexible
 from housner.effects.parameters import (
     AmplitudeDependentRestitution,
@@ -93,9 +94,7 @@ from housner.effects.registry import (
     STAGE_MECHANICS,  # noqa: F401
     STAGE_SENSOR,  # noqa: F401
     Effect,
-    EffectPlan,
     ParamSpec,
-    apply_effects,
     available_effects,
     discover_effects,
     effect_class,
@@ -103,7 +102,6 @@ from housner.effects.registry import (
     make_effect,
     make_effects,
     register_effect,
-    simulate_with_effects,
 )
 from housner.effects.sensor import SensorOffset, TimeLag
 from housner.effects.sliding import Sliding, simulate_sliding

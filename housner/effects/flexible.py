@@ -9,9 +9,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from housner._kernel import EPS, HALF_PI, _grid, _rk4_update, _secant
+from housner._kernel_parts import EPS, HALF_PI, _grid, _rk4_update, _secant
 from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, _corner_geometry, _illinois, _pos_int_or_none, run_kernel
 from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
+from housner.model import PH_MAX, RockingParams
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -342,8 +343,6 @@ def simulate_flexible(
         crossing of theta = 0 after a corner lost contact (not the small
         rocking of a block that sits on both springs).
     """
-    from housner.model import PH_MAX, RockingParams
-
     prm = RockingParams.from_specimen(specimen) if params is None else params
     f = float(frequency)
     zeta = float(damping_ratio)

@@ -31,7 +31,7 @@ def restitution_law(w, r, s, alpha, p2, q):
 
 @njit(cache=True)
 def amplitude_law(w, r, s, alpha, p2, q):
-    """r (w / (p alpha))^n clipped to [0, 1], q = (n,): :func:`housner._kernel._restitution`'s arithmetic."""
+    """r (w / (p alpha))^n clipped to [0, 1], q = (n,): :func:`housner._kernel_parts._restitution`'s arithmetic."""
     r_eff = r
     if q[0] != 0.0 and w > 0.0:
         r_eff = r * (w / (math.sqrt(p2) * alpha)) ** q[0]

@@ -1,19 +1,27 @@
-"""The effects' vocabulary and registry: ParamSpec, Effect, register / discover / make, composition (apply_effects)."""
+"""The effects' vocabulary and registry: ParamSpec, Effect, register / discover / make.
+
+Their composition for one simulation is :mod:`housner.effects.composition` (``apply_effects``).
+"""
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import importlib
 import math
+import sys
 import warnings
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from importlib.metadata import entry_points
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
 
+from housner.effects.terms import import_file
 from housner.errors import unknown_choice
-from housner.motion import GroundMotion
+from housner.motion import CHANNEL_PREFIX, GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
 
@@ -26,6 +34,8 @@ STAGE_GEOMETRY, STAGE_INERTIA, STAGE_DISSIPATION, STAGE_MECHANICS, STAGE_SENSOR 
 EFFECTS: dict[str, type[Effect]] = {}
 #: Module name -> the file of every effect plugin loaded (:func:`load_plugin`).
 PLUGIN_FILES: dict[str, str] = {}
+#: Plugin module -> SHA-256 (16 hex digits) of the file it was loaded from.
+_PLUGIN_CODE: dict[str, str] = {}
 
 _discovered = False
 
@@ -265,8 +275,6 @@ def _register(cls: type, name: str | None = None) -> type:
     for key, spec in cls.params.items():
         if not isinstance(spec, ParamSpec):
             raise TypeError(f"effect {name!r}: params[{key!r}] must be a ParamSpec, got {spec!r}")
-    from housner.motion import CHANNEL_PREFIX
-
     chans = cls.channels
     if not isinstance(chans, tuple) or not all(isinstance(c, str) and c.startswith(CHANNEL_PREFIX) for c in chans):
         raise ValueError(
@@ -335,12 +343,6 @@ def load_plugin(path) -> tuple[str, ...]:
         One line naming the file: it does not exist, is not a ``.py`` file, or registers no effect.
         An exception raised by the file itself propagates.
     """
-    import hashlib
-    import sys
-    from pathlib import Path
-
-    from housner.effects.terms import import_file
-
     p = Path(path).expanduser()
     if not p.is_file():
         raise ValueError(f"effect plugin {str(p)!r}: no such file")
@@ -351,14 +353,28 @@ def load_plugin(path) -> tuple[str, ...]:
     stem = "".join(ch if ch.isalnum() else "_" for ch in p.stem)
     modname = f"housner_plugin_{stem}_{digest}"
     code_hash = hashlib.sha256(p.read_bytes()).hexdigest()[:16]
-    import_file(modname, p)
+    # The same file again, or a byte-identical copy of it elsewhere (a scenario's folder, a notebook's),
+    # replaces the effects it registered before; another file may not take a registered name.
+    same = {m for m, f in PLUGIN_FILES.items() if f == str(p) or _PLUGIN_CODE.get(m) == code_hash}
+    before = dict(EFFECTS)
+    for n in [n for n, cls in EFFECTS.items() if cls.__module__ in same]:
+        del EFFECTS[n]
+    try:
+        import_file(modname, p)
+    except BaseException:
+        EFFECTS.clear()
+        EFFECTS.update(before)
+        raise
     names = tuple(n for n, cls in EFFECTS.items() if cls.__module__ == modname)
     if not names:
         sys.modules.pop(modname, None)
+        EFFECTS.clear()
+        EFFECTS.update(before)
         raise ValueError(
             f"effect plugin {str(p)!r} registers no effect (decorate an Effect subclass with @register_effect)"
         )
     PLUGIN_FILES[modname] = str(p)
+    _PLUGIN_CODE[modname] = code_hash
     for n in names:
         # the code each class was loaded from, kept even once the file is reloaded: a result cache keys
         # on it (housner.scenarios.execution.cache.effect_code_hash)
@@ -368,9 +384,6 @@ def load_plugin(path) -> tuple[str, ...]:
 
 def _rebuild_effect(module: str, qualname: str, plugin: str | None, values: dict) -> Effect:
     """The effect of :meth:`Effect.__reduce__`: its class imported (a plugin loaded from its file), then built."""
-    import importlib
-    import sys
-
     if module not in sys.modules:
         if plugin is not None:
             load_plugin(plugin)
@@ -457,193 +470,3 @@ def make_effects(specs: Iterable[Any]) -> tuple[Effect, ...]:
         else:
             raise TypeError(f"`effects[{i}]` must be an Effect, a name or a dict with 'name', got {spec!r}")
     return tuple(out)
-
-
-# ----------------------------------------------------------------------
-# composition
-@dataclass(frozen=True, eq=False)
-class EffectPlan:
-    """Effects resolved for one (specimen, motion): what the solver is given and what it does afterwards.
-
-    Attributes
-    ----------
-    specimen : Specimen
-    effects : tuple of Effect
-        In the order of application.
-    params : RockingParams
-        The rocking parameters after every ``modify_params``.
-    motion : GroundMotion
-        The ground motion after every ``transform_input``.
-    solver : callable or None
-        The mechanics effect's equation of motion; None for Housner's.
-    mechanics : Effect or None
-        The effect that supplied ``solver``.
-    terms : TermSet or None
-        The effects' terms for the analytic kernel (:mod:`housner.effects.terms`); None for none.
-    """
-
-    specimen: Specimen
-    effects: tuple
-    params: Any
-    motion: GroundMotion
-    solver: Callable[..., Response] | None = None
-    mechanics: Effect | None = None
-    terms: Any = None
-
-    def observe(self, response: Response) -> Response:
-        """Apply every ``observe`` hook and list the effects in ``response.info['effects']``."""
-        for e in self.effects:
-            out = e.observe(response)
-            if not isinstance(out, Response):
-                raise TypeError(f"effect {e.name!r}: observe() must return a Response, got {type(out).__name__}")
-            response = out
-        return replace(response, info={**response.info, "effects": [e.describe() for e in self.effects]})
-
-    def run(self, *, substeps: int | None = None, rest_tol: float = 1e-6) -> Response:
-        """Simulate: the solver on (specimen, motion, params), then the observers.
-
-        Parameters
-        ----------
-        substeps : int, optional
-            RK4 substeps per sample; default: the solver's.
-        rest_tol : float
-            Rest rule of :func:`housner.model.simulate` [-].
-        """
-        if self.solver is None:
-            from housner.model import simulate
-
-            res = simulate(self.specimen, self.motion, params=self.params, substeps=substeps, rest_tol=rest_tol,
-                           terms=self.terms)  # fmt: skip
-        else:
-            res = self.solver(self.specimen, self.motion, self.params, substeps=substeps, rest_tol=rest_tol)
-        return self.observe(res)
-
-
-def apply_effects(
-    specimen: Specimen, motion: GroundMotion, effects: Iterable[Effect] = (), *, params=None,
-    prefer_terms: bool = False,
-) -> EffectPlan:  # fmt: skip
-    """Resolve ``effects`` for one simulation (see the module docstring for the order).
-
-    Parameters
-    ----------
-    specimen : Specimen
-    motion : GroundMotion
-    effects : iterable of Effect
-        At most one of each name, and at most one that changes the mechanics.
-    params : RockingParams, optional
-        Starting parameters; default ``RockingParams.from_specimen(specimen)``.
-    prefer_terms : bool
-        Realise the effects that have a fast path (``Effect.fast_path``: restitution, its
-        amplitude dependence, rotational damping) through their kernel terms instead; the same
-        physics (the tests check it), for comparisons and benchmarks.
-
-    Returns
-    -------
-    EffectPlan
-        Call its ``run()`` to simulate.
-
-    Raises
-    ------
-    ValueError
-        An effect given twice, two mechanics effects, a mechanics effect with terms, a value out
-        of bounds, or a channel an effect reads that ``motion`` does not carry (naming both).
-    """
-    from housner.effects.terms import TermSet
-    from housner.model import RockingParams
-
-    if not isinstance(specimen, Specimen):
-        raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
-    if not isinstance(motion, GroundMotion):
-        raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
-    effects = tuple(effects)
-    seen: dict[str, int] = {}
-    made = {c for x in effects if isinstance(x, Effect) for c in type(x).makes_channels}
-    for i, e in enumerate(effects):
-        if not isinstance(e, Effect):
-            raise TypeError(
-                f"`effects[{i}]` must be a housner.effects.Effect (build one with make_effect(name, ...)), "
-                f"got {type(e).__name__}"
-            )
-        if e.name in seen:
-            raise ValueError(f"effect {e.name!r} given twice (effects[{seen[e.name]}] and effects[{i}]); give it once")
-        seen[e.name] = i
-        e.check(specimen)
-        for ch in type(e).channels:
-            if ch not in motion.channels and ch not in made:
-                raise ValueError(
-                    f"effect {e.name!r} reads the channel {ch!r}, which motion {motion.name!r} does not carry"
-                )
-    mech = [e.name for e in effects if e.changes_mechanics]
-    if len(mech) > 1:
-        raise ValueError(
-            f"effects {' and '.join(repr(m) for m in mech)} each replace the equation of motion and cannot be "
-            "combined: give at most one mechanics-changing effect per simulation"
-        )
-    ordered = tuple(sorted(effects, key=lambda e: e.stage))
-    prm = RockingParams.from_specimen(specimen) if params is None else params
-    by_terms = [prefer_terms and type(e).fast_path for e in ordered]
-    for e, skip in zip(ordered, by_terms, strict=True):
-        if skip:
-            continue
-        prm = e.modify_params(prm, specimen)
-        if not isinstance(prm, RockingParams):
-            raise TypeError(f"effect {e.name!r}: modify_params() must return a RockingParams, got {type(prm).__name__}")
-    mo = motion
-    for e in ordered:
-        mo = e.transform_input(mo)
-        if not isinstance(mo, GroundMotion):
-            raise TypeError(f"effect {e.name!r}: transform_input() must return a GroundMotion, got {type(mo).__name__}")
-    solver = None
-    mechanics = None
-    for e in ordered:
-        s = e.solver()
-        if s is not None:
-            solver, mechanics = s, e
-    if mechanics is not None:
-        clash = [e.name for e in ordered if e.name in mechanics.conflicts]
-        if clash:
-            raise ValueError(
-                f"effect {mechanics.name!r} cannot be combined with {', '.join(repr(c) for c in clash)}: "
-                f"{mechanics.conflict_reason}"
-            )
-    terms, with_terms = [], []
-    for e, by in zip(ordered, by_terms, strict=True):
-        if type(e).fast_path and not by:
-            continue  # realised by its parameters
-        ts = e.terms(prm, specimen)
-        if not isinstance(ts, (tuple, list)):
-            raise TypeError(f"effect {e.name!r}: terms() must return a tuple of terms, got {type(ts).__name__}")
-        if ts:
-            terms += list(ts)
-            with_terms.append(e.name)
-    if mechanics is not None and with_terms:
-        raise ValueError(
-            f"effect {mechanics.name!r} replaces the equation of motion and cannot take the kernel terms of "
-            f"{', '.join(repr(n) for n in with_terms)}: give it alone or drop those"
-        )
-    from housner.motion import VERTICAL
-
-    vertical = any(VERTICAL in type(e).channels or VERTICAL in type(e).makes_channels for e in ordered)
-    return EffectPlan(specimen, ordered, prm, mo, solver, mechanics, TermSet(tuple(terms), vertical) if terms else None)
-
-
-def simulate_with_effects(
-    specimen: Specimen,
-    motion: GroundMotion,
-    effects: Iterable[Effect] = (),
-    *,
-    params=None,
-    substeps: int | None = None,
-    rest_tol: float = 1e-6,
-    prefer_terms: bool = False,
-) -> Response:
-    """Simulate ``motion`` on ``specimen`` with ``effects``: ``apply_effects(...).run(...)``.
-
-    ``specimen``, ``motion``, ``effects``, ``params`` (the starting
-    parameters, default the specimen's Housner parameters) and ``prefer_terms``
-    are those of :func:`apply_effects`; ``substeps`` and ``rest_tol`` those of
-    :meth:`EffectPlan.run`.
-    """
-    plan = apply_effects(specimen, motion, effects, params=params, prefer_terms=prefer_terms)
-    return plan.run(substeps=substeps, rest_tol=rest_tol)

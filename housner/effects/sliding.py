@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from housner._kernel import (
+from housner._kernel_parts import (
     EPS,
     HALF_PI,
     _grid,
@@ -25,6 +25,7 @@ from housner._kernel import (
 )
 from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, _corner_geometry, _illinois, _pos_int_or_none, run_kernel
 from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
+from housner.model import RockingParams, default_substeps
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
@@ -476,8 +477,6 @@ def simulate_sliding(
         ``slip_max`` [m], ``slide_time`` (first slip [s], NaN if none),
         ``painleve_jams`` and ``lift_off_time`` [s] (see :class:`Sliding`).
     """
-    from housner.model import RockingParams, default_substeps
-
     prm = RockingParams.from_specimen(specimen) if params is None else params
     mu = float(mu)
     if not (math.isfinite(mu) and mu > 0):

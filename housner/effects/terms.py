@@ -28,23 +28,25 @@ pivot s:
     modify it (an amplitude dependence), whatever the order of the effects. s is the pivot
     before the impact (the block lands on -s), alpha and p2 are that pivot's.
 
-The kernel (:mod:`housner.effects._term_kernel`) is Housner's event-driven kernel with these
-hooks; its states are REST, ROCKING, STUCK and OVERTURNED, and it locates every event (impact,
-overturn, the zero of w under a dry term, uplift and release from a stick) to the precision of
-the plain kernel (see that module's docstring). With no term it is the plain kernel, bit for bit.
+The kernel is Housner's event-driven kernel (:mod:`housner._kernel`, its equation of motion and
+events in :mod:`housner._kernel_steps`) with these hooks; its states are REST, ROCKING, STUCK and
+OVERTURNED, and it locates every event (impact, overturn, the zero of w under a dry term, uplift
+and release from a stick) to the precision of the plain kernel (see those modules' docstrings).
+The plain kernel is that very code with its no-op hooks.
 
 Route: generated code, cached on disk
 -------------------------------------
-For each *structure* (which functions, of which kind) this module writes a Python module, the
-kernel template with its hook section replaced by calls to the terms' functions (their
-parameters are run-time data, so a new value of M_f recompiles nothing), into
-``$HOUSNER_CACHE_DIR/kernels`` (default ``~/.cache/housner/kernels``; ``HOUSNER_KERNEL_DIR``
-overrides), named by a SHA-256 of its text, of the plain kernel's and of every term's module
-source, and imports it. Numba compiles it with ``cache=True`` next to the file, so the machine
-code is reused by every later process, and a changed term (or kernel) gets a new file instead of
-a stale cache. Measured on this project's shared 2-core machine (numba 0.68; the routes on a
-prototype RK4 loop of 100 records x 4000 samples with one moment term, the chosen one on the
-whole kernel with ``benchmarks/bench_terms.py``):
+For each *structure* (which functions, of which kind) this module writes two Python modules, the
+plain kernel's :mod:`housner._kernel_steps` with its hook section replaced by calls to the terms'
+functions (their parameters are run-time data, so a new value of M_f recompiles nothing) and
+:mod:`housner._kernel` importing that one instead, into ``$HOUSNER_CACHE_DIR/kernels`` (default
+``~/.cache/housner/kernels``; ``HOUSNER_KERNEL_DIR`` overrides), named by a SHA-256 of the hook
+section, of the kernel's sources and of every term's module source, and imports them. Numba
+compiles them with ``cache=True`` next to the files, so the machine code is reused by every later
+process, and a changed term (or kernel) gets new files instead of a stale cache. Measured on
+this project's shared 2-core machine (numba 0.68; the routes on a prototype RK4 loop of 100
+records x 4000 samples with one moment term, the chosen one on the whole kernel with
+``benchmarks/bench_terms.py``):
 
 * dispatcher-argument specialisation (the term passed as an argument of an ``@njit`` kernel):
   as fast as generated code warm (1.03-1.14x the plain loop), but numba does not cache a
@@ -57,9 +59,9 @@ whole kernel with ``benchmarks/bench_terms.py``):
   across processes. The whole kernel with a term compiles in 2.7-3.1 s once per structure and
   machine (its parallel batch 1.6-1.7 s more, when used), and a new process loads it from
   numba's cache in 0.01-0.02 s. Warm, serial, on 100 records of 16 s (two runs; the machine was
-  shared, so +-10 %): the kernel's own overhead, on identical trajectories, is 1.03x without
-  terms, 1.11-1.13x for ``rotational_damping`` as a moment term and 1.13-1.18x for
-  ``restitution`` as an impact term against their fast paths; a user drag moment, pivot
+  shared, so +-10 %): the kernel's own overhead, on identical trajectories, is 1.11-1.13x for
+  ``rotational_damping`` as a moment term and 1.13-1.18x for ``restitution`` as an impact term
+  against their fast paths (without terms it is the plain kernel); a user drag moment, pivot
   friction and a vertical input cost 1.05-1.14x, 1.19-1.27x and 1.12-1.13x plain Housner (their
   physics differ: other impacts, fewer overturns).
 
@@ -91,9 +93,11 @@ import numpy as np
 
 __all__ = ["CoulombTerm", "ImpactTerm", "MomentTerm", "TermSet", "kernel_dir", "kernel_module"]
 
-_TEMPLATE = Path(__file__).with_name("_term_kernel.py")
-_PLAIN = Path(__file__).resolve().parent.parent / "_kernel.py"
+#: The plain kernel's modules: the steps (with the hooks), the record loop (importing the steps), the parts.
+_CORE = Path(__file__).resolve().parent.parent
+_STEPS, _RUN, _PARTS = _CORE / "_kernel_steps.py", _CORE / "_kernel.py", _CORE / "_kernel_parts.py"
 _BEGIN, _END = "# <hooks>\n", "# </hooks>\n"
+_STEPS_IMPORT = "from housner._kernel_steps import (\n"
 
 
 def _check_fn(kind: str, fn: Any, n_args: int) -> tuple[str, str]:
@@ -350,15 +354,20 @@ def _hooks(structure: tuple) -> str:
     ])  # fmt: skip
 
 
-def generated_source(structure: tuple) -> str:
-    """The text of the kernel module for ``structure``: the template with its hooks replaced."""
-    text = _TEMPLATE.read_text()
-    i, j = text.index(_BEGIN), text.index(_END) + len(_END)
+def generated_source(structure: tuple, steps_module: str = "housner._kernel_steps") -> tuple[str, str]:
+    """The texts of the kernel's two modules for ``structure``: :mod:`housner._kernel_steps` with its
+    hooks replaced, and :mod:`housner._kernel` importing it as ``steps_module``."""
     head = (
-        "# Generated by housner.effects.terms from housner/effects/_term_kernel.py; do not edit.\n"
+        "# Generated by housner.effects.terms from housner/{}; do not edit.\n"
         f"# Terms: {', '.join(f'{k} {m}.{q}' for k, m, q, _n, _f in structure) or 'none'}\n"
     )
-    return head + text[:i] + _hooks(structure) + text[j:]
+    text = _STEPS.read_text()
+    i, j = text.index(_BEGIN), text.index(_END) + len(_END)
+    steps = head.format(_STEPS.name) + text[:i] + _hooks(structure) + text[j:]
+    run = _RUN.read_text()
+    if run.count(_STEPS_IMPORT) != 1:
+        raise RuntimeError(f"{_RUN} must import the steps once as {_STEPS_IMPORT.strip()!r}")
+    return steps, head.format(_RUN.name) + run.replace(_STEPS_IMPORT, f"from {steps_module} import (\n")
 
 
 def import_file(name: str, path: Path) -> ModuleType:
@@ -376,26 +385,29 @@ def import_file(name: str, path: Path) -> ModuleType:
 
 
 def kernel_module(structure: tuple) -> ModuleType:
-    """The compiled kernel for ``structure``: written to :func:`kernel_dir` once, imported once per process."""
+    """The compiled kernel for ``structure`` (its record loop's module): written to :func:`kernel_dir` once,
+    imported once per process."""
     with _LOCK:
         mod = _MODULES.get(structure)
         if mod is not None:
             return mod
-        src = generated_source(structure)
-        h = hashlib.sha256(src.encode())
-        h.update(_PLAIN.read_bytes())
+        h = hashlib.sha256(_hooks(structure).encode())
+        for f in (_STEPS, _RUN, _PARTS):
+            h.update(f.read_bytes())
         for m in sorted({s[1] for s in structure}):
             h.update(m.encode() + b"\0" + _source_bytes(m))
         name = f"housner_terms_{h.hexdigest()[:24]}"
         d = kernel_dir()
-        path = d / f"{name}.py"
-        if not path.exists():
-            # write once, atomically: rewriting an existing file would change its stamp and void numba's cache
-            fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
-            with os.fdopen(fd, "w") as f:
-                f.write(src)
-            os.replace(tmp, path)
-        mod = import_file(name, path)
+        steps, run = generated_source(structure, f"{name}_steps")
+        for stem, src in ((f"{name}_steps", steps), (name, run)):
+            if not (d / f"{stem}.py").exists():
+                # write once, atomically: rewriting an existing file would change its stamp and void numba's cache
+                fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
+                with os.fdopen(fd, "w") as f:
+                    f.write(src)
+                os.replace(tmp, d / f"{stem}.py")
+        import_file(f"{name}_steps", d / f"{name}_steps.py")  # first: the loop's module imports it by this name
+        mod = import_file(name, d / f"{name}.py")
         _MODULES[structure] = mod
         return mod
 

@@ -23,7 +23,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from housner.reports.assertions.runs import AgreementReport, CDFAgreementError, Criterion, _check_count, _check_tol
+from housner.reports.assertions.criteria import AgreementReport, CDFAgreementError, Criterion, _check_count, _check_tol
+from housner.scenarios.studies.study import StudyResult, load_study
 
 __all__ = ["FragilityAgreementError", "assert_fragility_agreement"]
 
@@ -33,8 +34,6 @@ class FragilityAgreementError(CDFAgreementError):
 
 
 def _study(results):
-    from housner.scenarios.studies.study import StudyResult, load_study
-
     if isinstance(results, StudyResult):
         return results
     if isinstance(results, (str, Path)):

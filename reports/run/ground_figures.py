@@ -19,12 +19,12 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from housner.motion import GroundMotion
+from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 from housner.units import G
 
 __all__ = ["DEFAULT_PERIODS", "plot_ensemble_spectra", "plot_record"]

@@ -24,10 +24,18 @@ Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
-from housner.reports.page import Section, document, engine_tag, esc, guarded, write_page
+from housner.reports.page import (
+    Section,
+    document,
+    engine_tag,
+    esc,
+    guarded,
+    render_directory,
+    write_directory_report,
+    written_by,
+)
 from housner.reports.run.sections.agreement import _agreement, _free_vibration, _spectra
 from housner.reports.run.sections.distribution import _distribution
 from housner.reports.run.sections.ensemble import _ensemble
@@ -67,10 +75,7 @@ def render_report(run_dir: str | Path) -> str:
     housner.errors.DataFileError
         When the directory or its results table is missing or unreadable.
     """
-    t0 = time.perf_counter()
-    run = Run.load(run_dir)
-    sections = _build_sections(run)
-    return _page(run, sections, time.perf_counter() - t0)
+    return render_directory(run_dir, Run.load, _build_sections, _page)
 
 
 def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
@@ -88,8 +93,7 @@ def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
     pathlib.Path
         The file written.
     """
-    path = Path(out) if out is not None else Path(run_dir) / REPORT_FILE
-    return write_page(path, render_report(run_dir))
+    return write_directory_report(run_dir, out, render_report, REPORT_FILE)
 
 
 # ----------------------------------------------------------------------------
@@ -135,8 +139,5 @@ def _page(run: Run, sections: list[Section], seconds: float) -> str:
         f"{', '.join(engine_tag(e, run) for e in run.engines)} &middot; reference {esc(run.reference)}"
         f"{' &middot; run ' + esc(created) if created else ''}</p>"
     )
-    footer = (
-        f"Written by <code>housner.reports.run.write_report</code> from <code>{esc(run.path)}</code> "
-        f"in {seconds:.1f} s."
-    )
+    footer = written_by("housner.reports.run.write_report", run.path, seconds)
     return document(f"{name}: housner report", f"Scenario <code>{esc(name)}</code>", subtitle, sections, footer)

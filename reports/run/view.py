@@ -18,12 +18,17 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from housner import Specimen
+from housner.errors import DataFileError
+from housner.motion import GroundMotion
 from housner.reports import figures
 from housner.reports.page import esc
 from housner.scenarios.execution.rundir import json_number, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
-
-from housner.errors import DataFileError
+from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
+from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict
+from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
 
 #: Record-by-record agreement: theta_max/alpha within this relative tolerance of the reference [-].
 RECORD_RTOL = 0.03
@@ -164,8 +169,6 @@ class Run:
     @cached_property
     def record_gap(self) -> dict:
         """:func:`housner.scenarios.runs.spread.record_against_ensemble` for this run: the record among its ensemble."""
-        from housner.scenarios.runs.spread import record_against_ensemble
-
         record, why = _record(self)
         if record is None:
             raise DataFileError(self.path / "run.json", why)
@@ -198,8 +201,6 @@ class Run:
         The analytic model with the specimen's own r (the paper's numerical column is Housner's model),
         whatever the run's reference: how much stronger, in effect, the paper's motions were.
         """
-        from housner.scenarios.runs.spread import equivalent_amplitude
-
         analysis = self.meta.get("analysis") or {}
         targets = {float(k): json_number(v) for k, v in (analysis.get("paper_percentiles") or {}).items()}
         targets = {q: v for q, v in targets.items() if not math.isnan(v)}
@@ -220,8 +221,6 @@ class Run:
         computed. Empty when the run stored no errors (the reference is not the analytic model,
         or an older run) or has no motions.
         """
-        from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict
-
         stored = self.meta.get("engine_errors") or {}
         if not stored or self.motions is None or self.reference != "housner":
             return {}
@@ -243,8 +242,6 @@ class Run:
     @cached_property
     def specimen_obj(self):
         """The run's specimen as a :class:`housner.Specimen` (from run.json)."""
-        from housner import Specimen
-
         sp = self.specimen
         return Specimen(
             height=json_number(sp.get("height_m")),
@@ -268,8 +265,6 @@ class Run:
 
 
 def _motion_list(run: Run):
-    from housner.motion import GroundMotion
-
     m = run.motions
     out = []
     names = m.get("names", [])
@@ -281,8 +276,6 @@ def _motion_list(run: Run):
 
 def _record(run: Run):
     """(the record the run's motions come from, at prototype scale, None) or (None, why not)."""
-    from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
-
     scen = run.meta.get("scenario") or {}
     facts = run.motions_meta.get("record") or {}
     key = (scen.get("motions") or {}).get("record") or facts.get("name")

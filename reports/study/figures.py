@@ -32,12 +32,13 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-from housner.reports.figures import engine_colors
-from housner.scenarios.execution.rundir import json_number
-from housner.scenarios.studies.fragility import fragility_curve
 from matplotlib.figure import Figure
 from matplotlib.legend_handler import HandlerTuple
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+from housner.reports.figures import engine_colors
+from housner.scenarios.execution.rundir import json_number
+from housner.scenarios.studies.fragility import fragility_curve
 
 __all__ = ["LOG_SPAN", "plot_exceedance", "plot_fragility", "plot_size_effect"]
 
@@ -100,6 +101,29 @@ def _size_title(frame: pd.DataFrame, size: float) -> str:
     return f"prototype height {size:g} m" + (f" (S = {float(s[0]):g})" if len(s) == 1 else "")
 
 
+def _at_size(frame: pd.DataFrame, size: float, also: Sequence[str], reference: str | None,
+             colors: Mapping[str, str] | None) -> tuple:  # fmt: skip
+    """A table's rows at one size, and what every figure of one size needs of them.
+
+    Returns the rows, the engines (the reference first, then those of the rows and ``also``), their colours,
+    the stripes' intensities, whether that axis is logarithmic, and each engine's shift along it.
+    """
+    sub = frame[_same(frame["size"], size)] if len(frame) else frame
+    names = _engine_order(list(sub["engine"]) + list(also), reference)
+    colors = dict(colors) if colors is not None else engine_colors(names, reference)
+    levels = np.sort(sub["intensity"].dropna().unique().astype(float)) if len(sub) else np.array([1.0])
+    log = _use_log(levels)
+    return sub, names, colors, levels, log, _offsets(levels, len(names), log)
+
+
+def _stripe_points(ax, d: pd.DataFrame, shift, name: str, **style):
+    """An engine's fraction p per stripe with its Wilson bars (gid "points:ENGINE"), ``shift``-ed along x."""
+    p, lo, hi = (d[col].to_numpy(float) for col in ("p", "p_low", "p_high"))
+    eb = ax.errorbar(shift(d["intensity"].to_numpy(float)), p, yerr=_yerr(p, lo, hi), capsize=2.5, zorder=3, **style)
+    eb.lines[0].set_gid(f"points:{name}")
+    return eb
+
+
 def _set_intensity_axis(ax, levels, label: str) -> None:
     if _use_log(levels):
         ax.set_xscale("log")
@@ -160,13 +184,8 @@ def plot_fragility(
     engines' points are shifted slightly about each stripe so that the bars
     do not overlap, while the curves are drawn at the true intensity.
     """
-    sub = fr[_same(fr["size"], size)] if len(fr) else fr
     fitted = [str(f.get("engine")) for f in fits if _same([json_number(f.get("size"))], size)[0]]
-    names = _engine_order(list(sub["engine"]) + fitted, reference)
-    colors = dict(colors) if colors is not None else engine_colors(names, reference)
-    levels = np.sort(sub["intensity"].dropna().unique().astype(float)) if len(sub) else np.array([1.0])
-    log = _use_log(levels)
-    shift = _offsets(levels, len(names), log)
+    sub, names, colors, levels, log, shift = _at_size(fr, size, fitted, reference, colors)
     if log:
         grid = np.geomspace(levels.min() / 1.4, levels.max() * 1.4, 400)
     else:
@@ -182,20 +201,8 @@ def plot_fragility(
         d = d[d["n"].astype(float) > 0]
         parts = []
         if len(d):
-            p, lo, hi = (d[col].to_numpy(float) for col in ("p", "p_low", "p_high"))
-            eb = ax.errorbar(
-                shift[k](d["intensity"].to_numpy(float)),
-                p,
-                yerr=_yerr(p, lo, hi),
-                fmt="o",
-                ms=5 if name == reference else 4,
-                capsize=2.5,
-                lw=1.0,
-                color=c,
-                zorder=3,
-            )
-            eb.lines[0].set_gid(f"points:{name}")
-            parts.append(eb)
+            parts.append(_stripe_points(ax, d, shift[k], name, fmt="o", ms=5 if name == reference else 4, lw=1.0,
+                                        color=c))  # fmt: skip
         fit = _fit_of(fits, name, size)
         med = json_number(fit.get("median")) if fit else math.nan
         beta = json_number(fit.get("beta")) if fit else math.nan
@@ -258,12 +265,8 @@ def plot_size_effect(
         ``median``, ``median_low``, ``median_high``, ``status``.
     label : str
         Intensity measure with its unit (the median is in it).
-    reference : str, optional
-        Engine drawn in black.
-    colors : mapping, optional
-        Engine -> colour.
-    ci : float
-        Confidence level of the intervals in the tables [-] (for the title).
+    reference, colors, ci
+        As :func:`plot_fragility`.
 
     Returns
     -------
@@ -374,16 +377,8 @@ def plot_exceedance(
         ``exceedance.parquet``: one row per (engine, size, stripe, threshold) with
         ``engine``, ``size`` [m], ``S``, ``intensity``, ``threshold``, ``n``,
         ``k``, ``p``, ``p_low``, ``p_high``.
-    size : float
-        Prototype height to draw [m].
-    label : str
-        Intensity measure with its unit, for the x axes.
-    reference : str, optional
-        Engine drawn in black.
-    colors : mapping, optional
-        Engine -> colour.
-    ci : float
-        Confidence level of the intervals in the tables [-] (for the title).
+    size, label, reference, colors, ci
+        As :func:`plot_fragility`.
 
     Returns
     -------
@@ -391,13 +386,8 @@ def plot_exceedance(
         One axes per threshold (ascending), each with one error-bar series per
         engine that has a valid record at that size (gid "points:ENGINE").
     """
-    sub = ex[_same(ex["size"], size)] if len(ex) else ex
-    names = _engine_order(list(sub["engine"]), reference)
-    colors = dict(colors) if colors is not None else engine_colors(names, reference)
+    sub, names, colors, levels, _, shift = _at_size(ex, size, (), reference, colors)
     thresholds = np.sort(sub["threshold"].dropna().unique().astype(float)) if len(sub) else np.array([])
-    levels = np.sort(sub["intensity"].dropna().unique().astype(float)) if len(sub) else np.array([1.0])
-    log = _use_log(levels)
-    shift = _offsets(levels, len(names), log)
     n = max(thresholds.size, 1)
     ncols = min(n, 3)
     nrows = math.ceil(n / ncols)
@@ -411,19 +401,8 @@ def plot_exceedance(
             d = dt[(dt["engine"] == name) & (dt["n"].astype(float) > 0)].sort_values("intensity")
             if not len(d):
                 continue
-            p, lo, hi = (d[col].to_numpy(float) for col in ("p", "p_low", "p_high"))
-            eb = ax.errorbar(
-                shift[k](d["intensity"].to_numpy(float)),
-                p,
-                yerr=_yerr(p, lo, hi),
-                fmt="-o",
-                ms=4,
-                lw=1.6 if name == reference else 1.0,
-                capsize=2.5,
-                color=colors.get(name, "#444444"),
-                zorder=3,
-            )
-            eb.lines[0].set_gid(f"points:{name}")
+            eb = _stripe_points(ax, d, shift[k], name, fmt="-o", ms=4, lw=1.6 if name == reference else 1.0,
+                                color=colors.get(name, "#444444"))  # fmt: skip
             handles.setdefault(name, eb)
         what = " (overturn)" if t >= 1.0 else ""
         ax.set_title(rf"P[$\theta_{{max}}/\alpha \geq$ {t:g}]{what}", fontsize=10)

@@ -37,12 +37,14 @@ import re
 import sys
 from collections import Counter
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from housner.calibration import estimate_noise
-from housner.errors import DataFileError
+from housner.errors import DataFileError, unknown_choice
+from housner.impacts import noise_crossings
 from housner.motion import CHANNEL_PREFIX, QUANTITIES, GroundMotion, read_csv_header, read_csv_si, uniform_step
 from housner.specimen import Specimen
 
@@ -127,6 +129,15 @@ class MeasuredRecord:
     def is_free_vibration(self) -> bool:
         return self.kind == "free_vibration"
 
+    @cached_property
+    def impacts(self) -> np.ndarray:
+        """Indices of the measured impacts (read-only), derived once per record: zero crossings of theta with a
+        hysteresis of 4 noise sigmas (:func:`housner.impacts.noise_crossings`; for each, the first sample beyond
+        the band on the new side). The error window of every comparison and every scorer counts them."""
+        imp = noise_crossings(self.theta, self.noise)
+        imp.flags.writeable = False
+        return imp
+
 
 @dataclass(eq=False)
 class Campaign:
@@ -167,8 +178,6 @@ class Campaign:
         for r in self.records:
             if r.id == rid:
                 return r
-        from housner.errors import unknown_choice
-
         raise unknown_choice("record", rid, [r.id for r in self.records])
 
     def __len__(self) -> int:

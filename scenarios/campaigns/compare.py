@@ -80,7 +80,11 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+
+from housner import stats
+from housner.effects import make_effects
 from housner.engines.base import Engine, get_engine
+from housner.response import Response
 from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
 from housner.scenarios.campaigns.history_error import (
     DIVERGENCE_SUSTAIN,
@@ -97,10 +101,6 @@ from housner.scenarios.campaigns.history_error import (
     scored_error,
 )
 from housner.scenarios.campaigns.localise import METRICS, Features, Metric, features, mean_se, measured_features
-
-from housner import stats
-from housner.effects import make_effects
-from housner.response import Response
 
 __all__ = [
     "DIVERGENCE_SUSTAIN",

@@ -14,9 +14,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from housner.scenarios.campaigns.campaign import MeasuredRecord
 
 from housner.impacts import HYSTERESIS_SIGMAS, noise_crossings
+from housner.scenarios.campaigns.campaign import MeasuredRecord
 
 __all__ = [
     "DIVERGENCE_SUSTAIN",
@@ -85,11 +85,12 @@ def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | Non
     See the module docstring: up to the ``window_impacts``-th measured
     impact, the measured block passing alpha, or the end (ground motion); up
     to the ``window_impacts``-th impact or the last one above 10 noise sigmas
-    (free vibration).
+    (free vibration). The impacts are the record's own (:attr:`MeasuredRecord.impacts
+    <housner.scenarios.campaigns.campaign.MeasuredRecord.impacts>`, :func:`measured_impacts` derived once).
     """
     th = record.theta
     n = th.size
-    imp = measured_impacts(th, record.noise)
+    imp = record.impacts
     if record.kind == "free_vibration":
         k_imp = WINDOW_IMPACTS_FV if window_impacts is None else window_impacts
         floor = FV_FLOOR_SIGMAS * record.noise

@@ -10,16 +10,17 @@ fails").
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
-from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
-from housner.scenarios.campaigns.history_error import FV_FLOOR_SIGMAS, measured_impacts
 
 from housner.calibration import FreeVibrationCalibration, calibrate_free_vibration
+from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
+from housner.scenarios.campaigns.history_error import FV_FLOOR_SIGMAS, measured_impacts
 from housner.units import G
 
 __all__ = ["METRICS", "Features", "Metric", "features", "mean_se", "measured_features"]
@@ -37,6 +38,8 @@ UPLIFT_SMOOTH = 9
 UPLIFT_SIGMAS = 5.0
 #: Samples closer than this to the detected uplift do not count as "before uplift" [s].
 UPLIFT_MARGIN = 0.05
+#: Free-vibration analyses a campaign keeps (:func:`features`), the oldest dropped beyond this many [-].
+FV_CACHE_SIZE = 256
 
 
 class Metric(NamedTuple):
@@ -401,8 +404,13 @@ def features(
     Every quantity is computed the same way for the measurement and the
     model, with the measurement's noise level for the thresholds, so that a
     difference between the two is a difference of the physics.
+
+    The analysis of a free-vibration history (its calibration, energy ratios, half-cycles) is derived
+    once per campaign: a history analysed before (the measurement, or a model's that another
+    comparison or the diagnosis' free-vibration check observed the same way) is taken from the
+    campaign's cache, keyed by its samples.
     """
-    pool = _Pool(campaign.specimen.alpha, campaign.specimen.tan_alpha)
+    pool = _Pool(campaign.specimen.alpha, campaign.specimen.tan_alpha, _fv_cache(campaign))
     for position, rec in enumerate(campaign.records):
         if histories is None:
             th = rec.theta
@@ -423,6 +431,13 @@ def features(
     return pool.features()
 
 
+def _fv_cache(campaign: Campaign) -> dict | None:
+    """The campaign's free-vibration analyses, (record id, noise, alpha, digest of the history) -> the result of
+    :func:`_fv_features` or its error message (None for an object without a cache)."""
+    cache = getattr(campaign, "_cache", None)
+    return None if cache is None else cache.setdefault("fv_analyses", {})
+
+
 def measured_features(campaign: Campaign) -> Features:
     """:func:`features` of the measurement, computed once per campaign (kept in its cache)."""
     key = "measured_features"
@@ -434,8 +449,9 @@ def measured_features(campaign: Campaign) -> Features:
 class _Pool:
     """The quantities of :func:`features`, pooled record by record (alpha [rad], tan(alpha) [-])."""
 
-    def __init__(self, alpha: float, tan_alpha: float):
+    def __init__(self, alpha: float, tan_alpha: float, fv_cache: dict | None = None):
         self.alpha, self.tan_alpha = alpha, tan_alpha
+        self.fv_cache = fv_cache
         self.e_amp, self.e_c, self.e_s, self.h_amp, self.h_dur, self.f_amp, self.f_rat = ([] for _ in range(7))
         self.e_rec: list[np.ndarray] = []
         self.cals: dict[str, Any] = {}
@@ -445,11 +461,11 @@ class _Pool:
 
     def add_free_vibration(self, rec: MeasuredRecord, th: np.ndarray, position: int = 0) -> None:
         """Calibration, energy ratios, half-cycles and energy kept between impacts of one free vibration."""
-        try:
-            cal, (a1, c1, s1), (ha, hd), (fa, fr) = _fv_features(rec.t, th, self.alpha, rec.noise)
-        except ValueError as e:
-            self.cals[rec.id] = str(e)
+        got = self._fv_analysis(rec, th)
+        if isinstance(got, str):
+            self.cals[rec.id] = got
             return
+        cal, (a1, c1, s1), (ha, hd), (fa, fr) = got
         self.cals[rec.id] = cal
         self.e_amp.append(a1)
         self.e_c.append(c1)
@@ -459,6 +475,26 @@ class _Pool:
         self.h_dur.append(hd)
         self.f_amp.append(fa)
         self.f_rat.append(fr)
+
+    def _fv_analysis(self, rec: MeasuredRecord, th: np.ndarray):
+        """:func:`_fv_features` of one free-vibration history, or its error message; from the cache when it holds
+        the same history of the same record."""
+        if self.fv_cache is None:
+            key = None
+        else:
+            digest = hashlib.blake2b(np.ascontiguousarray(th, dtype=float).tobytes(), digest_size=16).digest()
+            key = (rec.id, float(rec.noise), float(self.alpha), th.size, digest)
+            if key in self.fv_cache:
+                return self.fv_cache[key]
+        try:
+            got = _fv_features(rec.t, th, self.alpha, rec.noise)
+        except ValueError as e:
+            got = str(e)
+        if key is not None:
+            self.fv_cache[key] = got
+            while len(self.fv_cache) > FV_CACHE_SIZE:
+                del self.fv_cache[next(iter(self.fv_cache))]
+        return got
 
     def add_ground_motion(self, rec: MeasuredRecord, th: np.ndarray, over: bool, tmax: float) -> None:
         """Uplift, tilt before it, excursions and peak of one ground motion (``tmax`` [rad])."""

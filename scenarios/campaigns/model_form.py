@@ -37,11 +37,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
-from housner.scenarios.campaigns.compare import simulate_records
 
 from housner.calibration import estimate_noise
 from housner.model import REST_TOL, default_substeps
 from housner.motion import GroundMotion
+from housner.scenarios.campaigns.compare import simulate_records
 
 __all__ = [
     "CONVENTIONS",
@@ -92,8 +92,18 @@ def acc_channel_noise(campaign) -> float:
     (not all zeros). Otherwise, per ground motion, the robust third-difference estimate
     (:func:`housner.calibration.estimate_noise`) on its first and on its last :data:`QUIET_SHARE`
     of samples, the smaller of the two (a record starts or ends with the table at rest), and the
-    median over the records; 0 when nothing is still.
+    median over the records; 0 when nothing is still. Derived once per campaign (kept in its cache): every
+    floor a diagnosis measures reads it.
     """
+    cache = getattr(campaign, "_cache", None)
+    if cache is None:
+        return _acc_channel_noise(campaign)
+    if "acc_channel_noise" not in cache:
+        cache["acc_channel_noise"] = _acc_channel_noise(campaign)
+    return cache["acc_channel_noise"]
+
+
+def _acc_channel_noise(campaign) -> float:
     fv = [np.asarray(r.motion.acc, dtype=float) for r in campaign.free_vibration]
     fv = [a for a in fv if a.size > 1 and np.any(a != 0.0)]
     if fv:

@@ -15,6 +15,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from housner.effects import effect_class
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.compare import Comparison
 from housner.scenarios.execution.rundir import jsonable
@@ -407,8 +409,6 @@ def signed_words(text: str) -> str:
 def param_unit(name: str, key: str) -> str:
     """The unit of parameter ``key`` of effect ``name`` (its ParamSpec's), "" when unknown."""
     try:
-        from housner.effects import effect_class
-
         return effect_class(name).params[key].unit
     except (KeyError, ValueError, AttributeError):
         return ""

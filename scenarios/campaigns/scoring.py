@@ -15,6 +15,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+
 from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
 from housner.scenarios.campaigns.compare import release_sensitivities, simulate_records
 from housner.scenarios.campaigns.history_error import ERROR_CLIP, error_window, scored_error
@@ -123,15 +124,16 @@ class Scorer:
         tens of per cent with the chaos. A plain mean over ~60 records would let that scatter outvote
         the three free vibrations, and fits (the fold refits above all) would wander off what they pin.
         """
-        return self._weigh(self.errors(effects))
+        return self.weigh(self.errors(effects))
 
     def noise_loss(self) -> float:
         """:meth:`loss` of a model that left nothing but the sensor noise [alpha]: each record's noise
         sigma / alpha in place of its error, the least a model can score without fitting noise."""
         alpha = self.campaign.specimen.alpha
-        return self._weigh(np.array([r.noise / alpha for r in self.records]))
+        return self.weigh(np.array([r.noise / alpha for r in self.records]))
 
-    def _weigh(self, e: np.ndarray) -> float:
+    def weigh(self, e: np.ndarray) -> float:
+        """:meth:`loss` of per-record errors ``e`` (in the order of :attr:`records`) [alpha]."""
         fv = self._fv
         if fv.all() or not fv.any():
             return float(e.mean())

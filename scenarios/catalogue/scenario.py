@@ -14,14 +14,15 @@ is loaded.
 from __future__ import annotations
 
 import difflib
+import inspect
 import sys
-from collections import OrderedDict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from housner.engines.base import ENGINES, engine_class
 from housner.errors import unknown_choice
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
@@ -33,8 +34,6 @@ else:  # pragma: no cover
 
 from housner.scenarios.catalogue.schema import (
     _TOML_LINE_RE,
-    DEFAULT_RDK_MODEL,
-    RDK_MODELS,
     ScenarioError,
     _check_analysis,
     _check_table,
@@ -45,9 +44,11 @@ from housner.scenarios.catalogue.schema import (
     check_motions,
     read_effects,
     read_engines,
+    read_plugins,
     read_specimen,
 )
 from housner.scenarios.catalogue.study_table import read_study
+from housner.scenarios.motions.records import RECORD_SUFFIXES, RECORDS, file_sha256, read_record_file
 
 __all__ = ["SCENARIOS", "Scenario", "ScenarioError", "list_scenarios", "load_scenario"]
 
@@ -137,7 +138,8 @@ class Scenario:
         return W.ravel(), A.ravel()
 
     # ------------------------------------------------------------------ records
-    def _error(self, key: str | None, message: str) -> ScenarioError:
+    def error(self, key: str | None, message: str) -> ScenarioError:
+        """A one-line error about the [motions] table's ``key``, naming this scenario's file and the key's line."""
         return _File(self.path or Path(f"scenario {self.name!r}"), self.raw_text).error("motions", key, message)
 
     def _record_path(self, written: str) -> Path:
@@ -149,24 +151,22 @@ class Scenario:
 
     def _read_file(self, key: str, written: str) -> tuple[GroundMotion, dict]:
         """One record file, and its facts for the metadata; any failure is one ScenarioError naming key and path."""
-        from housner.scenarios.motions.records import RECORD_SUFFIXES, RECORDS, file_sha256, read_record_file
-
         path = self._record_path(written)
         what = f"[motions] {key!r} names {written!r}"
         if path.suffix.lower() in RECORD_SUFFIXES and not path.exists():
             hint = f"; shipped records: {', '.join(RECORDS)}" if key == "record" else ""
-            raise self._error(key, f"{what}: no such file {path} (relative paths start at the scenario's folder{hint})")
+            raise self.error(key, f"{what}: no such file {path} (relative paths start at the scenario's folder{hint})")
         if key == "record" and path.is_dir():
-            raise self._error(
+            raise self.error(
                 key,
                 f"{what}: {path} is a folder; 'record' names one file (a folder of records is "
                 'source = "records" with records = "FOLDER")',
             )
         try:
-            motion = read_record_file(path)
+            motion = read_record_file(path, units=self.motions.get("units"))
             sha = file_sha256(path)
         except (OSError, ValueError) as e:
-            raise self._error(key, f"{what}: {_one_line(e)}") from None
+            raise self.error(key, f"{what}: {_one_line(e)}") from None
         facts = {
             "name": motion.name,
             "provenance": f"{motion.provenance}; file {path.resolve()} (sha256 {sha[:16]})",
@@ -176,34 +176,34 @@ class Scenario:
             "path": str(path.resolve()),
             "sha256": sha,
         }
-        return GroundMotion(motion.acc, motion.dt, motion.name, facts["provenance"]), facts
+        if motion.channels:
+            facts["channels"] = sorted(motion.channels)
+        return replace(motion, provenance=facts["provenance"]), facts
 
     def _suite_files(self) -> list[str]:
         """The files of ``records`` (a folder: its .AT2 and .csv files sorted by name; or a list), as written."""
-        from housner.scenarios.motions.records import RECORD_SUFFIXES
-
         spec = self.motions["records"]
         if isinstance(spec, str):
             folder = self._record_path(spec)
             what = f"[motions] 'records' names folder {spec!r}"
             if not folder.exists():
-                raise self._error(
+                raise self.error(
                     "records", f"{what}: no such folder {folder} (relative paths start at the scenario's folder)"
                 )
             if not folder.is_dir():
-                raise self._error("records", f"{what}: {folder} is a file; give a folder or a list of files")
+                raise self.error("records", f"{what}: {folder} is a file; give a folder or a list of files")
             try:
                 names = sorted(p.name for p in folder.iterdir() if p.suffix.lower() in RECORD_SUFFIXES and p.is_file())
             except OSError as e:
-                raise self._error("records", f"{what}: cannot list {folder} ({e.strerror or e})") from None
+                raise self.error("records", f"{what}: cannot list {folder} ({e.strerror or e})") from None
             if not names:
-                raise self._error("records", f"{what}: {folder} holds no .AT2 or .csv file")
+                raise self.error("records", f"{what}: {folder} holds no .AT2 or .csv file")
             return [str(Path(spec) / name) for name in names]
         if not spec:
-            raise self._error("records", "[motions] 'records' is an empty list; name at least one .AT2 or .csv file")
+            raise self.error("records", "[motions] 'records' is an empty list; name at least one .AT2 or .csv file")
         for v in spec:
             if not isinstance(v, str):
-                raise self._error("records", f"[motions] 'records' must hold file paths (strings), got {v!r}")
+                raise self.error("records", f"[motions] 'records' must hold file paths (strings), got {v!r}")
         return list(spec)
 
     def _read_files(self) -> dict:
@@ -220,7 +220,7 @@ class Scenario:
             for w in written:  # names are checked before the files are read
                 stem = Path(w).stem
                 if stem in seen:
-                    raise self._error(
+                    raise self.error(
                         "records",
                         f"[motions] 'records': {seen[stem]!r} and {w!r} would both be motion {stem!r}; "
                         "every record needs a name (file stem) of its own",
@@ -230,113 +230,9 @@ class Scenario:
         self._files = files
         return files
 
-    def _record(self) -> tuple[GroundMotion, dict]:
-        """The record of an rdk or record source, and its facts (name, provenance, dt, n; file and sha256)."""
-        files = self._read_files()
-        if "record" in files:
-            return files["record"][0]
-        from housner.scenarios.motions.records import load_record
-
-        record = load_record(self.motions.get("record", "elcentro"))
-        return record, {"name": record.name, "provenance": record.provenance, "dt": record.dt, "n": record.n}
-
-    def build_motions(
-        self, n: int | None = None, *, seed: int | None = None, band_check: bool = False
-    ) -> tuple[list[GroundMotion], dict]:
-        """Generate the scenario's motions at model scale, and metadata for the report.
-
-        Parameters
-        ----------
-        n : int, optional
-            Number of motions (RDK ensembles only; motion i does not depend on n).
-        seed : int, optional
-            Override the scenario's seed (RDK only).
-        band_check : bool
-            RDK only: also compare the ensemble's mean 5 % spectra with the
-            record's, per third-octave band (PSa 0.05-3 s, Sd 0.5-3 s, at
-            prototype scale, before ``amplitude``; :func:`housner.scenarios.motions.bands.band_check`).
-            About 2 s per 100 motions, so off unless asked (the runner asks).
-
-        Returns
-        -------
-        motions : list of GroundMotion
-        meta : dict
-            Source-specific facts: ``S``; the ``record`` (name, provenance,
-            dt [s], n; for a file also ``file``, ``path``, ``sha256``) or, for a
-            suite, ``records`` (one such dict per motion); for RDK the ``model``,
-            ``rdk_params``, ``seed``, for the matched model ``matched_gain``,
-            and with ``band_check`` the ``band_check`` table.
-        """
-        src = self.source
-        m = self.motions
-        meta: dict[str, Any] = {"source": src, "S": self.S}
-        amp = float(m.get("amplitude", 1.0))
-        if src == "records":
-            suite = self._read_files()["records"]
-            meta["records"] = [facts for _, facts in suite]
-            return [_to_model(g, amp, self.S) for g, _ in suite], meta
-        if src in ("rdk", "record"):
-            record, meta["record"] = self._record()
-            if src == "record":
-                return [_to_model(record, amp, self.S)], meta
-            if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
-                raise ValueError(f"`n` (number of motions) must be a positive integer, got {n!r}")
-            if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
-                raise ValueError(f"`seed` must be a non-negative integer, got {seed!r}")
-            n = int(m.get("n", 100)) if n is None else int(n)
-            seed = int(m.get("seed", 0)) if seed is None else int(seed)
-            model = m.get("model", DEFAULT_RDK_MODEL)
-            try:
-                fit = _fit(model, record)
-            except ValueError as e:  # a user's record the model cannot be fitted to
-                raise self._error(
-                    "record", f"[motions] cannot fit model {model!r} to record {record.name!r}: {_one_line(e)}"
-                ) from None
-            meta["model"] = model
-            meta["seed"] = seed
-            if model == "matched":
-                from housner.scenarios.motions import rdk_match
-
-                meta["rdk_params"] = fit.params.describe()
-                meta["matched_gain"] = _gain_facts(fit)
-                proto = rdk_match.simulate_matched(fit, n, seed)
-            else:
-                from housner.scenarios.motions import rdk
-
-                meta["rdk_params"] = fit.describe()
-                proto = rdk.simulate(fit, n, seed)
-            if band_check:
-                meta["band_check"] = _band_facts(proto, record, seed)
-            return [_to_model(g, amp, self.S) for g in proto], meta
-        if src == "free_vibration":
-            alpha = self.specimen.alpha
-            dur = float(m.get("duration", 10.0))
-            dt = float(m.get("dt", 0.002))
-            motions = [
-                GroundMotion.free_vibration(a * alpha, dur, dt, name=f"release {a:.2f} alpha")
-                for a in m["theta0_over_alpha"]
-            ]
-            meta["theta0_over_alpha"] = list(m["theta0_over_alpha"])
-            return motions, meta
-        # pulses
-        from housner import pulses
-
-        W, A = self.pulse_grid()
-        p = self.specimen.p
-        a_up = self.specimen.uplift_acceleration
-        dt = float(m.get("dt", 0.002))
-        kind = m.get("pulse", "symmetric_ricker")
-        motions = []
-        for w, a in zip(W, A, strict=True):
-            if kind == "one_sine":
-                g = pulses.one_sine(a * a_up, w * p, dt=dt, p=p)
-            else:
-                g = pulses.ricker(a * a_up, w * p, kind=kind.split("_")[0], dt=dt, p=p)
-            motions.append(
-                GroundMotion(g.acc, g.dt, f"{kind} w/p={w:.3g} a/gtan={a:.3g}", g.provenance, g.theta0, g.theta_dot0)
-            )
-        meta.update({"pulse": kind, "omega_ratio": W.tolist(), "accel_ratio": A.tolist()})
-        return motions, meta
+    def record_files(self) -> dict:
+        """The record files of the [motions] table, read once: ``{"record" | "records": [(motion, facts), ...]}``."""
+        return self._read_files()
 
     def check_engines(self, names: list[str] | None = None) -> None:
         """Instantiate every engine to run with its [engines.NAME] settings, to refuse bad settings
@@ -353,8 +249,6 @@ class Scenario:
             An engine name is unknown or its settings are refused; the message names
             the file and the [engines.NAME] table.
         """
-        from housner.engines.base import ENGINES, engine_class
-
         where = f"{self.path}" if self.path else f"scenario {self.name!r}"
         for name in names if names is not None else self.engines:
             if name not in ENGINES:
@@ -368,8 +262,6 @@ class Scenario:
             except (TypeError, ValueError) as e:
                 msg = str(e)
                 if isinstance(e, TypeError) and "unexpected keyword argument" in msg:
-                    import inspect
-
                     known = [p for p in inspect.signature(cls).parameters if p not in ("self", "args", "kwargs")]
                     bad = [k for k in settings if k not in known]
                     close = difflib.get_close_matches(bad[0], known, n=1) if bad else []
@@ -386,8 +278,6 @@ class Scenario:
         ScenarioError
             Naming the file, the engine, the effect and what the engine realises.
         """
-        from housner.engines.base import ENGINES, engine_class
-
         where = f"{self.path}" if self.path else f"scenario {self.name!r}"
         for name in names if names is not None else self.engines:
             if name not in ENGINES:
@@ -408,79 +298,38 @@ class Scenario:
                 if why:
                     raise ScenarioError(f"{where}: [[effects]] {why}")
 
+    def check_channels(self) -> None:
+        """Refuse, by name, an effect that reads a motion channel (``ground_acc_vertical``) the motions lack.
+
+        Only record files carry channels (extra ``ground_acc_<what>`` columns of a CSV); RDK ensembles,
+        pulses and free vibrations carry none.
+        """
+        files = self._read_files()
+        suite = files.get("records") or files.get("record") or []
+        own = [(g.name, set(g.channels)) for g, _ in suite] if self.source in ("record", "records") else []
+        for e in self.effects:
+            for ch in e.channels:
+                if not own:
+                    raise self.error(
+                        "source",
+                        f"[[effects]] effect {e.name!r} reads the channel {ch!r}, which motions of source "
+                        f"{self.source!r} do not carry (a record CSV with a {ch!r} column does)",
+                    )
+                lacking = next((name for name, chs in own if ch not in chs), None)
+                if lacking is not None:
+                    raise self.error(
+                        "records" if self.source == "records" else "record",
+                        f"[[effects]] effect {e.name!r} reads the channel {ch!r}, which record {lacking!r} "
+                        f"does not carry (a CSV column {ch} [m/s^2])",
+                    )
+
     def describe(self) -> dict:
         """The scenario as plain data (for run.json and the cache key)."""
         return {"name": self.name, "file": str(self.path) if self.path else None, **self.raw}
 
 
-def _to_model(g: GroundMotion, amplitude: float, S: float) -> GroundMotion:
-    """A prototype-scale motion (record or simulated) times ``amplitude``, compressed in time by sqrt(S)."""
-    return g.scaled(amplitude=amplitude).to_model_scale(S)
-
-
 def _one_line(e: Exception) -> str:
     return "; ".join(line.strip() for line in str(e).splitlines() if line.strip()) or type(e).__name__
-
-
-#: Fitted ground-motion models, oldest first: (model, record name, content hash of the record's
-#: samples and step) -> RDKParams or MatchedRDK. A record file that changes has another hash, so
-#: its fit is redone; the fits are deterministic (fixed fit seed).
-_FITS: OrderedDict[tuple[str, str, str], Any] = OrderedDict()
-_FITS_SIZE = 8
-
-
-def _fit(model: str, record: GroundMotion):
-    """The model of ``RDK_MODELS`` fitted to ``record`` (cached, see :data:`_FITS`)."""
-    key = (model, record.name, record.content_hash())
-    if key in _FITS:
-        _FITS.move_to_end(key)
-        return _FITS[key]
-    if model == "matched":
-        from housner.scenarios.motions import rdk_match
-
-        fit = rdk_match.fit_matched(record, params=_fit(DEFAULT_RDK_MODEL, record))
-    elif model == DEFAULT_RDK_MODEL:
-        from housner.scenarios.motions import rdk
-
-        fit = rdk.fit(record)
-    else:
-        raise unknown_choice("RDK model", model, RDK_MODELS)
-    _FITS[key] = fit
-    while len(_FITS) > _FITS_SIZE:
-        _FITS.popitem(last=False)
-    return fit
-
-
-def _gain_facts(fit) -> dict:
-    """The spectral gain of a MatchedRDK as plain data (units in the keys)."""
-    d = fit.describe()
-    keys = ("gain_centres_s", "gain", "fir_length_s", "n_fit", "iterations", "worst_band_ratio_per_iteration")
-    return {"model": d["model"], **{k: d[k] for k in keys}, "fit_seed": d["fit_seed"]}
-
-
-def _band_facts(proto: list[GroundMotion], record: GroundMotion, seed: int) -> dict:
-    """The band check of a prototype-scale ensemble against its record, as plain data for run.json."""
-    from housner.scenarios.motions import bands
-
-    check = bands.band_check(proto, record)
-    keep = ("centre_s", "lo_s", "hi_s", "ratio", "ci95_lo", "ci95_hi", "verdict")
-
-    def table(t, t_range) -> dict:
-        bands = [{k: row[k] for k in keep} for row in t.rows()]
-        return {"range_s": list(t_range), "passed": t.passed, "bands": bands}
-
-    return {
-        "what": (
-            f"5 % damped spectra, mean of {len(proto)} motions (seed {seed}) / record {record.name!r}, "
-            "per third-octave band, at prototype scale, before 'amplitude'"
-        ),
-        "record": record.name,
-        "damping": check.damping,
-        "bounds": list(check.psa.bounds),
-        "passed": check.passed,
-        "psa": table(check.psa, bands.DEFAULT_PSA_RANGE),
-        "sd": table(check.sd, bands.DEFAULT_SD_RANGE),
-    }
 
 
 def _discover() -> dict[str, Path]:
@@ -573,6 +422,7 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     src = mot["source"]
     analysis = dict(raw.get("analysis", {}))
     _check_analysis(f, analysis)
+    read_plugins(f, raw.get("plugins", []))  # before [[effects]]: they may name the plugins' effects
     effects = read_effects(f, raw.get("effects", []), specimen)
     scen = Scenario(
         name=name,
@@ -593,4 +443,5 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     if src == "pulses":
         scen.pulse_grid()  # validate the grids now
     scen._read_files()  # record files: read now, so that a bad one fails before any work
+    scen.check_channels()
     return scen

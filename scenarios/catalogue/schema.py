@@ -16,15 +16,16 @@ from typing import Any
 
 import numpy as np
 
+from housner.effects import available_effects, load_plugin, make_effect
+from housner.engines.base import ENGINES
 from housner.errors import unknown_choice
+from housner.motion import parse_unit
+from housner.scenarios.motions.build import DEFAULT_RDK_MODEL, RDK_MODELS
+from housner.scenarios.motions.records import RECORDS
 from housner.specimen import Specimen
 
 SPECIMEN_PRESETS = {"bachmann2017": Specimen.bachmann2017}
 MOTION_SOURCES = ("rdk", "record", "records", "pulses", "free_vibration")
-#: Ground-motion models of source "rdk": the published RDK model, and the spectrally
-#: matched ensemble of :mod:`housner.scenarios.motions.rdk_match`.
-RDK_MODELS = ("rdk2010", "matched")
-DEFAULT_RDK_MODEL = "rdk2010"
 PULSES = ("symmetric_ricker", "antisymmetric_ricker", "one_sine")
 
 # Allowed keys per table: key -> expected type(s). Unknown keys get "did you mean".
@@ -37,6 +38,7 @@ _SCHEMA: dict[str, dict[str, Any]] = {
         "engines": dict,
         "analysis": dict,
         "effects": list,
+        "plugins": list,
         "study": dict,
     },
     "specimen": {
@@ -53,6 +55,7 @@ _SCHEMA: dict[str, dict[str, Any]] = {
         "source": str,
         "record": str,
         "records": (str, list),
+        "units": str,
         "model": str,
         "n": int,
         "seed": int,
@@ -186,8 +189,6 @@ def _grid(path: Path, key: str, spec: Any, text: str = "") -> np.ndarray:
 
 def _is_path(record: str) -> bool:
     """True if ``record`` names a file: not a shipped name, and with a suffix or a path separator."""
-    from housner.scenarios.motions.records import RECORDS
-
     return record not in RECORDS and (bool(Path(record).suffix) or "/" in record or "\\" in record)
 
 
@@ -237,7 +238,13 @@ def check_motions(f: _File, mot: dict) -> None:
         raise f.error(
             "motions", "dt", f"[motions] 'dt' ({mot['dt']!r} s) must be below 'duration' ({mot['duration']!r} s)"
         )
-    for key, sources in (("record", ("rdk", "record")), ("records", ("records",)), ("model", ("rdk",))):
+    if "units" in mot:  # the acceleration unit of record files whose header names none
+        u = parse_unit(mot["units"])
+        if u is None or u[0] != "acceleration":
+            raise f.error("motions", "units", f"[motions] 'units' must be an acceleration unit (g, cm/s^2, m/s^2, "
+                          f"mm/s^2, in/s^2, ft/s^2), got {mot['units']!r}")  # fmt: skip
+    for key, sources in (("record", ("rdk", "record")), ("records", ("records",)), ("model", ("rdk",)),
+                         ("units", ("rdk", "record", "records"))):  # fmt: skip
         if key in mot and src not in sources:
             use = " or ".join(f"source = {s!r}" for s in sources)
             raise f.error("motions", key, f"[motions] {key!r} applies to {use}, not to source {src!r}")
@@ -246,8 +253,6 @@ def check_motions(f: _File, mot: dict) -> None:
             "motions", None, "[motions] source 'records' needs key 'records' (a folder, or a list of .AT2 / .csv files)"
         )
     if src in ("rdk", "record"):
-        from housner.scenarios.motions.records import RECORDS
-
         rec = mot.get("record", "elcentro")
         if not _is_path(rec) and rec not in RECORDS:
             msg = unknown_choice("record", rec, RECORDS)
@@ -268,8 +273,6 @@ def read_engines(f: _File, table: dict) -> tuple[list[str], dict]:
     """The [engines] table: the engine names to run and the per-engine settings tables (all registered names)."""
     eng_t = dict(table)
     names = list(eng_t.pop("names", ["housner"]))
-    from housner.engines.base import ENGINES
-
     if not names:
         raise f.error("engines", "names", "[engines] 'names' must list at least one engine")
     for n in names:
@@ -291,8 +294,6 @@ def _check_analysis(f: _File, analysis: dict) -> None:
     """The [analysis] table is read after the simulation (report): check it now."""
     ref = analysis.get("reference")
     if ref is not None:
-        from housner.engines.base import ENGINES
-
         if ref not in ENGINES:
             raise f.error("analysis", "reference", f"[analysis] {unknown_choice('reference engine', ref, ENGINES)}")
     for k, v in (analysis.get("paper_percentiles") or {}).items():
@@ -327,6 +328,30 @@ def _array_table_line(text: str, table: str, k: int) -> int | None:
     return lines[k] if k < len(lines) else None
 
 
+def read_plugins(f: _File, entries: list) -> tuple[str, ...]:
+    """Load the effects files of the top-level ``plugins`` list (paths relative to the scenario's folder).
+
+    ``plugins = ["effects/pivot_friction.py"]`` does for a scenario what ``--plugin FILE`` does on the
+    command line: the file's ``@register_effect`` classes join the registry, so that ``[[effects]]`` can
+    name them (and the workers load the same file). Returns the effect names registered; a file that
+    is missing, not ``.py``, registers no effect or fails to import is a one-line error naming the
+    scenario, the key's line and the file.
+    """
+    names: list[str] = []
+    for entry in entries:
+        if not isinstance(entry, str):
+            raise f.error("", "plugins", f"'plugins' must list Python files (strings), got {entry!r}")
+        path = Path(entry).expanduser()
+        if not path.is_absolute():
+            path = f.path.parent / path
+        try:
+            names.extend(load_plugin(path))
+        except Exception as e:  # a user's file: any failure is one line naming it
+            msg = "; ".join(x.strip() for x in str(e).splitlines() if x.strip()) or type(e).__name__
+            raise f.error("", "plugins", f"plugin {entry!r}: {msg}") from None
+    return tuple(names)
+
+
 def read_effects(f: _File, entries: list, specimen: Specimen) -> tuple:
     """The ``[[effects]]`` tables as effects of :mod:`housner.effects`, each checked against the specimen.
 
@@ -335,8 +360,6 @@ def read_effects(f: _File, entries: list, specimen: Specimen) -> tuple:
     parameter, a missing one or a value out of bounds is a one-line error
     naming the file and the line of that ``[[effects]]``.
     """
-    from housner.effects import available_effects, make_effect
-
     out = []
     for k, entry in enumerate(entries):
         line = _array_table_line(f.text, "effects", k)

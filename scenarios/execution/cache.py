@@ -15,12 +15,11 @@ import logging
 import os
 from pathlib import Path
 
-import numpy as np
-from housner.scenarios.execution.rundir import effect_data, jsonable
-
 import housner
 from housner import engines
 from housner.motion import GroundMotion
+from housner.scenarios.execution.chunks import entry_path, load_entry, store_entry
+from housner.scenarios.execution.rundir import effect_data, jsonable
 from housner.specimen import Specimen
 
 
@@ -32,7 +31,7 @@ def default_cache_dir() -> Path:
 
 _CODE_VERSION: str | None = None
 #: Sub-packages of ``housner`` that are not physics: installed, they sit inside housner/'s folder.
-_ABOVE_PHYSICS = ("engines", "scenarios", "reports", "cli.py")
+_ABOVE_PHYSICS = ("engines", "scenarios", "reports", "cli")
 
 
 def code_version() -> str:
@@ -84,9 +83,21 @@ def cache_key(
     specimen: Specimen, motion: GroundMotion, engine: str, settings: dict, version: str, effects: tuple = ()
 ) -> str:
     """Content hash of everything that determines one (engine, effects, motion) result."""
+    return _key(_shared_content(specimen, engine, settings, version, effects), motion)
+
+
+def cache_keys(
+    specimen: Specimen, motions: list[GroundMotion], engine: str, settings: dict, version: str, effects: tuple = ()
+) -> list[str]:
+    """:func:`cache_key` of each motion (the very same strings), the parts the motions share made once."""
+    shared = _shared_content(specimen, engine, settings, version, effects)
+    return [_key(shared, m) for m in motions]
+
+
+def _shared_content(specimen: Specimen, engine: str, settings: dict, version: str, effects: tuple) -> dict:
+    """Everything in a key but the motion, as plain JSON data."""
     content = {
         "specimen": specimen.describe(),
-        "motion": motion.content_hash(),
         "engine": engine,
         "settings": settings,
         "engine_version": version,
@@ -97,68 +108,19 @@ def cache_key(
         user = {type(e).name: h for e in effects if (h := effect_code_hash(e))}
         if user:  # a user's effect (plugin, entry point): its code is part of the result
             content["effect_code"] = user
-    payload = json.dumps(jsonable(content), sort_keys=True)
+    return jsonable(content)
+
+
+def _key(shared: dict, motion: GroundMotion) -> str:
+    """SHA-256 of the canonical JSON of the shared content and the motion's content hash."""
+    payload = json.dumps({**shared, "motion": motion.content_hash()}, sort_keys=True)
     return hashlib.sha256(payload.encode()).hexdigest()
 
 
 # --------------------------------------------------------------------------
-# Result cache: one .npz per key, holding theta and the row, with the key and a checksum.
+# Result cache: one .npz per key, holding theta and the row, with the key and a checksum. The format is
+# written and read in housner.scenarios.execution.chunks (which the worker processes load by its path).
 _log = logging.getLogger("housner.runner")
 
-
-def _entry_checksum(key: str, meta: dict, theta: np.ndarray) -> str:
-    """SHA-256 of an entry's payload: its key, its row fields (canonical JSON) and theta's bytes."""
-    h = hashlib.sha256()
-    h.update(key.encode())
-    h.update(b"\0")
-    h.update(json.dumps({k: v for k, v in meta.items() if k != "sha256"}, sort_keys=True).encode())
-    h.update(b"\0")
-    h.update(np.ascontiguousarray(theta, dtype="<f4").tobytes())
-    return h.hexdigest()
-
-
-def _load_cached(path: Path, key: str) -> tuple[dict | None, str | None]:
-    """Read a cache entry.
-
-    Returns
-    -------
-    row : dict or None
-        The stored row with ``theta``, or None (absent or rejected).
-    problem : str or None
-        Why an existing entry was rejected (unreadable, another key, checksum mismatch).
-    """
-    if not path.exists():
-        return None, None
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            meta = json.loads(str(z["row"]))
-            theta = np.asarray(z["theta"])
-    except Exception as e:
-        return None, f"is unreadable ({type(e).__name__})"
-    if not isinstance(meta, dict) or "sha256" not in meta or "key" not in meta:
-        return None, "has no key or checksum (older or foreign format)"
-    if meta["key"] != key:
-        return None, f"holds the result of another key ({str(meta['key'])[:12]}...)"
-    if meta["sha256"] != _entry_checksum(key, meta, theta):
-        return None, "fails its checksum (edited or corrupted)"
-    try:
-        row = {k: v for k, v in meta.items() if k not in ("key", "sha256")}
-        row["theta_max_over_alpha"] = float(row["theta_max_over_alpha"])
-        row["theta"] = theta
-        if row.get("status") != "ok":
-            return None, f"has status {row.get('status')!r}"
-    except (KeyError, TypeError, ValueError) as e:
-        return None, f"has a malformed row ({type(e).__name__}: {e})"
-    return row, None
-
-
-def _store_cached(path: Path, key: str, row: dict) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    meta = {k: v for k, v in row.items() if k not in ("theta", "motion_id")}
-    meta["theta_max_over_alpha"] = str(meta["theta_max_over_alpha"])
-    meta["key"] = key
-    theta = np.ascontiguousarray(row["theta"], dtype=np.float32)
-    meta["sha256"] = _entry_checksum(key, meta, theta)
-    tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-    np.savez_compressed(tmp, theta=theta, row=np.array(json.dumps(meta)))
-    os.replace(tmp, path)
+__all__ = ["cache_key", "cache_keys", "code_version", "default_cache_dir", "effect_code_hash", "entry_path",
+           "load_entry", "store_entry"]  # fmt: skip

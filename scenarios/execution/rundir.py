@@ -30,10 +30,11 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from housner.scenarios.execution.tables import REQUIRED_COLUMNS
 
+import housner
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
+from housner.scenarios.execution.tables import REQUIRED_COLUMNS
 
 RESULT_COLUMNS = [
     "engine",
@@ -110,8 +111,6 @@ def _git_commit() -> str:
 
 def provenance() -> dict:
     """Versions of the suite, Python and the engines' packages, and the git commit."""
-    import housner
-
     versions = {"housner": housner.__version__, "python": platform.python_version(), "numpy": np.__version__}
     for mod in ("mujoco", "pybullet", "scipy", "numba", "pandas"):
         try:

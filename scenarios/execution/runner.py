@@ -4,10 +4,11 @@
 the cache key of every record, the records the cache already holds, chunks of
 the others), executes the chunks (:mod:`housner.scenarios.execution.workers`: in
 this process, in a fault-tolerant process pool by default, or on a Dask cluster;
-every record reported as it finishes and stored in the cache,
-:mod:`housner.scenarios.execution.cache`) and returns the table: one row per
-(engine, motion), always all of them, a record that failed a row with
-``status = "failed"`` and its error. It never sees a scenario.
+an engine that batches runs each chunk in one call; every record reported as it
+finishes and stored in the cache, :mod:`housner.scenarios.execution.cache`) and
+returns the table: one row per (engine, motion), always all of them, a record that
+failed a row with ``status = "failed"`` and its error. It never sees a scenario.
+How it executes is a :class:`~housner.scenarios.execution.options.RunOptions`.
 """
 
 from __future__ import annotations
@@ -17,41 +18,33 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
-from housner.engines.base import engine_class
-from housner.scenarios.catalogue.schema import effects_label
-from housner.scenarios.execution.cache import _load_cached, _log, _store_cached, cache_key, default_cache_dir
-from housner.scenarios.execution.rundir import RESULT_COLUMNS
-from housner.scenarios.execution.workers import (
-    RunInterrupted,
-    _Chunk,
-    _failed,
-    _iter_chunk,
-    _Progress,
-    _run_dask,
-    _run_pool,
-)
 
+from housner.engines.base import engine_class
 from housner.motion import GroundMotion
+from housner.scenarios.catalogue.schema import effects_label
+from housner.scenarios.execution.cache import _log, cache_keys, default_cache_dir, entry_path, load_entry, store_entry
+from housner.scenarios.execution.chunks import engine_batches, entry_file, iter_chunk
+from housner.scenarios.execution.options import RunOptions
+from housner.scenarios.execution.rundir import RESULT_COLUMNS
+from housner.scenarios.execution.workers import RunInterrupted, _Chunk, _failed, _Progress, _run_dask, _run_pool
 from housner.specimen import Specimen
+
+#: Most records per chunk (without ``chunk_size``): for an engine that runs record by record, and one that batches.
+CHUNK_CAP, BATCH_CAP = 10, 40
 
 
 def run_engines(
     specimen: Specimen,
     motions: list[GroundMotion],
     engines: dict[str, dict],
+    options: RunOptions | None = None,
     *,
-    jobs: int | None = None,
-    scheduler: str | Any | None = None,
-    cache_dir: Path | None = None,
-    use_cache: bool = True,
-    progress: bool | _Progress = True,
-    chunk_size: int | None = None,
     effects: tuple = (),
     histories: bool = True,
+    **execution,
 ) -> tuple[pd.DataFrame, dict[tuple[str, int], np.ndarray], dict]:
     """Run every engine on every motion (with ``effects``, if any).
 
@@ -62,23 +55,20 @@ def run_engines(
         The shared ensemble; ``motion_id`` is the index in this list.
     engines : dict
         Engine name -> settings overrides.
-    jobs : int, optional
-        Worker processes (default: the number of CPUs); 1 runs in this process.
-    scheduler : str or distributed.Client, optional
-        Address of a Dask distributed scheduler (or a Client) to run the chunks on.
-    cache_dir : Path, optional
-        Result cache (default :func:`default_cache_dir`); ``use_cache=False`` ignores it.
-    progress : bool or progress bar
-        Show a progress bar with the estimated time left (tqdm, on stderr); a bar of the caller's
-        (``housner.scenarios.execution.workers._Progress``, e.g. one over a whole study) is advanced, not closed.
-    chunk_size : int, optional
-        Records per chunk sent to a worker (default: about a quarter of each worker's share, 1 to 10).
+    options : RunOptions, optional
+        How the records execute: worker processes (``jobs``, default one per CPU; 1 runs in this
+        process) or a Dask ``scheduler``, the result cache (``cache_dir``, ``use_cache``), the
+        progress bar, ``chunk_size``. A bar of the caller's (``housner.scenarios.execution.workers._Progress``,
+        e.g. one over a whole study) as ``progress`` is advanced, not closed, and keeps its runs'
+        worker processes from one run to the next until the caller closes it.
     effects : tuple of housner.effects.Effect
         Physical effects every engine realises in every record (``Engine.simulate``'s ``effects``);
         an engine that cannot realise one fails each record, naming it. Part of the cache key.
     histories : bool
         Keep each record's theta history (returned, and in memory until then). False keeps only
         the record's figures, so memory stays flat over many records (the cache still stores it).
+    **execution
+        :class:`RunOptions` fields as keywords (``jobs=1``, ``cache_dir=...``), over ``options``.
 
     Returns
     -------
@@ -87,13 +77,17 @@ def run_engines(
     histories : dict
         (engine, motion_id) -> theta on the motion's grid [rad], float32.
     info : dict
-        Per engine: settings, version, wall seconds (engine time, summed over records),
-        ``cached`` (entries reused), ``cache_rejected`` (entries found but refused: another
-        key, checksum mismatch, unreadable; recomputed), ``worker_deaths`` (worker processes
-        that died while running one of its records) and ``elapsed_s``.
+        Per engine: settings, version, wall seconds (engine time, summed over records; a batched
+        chunk's time is shared evenly by its records), ``cached`` (entries reused), ``cache_rejected``
+        (entries found but refused: another key, checksum mismatch, unreadable; recomputed),
+        ``worker_deaths`` (worker processes that died while running its records) and ``elapsed_s``.
 
     Raises
     ------
+    TypeError
+        A keyword that is not a :class:`RunOptions` field (naming it).
+    ValueError
+        An option out of its range (``jobs`` or ``chunk_size`` not a positive integer...).
     RunInterrupted
         Ctrl-C: the workers are stopped at once; the records finished so far are in the cache.
     SchedulerError
@@ -101,18 +95,16 @@ def run_engines(
 
     Notes
     -----
-    Fault tolerance (process pool): workers report each record as it finishes. A
-    worker that dies (killed, crashed in native code, out of memory) loses only the
-    record it was running; that record is retried once in a fresh worker, then listed
-    as failed with the reason (e.g. ``worker process killed by SIGKILL``). Every
-    (engine, motion) of the run has exactly one row.
+    Fault tolerance (process pool): workers report records as they finish. A worker that
+    dies (killed, crashed in native code, out of memory) loses only the records it had not
+    reported; the record it was running is retried once in a fresh worker, then listed as
+    failed with the reason (e.g. ``worker process killed by SIGKILL``). In a batched chunk,
+    where the record that killed it is unknown, each unfinished record is retried alone,
+    once. Every (engine, motion) of the run has exactly one row.
     """
-    if jobs is not None and (not isinstance(jobs, (int, np.integer)) or isinstance(jobs, bool) or jobs < 1):
-        raise ValueError(f"`jobs` must be a positive integer, got {jobs!r}")
-    if chunk_size is not None and (not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1):
-        raise ValueError(f"`chunk_size` must be a positive integer, got {chunk_size!r}")
-    cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
-    jobs = jobs or os.cpu_count() or 1
+    opts = RunOptions.merged(options, execution, "run_engines")
+    cache_dir = Path(opts.cache_dir) if opts.cache_dir else default_cache_dir()
+    jobs, scheduler = opts.jobs or os.cpu_count() or 1, opts.scheduler
     n_workers = 1 if scheduler is None and jobs == 1 else jobs
     per_worker = 4
     if scheduler is not None:
@@ -120,9 +112,9 @@ def run_engines(
         # length: an overturn ends one early); a task costs milliseconds. With 4 per worker, 2 workers ran
         # an engine-bound study 1.74 x faster than one, the last chunk keeping one worker alone.
         n_workers, per_worker = _cluster_threads(scheduler, jobs), 16
-    plan = _plan(specimen, motions, engines, effects, cache_dir if use_cache else None, n_workers, chunk_size,
-                 per_worker, histories)  # fmt: skip
-    elapsed = _execute(plan, specimen, jobs, scheduler, progress)
+    plan = _plan(specimen, motions, engines, effects, cache_dir if opts.use_cache else None, n_workers,
+                 opts.chunk_size, per_worker, histories)  # fmt: skip
+    elapsed = _execute(plan, specimen, jobs, scheduler, opts.progress)
     for name in plan.info:
         plan.info[name]["elapsed_s"] = elapsed
     df, histories = _table(plan.rows, list(engines), motions, effects)
@@ -139,16 +131,18 @@ class _Plan:
     chunks: list[_Chunk]
     cache_dir: Path | None  # None: the cache is not used
     histories: bool = True  # False: a record's theta is dropped once it is cached
+    store_here: bool = True  # False: the process that computes a record stores its entry (pool, this process)
 
     def store(self, name: str, r: dict) -> None:
-        """Take a computed record: into the rows, its time into the engine's total, into the cache if it is ok."""
+        """Take a computed record: into the rows, its time into the engine's total, into the cache if it is ok
+        (unless the process that computed it stored it already)."""
         r["cached"] = False
         self.rows[(name, r["motion_id"])] = r
         self.info[name]["wall_s"] += r["wall_s"]
-        if self.cache_dir is not None and r["status"] == "ok":
+        if self.store_here and self.cache_dir is not None and r["status"] == "ok":
             k = self.keys[(name, r["motion_id"])]
             try:
-                _store_cached(self.cache_dir / k[:2] / f"{k}.npz", k, r)
+                store_entry(entry_path(self.cache_dir, k), k, r)
             except OSError:
                 pass  # a read-only cache must not fail the run
         if not self.histories:
@@ -167,28 +161,34 @@ def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | No
           chunk_size: int | None, per_worker: int = 4, histories: bool = True) -> _Plan:  # fmt: skip
     """Probe each engine (settings, version), take what the cache holds, cut the rest into chunks."""
     plan = _Plan({}, {}, {}, [], cache_dir, histories)
-    per_engine: list[list[tuple]] = []
+    per_engine: list[list[_Chunk]] = []
     for name, settings in engines.items():
         probe = engine_class(name)(**settings)
         full_settings, version = probe.settings(), probe.version()
         plan.info[name] = {"settings": full_settings, "version": version, "wall_s": 0.0, "cached": 0,
                            "cache_rejected": 0, "worker_deaths": 0}  # fmt: skip
         todo = []
-        for i, m in enumerate(motions):
-            k = plan.keys[(name, i)] = cache_key(specimen, m, name, full_settings, version, effects)
+        for i, k in enumerate(cache_keys(specimen, motions, name, full_settings, version, effects)):
+            plan.keys[(name, i)] = k
             row = _cached_row(plan, name, i, k)
             if row is not None:
                 plan.rows[(name, i)] = row
             else:
-                todo.append((i, m))
-        size = chunk_size or max(1, min(10, math.ceil(len(todo) / (per_worker * n_workers))))
-        per_engine.append([(name, settings, todo[c : c + size], effects) for c in range(0, len(todo), size)])
+                todo.append((i, motions[i]))
+        batched = engine_batches(probe)
+        cap = BATCH_CAP if batched else CHUNK_CAP
+        size = chunk_size or max(1, min(cap, math.ceil(len(todo) / (per_worker * n_workers))))
+        per_engine.append([
+            _Chunk(0, name, settings, part, effects, batched, {i: plan.keys[(name, i)] for i, _ in part})
+            for part in (todo[c : c + size] for c in range(0, len(todo), size))
+        ])  # fmt: skip
     # Engines interleaved, chunk by chunk: the progress bar's rate (and time left) then mixes fast
     # and slow engines from the start instead of extrapolating the fastest one.
     for k in range(max((len(p) for p in per_engine), default=0)):
         for p in per_engine:
             if k < len(p):
-                plan.chunks.append(_Chunk(len(plan.chunks), *p[k]))
+                p[k].id = len(plan.chunks)
+                plan.chunks.append(p[k])
     return plan
 
 
@@ -196,8 +196,8 @@ def _cached_row(plan: _Plan, name: str, i: int, k: str) -> dict | None:
     """The cached record of (engine, motion) under key ``k``, or None (counted when an entry was refused)."""
     if plan.cache_dir is None:
         return None
-    path = plan.cache_dir / k[:2] / f"{k}.npz"
-    row, problem = _load_cached(path, k)
+    path = entry_file(plan.cache_dir, k)
+    row, problem = load_entry(path, k)
     if problem is not None:
         plan.info[name]["cache_rejected"] += 1
         _log.warning("housner: warning: cache entry %s (%s, motion %d) %s; recomputed", path, name, i, problem)
@@ -210,7 +210,7 @@ def _cached_row(plan: _Plan, name: str, i: int, k: str) -> dict | None:
     return row
 
 
-def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress: bool) -> float:
+def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress) -> float:
     """Run the plan's chunks (in this process, a process pool or on Dask); returns the wall time [s]."""
     chunks = plan.chunks
     total = sum(len(c.items) for c in chunks)
@@ -229,25 +229,33 @@ def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress: bool) -> flo
         plan.store(name, r)
         bar.update(name)
 
+    cache_dir = None if plan.cache_dir is None else str(plan.cache_dir)
     deaths: dict[tuple[str, int], list[str]] = {}
+    worker_deaths: dict[str, int] = {}
     t_start = time.perf_counter()
     try:
         if chunks:
-            if scheduler is not None:
+            if scheduler is not None:  # the cluster's workers need not see this machine's cache: stored here
                 _run_dask(chunks, specimen, scheduler, on_record)
             elif jobs == 1:
+                plan.store_here = False
                 for c in chunks:
-                    for r in _iter_chunk(c.engine, c.settings, specimen, c.items, c.effects):
-                        on_record(c.engine, r)
+                    for rows in iter_chunk(c.engine, c.settings, specimen, c.items, c.effects, batched=c.batched,
+                                           cache_dir=cache_dir, keys=c.keys):  # fmt: skip
+                        for r in rows:
+                            on_record(c.engine, r)
             else:
-                _run_pool(chunks, specimen, jobs, on_record, deaths)
+                plan.store_here = False
+                pool = None if own_bar else bar.pool_for(jobs)
+                _run_pool(chunks, specimen, jobs, on_record, deaths, worker_deaths=worker_deaths, pool=pool,
+                          cache_dir=cache_dir, thetas=plan.histories)  # fmt: skip
     except KeyboardInterrupt:
         bar.close()
         raise RunInterrupted(bar.done, total if own_bar else bar.total, cached=plan.cache_dir is not None) from None
     if own_bar:
         bar.close()
-    for (name, _i), reasons in deaths.items():
-        plan.info[name]["worker_deaths"] += len(reasons)
+    for name, n in worker_deaths.items():
+        plan.info[name]["worker_deaths"] += n
     return time.perf_counter() - t_start
 
 

@@ -1,168 +1,48 @@
 """Where the runner's records are simulated: in this process, in a fault-tolerant process pool, or on Dask.
 
-Work is split into chunks of (engine, motions, effects). Pool workers report
-every record as it finishes. A worker that dies (killed, crashed in native
-code, out of memory) loses only the record it was running: that record is
-retried once in a fresh worker, then listed as failed with the reason
-(``killed by SIGKILL``...); the rest of its chunk is re-queued. Ctrl-C stops
-the workers at once and raises :class:`RunInterrupted`.
+Work is split into chunks of (engine, motions, effects); each chunk runs where it is
+sent (:mod:`housner.scenarios.execution.chunks`): in one batched call where the engine
+batches (the analytic engine), else record by record, each ok record's cache entry
+written by the process that computed it. Pool workers report a chunk's records as they
+finish (a batched chunk at once, in bulk) and get their next chunk while they run the
+current one, so that they never wait for the parent. A worker that dies (killed,
+crashed in native code, out of memory) loses only the records it had not reported:
+the record it was running is retried once in a fresh worker, then listed as failed
+with the reason (``killed by SIGKILL``...), and the rest of its chunk is re-queued; in a
+batched chunk, where the record that killed it is unknown, each unfinished record is
+retried alone once. Ctrl-C stops the workers at once and raises :class:`RunInterrupted`.
 """
 
 from __future__ import annotations
 
 import asyncio
-import json
 import multiprocessing as mp
 import multiprocessing.connection
 import os
+import queue as _queue
+import runpy
 import signal
 import sys
 import threading
 import time
-import traceback
 from collections import deque
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from multiprocessing.reduction import ForkingPickler
 from typing import Any
 
-import numpy as np
-from housner.engines.base import get_engine
-from housner.scenarios.execution.rundir import jsonable
-
 from housner.motion import GroundMotion
+from housner.scenarios.execution.chunks import (
+    CRASH_ENV,
+    WORKER_FILE,
+    WORKER_RUN_NAME,
+    run_chunk,
+    unpack,
+    worker_main,
+)
 from housner.specimen import Specimen
 
-# --------------------------------------------------------------------------
-# Worker side
-_ENGINE_CACHE: dict[str, Any] = {}
-
-#: Test hook, read in pool worker processes only (never in the calling process):
-#: ``ENGINE:MOTION_ID:SIGNAL[:MARKER]`` makes the worker that is about to simulate
-#: that record die by ``SIGNAL`` (``KILL``, ``SEGV``, ...), as a killed, crashed or
-#: out-of-memory worker would. With ``MARKER`` (a file path) it happens once: the
-#: first worker to get there creates the file atomically and dies, later ones run.
-CRASH_ENV = "HOUSNER_TEST_CRASH"
-_IN_WORKER = False
-
-
-def _maybe_crash(name: str, motion_id: int) -> None:
-    spec = os.environ.get(CRASH_ENV)
-    if not spec or not _IN_WORKER:
-        return
-    parts = spec.split(":", 3)
-    if len(parts) < 3 or parts[0] != name or parts[1] != str(motion_id):
-        return
-    if len(parts) == 4:
-        try:
-            os.close(os.open(parts[3], os.O_CREAT | os.O_EXCL | os.O_WRONLY))
-        except FileExistsError:
-            return
-    sig = getattr(signal, "SIG" + parts[2].upper())
-    try:
-        import resource
-
-        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # a deliberate crash leaves no core file
-    except (ImportError, ValueError, OSError):
-        pass
-    os.kill(os.getpid(), sig)
-
-
-def _warm_up(eng: Any, specimen: Specimen) -> None:
-    """Run the engine once on 20 ms of free rocking, so that compilation and model
-    building are done before the first record (its ``wall_s`` is then the record's own)."""
-    try:
-        eng.simulate(specimen, GroundMotion.free_vibration(0.3 * specimen.alpha, 0.02, 0.002, name="warm-up"))
-    except Exception:
-        pass  # a real record will report whatever is wrong
-
-
-def _worker_engine(name: str, settings: dict, specimen: Specimen | None = None):
-    key = name + json.dumps(jsonable(settings), sort_keys=True)
-    eng = _ENGINE_CACHE.get(key)
-    if eng is None:
-        eng = get_engine(name, **settings)
-        if specimen is not None:
-            _warm_up(eng, specimen)
-        _ENGINE_CACHE[key] = eng
-    return eng
-
-
-def _simulate_one(eng: Any, specimen: Specimen, i: int, motion: GroundMotion, effects: tuple = ()) -> dict:
-    t0 = time.perf_counter()
-    try:
-        resp = eng.simulate(specimen, motion, effects) if effects else eng.simulate(specimen, motion)
-        theta = np.asarray(resp.theta, dtype=np.float32)  # checked finite by Engine.simulate (check_response)
-        return {
-            "motion_id": i,
-            "status": "ok",
-            "error": "",
-            "wall_s": time.perf_counter() - t0,
-            "theta_max_over_alpha": float(resp.theta_max_over_alpha),
-            "overturned": bool(resp.overturned),
-            "n_impacts": int(resp.n_impacts),
-            "theta": theta,
-        }
-    except Exception as e:
-        tb = traceback.extract_tb(e.__traceback__)
-        where = f" ({tb[-1].filename.rsplit('/', 1)[-1]}:{tb[-1].lineno})" if tb else ""
-        return {
-            "motion_id": i,
-            "status": "failed",
-            "error": f"{type(e).__name__}: {e}{where}",
-            "wall_s": time.perf_counter() - t0,
-        }
-
-
-def _iter_chunk(
-    name: str, settings: dict, specimen: Specimen, items: list[tuple[int, GroundMotion]], effects: tuple = ()
-):
-    """Yield one result dict per record, as each finishes; failures are data, not exceptions."""
-    try:
-        eng = _worker_engine(name, settings, specimen)
-    except Exception as e:  # the engine itself cannot start: every record of the chunk fails
-        msg = f"{type(e).__name__}: {e}"
-        for i, _ in items:
-            yield {"motion_id": i, "status": "failed", "error": msg, "wall_s": 0.0}
-        return
-    for i, motion in items:
-        _maybe_crash(name, i)
-        yield _simulate_one(eng, specimen, i, motion, effects)
-
-
-def _run_chunk(
-    name: str, settings: dict, specimen: Specimen, items: list[tuple[int, GroundMotion]], effects: tuple = ()
-) -> list[dict]:
-    """Run one engine on a few motions; every failure is caught and returned as data."""
-    return list(_iter_chunk(name, settings, specimen, items, effects))
-
-
-def _worker_main(conn: Any) -> None:
-    """Body of a pool worker process: run the chunks it is sent, reporting every record as it finishes.
-
-    Messages to the parent: ``("ready", None, None)`` once started, ``("rec", chunk_id, row)``
-    per record, ``("done", chunk_id, None)`` per chunk. ``None`` from the parent (or a closed
-    pipe) ends the process.
-    """
-    global _IN_WORKER
-    _IN_WORKER = True
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    try:
-        conn.send(("ready", None, None))
-        while True:
-            try:
-                msg = conn.recv()
-            except (EOFError, OSError):
-                return
-            if msg is None:
-                return
-            chunk_id, name, settings, specimen, items, effects = msg
-            for row in _iter_chunk(name, settings, specimen, items, effects):
-                conn.send(("rec", chunk_id, row))
-            conn.send(("done", chunk_id, None))
-    except (BrokenPipeError, ConnectionResetError, EOFError):
-        # the parent is gone or stopping (Ctrl-C, SIGTERM): nothing to report to, nothing to print
-        return
+__all__ = ["CRASH_ENV", "RunInterrupted", "SchedulerError", "connect_scheduler"]
 
 
 # --------------------------------------------------------------------------
@@ -290,6 +170,12 @@ class _Chunk:
     settings: dict
     items: list[tuple[int, GroundMotion]]
     effects: tuple = ()
+    batched: bool = False  # one simulate_many call for the chunk (the engine batches)
+    keys: dict[int, str] | None = None  # motion_id -> cache key, for the process that computes to store the entry
+
+    def part(self, chunk_id: int, items: list[tuple[int, GroundMotion]], batched: bool | None = None) -> _Chunk:
+        """Some of this chunk's records, as a chunk of their own."""
+        return replace(self, id=chunk_id, items=items, batched=self.batched if batched is None else batched)
 
 
 def _failed(i: int, msg: str) -> dict:
@@ -342,35 +228,68 @@ def _sigint_ignored():
         signal.signal(signal.SIGINT, old)
 
 
+_STOP = object()  # ends a worker's sender thread
+
+
 class _Worker:
-    """One worker process and its pipe; runs one chunk at a time."""
+    """One worker process, its pipe, and the chunks given to it (run in order, the first once started).
+
+    Chunks are sent by a thread of the parent's, so that the parent never waits on a pipe
+    while a worker is busy or starting; the process itself runs ``chunks.py`` by its path
+    (:data:`~housner.scenarios.execution.chunks.WORKER_FILE`), without the package's imports.
+    """
 
     def __init__(self, ctx: Any):
         parent, child = ctx.Pipe()
+        if os.path.isfile(WORKER_FILE):  # the module by its path: none of the package's imports
+            target, args = runpy.run_path, (WORKER_FILE, {"_CONN": child}, WORKER_RUN_NAME)
+        else:  # installed where files have no path (a zip): by its name
+            target, args = worker_main, (child,)
         with _sigint_ignored():
-            self.proc = ctx.Process(target=_worker_main, args=(child,), daemon=True, name="housner-worker")
+            self.proc = ctx.Process(target=target, args=args, daemon=True, name="housner-worker")
             self.proc.start()
         child.close()
         self.conn = parent
-        self.chunk: _Chunk | None = None
-        self.next = 0  # index in chunk.items of the record in progress
+        self.chunks: deque[_Chunk] = deque()  # given to it, in order
+        self.running = False  # the first of `chunks` has started
+        self.next = 0  # records of the running chunk reported so far
         self.ready = False  # the process has started and can run records
+        self._outbox: _queue.SimpleQueue = _queue.SimpleQueue()
+        self._sender = threading.Thread(target=self._send_loop, name="housner-sender", daemon=True)
+        self._sender.start()
 
-    def give(self, chunk: _Chunk, specimen: Specimen) -> bool:
-        self.chunk, self.next = chunk, 0
-        try:
-            self.conn.send((chunk.id, chunk.engine, chunk.settings, specimen, chunk.items, chunk.effects))
-            return True
-        except OSError:  # it died while idle
-            return False
+    def _send_loop(self) -> None:
+        while True:
+            msg = self._outbox.get()
+            if msg is _STOP:
+                return
+            try:
+                self.conn.send_bytes(msg)
+            except Exception:  # the worker died (broken pipe) or the pipe was closed: the parent's loop sees it
+                return
+
+    def takes(self, chunk: _Chunk) -> bool:
+        """Whether to give it ``chunk`` now: when idle, or as the next of a batched chunk (prefetched)."""
+        return not self.chunks or (len(self.chunks) == 1 and self.chunks[0].batched and chunk.batched)
+
+    def give(self, chunk: _Chunk, specimen: Specimen, cache_dir: str | None, thetas: bool) -> None:
+        """Queue ``chunk`` for it. The message is pickled here (an object that cannot be raises here, as
+        ``Connection.send`` would) and sent by the sender thread, as ``send`` sends it."""
+        keys = chunk.keys if cache_dir is not None else None
+        msg = (chunk.id, chunk.engine, chunk.settings, specimen, chunk.items, chunk.effects, chunk.batched, cache_dir,
+               keys, thetas)  # fmt: skip
+        data = ForkingPickler.dumps(msg)
+        self.chunks.append(chunk)
+        self._outbox.put(data)
+
+    def ask_to_exit(self) -> None:
+        self._outbox.put(ForkingPickler.dumps(None))
+        self._outbox.put(_STOP)
 
     def stop(self, wait: float) -> None:
         """Ask the worker to exit, wait ``wait`` seconds, then terminate and kill it."""
         if wait > 0:
-            try:
-                self.conn.send(None)
-            except OSError:
-                pass
+            self.ask_to_exit()
             self.proc.join(wait)
         if self.proc.is_alive():
             self.proc.terminate()
@@ -378,7 +297,43 @@ class _Worker:
         if self.proc.is_alive():
             self.proc.kill()
             self.proc.join(0.5)
+        self._outbox.put(_STOP)
+        self._sender.join(0.5)
         self.conn.close()
+
+
+class _Pool:
+    """Worker processes, started as the work needs them and kept until :meth:`close`: across the runs
+    of one caller (a study's sizes, through its progress bar: :meth:`_Progress.pool_for`), or one run."""
+
+    def __init__(self, jobs: int):
+        self.jobs = jobs
+        self.ctx = mp.get_context("spawn")
+        self.workers: list[_Worker] = []
+
+    def start(self) -> _Worker:
+        w = _Worker(self.ctx)
+        self.workers.append(w)
+        return w
+
+    def drop(self, w: _Worker) -> None:
+        """Forget a worker that died (its process is reaped, its pipe closed)."""
+        self.workers.remove(w)
+        w.stop(0.0)
+
+    def kill(self) -> None:
+        """Stop every worker at once (Ctrl-C, an error)."""
+        for w in self.workers:
+            w.stop(0.0)
+        self.workers.clear()
+
+    def close(self, wait: float = 5.0) -> None:
+        """Ask every worker to exit, all together, and reap them (killing those still there after ``wait`` s)."""
+        for w in self.workers:
+            w.ask_to_exit()
+        for w in self.workers:
+            w.stop(wait)
+        self.workers.clear()
 
 
 def _run_pool(
@@ -387,20 +342,34 @@ def _run_pool(
     jobs: int,
     on_record: Any,
     deaths: dict[tuple[str, int], list[str]],
+    *,
+    worker_deaths: dict[str, int] | None = None,
+    pool: _Pool | None = None,
+    cache_dir: str | None = None,
+    thetas: bool = True,
 ) -> None:
     """Run ``chunks`` on ``jobs`` worker processes, calling ``on_record(engine, row)`` per record.
 
-    Records come back one by one, so a worker that dies loses only the record it
-    was running. That record is retried once in a fresh worker (the chunk's other
-    unfinished records are simply re-queued); if it kills its worker again it is
-    listed as failed with both reasons. ``deaths`` collects (engine, motion_id) ->
-    reasons. After ``2 jobs + 8`` deaths the rest of the work fails instead of
-    spawning more workers.
+    Records come back as they finish, so a worker that dies loses only the records it
+    had not reported. The record it was running is retried once in a fresh worker (the
+    chunk's other unfinished records are simply re-queued); if it kills its worker again
+    it is listed as failed with both reasons. In a batched chunk the record that killed
+    the worker is unknown: each of its unfinished records is retried alone, once (that
+    death counts as its first try). ``deaths`` collects (engine, motion_id) -> reasons;
+    ``worker_deaths`` counts, per engine, the workers that died running its records.
+    After ``2 jobs + 8`` deaths the rest of the work fails instead of spawning more
+    workers.
+
+    ``pool`` (with ``jobs`` workers) is used and left running; without it a pool is
+    started and closed here. ``cache_dir``: the workers store each ok record's entry
+    (the chunks' ``keys``). ``thetas``: the workers send the histories back.
     """
-    ctx = mp.get_context("spawn")
-    queue = deque(chunks)
+    own = pool is None or pool.jobs != jobs
+    if own:
+        pool = _Pool(jobs)
+    worker_deaths = {} if worker_deaths is None else worker_deaths
+    todo = deque(chunks)
     next_id = max((c.id for c in chunks), default=0) + 1
-    workers: list[_Worker] = []
     n_dead, max_dead = 0, 2 * jobs + 8
     last_reason = ""
 
@@ -409,17 +378,25 @@ def _run_pool(
         w.proc.join(2.0)
         reason = last_reason = _death_reason(w.proc.exitcode)
         n_dead += 1
-        w.conn.close()
-        workers.remove(w)
-        chunk, rest = w.chunk, w.chunk.items[w.next :] if w.chunk else []
+        pool.drop(w)
+        given = list(w.chunks)
+        if not w.running:  # no chunk of its had started (it died starting up, or idle): run them elsewhere
+            todo.extendleft(reversed(given))
+            return
+        chunk, rest = given[0], given[0].items[w.next :]
+        todo.extendleft(reversed(given[1:]))  # prefetched, never started
         if not rest:
             return
-        if not w.ready:  # it died starting up, before any record: nothing to blame, run the chunk elsewhere
-            queue.appendleft(chunk)
+        worker_deaths[chunk.engine] = worker_deaths.get(chunk.engine, 0) + 1
+        if chunk.batched and len(rest) > 1:  # which record killed it is unknown: each is retried alone, last
+            for i, m in rest:
+                deaths.setdefault((chunk.engine, i), []).append(f"{reason}, running it in a batch of {len(rest)}")
+                todo.append(chunk.part(next_id, [(i, m)], batched=False))
+                next_id += 1
             return
         (i, m), rest = rest[0], rest[1:]
         if rest:
-            queue.appendleft(_Chunk(next_id, chunk.engine, chunk.settings, rest, chunk.effects))
+            todo.appendleft(chunk.part(next_id, rest))
             next_id += 1
         reasons = deaths.setdefault((chunk.engine, i), [])
         reasons.append(reason)
@@ -427,73 +404,106 @@ def _run_pool(
             msg = f"the worker process died while simulating this record: {reasons[0]}; on the retry: {reasons[1]}"
             on_record(chunk.engine, _failed(i, msg))
         else:
-            queue.append(_Chunk(next_id, chunk.engine, chunk.settings, [(i, m)], chunk.effects))  # the one retry, last
+            todo.append(chunk.part(next_id, [(i, m)], batched=False))  # the one retry, last
             next_id += 1
 
-    def give(w: _Worker, chunk: _Chunk) -> None:
-        if not w.give(chunk, specimen):  # it died while idle: nothing of the chunk ran
-            w.chunk = None
-            queue.appendleft(chunk)
+    def give_out() -> None:
+        for w in pool.workers:
+            while todo and w.takes(todo[0]):
+                w.give(todo.popleft(), specimen, cache_dir, thetas)
+        while todo and len(pool.workers) < jobs:
+            w = pool.start()
+            while todo and w.takes(todo[0]):
+                w.give(todo.popleft(), specimen, cache_dir, thetas)
+
+    def give_up() -> None:
+        msg = f"not run: {n_dead} worker processes died (the last {last_reason}); gave up"
+        for w in pool.workers:
+            if w.chunks:
+                first = w.chunks[0]
+                todo.extendleft(reversed(list(w.chunks)[1:]))
+                todo.appendleft(first.part(0, first.items[w.next :] if w.running else first.items))
+                w.chunks.clear()
+        for c in todo:
+            for i, _ in c.items:
+                on_record(c.engine, _failed(i, msg))
+        todo.clear()
+        pool.kill()
+
+    def take(w: _Worker) -> None:
+        """Read one message of ``w`` and act on it."""
+        try:
+            kind, _cid, payload = w.conn.recv()
+        except (EOFError, OSError):
             lost(w)
+            return
+        if kind == "ready":
+            w.ready = True
+        elif kind == "start":
+            w.running, w.next = True, 0
+        elif kind == "rec":
+            rows = unpack(payload)
+            w.next += len(rows)
+            for row in rows:
+                on_record(w.chunks[0].engine, row)
+        else:  # "done"
+            w.chunks.popleft()
+            w.running, w.next = False, 0
 
     try:
-        while queue or any(w.chunk is not None for w in workers):
+        while todo or any(w.chunks for w in pool.workers):
             if n_dead > max_dead:
-                msg = f"not run: {n_dead} worker processes died (the last {last_reason}); gave up"
-                for w in workers:
-                    if w.chunk is not None:
-                        rest = w.chunk.items[w.next :]
-                        queue.appendleft(_Chunk(0, w.chunk.engine, w.chunk.settings, rest, w.chunk.effects))
-                        w.chunk = None
-                for c in queue:
-                    for i, _ in c.items:
-                        on_record(c.engine, _failed(i, msg))
-                queue.clear()
+                give_up()
                 break
-            for w in [w for w in workers if w.chunk is None]:
-                if queue:
-                    give(w, queue.popleft())
-            while queue and len(workers) < jobs:
-                w = _Worker(ctx)
-                workers.append(w)
-                give(w, queue.popleft())
-            busy = {w.conn: w for w in workers if w.chunk is not None}
+            give_out()
+            busy = {w.conn: w for w in pool.workers if w.chunks}
             for conn in mp.connection.wait(list(busy)):
-                w = busy[conn]
-                try:
-                    kind, _cid, row = conn.recv()
-                except (EOFError, OSError):
-                    lost(w)
-                    continue
-                if kind == "ready":
-                    w.ready = True
-                elif kind == "rec":
-                    on_record(w.chunk.engine, row)
-                    w.next += 1
-                else:  # "done"
-                    w.chunk = None
-    except BaseException:  # Ctrl-C or an error here: stop the workers now, do not wait for them
-        for w in workers:
-            w.stop(0.0)
+                take(busy[conn])
+    except KeyboardInterrupt:
+        # A worker stores a record's entry, then reports it: take the reports already on their way, so that
+        # the records counted as done are those in the cache; then stop the workers at once.
+        try:
+            _drain(pool, take)
+        finally:
+            pool.kill()
         raise
-    for w in workers:
-        w.stop(5.0)
+    except BaseException:  # an error here: stop the workers now, do not wait for them
+        pool.kill()
+        raise
+    if own:
+        pool.close()
+
+
+def _drain(pool: _Pool, take: Any, quiet: float = 0.05, limit: float = 0.5) -> None:
+    """Take the workers' messages until none comes for ``quiet`` seconds (``limit`` seconds at most)."""
+    deadline = time.monotonic() + limit
+    while (left := deadline - time.monotonic()) > 0:
+        busy = {w.conn: w for w in pool.workers if w.chunks}
+        ready = mp.connection.wait(list(busy), timeout=min(quiet, left)) if busy else []
+        if not ready:
+            return
+        for conn in ready:
+            take(busy[conn])
 
 
 def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_record: Any) -> None:
-    """Run ``chunks`` on a Dask cluster; a task that fails twice (Dask retries it once) fails its records."""
+    """Run ``chunks`` on a Dask cluster; a task that fails twice (Dask retries it once) fails its records.
+
+    The results (histories included) come back in bulk, one packed set per chunk; the caller stores the
+    cache entries (a cluster's workers need not see this machine's cache)."""
     from distributed import Client, as_completed
 
     client = scheduler if isinstance(scheduler, Client) else connect_scheduler(scheduler)
     futs: dict[Any, _Chunk] = {}
     try:
         for c in chunks:
-            f = client.submit(_run_chunk, c.engine, c.settings, specimen, c.items, c.effects, pure=False, retries=1)
+            f = client.submit(run_chunk, c.engine, c.settings, specimen, c.items, c.effects, c.batched, pure=False,
+                              retries=1)  # fmt: skip
             futs[f] = c
         for f in as_completed(futs):
             c = futs[f]
             try:
-                res = f.result()
+                res = unpack(f.result())
             except Exception as e:  # the worker died or the task could not run, twice
                 res = [_failed(i, f"Dask task failed twice: {type(e).__name__}: {e}") for i, _ in c.items]
             for r in res:
@@ -510,13 +520,18 @@ class _Progress:
     """Progress on stderr. Until the first record comes back (workers starting, engines
     loading and, after an update, numba compiling for 10-20 s) one line says so; the bar,
     and with it the time-left estimate, starts with the first finished record, so the
-    estimate is made of simulation time only."""
+    estimate is made of simulation time only.
+
+    A bar of the caller's spans several runs (a study's sizes): the worker processes of
+    those runs are kept from one to the next (:meth:`pool_for`) and stopped by :meth:`close`,
+    which the caller calls once, when its runs are over."""
 
     def __init__(self, total: int, enabled: bool, how: str):
         self.total = total
         self.done = 0
         self.enabled = enabled and total > 0
         self.bar = None
+        self.pool: _Pool | None = None
         if self.enabled:
             print(
                 f"simulating {total} records: {how}; loading the engines "
@@ -552,6 +567,17 @@ class _Progress:
             self.bar.update(1)
         self.bar.set_postfix_str(engine, refresh=False)
 
+    def pool_for(self, jobs: int) -> _Pool:
+        """The worker processes of the runs under this bar (``jobs`` of them), kept until :meth:`close`."""
+        if self.pool is None or self.pool.jobs != jobs:
+            if self.pool is not None:
+                self.pool.close()
+            self.pool = _Pool(jobs)
+        return self.pool
+
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
+        if self.pool is not None:
+            self.pool.close()
+            self.pool = None

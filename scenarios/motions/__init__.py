@@ -1,5 +1,6 @@
 """Ground motions: recorded ones, Rezaeian & Der Kiureghian models (plain and spectrum-matched), bands, spectra."""
 
+from housner.scenarios.motions.build import build_motions
 from housner.scenarios.motions.elastic import response_spectrum
 from housner.scenarios.motions.rdk import RDKParams, fit, simulate_motions
 from housner.scenarios.motions.rdk_match import MatchedRDK, fit_matched, simulate_matched
@@ -8,6 +9,7 @@ from housner.scenarios.motions.records import elcentro, load_record
 __all__ = [
     "MatchedRDK",
     "RDKParams",
+    "build_motions",
     "elcentro",
     "fit",
     "fit_matched",

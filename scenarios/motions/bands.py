@@ -18,9 +18,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 
 from housner.motion import GroundMotion
+from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 
 __all__ = [
     "BAND_BOUNDS",

@@ -76,6 +76,9 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
+from scipy import fft as sfft
+
+from housner.motion import GroundMotion
 from housner.scenarios.motions import rdk
 from housner.scenarios.motions.bands import (
     BAND_BOUNDS,
@@ -93,9 +96,6 @@ from housner.scenarios.motions.bands import (
 )
 from housner.scenarios.motions.elastic import POINTS_PER_PERIOD, _check_damping, linear_step_coefficients
 from housner.scenarios.motions.rdk import RDKParams
-from scipy import fft as sfft
-
-from housner.motion import GroundMotion
 
 __all__ = [
     "BAND_BOUNDS",

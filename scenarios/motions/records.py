@@ -140,7 +140,7 @@ def load_record(name: str) -> GroundMotion:
 RECORD_SUFFIXES: dict[str, str] = {".at2": "PEER AT2", ".csv": "CSV with `time` and `ground_acc` columns"}
 
 
-def read_record_file(path: str | Path, name: str | None = None) -> GroundMotion:
+def read_record_file(path: str | Path, name: str | None = None, units: str | None = None) -> GroundMotion:
     """Read a user's record file, a PEER AT2 or a CSV, chosen by its suffix.
 
     Parameters
@@ -152,6 +152,9 @@ def read_record_file(path: str | Path, name: str | None = None) -> GroundMotion:
         (``ground_acc [g]``). Converted once, in the reader, to m/s^2.
     name : str, optional
         Name of the motion (default: the file's stem).
+    units : str, optional
+        Acceleration unit of a file whose header names none (a scenario's ``[motions] units``);
+        a unit the header names must agree with it.
 
     Returns
     -------
@@ -174,8 +177,8 @@ def read_record_file(path: str | Path, name: str | None = None) -> GroundMotion:
     if not path.exists():
         raise DataFileError(path, "no such file")
     if path.suffix.lower() == ".at2":
-        return GroundMotion.from_at2(path, name=name)
-    return GroundMotion.from_csv(path, name=name)
+        return GroundMotion.from_at2(path, name=name, units=units)
+    return GroundMotion.from_csv(path, name=name, units=units)
 
 
 def file_sha256(path: str | Path) -> str:

@@ -12,14 +12,17 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+
+from housner.motion import GroundMotion
 from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.schema import effects_label
+from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES, effect_data, provenance, write_run
 from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs.chaos import run_engine_errors
-
-from housner.motion import GroundMotion
+from housner.scenarios.runs.spread import seed_spread
 
 __all__ = ["RunResult", "effects_series", "run_scenario"]
 
@@ -46,7 +49,7 @@ def effects_series(engine: str, effects: tuple) -> str:
     return f"{engine} + {effects_label(effects)}"
 
 
-def _with_effects(scenario, motions, eng_settings, results, histories, info, **run) -> tuple:
+def _with_effects(scenario, motions, eng_settings, results, histories, info, options: RunOptions) -> tuple:
     """Run every engine again with the scenario's [[effects]]; its rows join the run as series "ENGINE + EFFECTS".
 
     The rows keep the engine's name in ``effects_series`` form in ``engine`` (so the statistics, the
@@ -55,7 +58,7 @@ def _with_effects(scenario, motions, eng_settings, results, histories, info, **r
     and ``effects``.
     """
     eff = scenario.effects
-    res_e, hist_e, info_e = run_engines(scenario.specimen, motions, eng_settings, effects=eff, **run)
+    res_e, hist_e, info_e = run_engines(scenario.specimen, motions, eng_settings, options, effects=eff)
     series = {name: effects_series(name, eff) for name in eng_settings}
     res_e = res_e.assign(engine=res_e["engine"].map(series))
     hist = {**histories, **{(series[n], i): th for (n, i), th in hist_e.items()}}
@@ -71,11 +74,8 @@ def run_scenario(
     n_motions: int | None = None,
     seed: int | None = None,
     out: str | Path | None = None,
-    jobs: int | None = None,
-    scheduler: str | Any | None = None,
-    cache_dir: Path | None = None,
-    use_cache: bool = True,
-    progress: bool = True,
+    options: RunOptions | None = None,
+    **execution: Any,
 ) -> RunResult:
     """Run a scenario on its engines (or ``engines``) and write the run directory.
 
@@ -91,9 +91,15 @@ def run_scenario(
         Override the ensemble's seed.
     out : path, optional
         Run directory (default ``runs/<scenario>``).
-    jobs, scheduler, cache_dir, use_cache, progress
-        See :func:`run_engines`.
+    options : RunOptions, optional
+        How the records execute (worker processes, Dask scheduler, result cache, progress bar,
+        chunk size); see :class:`~housner.scenarios.execution.options.RunOptions`. The Table 2
+        spread's ensembles (``seed_spread`` in [analysis]) use its cache settings, in this process.
+    **execution
+        :class:`RunOptions` fields as keywords (``jobs=1``, ``cache_dir=...``), over ``options``;
+        another keyword is a TypeError naming it.
     """
+    opts = RunOptions.merged(options, execution, "run_scenario")
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     names = list(engines) if engines else list(scenario.engines)
@@ -101,33 +107,12 @@ def run_scenario(
     out = Path(out) if out else Path("runs") / scenario.name
     check_output_dir(out, "run directory", files=RUN_FILES)  # before the work, not after it
     t0 = time.perf_counter()
-    motions, mmeta = scenario.build_motions(n_motions, seed=seed, band_check=True)  # the report shows the bands
+    motions, mmeta = build_motions(scenario, n_motions, seed=seed, band_check=True)  # the report shows the bands
     t_motions = time.perf_counter() - t0
     eng_settings = {n: dict(scenario.engine_settings.get(n, {})) for n in names}
-    results, histories, info = run_engines(
-        scenario.specimen,
-        motions,
-        eng_settings,
-        jobs=jobs,
-        scheduler=scheduler,
-        cache_dir=cache_dir,
-        use_cache=use_cache,
-        progress=progress,
-    )
+    results, histories, info = run_engines(scenario.specimen, motions, eng_settings, opts)
     if scenario.effects:
-        results, histories, info = _with_effects(
-            scenario,
-            motions,
-            eng_settings,
-            results,
-            histories,
-            info,
-            jobs=jobs,
-            scheduler=scheduler,
-            cache_dir=cache_dir,
-            use_cache=use_cache,
-            progress=progress,
-        )
+        results, histories, info = _with_effects(scenario, motions, eng_settings, results, histories, info, opts)
     fails = results[results["status"] != "ok"]
     # each engine's free-rocking r and p errors: the report's chaos floor perturbs the analytic model by them
     reference = str(scenario.analysis.get("reference", "housner"))
@@ -135,9 +120,7 @@ def run_scenario(
     spread = None
     k = int(scenario.analysis.get("seed_spread", 0) or 0)
     if k > 1 and "housner" in names and n_motions is None and seed is None:
-        from housner.scenarios.runs.spread import seed_spread
-
-        spread = seed_spread(scenario, k, cache_dir=cache_dir, use_cache=use_cache)
+        spread = seed_spread(scenario, k, options=RunOptions(cache_dir=opts.cache_dir, use_cache=opts.use_cache))
     meta = {
         "scenario": scenario.describe(),
         "specimen": scenario.specimen.describe(),

@@ -3,11 +3,18 @@ record against its own simulated ensemble (why Table 2 of the seed paper is not 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from housner.scenarios.catalogue.scenario import Scenario
+from housner.scenarios.execution.options import RunOptions
+from housner.scenarios.motions.build import build_motions
+from housner.scenarios.execution.runner import run_engines
+from housner.engines.base import get_engine
+from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
+from housner.scenarios.motions.records import arias_intensity
 
 __all__ = ["RECORD_BAND_S", "ensemble_seeds", "equivalent_amplitude", "record_against_ensemble", "seed_spread"]
 
@@ -28,9 +35,8 @@ def seed_spread(
     n: int | None = None,
     q=(25, 50, 75),
     engine: str = "housner",
-    jobs: int = 1,
-    cache_dir=None,
-    use_cache: bool = True,
+    options: RunOptions | None = None,
+    **execution,
 ) -> dict:
     """Percentiles of theta_max/alpha and the overturn fraction over ``k`` independent ensembles.
 
@@ -52,9 +58,13 @@ def seed_spread(
         Percentiles [%].
     engine : str
         Engine that runs the ensembles.
-    jobs, cache_dir, use_cache
-        As for :func:`housner.scenarios.execution.runner.run_engines` (one process by default: the
-        analytic model is faster than starting workers).
+    options : RunOptions, optional
+        How the ensembles' records execute (:class:`~housner.scenarios.execution.options.RunOptions`:
+        ``jobs``, ``cache_dir``, ``use_cache``...), as for
+        :func:`housner.scenarios.execution.runner.run_engines`, without a progress bar; ``jobs``
+        None (the default) means one process here: the analytic model is faster than starting workers.
+    **execution
+        :class:`RunOptions` fields as keywords (``jobs=2``, ``cache_dir=...``), over ``options``.
 
     Returns
     -------
@@ -63,18 +73,16 @@ def seed_spread(
         ``overturn_fraction`` (k values); ``summary`` {q: (min, median, max)};
         ``n_failed`` (records left out, over all ensembles).
     """
-    from housner.scenarios.execution.runner import run_engines
-
+    opts = RunOptions.merged(options, execution, "seed_spread")
+    opts = dataclasses.replace(opts, jobs=opts.jobs or 1, progress=False)
     settings = {engine: dict(scenario.engine_settings.get(engine, {}))}
     seeds = ensemble_seeds(int(scenario.seed or 0), k)
     pct: dict[int, list[float]] = {int(x): [] for x in q}
     fr = []
     n_failed = 0
     for s in seeds:
-        motions, _ = scenario.build_motions(n, seed=s)
-        res, _, _ = run_engines(
-            scenario.specimen, motions, settings, jobs=jobs, cache_dir=cache_dir, use_cache=use_cache, progress=False
-        )
+        motions, _ = build_motions(scenario, n, seed=s)
+        res, _, _ = run_engines(scenario.specimen, motions, settings, opts)
         ok = res[res["status"] == "ok"]
         n_failed += len(res) - len(ok)
         v = ok["theta_max_over_alpha"].to_numpy(float)
@@ -159,10 +167,6 @@ def record_against_ensemble(
         ``p_prototype_1_s``; ``arias_record_m_s``, ``arias_ensemble_mean_m_s``,
         ``arias_ensemble_5_95_m_s``.
     """
-    from housner.engines.base import get_engine
-    from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
-    from housner.scenarios.motions.records import arias_intensity
-
     motions = list(motions)
     if not motions:
         raise ValueError("`motions` is empty")
@@ -269,8 +273,6 @@ def equivalent_amplitude(
         ``grid`` (the factors simulated), ``evaluations``, ``step``, ``ci``,
         ``engine``, ``n`` (records).
     """
-    from housner.engines.base import get_engine
-
     motions = list(motions)
     if not motions:
         raise ValueError("`motions` is empty")

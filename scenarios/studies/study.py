@@ -58,9 +58,26 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from housner.scenarios.catalogue.study_table import INTENSITIES, Study, read_study
+import pyarrow as pa
 
+from housner.errors import DataFileError
 from housner.motion import GroundMotion
+from housner.scenarios.catalogue.scenario import Scenario, load_scenario
+from housner.scenarios.catalogue.study_table import INTENSITIES, Study, read_study
+from housner.scenarios.execution.options import RunOptions
+from housner.scenarios.execution.outputs import check_output_dir
+from housner.scenarios.execution.rundir import jsonable, provenance
+from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.execution.workers import _Progress
+from housner.scenarios.motions.build import build_motions
+from housner.scenarios.motions.elastic import response_spectrum
+from housner.scenarios.studies.fragility import (
+    bootstrap_fit,
+    compare_fits,
+    exceedance,
+    proportion_intervals,
+    stripe_counts,
+)
 from housner.units import G
 
 __all__ = [
@@ -108,8 +125,6 @@ def intensity_measure(motion: GroundMotion, kind: str, specimen, period: float |
         v = np.concatenate(([0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * motion.dt)))  # exact for linear ug''
         return float(np.max(np.abs(v))) * specimen.frequency_parameter / g_tan
     if kind == "sa":
-        from housner.scenarios.motions.elastic import response_spectrum
-
         psa, _ = response_spectrum(motion, [period], 0.05)
         return float(psa[0]) / g_tan
     raise ValueError(f"`kind` must be one of pga, pgv, sa, got {kind!r}")
@@ -221,11 +236,8 @@ def run_study(
     n_motions: int | None = None,
     seed: int | None = None,
     out: str | Path | None = None,
-    jobs: int | None = None,
-    scheduler: str | Any | None = None,
-    cache_dir: Path | None = None,
-    use_cache: bool = True,
-    progress: bool = True,
+    options: RunOptions | None = None,
+    **execution: Any,
 ) -> StudyResult:
     """Run a scenario's ``[study]``: every (engine, size, stripe, motion), then the fragility analysis.
 
@@ -233,20 +245,17 @@ def run_study(
     ----------
     scenario : Scenario or str or Path
         A loaded scenario with a ``[study]`` table, a catalogue name or a TOML file.
-    engines, n_motions, seed, out, jobs, scheduler, cache_dir, use_cache, progress
-        As :func:`housner.scenarios.runs.run.run_scenario`; ``out`` defaults to ``runs/<scenario>``.
+    engines, n_motions, seed, out, options, **execution
+        As :func:`housner.scenarios.runs.run.run_scenario`; ``out`` defaults to ``runs/<scenario>``. The
+        sizes run one after another under one progress bar, on the same worker processes.
 
     Returns
     -------
     StudyResult
         Also written to ``out`` (see the module notes).
     """
-    from housner.scenarios.catalogue.scenario import Scenario, load_scenario
-    from housner.scenarios.execution.outputs import check_output_dir
-    from housner.scenarios.execution.rundir import provenance
-    from housner.scenarios.execution.runner import run_engines
-    from housner.scenarios.execution.workers import _Progress
-
+    opts = RunOptions.merged(options, execution, "run_study")
+    jobs, scheduler, progress = opts.jobs, opts.scheduler, opts.progress
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     study = scenario.study
@@ -257,7 +266,7 @@ def run_study(
     out = Path(out) if out else Path("runs") / scenario.name
     check_output_dir(out, "study directory", files=STUDY_FILES)
     t0 = time.perf_counter()
-    base, mmeta = scenario.build_motions(n_motions, seed=seed)
+    base, mmeta = build_motions(scenario, n_motions, seed=seed)
     n = len(base)
     eng_settings = {e: dict(scenario.engine_settings.get(e, {})) for e in names}
     total = len(names) * n * len(study.levels) * len(study.S)
@@ -267,8 +276,7 @@ def run_study(
     try:
         for k, S in enumerate(study.S):
             motions, factors = study_motions(study, base, scenario.S, k, scenario.specimen)
-            res, h, inf = run_engines(scenario.specimen, motions, eng_settings, jobs=jobs, scheduler=scheduler,
-                                      cache_dir=cache_dir, use_cache=use_cache, progress=bar,
+            res, h, inf = run_engines(scenario.specimen, motions, eng_settings, opts.replace(progress=bar),
                                       effects=scenario.effects, histories=study.histories)  # fmt: skip
             idx = res["motion_id"].to_numpy()
             stripe, motion_id = idx // n, idx % n
@@ -353,8 +361,6 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
     dict
         ``fragility`` and ``exceedance`` (DataFrames), ``fits`` and ``comparisons`` (lists of dicts).
     """
-    from housner.scenarios.studies import fragility as fr
-
     im = np.asarray(study.levels, dtype=float)
     frag, exc, fits, comps = [], [], [], []
     for size, S in zip(study.prototype_heights, study.S, strict=True):
@@ -362,18 +368,18 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
         for e in engines:
             th, valid = mats[e]
             over = np.isinf(th)
-            n, k = fr.stripe_counts(over, valid)
-            p, lo, hi = fr.proportion_intervals(k, n, study.ci)
+            n, k = stripe_counts(over, valid)
+            p, lo, hi = proportion_intervals(k, n, study.ci)
             frag.append(pd.DataFrame({"engine": e, "size": size, "S": S, "stripe": np.arange(len(im)), "intensity": im,
                                       "n": n, "n_overturned": k, "p": p, "p_low": lo, "p_high": hi}))  # fmt: skip
-            ex = fr.exceedance(th, study.thresholds, valid, study.ci)
+            ex = exceedance(th, study.thresholds, valid, study.ci)
             exc.append(ex.assign(engine=e, size=size, S=S, intensity=im[ex["stripe"].to_numpy()]))
             if not valid.any():  # every record of this engine and size failed: nothing to fit
                 fits.append({"engine": e, "size": size, "S": S, **dict.fromkeys(_FIT_NUMBERS, math.nan),
                              "status": "no_data", "message": "no valid record at any stripe (every record failed)",
                              "n_boot": 0, "n_failed": 0})  # fmt: skip
                 continue
-            b = fr.bootstrap_fit(im, over, valid, n_boot=study.n_boot, seed=study.seed, ci=study.ci)
+            b = bootstrap_fit(im, over, valid, n_boot=study.n_boot, seed=study.seed, ci=study.ci)
             fits.append({"engine": e, "size": size, "S": S, "median": b.fit.median, "median_low": b.median_low,
                          "median_high": b.median_high, "beta": b.fit.beta, "beta_low": b.beta_low,
                          "beta_high": b.beta_high, "status": b.fit.status, "message": b.fit.message,
@@ -389,8 +395,8 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
                     continue  # no records on one side (or not the same motions): no paired comparison
                 # two intervals decide "disagree": each at 1 - (1 - ci) / 2 (Bonferroni), so that agreeing
                 # engines are called different at most 1 - ci of the time (at ci each: 14 % measured, not 5 %)
-                c = fr.compare_fits(im, np.isinf(th), np.isinf(th_r), valid, valid_r, n_boot=study.n_boot,
-                                    seed=study.seed, ci=compare_ci(study.ci))  # fmt: skip
+                c = compare_fits(im, np.isinf(th), np.isinf(th_r), valid, valid_r, n_boot=study.n_boot,
+                                 seed=study.seed, ci=compare_ci(study.ci))  # fmt: skip
                 comps.append({"engine": e, "reference": reference, "size": size, "S": S,
                               "median_ratio": c.median_ratio, "ratio_low": c.ratio_low, "ratio_high": c.ratio_high,
                               "beta_diff": c.beta_diff, "diff_low": c.diff_low, "diff_high": c.diff_high,
@@ -407,8 +413,6 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
 # --------------------------------------------------------------------------
 def _plain(x: Any) -> Any:
     """JSON data with NaN / inf written as null / "inf" strings (JSON has neither)."""
-    from housner.scenarios.execution.rundir import jsonable
-
     return jsonable(x, nonfinite="null")
 
 
@@ -431,22 +435,33 @@ def load_study(path: str | Path) -> StudyResult:
     ------
     ValueError
         Naming the directory and the file that is missing.
+    DataFileError
+        Naming a study file that cannot be read (corrupt JSON or parquet).
     """
     out = Path(path)
     for name in STUDY_FILES[:-1]:
         if not (out / name).is_file():
             raise ValueError(f"{out}: not a study directory (no {name}; run `housner run` on a scenario with [study])")
-    fits = json.loads((out / FITS_FILE).read_text())
 
     def num(rows):
         return [{k: (math.nan if v is None else v) for k, v in r.items()} for r in rows]
 
+    def read(name: str, how):
+        try:
+            return how(out / name)
+        except (OSError, ValueError, KeyError, pa.ArrowException) as e:  # JSONDecodeError is a ValueError
+            first = (str(e).splitlines() or [type(e).__name__])[0]
+            raise DataFileError(out / name, f"cannot read this study file ({first}); run the study again") from None
+
+    fits = read(FITS_FILE, lambda p: json.loads(p.read_text()))
+    if not (isinstance(fits, dict) and {"fits", "comparisons"} <= set(fits)):
+        raise DataFileError(out / FITS_FILE, "is not a study's fits (no 'fits' and 'comparisons'); run the study again")
     return StudyResult(
-        results=pd.read_parquet(out / RESULTS_FILE),
-        fragility=pd.read_parquet(out / FRAGILITY_FILE),
-        exceedance=pd.read_parquet(out / EXCEEDANCE_FILE),
+        results=read(RESULTS_FILE, pd.read_parquet),
+        fragility=read(FRAGILITY_FILE, pd.read_parquet),
+        exceedance=read(EXCEEDANCE_FILE, pd.read_parquet),
         fits=num(fits["fits"]),
         comparisons=num(fits["comparisons"]),
-        meta=json.loads((out / STUDY_FILE).read_text()),
+        meta=read(STUDY_FILE, lambda p: json.loads(p.read_text())),
         out=out,
     )

@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 import pandas as pd
+
+from housner import calibration
 from housner.reports import figures
 from housner.reports.page import engine_tag, esc, fmt_g, fmt_num, fmt_p, fmt_pct, html_figure, html_note, html_table
 from housner.reports.run.view import RECORD_RTOL, Run
@@ -213,8 +215,6 @@ def _nan_to_num(v: np.ndarray) -> np.ndarray:
 
 
 def _free_vibration(run: Run) -> str:
-    from housner import calibration
-
     alpha = run.alpha
     if not math.isfinite(alpha):
         return html_note("run.json holds no specimen: cannot normalise the free rocking.", "warn")

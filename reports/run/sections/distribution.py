@@ -12,6 +12,8 @@ import json
 import math
 
 import numpy as np
+
+from housner import stats
 from housner.reports import figures
 from housner.reports.page import (
     ci_cell,
@@ -28,8 +30,6 @@ from housner.reports.page import (
 from housner.reports.run.view import _Q, Run, _record
 from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.execution.tables import percentile_table
-
-from housner import stats
 
 
 def _distribution(run: Run) -> str:

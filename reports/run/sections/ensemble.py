@@ -10,10 +10,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from housner.reports.page import esc, fmt_g, fmt_num, guarded, html_figure, html_note, html_table, status_badge
+from housner.reports.run.ground_figures import plot_ensemble_spectra
 from housner.reports.run.view import Run, _motion_list, _record
 from housner.scenarios.execution.rundir import json_number
-
 from housner.units import G
 
 
@@ -213,10 +214,6 @@ def _rdk_table(params: dict) -> str:
 def _spectra_figure(run: Run) -> str:
     if run.motions is None:
         return html_note("motions.npz is missing: no spectra.")
-    try:
-        from housner.reports.run.ground_figures import plot_ensemble_spectra
-    except ImportError:
-        return html_note("The spectra figure needs reports/ground_figures.py, which is not installed.", "warn")
     record, why = _record(run)
     if record is None:
         return html_note(f"{why}: no spectra.", "warn" if "catalogue" in why or "Record file" in why else "note")

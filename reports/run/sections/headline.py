@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from housner import stats
 from housner.reports.page import (
     ci_cell,
     engine_tag,
@@ -27,8 +29,6 @@ from housner.reports.page import (
 )
 from housner.reports.run.sections.tuning import _settings_html, _tuning, _tuning_caveats
 from housner.reports.run.view import BOOT_SEED, DEFAULT_KS_MAX, DEFAULT_OVERTURN_TOL, N_BOOT, Run, _verdict
-
-from housner import stats
 from housner.units import G
 
 

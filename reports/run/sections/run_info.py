@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_table
 from housner.reports.run.view import Run
 

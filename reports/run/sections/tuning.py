@@ -15,6 +15,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from housner import engines
+from housner.engines.base import engine_class
+from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR
 from housner.reports import figures
 from housner.reports.page import engine_tag, esc, fmt_g, fmt_num, html_figure, html_note, html_table, status_badge
 from housner.reports.run.view import DEFAULT_KS_MAX, Run, _verdict
@@ -50,8 +54,6 @@ def _tuning_caveats(run: Run) -> dict[str, str]:
         decay = _frame(d, "decay_table")
         small_limit = math.nan
         if {"rel_error", "peak_analytic"} <= set(decay.columns):
-            from housner.engines.tuning import DECAY_RTOL
-
             bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
             if len(bad):
                 small_limit = float(bad["peak_analytic"].max())
@@ -89,8 +91,6 @@ def _settings_html(settings: dict) -> str:
 def _tuning_file(engine: str) -> Path:
     if TUNING_DIR is not None:
         return Path(TUNING_DIR) / f"tuning-{engine}.json"
-    from housner import engines
-
     return Path(engines.__file__).resolve().parent / "models" / f"tuning-{engine}.json"
 
 
@@ -139,8 +139,6 @@ def _tuning_checks(d: dict) -> list[_Check]:
     Each check is judged with the tuner's own tolerances, so a check said "not met"
     here is the one ``housner tune`` counted; tables absent from the file give no row.
     """
-    from housner.engines.tuning import DECAY_RTOL, SMALL_WORST_FACTOR
-
     rtol = json_number(d.get("rtol"))
     out: list[_Check] = []
 
@@ -265,8 +263,6 @@ def _settings_differ(tuned: dict, used: dict) -> list[str]:
 def _engine_defaults(name: str) -> dict:
     """The registered engine's DEFAULTS, or none for an engine the registry does not know."""
     try:
-        from housner.engines.base import engine_class
-
         return dict(getattr(engine_class(name), "DEFAULTS", {}) or {})
     except (ValueError, ImportError):  # an unknown or unloadable engine: compare only what the file has
         return {}
@@ -281,8 +277,6 @@ def _tuning(run: Run) -> str:
             "they run with the settings above. <code>housner tune ENGINE</code> finds contact settings that "
             "reproduce a target r."
         )
-    from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR
-
     parts = ["<h3>Tuned contact parameters</h3>"]
     rows = []
     curves, decays = {}, {}

@@ -1,9 +1,11 @@
-"""The analytic kernel with the effects' terms (private; the template that :mod:`housner.effects.terms` fills in).
+"""The analytic kernel's equation of motion with the terms' hooks, its RK4 step and its events (private).
 
-The same rocking equation, events and numerics as :mod:`housner._kernel` (read its docstring first),
-in the same reduced coordinates on the current pivot ``s``
-(phi = s theta, w = s theta', a = s ug''/g, and v = a_v/g the vertical table acceleration, which is
-not mirrored), with four hooks that the effects' terms fill in::
+Reduced coordinates on the current pivot ``s`` (+1 for the +x corner, -1 for the -x corner)::
+
+    phi = s theta >= 0,   w = s theta_dot,   a = s ug'' / g,   v = a_v / g (not mirrored)
+
+in which Housner's equation of motion (seed eq. 2, plus a viscous term) reads the same on both
+pivots, with four hooks that the effects' terms (:mod:`housner.effects.terms`) fill in::
 
     phi'' = -p_s^2 (sin(alpha_s - phi) + a cos(alpha_s - phi)) - c w
             + _moment(phi, w, t, a, v, s, alpha_s, p_s^2, q)          smooth moments (sum of the terms)
@@ -12,75 +14,50 @@ not mirrored), with four hooks that the effects' terms fill in::
     at an impact: r = _impact(w_before, r, s, alpha_s, p_s^2, q)      the energy ratio, chained
 
 ``q`` is every term's parameters in one array; a generated hook passes each term its own slice.
-The section between the ``hooks`` markers below is what a generated kernel replaces; as written
-here it holds the no-op hooks, and this module is then the plain kernel computed by other code:
-with no term it gives bit for bit what :func:`housner._kernel.run_one` gives (tested).
+The section between the ``hooks`` markers below is what :mod:`housner.effects.terms` replaces to
+generate the kernel of a set of terms (with :mod:`housner._kernel`, which runs the record); as
+written it holds the no-op hooks: Housner's equation, the plain kernel.
 
-Block states and the events between them:
+Events (impact, peak, overturn, the zero of w under a dry term) are located by Newton iteration
+on the length of a single RK4 step from the start of the substep, so that the located root is a
+root of the very integrator that is being used, to machine precision. With a dry term the
+direction of motion ``sig`` is frozen over a step (so that RK4 integrates a smooth right-hand
+side); a step in which w reaches 0 is cut there, and the block sticks when the other moments at
+w = 0 stay within the dry capacity, ``|phi''(w = 0, without the dry terms)| <= _dry``; otherwise
+it turns back with ``sig`` reversed (a peak of phi is such a reversal). When a term acts at rest
+(``AT_REST``: a moment that is not zero at phi = w = 0, e.g. a vertical input, or any dry term)
+the block held still starts to move at the first instant at which ``phi''`` at w = 0 leaves the
+dry capacity (at rest on a corner: ``phi''(0, 0) > _dry`` on that corner, which is
+a < -tan(alpha)(1 + v) for a vertical input, and a threshold raised by M_f / (m g R cos(alpha))
+for pivot friction). The margin is checked at every substep boundary of the sample and its root
+located by Illinois false position to a few ulps; for inputs linear between samples and terms
+affine in them (all the library's) the margin is affine in time and the root exact to rounding.
 
-* ROCKING -> impact (phi = 0), overturn (phi = pi/2), as in the plain kernel;
-* ROCKING -> STUCK, with a dry term only: the direction of motion ``sig`` is frozen over a step (so
-  that RK4 integrates a smooth right-hand side); a step in which w reaches 0 is cut there (the
-  root of w on the RK4 step, located by the plain kernel's Newton iteration, to machine
-  precision), and the block sticks when the other moments at w = 0 stay within the dry capacity,
-  ``|phi''(w = 0, without the dry terms)| <= _dry``; otherwise it turns back with ``sig`` reversed
-  (a peak of phi is such a reversal);
-* STUCK -> ROCKING and REST -> ROCKING: when a term acts at rest (``AT_REST``: a moment that is
-  not zero at phi = w = 0, e.g. a vertical input, or any dry term) the block held still starts to
-  move at the first instant at which ``phi''`` at w = 0 leaves the dry capacity (at rest on a
-  corner: ``phi''(0, 0) > _dry`` on that corner, which is a < -tan(alpha)(1 + v) for a vertical
-  input, and a threshold raised by M_f / (m g R cos(alpha)) for pivot friction). The margin is
-  checked at every substep boundary of the sample and its root located by Illinois false
-  position to a few ulps; for inputs linear between samples and terms affine in them (all the
-  library's) the margin is affine in time and the root exact to rounding. Without such a term
-  the plain kernel's uplift rule is used, exactly.
-* REST is entered by the plain rest rule after an impact, or at a reversal at phi <= 0.
-
-Units: time [s], angles [rad], angular velocity [rad/s], accelerations in units of g [-]
-(ground) and of 1/s^2 (the hooks' reduced angular accelerations).
+Units: time [s], angles [rad], angular velocity [rad/s], ground accelerations in units of g [-],
+the hooks' reduced angular accelerations in 1/s^2.
 """
 
 from __future__ import annotations
 
 import math
 
-from numba import njit, prange
+from numba import njit
 
-from housner._kernel import (
+from housner._kernel_parts import (
     _EV_IMPACT,
     _EV_NONE,
     _EV_OVERTURN,
+    _EV_REVERSE,
     _EV_SETTLE,
-    _MAX_EVENTS_PER_SAMPLE,
+    _EV_STALL,
     EPS,
     HALF_PI,
-    I_ALPHA_NEG,
-    I_ALPHA_POS,
-    I_DAMPING,
-    I_P_NEG,
-    I_P_POS,
-    I_R_EXP,
-    I_R_NEG,
-    I_R_POS,
-    OVERTURNED,
-    REST,
-    ROCKING,
-    STUCK,
     _grid,
-    _initial_state,
-    _pivot_constants,
     _reduced_ground,
-    _restitution,
     _rk4_update,
     _secant,
-    _store,
     _substep_of,
-    _uplift,
 )
-
-#: Event codes of a step beyond the plain kernel's: the velocity reaches zero (dry terms), and a
-#: block released at w = 0 that does not move within the step.
-_EV_REVERSE, _EV_STALL = 4, 5
 
 # <hooks>
 #: Whether the kernel has smooth moment terms, dry (Coulomb) terms, impact terms, and a term that
@@ -110,6 +87,9 @@ def _impact(w, r, s, alpha, p2, q):
 
 
 # </hooks>
+
+#: Whether a hook reads the terms' parameters ``q`` (:func:`housner._kernel.run_one` runs without them else).
+TERMS = HAS_MOMENT or HAS_DRY or HAS_IMPACT
 
 
 # ----------------------------------------------------------------------
@@ -159,7 +139,7 @@ def _capacity(phi, tau, fr, q):
 
 @njit(cache=True)
 def _rk4(phi, w, tau, h, fr, q):
-    """One classic RK4 step of length h [s] from local time tau [s] (the plain kernel's arithmetic)."""
+    """One classic RK4 step of length h [s] from local time tau [s], a(tau) = a0 + slope tau (the frame's)."""
     hh = 0.5 * h
     k1 = _accel(phi, w, tau, fr, q)
     w2 = w + hh * k1
@@ -173,9 +153,15 @@ def _rk4(phi, w, tau, h, fr, q):
 
 @njit(cache=True)
 def _locate(kind, target, hl, gl, hr, gr, phi0, w0, tau, fr, q):
-    """Root h in [hl, hr] [s] of phi(h) - target (kind 0) or w(h) (kind 1) on one RK4 step from tau.
+    """Root h in [hl, hr] [s] of a function of one RK4 step of length h from tau.
 
-    :func:`housner._kernel._locate` with the terms; returns (h, phi(h), w(h)).
+    ``kind`` 0: phi(h) - target; ``kind`` 1: w(h). ``gl`` and ``gr`` are the
+    function at the bracket ends and have opposite signs (``gr`` may be 0).
+    Safeguarded Newton: the derivative is the step's own end state (w, or
+    phi''), which matches d/dh of the step to O(h^4), so convergence is fast;
+    a bisection replaces any Newton update that leaves the bracket.
+
+    Returns (h, phi(h), w(h)).
     """
     if gr == 0.0:
         ph, wh = _rk4(phi0, w0, tau, hr, fr, q)
@@ -209,10 +195,16 @@ def _locate(kind, target, hl, gl, hr, gr, phi0, w0, tau, fr, q):
 
 
 # ----------------------------------------------------------------------
-# events of a step without dry terms: the plain kernel's
+# events of a step without dry terms
 @njit(cache=True, inline="always")
 def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
-    """:func:`housner._kernel._crossing` with the terms."""
+    """Does phi cross zero inside the step (phi, w) -> (phi1, w1) of length H [s]?
+
+    ``hp``, ``php``: time and value of a peak inside the step (hp < 0 if none).
+    Returns (event, hl, gl, hr, gr): ``_EV_IMPACT`` with a bracket [hl, hr] of
+    the first crossing (phi = gl > 0 at hl, gr <= 0 at hr), ``_EV_SETTLE`` or
+    ``_EV_NONE``.
+    """
     hl = -1.0
     gl = 0.0
     hr = H
@@ -225,6 +217,8 @@ def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
             hl = 0.0
             gl = phi
         elif w > 0.0:
+            # just after an impact (phi = 0, w > 0): find a point of the
+            # step with phi > 0 to bracket the next crossing
             hb = 0.5 * H
             for _ in range(80):
                 pb, _wb = _rk4(phi, w, tau, hb, fr, q)
@@ -234,8 +228,10 @@ def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
                     break
                 hb *= 0.5
         if hl < 0.0:
+            # fresh uplift that did not lift (threshold met to rounding only)
             return _EV_SETTLE, hl, gl, hr, gr
     elif w < 0.0 and w1 > 0.0 and phi1 > 0.0 and phi > 0.0:
+        # a minimum inside the step: does it dip below zero?
         hm, phm, _wm = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, fr, q)
         if phm < 0.0:
             hl = 0.0
@@ -247,11 +243,18 @@ def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
 
 @njit(cache=True, inline="always")
 def _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max):
-    """:func:`housner._kernel._step_event` with the terms: (event, h, w_h, theta_max)."""
+    """First event of the RK4 step (phi, w) -> (phi1, w1) of length H [s] from local time tau [s].
+
+    Returns (event, h, w_h, theta_max): the event code (``_EV_*``), the time
+    h [s] after tau at which it happens and the speed w_h [rad/s] there (for
+    an impact), and theta_max raised by a peak of phi inside the step.
+    """
+    # a peak of phi inside the step (theta_max between samples)
     hp = -1.0
     php = 0.0
     if w > 0.0 and w1 < 0.0:
         hp, php, _wp = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, fr, q)
+    # overturn: phi reaches pi/2
     if (hp >= 0.0 and php >= HALF_PI) or phi1 >= HALF_PI:
         hr = H
         gr = phi1 - HALF_PI
@@ -262,6 +265,7 @@ def _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max):
         return _EV_OVERTURN, h_o, 0.0, HALF_PI
     if hp >= 0.0 and php > theta_max:
         theta_max = php
+    # impact: phi crosses zero inside the step
     event, hl, gl, hr, gr = _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q)
     if event == _EV_IMPACT:
         h_i, _ph, w_i = _locate(0, 0.0, hl, gl, hr, gr, phi, w, tau, fr, q)
@@ -421,195 +425,3 @@ def _after_reversal(phi, tau, fr, q, sig_before):
     if abs(acc) <= _capacity(phi, tau, fr, q) or (acc > 0.0) == (sig_before > 0.0):
         return 0.0
     return -sig_before
-
-
-# ----------------------------------------------------------------------
-@njit(cache=True)
-def run_one(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_out, theta_dot_out, impacts):
-    """Simulate one record: :func:`housner._kernel.run_one` with the terms.
-
-    ``v_g`` [-] is the vertical table acceleration over g at the samples (zeros when no term
-    reads it), ``q`` the terms' parameters; the other arguments and the returned tuple are those
-    of :func:`housner._kernel.run_one`.
-    """
-    alpha_p = prm[I_ALPHA_POS]
-    alpha_n = prm[I_ALPHA_NEG]
-    p2_p = prm[I_P_POS] * prm[I_P_POS]
-    p2_n = prm[I_P_NEG] * prm[I_P_NEG]
-    c = prm[I_DAMPING]
-    tan_p, tan_n, wrest2_p, wrest2_n = _pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol)
-    at_rest, s, phi, w, t_uplift = _initial_state(theta0, theta_dot0)
-    mode = REST if at_rest else ROCKING
-    sig = 0.0
-    if HAS_DRY and not at_rest:
-        if w != 0.0:
-            sig = 1.0 if w > 0.0 else -1.0
-        else:
-            k1 = 1 if acc_g.size > 1 else 0
-            fr = _frame(s, acc_g[0], acc_g[k1], v_g[0], v_g[k1], dt, 0.0, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
-            if _hold_margin(phi, True, 0.0, fr, q) <= 0.0:
-                mode = STUCK
-            else:
-                sig = 1.0 if _accel(phi, 0.0, 0.0, fr, q) > 0.0 else -1.0
-    theta_max = abs(theta0)
-    t_over = math.nan
-    n_imp = 0
-    guard = 0
-    if record:
-        theta_out[0] = theta0
-        theta_dot_out[0] = theta_dot0
-
-    for k in range(acc_g.size - 1):
-        if mode == OVERTURNED and not record:
-            break
-        t_k, g0, g1 = k * dt, acc_g[k], acc_g[k + 1]
-        u0, u1 = v_g[k], v_g[k + 1]
-        tau, j, n_ev = 0.0, 0, 0
-        while mode != OVERTURNED:
-            if mode == REST or mode == STUCK:
-                if AT_REST:
-                    tl, sd, sg = _leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n,
-                                        p2_p, p2_n, c, q)  # fmt: skip
-                    if tl == math.inf:
-                        break
-                    if mode == REST:
-                        s = sd
-                        phi = 0.0
-                        if math.isnan(t_uplift):
-                            t_uplift = t_k + tl
-                    tau = tl
-                    sig = sg
-                else:
-                    tu_p, tu_n = _uplift(g0, g1, tau, dt, tan_p, tan_n)
-                    if tu_p == math.inf and tu_n == math.inf:
-                        break
-                    s = 1.0 if tu_p < tu_n else -1.0
-                    tau = tu_p if tu_p < tu_n else tu_n
-                    if math.isnan(t_uplift):
-                        t_uplift = t_k + tau
-                    phi = 0.0
-                    sig = 1.0
-                mode = ROCKING
-                w = 0.0
-                j = _substep_of(tau, m, dt)
-            tgt = _grid(j + 1, m, dt)
-            if tgt > tau:
-                fr = _frame(s, g0, g1, u0, u1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, sig)
-                H = tgt - tau
-                phi1, w1 = _rk4(phi, w, tau, H, fr, q)
-                ph_h = 0.0
-                if HAS_DRY:
-                    event, h, ph_h, w_h, theta_max = _step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max)
-                else:
-                    event, h, w_h, theta_max = _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max)
-                if event == _EV_OVERTURN:
-                    mode = OVERTURNED
-                    t_over = t_k + tau + h
-                    break
-                if event == _EV_IMPACT or event == _EV_REVERSE:
-                    if event == _EV_IMPACT:
-                        if n_imp < impacts.size:
-                            impacts[n_imp] = t_k + tau + h
-                        n_imp += 1
-                        tau = tau + h
-                        r_imp = prm[I_R_NEG] if s > 0.0 else prm[I_R_POS]
-                        if HAS_IMPACT:
-                            r_imp = _impact(-w_h, r_imp, s, fr[6], fr[7], q)
-                        w = _restitution(-w_h, r_imp, prm[I_R_EXP], fr[7], fr[6])
-                        phi = 0.0
-                        s = -s
-                        sig = 1.0
-                        if w * w < (wrest2_p if s > 0.0 else wrest2_n):
-                            mode = REST
-                            w = 0.0
-                    else:  # the velocity reached zero at phi = ph_h (dry terms)
-                        tau = tau + h
-                        phi = ph_h
-                        w = 0.0
-                        sig = _after_reversal(phi, tau, fr, q, sig) if phi > 0.0 else 0.0
-                        if sig == 0.0:
-                            mode = STUCK if phi > 0.0 else REST
-                            if mode == REST:
-                                phi = 0.0
-                    n_ev += 1
-                    if n_ev > _MAX_EVENTS_PER_SAMPLE:
-                        mode = REST
-                        phi = 0.0
-                        w = 0.0
-                        guard += 1
-                        break
-                    continue
-                if event == _EV_NONE:
-                    phi = phi1
-                    w = w1
-                    if phi > theta_max:
-                        theta_max = phi
-                elif event == _EV_STALL:
-                    mode = STUCK if phi > 0.0 else REST
-                    w = 0.0
-                else:  # settle
-                    mode = REST
-                    phi = 0.0
-                    w = 0.0
-                tau = tgt
-            j += 1
-            if j >= m:
-                break
-        if record:
-            _store(theta_out, theta_dot_out, k + 1, s, phi, w, mode == ROCKING or mode == STUCK, mode == OVERTURNED)
-    return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard
-
-
-@njit(cache=True)
-def run_batch(
-    acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-    imp_offsets, out,
-):  # fmt: skip
-    """Serial batch over records i (samples offsets[i]:offsets[i+1]); ``q`` [n_rec, n_q]: each record's terms.
-
-    ``out`` [n_rec, 6] receives (theta_max, overturned, t_over, t_uplift, n_imp, guard), as
-    :func:`housner._kernel.run_batch`.
-    """
-    for i in range(offsets.size - 1):
-        _one_of_batch(
-            i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-            imp_offsets, out,
-        )  # fmt: skip
-
-
-@njit(cache=True, parallel=True)
-def run_batch_parallel(
-    acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-    imp_offsets, out,
-):  # fmt: skip
-    """:func:`run_batch` with the records spread over threads (numba ``prange``)."""
-    for i in prange(offsets.size - 1):
-        _one_of_batch(
-            i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-            imp_offsets, out,
-        )  # fmt: skip
-
-
-@njit(cache=True)
-def _one_of_batch(
-    i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-    imp_offsets, out,
-):  # fmt: skip
-    a = offsets[i]
-    b = offsets[i + 1]
-    if record:
-        th = theta[a:b]
-        thd = theta_dot[a:b]
-    else:
-        th = theta[0:0]
-        thd = theta_dot[0:0]
-    res = run_one(
-        acc_g[a:b], v_g[a:b], dts[i], ms[i], prm[i], q[i], theta0s[i], theta_dot0s[i], rest_tol, record, th, thd,
-        impacts[imp_offsets[i] : imp_offsets[i + 1]],
-    )  # fmt: skip
-    out[i, 0] = res[0]
-    out[i, 1] = 1.0 if res[1] else 0.0
-    out[i, 2] = res[2]
-    out[i, 3] = res[3]
-    out[i, 4] = res[4]
-    out[i, 5] = res[5]

@@ -1,0 +1,29 @@
+"""The ``housner`` command line: the top layer, above scenarios, engines and reports.
+
+Errors are one line on stderr, ``housner: error: ...``, naming the file, line,
+key or argument at fault; ``--debug`` (or ``HOUSNER_DEBUG=1``) adds the
+traceback. Inputs and output paths are checked before any simulation.
+
+Exit status: 0 done; 1 a runtime failure (``run``: a record failed, unless
+``--allow-failures``; ``tune``: target not met; an unreachable Dask
+scheduler; an unexpected error); 2 bad input (arguments, scenario, campaign
+or record files, output paths); 130 interrupted by Ctrl-C; 143 terminated (SIGTERM).
+
+Modules: :mod:`~housner.cli.args` (argument types, input checks, exit statuses),
+:mod:`~housner.cli.commands` (the subcommands), :mod:`~housner.cli.parser` (the parser),
+:mod:`~housner.cli.app` (``main``: plugins, signals, errors).
+
+This package's own import is light on purpose: the ``housner`` script imports :func:`main` from
+here, and every worker process that a run spawns imports the script again (Python's spawn start
+method re-imports the main module), so the layers below load when the command runs, not when a
+worker starts.
+"""
+
+__all__ = ["main"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``housner`` command; returns the exit status (see :mod:`housner.cli.app`)."""
+    from housner.cli.app import main as run  # lazy: spawned workers re-import the entry point (see above)
+
+    return run(argv)

@@ -1,0 +1,176 @@
+"""``main``: the entry point of the ``housner`` command (plugins first, then the parser; signals; one-line errors)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import traceback
+
+from housner.cli.args import (
+    EXIT_FAILURE,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_TERMINATED,
+    EXIT_USAGE,
+    UsageError,
+)
+from housner.cli.parser import build_parser
+from housner.effects import load_plugin
+from housner.errors import DataFileError, EngineUnavailable
+from housner.scenarios.execution.workers import RunInterrupted, SchedulerError
+
+__all__ = ["main"]
+
+_TERMINATED = False
+
+
+def _on_sigterm(signum, frame) -> None:
+    """SIGTERM is handled like Ctrl-C (workers stopped, finished records cached), with its own status."""
+    global _TERMINATED
+    _TERMINATED = True
+    raise KeyboardInterrupt
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+def _one_line(text: str) -> str:
+    """Join a multi-line message into one line."""
+    return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
+
+
+def _error(message: str) -> None:
+    print(f"housner: error: {_one_line(message)}", file=sys.stderr)
+
+
+def _plugin_args(argv: list[str]) -> list[str]:
+    """The files named by ``--plugin FILE`` / ``--plugin=FILE`` on the command line, in order."""
+    out = []
+    for i, a in enumerate(argv):
+        if a == "--plugin" and i + 1 < len(argv):
+            out.append(argv[i + 1])
+        elif a.startswith("--plugin="):
+            out.append(a.split("=", 1)[1])
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``housner`` command; returns the exit status (see the module docstring)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = os.environ.get("HOUSNER_DEBUG", "").strip().lower() not in ("", "0", "false", "no") or "--debug" in argv
+    argv = [a for a in argv if a != "--debug"]  # accepted anywhere on the line
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        # effect plugins load first, so that their effects are known to the parser's help and checks
+        for path in _plugin_args(argv):
+            try:
+                load_plugin(path)
+            except ValueError as e:
+                _error(f"--plugin: {e}")
+                return EXIT_USAGE
+        try:
+            parser = build_parser(full_help=any(a in ("-h", "--help") for a in argv))
+            args = parser.parse_args(argv)
+        except SystemExit as e:  # --help, --version
+            return e.code if isinstance(e.code, int) else (EXIT_OK if e.code is None else EXIT_USAGE)
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt as e:
+        if debug:
+            traceback.print_exc()
+        if isinstance(e, RunInterrupted) and e.cached:
+            print(
+                f"housner: interrupted: {e.done} of {e.total} records finished and are cached; "
+                "run the same command again to resume",
+                file=sys.stderr,
+            )
+        elif isinstance(e, RunInterrupted):
+            print(
+                f"housner: interrupted: {e.done} of {e.total} records finished (not cached: --no-cache)",
+                file=sys.stderr,
+            )
+        else:
+            print("housner: interrupted", file=sys.stderr)
+        return EXIT_TERMINATED if _TERMINATED else EXIT_INTERRUPTED
+    except Exception as e:
+        if debug:
+            traceback.print_exc()
+        status, message = _classify(e)
+        if status == EXIT_FAILURE and not debug and type(e).__name__ not in ("SchedulerError",):
+            message += " (run with --debug or HOUSNER_DEBUG=1 for the traceback)"
+        _error(message)
+        return status
+
+
+def _classify(e: Exception) -> tuple[int, str]:
+    """Exit status and message of an error that reached :func:`main`."""
+    if isinstance(e, SchedulerError):
+        return EXIT_FAILURE, str(e)
+    if isinstance(e, (UsageError, DataFileError, ValueError, FileNotFoundError, EngineUnavailable)):  # bad input
+        msg = str(e)
+        if isinstance(e, OSError) and e.filename is not None and str(e.filename) not in msg:
+            msg = f"{e.filename}: {e.strerror or msg}"
+        return EXIT_USAGE, msg or type(e).__name__
+    if isinstance(e, OSError):
+        where = f"{e.filename}: " if e.filename is not None else ""
+        return EXIT_FAILURE, f"{where}{e.strerror or e}"
+    return EXIT_FAILURE, f"unexpected {type(e).__name__}: {e}"
+

@@ -1,0 +1,155 @@
+"""The command line's argument types and input checks: each refuses a bad value in one line naming the option."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import housner
+from housner.effects import available_effects
+from housner.engines.base import ENGINE_PACKAGES, ENGINES
+from housner.errors import unknown_choice
+from housner.scenarios.execution.outputs import check_output_file
+
+#: Exit statuses of the command (see the module docstring).
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+#: Exit status after SIGTERM (128 + 15), which a batch scheduler or a container runtime sends.
+EXIT_TERMINATED = 143
+
+
+class UsageError(ValueError):
+    """Bad input found by the command itself (an argument, a path); exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, with one-line errors raised as :class:`UsageError` instead of usage text and exit."""
+
+    def error(self, message: str):  # noqa: D102 - argparse API
+        raise UsageError(f"{message} (see `{self.prog} --help`)")
+
+
+def _int_at_least(minimum: int, what: str):
+    """An argparse type: an integer of at least ``minimum``, else "must be <what>, got ..."."""
+
+    def parse(value: str) -> int:
+        try:
+            n = int(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {what}, got {value!r}") from None
+        if n < minimum:
+            raise argparse.ArgumentTypeError(f"must be {what}, got {value!r}")
+        return n
+
+    return parse
+
+
+def _folds_int(value: str) -> int:
+    n = _nonneg_int(value)
+    if n < 2:
+        raise argparse.ArgumentTypeError(f"must be an integer of at least 2, got {value!r}")
+    return n
+
+
+def _as_float(text: str) -> float:
+    """``float(text)``, NaN when it is not a number (so every range check fails on it)."""
+    try:
+        return float(text)
+    except ValueError:
+        return math.nan
+
+
+def _float_within(inside, what: str):
+    """An argparse type: a float for which ``inside(x)`` holds, else "must be WHAT, got 'TEXT'"."""
+
+    def parse(value: str) -> float:
+        x = _as_float(value)
+        if not inside(x):
+            raise argparse.ArgumentTypeError(f"must be {what}, got {value!r}")
+        return x
+
+    return parse
+
+
+def _amplitudes(value: str) -> tuple[float, ...]:
+    out = []
+    for part in value.split(","):
+        a = _as_float(part)
+        if not 0.0 < a < 1.0:
+            raise argparse.ArgumentTypeError(
+                f"must be comma-separated amplitudes theta0/alpha in (0, 1), got {part.strip()!r} in {value!r}"
+            )
+        out.append(a)
+    return tuple(out)
+
+
+def _engines_arg(value: str) -> list[str]:
+    names = [v.strip() for v in value.split(",") if v.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError("give at least one engine name, e.g. housner,mujoco")
+    for n in names:
+        if n not in ENGINES:
+            raise argparse.ArgumentTypeError(str(unknown_choice("engine", n, ENGINES)))
+    return names
+
+
+def _versions() -> str:
+    """``housner X (python Y; engines: ...)``, from package metadata (imports no engine)."""
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+
+    parts = []
+    for name in ENGINES:
+        pkg = ENGINE_PACKAGES.get(name, name)
+        try:
+            v = housner.__version__ if pkg == "housner" else version(pkg)
+        except PackageNotFoundError:
+            v = "not installed"
+        parts.append(f"{name} {v}")
+    return f"housner {housner.__version__} (python {platform.python_version()}; engines: {', '.join(parts)})"
+
+
+class _VersionAction(argparse.Action):
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings=option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(_versions())
+        parser.exit(0)
+
+
+def _check_output_file(path: str, option: str) -> Path:
+    return check_output_file(path, option)
+
+
+def _names_arg(value: str) -> list[str]:
+    if value.strip().lower() == "none":
+        return []
+    return [v.strip() for v in value.split(",") if v.strip()]
+
+
+def _check_campaign(path: str) -> None:
+    """The campaign argument is a directory with campaign.toml, or a .toml file: checked before the work."""
+    p = Path(path)
+    if not p.exists():
+        raise UsageError(f"campaign {p} does not exist (give a directory with campaign.toml, or the campaign.toml)")
+    if p.is_dir() and not (p / "campaign.toml").exists():
+        raise UsageError(f"campaign directory {p} holds no campaign.toml")
+    if p.is_file() and p.suffix != ".toml":
+        raise UsageError(f"campaign {p} is a file but not a .toml file (give the directory with campaign.toml)")
+    toml = p / "campaign.toml" if p.is_dir() else p
+    if toml.is_dir():
+        raise UsageError(f"campaign {toml} is a directory, not a file")
+
+
+def _check_effects(names: list[str] | None, option: str) -> None:
+    known = available_effects()
+    for n in names or ():
+        if n not in known:
+            raise UsageError(f"argument {option}: {unknown_choice('effect', n, known)}")
+
+
+_positive_int = _int_at_least(1, "a positive integer")
+_nonneg_int = _int_at_least(0, "a non-negative integer")
+_open_fraction = _float_within(lambda x: 0.0 < x < 1.0, "a number between 0 and 1 (exclusive)")
+_ratio = _float_within(lambda x: 0.0 < x <= 1.0, "a kinetic-energy ratio in (0, 1]")

@@ -1,0 +1,253 @@
+"""The ``housner`` subcommands: scenarios, run, report, tune, diagnose (each returns the exit status)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from housner.cli.args import EXIT_FAILURE, EXIT_OK, UsageError, _check_campaign, _check_effects, _check_output_file
+from housner.engines.base import get_engine
+from housner.engines.tuning import tune
+from housner.reports.diagnosis import write_diagnosis_report
+from housner.reports.run.page import write_report
+from housner.reports.study.page import write_study_report
+from housner.reports.tuning_figure import tuning_report_figure
+from housner.scenarios.campaigns.campaign import load_campaign
+from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.catalogue.scenario import SCENARIOS, list_scenarios, load_scenario
+from housner.scenarios.execution.options import RunOptions
+from housner.scenarios.execution.outputs import check_output_dir
+from housner.scenarios.execution.rundir import RUN_FILES
+from housner.scenarios.execution.workers import connect_scheduler
+from housner.scenarios.runs.run import run_scenario
+from housner.scenarios.studies.study import STUDY_FILES, run_study
+from housner.specimen import Specimen
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    for name, desc in list_scenarios():
+        print(f"{name:18s} {desc}")
+        if args.verbose:
+            print(f"{'':18s} {SCENARIOS[name]}")
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    # Everything is checked before the first simulation: scenario, engines, arguments, outputs, scheduler.
+    scenario = load_scenario(args.scenario)
+    engines = args.engines or scenario.engines
+    scenario.check_engines(engines)
+    for opt, value in (("--n-motions", args.n_motions), ("--seed", args.seed)):
+        if value is not None and scenario.source != "rdk":
+            raise UsageError(
+                f"argument {opt}: scenario {scenario.name!r} has a fixed set of {scenario.n_motions} motions "
+                f"(source {scenario.source!r}); {opt} applies to RDK ensembles"
+            )
+    out = Path(args.out) if args.out else Path("runs") / scenario.name
+    if scenario.study is not None:
+        check_output_dir(out, "--out" if args.out else "study directory (--out)", files=STUDY_FILES)
+    else:
+        check_output_dir(out, "--out" if args.out else "run directory (--out)", files=RUN_FILES)
+    client = connect_scheduler(args.scheduler) if args.scheduler else None
+    n = args.n_motions if args.n_motions is not None else scenario.n_motions
+    if scenario.study is not None:
+        return _run_study(args, scenario, engines, out, client, n)
+    print(f"scenario {scenario.name}: {n} motions x engines {', '.join(engines)} -> {out}", file=sys.stderr)
+    run = _call_runner(run_scenario, args, scenario, engines, out, client)
+    res = run.results
+    for name in dict.fromkeys(res.engine):  # the engines, then the series with the scenario's [[effects]]
+        sub = res[res.engine == name]
+        ok = sub[sub.status == "ok"]
+        info = run.meta["engines"][name]
+        rejected = f", {info['cache_rejected']} cache entries rejected" if info.get("cache_rejected") else ""
+        median = ok.theta_max_over_alpha.median() if len(ok) else math.nan
+        print(
+            f"  {name:9s} {len(ok)}/{len(sub)} ok, {int(ok.overturned.sum())} overturned, "
+            f"median theta_max/alpha {median:.3f}, "
+            f"{info['wall_s']:.1f} s engine time ({info['cached']} cached{rejected})"
+        )
+    if len(run.failures):
+        print(f"{len(run.failures)} record(s) failed (kept out of the statistics):", file=sys.stderr)
+        for r in run.failures.itertuples():
+            print(f"  {r.engine} motion {r.motion_id} ({r.motion_name}): {r.error}", file=sys.stderr)
+    print(f"results: {out / 'results.parquet'}")
+    if not args.no_report:
+        path = write_report(out)
+        print(f"report:  {path}")
+    if len(run.failures) and not args.allow_failures:
+        print(
+            f"housner: error: {len(run.failures)} of {len(res)} records failed (listed above); "
+            "exit status 1 (--allow-failures: exit 0 when records fail)",
+            file=sys.stderr,
+        )
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
+def _call_runner(runner, args: argparse.Namespace, scenario, engines: list[str], out: Path, client):
+    """``runner`` (run_scenario or run_study) with the command's options; the scheduler's client closed after."""
+    try:
+        options = RunOptions(jobs=args.jobs, scheduler=client, use_cache=not args.no_cache, progress=not args.quiet)
+        return runner(scenario, engines=engines, n_motions=args.n_motions, seed=args.seed, out=out, options=options)
+    finally:
+        if client is not None:
+            client.close(timeout=2)
+
+
+def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path, client, n: int) -> int:
+    """`housner run` on a scenario with a [study]: every record, the fragility fits, the study report."""
+    st = scenario.study
+    print(
+        f"study {scenario.name}: {len(st.S)} sizes x {len(st.levels)} stripes x {n} motions x engines "
+        f"{', '.join(engines)} = {len(st.S) * len(st.levels) * n * len(engines)} records -> {out}",
+        file=sys.stderr,
+    )
+    res = _call_runner(run_study, args, scenario, engines, out, client)
+    comps = {(c["engine"], c["size"]): c for c in res.comparisons}
+    print(f"fragility ({st.label}; median and beta with {st.ci:.0%} bootstrap intervals):")
+    for f in res.fits:
+        head = f"  {f['engine']:9s} H = {f['size']:g} m: "
+        if f["status"] != "ok":
+            print(head + f"no fit ({f['message']})")
+            continue
+        line = (f"median {f['median']:.3g} [{f['median_low']:.3g}, {f['median_high']:.3g}], "
+                f"beta {f['beta']:.2f} [{f['beta_low']:.2f}, {f['beta_high']:.2f}]")  # fmt: skip
+        if f.get("caveat"):
+            line += f" (caveat: {f['caveat']})"
+        c = comps.get((f["engine"], f["size"]))
+        if c is not None:
+            word = "DISAGREES with" if c["disagree"] else "agrees with"
+            line += (
+                f"; {word} {c['reference']}: median x{c['median_ratio']:.3f} "
+                f"[{c['ratio_low']:.3f}, {c['ratio_high']:.3f}], "
+                f"beta {c['beta_diff']:+.2f} [{c['diff_low']:+.2f}, {c['diff_high']:+.2f}]"
+            )
+        print(head + line)
+    failed = res.results[res.results["status"] != "ok"]
+    if len(failed):
+        print(f"{len(failed)} record(s) failed (kept out of the fits):", file=sys.stderr)
+        for r in failed.head(20).itertuples():
+            print(f"  {r.engine} H = {r.size:g} m stripe {r.stripe} motion {r.motion_id}: {r.error}", file=sys.stderr)
+    print(f"results: {out / 'fragility.json'}")
+    if not args.no_report:
+        print(f"report:  {write_study_report(out)}")
+    if len(failed) and not args.allow_failures:
+        print(f"housner: error: {len(failed)} of {len(res.results)} records failed (listed above); exit status 1 "
+              "(--allow-failures: exit 0 when records fail)", file=sys.stderr)  # fmt: skip
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    run_dir = Path(args.run_dir)
+    if not run_dir.exists():
+        raise UsageError(f"run directory {run_dir} does not exist")
+    if not run_dir.is_dir():
+        raise UsageError(f"run directory {run_dir} is a file; give the directory a run wrote (--out of `housner run`)")
+    if not (run_dir / "results.parquet").is_file():
+        raise UsageError(f"{run_dir} holds no results.parquet; run `housner run SCENARIO --out {run_dir}` first")
+    out = _check_output_file(args.out, "--out") if args.out else None
+    write = write_study_report if (run_dir / "fragility.json").is_file() else write_report  # a study's or a run's
+    if out is None:
+        check_output_dir(run_dir, "run directory", files=("report.html",))
+    try:
+        path = write(run_dir, out)
+    except (OSError, ValueError) as e:  # a damaged run directory: name it, no traceback
+        detail = " ".join(str(e).split()) or type(e).__name__
+        raise UsageError(f"run directory {run_dir}: cannot build the report ({type(e).__name__}: {detail})") from e
+    print(f"report: {path}")
+    return EXIT_OK
+
+
+def _cmd_tune(args: argparse.Namespace) -> int:
+    specimen = Specimen.bachmann2017()
+    if args.scenario:
+        specimen = load_scenario(args.scenario).specimen
+    if args.json:
+        _check_output_file(args.json, "--json")
+    amps = args.amplitudes
+    kwargs = {"target_r": args.target_r, "progress": not args.quiet}
+    if amps:
+        kwargs["amplitudes"] = amps
+    if args.defaults_only:
+        kwargs["candidates"] = [get_engine(args.engine).settings()]
+    if args.figure:
+        _check_output_file(args.figure, "--figure")
+    result = tune(args.engine, specimen, **kwargs)
+    print(result.summary())
+    _print_best_candidates(result)
+    if args.json:
+        Path(args.json).write_text(json.dumps(result.to_dict(), indent=2, default=str))
+        print(f"written: {args.json}")
+    if args.figure:
+        tuning_report_figure(result).savefig(args.figure)
+        print(f"written: {args.figure}")
+    return 0 if result.met else 1
+
+
+def _print_best_candidates(result, n: int = 10) -> None:
+    """The n best candidates of a tuning by score (largest error over its tolerance; <= 1 passes)."""
+    import pandas as pd
+
+    if len(result.candidates) < 2:
+        return
+    cols = [
+        "settings",
+        "score",
+        "worst_rel_error",
+        "small_worst_rel_error",
+        "small_mean_rel_error",
+        "decay_rel_error",
+        "pulse_rel_error",
+        "cost_per_sim_second",
+        "met",
+    ]
+    best = result.candidates.sort_values(["score", "cost_per_sim_second"]).head(n)
+    print(f"\nbest {len(best)} candidates by score (largest error over its tolerance; <= 1 passes):")
+    with pd.option_context("display.width", 250, "display.max_colwidth", 120):
+        print(best[[c for c in cols if c in best.columns]].to_string())
+
+
+def _cmd_diagnose(args: argparse.Namespace) -> int:
+    _check_campaign(args.campaign)  # inputs and outputs checked before the work
+    _check_effects(args.effects, "--effects")
+    _check_effects(args.add, "--add")
+    if args.json:
+        _check_output_file(args.json, "--json")
+    if args.report is not None:
+        _check_output_file(args.report, "--report")
+    campaign = load_campaign(args.campaign)
+    for rid, file, msg in campaign.skipped:
+        print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
+    print(f"{campaign!r}", file=sys.stderr)
+    want_report = args.report is not None
+    diag = diagnose(
+        campaign,
+        effects=args.effects,
+        add=tuple(args.add or ()),
+        folds=args.folds,
+        train_fraction=args.train_fraction,
+        seed=args.seed,
+        max_effects=args.max_effects,
+        compare_steps=want_report,
+        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
+    )
+    print(f"verdict: {diag.status}")
+    print(diag.summary())
+    print()
+    print(f"{'step':45s} {'held-out error [alpha]':>24s} {'improvement':>20s}")
+    for s in diag.steps:
+        imp = "" if s.added is None else f"{s.improvement:+.4f} +- {s.improvement_se:.2g}"
+        print(f"{s.label()[:45]:45s} {s.heldout_error:>13.4f} +- {s.heldout_se:<8.2g} {imp:>20s}")
+    res = diag.verdict.residual
+    print(f"correct-model floor {res.floor:.4f} (measured), error/floor {res.ratio:.2f}, z {res.z:+.1f}; "
+          f"sensor noise sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
+    if args.json:
+        diag.to_json(args.json)
+        print(f"json:   {args.json}")
+    if want_report:
+        print(f"report: {write_diagnosis_report(diag, args.report)}")
+    return 0

@@ -1,0 +1,166 @@
+"""The ``housner`` command's parser: subcommands, their options, and the help that lists the registries."""
+
+from __future__ import annotations
+
+import argparse
+
+from housner.cli.args import (
+    _amplitudes,
+    _engines_arg,
+    _folds_int,
+    _names_arg,
+    _nonneg_int,
+    _open_fraction,
+    _Parser,
+    _positive_int,
+    _ratio,
+    _VersionAction,
+)
+from housner.cli.commands import _cmd_diagnose, _cmd_report, _cmd_run, _cmd_scenarios, _cmd_tune
+from housner.effects import available_effects
+from housner.engines.base import ENGINES
+from housner.scenarios.catalogue.scenario import SCENARIOS
+
+_EXIT_HELP = """exit status:
+  0    done
+  1    runtime failure: {run_failure}an unreachable scheduler, an unexpected error
+  2    bad input: arguments, scenario/campaign/record files, output paths (checked before any work)
+  130  interrupted (Ctrl-C){ctrl_c}
+  143  terminated (SIGTERM), handled as Ctrl-C"""
+
+
+def _listing(full: bool) -> dict[str, str]:
+    """Names from the registries for the help texts (only built when help is asked for)."""
+    if not full:
+        return {"engines": "see `housner run --help`", "effects": "", "scenarios": ""}
+    return {
+        "engines": ", ".join(ENGINES),
+        "effects": ", ".join(available_effects()),
+        "scenarios": ", ".join(SCENARIOS),
+    }
+
+
+def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
+    """The command's parser; ``full_help`` lists the registered engines, effects and scenarios in the help."""
+    names = _listing(full_help)
+    raw = argparse.RawDescriptionHelpFormatter
+    p = _Parser(
+        prog="housner",
+        description="Cross-validate physics engines against the analytic Housner rocking block.",
+        epilog=_EXIT_HELP.format(run_failure="`run`: a record failed; `tune`: target not met; ", ctrl_c="")
+        + "\n\nerrors are one line; --debug or HOUSNER_DEBUG=1 shows the traceback",
+        formatter_class=raw,
+    )
+    p.add_argument("--version", action=_VersionAction, help="print the versions of housner and its engines, and exit")
+    p.add_argument("--debug", action="store_true", help="show the traceback of an error (also HOUSNER_DEBUG=1)")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    s = sub.add_parser("scenarios", help="list the shipped scenarios")
+    s.add_argument("-v", "--verbose", action="store_true", help="also print each scenario's file")
+    s.set_defaults(func=_cmd_scenarios)
+
+    _add_run(sub, names)
+    rep = sub.add_parser("report", help="rebuild the HTML report of a run directory")
+    rep.add_argument("run_dir")
+    rep.add_argument("--out", help="report file (default RUN_DIR/report.html)")
+    rep.set_defaults(func=_cmd_report)
+
+    _add_tune(sub, names)
+    _add_diagnose(sub, names)
+    return p
+
+
+def _add_run(sub, names: dict) -> None:
+    """The ``run`` command's arguments."""
+    r = sub.add_parser(
+        "run",
+        help="run a scenario on its engines and write results and an HTML report",
+        description="Run a scenario on its engines, write the run directory and its HTML report.",
+        epilog=f"engines: {names['engines']}\nscenarios: {names['scenarios']} (or a TOML file)\n\n"
+        + _EXIT_HELP.format(
+            run_failure="a record failed in an engine (unless --allow-failures), ",
+            ctrl_c="; finished records stay in the cache, re-run to resume",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    r.add_argument("scenario", help="catalogue name (see `housner scenarios`) or path to a TOML file")
+    r.add_argument(
+        "--engines", type=_engines_arg, help=f"comma-separated engines (default: the scenario's): {names['engines']}"
+    )
+    r.add_argument("--n-motions", type=_positive_int, help="number of motions of an RDK ensemble (positive)")
+    r.add_argument("--seed", type=_nonneg_int, help="override the RDK ensemble's seed (non-negative)")
+    r.add_argument("--out", help="run directory (default runs/SCENARIO); checked writable before the run")
+    r.add_argument("--jobs", type=_positive_int, help="worker processes (default: all CPUs; 1 = this process)")
+    r.add_argument("--scheduler", help="address of a Dask distributed scheduler to run on (5 s to connect)")
+    r.add_argument("--no-cache", action="store_true", help="recompute instead of reusing cached results")
+    r.add_argument("--no-report", action="store_true", help="skip the HTML report")
+    r.add_argument(
+        "--allow-failures",
+        action="store_true",
+        help="exit 0 even when records failed (they are listed, and kept out of the statistics)",
+    )
+    r.add_argument("--plugin", action="append", metavar="FILE.py",
+                   help="load the effects this Python file registers (@register_effect; repeatable)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_run)
+
+
+def _add_tune(sub, names: dict) -> None:
+    """The ``tune`` command's arguments."""
+    t = sub.add_parser(
+        "tune",
+        help="search engine contact settings that reproduce a target r in free vibration",
+        epilog=f"engines: {names['engines']}",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    t.add_argument("engine", help=f"engine name ({names['engines']})")
+    t.add_argument(
+        "--r",
+        "--target-r",
+        dest="target_r",
+        type=_ratio,
+        help="kinetic-energy ratio to reach, e.g. a measured one (default: the specimen's Housner r)",
+    )
+    t.add_argument(
+        "--amplitudes", type=_amplitudes, help="release amplitudes theta0/alpha, comma-separated (default 0.2..0.9)"
+    )
+    t.add_argument("--scenario", help="take the specimen from this scenario (default: the seed specimen)")
+    t.add_argument(
+        "--json", help="write the tuning result to this JSON file (the report reads engines/models/tuning-ENGINE.json)"
+    )
+    t.add_argument("--figure", help="write the figure of r against release amplitude to this file (PNG, SVG, PDF)")
+    t.add_argument(
+        "--defaults-only",
+        action="store_true",
+        help="only measure the engine's current default settings (r against amplitude, cost)",
+    )
+    t.add_argument("-q", "--quiet", action="store_true")
+    t.set_defaults(func=_cmd_tune)
+
+
+def _add_diagnose(sub, names: dict) -> None:
+    """The ``diagnose`` command's arguments."""
+    d = sub.add_parser(
+        "diagnose",
+        help="find the physical effect a measurement campaign needs (error ladder)",
+        epilog=f"effects: {names['effects']}",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    d.add_argument("campaign", help="campaign directory (campaign.toml + records/)")
+    d.add_argument(
+        "--effects",
+        type=_names_arg,
+        help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}",
+    )
+    d.add_argument("--add", action="append", metavar="NAME", help="add this effect by hand first (repeatable)")
+    d.add_argument("--json", help="write the diagnosis to this JSON file")
+    d.add_argument("--report", help="write the HTML report to this file")
+    d.add_argument("--folds", type=_folds_int, default=5,
+                   help="cross-validation folds: every record is held out once (5; at least 2)")
+    d.add_argument("--train-fraction", type=_open_fraction, default=None,
+                   help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
+    d.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the fold assignment (0)")
+    d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
+    d.add_argument("--plugin", action="append", metavar="FILE.py",
+                   help="load the effects this Python file registers (@register_effect; repeatable)")
+    d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    d.set_defaults(func=_cmd_diagnose)

@@ -1,0 +1,210 @@
+"""The correct-model floor: the error a correct model shows on each record, measured from the campaign itself.
+
+A held-out time-history error is only meaningful against the error that a
+*correct* model would show on the same records: the sensor noise, plus what
+chaos makes of parameters that the campaign pins only so well. That floor is
+measured here from the campaign itself, by a parametric bootstrap
+(:func:`measure_floor`):
+
+1. the fitted model is taken as the truth and run on the measured table
+   motions (free vibrations released at the measured angle): the records a
+   correct model would have produced;
+2. Gaussian noise of each record's measured sigma is added (a fresh draw per
+   replica);
+3. the model that scores them is the one the real held-out errors use: the
+   records of fold k are scored by the model fitted without fold k (its
+   parameters differ from the full fit's as they do in the real scoring,
+   a fold refit that wandered included), each parameter moved by a
+   Gaussian draw of the full fit's own uncertainty (the grouped-jackknife
+   standard error over the K fold fits: the bootstrap's truth is the full
+   fit, the real truth is within that of it), each draw kept within the
+   range the fold fits and the full fit span (the values the data chose: a
+   draw beyond them can cross into a regime the data reject, e.g. a sliding
+   block's friction coefficient across tan alpha, where the block rocks and
+   the error is tens of noise sigmas), and integrated with twice
+   the substeps (a measurement is never produced by the model's own
+   integrator, and chaos amplifies the difference like any other); the
+   stated specimen's p and r are not perturbed: a model that is right about
+   them is what "correct" means here;
+4. each record is scored with the same error and window as the real one.
+
+The real held-out errors are tested against it by
+:func:`housner.scenarios.campaigns.residual.residual_test`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from housner.effects import make_effect
+from housner.model import default_substeps
+from housner.scenarios.campaigns.campaign import estimate_release
+from housner.scenarios.campaigns.compare import (
+    RELEASE_DTHETA0_SIGMAS,
+    record_error,
+    release_sensitivities,
+    release_shift_samples,
+    simulate_records,
+)
+from housner.scenarios.campaigns.fitting import param_dims
+from housner.scenarios.campaigns.model_form import ModelForm, acc_channel_noise
+
+__all__ = ["N_REPLICAS", "Floor", "measure_floor"]
+
+#: Replicas of the floor bootstrap [-]. Each is one simulation of the campaign.
+N_REPLICAS = 6
+
+
+@dataclass(frozen=True)
+class Floor:
+    """The error a correct model shows on each record, measured by the parametric bootstrap.
+
+    Attributes
+    ----------
+    mean, sd : ndarray
+        Per record (campaign order): mean and standard deviation over the replicas [alpha].
+    n_replicas : int
+    perturbation : dict
+        What was perturbed and by how much: parameter -> standard deviation (units of the parameter),
+        and the substeps of the scoring model.
+    """
+
+    mean: np.ndarray
+    sd: np.ndarray
+    n_replicas: int
+    perturbation: dict
+
+
+
+def _perturbed(name: str, params: dict, sd: dict, rng, specimen, hull: dict | None = None) -> dict:
+    out = dict(params)
+    for d in param_dims(name, specimen):
+        key = f"{name}.{d.key}"
+        s = sd.get(key, 0.0)
+        if s > 0:
+            lo, hi = (hull or {}).get(key, (d.lo, d.hi))
+            out[d.key] = min(max(params[d.key] + s * rng.standard_normal(), d.lo, lo), d.hi, hi)
+    return out
+
+
+def measure_floor(
+    scorer,
+    model_full: list[tuple[str, dict]],
+    model_folds: list[list[tuple[str, dict]]],
+    fold_of: np.ndarray,
+    *,
+    n_replicas: int = N_REPLICAS,
+    seed: int = 0,
+    family: str = "any",
+) -> Floor:
+    """Parametric bootstrap of the error a correct model shows on each record (module docstring).
+
+    Parameters
+    ----------
+    scorer : housner.scenarios.campaigns.scoring.Scorer
+        All records of the campaign (truncated to their error windows), in campaign order.
+    model_full : list of (name, params)
+        The model fitted on every record: the bootstrap's truth.
+    model_folds : list of list of (name, params)
+        The same model fitted without each fold: the model that scores that fold's records.
+    fold_of : ndarray of int
+        Fold of each record.
+    n_replicas : int
+    seed : int
+    family : str
+        The family of correct integrators each replica's truth is drawn from
+        (:data:`housner.scenarios.campaigns.model_form.FAMILIES`).
+
+    Returns
+    -------
+    Floor
+    """
+
+    camp = scorer.campaign
+    spec = camp.specimen
+    alpha = spec.alpha
+    recs = scorer.records
+    k_folds = len(model_folds)
+    sd: dict[str, float] = {}
+    hull: dict[str, tuple[float, float]] = {}
+    for i, (name, p) in enumerate(model_full):
+        for key in p:
+            vals = np.array([mf[i][1][key] for mf in model_folds], dtype=float)
+            # the grouped-jackknife standard error of the full fit: how far the bootstrap's truth may be
+            # from the real one
+            ss = float(np.sum((vals - vals.mean()) ** 2))
+            sd[f"{name}.{key}"] = math.sqrt((k_folds - 1) / k_folds * ss) if k_folds > 1 else 0.0
+            hull[f"{name}.{key}"] = (min(float(vals.min()), p[key]), max(float(vals.max()), p[key]))
+    settings = dict(scorer.engine_settings)
+    truth_eff = [make_effect(n, **p) for n, p in model_full]
+    acc_noise = acc_channel_noise(camp)
+    # the scoring model integrates with twice the substeps: the measurement was not produced by this
+    # integrator, and chaos amplifies such a difference as it amplifies any other
+    sub = settings.get("substeps") or default_substeps(spec.frequency_parameter, recs[0].dt)
+    model_settings = {**settings, "substeps": 2 * int(sub)}
+    errs = np.empty((n_replicas, len(recs)))
+    forms = []
+    for b in range(n_replicas):
+        rng = np.random.default_rng(np.random.SeedSequence([seed, 4241, b]))
+        # the replica's truth: the fitted model, produced by "another correct integrator" (module docstring)
+        form = ModelForm.draw(np.random.default_rng(np.random.SeedSequence([seed, 4242, b])), acc_noise, family)
+        forms.append(form)
+        truth = form.simulate(spec, recs, truth_eff, settings)
+        model = [None] * len(recs)
+        model_sens: list = [None] * len(recs)
+        eff_of: dict[int, list] = {}
+        for k in range(k_folds):
+            idx = np.flatnonzero(fold_of == k)
+            if idx.size == 0:
+                continue
+            # the model that scores fold k's records is the one fitted without them, as in the real
+            # held-out errors, moved by the uncertainty of the truth
+            eff = [make_effect(n, **_perturbed(n, model_folds[k][j][1], sd, rng, spec, hull))
+                   for j, (n, _p) in enumerate(model_full)]  # fmt: skip
+            eff_of[k] = eff
+            sub = [recs[i] for i in idx]
+            res = simulate_records(spec, sub, "housner", eff, model_settings)
+            sens = release_sensitivities(spec, sub, res, "housner", eff, model_settings)
+            for i, r, g in zip(idx, res, sens, strict=True):
+                model[i] = r
+                model_sens[i] = g
+        for i, rec in enumerate(recs):
+            tr, mo = truth[i], model[i]
+            if isinstance(tr, str) or isinstance(mo, str) or mo is None:
+                errs[b, i] = 1.0
+                continue
+            th_true = tr
+            meas = th_true + rng.normal(0.0, rec.noise, th_true.size)
+            g = model_sens[i]
+            if rec.kind == "free_vibration":
+                # the model of a free vibration starts from the release angle read off the noisy record
+                # (campaign.estimate_release), off the true one by its standard error: so here
+                mo, g = _from_estimated_release(spec, rec, meas, mo, g, eff_of[int(fold_of[i])], model_settings)
+            th_mod = np.asarray(mo.theta, dtype=float)[: rec.theta.size]
+            errs[b, i] = record_error(th_mod, meas, scorer.ends[i], alpha, align=release_shift_samples(rec),
+                                      sensitivity=None if g is None else g[: rec.theta.size],
+                                      max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise)  # fmt: skip
+    pert = {k: v for k, v in sd.items() if v > 0}
+    pert["substeps"] = model_settings["substeps"]
+    pert["model_form"] = {"family": family, "replicas": [f.describe() for f in forms], "acc_noise": acc_noise}
+    return Floor(errs.mean(axis=0), errs.std(axis=0, ddof=1) if n_replicas > 1 else np.zeros(len(recs)), n_replicas,
+                 pert)  # fmt: skip
+
+
+def _from_estimated_release(spec, rec, meas, mo, g, eff, settings):
+    """The model's response (and release sensitivity) to a free vibration of replica data ``meas``, started
+    from the release angle the campaign reader would read off it; ``mo``, ``g`` when it reads the same."""
+    try:
+        _k, th0 = estimate_release(rec.t, meas, rec.noise)
+    except ValueError:
+        return mo, g
+    if th0 == rec.motion.theta0:
+        return mo, g
+    moved = replace(rec, motion=replace(rec.motion, theta0=th0))
+    res = simulate_records(spec, [moved], "housner", eff, settings)
+    if isinstance(res[0], str):
+        return mo, g
+    return res[0], release_sensitivities(spec, [moved], res, "housner", eff, settings)[0]
