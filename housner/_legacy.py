@@ -64,11 +64,11 @@ def new_name(old: str) -> str | tuple[str, ...] | None:
     """The 0.2 module of a 0.1 module name; None when ``old`` was not one of the project's modules."""
     if old in MOVED:
         return MOVED[old]
-    head, _, tail = old.rpartition(".")
+    head = old.rpartition(".")[0]
     while head:  # a module under a moved package: reports.sections.tuning -> housner.reports.run.sections.tuning
         if head in MOVED and isinstance(MOVED[head], str):
             return f"{MOVED[head]}.{old[len(head) + 1:]}"
-        head, _, tail = head.rpartition(".")
+        head = head.rpartition(".")[0]
     return None
 
 
@@ -77,8 +77,9 @@ def _users_own(name: str) -> bool:
     spec = importlib.machinery.PathFinder.find_spec(name)
     if spec is None:
         return False
-    where = spec.origin or (list(spec.submodule_search_locations or [""])[0])
-    return _REPO / name not in Path(where).resolve().parents and Path(where).resolve() != _REPO / name
+    where = Path(spec.origin or list(spec.submodule_search_locations or [""])[0]).resolve()
+    ours = _REPO / name
+    return where != ours and ours not in where.parents
 
 
 def _caller_level() -> int:

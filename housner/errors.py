@@ -6,7 +6,7 @@ import difflib
 from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["DataFileError", "EngineError", "EngineUnavailable", "unknown_choice"]
+__all__ = ["DataFileError", "EngineError", "EngineUnavailable", "one_line", "unknown_choice"]
 
 
 class DataFileError(ValueError):
@@ -50,3 +50,12 @@ def unknown_choice(kind: str, name: str, choices: Iterable[str]) -> ValueError:
         msg += f"; did you mean {close[0]!r}?"
     msg += f" (choices: {', '.join(choices)})"
     return ValueError(msg)
+
+
+def one_line(message: object) -> str:
+    """A message, or an exception's, on one line: its non-empty lines joined by "; ".
+
+    An exception without text gives its type's name, so that an error line never ends empty.
+    """
+    text = "; ".join(line.strip() for line in str(message).splitlines() if line.strip())
+    return text or (type(message).__name__ if isinstance(message, BaseException) else "")

@@ -18,7 +18,7 @@ from housner.cli.args import (
 )
 from housner.cli.parser import build_parser
 from housner.effects import load_plugin
-from housner.errors import DataFileError, EngineUnavailable
+from housner.errors import DataFileError, EngineUnavailable, one_line
 from housner.scenarios.execution.workers import RunInterrupted, SchedulerError
 
 __all__ = ["main"]
@@ -92,13 +92,8 @@ def _on_sigterm(signum, frame) -> None:
 
 
 
-def _one_line(text: str) -> str:
-    """Join a multi-line message into one line."""
-    return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
-
-
 def _error(message: str) -> None:
-    print(f"housner: error: {_one_line(message)}", file=sys.stderr)
+    print(f"housner: error: {one_line(message)}", file=sys.stderr)
 
 
 def _plugin_args(argv: list[str]) -> list[str]:

@@ -361,18 +361,16 @@ def load_plugin(path) -> tuple[str, ...]:
         del EFFECTS[n]
     try:
         import_file(modname, p)
-    except BaseException:
+        names = tuple(n for n, cls in EFFECTS.items() if cls.__module__ == modname)
+        if not names:
+            sys.modules.pop(modname, None)
+            raise ValueError(
+                f"effect plugin {str(p)!r} registers no effect (decorate an Effect subclass with @register_effect)"
+            )
+    except BaseException:  # the registry is left as it was
         EFFECTS.clear()
         EFFECTS.update(before)
         raise
-    names = tuple(n for n, cls in EFFECTS.items() if cls.__module__ == modname)
-    if not names:
-        sys.modules.pop(modname, None)
-        EFFECTS.clear()
-        EFFECTS.update(before)
-        raise ValueError(
-            f"effect plugin {str(p)!r} registers no effect (decorate an Effect subclass with @register_effect)"
-        )
     PLUGIN_FILES[modname] = str(p)
     _PLUGIN_CODE[modname] = code_hash
     for n in names:

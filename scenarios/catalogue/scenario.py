@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from housner.engines.base import ENGINES, engine_class
-from housner.errors import unknown_choice
+from housner.errors import one_line, unknown_choice
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
 
@@ -124,7 +124,7 @@ class Scenario:
         if src == "record":
             return 1
         if src == "records":
-            return len(self._read_files()["records"])
+            return len(self.record_files()["records"])
         if src == "free_vibration":
             return len(self.motions["theta0_over_alpha"])
         return len(self.pulse_grid()[0])
@@ -166,7 +166,7 @@ class Scenario:
             motion = read_record_file(path, units=self.motions.get("units"))
             sha = file_sha256(path)
         except (OSError, ValueError) as e:
-            raise self.error(key, f"{what}: {_one_line(e)}") from None
+            raise self.error(key, f"{what}: {one_line(e)}") from None
         facts = {
             "name": motion.name,
             "provenance": f"{motion.provenance}; file {path.resolve()} (sha256 {sha[:16]})",
@@ -206,8 +206,11 @@ class Scenario:
                 raise self.error("records", f"[motions] 'records' must hold file paths (strings), got {v!r}")
         return list(spec)
 
-    def _read_files(self) -> dict:
-        """Read the record files the [motions] table names, once (load_scenario does it, to fail early)."""
+    def record_files(self) -> dict:
+        """The record files of the [motions] table, read once: ``{"record" | "records": [(motion, facts), ...]}``.
+
+        :func:`load_scenario` reads them, so that a bad one fails before any work.
+        """
         if self._files is not None:
             return self._files
         files: dict[str, list] = {}
@@ -229,10 +232,6 @@ class Scenario:
             files["records"] = [self._read_file("records", w) for w in written]
         self._files = files
         return files
-
-    def record_files(self) -> dict:
-        """The record files of the [motions] table, read once: ``{"record" | "records": [(motion, facts), ...]}``."""
-        return self._read_files()
 
     def check_engines(self, names: list[str] | None = None) -> None:
         """Instantiate every engine to run with its [engines.NAME] settings, to refuse bad settings
@@ -304,7 +303,7 @@ class Scenario:
         Only record files carry channels (extra ``ground_acc_<what>`` columns of a CSV); RDK ensembles,
         pulses and free vibrations carry none.
         """
-        files = self._read_files()
+        files = self.record_files()
         suite = files.get("records") or files.get("record") or []
         own = [(g.name, set(g.channels)) for g, _ in suite] if self.source in ("record", "records") else []
         for e in self.effects:
@@ -326,10 +325,6 @@ class Scenario:
     def describe(self) -> dict:
         """The scenario as plain data (for run.json and the cache key)."""
         return {"name": self.name, "file": str(self.path) if self.path else None, **self.raw}
-
-
-def _one_line(e: Exception) -> str:
-    return "; ".join(line.strip() for line in str(e).splitlines() if line.strip()) or type(e).__name__
 
 
 def _discover() -> dict[str, Path]:
@@ -442,6 +437,6 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     scen.check_effects()
     if src == "pulses":
         scen.pulse_grid()  # validate the grids now
-    scen._read_files()  # record files: read now, so that a bad one fails before any work
+    scen.record_files()  # record files: read now, so that a bad one fails before any work
     scen.check_channels()
     return scen

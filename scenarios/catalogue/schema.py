@@ -18,7 +18,7 @@ import numpy as np
 
 from housner.effects import available_effects, load_plugin, make_effect
 from housner.engines.base import ENGINES
-from housner.errors import unknown_choice
+from housner.errors import one_line, unknown_choice
 from housner.motion import parse_unit
 from housner.scenarios.motions.build import DEFAULT_RDK_MODEL, RDK_MODELS
 from housner.scenarios.motions.records import RECORDS
@@ -347,8 +347,7 @@ def read_plugins(f: _File, entries: list) -> tuple[str, ...]:
         try:
             names.extend(load_plugin(path))
         except Exception as e:  # a user's file: any failure is one line naming it
-            msg = "; ".join(x.strip() for x in str(e).splitlines() if x.strip()) or type(e).__name__
-            raise f.error("", "plugins", f"plugin {entry!r}: {msg}") from None
+            raise f.error("", "plugins", f"plugin {entry!r}: {one_line(e)}") from None
     return tuple(names)
 
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from housner import pulses
-from housner.errors import unknown_choice
+from housner.errors import one_line, unknown_choice
 from housner.motion import GroundMotion
 from housner.scenarios.motions import bands, rdk, rdk_match
 from housner.scenarios.motions.records import load_record
@@ -78,7 +78,7 @@ def build_motions(
             fit = _fit(model, record)
         except ValueError as e:  # a user's record the model cannot be fitted to
             raise scenario.error(
-                "record", f"[motions] cannot fit model {model!r} to record {record.name!r}: {_one_line(e)}"
+                "record", f"[motions] cannot fit model {model!r} to record {record.name!r}: {one_line(e)}"
             ) from None
         meta["model"] = model
         meta["seed"] = seed
@@ -133,10 +133,6 @@ def _record(scenario) -> tuple[GroundMotion, dict]:
 def _to_model(g: GroundMotion, amplitude: float, S: float) -> GroundMotion:
     """A prototype-scale motion (record or simulated) times ``amplitude``, compressed in time by sqrt(S)."""
     return g.scaled(amplitude=amplitude).to_model_scale(S)
-
-
-def _one_line(e: Exception) -> str:
-    return "; ".join(line.strip() for line in str(e).splitlines() if line.strip()) or type(e).__name__
 
 
 #: Fitted ground-motion models, oldest first: (model, record name, content hash of the record's
