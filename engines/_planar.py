@@ -26,6 +26,7 @@ from housner.response import Response
 __all__ = [
     "IMPACT_LAW_DELAY",
     "IMPACT_LAW_RANGE",
+    "PIVOT_RANGES",
     "IMPACT_LAW_TOL",
     "OVERTURN_ANGLE",
     "QUIET",
@@ -83,6 +84,10 @@ IMPACT_LAW_DELAY = 2e-3
 #: Accepted range of every planar adapter's ``impact_energy_factor`` setting (the low end excluded):
 #: the adapter's impact law only ever takes energy away, so it cannot lift r above the contact's own.
 IMPACT_LAW_RANGE = (0.0, 1.0)
+
+#: Ranges of the settings every rigid-pivot adapter (DART, Drake, OpenSees) takes: the step [s], the pivot's
+#: Coulomb friction coefficient [-] and the impact law's factor [-]; an adapter adds its own contact's.
+PIVOT_RANGES: dict = {"timestep": (1e-6, 1e-2), "friction": (0.0, 100.0), "impact_energy_factor": IMPACT_LAW_RANGE}
 
 
 def checked_settings(

@@ -39,7 +39,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from housner.engines._planar import IMPACT_LAW_RANGE, OVERTURN_ANGLE, ROCKING_TOL, PlanarEngine, gravity_x
+from housner.engines._planar import OVERTURN_ANGLE, PIVOT_RANGES, ROCKING_TOL, PlanarEngine, gravity_x
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
 from housner.units import G
@@ -94,11 +94,9 @@ class DartEngine(PlanarEngine):
     MODULE = "dartpy"
     INSTALL: ClassVar[str] = INSTALL
     RANGES: ClassVar[dict] = {
-        "timestep": (1e-6, 1e-2),
-        "friction": (0.0, 100.0),
+        **PIVOT_RANGES,
         "restitution": (0.0, 1.0),
         "pivot_radius": (1e-7, 1e-2),
-        "impact_energy_factor": IMPACT_LAW_RANGE,
     }
 
     @classmethod

@@ -64,7 +64,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from housner.engines._planar import IMPACT_LAW_RANGE, OVERTURN_ANGLE, ROCKING_TOL, PlanarEngine, gravity_x
+from housner.engines._planar import OVERTURN_ANGLE, PIVOT_RANGES, ROCKING_TOL, PlanarEngine, gravity_x
 from housner.errors import EngineError
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
@@ -132,12 +132,10 @@ class DrakeEngine(PlanarEngine):
     MODULE = "pydrake.multibody.plant"
     INSTALL: ClassVar[str] = INSTALL
     RANGES: ClassVar[dict] = {
-        "timestep": (1e-6, 1e-2),
+        **PIVOT_RANGES,
         "stiffness": (1e3, 1e12),
         "relaxation_time": (0.0, 1.0),
-        "friction": (0.0, 100.0),
         "pivot_radius": (1e-7, 1e-2),
-        "impact_energy_factor": IMPACT_LAW_RANGE,
     }
 
     def __init__(self, **settings: Any):

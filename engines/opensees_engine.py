@@ -68,8 +68,8 @@ from typing import ClassVar
 import numpy as np
 
 from housner.engines._planar import (
-    IMPACT_LAW_RANGE,
     OVERTURN_ANGLE,
+    PIVOT_RANGES,
     ROCKING_TOL,
     RUNAWAY_M,
     ImpactLaw,
@@ -189,12 +189,10 @@ class OpenSeesEngine(PlanarEngine):
 
     LABEL = "OpenSees"
     RANGES: ClassVar[dict] = {
-        "timestep": (1e-6, 1e-2),
+        **PIVOT_RANGES,
         "contact_stiffness": (1e4, 1e10),
         "contact_damping": (0.0, 1e-1),
-        "friction": (0.0, 100.0),
         "tolerance": (1e-9, 1.0),
-        "impact_energy_factor": IMPACT_LAW_RANGE,
     }
     STRICT = ("timestep", "contact_stiffness", "impact_energy_factor")
 

@@ -335,6 +335,7 @@ def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: 
     _run_kernel(terms, parallel and n_rec > 1, acc_g, v_g, offsets, dts, ms_a, prm_a, q, th0, thd0, rest_tol, True,
                 theta, theta_dot, impacts, imp_off, out)  # fmt: skip
     results = []
+    prm_d = asdict(prm)  # once: a record's info holds its own shallow copy (the values are numbers)
     for i, mo in enumerate(motions):
         n_imp = int(out[i, 4])
         if n_imp > caps[i]:
@@ -348,7 +349,7 @@ def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: 
             )  # fmt: skip
         else:
             imp_i = impacts[imp_off[i] : imp_off[i] + n_imp].copy()
-        info = {"substeps": int(ms_a[i]), "rest_tol": rest_tol, "params": asdict(prm)}
+        info = {"substeps": int(ms_a[i]), "rest_tol": rest_tol, "params": dict(prm_d)}
         if terms is not None:
             info["terms"] = terms.describe()
         if out[i, 5]:
