@@ -16,6 +16,8 @@ from housner.scenarios.execution.outputs import check_output_file
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 #: Exit status after SIGTERM (128 + 15), which a batch scheduler or a container runtime sends.
 EXIT_TERMINATED = 143
+#: ``housner run --check``: an engine's distribution verdict is FAIL.
+EXIT_VERDICT = 3
 
 
 class UsageError(ValueError):

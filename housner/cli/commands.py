@@ -8,11 +8,20 @@ import math
 import sys
 from pathlib import Path
 
-from housner.cli.args import EXIT_FAILURE, EXIT_OK, UsageError, _check_campaign, _check_effects, _check_output_file
+from housner.cli.args import (
+    EXIT_FAILURE,
+    EXIT_OK,
+    EXIT_VERDICT,
+    UsageError,
+    _check_campaign,
+    _check_effects,
+    _check_output_file,
+)
 from housner.engines.base import get_engine
 from housner.engines.tuning import tune
 from housner.reports.diagnosis import write_diagnosis_report
 from housner.reports.run.page import write_report
+from housner.reports.run.view import Run, engine_verdict
 from housner.reports.study.page import write_study_report
 from housner.reports.tuning_figure import tuning_report_figure
 from housner.scenarios.campaigns.campaign import load_campaign
@@ -77,6 +86,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if not args.no_report:
         path = write_report(out)
         print(f"report:  {path}")
+    failed_engines = _print_verdicts(out)
     if len(run.failures) and not args.allow_failures:
         print(
             f"housner: error: {len(run.failures)} of {len(res)} records failed (listed above); "
@@ -84,7 +94,30 @@ def _cmd_run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return EXIT_FAILURE
+    if failed_engines and args.check:
+        print(f"housner: error: verdict FAIL for {', '.join(failed_engines)}; exit status {EXIT_VERDICT} (--check)",
+              file=sys.stderr)  # fmt: skip
+        return EXIT_VERDICT
     return EXIT_OK
+
+
+def _print_verdicts(out: Path) -> list[str]:
+    """Print each engine's verdict against the reference (as the report's headline gives it); the failed ones."""
+    view = Run.load(out)
+    if not view.others:
+        return []
+    floors = view.chaos_floors
+    effects = {n for n, v in (view.meta.get("engines") or {}).items() if isinstance(v, dict) and v.get("effects")}
+    print(f"verdict against {view.reference} (the report's headline):")
+    failed = []
+    for name in view.others:
+        if name in effects:
+            continue  # an engine with the scenario's effects is meant to differ: no verdict
+        v = engine_verdict(view.comparison.loc[name], floors.get(name))
+        print(f"  {name:9s} {v.line()}")
+        if v.status == "FAIL":
+            failed.append(name)
+    return failed
 
 
 def _call_runner(runner, args: argparse.Namespace, scenario, engines: list[str], out: Path, client):

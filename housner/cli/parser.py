@@ -25,6 +25,7 @@ _EXIT_HELP = """exit status:
   0    done
   1    runtime failure: {run_failure}an unreachable scheduler, an unexpected error
   2    bad input: arguments, scenario/campaign/record files, output paths (checked before any work)
+  3    `run --check`: an engine's verdict against the reference is FAIL
   130  interrupted (Ctrl-C){ctrl_c}
   143  terminated (SIGTERM), handled as Ctrl-C"""
 
@@ -100,6 +101,8 @@ def _add_run(sub, names: dict) -> None:
     )
     r.add_argument("--plugin", action="append", metavar="FILE.py",
                    help="load the effects this Python file registers (@register_effect; repeatable)")
+    r.add_argument("--check", action="store_true",
+                   help="exit 3 when an engine's verdict against the reference is FAIL (inconclusive does not fail)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 

@@ -27,7 +27,7 @@ from housner.reports.page import esc
 from housner.scenarios.execution.rundir import json_number, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
-from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict
+from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict, floor_verdict
 from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
 
 #: Record-by-record agreement: theta_max/alpha within this relative tolerance of the reference [-].
@@ -303,18 +303,86 @@ DEFAULT_KS_MAX = 0.15
 DEFAULT_OVERTURN_TOL = 0.08
 
 
-def _verdict(row: pd.Series) -> tuple[bool | None, list[str]]:
-    """Pass/fail of one engine against the default tolerances, with the reason for each criterion."""
+#: Fewest records of each engine that a distribution verdict is drawn from: one record moves the KS distance
+#: by 1/n, so below 3 / DEFAULT_KS_MAX = 20 records a single record's difference is a third of the tolerance
+#: or more, and one record gives KS 0 or 1 whatever the engines do. Fewer records: "inconclusive".
+MIN_RECORDS = math.ceil(3 / DEFAULT_KS_MAX)
+
+
+@dataclass(frozen=True)
+class EngineVerdict:
+    """What a run says of one engine against the reference, in plain text (the page and the command line).
+
+    Attributes
+    ----------
+    status : str
+        The distribution verdict: ``"PASS"``, ``"FAIL"`` (against the default tolerances),
+        ``"inconclusive"`` (fewer than :data:`MIN_RECORDS` records, none failed) or ``"no data"``.
+    checks : tuple of (bool, str)
+        Each criterion: met, and its figures.
+    records : str or None
+        The record-by-record verdict against the chaos floor
+        (:func:`housner.scenarios.runs.chaos.floor_verdict`), None where the run has no floor.
+    below_floor : bool or None
+        Whether the record-by-record agreement lies below the chaos floor.
+    """
+
+    status: str
+    checks: tuple
+    records: str | None = None
+    below_floor: bool | None = None
+
+    @property
+    def ok(self) -> bool | None:
+        """True for PASS, False for FAIL, None otherwise (as a page's badge takes it)."""
+        return {"PASS": True, "FAIL": False}.get(self.status)
+
+    def line(self) -> str:
+        """One line for the command line: the distribution verdict, its figures, the record-by-record one."""
+        figures = "; ".join(t for _, t in self.checks)
+        rec = f"; record by record: {self.records}" if self.records else ""
+        return f"{self.status}: {figures}{rec}"
+
+
+def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
+    """The verdict of one engine (its row of the run's comparison table) against the default tolerances.
+
+    ``floor`` is the engine's :class:`housner.scenarios.runs.chaos.ChaosFloor`, if the run has one.
+    """
     ks, dp, nf = float(row["ks_distance"]), float(row["overturn_diff"]), int(row["n_failed"])
     if math.isnan(ks) or math.isnan(dp):
-        return None, ["no usable records to compare"]
-    checks = [
-        (ks <= DEFAULT_KS_MAX, f"KS {ks:.3f} {'&le;' if ks <= DEFAULT_KS_MAX else '&gt;'} {DEFAULT_KS_MAX}"),
+        return EngineVerdict("no data", ((False, "no usable records to compare"),))
+    checks = (
+        (ks <= DEFAULT_KS_MAX, f"KS {ks:.3f} {'<=' if ks <= DEFAULT_KS_MAX else '>'} {DEFAULT_KS_MAX}"),
         (
             abs(dp) <= DEFAULT_OVERTURN_TOL,
-            f"|&Delta;P[overturn]| {abs(dp):.3f} {'&le;' if abs(dp) <= DEFAULT_OVERTURN_TOL else '&gt;'} "
-            f"{DEFAULT_OVERTURN_TOL}",
+            f"|dP[overturn]| {abs(dp):.3f} {'<=' if abs(dp) <= DEFAULT_OVERTURN_TOL else '>'} {DEFAULT_OVERTURN_TOL}",
         ),
         (nf == 0, f"{nf} failed record{'s' if nf != 1 else ''}"),
-    ]
-    return all(c for c, _ in checks), [f'<span class="{"ok" if c else "bad"}">{t}</span>' for c, t in checks]
+    )
+    n = int(row["n_ok"])
+    if n < MIN_RECORDS and nf == 0:  # a failed record fails at any size; the two statistics need records
+        status = "inconclusive"
+        checks = ((False, f"only {n} record{'s' if n != 1 else ''} (a distribution verdict needs {MIN_RECORDS}: one "
+                   f"record moves the KS distance by 1/n = {1 / max(n, 1):.2f})"), *checks)  # fmt: skip
+    else:
+        status = "PASS" if all(c for c, _ in checks) else "FAIL"
+    records = below = None
+    n_pair = float(row.get("n_paired", 0) or 0)
+    if floor is not None and n_pair > 0:
+        k = int(round(float(row["agreement_share"]) * n_pair))
+        records = floor_verdict(k, int(n_pair), floor)
+        below = "below the floor" in records
+    return EngineVerdict(status, checks, records, below)
+
+
+def _verdict(row: pd.Series) -> tuple[bool | None, list[str]]:
+    """The page's form of :func:`engine_verdict`: pass (None: not evaluated) and each criterion as HTML."""
+    v = engine_verdict(row)
+    html = [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
+    return v.ok, html
+
+
+def _html_figures(text: str) -> str:
+    """A criterion's plain text as the page writes it (entities for <=, > and Delta)."""
+    return esc(text).replace("&lt;=", "&le;").replace("dP[", "&Delta;P[")

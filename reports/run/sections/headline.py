@@ -28,7 +28,16 @@ from housner.reports.page import (
     status_badge,
 )
 from housner.reports.run.sections.tuning import _settings_html, _tuning, _tuning_caveats
-from housner.reports.run.view import BOOT_SEED, DEFAULT_KS_MAX, DEFAULT_OVERTURN_TOL, N_BOOT, Run, _verdict
+from housner.reports.run.view import (
+    BOOT_SEED,
+    DEFAULT_KS_MAX,
+    DEFAULT_OVERTURN_TOL,
+    MIN_RECORDS,
+    N_BOOT,
+    Run,
+    _html_figures,
+    engine_verdict,
+)
 from housner.units import G
 
 
@@ -85,6 +94,7 @@ def _headline(run: Run) -> str:
                 "how far it moves it."
             )
         )
+    floors = _floors(run, parts)
     for name in run.others:
         row = cmp.loc[name]
         if name in effects:
@@ -93,9 +103,12 @@ def _headline(run: Run) -> str:
                 f'<li><span class="badge na">effect</span> {engine_tag(name, run)}: {_moved(run, base, name)}</li>'
             )
             continue
-        ok, reasons = _verdict(row)
+        v = engine_verdict(row, floors.get(name))
+        reasons = [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
         extra = f'<div class="caveat">{caveats[name]}</div>' if name in caveats else ""
-        lines.append(f"<li>{status_badge(ok)} {engine_tag(name, run)}: {'; '.join(reasons)}{extra}</li>")
+        if v.records:
+            extra = f"<div><strong>Record by record</strong>: {esc(v.records)}.</div>" + extra
+        lines.append(f"<li>{_badges(v)} {engine_tag(name, run)}: {'; '.join(reasons)}{extra}</li>")
     if lines:
         parts.append(f'<ul class="verdicts">{"".join(lines)}</ul>')
     else:
@@ -113,7 +126,7 @@ def _headline(run: Run) -> str:
     for name in run.engines:
         row = cmp.loc[name]
         is_ref = name == ref
-        ok, _ = _verdict(row) if not is_ref else (None, [])
+        v = engine_verdict(row, floors.get(name)) if not is_ref else None
         nf = int(row["n_failed"])
         rows.append(
             [
@@ -127,25 +140,60 @@ def _headline(run: Run) -> str:
                 if is_ref
                 else "effect"
                 if name in effects
-                else status_badge(ok) + (_caveat_mark(caveats[name]) if name in caveats else ""),
+                else _badges(v) + (_caveat_mark(caveats[name]) if name in caveats else ""),
             ]
         )
     parts.append(html_table(header, rows, cls="headline"))
     n = int(cmp.loc[ref, "n_ok"]) if ref in cmp.index else 0
     # Smirnov's asymptotic 5 % critical distance for two samples of n: sqrt(-ln(0.025) / 2) sqrt(2 / n).
     crit = math.sqrt(-math.log(0.025) / 2.0) * math.sqrt(2.0 / n) if n else math.nan
+    if n >= MIN_RECORDS:
+        how_sure = (
+            f"How sure: two <em>independent</em> ensembles of n = {n} records from one distribution differ by a KS "
+            f"distance above {fmt_num(crit, 2)} one time in twenty; here every engine sees the very same motions, "
+            "so engines that agree should sit well below that, and the p-value (which assumes independent samples) "
+            "is conservative."
+        )
+    else:
+        how_sure = (
+            f"With {n} record{'s' if n != 1 else ''} the distribution verdict is <strong>inconclusive</strong>: one "
+            f"record moves the KS distance by 1/n, so at least {MIN_RECORDS} records are needed for a tolerance of "
+            f"{DEFAULT_KS_MAX}; the figures are shown, not judged."
+        )
     parts.append(
         html_note(
             f"Pass means KS distance &le; {DEFAULT_KS_MAX}, |&Delta;P[overturn]| &le; {DEFAULT_OVERTURN_TOL} and no "
-            "failed record (the defaults of <code>housner.reports.assertions.runs.assert_cdf_agreement</code>). "
+            "failed record (the defaults of <code>housner.reports.assertions.runs.assert_cdf_agreement</code>), "
+            f"on at least {MIN_RECORDS} records. Record by record, an engine is <em>at the chaos floor</em> when its "
+            "share of records within the agreement tolerance reaches what the analytic model keeps under its own "
+            "measured r and p errors, and <em>below</em> it otherwise. "
             "P[overturn] intervals are Wilson score intervals; median intervals are percentile bootstraps "
-            f"({N_BOOT} resamples, seed {BOOT_SEED}). How sure: two <em>independent</em> ensembles of "
-            f"n = {n} records from one distribution differ by a KS distance above {fmt_num(crit, 2)} one time in "
-            "twenty; here every engine sees the very same motions, so engines that agree should sit well below "
-            "that, and the p-value (which assumes independent samples) is conservative."
+            f"({N_BOOT} resamples, seed {BOOT_SEED}). " + how_sure
         )
     )
     return "".join(parts)
+
+
+def _floors(run: Run, parts: list[str]) -> dict:
+    """The run's chaos floors; one that cannot be computed (its record gone) loses only the record-by-record
+    verdict, said in a note."""
+    try:
+        return run.chaos_floors
+    except Exception as e:
+        parts.append(html_note(f"The chaos floors could not be computed: <code>{esc(type(e).__name__)}: {esc(e)}"
+                               "</code>", "warn"))  # fmt: skip
+        return {}
+
+
+def _badges(v) -> str:
+    """The distribution verdict's badge, and the record-by-record one beside it where the run has a floor."""
+    if v.status == "inconclusive":
+        out = '<span class="badge na">inconclusive</span>'
+    else:
+        out = status_badge(v.ok)
+    if v.below_floor is not None:
+        out += " " + status_badge(not v.below_floor, yes="at the floor", no="below the floor")
+    return out
 
 
 def _caveat_mark(text: str) -> str:
