@@ -58,7 +58,8 @@ _ROUNDING_SHARE = 0.01
 #: more likely milliseconds (or microseconds) taken for seconds than a real record.
 PLAUSIBLE_STEP = (1e-5, 0.1)
 
-#: The quantity each column of the suite's CSV formats measures (docs/campaign-format.md), SI unit in brackets.
+#: The quantity each column of the suite's CSV formats measures (docs/reference/campaign-format.md), SI unit
+#: in brackets.
 QUANTITIES = {"time": "time", "ground_acc": "acceleration", "theta": "angle"}
 
 #: SI unit of each quantity.

@@ -255,7 +255,8 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     campaign = load_campaign(args.campaign)
     for rid, file, msg in campaign.skipped:
         print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
-    print(f"{campaign!r}", file=sys.stderr)
+    if not args.quiet:
+        print(f"{campaign!r}", file=sys.stderr)
     want_report = args.report is not None
     diag = diagnose(
         campaign,

@@ -119,6 +119,8 @@ class Effect:
         ``terms`` (faster, batched with the plain kernel): it is the default route, and
         ``apply_effects(..., prefer_terms=True)`` takes the terms instead.
 
+    Notes
+    -----
     The dataclass fields are validated on construction against the static
     bounds (a value outside them raises a ValueError naming the parameter,
     unless it is the neutral value); specimen-dependent bounds are checked by

@@ -5,7 +5,7 @@ A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one
 [s], ``ground_acc`` [m/s^2] and ``theta`` [rad], and optional extra measured
 channels ``ground_acc_<what>`` [m/s^2] (``ground_acc_vertical``: the vertical
 table acceleration), which the record's motion carries in ``channels`` (see
-docs/campaign-format.md). A
+docs/reference/campaign-format.md). A
 header cell may name another unit in brackets (``time [ms]``,
 ``ground_acc [g]``, ``theta [deg]``, see :func:`housner.motion.parse_unit`);
 the reader converts once, to SI. A time column without a unit whose step is
