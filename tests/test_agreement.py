@@ -66,7 +66,7 @@ def test_elcentro_distributions_agree(engine, tmp_path_factory):
     run = run_scenario("elcentro", engines=["housner", engine], out=out, progress=False)
     a = run.results
     n = int((a.engine == engine).sum())
-    # Chaos decorrelates the engines record by record (see the README), so their samples behave
+    # Chaos decorrelates the engines record by record (see docs/results.md), so their samples behave
     # as independent draws of one distribution: the two-sample KS distance of such draws exceeds
     # 1.63 sqrt(2/n) (0.23 at n = 100) 1 % of the time. The old fixed 0.15 is exceeded 21 % of the
     # time by identical distributions (PyBullet on the matched ensemble: 0.18, p = 0.08).

@@ -177,7 +177,7 @@ def test_default_model_is_the_published_one_unchanged(tmp_path):
     assert len(check["psa"]["bands"]) == 19 and len(check["sd"]["bands"]) == 9
     assert check["psa"]["range_s"] == [0.05, 3.0] and check["sd"]["range_s"] == [0.5, 3.0]
     assert check["bounds"] == [0.8, 1.25] and check["record"] == "elcentro-peer1999"
-    assert not check["passed"]  # the published model misses the record at 0.5-1 s (README)
+    assert not check["passed"]  # the published model misses the record at 0.5-1 s (docs/results.md)
 
 
 def test_the_seed_scenario_runs_the_matched_model_and_its_bands_pass():

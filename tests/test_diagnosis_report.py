@@ -26,7 +26,8 @@ from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.diagnose import diagnose
 from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+#: The documentation page that explains the verdict (it was the README's "Measurements" section).
+DIAGNOSIS_DOC = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "diagnosis.md"
 
 
 @pytest.fixture(scope="module")
@@ -221,14 +222,14 @@ def test_overturned_is_written_without_an_uncertainty(diag):
 
 
 # ----------------------------------------------------------------------------
-# 7. one threshold for a localisation quantity, on the page and in the README
-def test_page_and_readme_state_the_same_localisation_threshold(diag, page, monkeypatch):
+# 7. one threshold for a localisation quantity, on the page and in the documentation
+def test_page_and_docs_state_the_same_localisation_threshold(diag, page, monkeypatch):
     z_local, z_misfit = verdict_mod.Z_LOCAL, verdict_mod.Z_MISFIT
     text = _text(page)
     assert f"more than {z_local:g} combined standard errors" in text
     assert f"z > {z_misfit:g}" in text and f"more than {z_local:g} standard errors" in text
-    readme = README.read_text()
-    section = readme[readme.index("## Measurements: where does the model fail") :]
+    doc = DIAGNOSIS_DOC.read_text(encoding="utf-8")
+    section = doc[doc.index("## The floor") :]
     section = " ".join(section[: section.index("\n## ", 10)].split())
     assert f"more than {z_local:g} standard errors from the measured one" in section
     assert f"z > {z_misfit:g}" in section and f"`Z_LOCAL` = {z_local:g}" in section

@@ -171,7 +171,7 @@ def test_ground_carries_the_pivots_contact_settings():
     MuJoCo builds each contact row's reference acceleration -B v - K d with K = 1 / (dmax tc dr)^2 and
     B = 2 / (dmax tc), from the solref (tc, dr) and solimp dmax of the contact, where the two geoms' solref and
     solimp are averaged (solmix 1 each). A ground left at MuJoCo's default solref (0.02, 1) averages the time
-    constant to (0.02 + tc) / 2: the cause of the too soft contact of the first tuned model (README).
+    constant to (0.02 + tc) / 2: the cause of the too soft contact of the first tuned model (docs/results.md).
     """
     tc, dr = MJCF_DEFAULTS["solref"]
     dmax = MJCF_DEFAULTS["solimp"][1]

@@ -102,7 +102,7 @@ def test_matched_spectra_within_25_percent_at_every_period_where_the_published_m
     """The per-period target the published model cannot reach (it was a strict xfail of tests/test_rdk.py).
 
     Ensemble mean 5 % PSa / record at 20 periods 0.1-2 s: the published model's single-mode
-    filter leaves 0.5-1 s short (0.53 of the record there, README), the matched model is
+    filter leaves 0.5-1 s short (0.53 of the record there, docs/results.md), the matched model is
     within 25 % at every period (measured 0.84-1.18 on both variants).
     """
     periods = np.logspace(-1, np.log10(2.0), 20)
