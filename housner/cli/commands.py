@@ -1,4 +1,4 @@
-"""The ``housner`` subcommands: scenarios, run, report, tune, diagnose (each returns the exit status)."""
+"""The ``housner`` subcommands: scenarios, run, report, tune, diagnose, explain (each returns the exit status)."""
 
 from __future__ import annotations
 
@@ -31,6 +31,7 @@ from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES
 from housner.scenarios.execution.workers import connect_scheduler
+from housner.scenarios.runs.explain import explain_engine
 from housner.scenarios.runs.run import run_scenario
 from housner.scenarios.studies.study import STUDY_FILES, run_study
 from housner.specimen import Specimen
@@ -285,3 +286,44 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     if want_report:
         print(f"report: {write_diagnosis_report(diag, args.report)}")
     return 0
+
+
+def _cmd_explain(args: argparse.Namespace) -> int:
+    # inputs and outputs checked before the work: scenario, engine, options, files
+    scenario = load_scenario(args.scenario)
+    if scenario.source in ("free_vibration",) or scenario.study is not None:
+        raise UsageError(f"argument --scenario: scenario {scenario.name!r} has no ground motions to explain an engine "
+                         "on (give one of ground motions, e.g. elcentro)")  # fmt: skip
+    if args.n_motions is not None and scenario.source != "rdk":
+        raise UsageError(
+            f"argument --n-motions: scenario {scenario.name!r} has a fixed set of {scenario.n_motions} motions "
+            f"(source {scenario.source!r}); --n-motions applies to RDK ensembles"
+        )
+    scenario.check_engines([args.engine, "housner"])
+    _check_effects(args.effects, "--effects")
+    if args.json:
+        _check_output_file(args.json, "--json")
+    if args.workdir:
+        check_output_dir(Path(args.workdir), "--workdir")
+    n = args.n_motions if args.n_motions is not None else scenario.n_motions
+    if not args.quiet:
+        print(f"explain {args.engine} on {scenario.name}: {n} ground motions and free vibrations", file=sys.stderr)
+    expl = explain_engine(
+        args.engine,
+        scenario,
+        n_motions=args.n_motions,
+        sigma=args.sigma,
+        seed=args.seed,
+        effects=args.effects,
+        options=RunOptions(jobs=args.jobs, progress=not args.quiet),
+        workdir=args.workdir,
+        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
+    )
+    print(expl.summary())
+    print(f"wall time {expl.wall_s['total']:.1f} s")
+    if args.workdir:
+        print(f"campaign: {expl.details['campaign']}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(expl.to_dict(), indent=2))
+        print(f"json:   {args.json}")
+    return EXIT_OK

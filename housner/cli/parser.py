@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from housner.cli.args import (
     _amplitudes,
     _engines_arg,
+    _float_within,
     _folds_int,
     _names_arg,
     _nonneg_int,
@@ -16,10 +18,12 @@ from housner.cli.args import (
     _ratio,
     _VersionAction,
 )
-from housner.cli.commands import _cmd_diagnose, _cmd_report, _cmd_run, _cmd_scenarios, _cmd_tune
+from housner.cli.commands import _cmd_diagnose, _cmd_explain, _cmd_report, _cmd_run, _cmd_scenarios, _cmd_tune
 from housner.effects import available_effects
 from housner.engines.base import ENGINES
+from housner.errors import unknown_choice
 from housner.scenarios.catalogue.scenario import SCENARIOS
+from housner.scenarios.runs.explain import EXPLAIN_SIGMA
 
 _EXIT_HELP = """exit status:
   0    done
@@ -67,6 +71,7 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
 
     _add_tune(sub, names)
     _add_diagnose(sub, names)
+    _add_explain(sub, names)
     return p
 
 
@@ -167,3 +172,41 @@ def _add_diagnose(sub, names: dict) -> None:
                    help="load the effects this Python file registers (@register_effect; repeatable)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=_cmd_diagnose)
+
+
+def _engine_name(value: str) -> str:
+    if value not in ENGINES:
+        raise argparse.ArgumentTypeError(str(unknown_choice("engine", value, ENGINES)))
+    return value
+
+
+_noise_rad = _float_within(lambda x: math.isfinite(x) and x >= 0.0, "a noise level >= 0 [rad]")
+
+
+def _add_explain(sub, names: dict) -> None:
+    """The ``explain`` command's arguments."""
+    e = sub.add_parser(
+        "explain",
+        help="diagnose an engine's own responses as a campaign: the effects that bring Housner to it, the floor",
+        description="Run an engine on a scenario's ground motions and on free vibrations, diagnose its responses "
+        "like a measurement campaign, and compare the analytic model with the effects found against the engine, "
+        "record by record, beside the floor a correct model could reach.",
+        epilog=f"engines: {names['engines']}\nscenarios: {names['scenarios']} (or a TOML file)\n\n"
+        + _EXIT_HELP.format(run_failure="", ctrl_c="; finished records stay in the cache, re-run to resume"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    e.add_argument("engine", type=_engine_name, metavar="ENGINE", help=f"engine to explain: {names['engines']}")
+    e.add_argument("--scenario", default="elcentro", help="scenario of ground motions (default elcentro)")
+    e.add_argument("--n-motions", type=_positive_int, help="number of motions of an RDK ensemble (positive)")
+    e.add_argument("--sigma", type=_noise_rad, default=EXPLAIN_SIGMA,
+                   help=f"noise added to the engine's theta before the diagnosis [rad] (default {EXPLAIN_SIGMA:g})")
+    e.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the noise and of the diagnosis' folds (0)")
+    e.add_argument("--effects", type=_names_arg,
+                   help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}")
+    e.add_argument("--json", help="write the explanation to this JSON file")
+    e.add_argument("--workdir", help="keep the engine's campaign in WORKDIR/ENGINE-SCENARIO (default: a temporary one)")
+    e.add_argument("--plugin", action="append", metavar="FILE.py",
+                   help="load the effects this Python file registers (@register_effect; repeatable)")
+    e.add_argument("--jobs", type=_positive_int, help="worker processes (default: all CPUs; 1 = this process)")
+    e.add_argument("-q", "--quiet", action="store_true", help="no progress bar or progress lines")
+    e.set_defaults(func=_cmd_explain)

@@ -27,12 +27,8 @@ from housner.reports.page import esc
 from housner.scenarios.execution.rundir import json_number, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
-from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict, floor_verdict
+from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, floor_verdict
 from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
-
-#: Record-by-record agreement: theta_max/alpha within this relative tolerance of the reference [-].
-RECORD_RTOL = 0.03
-
 
 #: Bootstrap resamples for percentile intervals (Efron and Tibshirani 1993, ch. 13, ask for at
 #: least 1000 for percentile intervals) and the fixed seed that makes pages reproducible.

@@ -41,10 +41,15 @@ from housner.motion import GroundMotion
 from housner.specimen import Specimen
 from housner.stats import overturn_probability, per_record_agreement
 
+#: Record-by-record agreement: both overturned, or both rocked with theta_max/alpha within this relative
+#: tolerance of the reference's [-] (the run report's rule, and housner explain's).
+RECORD_RTOL = 0.03
+
 __all__ = [
     "RELEASE_AMPLITUDES",
     "ChaosFloor",
     "EngineErrors",
+    "RECORD_RTOL",
     "chaos_floor",
     "errors_from_dict",
     "floor_verdict",

@@ -1,0 +1,205 @@
+"""The floor of ``housner explain``: the record-by-record agreement a correct model could still miss.
+
+An engine's per-record agreement with the analytic model cannot be judged
+against 100 %: rocking under a long record is chaotic (Bachmann et al. 2017,
+Fig. 9), so two correct solvers of the same equation part on some records.
+Two parts bound what a correct model could show:
+
+* the **chaos floor** (:func:`housner.scenarios.runs.chaos.chaos_floor`): the
+  analytic model against itself with r and p perturbed by the engine's
+  *measured* free-rocking errors;
+* the **model-form floor** (:func:`model_form_floor`): the analytic model
+  against itself under the conventions two correct integrators differ in
+  (:data:`PERTURBATIONS`): the input held over each sample instead of linear,
+  a timing of the input up to half a sample early or late, its amplitude a
+  part in a thousand up or down, the integrator's substeps doubled. Each is
+  one :class:`housner.scenarios.campaigns.model_form.ModelForm`, the family
+  the diagnosis' own floor draws from, at the edge of its range.
+
+The timing is :data:`SHIFT` = 3/8 of a sample, not 1/2: every run feeds the
+block its input on a grid :data:`~housner.scenarios.campaigns.model_form.UPSAMPLE`
+= 4 times finer than the record's, where half a sample is two whole steps of
+the integrator, a pure delay that changes no peak (on 40 ``elcentro`` motions:
+100 % and 97.5 % agreement). 3/8 is the largest shift within half a sample
+that puts the input's samples midway between two of the integrator's steps,
+which is what a timing convention changes for a solver (45 % agreement).
+
+The extended floor (:func:`extended_floor`) is the lower of the two: the
+agreement that a correct model, with the engine's measured errors or another
+integrator's conventions, could show.
+
+References
+----------
+Bachmann, J. A. et al. (2017). COMPDYN 2017, Fig. 9.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from housner.engines.base import get_engine
+from housner.model import default_substeps
+from housner.motion import GroundMotion
+from housner.scenarios.campaigns.model_form import SCALE_SD, SHIFT_SAMPLES, UPSAMPLE, ModelForm
+from housner.scenarios.runs.chaos import RECORD_RTOL, ChaosFloor, chaos_floor, measure_engine_errors
+from housner.specimen import Specimen
+from housner.stats import per_record_agreement
+
+__all__ = [
+    "PERTURBATIONS",
+    "RECORD_RTOL",
+    "SHIFT",
+    "ModelFormFloor",
+    "engine_chaos_floor",
+    "extended_floor",
+    "model_form_floor",
+]
+
+
+#: Sub-sample timing of the input [samples] (module docstring: 1/2 less half a step of the finer grid).
+SHIFT = SHIFT_SAMPLES - 0.5 / UPSAMPLE
+
+#: The conventions two correct integrators of Housner's equation differ in, each at the edge of the
+#: range the diagnosis' floor draws from (:mod:`housner.scenarios.campaigns.model_form`): label -> form.
+PERTURBATIONS: dict[str, ModelForm] = {
+    "held": ModelForm(convention="held"),
+    "shift+": ModelForm(shift=SHIFT),
+    "shift-": ModelForm(shift=-SHIFT),
+    "scale+": ModelForm(scale=1.0 + SCALE_SD),
+    "scale-": ModelForm(scale=1.0 - SCALE_SD),
+    "substeps x2": ModelForm(substep_factor=2),
+}
+
+
+@dataclass(frozen=True)
+class ModelFormFloor:
+    """Self-agreement of the analytic model under another correct integrator's conventions.
+
+    Attributes
+    ----------
+    shares : dict
+        Per perturbation of :data:`PERTURBATIONS`: the share of records on which the perturbed
+        analytic model agrees with the unperturbed one [-].
+    verdict_shares : dict
+        The same for the overturn verdict alone [-].
+    share : float
+        The floor: the mean of ``shares`` [-].
+    share_min, share_max : float
+        The lowest and highest of ``shares`` [-].
+    n : int
+        Records compared.
+    substeps : int
+        Integrator substeps per sample of the unperturbed run, on the grid :data:`UPSAMPLE` times
+        finer than the records' [-].
+    """
+
+    shares: dict
+    verdict_shares: dict
+    share: float
+    share_min: float
+    share_max: float
+    n: int
+    substeps: int
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def model_form_floor(
+    specimen: Specimen,
+    motions: Sequence[GroundMotion],
+    settings: Mapping | None = None,
+    *,
+    rtol: float = RECORD_RTOL,
+    atol: float = 0.0,
+) -> ModelFormFloor:
+    """The analytic model's record-by-record agreement with itself under :data:`PERTURBATIONS`.
+
+    Every run, the unperturbed one included, feeds the block the input on a grid
+    :data:`~housner.scenarios.campaigns.model_form.UPSAMPLE` times finer than the record's
+    (:meth:`ModelForm.felt`), so that each perturbation differs from the reference in itself alone.
+
+    Parameters
+    ----------
+    specimen : Specimen
+    motions : sequence of GroundMotion
+        The ground motions (the ones the engine ran), each starting at rest.
+    settings : mapping, optional
+        Settings of the analytic engine (``r``; ``substeps`` per sample of the records).
+    rtol, atol : float
+        Tolerances of :func:`housner.stats.per_record_agreement` [-].
+
+    Returns
+    -------
+    ModelFormFloor
+    """
+    if not motions:
+        raise ValueError("`motions` is empty: the model-form floor needs at least one ground motion")
+    settings = dict(settings or {})
+    sub = settings.pop("substeps", None)
+    dt_fine = max(m.dt for m in motions) / UPSAMPLE
+    # the records' substeps spread over the finer grid, or the solver's own rule (p h <= PH_MAX) on it
+    base = max(1, math.ceil(int(sub) / UPSAMPLE)) if sub else default_substeps(specimen.frequency_parameter, dt_fine)
+
+    def theta(form: ModelForm) -> np.ndarray:
+        eng = get_engine("housner", **settings, substeps=form.substep_factor * base)
+        out = eng.simulate_many(specimen, [form.felt(m) for m in motions])
+        return np.array([r.theta_max_over_alpha for r in out], dtype=float)
+
+    ref = theta(ModelForm())
+    shares, verdicts = {}, {}
+    for label, form in PERTURBATIONS.items():
+        ag = per_record_agreement(theta(form), ref, rtol=rtol, atol=atol)
+        shares[label], verdicts[label] = ag.share, ag.verdict_share
+    vals = list(shares.values())
+    return ModelFormFloor(shares, verdicts, float(np.mean(vals)), float(min(vals)), float(max(vals)), int(ref.size),
+                          int(base))  # fmt: skip
+
+
+def engine_chaos_floor(
+    engine: str,
+    engine_settings: Mapping | None,
+    specimen: Specimen,
+    motions: Sequence[GroundMotion],
+    r: float | None = None,
+    *,
+    rtol: float = RECORD_RTOL,
+    atol: float = 0.0,
+) -> ChaosFloor:
+    """The chaos floor of an engine: its free-rocking r and p errors measured, the analytic model perturbed by them.
+
+    As ``housner run`` measures the errors (:func:`housner.scenarios.runs.chaos.run_engine_errors`:
+    releases sampled at the ensemble's median step, r against the analytic model's r) and as its
+    report computes the floor (``housner.reports.run.view.Run.chaos_floors``).
+
+    Parameters
+    ----------
+    engine : str
+        Registry name of the engine.
+    engine_settings : mapping, optional
+        Its settings.
+    specimen : Specimen
+    motions : sequence of GroundMotion
+        The ground motions the floor is measured on.
+    r : float, optional
+        The analytic model's r [-] (default: Housner's).
+    rtol, atol : float
+        Tolerances of :func:`housner.stats.per_record_agreement` [-].
+
+    Returns
+    -------
+    ChaosFloor
+        A floor of 1 (no perturbation) for an engine without measurable errors (the analytic engine).
+    """
+    dt = float(np.median([m.dt for m in motions]))
+    errors = measure_engine_errors(get_engine(engine, **dict(engine_settings or {})), specimen, r_reference=r, dt=dt)
+    return chaos_floor(specimen, motions, errors, r=r, rtol=rtol, atol=atol)
+
+
+def extended_floor(chaos: ChaosFloor, model_form: ModelFormFloor) -> float:
+    """The lower of the chaos floor's and the model-form floor's mean shares [-]."""
+    return float(min(chaos.share, model_form.share))
