@@ -67,7 +67,8 @@ def test_run_errors_for_every_engine_but_the_reference(motions):
 
 
 def test_verdict_names_the_figures_and_the_side():
-    fl = ChaosFloor("e", 1e-3, 5e-4, {"r+": 0.7, "r-": 0.8}, {"r+": 1.0, "r-": 1.0}, 0.75, 0.7, 0.8, 100)
+    fl = ChaosFloor({"r+": 0.7, "r-": 0.8}, {"r+": 1.0, "r-": 1.0}, 0.75, 0.7, 0.8, 100,
+                    engine="e", eps_r=1e-3, eps_p=5e-4)
     at = floor_verdict(72, 100, fl)
     assert "agreement 72%" in at and "chaos floor of 75%" in at and "at the floor" in at
     below = floor_verdict(40, 100, fl)  # Wilson upper bound of 40/100 is about 50 % < 70 %

@@ -49,7 +49,7 @@ def test_status(row, status):
 
 def test_record_by_record_verdict_sits_beside_the_distribution_one():
     shares = {"r+": 0.6, "r-": 0.66, "p+": 0.7, "p-": 0.68}
-    floor = ChaosFloor("mujoco", 0.002, 0.001, shares, shares, 0.66, 0.6, 0.7, 100)
+    floor = ChaosFloor(shares, shares, 0.66, 0.6, 0.7, 100, engine="mujoco", eps_r=0.002, eps_p=0.001)
     below = engine_verdict(_row(0.05, 0.0, 100, share=0.28), floor)  # MuJoCo on elcentro: PASS, 28 % vs 66 %
     assert below.status == "PASS" and below.below_floor is True and "below the floor" in below.line()
     at = engine_verdict(_row(0.05, 0.0, 100, share=0.64), floor)

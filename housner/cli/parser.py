@@ -75,9 +75,21 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     return p
 
 
+def _command(sub, name: str, **kw) -> argparse.ArgumentParser:
+    """A subcommand whose epilog (engines, effects, exit statuses) keeps its line breaks."""
+    return sub.add_parser(name, formatter_class=argparse.RawDescriptionHelpFormatter, **kw)
+
+
+def _plugin_option(p: argparse.ArgumentParser) -> None:
+    """``--plugin FILE.py`` (repeatable), as run, diagnose and explain take it."""
+    p.add_argument("--plugin", action="append", metavar="FILE.py",
+                   help="load the effects this Python file registers (@register_effect; repeatable)")  # fmt: skip
+
+
 def _add_run(sub, names: dict) -> None:
     """The ``run`` command's arguments."""
-    r = sub.add_parser(
+    r = _command(
+        sub,
         "run",
         help="run a scenario on its engines and write results and an HTML report",
         description="Run a scenario on its engines, write the run directory and its HTML report.",
@@ -86,7 +98,6 @@ def _add_run(sub, names: dict) -> None:
             run_failure="a record failed in an engine (unless --allow-failures), ",
             ctrl_c="; finished records stay in the cache, re-run to resume",
         ),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     r.add_argument("scenario", help="catalogue name (see `housner scenarios`) or path to a TOML file")
     r.add_argument(
@@ -104,8 +115,7 @@ def _add_run(sub, names: dict) -> None:
         action="store_true",
         help="exit 0 even when records failed (they are listed, and kept out of the statistics)",
     )
-    r.add_argument("--plugin", action="append", metavar="FILE.py",
-                   help="load the effects this Python file registers (@register_effect; repeatable)")
+    _plugin_option(r)
     r.add_argument("--check", action="store_true",
                    help="exit 3 when an engine's verdict against the reference is FAIL (inconclusive does not fail)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -114,11 +124,11 @@ def _add_run(sub, names: dict) -> None:
 
 def _add_tune(sub, names: dict) -> None:
     """The ``tune`` command's arguments."""
-    t = sub.add_parser(
+    t = _command(
+        sub,
         "tune",
         help="search engine contact settings that reproduce a target r in free vibration",
         epilog=f"engines: {names['engines']}",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     t.add_argument("engine", help=f"engine name ({names['engines']})")
     t.add_argument(
@@ -147,11 +157,11 @@ def _add_tune(sub, names: dict) -> None:
 
 def _add_diagnose(sub, names: dict) -> None:
     """The ``diagnose`` command's arguments."""
-    d = sub.add_parser(
+    d = _command(
+        sub,
         "diagnose",
         help="find the physical effect a measurement campaign needs (error ladder)",
         epilog=f"effects: {names['effects']}",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     d.add_argument("campaign", help="campaign directory (campaign.toml + records/)")
     d.add_argument(
@@ -168,8 +178,7 @@ def _add_diagnose(sub, names: dict) -> None:
                    help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
     d.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the fold assignment (0)")
     d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
-    d.add_argument("--plugin", action="append", metavar="FILE.py",
-                   help="load the effects this Python file registers (@register_effect; repeatable)")
+    _plugin_option(d)
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=_cmd_diagnose)
 
@@ -185,7 +194,8 @@ _noise_rad = _float_within(lambda x: math.isfinite(x) and x >= 0.0, "a noise lev
 
 def _add_explain(sub, names: dict) -> None:
     """The ``explain`` command's arguments."""
-    e = sub.add_parser(
+    e = _command(
+        sub,
         "explain",
         help="diagnose an engine's own responses as a campaign: the effects that bring Housner to it, the floor",
         description="Run an engine on a scenario's ground motions and on free vibrations, diagnose its responses "
@@ -193,7 +203,6 @@ def _add_explain(sub, names: dict) -> None:
         "record by record, beside the floor a correct model could reach.",
         epilog=f"engines: {names['engines']}\nscenarios: {names['scenarios']} (or a TOML file)\n\n"
         + _EXIT_HELP.format(run_failure="", ctrl_c="; finished records stay in the cache, re-run to resume"),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     e.add_argument("engine", type=_engine_name, metavar="ENGINE", help=f"engine to explain: {names['engines']}")
     e.add_argument("--scenario", default="elcentro", help="scenario of ground motions (default elcentro)")
@@ -205,8 +214,7 @@ def _add_explain(sub, names: dict) -> None:
                    help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}")
     e.add_argument("--json", help="write the explanation to this JSON file")
     e.add_argument("--workdir", help="keep the engine's campaign in WORKDIR/ENGINE-SCENARIO (default: a temporary one)")
-    e.add_argument("--plugin", action="append", metavar="FILE.py",
-                   help="load the effects this Python file registers (@register_effect; repeatable)")
+    _plugin_option(e)
     e.add_argument("--jobs", type=_positive_int, help="worker processes (default: all CPUs; 1 = this process)")
     e.add_argument("-q", "--quiet", action="store_true", help="no progress bar or progress lines")
     e.set_defaults(func=_cmd_explain)

@@ -47,6 +47,7 @@ RECORD_RTOL = 0.03
 
 __all__ = [
     "RELEASE_AMPLITUDES",
+    "AgreementShares",
     "ChaosFloor",
     "EngineErrors",
     "RECORD_RTOL",
@@ -197,18 +198,14 @@ def errors_from_dict(d: dict) -> EngineErrors:
 
 
 @dataclass(frozen=True)
-class ChaosFloor:
-    """Self-agreement of the analytic model under an engine's measured errors.
+class AgreementShares:
+    """Self-agreement of the analytic model under perturbations: the share of records that still agree.
 
     Attributes
     ----------
-    engine : str
-        The engine whose errors set the perturbation.
-    eps_r, eps_p : float
-        The relative perturbations of r and p [-] (the engine's RMS errors).
     shares : dict
-        Per perturbation ("r+", "r-", "p+", "p-"): the share of records on
-        which the perturbed analytic model agrees with the unperturbed one [-].
+        Per perturbation: the share of records on which the perturbed analytic model agrees with the
+        unperturbed one [-].
     verdict_shares : dict
         The same for the overturn verdict alone [-].
     share : float
@@ -219,9 +216,6 @@ class ChaosFloor:
         Records compared.
     """
 
-    engine: str
-    eps_r: float
-    eps_p: float
     shares: dict
     verdict_shares: dict
     share: float
@@ -229,8 +223,32 @@ class ChaosFloor:
     share_max: float
     n: int
 
+    @staticmethod
+    def summarised(shares: dict, verdict_shares: dict, n: int) -> dict:
+        """The fields of the class from the per-perturbation shares (no perturbation: agreement 1)."""
+        vals = list(shares.values()) or [1.0]
+        return {"shares": shares, "verdict_shares": verdict_shares, "share": float(np.mean(vals)),
+                "share_min": float(min(vals)), "share_max": float(max(vals)), "n": int(n)}  # fmt: skip
+
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+@dataclass(frozen=True)
+class ChaosFloor(AgreementShares):
+    """:class:`AgreementShares` under an engine's measured errors: r and p perturbed ("r+", "r-", "p+", "p-").
+
+    Attributes
+    ----------
+    engine : str
+        The engine whose errors set the perturbation.
+    eps_r, eps_p : float
+        The relative perturbations of r and p [-] (the engine's RMS errors).
+    """
+
+    engine: str = ""
+    eps_r: float = 0.0
+    eps_p: float = 0.0
 
 
 def chaos_floor(
@@ -281,18 +299,8 @@ def chaos_floor(
             ag = per_record_agreement(got, base, rtol=rtol, atol=atol)
             shares[label + tag] = ag.share
             verdicts[label + tag] = ag.verdict_share
-    vals = list(shares.values()) or [1.0]
-    return ChaosFloor(
-        engine=errors.engine,
-        eps_r=errors.eps_r,
-        eps_p=errors.eps_p,
-        shares=shares,
-        verdict_shares=verdicts,
-        share=float(np.mean(vals)),
-        share_min=float(min(vals)),
-        share_max=float(max(vals)),
-        n=int(base.size),
-    )
+    return ChaosFloor(engine=errors.engine, eps_r=errors.eps_r, eps_p=errors.eps_p,
+                      **AgreementShares.summarised(shares, verdicts, base.size))  # fmt: skip
 
 
 def floor_verdict(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) -> str:

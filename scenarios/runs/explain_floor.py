@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -45,7 +45,7 @@ from housner.engines.base import get_engine
 from housner.model import default_substeps
 from housner.motion import GroundMotion
 from housner.scenarios.campaigns.model_form import SCALE_SD, SHIFT_SAMPLES, UPSAMPLE, ModelForm
-from housner.scenarios.runs.chaos import RECORD_RTOL, ChaosFloor, chaos_floor, measure_engine_errors
+from housner.scenarios.runs.chaos import RECORD_RTOL, AgreementShares, ChaosFloor, chaos_floor, measure_engine_errors
 from housner.specimen import Specimen
 from housner.stats import per_record_agreement
 
@@ -76,37 +76,18 @@ PERTURBATIONS: dict[str, ModelForm] = {
 
 
 @dataclass(frozen=True)
-class ModelFormFloor:
-    """Self-agreement of the analytic model under another correct integrator's conventions.
+class ModelFormFloor(AgreementShares):
+    """:class:`housner.scenarios.runs.chaos.AgreementShares` under another correct integrator's conventions
+    (one share per perturbation of :data:`PERTURBATIONS`).
 
     Attributes
     ----------
-    shares : dict
-        Per perturbation of :data:`PERTURBATIONS`: the share of records on which the perturbed
-        analytic model agrees with the unperturbed one [-].
-    verdict_shares : dict
-        The same for the overturn verdict alone [-].
-    share : float
-        The floor: the mean of ``shares`` [-].
-    share_min, share_max : float
-        The lowest and highest of ``shares`` [-].
-    n : int
-        Records compared.
     substeps : int
         Integrator substeps per sample of the unperturbed run, on the grid :data:`UPSAMPLE` times
         finer than the records' [-].
     """
 
-    shares: dict
-    verdict_shares: dict
-    share: float
-    share_min: float
-    share_max: float
-    n: int
-    substeps: int
-
-    def to_dict(self) -> dict:
-        return asdict(self)
+    substeps: int = 0
 
 
 def model_form_floor(
@@ -155,9 +136,7 @@ def model_form_floor(
     for label, form in PERTURBATIONS.items():
         ag = per_record_agreement(theta(form), ref, rtol=rtol, atol=atol)
         shares[label], verdicts[label] = ag.share, ag.verdict_share
-    vals = list(shares.values())
-    return ModelFormFloor(shares, verdicts, float(np.mean(vals)), float(min(vals)), float(max(vals)), int(ref.size),
-                          int(base))  # fmt: skip
+    return ModelFormFloor(substeps=int(base), **AgreementShares.summarised(shares, verdicts, ref.size))
 
 
 def engine_chaos_floor(
