@@ -33,65 +33,6 @@ def _on_sigterm(signum, frame) -> None:
     raise KeyboardInterrupt
 
 
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 def _error(message: str) -> None:
     print(f"housner: error: {one_line(message)}", file=sys.stderr)
 
