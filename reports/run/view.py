@@ -27,9 +27,8 @@ from housner.reports.page import esc
 from housner.scenarios.execution.rundir import json_number, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
-from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, floor_verdict
+from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, floor_check, floor_verdict
 from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
-from housner.stats import wilson_interval
 
 #: Bootstrap resamples for percentile intervals (Efron and Tibshirani 1993, ch. 13, ask for at
 #: least 1000 for percentile intervals) and the fixed seed that makes pages reproducible.
@@ -368,16 +367,14 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
                    f"record moves the KS distance by 1/n = {1 / max(n, 1):.2f})"), *checks)  # fmt: skip
     else:
         status = "PASS" if all(c for c, _ in checks) else "FAIL"
-    records = below = None
-    n_pair = float(row.get("n_paired", 0) or 0)
-    if floor is not None and n_pair > 0:
-        k = int(round(float(row["agreement_share"]) * n_pair))
-        records = floor_verdict(k, int(n_pair), floor)
-        below = "below the floor" in records
-        lo, hi = wilson_interval(k, n_pair)  # the interval floor_verdict judges by
-        short = f"{k / n_pair:.0%} [{float(lo):.0%}, {float(hi):.0%}] vs chaos floor {floor.share:.0%}"
-        return EngineVerdict(status, checks, records, below, short)
-    return EngineVerdict(status, checks, records, below)
+    paired = float(row.get("n_paired", 0) or 0)
+    if floor is None or not paired > 0:  # (NaN: no paired records)
+        return EngineVerdict(status, checks)
+    n_pair = int(paired)
+    k = int(round(float(row["agreement_share"]) * n_pair))
+    lo, hi, below = floor_check(k, n_pair, floor)
+    short = f"{k / n_pair:.0%} [{lo:.0%}, {hi:.0%}] vs chaos floor {floor.share:.0%}"
+    return EngineVerdict(status, checks, floor_verdict(k, n_pair, floor), below, short)
 
 
 def _verdict(row: pd.Series) -> tuple[bool | None, list[str]]:

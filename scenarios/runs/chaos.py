@@ -39,7 +39,7 @@ from housner.engines.base import RECORD_ERRORS, Engine, get_engine
 from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
-from housner.stats import overturn_probability, per_record_agreement
+from housner.stats import per_record_agreement, wilson_interval
 
 #: Record-by-record agreement: both overturned, or both rocked with theta_max/alpha within this relative
 #: tolerance of the reference's [-] (the run report's rule, and housner explain's).
@@ -53,6 +53,7 @@ __all__ = [
     "RECORD_RTOL",
     "chaos_floor",
     "errors_from_dict",
+    "floor_check",
     "floor_verdict",
     "measure_engine_errors",
     "rms",
@@ -303,6 +304,13 @@ def chaos_floor(
                       **AgreementShares.summarised(shares, verdicts, base.size))  # fmt: skip
 
 
+def floor_check(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) -> tuple[float, float, bool]:
+    """The Wilson interval of an engine's record-by-record agreement share [-], and whether it lies below the
+    chaos floor: its upper end under the lowest perturbed share (``n`` > 0)."""
+    low, high = (float(x) for x in wilson_interval(n_agree, n, ci))
+    return low, high, high < floor.share_min
+
+
 def floor_verdict(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) -> str:
     """One sentence: is an engine's record-by-record agreement at the chaos floor or below it?
 
@@ -320,13 +328,13 @@ def floor_verdict(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) 
     """
     if n <= 0:
         return "no paired records"
-    est = overturn_probability(np.arange(n) < n_agree, ci=ci, method="wilson")
+    low, high, below = floor_check(n_agree, n, floor, ci=ci)
     lo, hi = floor.share_min, floor.share_max
     span = f"{lo:.0%}" if lo == hi else f"{lo:.0%}-{hi:.0%}"
     head = (
-        f"agreement {n_agree / n:.0%} [{est.low:.0%}, {est.high:.0%}] against a chaos floor of {floor.share:.0%} "
+        f"agreement {n_agree / n:.0%} [{low:.0%}, {high:.0%}] against a chaos floor of {floor.share:.0%} "
         f"({span}; analytic model with r x (1 +- {floor.eps_r:.2%}), p x (1 +- {floor.eps_p:.2%}))"
     )
-    if est.high >= floor.share_min:
+    if not below:
         return head + ": at the floor, record-by-record differences no larger than its measured r and p errors give"
     return head + ": below the floor, a difference beyond its measured r and p errors"
