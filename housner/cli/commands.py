@@ -84,10 +84,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         for r in run.failures.itertuples():
             print(f"  {r.engine} motion {r.motion_id} ({r.motion_name}): {r.error}", file=sys.stderr)
     print(f"results: {out / 'results.parquet'}")
+    view = Run.load(out)  # once: the report and the verdicts read the same run (its chaos floors computed once)
     if not args.no_report:
-        path = write_report(out)
+        path = write_report(out, view=view)
         print(f"report:  {path}")
-    failed_engines = _print_verdicts(out)
+    failed_engines = _print_verdicts(view)
     if len(run.failures) and not args.allow_failures:
         print(
             f"housner: error: {len(run.failures)} of {len(res)} records failed (listed above); "
@@ -102,9 +103,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _print_verdicts(out: Path) -> list[str]:
+def _print_verdicts(view: Run) -> list[str]:
     """Print each engine's verdict against the reference (as the report's headline gives it); the failed ones."""
-    view = Run.load(out)
     if not view.others:
         return []
     floors = view.chaos_floors

@@ -55,7 +55,7 @@ __all__ = [
 
 # ----------------------------------------------------------------------------
 # public API
-def render_report(run_dir: str | Path) -> str:
+def render_report(run_dir: str | Path, *, view: Run | None = None) -> str:
     """The HTML report of a run directory, as a string.
 
     Parameters
@@ -64,6 +64,8 @@ def render_report(run_dir: str | Path) -> str:
         Directory written by :func:`housner.scenarios.execution.rundir.write_run`; it must hold
         ``results.parquet``; ``run.json``, ``motions.npz`` and
         ``histories.parquet`` add sections when present.
+    view : Run, optional
+        That directory already loaded (:meth:`Run.load`), for a caller that reads it too.
 
     Returns
     -------
@@ -75,10 +77,10 @@ def render_report(run_dir: str | Path) -> str:
     housner.errors.DataFileError
         When the directory or its results table is missing or unreadable.
     """
-    return render_directory(run_dir, Run.load, _build_sections, _page)
+    return render_directory(run_dir, Run.load if view is None else (lambda _: view), _build_sections, _page)
 
 
-def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
+def write_report(run_dir: str | Path, out: str | Path | None = None, *, view: Run | None = None) -> Path:
     """Write the HTML report of a run directory.
 
     Parameters
@@ -87,13 +89,15 @@ def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
         A run directory (see :func:`render_report`).
     out : str or pathlib.Path, optional
         File to write; default ``run_dir/report.html``.
+    view : Run, optional
+        That directory already loaded (see :func:`render_report`).
 
     Returns
     -------
     pathlib.Path
         The file written.
     """
-    return write_directory_report(run_dir, out, render_report, REPORT_FILE)
+    return write_directory_report(run_dir, out, lambda d: render_report(d, view=view), REPORT_FILE)
 
 
 # ----------------------------------------------------------------------------
