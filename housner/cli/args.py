@@ -85,14 +85,18 @@ def _amplitudes(value: str) -> tuple[float, ...]:
     return tuple(out)
 
 
+def _engine_name(value: str) -> str:
+    """One registered engine name (an argument's type)."""
+    if value not in ENGINES:
+        raise argparse.ArgumentTypeError(str(unknown_choice("engine", value, ENGINES)))
+    return value
+
+
 def _engines_arg(value: str) -> list[str]:
     names = [v.strip() for v in value.split(",") if v.strip()]
     if not names:
         raise argparse.ArgumentTypeError("give at least one engine name, e.g. housner,mujoco")
-    for n in names:
-        if n not in ENGINES:
-            raise argparse.ArgumentTypeError(str(unknown_choice("engine", n, ENGINES)))
-    return names
+    return [_engine_name(n) for n in names]
 
 
 def _versions() -> str:

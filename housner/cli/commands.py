@@ -50,12 +50,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario)
     engines = args.engines or scenario.engines
     scenario.check_engines(engines)
-    for opt, value in (("--n-motions", args.n_motions), ("--seed", args.seed)):
-        if value is not None and scenario.source != "rdk":
-            raise UsageError(
-                f"argument {opt}: scenario {scenario.name!r} has a fixed set of {scenario.n_motions} motions "
-                f"(source {scenario.source!r}); {opt} applies to RDK ensembles"
-            )
+    _check_ensemble_option(scenario, "--n-motions", args.n_motions)
+    _check_ensemble_option(scenario, "--seed", args.seed)
     out = Path(args.out) if args.out else Path("runs") / scenario.name
     if scenario.study is not None:
         check_output_dir(out, "--out" if args.out else "study directory (--out)", files=STUDY_FILES)
@@ -101,6 +97,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return EXIT_VERDICT
     return EXIT_OK
+
+
+def _check_ensemble_option(scenario, opt: str, value) -> None:
+    """``--n-motions`` and ``--seed`` apply to RDK ensembles: refused for a scenario with a fixed set of motions."""
+    if value is not None and scenario.source != "rdk":
+        raise UsageError(
+            f"argument {opt}: scenario {scenario.name!r} has a fixed set of {scenario.n_motions} motions "
+            f"(source {scenario.source!r}); {opt} applies to RDK ensembles"
+        )
 
 
 def _print_verdicts(view: Run) -> list[str]:
@@ -294,11 +299,7 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     if scenario.source in ("free_vibration",) or scenario.study is not None:
         raise UsageError(f"argument --scenario: scenario {scenario.name!r} has no ground motions to explain an engine "
                          "on (give one of ground motions, e.g. elcentro)")  # fmt: skip
-    if args.n_motions is not None and scenario.source != "rdk":
-        raise UsageError(
-            f"argument --n-motions: scenario {scenario.name!r} has a fixed set of {scenario.n_motions} motions "
-            f"(source {scenario.source!r}); --n-motions applies to RDK ensembles"
-        )
+    _check_ensemble_option(scenario, "--n-motions", args.n_motions)
     scenario.check_engines([args.engine, "housner"])
     _check_effects(args.effects, "--effects")
     if args.json:

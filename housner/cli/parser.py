@@ -7,6 +7,7 @@ import math
 
 from housner.cli.args import (
     _amplitudes,
+    _engine_name,
     _engines_arg,
     _float_within,
     _folds_int,
@@ -21,7 +22,6 @@ from housner.cli.args import (
 from housner.cli.commands import _cmd_diagnose, _cmd_explain, _cmd_report, _cmd_run, _cmd_scenarios, _cmd_tune
 from housner.effects import available_effects
 from housner.engines.base import ENGINES
-from housner.errors import unknown_choice
 from housner.scenarios.catalogue.scenario import SCENARIOS
 from housner.scenarios.runs.explain import EXPLAIN_SIGMA
 
@@ -181,12 +181,6 @@ def _add_diagnose(sub, names: dict) -> None:
     _plugin_option(d)
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=_cmd_diagnose)
-
-
-def _engine_name(value: str) -> str:
-    if value not in ENGINES:
-        raise argparse.ArgumentTypeError(str(unknown_choice("engine", value, ENGINES)))
-    return value
 
 
 _noise_rad = _float_within(lambda x: math.isfinite(x) and x >= 0.0, "a noise level >= 0 [rad]")
