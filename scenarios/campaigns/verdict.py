@@ -57,6 +57,7 @@ __all__ = [
     "measure_floor",
     "order_drift",
     "physical_classes",
+    "pointer_text",
     "residual_test",
 ]
 
@@ -115,6 +116,19 @@ def distribution_checks(cmp: Comparison | None) -> list[str]:
 
 # ----------------------------------------------------------------------------
 # the verdict
+def pointer_text(classes: Sequence[dict]) -> str:
+    """Where to look first: the strongest physical class (:func:`physical_classes`) with two pieces of its
+    evidence, then the others by name; ``""`` for none. The verdict's text ends with it."""
+    if not classes:
+        return ""
+    top = classes[0]
+    ev = "; ".join(_evidence_text(e) for e in top["evidence"][:2])
+    text = f"Where to look first: {top['meaning']} ({ev})."
+    if len(classes) > 1:
+        text += " Then: " + "; ".join(c["class"] for c in classes[1:]) + "."
+    return text
+
+
 @dataclass(frozen=True)
 class Verdict:
     """What the diagnosis can claim.
@@ -286,11 +300,7 @@ def decide(
         if dist_final:
             text += " The distributions disagree too: " + "; ".join(dist_final) + "."
         if classes:
-            top = classes[0]
-            ev = "; ".join(_evidence_text(e) for e in top["evidence"][:2])
-            text += f" Where to look first: {top['meaning']} ({ev})."
-            if len(classes) > 1:
-                text += " Then: " + "; ".join(c["class"] for c in classes[1:]) + "."
+            text += " " + pointer_text(classes)
         else:
             text += f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is " \
                     "in the time histories only."  # fmt: skip

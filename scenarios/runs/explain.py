@@ -32,7 +32,7 @@ import math
 import re
 import tempfile
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -43,6 +43,7 @@ from housner.effects import available_effects, make_effect
 from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.campaigns.verdict import pointer_text
 from housner.scenarios.catalogue.scenario import Scenario
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
@@ -180,11 +181,12 @@ def _agreement(engine_theta: pd.Series, model_theta: pd.Series) -> tuple[float, 
     return ag.share, ag.n
 
 
-def _where(text: str, where: Sequence[str]) -> str:
-    """The verdict's pointer: its "Where to look first" sentence, else its first localisation item."""
-    m = re.search(r"Where to look first: .*", text)
-    if m:
-        return m.group(0)
+def _where(verdict) -> str:
+    """The verdict's pointer (:func:`~housner.scenarios.campaigns.verdict.pointer_text`), else the sentence
+    that names the misfit, else its first localisation item."""
+    if verdict.next:
+        return pointer_text(verdict.next)
+    text, where = verdict.text, verdict.where
     m = re.search(r"(A misfit of [^.]*\.|a misfit that [^.]*\.)", text)
     if m:
         return m.group(0)
@@ -203,7 +205,7 @@ def _remains(engine: str, names: list[str], agreement: float, floor: float, reac
         return (f"{head}, {gap}, though the diagnosis finds {v.status.replace('_', ' ')} in the time histories: "
                 "what remains shows in the records' peaks and overturns, not in the errors a correct model leaves.")
     return (f"{head}, {gap}; the diagnosis is {v.status.replace('_', ' ')} (residual ratio "
-            f"{v.residual.ratio:.2f} against the correct-model floor). {_where(v.text, v.where)}").strip()
+            f"{v.residual.ratio:.2f} against the correct-model floor). {_where(v)}").strip()
 
 
 def explain_engine(
