@@ -377,11 +377,9 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
     return EngineVerdict(status, checks, floor_verdict(k, n_pair, floor), below, short)
 
 
-def _verdict(row: pd.Series) -> tuple[bool | None, list[str]]:
-    """The page's form of :func:`engine_verdict`: pass (None: not evaluated) and each criterion as HTML."""
-    v = engine_verdict(row)
-    html = [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
-    return v.ok, html
+def checks_html(v: EngineVerdict) -> list[str]:
+    """Each criterion of a verdict as the page writes it: its figures, marked met or not."""
+    return [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
 
 
 def _html_figures(text: str) -> str:

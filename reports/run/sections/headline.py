@@ -35,7 +35,7 @@ from housner.reports.run.view import (
     MIN_RECORDS,
     N_BOOT,
     Run,
-    _html_figures,
+    checks_html,
     engine_verdict,
 )
 from housner.units import G
@@ -104,7 +104,7 @@ def _headline(run: Run) -> str:
             )
             continue
         v = engine_verdict(row, floors.get(name))
-        reasons = [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
+        reasons = checks_html(v)
         extra = f'<div class="caveat">{caveats[name]}</div>' if name in caveats else ""
         if v.records:
             extra = f"<div><strong>Record by record</strong>: {esc(v.records)}.</div>" + extra

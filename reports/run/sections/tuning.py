@@ -21,7 +21,7 @@ from housner.engines.base import engine_class
 from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR
 from housner.reports import figures
 from housner.reports.page import engine_tag, esc, fmt_g, fmt_num, html_figure, html_note, html_table, status_badge
-from housner.reports.run.view import DEFAULT_KS_MAX, Run, _verdict
+from housner.reports.run.view import DEFAULT_KS_MAX, Run, engine_verdict
 from housner.scenarios.execution.rundir import json_number
 
 #: Folder of the tuning results ``tuning-<engine>.json`` written by ``housner tune``;
@@ -40,7 +40,7 @@ def _tuning_caveats(run: Run) -> dict[str, str]:
         if not failed:
             continue
         row = cmp.loc[name]
-        ok, _ = _verdict(row)
+        ok = engine_verdict(row).ok
         what = "; ".join(f'<span class="bad">{c.short}</span>' for c in failed)
         text = f"Tuning not met (<code>{esc(f.name)}</code>, {esc(d.get('date', ''))}): {what}. "
         names = {c.name for c in failed}
