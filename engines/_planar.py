@@ -410,8 +410,24 @@ class PlanarEngine(Engine):
         contact leaves it [-], in (0, 1]: the adapters' impact law
         (:class:`ImpactLaw`) for an r below the contact's own.
         1 (default): the contact alone.
+    friction : float
+        Coulomb friction coefficient pivot/ground [-]; it must exceed
+        max |ug''| / g with a margin for the impacts.
+    pivot_radius : float
+        Radius of the pivot spheres [m], at most 1e-3 H (the adapters whose pivots are spheres: DART, Drake).
     **settings
         The adapter's others (its ``DEFAULTS``).
+
+    Examples
+    --------
+    Every adapter is driven alike; released from rest at 0.3 alpha, the block rocks and impacts:
+
+    >>> from housner.engines import get_engine
+    >>> from housner import GroundMotion, Specimen
+    >>> spec = Specimen.bachmann2017()
+    >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s
+    >>> [get_engine(name).simulate(spec, released).n_impacts > 3 for name in ("dart", "drake", "opensees")]
+    [True, True, True]
     """
 
     #: The ``restitution`` effect, through the impact law.

@@ -55,26 +55,10 @@ class DartEngine(PlanarEngine):
 
     Parameters
     ----------
-    timestep : float
-        Longest step [s] (:class:`housner.engines._planar.PlanarEngine`).
-    friction : float
-        Coulomb friction coefficient pivot/ground [-]; it must exceed
-        max |ug''| / g with a margin for the impacts.
     restitution : float
         Newton restitution coefficient at the pivots [-]; 0 is Housner's plastic impact.
-    pivot_radius : float
-        Radius of the pivot spheres [m], at most 1e-3 H.
-    impact_energy_factor : float
-        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
-
-    Examples
-    --------
-    >>> from housner.engines import get_engine
-    >>> from housner import GroundMotion, Specimen
-    >>> spec = Specimen.bachmann2017()
-    >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s
-    >>> get_engine("dart").simulate(spec, released).n_impacts > 3
-    True
+    timestep, friction, pivot_radius, impact_energy_factor
+        As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
     """
 
     name = "dart"
@@ -89,6 +73,9 @@ class DartEngine(PlanarEngine):
         "pivot_radius": 1.0e-5,
         "impact_energy_factor": 1.0,
     }
+    #: The accuracy-cost frontier's axes (``housner frontier dart``): the step [s] and the radius of
+    #: the pivot spheres [m] (the contact's geometry: DART's contact is rigid, an LCP).
+    FRONTIER: ClassVar[dict] = {"timestep": (5e-5, 1e-4, 2e-4, 4e-4), "pivot_radius": (1e-6, 1e-5, 1e-4)}
 
     LABEL = "DART"
     MODULE = "dartpy"

@@ -86,8 +86,6 @@ class DrakeEngine(PlanarEngine):
 
     Parameters
     ----------
-    timestep : float
-        Longest step [s] (:class:`housner.engines._planar.PlanarEngine`).
     stiffness : float
         Point-contact stiffness of each pivot on the ground [N/m] (the pair's
         combined value; each side of the pair is given twice it).
@@ -95,22 +93,8 @@ class DrakeEngine(PlanarEngine):
         SAP's linear dissipation time of the pivot contact [s] (the pair's
         combined value; each side carries half of it). 0 is no dissipation
         beyond the implicit step's.
-    friction : float
-        Coulomb friction coefficient pivot/ground [-]; it must exceed
-        max |ug''| / g with a margin for the impacts.
-    pivot_radius : float
-        Radius of the pivot spheres [m], at most 1e-3 H.
-    impact_energy_factor : float
-        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
-
-    Examples
-    --------
-    >>> from housner.engines.drake_engine import DrakeEngine
-    >>> from housner import GroundMotion, Specimen
-    >>> spec = Specimen.bachmann2017()
-    >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s
-    >>> DrakeEngine().simulate(spec, released).n_impacts > 3
-    True
+    timestep, friction, pivot_radius, impact_energy_factor
+        As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
     """
 
     name = "drake"
@@ -127,6 +111,9 @@ class DrakeEngine(PlanarEngine):
         "pivot_radius": 1.0e-5,
         "impact_energy_factor": 1.0,
     }
+    #: The accuracy-cost frontier's axes (``housner frontier drake``): the step [s] and the point
+    #: contact's stiffness [N/m].
+    FRONTIER: ClassVar[dict] = {"timestep": (1.25e-4, 2.5e-4, 5e-4, 1e-3), "stiffness": (1e8, 5e8, 2.5e9)}
 
     LABEL = "Drake"
     MODULE = "pydrake.multibody.plant"

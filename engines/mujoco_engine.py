@@ -257,6 +257,12 @@ class MujocoEngine(PlanarEngine):
 
     #: Tuned defaults (see the class notes for their provenance and measured errors).
     DEFAULTS: ClassVar[dict] = {**MJCF_DEFAULTS, "impact_energy_factor": 1.0}
+    #: The accuracy-cost frontier's axes (``housner frontier mujoco``): the step [s] and the contact's
+    #: solref time constant [s] (its stiffness: the default 0.4 ms is twice the default step, MuJoCo's floor).
+    FRONTIER: ClassVar[dict] = {
+        "timestep": (1e-4, 2e-4, 3e-4, 5e-4),
+        "solref": ((4e-4, 1.0), (6e-4, 1.0), (1e-3, 1.0)),
+    }
 
     def __init__(self, **settings: Any):
         for key in settings:

@@ -139,8 +139,6 @@ class OpenSeesEngine(PlanarEngine):
 
     Parameters
     ----------
-    timestep : float
-        Longest step [s] (:class:`housner.engines._planar.PlanarEngine`).
     contact_stiffness : float
         k_n [N/m]: stiffness of each of the two normal springs per corner (the
         bearing's and the damped one's), so 2 k_n per corner in contact.
@@ -154,23 +152,14 @@ class OpenSeesEngine(PlanarEngine):
     tolerance : float
         Newton iterations stop when the norm of the unbalanced forces is below
         this [N, N m].
-    impact_energy_factor : float
-        The impact law's factor (:class:`housner.engines._planar.PlanarEngine`); 1 (default): the contact alone.
+    timestep, impact_energy_factor
+        As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
 
     Notes
     -----
     OpenSees is one interpreter per process: the engine wipes and rebuilds the
     model for every record, so records run one after the other in a process
     (use processes, not threads, to run them in parallel).
-
-    Examples
-    --------
-    >>> from housner.engines.opensees_engine import OpenSeesEngine
-    >>> from housner import GroundMotion, Specimen
-    >>> spec = Specimen.bachmann2017()
-    >>> released = GroundMotion.free_vibration(0.3 * spec.alpha, 2.0)  # from rest at 0.3 alpha, 2 s
-    >>> OpenSeesEngine().simulate(spec, released).n_impacts > 3
-    True
     """
 
     name = "opensees"
@@ -186,6 +175,9 @@ class OpenSeesEngine(PlanarEngine):
         "tolerance": 1.0e-3,
         "impact_energy_factor": 1.0,
     }
+    #: The accuracy-cost frontier's axes (``housner frontier opensees``): the step [s] and the contact
+    #: springs' stiffness [N/m].
+    FRONTIER: ClassVar[dict] = {"timestep": (1e-4, 2e-4, 5e-4, 1e-3), "contact_stiffness": (5e6, 1.5e7, 5e7)}
 
     LABEL = "OpenSees"
     RANGES: ClassVar[dict] = {

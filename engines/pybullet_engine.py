@@ -71,7 +71,7 @@ import tempfile
 import time
 import weakref
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -215,6 +215,9 @@ class PybulletEngine(PlanarEngine):
         "bevel": URDF_DEFAULTS["bevel"],
         "impact_energy_factor": 1.0,
     }
+    #: The accuracy-cost frontier's axes (``housner frontier pybullet``): the step [s] and the contact's
+    #: error reduction parameter [-] (how fast penetration is pushed out).
+    FRONTIER: ClassVar[dict] = {"timestep": (1e-4, 2e-4, 5e-4, 1e-3), "contact_erp": (0.1, 0.2, 0.5, 0.8)}
 
     def __init__(self, **settings: Any):
         unknown = sorted(set(settings) - set(self.DEFAULTS))

@@ -241,15 +241,18 @@ def _errors(meas: list[dict], suites: list[_Suite], target: float, rtol: float) 
         "pulse_rel_error": _worst(np.concatenate([np.ravel(p) for p in pulse])),
         "decay_rel_error": _worst(all_decay),
     }
-    ratios = [e["worst_rel_error"] / rtol]
+    ratios = {"r": e["worst_rel_error"] / rtol}
     if all_small.size:
-        ratios.append(e["small_worst_rel_error"] / (SMALL_WORST_FACTOR * rtol))
-        ratios.append(abs(small_mean) / rtol if math.isfinite(small_mean) else math.inf)
+        ratios["small-amplitude r"] = e["small_worst_rel_error"] / (SMALL_WORST_FACTOR * rtol)
+        ratios["small-amplitude mean r"] = abs(small_mean) / rtol if math.isfinite(small_mean) else math.inf
     if pulse_scaled.size:
-        ratios.append(_worst(pulse_scaled) / rtol)
+        ratios["pulses"] = _worst(pulse_scaled) / rtol
     if all_decay.size:
-        ratios.append(e["decay_rel_error"] / DECAY_RTOL)
-    e["score"] = float(max(ratios)) if all(math.isfinite(x) for x in ratios) else math.inf
+        ratios["decay"] = e["decay_rel_error"] / DECAY_RTOL
+    finite = all(math.isfinite(x) for x in ratios.values())
+    e["score"] = float(max(ratios.values())) if finite else math.inf
     e["met"] = bool(e["score"] <= 1.0)
+    # the checks not met, by name (a ratio that could not be measured fails its check)
+    e["failed"] = ", ".join(k for k, x in ratios.items() if not (math.isfinite(x) and x <= 1.0))
     e["_rel"], e["_small"], e["_decay"], e["_pulse"] = rel, small, decay, pulse
     return e

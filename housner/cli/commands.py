@@ -1,4 +1,5 @@
-"""The ``housner`` subcommands: scenarios, run, report, tune, diagnose, explain (each returns the exit status)."""
+"""The ``housner`` subcommands: scenarios, run, report, tune, diagnose, explain, frontier (each returns the exit
+status)."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from housner.cli.args import (
 from housner.engines.base import get_engine
 from housner.engines.tuning import tune
 from housner.reports.diagnosis import write_diagnosis_report
+from housner.reports.frontier_figure import frontier_figure
 from housner.reports.run.page import write_report
 from housner.reports.run.view import Run, engine_verdict
 from housner.reports.study.page import write_study_report
@@ -32,6 +34,7 @@ from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES
 from housner.scenarios.execution.workers import connect_scheduler
 from housner.scenarios.runs.explain import explain_engine
+from housner.scenarios.runs.frontier import engine_frontier, frontier_axes
 from housner.scenarios.runs.run import run_scenario
 from housner.scenarios.studies.study import STUDY_FILES, run_study
 from housner.specimen import Specimen
@@ -293,33 +296,41 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_explain(args: argparse.Namespace) -> int:
-    # inputs and outputs checked before the work: scenario, engine, options, files
+def _engine_scenario(args: argparse.Namespace, purpose: str):
+    """``--scenario`` loaded and checked for an engine's analysis: ground motions, ``--n-motions``, the engine."""
     scenario = load_scenario(args.scenario)
-    if scenario.source in ("free_vibration",) or scenario.study is not None:
-        raise UsageError(f"argument --scenario: scenario {scenario.name!r} has no ground motions to explain an engine "
-                         "on (give one of ground motions, e.g. elcentro)")  # fmt: skip
+    if scenario.source == "free_vibration" or scenario.study is not None:
+        raise UsageError(f"argument --scenario: scenario {scenario.name!r} has no ground motions to {purpose} "
+                         "(give one of ground motions, e.g. elcentro)")  # fmt: skip
     _check_ensemble_option(scenario, "--n-motions", args.n_motions)
     scenario.check_engines([args.engine, "housner"])
+    return scenario
+
+
+def _engine_work(args: argparse.Namespace, scenario, what: str, records: str) -> dict:
+    """Announce an engine command's work on stderr (unless -q) and give its keyword arguments: ``n_motions``,
+    ``options`` (jobs, progress bar) and ``progress`` (lines on stderr)."""
+    n = args.n_motions if args.n_motions is not None else scenario.n_motions
+    if not args.quiet:
+        print(f"{what} {args.engine} on {scenario.name}: {n} {records}", file=sys.stderr)
+    return {
+        "n_motions": args.n_motions,
+        "options": RunOptions(jobs=args.jobs, progress=not args.quiet),
+        "progress": None if args.quiet else (lambda line: print(line, file=sys.stderr)),
+    }
+
+
+def _cmd_explain(args: argparse.Namespace) -> int:
+    # inputs and outputs checked before the work: scenario, engine, options, files
+    scenario = _engine_scenario(args, "explain an engine on")
     _check_effects(args.effects, "--effects")
     if args.json:
         _check_output_file(args.json, "--json")
     if args.workdir:
         check_output_dir(Path(args.workdir), "--workdir")
-    n = args.n_motions if args.n_motions is not None else scenario.n_motions
-    if not args.quiet:
-        print(f"explain {args.engine} on {scenario.name}: {n} ground motions and free vibrations", file=sys.stderr)
-    expl = explain_engine(
-        args.engine,
-        scenario,
-        n_motions=args.n_motions,
-        sigma=args.sigma,
-        seed=args.seed,
-        effects=args.effects,
-        options=RunOptions(jobs=args.jobs, progress=not args.quiet),
-        workdir=args.workdir,
-        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
-    )
+    common = _engine_work(args, scenario, "explain", "ground motions and free vibrations")
+    expl = explain_engine(args.engine, scenario, sigma=args.sigma, seed=args.seed, effects=args.effects,
+                          workdir=args.workdir, **common)  # fmt: skip
     print(expl.summary())
     print(f"wall time {expl.wall_s['total']:.1f} s")
     if args.workdir:
@@ -327,4 +338,29 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps(expl.to_dict(), indent=2))
         print(f"json:   {args.json}")
+    return EXIT_OK
+
+
+def _cmd_frontier(args: argparse.Namespace) -> int:
+    # inputs and outputs checked before the work: engine, scenario, options, files
+    if args.engine == "housner":
+        raise UsageError("argument ENGINE: 'housner' is the reference the frontier is measured against; "
+                         "name another engine")  # fmt: skip
+    try:
+        frontier_axes(args.engine)
+    except ValueError as e:
+        raise UsageError(f"argument ENGINE: {e}") from None
+    scenario = _engine_scenario(args, "measure a frontier on")
+    for opt, path in (("--json", args.json), ("--figure", args.figure)):
+        if path:
+            _check_output_file(path, opt)
+    fr = engine_frontier(args.engine, scenario, **_engine_work(args, scenario, "frontier of", "ground motions"))
+    print(fr.summary())
+    print(f"wall time {fr.wall_s:.1f} s")
+    if args.json:
+        Path(args.json).write_text(json.dumps(fr.to_dict(), indent=2))
+        print(f"json:   {args.json}")
+    if args.figure:
+        frontier_figure(fr).savefig(args.figure)
+        print(f"figure: {args.figure}")
     return EXIT_OK

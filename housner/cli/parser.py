@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
 
 from housner.cli.args import (
     _amplitudes,
@@ -19,7 +20,15 @@ from housner.cli.args import (
     _ratio,
     _VersionAction,
 )
-from housner.cli.commands import _cmd_diagnose, _cmd_explain, _cmd_report, _cmd_run, _cmd_scenarios, _cmd_tune
+from housner.cli.commands import (
+    _cmd_diagnose,
+    _cmd_explain,
+    _cmd_frontier,
+    _cmd_report,
+    _cmd_run,
+    _cmd_scenarios,
+    _cmd_tune,
+)
 from housner.effects import available_effects
 from housner.engines.base import ENGINES
 from housner.scenarios.catalogue.scenario import SCENARIOS
@@ -32,6 +41,17 @@ _EXIT_HELP = """exit status:
   3    `run --check`: an engine's verdict against the reference is FAIL
   130  interrupted (Ctrl-C){ctrl_c}
   143  terminated (SIGTERM), handled as Ctrl-C"""
+
+#: Each subcommand's line in ``housner --help``, in the order listed there.
+_SUMMARIES = {
+    "scenarios": "list the shipped scenarios",
+    "run": "run a scenario on its engines and write results and an HTML report",
+    "report": "rebuild the HTML report of a run directory",
+    "tune": "search engine contact settings that reproduce a target r in free vibration",
+    "diagnose": "find the physical effect a measurement campaign needs (error ladder)",
+    "explain": "diagnose an engine's own responses as a campaign: the effects that bring Housner to it, the floor",
+    "frontier": "sweep an engine's time step and contact setting: accuracy against cost, and the knee",
+}
 
 
 def _listing(full: bool) -> dict[str, str]:
@@ -59,25 +79,31 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     p.add_argument("--version", action=_VersionAction, help="print the versions of housner and its engines, and exit")
     p.add_argument("--debug", action="store_true", help="show the traceback of an error (also HOUSNER_DEBUG=1)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    s = sub.add_parser("scenarios", help="list the shipped scenarios")
+    s = _command(sub, "scenarios", _cmd_scenarios)
     s.add_argument("-v", "--verbose", action="store_true", help="also print each scenario's file")
-    s.set_defaults(func=_cmd_scenarios)
 
     _add_run(sub, names)
-    rep = sub.add_parser("report", help="rebuild the HTML report of a run directory")
+    rep = _command(sub, "report", _cmd_report)
     rep.add_argument("run_dir")
     rep.add_argument("--out", help="report file (default RUN_DIR/report.html)")
-    rep.set_defaults(func=_cmd_report)
 
     _add_tune(sub, names)
     _add_diagnose(sub, names)
     _add_explain(sub, names)
+    _add_frontier(sub, names)
     return p
 
 
-def _command(sub, name: str, **kw) -> argparse.ArgumentParser:
-    """A subcommand whose epilog (engines, effects, exit statuses) keeps its line breaks."""
-    return sub.add_parser(name, formatter_class=argparse.RawDescriptionHelpFormatter, **kw)
+def _command(sub, name: str, func: Callable, epilog: str | None = None, **kw) -> argparse.ArgumentParser:
+    """Subcommand ``name``, run by ``func``, with its line of :data:`_SUMMARIES` as help.
+
+    Its epilog (engines, effects, exit statuses) keeps its line breaks; ``kw`` go to ``add_parser``.
+    """
+    p = sub.add_parser(
+        name, help=_SUMMARIES[name], epilog=epilog, formatter_class=argparse.RawDescriptionHelpFormatter, **kw
+    )
+    p.set_defaults(func=func)
+    return p
 
 
 def _plugin_option(p: argparse.ArgumentParser) -> None:
@@ -91,7 +117,7 @@ def _add_run(sub, names: dict) -> None:
     r = _command(
         sub,
         "run",
-        help="run a scenario on its engines and write results and an HTML report",
+        _cmd_run,
         description="Run a scenario on its engines, write the run directory and its HTML report.",
         epilog=f"engines: {names['engines']}\nscenarios: {names['scenarios']} (or a TOML file)\n\n"
         + _EXIT_HELP.format(
@@ -119,17 +145,11 @@ def _add_run(sub, names: dict) -> None:
     r.add_argument("--check", action="store_true",
                    help="exit 3 when an engine's verdict against the reference is FAIL (inconclusive does not fail)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    r.set_defaults(func=_cmd_run)
 
 
 def _add_tune(sub, names: dict) -> None:
     """The ``tune`` command's arguments."""
-    t = _command(
-        sub,
-        "tune",
-        help="search engine contact settings that reproduce a target r in free vibration",
-        epilog=f"engines: {names['engines']}",
-    )
+    t = _command(sub, "tune", _cmd_tune, epilog=f"engines: {names['engines']}")
     t.add_argument("engine", help=f"engine name ({names['engines']})")
     t.add_argument(
         "--r",
@@ -152,17 +172,11 @@ def _add_tune(sub, names: dict) -> None:
         help="only measure the engine's current default settings (r against amplitude, cost)",
     )
     t.add_argument("-q", "--quiet", action="store_true")
-    t.set_defaults(func=_cmd_tune)
 
 
 def _add_diagnose(sub, names: dict) -> None:
     """The ``diagnose`` command's arguments."""
-    d = _command(
-        sub,
-        "diagnose",
-        help="find the physical effect a measurement campaign needs (error ladder)",
-        epilog=f"effects: {names['effects']}",
-    )
+    d = _command(sub, "diagnose", _cmd_diagnose, epilog=f"effects: {names['effects']}")
     d.add_argument("campaign", help="campaign directory (campaign.toml + records/)")
     d.add_argument(
         "--effects",
@@ -180,27 +194,54 @@ def _add_diagnose(sub, names: dict) -> None:
     d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
     _plugin_option(d)
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
-    d.set_defaults(func=_cmd_diagnose)
 
 
 _noise_rad = _float_within(lambda x: math.isfinite(x) and x >= 0.0, "a noise level >= 0 [rad]")
 
 
-def _add_explain(sub, names: dict) -> None:
-    """The ``explain`` command's arguments."""
-    e = _command(
-        sub,
+#: What the commands that run one engine on a scenario's ground motions do, for their ``--help``.
+_ENGINE_COMMANDS = {
+    "explain": (
         "explain",
-        help="diagnose an engine's own responses as a campaign: the effects that bring Housner to it, the floor",
-        description="Run an engine on a scenario's ground motions and on free vibrations, diagnose its responses "
-        "like a measurement campaign, and compare the analytic model with the effects found against the engine, "
-        "record by record, beside the floor a correct model could reach.",
+        "Run an engine on a scenario's ground motions and on free vibrations, diagnose its responses like a "
+        "measurement campaign, and compare the analytic model with the effects found against the engine, record "
+        "by record, beside the floor a correct model could reach.",
+    ),
+    "frontier": (
+        "sweep",
+        "Sweep an engine's time step and its main contact setting (the axes its class declares), and measure at "
+        "each point the tuner's checks, per-record agreement and KS against the analytic model on a scenario's "
+        "ground motions, the extended floor and the CPU time; mark the knee, where accuracy stops improving.",
+    ),
+}
+
+
+def _engine_command(sub, name: str, func: Callable, names: dict) -> argparse.ArgumentParser:
+    """A command of :data:`_ENGINE_COMMANDS`: ENGINE, --scenario, --n-motions; :func:`_engine_command_tail`
+    adds --jobs and -q after the command's own options."""
+    verb, description = _ENGINE_COMMANDS[name]
+    c = _command(
+        sub,
+        name,
+        func,
+        description=description,
         epilog=f"engines: {names['engines']}\nscenarios: {names['scenarios']} (or a TOML file)\n\n"
         + _EXIT_HELP.format(run_failure="", ctrl_c="; finished records stay in the cache, re-run to resume"),
     )
-    e.add_argument("engine", type=_engine_name, metavar="ENGINE", help=f"engine to explain: {names['engines']}")
-    e.add_argument("--scenario", default="elcentro", help="scenario of ground motions (default elcentro)")
-    e.add_argument("--n-motions", type=_positive_int, help="number of motions of an RDK ensemble (positive)")
+    c.add_argument("engine", type=_engine_name, metavar="ENGINE", help=f"engine to {verb}: {names['engines']}")
+    c.add_argument("--scenario", default="elcentro", help="scenario of ground motions (default elcentro)")
+    c.add_argument("--n-motions", type=_positive_int, help="number of motions of an RDK ensemble (positive)")
+    return c
+
+
+def _engine_command_tail(c: argparse.ArgumentParser) -> None:
+    c.add_argument("--jobs", type=_positive_int, help="worker processes (default: all CPUs; 1 = this process)")
+    c.add_argument("-q", "--quiet", action="store_true", help="no progress bar or progress lines")
+
+
+def _add_explain(sub, names: dict) -> None:
+    """The ``explain`` command's arguments."""
+    e = _engine_command(sub, "explain", _cmd_explain, names)
     e.add_argument("--sigma", type=_noise_rad, default=EXPLAIN_SIGMA,
                    help=f"noise added to the engine's theta before the diagnosis [rad] (default {EXPLAIN_SIGMA:g})")
     e.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the noise and of the diagnosis' folds (0)")
@@ -209,6 +250,13 @@ def _add_explain(sub, names: dict) -> None:
     e.add_argument("--json", help="write the explanation to this JSON file")
     e.add_argument("--workdir", help="keep the engine's campaign in WORKDIR/ENGINE-SCENARIO (default: a temporary one)")
     _plugin_option(e)
-    e.add_argument("--jobs", type=_positive_int, help="worker processes (default: all CPUs; 1 = this process)")
-    e.add_argument("-q", "--quiet", action="store_true", help="no progress bar or progress lines")
-    e.set_defaults(func=_cmd_explain)
+    _engine_command_tail(e)
+
+
+def _add_frontier(sub, names: dict) -> None:
+    """The ``frontier`` command's arguments."""
+    f = _engine_command(sub, "frontier", _cmd_frontier, names)
+    f.add_argument("--json", help="write the frontier to this JSON file (the run report reads "
+                   "engines/models/frontier-ENGINE.json)")  # fmt: skip
+    f.add_argument("--figure", help="write the frontier's figure to this image file")
+    _engine_command_tail(f)

@@ -50,6 +50,37 @@ def damping_moment(phi, w, t, a, v, s, alpha, p2, q):
 
 # ----------------------------------------------------------------------
 # effects that change the rocking parameters
+class _NeutralAtZero(Effect):
+    """A fast-path dissipation effect of one parameter whose value 0 changes nothing.
+
+    At a non-zero value v, ``modify_params`` gives the rocking parameters of :meth:`_realise` and
+    ``terms`` the one kernel term of :meth:`_term`: the same physics by the two routes.
+    """
+
+    stage = STAGE_DISSIPATION
+    fast_path = True
+
+    def _value(self) -> float:
+        (key,) = type(self).params
+        return getattr(self, key)
+
+    def _realise(self, params, v: float):
+        """The rocking parameters ``params`` with the effect of value ``v`` applied."""
+        raise NotImplementedError
+
+    def _term(self, v: float):
+        """The effect of value ``v`` as a kernel term (:mod:`housner.effects.terms`)."""
+        raise NotImplementedError
+
+    def modify_params(self, params, specimen):
+        v = self._value()
+        return params if v == 0.0 else self._realise(params, v)
+
+    def terms(self, params, specimen):
+        v = self._value()
+        return () if v == 0.0 else (self._term(v),)
+
+
 @register_effect
 @dataclass(frozen=True)
 class Restitution(Effect):
@@ -89,7 +120,7 @@ class Restitution(Effect):
 
 @register_effect
 @dataclass(frozen=True)
-class AmplitudeDependentRestitution(Effect):
+class AmplitudeDependentRestitution(_NeutralAtZero):
     """Impact loss that depends on the impact speed.
 
     The energy ratio of an impact with pre-impact speed |theta'| is
@@ -116,23 +147,19 @@ class AmplitudeDependentRestitution(Effect):
 
     name = "amplitude_dependent_restitution"
     params = {"exponent": ParamSpec("-", (-2.0, 2.0), 0.0, 0.0, "exponent n of r (|theta'|/(p alpha))^n")}
-    stage = STAGE_DISSIPATION
-    fast_path = True
     exponent: float = 0.0
 
-    def modify_params(self, params, specimen):
-        if self.exponent == 0.0:
-            return params
-        return replace(params, r_amp_exponent=self.exponent)
+    def _realise(self, params, n: float):
+        return replace(params, r_amp_exponent=n)
 
-    def terms(self, params, specimen):
+    def _term(self, n: float) -> ImpactTerm:
         """The same law as an impact term that scales the ratio in force."""
-        return () if self.exponent == 0.0 else (ImpactTerm(amplitude_law, (self.exponent,)),)
+        return ImpactTerm(amplitude_law, (n,))
 
 
 @register_effect
 @dataclass(frozen=True)
-class RotationalDamping(Effect):
+class RotationalDamping(_NeutralAtZero):
     """Viscous moment between impacts, -c I0 theta'.
 
     The equation of motion gains -c theta', so between impacts the rocking
@@ -154,18 +181,14 @@ class RotationalDamping(Effect):
 
     name = "rotational_damping"
     params = {"c": ParamSpec("1/s", (0.0, 5.0), 0.0, 0.0, "viscous damping rate of the rotation")}
-    stage = STAGE_DISSIPATION
-    fast_path = True
     c: float = 0.0
 
-    def modify_params(self, params, specimen):
-        if self.c == 0.0:
-            return params
-        return replace(params, damping=params.damping + self.c)
+    def _realise(self, params, c: float):
+        return replace(params, damping=params.damping + c)
 
-    def terms(self, params, specimen):
+    def _term(self, c: float) -> MomentTerm:
         """The same moment as a kernel term, -c w (zero at rest: the uplift rule is unchanged)."""
-        return () if self.c == 0.0 else (MomentTerm(damping_moment, (self.c,), at_rest=False),)
+        return MomentTerm(damping_moment, (c,), at_rest=False)
 
 
 def asymmetric_impact_ratios(specimen: Specimen, e: float) -> tuple[float, float]:

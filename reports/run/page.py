@@ -26,18 +26,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from housner.reports.page import (
-    Section,
-    document,
-    engine_tag,
-    esc,
-    guarded,
-    render_directory,
-    write_directory_report,
-    written_by,
-)
+from housner.reports._scenario_page import scenario_page
+from housner.reports.page import Section, guarded, render_directory, write_directory_report
 from housner.reports.run.sections.agreement import _agreement, _free_vibration, _spectra
 from housner.reports.run.sections.distribution import _distribution
+from housner.reports.run.sections.engines_explained import engines_explained, has_engine_measurements
 from housner.reports.run.sections.ensemble import _ensemble
 from housner.reports.run.sections.headline import _headline, _specimen
 from housner.reports.run.sections.run_info import _failures, _provenance
@@ -110,6 +103,9 @@ def _build_sections(run: Run) -> list[Section]:
         Section("distribution", "Distribution of the peak rotation", _distribution(run)),
         Section("agreement", "Cross-engine agreement", _agreement(run)),
     ]
+    if has_engine_measurements(run):
+        out.append(Section("engines-explained", "What each engine's departure is made of, and what it costs",
+                           guarded("The engines' decomposition and frontiers", lambda: engines_explained(run))))
     if run.source == "pulses":
         out.append(Section("rocking-spectra", "Rocking spectra", guarded("The rocking spectra", lambda: _spectra(run))))
     if run.source == "free_vibration":
@@ -124,16 +120,14 @@ def _build_sections(run: Run) -> list[Section]:
 
 
 def _page(run: Run, sections: list[Section], seconds: float) -> str:
-    scen = run.meta.get("scenario") or {}
-    name = scen.get("name") or run.path.name
-    spec = run.specimen.get("name", "")
     n_motions = run.meta.get("n_motions", run.results["motion_id"].nunique())
-    created = (run.meta.get("provenance") or {}).get("created", "")
-    subtitle = (
-        f'<p class="sub">{esc(scen.get("description", ""))}</p>'
-        f'<p class="sub">{esc(spec)} &middot; {esc(n_motions)} motions &middot; engines '
-        f"{', '.join(engine_tag(e, run) for e in run.engines)} &middot; reference {esc(run.reference)}"
-        f"{' &middot; run ' + esc(created) if created else ''}</p>"
+    return scenario_page(
+        run,
+        sections,
+        seconds,
+        title="housner report",
+        heading="Scenario",
+        writer="housner.reports.run.write_report",
+        specimen=run.specimen.get("name", ""),
+        n_motions=n_motions,
     )
-    footer = written_by("housner.reports.run.write_report", run.path, seconds)
-    return document(f"{name}: housner report", f"Scenario <code>{esc(name)}</code>", subtitle, sections, footer)

@@ -38,16 +38,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from housner.reports.page import (
-    Section,
-    document,
-    engine_tag,
-    esc,
-    guarded,
-    render_directory,
-    write_directory_report,
-    written_by,
-)
+from housner.reports._scenario_page import scenario_page
+from housner.reports.page import Section, guarded, render_directory, write_directory_report
 from housner.reports.study.sections import (
     exceedance_figures,
     failures,
@@ -125,14 +117,12 @@ def _build_sections(study: StudyView) -> list[Section]:
 
 
 def _page(study: StudyView, sections: list[Section], seconds: float) -> str:
-    scen = study.meta.get("scenario") or {}
-    name = scen.get("name") or study.path.name
-    spec = (study.meta.get("specimen") or {}).get("name", "")
-    created = (study.meta.get("provenance") or {}).get("created", "")
-    subtitle = (
-        f'<p class="sub">{esc(scen.get("description") or "")}</p>'
-        f'<p class="sub">{esc(spec)} &middot; engines {", ".join(engine_tag(e, study) for e in study.engines)} '
-        f"&middot; reference {esc(study.reference)}{' &middot; run ' + esc(created) if created else ''}</p>"
+    return scenario_page(
+        study,
+        sections,
+        seconds,
+        title="fragility study",
+        heading="Fragility study",
+        writer="housner.reports.study.page.write_study_report",
+        specimen=(study.meta.get("specimen") or {}).get("name", ""),
     )
-    footer = written_by("housner.reports.study.page.write_study_report", study.path, seconds)
-    return document(f"{name}: fragility study", f"Fragility study <code>{esc(name)}</code>", subtitle, sections, footer)

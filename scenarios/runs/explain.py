@@ -47,6 +47,7 @@ from housner.scenarios.campaigns.verdict import pointer_text
 from housner.scenarios.catalogue.scenario import Scenario
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
+from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.runs.chaos import RECORD_RTOL
 from housner.scenarios.runs.engine_campaign import (
@@ -62,9 +63,10 @@ from housner.scenarios.runs.explain_floor import (
     extended_floor,
     model_form_floor,
 )
-from housner.stats import per_record_agreement
+from housner.stats import ks_2samp, per_record_agreement
 
-__all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "RECORD_RTOL", "Explanation", "explain_engine"]
+__all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "RECORD_RTOL", "Explanation", "explain_engine", "record_agreement",
+           "record_thetas"]  # fmt: skip
 
 #: Noise added to the engine's theta before the diagnosis [rad]. The diagnosis takes a record as signal plus
 #: white noise of the level it estimates from the record (third differences,
@@ -108,6 +110,9 @@ class Explanation:
         What is left and where, in one sentence or two.
     n_records : int
         Ground motions on which both the engine and the analytic model ran.
+    ks : dict
+        ``plain`` and ``with_effects``: the two-sample KS distance [-] of the engine's theta_max/alpha
+        distribution from the analytic model's, without and with ``effects`` (overturns as +inf).
     details : dict
         The two floors in full (per perturbation), overturn counts, settings and the campaign's path.
     wall_s : dict
@@ -125,12 +130,13 @@ class Explanation:
     diagnosis: dict
     remains: str
     n_records: int
+    ks: dict = field(default_factory=dict)
     details: dict = field(default_factory=dict)
     wall_s: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """Plain data for JSON (NaN as None)."""
-        return _plain({k: getattr(self, k) for k in self.__dataclass_fields__})
+        return jsonable({k: getattr(self, k) for k in self.__dataclass_fields__}, nonfinite="null")
 
     def summary(self) -> str:
         """A few lines: effects, agreement before and after beside the floor, reaching it, what remains."""
@@ -145,34 +151,29 @@ class Explanation:
             f"{self.agreement:.0%}; floor {self.floor:.0%} (the lower of chaos {fp['chaos']:.0%} and model form "
             f"{fp['model_form']:.0%})",
             f"reaches the floor (within {REACH_MARGIN:.0%}): {'yes' if self.reaches_floor else 'no'}",
+            f"KS distance from {self.engine}: plain {self.ks.get('plain', math.nan):.3f} -> with the effects "
+            f"{self.ks.get('with_effects', math.nan):.3f}",
             f"held-out error {d['heldout_error']['before']:.4f} -> {d['heldout_error']['after']:.4f} alpha, "
             f"residual ratio {d['residual_ratio']:.2f}",
             f"remains: {self.remains}",
         ])  # fmt: skip
 
 
-def _plain(x):
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    return x if x is None or isinstance(x, str) else str(x)
 
-
-def _theta(results: pd.DataFrame, engine: str, offset: int = 0) -> pd.Series:
+def record_thetas(results: pd.DataFrame, engine: str, offset: int = 0) -> pd.Series:
     """theta_max/alpha per ground motion (+inf: overturned) of an engine's ok rows, indexed by motion."""
     ok = results[(results["engine"] == engine) & (results["status"] == "ok") & (results["motion_id"] >= offset)]
     v = np.where(ok["overturned"].to_numpy(bool), np.inf, ok["theta_max_over_alpha"].to_numpy(float))
     return pd.Series(v, index=ok["motion_id"].to_numpy(int) - offset)
 
 
-def _agreement(engine_theta: pd.Series, model_theta: pd.Series) -> tuple[float, int]:
+def _ks(engine_theta: pd.Series, model_theta: pd.Series) -> float:
+    """KS distance [-] between the engine's and the model's theta_max/alpha on the records both ran."""
+    both = engine_theta.index.intersection(model_theta.index)
+    return ks_2samp(engine_theta[both].to_numpy(), model_theta[both].to_numpy()).distance if len(both) else math.nan
+
+
+def record_agreement(engine_theta: pd.Series, model_theta: pd.Series) -> tuple[float, int]:
     """Per-record agreement share [-] of the model with the engine (the reference) on the records both ran."""
     both = engine_theta.index.intersection(model_theta.index)
     if not len(both):
@@ -278,17 +279,17 @@ def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say,
     t2 = time.perf_counter()
     final = [(n, dict(p)) for n, p in d.final.effects]
     n_fv = len(runs.releases)
-    eng_theta = _theta(runs.results, engine, n_fv)
-    plain_theta = _theta(runs.results, "housner", n_fv)
-    plain, n = _agreement(eng_theta, plain_theta)
+    eng_theta = record_thetas(runs.results, engine, n_fv)
+    plain_theta = record_thetas(runs.results, "housner", n_fv)
+    plain, n = record_agreement(eng_theta, plain_theta)
     with_eff, eff_theta = plain, plain_theta
     if final:
         say(f"running the analytic model with {', '.join(n for n, _ in final)}")
         effs = tuple(make_effect(nm, **p) for nm, p in final)
         res_e, _h, _i = run_engines(sc.specimen, runs.motions, {"housner": runs.settings["housner"]}, options,
                                     effects=effs, histories=False)  # fmt: skip
-        eff_theta = _theta(res_e, "housner")
-        with_eff, n = _agreement(eng_theta, eff_theta)
+        eff_theta = record_thetas(res_e, "housner")
+        with_eff, n = record_agreement(eng_theta, eff_theta)
     t3 = time.perf_counter()
     say("measuring the floors (chaos: the engine's r and p errors; model form: correct integrators)")
     ms = [runs.motions[i] for i in sorted(eng_theta.index)]
@@ -313,6 +314,7 @@ def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say,
                    "residual_ratio": v.residual.ratio},  # fmt: skip
         remains=_remains(engine, names, with_eff, floor, reaches, d),
         n_records=int(n),
+        ks={"plain": _ks(eng_theta, plain_theta), "with_effects": _ks(eng_theta, eff_theta)},
         details={
             "chaos_floor": chaos.to_dict(),
             "model_form_floor": mform.to_dict(),

@@ -148,28 +148,29 @@ def _range(x: np.ndarray, unit: str) -> str:
 
 
 #: Fitted Rezaeian & Der Kiureghian parameters (keys of ``housner.scenarios.motions.rdk.RDKParams.describe()``):
-#: key -> (symbol, unit, meaning).
+#: key -> (symbol, meaning), or (symbol, meaning, unit) where the key's unit suffix (:func:`_unit_from_key`)
+#: does not give the unit.
 _RDK_ROWS = {
-    "model": ("model", "", ""),
-    "Ia_m_s": ("I<sub>a</sub>", "m/s", "Arias intensity, &pi;/(2g) &int; &uuml;<sub>g</sub>&sup2; dt"),
-    "D5_95_s": ("D<sub>5-95</sub>", "s", "significant duration, from 5 % to 95 % of I<sub>a</sub>"),
-    "t_mid_s": ("t<sub>mid</sub>", "s", "time at 45 % of I<sub>a</sub>"),
-    "omega_mid_rad_s": ("&omega;<sub>mid</sub>", "rad/s", "filter frequency at t<sub>mid</sub>"),
-    "f_mid_Hz": ("f<sub>mid</sub>", "Hz", "&omega;<sub>mid</sub>/2&pi;"),
-    "omega_prime_rad_s2": ("&omega;&prime;", "rad/s&sup2;", "rate of change of the filter frequency"),
-    "zeta_f": ("&zeta;<sub>f</sub>", "&ndash;", "filter damping ratio"),
-    "omega_c_rad_s": ("&omega;<sub>c</sub>", "rad/s", "corner frequency of the high-pass filter"),
-    "T0_s": ("T<sub>0</sub>", "s", "start of the modulating function q(t)"),
-    "dt_s": ("dt", "s", "step of the simulated motions (prototype scale)"),
-    "duration_s": ("duration", "s", "length of the simulated motions (prototype scale)"),
+    "model": ("model", ""),
+    "Ia_m_s": ("I<sub>a</sub>", "Arias intensity, &pi;/(2g) &int; &uuml;<sub>g</sub>&sup2; dt"),
+    "D5_95_s": ("D<sub>5-95</sub>", "significant duration, from 5 % to 95 % of I<sub>a</sub>"),
+    "t_mid_s": ("t<sub>mid</sub>", "time at 45 % of I<sub>a</sub>"),
+    "omega_mid_rad_s": ("&omega;<sub>mid</sub>", "filter frequency at t<sub>mid</sub>"),
+    "f_mid_Hz": ("f<sub>mid</sub>", "&omega;<sub>mid</sub>/2&pi;"),
+    "omega_prime_rad_s2": ("&omega;&prime;", "rate of change of the filter frequency"),
+    "zeta_f": ("&zeta;<sub>f</sub>", "filter damping ratio", "&ndash;"),
+    "omega_c_rad_s": ("&omega;<sub>c</sub>", "corner frequency of the high-pass filter"),
+    "T0_s": ("T<sub>0</sub>", "start of the modulating function q(t)"),
+    "dt_s": ("dt", "step of the simulated motions (prototype scale)"),
+    "duration_s": ("duration", "length of the simulated motions (prototype scale)"),
     "alpha1": (
         "&alpha;<sub>1</sub>",
-        "m/s&sup2; s<sup>1&minus;&alpha;2</sup>",
         "scale of q(t) = &alpha;<sub>1</sub> (t&minus;T<sub>0</sub>)<sup>&alpha;2&minus;1</sup> "
         "exp(&minus;&alpha;<sub>3</sub>(t&minus;T<sub>0</sub>))",
+        "m/s&sup2; s<sup>1&minus;&alpha;2</sup>",
     ),
-    "alpha2": ("&alpha;<sub>2</sub>", "&ndash;", "shape of q(t)"),
-    "alpha3_1_s": ("&alpha;<sub>3</sub>", "1/s", "decay rate of q(t)"),
+    "alpha2": ("&alpha;<sub>2</sub>", "shape of q(t)", "&ndash;"),
+    "alpha3_1_s": ("&alpha;<sub>3</sub>", "decay rate of q(t)"),
 }
 
 
@@ -204,7 +205,8 @@ def _rdk_table(params: dict) -> str:
             value, unit, desc = v.get("value"), esc(v.get("unit", "")), esc(v.get("description", ""))
             symbol = f"<code>{esc(k)}</code>"
         else:
-            symbol, unit, desc = _RDK_ROWS.get(k, (f"<code>{esc(k)}</code>", _unit_from_key(str(k)), ""))
+            symbol, desc, *unit = _RDK_ROWS.get(k, (f"<code>{esc(k)}</code>", ""))
+            unit = unit[0] if unit else _unit_from_key(str(k))
             value = v
         cell = esc(value) if isinstance(value, str) else fmt_g(value, 5)
         rows.append([symbol, cell, unit, desc])

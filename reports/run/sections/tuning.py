@@ -33,7 +33,7 @@ def _tuning_caveats(run: Run) -> dict[str, str]:
     """engine -> HTML: the tuning checks its tuning file did not meet, by how much, and what that means here."""
     out = {}
     cmp = run.comparison
-    for name, (f, d) in _tuning_data(run).items():
+    for name, (f, d) in model_data(run).items():
         if name not in run.others or d.get("met") is not False:
             continue
         failed = [c for c in _tuning_checks(d) if not c.met]
@@ -88,17 +88,18 @@ def _settings_html(settings: dict) -> str:
     )
 
 
-def _tuning_file(engine: str) -> Path:
+def model_file(kind: str, engine: str) -> Path:
+    """The stored ``<kind>-<engine>.json`` (kind: tuning, explain, frontier) in :data:`TUNING_DIR`."""
     if TUNING_DIR is not None:
-        return Path(TUNING_DIR) / f"tuning-{engine}.json"
-    return Path(engines.__file__).resolve().parent / "models" / f"tuning-{engine}.json"
+        return Path(TUNING_DIR) / f"{kind}-{engine}.json"
+    return Path(engines.__file__).resolve().parent / "models" / f"{kind}-{engine}.json"
 
 
-def _tuning_data(run: Run) -> dict[str, tuple[Path, dict]]:
-    """engine -> (file, parsed tuning-<engine>.json) for the run's engines that have one."""
+def model_data(run: Run, kind: str = "tuning") -> dict[str, tuple[Path, dict]]:
+    """engine -> (file, parsed ``<kind>-<engine>.json``) for the run's engines that have one."""
     found = {}
     for name in run.engines:
-        f = _tuning_file(name)
+        f = model_file(kind, name)
         if f.is_file():
             try:
                 found[name] = (f, json.loads(f.read_text(encoding="utf-8")))
@@ -270,7 +271,7 @@ def _engine_defaults(name: str) -> dict:
 
 def _tuning(run: Run) -> str:
     """Tuned contact checks and r against amplitude, from housner.engines/models/tuning-<engine>.json when present."""
-    found = _tuning_data(run)
+    found = model_data(run)
     if not found:
         return html_note(
             "No tuning results (engines/models/tuning-&lt;engine&gt;.json) for these engines: "

@@ -1,0 +1,169 @@
+"""Report section on what each engine's departure from the analytic model is made of, and what it costs.
+
+Reads, for each of the run's engines, the stored measurements next to its tuning file
+(:func:`~housner.reports.run.sections.tuning.model_file`):
+
+* ``explain-<engine>.json`` (``housner explain ENGINE --json FILE``): the effects that carry
+  the analytic model to the engine, its per-record agreement with the engine before and
+  after them, the extended floor a correct model could reach, and what remains;
+* ``frontier-<engine>.json`` (``housner frontier ENGINE --json FILE``): the engine's
+  accuracy-cost frontier, its defaults and its knee.
+
+Both were measured on a named scenario, not on this run; the section says which.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+from housner.reports.frontier_figure import frontier_figure
+from housner.reports.page import engine_tag, esc, fmt_g, html_figure, html_note, html_table, status_badge
+from housner.reports.run.sections.tuning import model_data, model_file
+from housner.reports.run.view import Run
+from housner.scenarios.runs.frontier import Frontier, knee_reason
+
+__all__ = ["engines_explained", "has_engine_measurements"]
+
+
+def _pct(x) -> str:
+    return "&ndash;" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.0%}"
+
+
+def _effects_html(effects) -> str:
+    if not effects:
+        return "none"
+    return "<br>".join(
+        f"<code>{esc(e['name'])}</code> ("
+        + ", ".join(f"{esc(k)} = {fmt_g(v, 4)}" for k, v in (e.get("params") or {}).items())
+        + ")"
+        for e in effects
+    )
+
+
+def _ks_html(ks) -> str:
+    if not ks or ks.get("plain") is None:
+        return ""
+    return f"<br><small>KS {fmt_g(ks['plain'], 3)} &rarr; {fmt_g(ks.get('with_effects'), 3)}</small>"
+
+
+def _decomposition(run: Run, found: dict) -> str:
+    rows = []
+    for name, (f, d) in found.items():
+        if "engine" not in d:
+            rows.append([engine_tag(name, run), f"<code>{esc(f.name)}</code>: unreadable", "", "", "", "", ""])
+            continue
+        parts = d.get("floor_parts") or {}
+        reaches = d.get("reaches_floor")
+        rows.append(
+            [
+                engine_tag(name, run),
+                f"{esc(d.get('scenario', ''))}, {esc(d.get('n_records', ''))} records",
+                _effects_html(d.get("effects")),
+                f"{_pct(d.get('agreement_plain'))} &rarr; {_pct(d.get('agreement'))}" + _ks_html(d.get("ks")),
+                f"{_pct(d.get('floor'))} <small>(chaos {_pct(parts.get('chaos'))}, "
+                f"model form {_pct(parts.get('model_form'))})</small>",
+                status_badge(bool(reaches), "reaches it", "below it") if reaches is not None else "&ndash;",
+                esc(d.get("remains", "")),
+            ]
+        )
+    return html_table(
+        [
+            "engine",
+            "measured on",
+            "effects found",
+            "agreement: Housner &rarr; Housner + effects",
+            "extended floor",
+            "at the floor (within 5 points)",
+            "what remains",
+        ],  # fmt: skip
+        rows,
+        caption="Per-record agreement: the share of ground motions on which the analytic model and the engine "
+        "both overturn, or both rock with &theta;<sub>max</sub>/&alpha; within 3 %. The extended floor is the "
+        "agreement a correct model could still miss: the lower of the chaos floor (the analytic model against "
+        "itself with r and p perturbed by the engine's measured errors) and the model-form floor (two correct "
+        "integrators' conventions).",
+    )
+
+
+def _frontier_rows(fr: Frontier) -> list[list[str]]:
+    rows = []
+    for i, p in enumerate(fr.points):
+        mark = " ".join(m for m, on in (("defaults", i == fr.default), ("knee", i == fr.knee)) if on)
+        if p.error:
+            rows.append([esc(p.label), f"failed: {esc(p.error)}", *[""] * 8])
+            continue
+        se = p.agreement_se()
+        rows.append(
+            [
+                f"<code>{esc(p.label)}</code>" + (f" <b>{mark}</b>" if mark else ""),
+                f"{p.r_error:+.2%}",
+                f"{p.small_error:+.2%}",
+                f"{p.decay_error:+.1%}",
+                f"{p.pulse_error:+.2%}",
+                status_badge(p.checks_met, "met", "NOT met") + (f"<br><small>{esc(p.failed)}</small>" * bool(p.failed)),
+                f"{p.agreement:.0%} &plusmn; {se:.0%}",
+                _pct(p.floor),
+                f"{p.ks:.3f}",
+                fmt_g(p.cpu_per_sim_second, 3),
+            ]
+        )
+    return rows
+
+
+def _frontier(run: Run, name: str, d: dict) -> str:
+    try:
+        fr = Frontier.from_dict(d)
+    except (KeyError, TypeError, ValueError) as e:
+        return html_note(f"{engine_tag(name, run)}: the frontier file cannot be read ({esc(e)})", "warn")
+    table = html_table(
+        [
+            "point",
+            "r error 0.2-0.9 &alpha;",
+            "small-amplitude r",
+            "decay, 40 impacts",
+            "pulses",
+            "tuner checks",
+            "agreement &plusmn; SE",
+            "extended floor",
+            "KS",
+            "CPU s per sim. s",
+        ],  # fmt: skip
+        _frontier_rows(fr),
+        caption=f"{engine_tag(name, run)} on <code>{esc(fr.scenario)}</code> ({fr.n_motions} motions), measured "
+        f"{esc(fr.date)}, version {esc(fr.version)}; errors are the worst by magnitude. Knee: "
+        f"{esc(knee_reason(fr))}.",
+    )
+    used = ((run.meta.get("engines") or {}).get(name) or {}).get("settings") or {}
+    knee = fr.knee_settings()
+    differ = [k for k in knee if k in used and json.dumps(used[k]) != json.dumps(knee[k])]
+    note = html_note(f"This run's {esc(', '.join(differ))} differ from the knee's.", "warn") if differ else ""
+    fig = html_figure(frontier_figure(fr), f"{esc(name)}: accuracy against cost", f"{name} frontier")
+    return f"<h4>{engine_tag(name, run)}</h4>{table}{note}{fig}"
+
+
+def has_engine_measurements(run: Run) -> bool:
+    """Whether an engine of the run other than the reference has a stored explanation or frontier."""
+    kinds = ("explain", "frontier")
+    return any(name != run.reference and any(model_file(k, name).is_file() for k in kinds) for name in run.engines)
+
+
+def engines_explained(run: Run) -> str:
+    """HTML: each engine's decomposition (explain) and its accuracy-cost frontier, from the stored files."""
+    expl = {k: v for k, v in model_data(run, "explain").items() if k != run.reference}
+    front = {k: v for k, v in model_data(run, "frontier").items() if k != run.reference}
+    if not expl and not front:
+        return html_note(
+            "No stored explanation or frontier for these engines (engines/models/explain-&lt;engine&gt;.json, "
+            "frontier-&lt;engine&gt;.json). <code>housner explain ENGINE --json FILE</code> and "
+            "<code>housner frontier ENGINE --json FILE</code> measure them."
+        )
+    out = []
+    if expl:
+        out.append("<h3>The departure, decomposed</h3>" + _decomposition(run, expl))
+    if front:
+        out.append("<h3>Accuracy against cost</h3><p>Each engine's time step and main contact setting swept, the "
+                   "other settings at their defaults: the tuner's checks, per-record agreement with the analytic "
+                   "model and KS on the scenario's ground motions, and the CPU time.</p>")  # fmt: skip
+        out += [_frontier(run, name, d) for name, (_f, d) in front.items()]
+    return "".join(out)

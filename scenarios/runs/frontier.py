@@ -1,0 +1,353 @@
+"""An engine's accuracy-cost frontier: its time step and main contact setting swept, each point measured.
+
+:func:`engine_frontier` sweeps an engine's settings along the axes its class declares
+(``FRONTIER``: the time step and its main contact setting, 3-5 values each, the other
+settings at their defaults; :func:`frontier_axes`) and measures, at every point:
+
+* the tuner's checks (:mod:`housner.engines.tuning.checks`): the worst error of the
+  energy ratio r over releases at 0.2-0.9 alpha, the worst at small amplitudes, the free
+  decay over 40 impacts, the pulses, whether all are met, and the CPU seconds per simulated
+  second on the check records;
+* the scenario's ground motions: per-record agreement of the engine's theta_max/alpha with
+  the analytic model's (within :data:`~housner.scenarios.runs.chaos.RECORD_RTOL`), the
+  two-sample KS statistic of the two distributions, and the extended floor
+  (:func:`~housner.scenarios.runs.explain_floor.extended_floor`: the chaos floor of the
+  point's own r and p errors, or the model-form floor of a correct integrator, the lower).
+
+:func:`knee` picks the point where accuracy stops improving: the cheapest point that meets
+every tuner check some point meets (:func:`admissible`) and whose per-record agreement is not significantly
+below the best point's (a two-proportion z-test at 95 %, :data:`KNEE_Z`). ``housner frontier
+ENGINE`` runs it from the shell and stores the result that the run report draws
+(``engines/models/frontier-<engine>.json``).
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from housner.engines.base import engine_class
+from housner.engines.tuning import COST_TIE, tune
+from housner.scenarios.catalogue.scenario import Scenario
+from housner.scenarios.execution.options import RunOptions
+from housner.scenarios.execution.rundir import jsonable
+from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.motions.build import build_motions
+from housner.scenarios.runs.engine_campaign import check_engine, ground_motion_scenario
+from housner.scenarios.runs.explain import record_agreement, record_thetas
+from housner.scenarios.runs.explain_floor import engine_chaos_floor, model_form_floor
+from housner.stats import ks_2samp
+
+__all__ = ["KNEE_Z", "TIMESTEP_FACTORS", "Frontier", "FrontierPoint", "admissible", "engine_frontier", "frontier_axes",
+           "knee", "knee_reason", "unmet_everywhere"]  # fmt: skip
+
+#: Time steps swept for an engine that declares no ``FRONTIER``: its default times these [-].
+TIMESTEP_FACTORS = (0.5, 1.0, 2.0, 4.0)
+#: One-sided z of the knee's test [-]: a point's agreement counts as below the best point's when the
+#: difference exceeds 1.96 standard errors of a difference of two shares (95 %, two-sided).
+KNEE_Z = 1.96
+
+
+@dataclass
+class FrontierPoint:
+    """One point of the sweep: the settings that differ from the defaults and what they measured.
+
+    Errors are relative [-] (engine / analytic - 1, the worst by magnitude); shares are of the
+    records both engines ran [-]; ``cpu_per_sim_second`` is CPU seconds per simulated second
+    on the tuner's check records.
+    """
+
+    axis: str  # the setting swept ("" for the defaults)
+    settings: dict  # the settings that differ from the defaults
+    r_error: float = math.nan
+    small_error: float = math.nan
+    decay_error: float = math.nan
+    pulse_error: float = math.nan
+    checks_met: bool = False
+    failed: str = ""  # the tuner's checks not met, comma-separated
+    score: float = math.nan  # the tuner's score: the largest error over its tolerance (<= 1: all met)
+    agreement: float = math.nan
+    n_records: int = 0
+    ks: float = math.nan
+    floor: float = math.nan
+    floor_parts: dict = field(default_factory=dict)
+    overturned: int = 0
+    cpu_per_sim_second: float = math.nan
+    error: str = ""
+
+    @property
+    def label(self) -> str:
+        """The point as a table names it: ``timestep=0.0001``, or ``defaults``."""
+        return ", ".join(f"{k}={_fmt(v)}" for k, v in self.settings.items()) or "defaults"
+
+    def agreement_se(self) -> float:
+        """Binomial standard error of :attr:`agreement` [-]."""
+        p, n = self.agreement, self.n_records
+        return math.sqrt(max(p * (1.0 - p), 0.0) / n) if n and math.isfinite(p) else math.nan
+
+
+@dataclass
+class Frontier:
+    """The sweep of one engine on one scenario (module docstring)."""
+
+    engine: str
+    scenario: str
+    n_motions: int
+    defaults: dict
+    axes: dict
+    points: list[FrontierPoint]
+    knee: int  # index into points
+    default: int  # index into points
+    model_form_floor: float
+    version: str = ""
+    date: str = ""
+    wall_s: float = 0.0
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["points"] = [{**asdict(p), "label": p.label} for p in self.points]
+        return jsonable(d, nonfinite="null")
+
+    @classmethod
+    def from_dict(cls, d: Mapping) -> Frontier:
+        pts = [FrontierPoint(**{k: _num(v) for k, v in p.items() if k != "label"}) for p in d["points"]]
+        keep = {k: d[k] for k in ("engine", "scenario", "n_motions", "defaults", "axes", "knee", "default",
+                                  "model_form_floor", "version", "date", "wall_s") if k in d}  # fmt: skip
+        return cls(points=pts, **{k: _num(v) for k, v in keep.items()})
+
+    def knee_settings(self) -> dict:
+        """The knee's settings, complete (the defaults with the knee's changes)."""
+        return {**self.defaults, **self.points[self.knee].settings}
+
+    def summary(self) -> str:
+        """The frontier as a text table, the default and the knee marked."""
+        head = (f"{'point':32s} {'r err':>7s} {'small':>7s} {'decay':>7s} {'pulse':>7s} {'checks':>6s} "
+                f"{'agree':>6s} {'floor':>6s} {'KS':>6s} {'cpu/s':>8s}")  # fmt: skip
+        lines = [f"{self.engine} on {self.scenario} ({self.n_motions} motions): accuracy against cost", head]
+        for i, p in enumerate(self.points):
+            mark = ("*" if i == self.knee else " ") + ("d" if i == self.default else " ")
+            if p.error:
+                lines.append(f"{mark}{p.label[:30]:30s} failed: {p.error}")
+                continue
+            lines.append(f"{mark}{p.label[:30]:30s} {p.r_error:+7.2%} {p.small_error:+7.2%} {p.decay_error:+7.1%} "
+                         f"{p.pulse_error:+7.2%} {'met' if p.checks_met else 'NOT':>6s} {p.agreement:6.0%} "
+                         f"{p.floor:6.0%} {p.ks:6.3f} {p.cpu_per_sim_second:8.4f}")  # fmt: skip
+        k, d = self.points[self.knee], self.points[self.default]
+        lines.append(f"d: the defaults; *: the knee ({k.label}): {knee_reason(self)}")
+        if self.knee != self.default and math.isfinite(k.cpu_per_sim_second) and d.cpu_per_sim_second > 0:
+            lines.append(f"the knee costs {k.cpu_per_sim_second / d.cpu_per_sim_second:.2f}x the defaults")
+        return "\n".join(lines)
+
+
+def frontier_axes(engine: str) -> dict[str, tuple]:
+    """The settings an engine's frontier sweeps and their values: the class's ``FRONTIER``, else its
+    default ``timestep`` times :data:`TIMESTEP_FACTORS`.
+
+    Raises
+    ------
+    ValueError
+        For an engine with neither (nothing to sweep), naming it.
+    """
+    cls = engine_class(engine)
+    axes = getattr(cls, "FRONTIER", None)
+    if axes:
+        return {str(k): tuple(v) for k, v in axes.items()}
+    dt = (getattr(cls, "DEFAULTS", None) or {}).get("timestep")
+    if not dt:
+        raise ValueError(f"engine {engine!r} has no `timestep` setting and declares no FRONTIER axes: "
+                         "nothing to sweep")  # fmt: skip
+    return {"timestep": tuple(float(dt) * f for f in TIMESTEP_FACTORS)}
+
+
+def _points(defaults: Mapping, axes: Mapping[str, Sequence]) -> list[FrontierPoint]:
+    """The defaults first, then each axis' values other than its default, the other settings at theirs."""
+    pts = [FrontierPoint("", {})]
+    for name, values in axes.items():
+        if name not in defaults:
+            raise ValueError(f"frontier axis {name!r} is not a setting of the engine; its settings: "
+                             f"{', '.join(sorted(defaults))}")  # fmt: skip
+        pts += [FrontierPoint(name, {name: v}) for v in values if not _same(v, defaults[name])]
+    return pts
+
+
+def engine_frontier(
+    engine: str,
+    scenario: Scenario | str | Path = "elcentro",
+    *,
+    n_motions: int | None = None,
+    axes: Mapping[str, Sequence] | None = None,
+    options: RunOptions | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Frontier:
+    """Sweep an engine's settings and measure accuracy and cost at each point (module docstring).
+
+    Parameters
+    ----------
+    engine : str
+        Registry name of the engine (not the analytic one: it is the reference).
+    scenario : Scenario or str or Path
+        A scenario of ground motions (default ``elcentro``); its specimen is tuned for.
+    n_motions : int, optional
+        Ground motions of an RDK ensemble (default: the scenario's).
+    axes : mapping, optional
+        Setting name -> values to sweep (default :func:`frontier_axes`).
+    options : RunOptions, optional
+        How the ground-motion records execute (workers, cache, progress bar).
+    progress : callable, optional
+        Called with a line of text as the work goes.
+
+    Returns
+    -------
+    Frontier
+    """
+    t0 = time.perf_counter()
+    say = progress or (lambda s: None)
+    check_engine(engine)
+    if engine == "housner":
+        raise ValueError("`engine` 'housner' is the reference the frontier measures against; name another engine")
+    sc = ground_motion_scenario(scenario, n_motions)
+    cls = engine_class(engine)
+    ax = {str(k): tuple(v) for k, v in (axes or frontier_axes(engine)).items()}
+    base = dict(sc.engine_settings.get(engine, {}))
+    defaults = {**cls(**base).settings(), **base} if hasattr(cls, "settings") else {**cls.DEFAULTS, **base}
+    pts = _points(defaults, ax)
+    motions, _meta = build_motions(sc, n_motions)
+    say(f"the tuner's checks at {len(pts)} points of {engine}")
+    table = tune(engine, sc.specimen, candidates=[{**base, **p.settings} for p in pts], progress=False).candidates
+    version = cls(**base).version() if hasattr(cls, "version") else ""
+    href = dict(sc.engine_settings.get("housner", {}))
+    say(f"the analytic model on {len(motions)} ground motions")
+    res_h, _h, _i = run_engines(sc.specimen, motions, {"housner": href}, options, histories=False)
+    ref = record_thetas(res_h, "housner")
+    mform = model_form_floor(sc.specimen, [motions[i] for i in sorted(ref.index)], href).share
+    for i, p in enumerate(pts):
+        row = table.iloc[i]
+        p.r_error, p.small_error = float(row["worst_rel_error"]), float(row["small_worst_rel_error"])
+        p.decay_error, p.pulse_error = float(row["decay_rel_error"]), float(row["pulse_rel_error"])
+        p.checks_met, p.cpu_per_sim_second = bool(row["met"]), float(row["cost_per_sim_second"])
+        p.failed, p.score = str(row.get("failed", "") or ""), float(row["score"])
+        p.error = str(row["error"] or "")
+        if p.error:
+            continue
+        say(f"{engine} {p.label} on {len(motions)} ground motions ({i + 1}/{len(pts)})")
+        settings = {**base, **p.settings}
+        res, _h, _i = run_engines(sc.specimen, motions, {engine: settings}, options, histories=False)
+        th = record_thetas(res, engine)
+        p.agreement, p.n_records = record_agreement(th, ref)
+        both = th.index.intersection(ref.index)
+        if not len(both):
+            p.error = "no record ran"
+            continue
+        p.ks = float(ks_2samp(th[both].to_numpy(), ref[both].to_numpy()).distance)
+        p.overturned = int(np.isinf(th[both].to_numpy()).sum())
+        chaos = engine_chaos_floor(engine, settings, sc.specimen, [motions[j] for j in sorted(both)], href.get("r"))
+        p.floor_parts = {"chaos": float(chaos.share), "model_form": float(mform)}
+        p.floor = float(min(chaos.share, mform))
+    out = Frontier(
+        engine=engine,
+        scenario=sc.name,
+        n_motions=len(motions),
+        defaults=defaults,
+        axes={k: list(v) for k, v in ax.items()},
+        points=pts,
+        knee=0,
+        default=0,
+        model_form_floor=float(mform),
+        version=version,
+        date=datetime.date.today().isoformat(),
+    )
+    out.knee = knee(out.points)
+    out.wall_s = time.perf_counter() - t0
+    return out
+
+
+def knee(points: Sequence[FrontierPoint]) -> int:
+    """Index of the cheapest point where accuracy stops improving (module docstring).
+
+    The admissible points ran and meet every tuner check that some point meets (all of them, where one
+    point meets all; a check no point meets, such as a decay no setting reaches, is said, not chosen
+    by); among them, the cheapest whose agreement is at most :data:`KNEE_Z` standard errors of the
+    difference below the best agreement among them, costs within :data:`~housner.engines.tuning.COST_TIE`
+    (15 %) of each other counting as equal (then the defaults, the first point, stay). Where no point
+    meets every check some point meets, the admissible point is the one of smallest score.
+    """
+    ran = [i for i, p in enumerate(points) if not p.error and math.isfinite(p.agreement)]
+    if not ran:
+        return 0
+    ok = admissible(points, ran)
+    best = max(ok, key=lambda i: points[i].agreement)
+    b = points[best]
+
+    def close(p: FrontierPoint) -> bool:
+        se = math.hypot(p.agreement_se(), b.agreement_se())
+        return b.agreement - p.agreement <= KNEE_Z * se
+
+    near = [i for i in ok if close(points[i])]
+    cheapest = min(points[i].cpu_per_sim_second for i in near)
+    tie = [i for i in near if points[i].cpu_per_sim_second <= (1.0 + COST_TIE) * cheapest]
+    # CPU time is noisy at 10-20 %: among the equally cheap, the defaults stay, else the most accurate
+    return 0 if 0 in tie else max(tie, key=lambda i: (points[i].agreement, -points[i].cpu_per_sim_second))
+
+
+def _failed(p: FrontierPoint) -> set[str]:
+    if p.checks_met:
+        return set()
+    return {c.strip() for c in p.failed.split(",") if c.strip()} or {"a check"}
+
+
+def unmet_everywhere(points: Sequence[FrontierPoint], idx: Sequence[int] | None = None) -> set[str]:
+    """The tuner's checks that no point (of ``idx``) meets."""
+    idx = range(len(points)) if idx is None else idx
+    sets = [_failed(points[i]) for i in idx if not points[i].error]
+    return set.intersection(*sets) if sets else set()
+
+
+def admissible(points: Sequence[FrontierPoint], idx: Sequence[int]) -> list[int]:
+    """The points of ``idx`` that meet every tuner check some point of ``idx`` meets, else the best-scoring one."""
+    never = unmet_everywhere(points, idx)
+    ok = [i for i in idx if _failed(points[i]) <= never]
+    if ok:
+        return ok
+    return [min(idx, key=lambda i: points[i].score if math.isfinite(points[i].score) else math.inf)]
+
+
+def knee_reason(f: Frontier) -> str:
+    """Why the knee is where it is, in one sentence or two."""
+    pts = f.points
+    k = pts[f.knee]
+    ran = [i for i, p in enumerate(pts) if not p.error and math.isfinite(p.agreement)]
+    ok = admissible(pts, ran) if ran else [f.knee]
+    best = max((pts[i] for i in ok), key=lambda p: p.agreement, default=k)
+    never = unmet_everywhere(pts, ran)
+    lead = ("it meets every tuner check" if k.checks_met else
+            f"no point meets the {', '.join(sorted(never))} check; it meets every other")  # fmt: skip
+    return (f"{lead}, its agreement ({k.agreement:.0%}) is within {KNEE_Z:g} standard errors of the best "
+            f"({best.agreement:.0%}, {best.label}), and it costs the least CPU time of those "
+            f"({k.cpu_per_sim_second:.4g} s per simulated second; within {COST_TIE:.0%} counts as equal, and then "
+            "the defaults stay)")  # fmt: skip
+
+
+def _same(a, b) -> bool:
+    """Equal settings: numbers to 1e-12, sequences (a tuple or its JSON list) element by element."""
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
+        return math.isclose(float(a), float(b), rel_tol=1e-12)
+    return a == b
+
+
+def _fmt(v) -> str:
+    """A setting's value as a label writes it: ``0.0004``, ``(0.0004, 1)`` (a tuple or its JSON list alike)."""
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(_fmt(x) for x in v) + ")"
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def _num(v):
+    return math.nan if v is None else v
