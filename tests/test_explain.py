@@ -32,6 +32,8 @@ def test_the_analytic_engine_explains_itself(control):
     assert not expl.effects or expl.agreement == 1.0, expl.effects
     # the engine and the reference are one deterministic solver on the same motions: exactly equal peaks
     assert expl.agreement_plain == 1.0
+    # the same peaks give the same distribution: KS distance 0 before (and, with peaks unchanged, after)
+    assert expl.ks["plain"] == 0.0 and (expl.effects or expl.ks["with_effects"] == 0.0)
     # the criterion: at the floor within REACH_MARGIN (5 points)
     assert expl.agreement >= expl.floor - REACH_MARGIN and expl.reaches_floor
     # the time histories: white noise at EXPLAIN_SIGMA on the model's own samples is what a correct model leaves

@@ -201,3 +201,15 @@ def test_the_engine_base_checks_every_response_and_the_runner_keeps_the_others(t
     assert list(df.status) == ["ok", "ok", "failed", "ok"]
     assert "non-finite theta history on motion 'm2'" in df.error[2]
     ENGINES.setdefault("nan-housner", NanEngine)
+
+
+def test_guided_chunks_end_the_run_on_short_chunks():
+    """The last n_workers * size records of an engine that runs record by record go out in quarter chunks:
+    a run does not end with one worker on a whole chunk of slow records while the others idle."""
+    from housner.scenarios.execution.runner import _parts
+
+    parts = _parts(list(range(100)), 10, 2, guided=True)
+    assert sum(parts, []) == list(range(100))  # every record once, in order
+    assert [len(p) for p in parts[:8]] == [10] * 8 and all(len(p) <= 3 for p in parts[8:])
+    assert [len(p) for p in _parts(list(range(100)), 10, 2, guided=False)] == [10] * 10
+    assert [len(p) for p in _parts(list(range(100)), 10, 1, guided=True)] == [10] * 10  # one worker: no tail
