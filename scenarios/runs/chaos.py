@@ -237,18 +237,13 @@ class AgreementShares:
 
 @dataclass(frozen=True)
 class ChaosFloor(AgreementShares):
-    """:class:`AgreementShares` under an engine's measured errors: r and p perturbed ("r+", "r-", "p+", "p-").
+    """:class:`AgreementShares` under an engine's measured errors: r and p perturbed ("r+", "r-", "p+", "p-")."""
 
-    Attributes
-    ----------
-    engine : str
-        The engine whose errors set the perturbation.
-    eps_r, eps_p : float
-        The relative perturbations of r and p [-] (the engine's RMS errors).
-    """
-
+    #: The engine whose errors set the perturbation.
     engine: str = ""
+    #: The relative perturbation of r [-] (the engine's RMS error of r).
     eps_r: float = 0.0
+    #: The relative perturbation of p [-] (the engine's RMS error of p).
     eps_p: float = 0.0
 
 

@@ -78,15 +78,10 @@ PERTURBATIONS: dict[str, ModelForm] = {
 @dataclass(frozen=True)
 class ModelFormFloor(AgreementShares):
     """:class:`housner.scenarios.runs.chaos.AgreementShares` under another correct integrator's conventions
-    (one share per perturbation of :data:`PERTURBATIONS`).
+    (one share per perturbation of :data:`PERTURBATIONS`)."""
 
-    Attributes
-    ----------
-    substeps : int
-        Integrator substeps per sample of the unperturbed run, on the grid :data:`UPSAMPLE` times
-        finer than the records' [-].
-    """
-
+    #: Integrator substeps per sample of the unperturbed run, on the grid :data:`UPSAMPLE` times finer than the
+    #: records' [-].
     substeps: int = 0
 
 
