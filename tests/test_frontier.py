@@ -128,5 +128,14 @@ def test_report_section_shows_the_decomposition_and_the_frontier(tmp_path, monke
     html = engines_explained(Run.load(run_dir))
     assert "28% &rarr; 31%" in html and "viscous_damping" in html and "zeta = 0.0012" in html
     assert "chaos 67%" in html and "below it" in html
-    assert "defaults knee" in html and "data:image/png;base64," in html
+    assert "swept from, knee" in html and "data:image/png;base64," in html
     assert "NOT met" in html  # the cheap point that fails a check
+
+
+def test_the_report_marks_the_point_that_is_the_engines_defaults_now():
+    from housner.reports.run.sections.engines_explained import current_point
+
+    fr = Frontier.from_dict(_frontier_file())  # swept from timestep 0.016; points 0.016, 0.03, 0.008
+    assert current_point(fr, {"timestep": 0.03, "other": 1}) == 1
+    assert current_point(fr, {"timestep": 0.016}) == 0
+    assert current_point(fr, {"timestep": 0.02}) is None and current_point(fr, {}) is None

@@ -45,7 +45,7 @@ from housner.scenarios.runs.explain_floor import engine_chaos_floor, model_form_
 from housner.stats import ks_2samp
 
 __all__ = ["KNEE_Z", "TIMESTEP_FACTORS", "Frontier", "FrontierPoint", "admissible", "engine_frontier", "frontier_axes",
-           "knee", "knee_reason", "unmet_everywhere"]  # fmt: skip
+           "knee", "knee_reason", "same_setting", "unmet_everywhere"]  # fmt: skip
 
 #: Time steps swept for an engine that declares no ``FRONTIER``: its default times these [-].
 TIMESTEP_FACTORS = (0.5, 1.0, 2.0, 4.0)
@@ -172,7 +172,7 @@ def _points(defaults: Mapping, axes: Mapping[str, Sequence]) -> list[FrontierPoi
         if name not in defaults:
             raise ValueError(f"frontier axis {name!r} is not a setting of the engine; its settings: "
                              f"{', '.join(sorted(defaults))}")  # fmt: skip
-        pts += [FrontierPoint(name, {name: v}) for v in values if not _same(v, defaults[name])]
+        pts += [FrontierPoint(name, {name: v}) for v in values if not same_setting(v, defaults[name])]
     return pts
 
 
@@ -333,10 +333,10 @@ def knee_reason(f: Frontier) -> str:
             "the defaults stay)")  # fmt: skip
 
 
-def _same(a, b) -> bool:
+def same_setting(a, b) -> bool:
     """Equal settings: numbers to 1e-12, sequences (a tuple or its JSON list) element by element."""
     if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+        return len(a) == len(b) and all(same_setting(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
         return math.isclose(float(a), float(b), rel_tol=1e-12)
     return a == b

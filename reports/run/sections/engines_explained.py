@@ -19,9 +19,9 @@ import math
 
 from housner.reports.frontier_figure import frontier_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_figure, html_note, html_table, status_badge
-from housner.reports.run.sections.tuning import model_data, model_file
+from housner.reports.run.sections.tuning import _engine_defaults, model_data, model_file
 from housner.reports.run.view import Run
-from housner.scenarios.runs.frontier import Frontier, knee_reason
+from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
 
 __all__ = ["engines_explained", "has_engine_measurements"]
 
@@ -86,10 +86,23 @@ def _decomposition(run: Run, found: dict) -> str:
     )
 
 
-def _frontier_rows(fr: Frontier) -> list[list[str]]:
+def current_point(fr: Frontier, defaults: dict) -> int | None:
+    """Index of the point whose swept settings equal the engine's ``defaults`` now, or None."""
+    if not defaults:
+        return None
+    for i, p in enumerate(fr.points):
+        full = {**fr.defaults, **p.settings}
+        if all(k in defaults and same_setting(full[k], defaults[k]) for k in fr.axes):
+            return i
+    return None
+
+
+def _frontier_rows(fr: Frontier, now: int | None) -> list[list[str]]:
     rows = []
     for i, p in enumerate(fr.points):
-        mark = " ".join(m for m, on in (("defaults", i == fr.default), ("knee", i == fr.knee)) if on)
+        marks = (("swept from", i == fr.default and now != fr.default), ("knee", i == fr.knee),
+                 ("the defaults now", i == now))  # fmt: skip
+        mark = ", ".join(m for m, on in marks if on)
         if p.error:
             rows.append([esc(p.label), f"failed: {esc(p.error)}", *[""] * 8])
             continue
@@ -129,7 +142,7 @@ def _frontier(run: Run, name: str, d: dict) -> str:
             "KS",
             "CPU s per sim. s",
         ],  # fmt: skip
-        _frontier_rows(fr),
+        _frontier_rows(fr, current_point(fr, _engine_defaults(name))),
         caption=f"{engine_tag(name, run)} on <code>{esc(fr.scenario)}</code> ({fr.n_motions} motions), measured "
         f"{esc(fr.date)}, version {esc(fr.version)}; errors are the worst by magnitude. Knee: "
         f"{esc(knee_reason(fr))}.",
