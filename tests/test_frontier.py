@@ -47,6 +47,15 @@ def test_knee_is_the_cheapest_point_not_significantly_below_the_best():
     assert 0.40 - 0.20 > KNEE_Z * se
 
 
+def test_knee_trades_no_checked_accuracy_for_time():
+    # MuJoCo's sweep: 0.3 ms meets every check at 0.84x the cost, but scores 0.86 against the defaults' 0.57
+    d, coarse = point(0.28, 0.0171), point(0.28, 0.0144)
+    d.score, coarse.score = 0.571, 0.858
+    assert knee([d, coarse]) == 0
+    coarse.score = 0.5  # as well checked: the cheaper step is the knee
+    assert knee([d, coarse]) == 1
+
+
 def test_knee_needs_the_tuner_checks_and_skips_failed_points():
     pts = [point(0.40, 1.0), point(0.40, 0.5, met=False), point(math.nan, 0.1, error="diverged")]
     assert knee(pts) == 0  # the cheaper point fails a check; the cheapest did not run

@@ -15,7 +15,8 @@ settings at their defaults; :func:`frontier_axes`) and measures, at every point:
   point's own r and p errors, or the model-form floor of a correct integrator, the lower).
 
 :func:`knee` picks the point where accuracy stops improving: the cheapest point that meets
-every tuner check some point meets (:func:`admissible`) and whose per-record agreement is not significantly
+every tuner check some point meets (:func:`admissible`), scores no worse on them than the
+defaults (the issue's "no engine's accuracy worse than today") and whose per-record agreement is not significantly
 below the best point's (a two-proportion z-test at 95 %, :data:`KNEE_Z`). ``housner frontier
 ENGINE`` runs it from the shell and stores the result that the run report draws
 (``engines/models/frontier-<engine>.json``).
@@ -45,7 +46,7 @@ from housner.scenarios.runs.explain_floor import engine_chaos_floor, model_form_
 from housner.stats import ks_2samp
 
 __all__ = ["KNEE_Z", "TIMESTEP_FACTORS", "Frontier", "FrontierPoint", "admissible", "engine_frontier", "frontier_axes",
-           "knee", "knee_reason", "same_setting", "unmet_everywhere"]  # fmt: skip
+           "knee", "knee_reason", "not_worse_checked", "same_setting", "unmet_everywhere"]  # fmt: skip
 
 #: Time steps swept for an engine that declares no ``FRONTIER``: its default times these [-].
 TIMESTEP_FACTORS = (0.5, 1.0, 2.0, 4.0)
@@ -272,15 +273,18 @@ def knee(points: Sequence[FrontierPoint]) -> int:
 
     The admissible points ran and meet every tuner check that some point meets (all of them, where one
     point meets all; a check no point meets, such as a decay no setting reaches, is said, not chosen
-    by); among them, the cheapest whose agreement is at most :data:`KNEE_Z` standard errors of the
-    difference below the best agreement among them, costs within :data:`~housner.engines.tuning.COST_TIE`
-    (15 %) of each other counting as equal (then the defaults, the first point, stay). Where no point
-    meets every check some point meets, the admissible point is the one of smallest score.
+    by), and score no worse on the checks than the defaults (:func:`not_worse_checked`: the largest
+    error over its tolerance; the per-impact scatter makes it vary by +-0.3 from one step to the next,
+    so a coarser step is taken only where it checks as well). Among them: the cheapest whose agreement
+    is at most :data:`KNEE_Z` standard errors of the difference below the best agreement among them,
+    costs within :data:`~housner.engines.tuning.COST_TIE` (15 %) of each other counting as equal (then
+    the defaults, the first point, stay). Where no point meets every check some point meets, the
+    admissible point is the one of smallest score.
     """
     ran = [i for i, p in enumerate(points) if not p.error and math.isfinite(p.agreement)]
     if not ran:
         return 0
-    ok = admissible(points, ran)
+    ok = not_worse_checked(points, admissible(points, ran))
     best = max(ok, key=lambda i: points[i].agreement)
     b = points[best]
 
@@ -293,6 +297,15 @@ def knee(points: Sequence[FrontierPoint]) -> int:
     tie = [i for i in near if points[i].cpu_per_sim_second <= (1.0 + COST_TIE) * cheapest]
     # CPU time is noisy at 10-20 %: among the equally cheap, the defaults stay, else the most accurate
     return 0 if 0 in tie else max(tie, key=lambda i: (points[i].agreement, -points[i].cpu_per_sim_second))
+
+
+def not_worse_checked(points: Sequence[FrontierPoint], idx: Sequence[int]) -> list[int]:
+    """The points of ``idx`` whose tuner score is no worse than the defaults' (``points[0]``), when the defaults
+    are among them: accuracy the checks can see is not traded for CPU time."""
+    d = points[0]
+    if 0 not in idx or not math.isfinite(d.score):
+        return list(idx)
+    return [i for i in idx if points[i].score <= d.score]
 
 
 def _failed(p: FrontierPoint) -> set[str]:
@@ -322,11 +335,12 @@ def knee_reason(f: Frontier) -> str:
     pts = f.points
     k = pts[f.knee]
     ran = [i for i, p in enumerate(pts) if not p.error and math.isfinite(p.agreement)]
-    ok = admissible(pts, ran) if ran else [f.knee]
+    ok = not_worse_checked(pts, admissible(pts, ran)) if ran else [f.knee]
     best = max((pts[i] for i in ok), key=lambda p: p.agreement, default=k)
     never = unmet_everywhere(pts, ran)
     lead = ("it meets every tuner check" if k.checks_met else
             f"no point meets the {', '.join(sorted(never))} check; it meets every other")  # fmt: skip
+    lead += f", scores {k.score:.2f} on them (the defaults {pts[0].score:.2f})"
     return (f"{lead}, its agreement ({k.agreement:.0%}) is within {KNEE_Z:g} standard errors of the best "
             f"({best.agreement:.0%}, {best.label}), and it costs the least CPU time of those "
             f"({k.cpu_per_sim_second:.4g} s per simulated second; within {COST_TIE:.0%} counts as equal, and then "
