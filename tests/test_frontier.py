@@ -148,3 +148,21 @@ def test_the_report_marks_the_point_that_is_the_engines_defaults_now():
     assert current_point(fr, {"timestep": 0.03, "other": 1}) == 1
     assert current_point(fr, {"timestep": 0.016}) == 0
     assert current_point(fr, {"timestep": 0.02}) is None and current_point(fr, {}) is None
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_shipped_defaults_are_the_knee_of_the_shipped_frontier(engine):
+    """engines/models/frontier-ENGINE.json: readable, its knee is what the rule gives, and the engine's defaults
+    are that knee (the issue: defaults at the knee). A change of defaults or of the rule shows here."""
+    from housner.reports.run.sections.engines_explained import current_point
+    from housner.reports.run.sections.tuning import model_file
+
+    path = model_file("frontier", engine)
+    if not path.is_file():
+        pytest.skip(f"no shipped frontier for {engine}")
+    fr = Frontier.from_dict(json.loads(path.read_text()))
+    assert fr.engine == engine and fr.n_motions >= 50
+    assert knee(fr.points) == fr.knee
+    assert current_point(fr, engine_class(engine).DEFAULTS) == fr.knee
+    explained = json.loads(model_file("explain", engine).read_text())
+    assert explained["engine"] == engine and 0.0 <= explained["agreement"] <= 1.0 and 0.0 < explained["floor"] <= 1.0

@@ -97,6 +97,12 @@ def current_point(fr: Frontier, defaults: dict) -> int | None:
     return None
 
 
+def _score_html(p) -> str:
+    """The tuner's score (largest error over its tolerance) and the checks not met, small under the badge."""
+    score = f"score {p.score:.2f}" if math.isfinite(p.score) else ""
+    return f"<br><small>{'; '.join(x for x in (score, esc(p.failed)) if x)}</small>"
+
+
 def _frontier_rows(fr: Frontier, now: int | None) -> list[list[str]]:
     rows = []
     for i, p in enumerate(fr.points):
@@ -114,7 +120,7 @@ def _frontier_rows(fr: Frontier, now: int | None) -> list[list[str]]:
                 f"{p.small_error:+.2%}",
                 f"{p.decay_error:+.1%}",
                 f"{p.pulse_error:+.2%}",
-                status_badge(p.checks_met, "met", "NOT met") + (f"<br><small>{esc(p.failed)}</small>" * bool(p.failed)),
+                status_badge(p.checks_met, "met", "NOT met") + _score_html(p),
                 f"{p.agreement:.0%} &plusmn; {se:.0%}",
                 _pct(p.floor),
                 f"{p.ks:.3f}",
