@@ -16,8 +16,8 @@ settings at their defaults; :func:`frontier_axes`) and measures, at every point:
 
 :func:`knee` picks the point where accuracy stops improving: the cheapest point that meets
 every tuner check some point meets (:func:`admissible`), scores no worse on them than the
-defaults (the issue's "no engine's accuracy worse than today") and whose per-record agreement is not significantly
-below the best point's (a two-proportion z-test at 95 %, :data:`KNEE_Z`). ``housner frontier
+defaults (no accuracy the checks see is traded for time) and whose per-record agreement is not
+significantly below the best point's (a two-proportion z-test at 95 %, :data:`KNEE_Z`). ``housner frontier
 ENGINE`` runs it from the shell and stores the result that the run report draws
 (``engines/models/frontier-<engine>.json``).
 """
@@ -42,7 +42,7 @@ from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs.engine_campaign import check_engine, ground_motion_scenario
 from housner.scenarios.runs.explain import record_agreement, record_thetas
-from housner.scenarios.runs.explain_floor import engine_chaos_floor, model_form_floor
+from housner.scenarios.runs.explain_floor import engine_chaos_floor, extended_floor, model_form_floor
 from housner.stats import ks_2samp
 
 __all__ = ["KNEE_Z", "TIMESTEP_FACTORS", "Frontier", "FrontierPoint", "admissible", "engine_frontier", "frontier_axes",
@@ -216,17 +216,17 @@ def engine_frontier(
     cls = engine_class(engine)
     ax = {str(k): tuple(v) for k, v in (axes or frontier_axes(engine)).items()}
     base = dict(sc.engine_settings.get(engine, {}))
-    defaults = {**cls(**base).settings(), **base} if hasattr(cls, "settings") else {**cls.DEFAULTS, **base}
+    probe = cls(**base)  # the scenario's settings checked, and the engine's full defaults with them
+    defaults, version = probe.settings(), probe.version()
     pts = _points(defaults, ax)
     motions, _meta = build_motions(sc, n_motions)
     say(f"the tuner's checks at {len(pts)} points of {engine}")
     table = tune(engine, sc.specimen, candidates=[{**base, **p.settings} for p in pts], progress=False).candidates
-    version = cls(**base).version() if hasattr(cls, "version") else ""
     href = dict(sc.engine_settings.get("housner", {}))
     say(f"the analytic model on {len(motions)} ground motions")
     res_h, _h, _i = run_engines(sc.specimen, motions, {"housner": href}, options, histories=False)
     ref = record_thetas(res_h, "housner")
-    mform = model_form_floor(sc.specimen, [motions[i] for i in sorted(ref.index)], href).share
+    mform = model_form_floor(sc.specimen, [motions[i] for i in sorted(ref.index)], href)
     for i, p in enumerate(pts):
         row = table.iloc[i]
         p.r_error, p.small_error = float(row["worst_rel_error"]), float(row["small_worst_rel_error"])
@@ -248,8 +248,8 @@ def engine_frontier(
         p.ks = float(ks_2samp(th[both].to_numpy(), ref[both].to_numpy()).distance)
         p.overturned = int(np.isinf(th[both].to_numpy()).sum())
         chaos = engine_chaos_floor(engine, settings, sc.specimen, [motions[j] for j in sorted(both)], href.get("r"))
-        p.floor_parts = {"chaos": float(chaos.share), "model_form": float(mform)}
-        p.floor = float(min(chaos.share, mform))
+        p.floor_parts = {"chaos": float(chaos.share), "model_form": float(mform.share)}
+        p.floor = extended_floor(chaos, mform)
     out = Frontier(
         engine=engine,
         scenario=sc.name,
@@ -259,7 +259,7 @@ def engine_frontier(
         points=pts,
         knee=0,
         default=0,
-        model_form_floor=float(mform),
+        model_form_floor=float(mform.share),
         version=version,
         date=datetime.date.today().isoformat(),
     )
@@ -281,12 +281,10 @@ def knee(points: Sequence[FrontierPoint]) -> int:
     the defaults, the first point, stay). Where no point meets every check some point meets, the
     admissible point is the one of smallest score.
     """
-    ran = [i for i, p in enumerate(points) if not p.error and math.isfinite(p.agreement)]
-    if not ran:
+    ok = _candidates(points)
+    if not ok:
         return 0
-    ok = not_worse_checked(points, admissible(points, ran))
-    best = max(ok, key=lambda i: points[i].agreement)
-    b = points[best]
+    b = points[max(ok, key=lambda i: points[i].agreement)]
 
     def close(p: FrontierPoint) -> bool:
         se = math.hypot(p.agreement_se(), b.agreement_se())
@@ -297,6 +295,17 @@ def knee(points: Sequence[FrontierPoint]) -> int:
     tie = [i for i in near if points[i].cpu_per_sim_second <= (1.0 + COST_TIE) * cheapest]
     # CPU time is noisy at 10-20 %: among the equally cheap, the defaults stay, else the most accurate
     return 0 if 0 in tie else max(tie, key=lambda i: (points[i].agreement, -points[i].cpu_per_sim_second))
+
+
+def _ran(points: Sequence[FrontierPoint]) -> list[int]:
+    """The points that ran on the ground motions."""
+    return [i for i, p in enumerate(points) if not p.error and math.isfinite(p.agreement)]
+
+
+def _candidates(points: Sequence[FrontierPoint]) -> list[int]:
+    """The points the knee is chosen among: ran, admissible, checked no worse than the defaults."""
+    ran = _ran(points)
+    return not_worse_checked(points, admissible(points, ran)) if ran else []
 
 
 def not_worse_checked(points: Sequence[FrontierPoint], idx: Sequence[int]) -> list[int]:
@@ -334,10 +343,8 @@ def knee_reason(f: Frontier) -> str:
     """Why the knee is where it is, in one sentence or two."""
     pts = f.points
     k = pts[f.knee]
-    ran = [i for i, p in enumerate(pts) if not p.error and math.isfinite(p.agreement)]
-    ok = not_worse_checked(pts, admissible(pts, ran)) if ran else [f.knee]
-    best = max((pts[i] for i in ok), key=lambda p: p.agreement, default=k)
-    never = unmet_everywhere(pts, ran)
+    best = max((pts[i] for i in _candidates(pts)), key=lambda p: p.agreement, default=k)
+    never = unmet_everywhere(pts, _ran(pts))
     lead = ("it meets every tuner check" if k.checks_met else
             f"no point meets the {', '.join(sorted(never))} check; it meets every other")  # fmt: skip
     lead += f", scores {k.score:.2f} on them (the defaults {pts[0].score:.2f})"

@@ -14,12 +14,11 @@ Both were measured on a named scenario, not on this run; the section says which.
 
 from __future__ import annotations
 
-import json
 import math
 
 from housner.reports.frontier_figure import frontier_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_figure, html_note, html_table, status_badge
-from housner.reports.run.sections.tuning import _engine_defaults, model_data, model_file
+from housner.reports.run.sections.tuning import _engine_defaults, _settings_differ, model_data, model_file
 from housner.reports.run.view import Run
 from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
 
@@ -154,8 +153,7 @@ def _frontier(run: Run, name: str, d: dict) -> str:
         f"{esc(knee_reason(fr))}.",
     )
     used = ((run.meta.get("engines") or {}).get(name) or {}).get("settings") or {}
-    knee = fr.knee_settings()
-    differ = [k for k in knee if k in used and json.dumps(used[k]) != json.dumps(knee[k])]
+    differ = _settings_differ(fr.knee_settings(), used)
     note = html_note(f"This run's {esc(', '.join(differ))} differ from the knee's.", "warn") if differ else ""
     fig = html_figure(frontier_figure(fr), f"{esc(name)}: accuracy against cost", f"{name} frontier")
     return f"<h4>{engine_tag(name, run)}</h4>{table}{note}{fig}"
