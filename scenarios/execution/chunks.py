@@ -460,6 +460,11 @@ def worker_main(conn: Any) -> None:
         sys.modules["numba"].set_num_threads(1)
     else:
         os.environ["NUMBA_NUM_THREADS"] = "1"
+    # Importing MuJoCo loads its GL context, whose GLFW binding asks a child Python for the library's
+    # version; a worker stopped meanwhile (Ctrl-C, SIGTERM) leaves that child writing into a closed pipe,
+    # and its BrokenPipeError traceback lands on the run's stderr. A worker never renders: no GL context
+    # (MuJoCo's own switch; a value the user set stays).
+    os.environ.setdefault("MUJOCO_GL", "disable")
     try:
         conn.send(("ready", None, None))
         while True:
