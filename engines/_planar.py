@@ -393,7 +393,7 @@ class PlanarEngine(Engine):
     """The base of the planar adapters: settings and pickling, the impact law's hooks, the sample loop, the response.
 
     A subclass sets :attr:`DEFAULTS` (every setting, ``impact_energy_factor`` among them),
-    :attr:`LABEL`, :attr:`RANGES` and :attr:`STRICT` for :func:`checked_settings`, and an optional
+    :attr:`LABEL`, :attr:`RANGES` and :attr:`STRICT` for :func:`checked_settings` (and :attr:`CHOICES`), and an optional
     engine its :attr:`MODULE` and :attr:`INSTALL` (:meth:`require`); or its own ``__init__``. An
     instance pickles as its settings: models, contexts and clients are rebuilt in the receiving
     process. The ``restitution`` effect is realised through the impact law (:class:`ImpactLaw`). A
@@ -440,6 +440,8 @@ class PlanarEngine(Engine):
     RANGES: ClassVar[dict] = {}
     #: Settings whose low end is excluded.
     STRICT: ClassVar[tuple[str, ...]] = ("timestep", "impact_energy_factor")
+    #: The accepted values of each setting that is a choice (a solver, a detector), as a collection.
+    CHOICES: ClassVar[dict] = {}
     #: The optional engine's module, imported on first use (:meth:`require`); "" for none.
     MODULE: ClassVar[str] = ""
     #: How to install the engine's package (named when it is missing).
@@ -448,6 +450,9 @@ class PlanarEngine(Engine):
     def __init__(self, **settings: Any):
         self.require()  # a missing package is said before any long work
         self._settings = checked_settings(self.LABEL, self.DEFAULTS, self.RANGES, settings, strict=self.STRICT)
+        for key, accepted in self.CHOICES.items():
+            if self._settings[key] not in accepted:
+                raise unknown_choice(f"{self.LABEL} setting `{key}`", self._settings[key], accepted)
 
     @classmethod
     def require(cls) -> Any:

@@ -1,10 +1,10 @@
-"""Drake (pydrake): the rocking block as a planar body on a stiff point contact, SAP discrete solver.
+"""Drake (pydrake): the rocking block as a planar body on a stiff point contact, TAMSI discrete solver.
 
 The model, built from a :class:`housner.Specimen` once per specimen and step and
 reused for every record (numbered as in ``engines/models/drake.md``):
 
-1. Plant: a discrete ``MultibodyPlant`` with a fixed step h (``timestep``:
-   each sample interval cut into the fewest equal steps no longer than it),
+1. Plant: a discrete ``MultibodyPlant`` with a fixed step h (``timestep``,
+   1/8 ms: each sample interval cut into the fewest equal steps no longer than it),
    gravity -g along z (g = 9.80665 m/s^2; Drake's default is 9.81), sampled output
    ports off (the state is all that is read).
 2. Block: one body, centre of mass at its frame origin, mass m, inertia
@@ -23,19 +23,33 @@ reused for every record (numbered as in ``engines/models/drake.md``):
    (+-B, 0) when the block stands: one contact point per pivot, as in
    Housner's model. Coulomb friction mu = 1.5 (Drake combines the pair's
    coefficients as 2 mu1 mu2 / (mu1 + mu2), so both carry mu).
-5. Contact: point contact (``ContactModel.kPoint``) solved by SAP
-   (``DiscreteContactApproximation.kSap``), a convex implicit contact
-   solver, with the pair's stiffness k (``stiffness``, 5e8 N/m per pivot) and
-   linear (Kelvin-Voigt) dissipation time tau (``relaxation_time``, 0 s).
+5. Contact: point contact (``ContactModel.kPoint``) with the pair's
+   stiffness k (``stiffness``, 5e8 N/m per pivot), solved by the discrete
+   solver ``contact_approximation`` names:
+
+   * ``"tamsi"`` (default, ``DiscreteContactApproximation.kTamsi``): TAMSI,
+     Hunt-Crossley dissipation d (``dissipation``, 50 s/m: Drake's own value
+     when none is given, drake 1.51.1) and regularised Coulomb friction that
+     lets a pivot creep below ``stiction_tolerance`` (1e-4 m/s, Drake's default);
+   * ``"sap"`` (``kSap``): SAP, a convex implicit contact solver, with linear
+     (Kelvin-Voigt) dissipation time tau (``relaxation_time``, 0 s) in place of d;
+   * ``"lagged"``, ``"similar"``: SAP's convex solver on the Hunt-Crossley d.
+
    Drake combines a pair's stiffnesses in series, k1 k2 / (k1 + k2), and
    adds their relaxation times (and gives each geometry tau = 0.1 s when
-   unset), so the ground and the pivots each carry 2 k and tau / 2. With
-   k = 5e8 N/m, sqrt(k / m) h = 2.8 at h = 0.25 ms: the contact is far too
-   stiff for the step to resolve, SAP treats it as near-rigid and ends each
-   impact within a step without a rebound, Housner's plastic impact. The
-   stiffness still matters before uplift: the block's elastic tilt on softer
-   pivots starts the rocking early (5e7 N/m: first pulse peaks 1-2 % high;
-   5e8 N/m: within 0.12 %).
+   unset), so the ground and the pivots each carry 2 k, d and tau / 2. With
+   k = 5e8 N/m, sqrt(k / m) h = 1.4 at h = 1/8 ms: the contact is far too
+   stiff for the step to resolve, the solver treats it as near-rigid and ends
+   each impact within a step or two without a rebound, Housner's plastic
+   impact. The stiffness still matters before uplift: the block's elastic
+   tilt on softer pivots starts the rocking early (5e7 N/m: first pulse
+   peaks 1-2 % high; 5e8 N/m: within 0.3 %).
+   TAMSI at 1/8 ms replaced SAP at 1/4 ms as the default on 2026-11-26
+   (``housner frontier drake``, ``engines/models/drake.md``): it meets the
+   tuner's checks with a smaller largest error (0.69 of the tolerances
+   against 0.73) at 0.43x the CPU time (0.12 against 0.28 CPU s per
+   simulated s); TAMSI at 1/4 ms is cheaper still but its free decay is
+   5.0 % off (SAP's 2.2 %, TAMSI at 1/8 ms 3.5 %).
 6. Ground motion: the d'Alembert force -m ug''(t) on the x coordinate,
    through the plant's applied-generalized-force input port, set before every
    step to m times the exact mean of the linearly interpolated -ug'' over
@@ -82,7 +96,7 @@ def _drake() -> Any:
 
 
 class DrakeEngine(PlanarEngine):
-    """Drake's block on a stiff point contact (SAP solver), driven by the d'Alembert force.
+    """Drake's block on a stiff point contact (TAMSI solver by default), driven by the d'Alembert force.
 
     Parameters
     ----------
@@ -92,7 +106,15 @@ class DrakeEngine(PlanarEngine):
     relaxation_time : float
         SAP's linear dissipation time of the pivot contact [s] (the pair's
         combined value; each side carries half of it). 0 is no dissipation
-        beyond the implicit step's.
+        beyond the implicit step's. Only ``"sap"`` uses it: the other solvers
+        refuse a non-zero one.
+    dissipation : float
+        Hunt-Crossley dissipation of the pivot contact [s/m] (each side
+        carries it), which ``"tamsi"``, ``"lagged"`` and ``"similar"`` use.
+    contact_approximation : {"tamsi", "sap", "lagged", "similar"}
+        Drake's discrete contact solver (step 5 of the module docstring).
+    stiction_tolerance : float
+        Sliding speed below which TAMSI's regularised friction sticks [m/s].
     timestep, friction, pivot_radius, impact_energy_factor
         As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
     """
@@ -100,20 +122,27 @@ class DrakeEngine(PlanarEngine):
     name = "drake"
     package = "drake"
 
-    #: Default settings (2026-11-24, drake 1.51.1, seed specimen): first-impact r within 0.2 % of
-    #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning, pulses within 0.5 %; about 0.25 CPU s per
-    #: simulated s (0.1 ms steps: 0.6).
+    #: Default settings (2026-11-26, drake 1.51.1, seed specimen, ``housner frontier drake``): r within
+    #: 0.18 % of Housner's at 0.2-0.9 alpha with no tuning, pulses within 0.3 %, free decay within 3.5 %;
+    #: about 0.12 CPU s per simulated s (SAP at 1/4 ms, the defaults until then: 0.28).
     DEFAULTS: ClassVar[dict] = {
-        "timestep": 2.5e-4,
+        "timestep": 1.25e-4,
         "stiffness": 5.0e8,
         "relaxation_time": 0.0,
         "friction": 1.5,
         "pivot_radius": 1.0e-5,
         "impact_energy_factor": 1.0,
+        "dissipation": 50.0,
+        "contact_approximation": "tamsi",
+        "stiction_tolerance": 1.0e-4,
     }
-    #: The accuracy-cost frontier's axes (``housner frontier drake``): the step [s] and the point
-    #: contact's stiffness [N/m].
-    FRONTIER: ClassVar[dict] = {"timestep": (1.25e-4, 2.5e-4, 5e-4, 1e-3), "stiffness": (1e8, 5e8, 2.5e9)}
+    #: The accuracy-cost frontier's axes (``housner frontier drake``): the step [s], the point
+    #: contact's stiffness [N/m] and the contact solver.
+    FRONTIER: ClassVar[dict] = {
+        "timestep": (6.25e-5, 1.25e-4, 2.5e-4, 5e-4),
+        "stiffness": (1e8, 5e8, 2.5e9),
+        "contact_approximation": ("tamsi", "sap"),
+    }
 
     LABEL = "Drake"
     MODULE = "pydrake.multibody.plant"
@@ -123,21 +152,35 @@ class DrakeEngine(PlanarEngine):
         "stiffness": (1e3, 1e12),
         "relaxation_time": (0.0, 1.0),
         "pivot_radius": (1e-7, 1e-2),
+        "dissipation": (0.0, 1e4),
+        "stiction_tolerance": (1e-9, 1.0),
     }
+    #: Drake's discrete contact solvers this adapter offers (``contact_approximation``).
+    APPROXIMATIONS: ClassVar[dict] = {"sap": "kSap", "tamsi": "kTamsi", "lagged": "kLagged", "similar": "kSimilar"}
+    CHOICES: ClassVar[dict] = {"contact_approximation": APPROXIMATIONS}
 
     def __init__(self, **settings: Any):
         super().__init__(**settings)
+        a = self._settings["contact_approximation"]
+        if a != "sap" and self._settings["relaxation_time"] > 0.0:
+            raise ValueError(
+                f"Drake setting `relaxation_time` is SAP's dissipation; {a!r} ignores it: give "
+                "`contact_approximation='sap'` with it, or `dissipation` (Hunt-Crossley) instead"
+            )
         self._model = None  # (key, plant, diagram context, plant context, input vector), built on first use
 
     @classmethod
     def tuning_candidates(cls, specimen: Specimen, target_r: float) -> list[dict]:
         """Settings to try when tuning the contact to an energy ratio, cheap to expensive.
 
-        Within 0.2 % of Housner's r: the stiff, undamped default contact with
-        steps of 1/3 to 1/10 ms (they divide the tuner's 1 ms samples); the
-        step moves only each impact's scatter (about +-0.4 % at 1/4 ms, see
-        ``engines/models/drake.md``). Above it: softer undamped pivots at the
-        default step, which give part of the impact's energy back (seed
+        Within 0.2 % of Housner's r: the stiff default contact on TAMSI at 1/8 and
+        1/10 ms, then SAP at 1/4 ms (the defaults until 2026-11-26). TAMSI's
+        free decay moves with the step by more than its r does (seed specimen,
+        2026-11-26: 5.0 % off at 1/4 ms, 6.8 % at 1/6, 4.4 % at 1/7, 3.5 % at
+        1/8, 2.9 % at 1/10; SAP 2.2 % at 1/4), so the coarser steps are not
+        offered. Away from Housner's r the contact is SAP's at 1/4 ms, whose
+        stiffness and dissipation time were measured there. Above it: softer
+        undamped pivots, which give part of the impact's energy back (seed
         specimen, 2026-11-24: k = 1e7 N/m keeps r = 0.946-0.948, 5e6 N/m
         0.949-0.958, 2e6 N/m 0.955-0.970 over 0.1-0.8 alpha). Below it: softer
         pivots with SAP's linear dissipation, the only knob that takes more
@@ -149,9 +192,10 @@ class DrakeEngine(PlanarEngine):
         the target kinetic-energy ratio at impact [-].
         """
         r_h = specimen.r_housner
+        sap = dict(contact_approximation="sap", timestep=2.5e-4)
         if target_r > r_h * 1.002:
-            out = [dict(stiffness=k) for k in (1e7, 7e6, 5e6, 3.5e6, 2.5e6)]
-            return out + [dict(stiffness=k, relaxation_time=1e-4) for k in (5e6, 3.5e6)]
+            out = [dict(sap, stiffness=k) for k in (1e7, 7e6, 5e6, 3.5e6, 2.5e6)]
+            return out + [dict(sap, stiffness=k, relaxation_time=1e-4) for k in (5e6, 3.5e6)]
         if target_r < r_h * 0.998:
             pairs = (
                 (5e6, 5e-4),
@@ -163,8 +207,8 @@ class DrakeEngine(PlanarEngine):
                 (5e5, 6e-3),
                 (5e5, 2e-2),
             )
-            return [dict(stiffness=k, relaxation_time=tau) for k, tau in pairs]
-        return [dict(timestep=1e-3 / n) for n in (3, 4, 5, 6, 8, 10)]
+            return [dict(sap, stiffness=k, relaxation_time=tau) for k, tau in pairs]
+        return [dict(), dict(timestep=1e-4), sap]
 
     # ------------------------------------------------------------------
     def build(self, specimen: Specimen, step: float):
@@ -193,7 +237,10 @@ class DrakeEngine(PlanarEngine):
         rho = self._pivot_radius(specimen)
         builder = DiagramBuilder()
         plant, _ = AddMultibodyPlantSceneGraph(builder, time_step=step)
-        plant.set_discrete_contact_approximation(DiscreteContactApproximation.kSap)
+        plant.set_discrete_contact_approximation(
+            getattr(DiscreteContactApproximation, self.APPROXIMATIONS[s["contact_approximation"]])
+        )
+        plant.set_stiction_tolerance(s["stiction_tolerance"])
         plant.set_contact_model(ContactModel.kPoint)
         plant.SetUseSampledOutputPorts(False)
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -G])  # Drake's default is 9.81
@@ -210,7 +257,7 @@ class DrakeEngine(PlanarEngine):
             # Drake combines a pair's stiffnesses in series and adds its relaxation times (step 5).
             props = ProximityProperties()
             mu = s["friction"]
-            AddContactMaterial(None, 2.0 * s["stiffness"], CoulombFriction(mu, mu), props)
+            AddContactMaterial(s["dissipation"], 2.0 * s["stiffness"], CoulombFriction(mu, mu), props)
             props.AddProperty("material", "relaxation_time", 0.5 * s["relaxation_time"])
             return props
 
@@ -250,7 +297,7 @@ class DrakeEngine(PlanarEngine):
                     step(ctx, False)
                     if law.active and (c := law.after_step(state().GetAtIndex(2), state().GetAtIndex(5))) is not None:
                         plant.SetVelocities(ctx, c * plant.GetVelocities(ctx))
-            except RuntimeError as e:  # SAP did not converge
+            except RuntimeError as e:  # the contact solver did not converge
                 raise EngineError(
                     f"Drake failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: {e}; "
                     "try a smaller `timestep` or a softer `stiffness`"

@@ -37,17 +37,40 @@ def test_passes_the_conformance_check(engine):
     assert len(report.checks) == 6
 
 
+SAP = dict(contact_approximation="sap", timestep=2.5e-4)  # the defaults until 2026-11-26
+
+
+@pytest.mark.parametrize("settings", [{}, SAP], ids=["tamsi", "sap"])
 @pytest.mark.parametrize("a", [0.2, 0.5, 0.8])
-def test_first_impact_keeps_housners_energy_ratio(engine, a):
-    """Stiff undamped SAP point contact: r within 0.3 % of Housner's (measured +0.07 / -0.18 / -0.12 %).
+def test_first_impact_keeps_housners_energy_ratio(a, settings):
+    """Stiff point contact, TAMSI at 1/8 ms (the defaults) and SAP at 1/4 ms: r within 0.3 % of Housner's
+    (measured +0.07 / +0.10 / -0.11 % and +0.07 / -0.18 / -0.12 %).
 
     0.3 % is the tolerance the tuned MuJoCo and PyBullet meet over 0.2-0.9 alpha. The error is
-    each impact's scatter with where it falls within the 0.25 ms step (+-0.31 % over 0.2-0.9 alpha
-    on a 0.05 grid), not a bias (mean +0.05 % over 0.05-0.9 alpha).
+    each impact's scatter with where it falls within the step (SAP: +-0.31 % over 0.2-0.9 alpha
+    on a 0.05 grid), not a bias (SAP: mean +0.05 % over 0.05-0.9 alpha).
     """
+    engine = DrakeEngine(**settings)
     res = engine.simulate(SEED, GroundMotion.free_vibration(a * SEED.alpha, 1.2, dt=1e-3))
     assert first_impact_ratio(res, SEED.alpha) == pytest.approx(SEED.r_housner, rel=3e-3)
-    assert res.engine == "drake" and res.info["step"] == pytest.approx(2.5e-4)
+    step = {**DrakeEngine.DEFAULTS, **settings}["timestep"]
+    assert res.engine == "drake" and res.info["step"] == pytest.approx(step)
+
+
+def test_tamsi_dissipation_default_is_drakes_own():
+    """The ``dissipation`` default is the value Drake gives a point contact that names none (the module
+    docstring's claim): the same trajectory to the last bit when the material leaves it unset."""
+    import pydrake.geometry as geometry
+
+    released = GroundMotion.free_vibration(0.3 * SEED.alpha, 1.5, dt=1e-3)
+    ours = DrakeEngine().simulate(SEED, released).theta
+    real = geometry.AddContactMaterial
+    try:
+        geometry.AddContactMaterial = lambda _d, k, f, props: real(None, k, f, props)
+        drakes = DrakeEngine().simulate(SEED, released).theta
+    finally:
+        geometry.AddContactMaterial = real
+    assert np.array_equal(ours, drakes)
 
 
 def test_pulses_match_the_analytic_model(engine):
@@ -70,6 +93,10 @@ def test_settings_are_checked_and_travel(engine):
             DrakeEngine(**{key: bad})
     with pytest.raises(ValueError, match="unknown Drake setting"):
         DrakeEngine(stepsize=1e-4)
+    with pytest.raises(ValueError, match="`contact_approximation` 'tamsy'; did you mean 'tamsi'"):
+        DrakeEngine(contact_approximation="tamsy")
+    with pytest.raises(ValueError, match="`relaxation_time` is SAP's dissipation"):
+        DrakeEngine(relaxation_time=1e-3)  # TAMSI would ignore it
     with pytest.raises(ValueError, match="`pivot_radius`"):
         DrakeEngine(pivot_radius=5e-3).simulate(SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 0.1))
     with pytest.raises(ValueError, match="cannot realise effect 'sliding'"):
@@ -94,14 +121,17 @@ def test_missing_package_is_one_line_naming_the_install(monkeypatch):
 
 
 def test_tuning_candidates_are_short_and_aimed():
-    """Near Housner's r: steps dividing the tuner's 1 ms samples; away from it: softer pivots."""
+    """Near Housner's r: the defaults first, steps dividing the tuner's 1 ms samples; away from it: softer
+    pivots on SAP (whose dissipation time the lower targets need)."""
     near = DrakeEngine.tuning_candidates(SEED, SEED.r_housner)
-    assert near and all(abs(1e-3 / c["timestep"] - round(1e-3 / c["timestep"])) < 1e-9 for c in near)
+    assert near and near[0] == {}
+    steps = [{**DrakeEngine.DEFAULTS, **c}["timestep"] for c in near]
+    assert all(abs(1e-3 / h - round(1e-3 / h)) < 1e-9 for h in steps)
     stiff = DrakeEngine.DEFAULTS["stiffness"]
     for target in (0.85, 0.90, 0.96):
         cands = DrakeEngine.tuning_candidates(SEED, target)
         assert 0 < len(cands) <= 12
-        assert all(c["stiffness"] < stiff for c in cands)
+        assert all(c["stiffness"] < stiff and c["contact_approximation"] == "sap" for c in cands)
         for c in cands:
             DrakeEngine(**c)  # every candidate is a valid setting
     below = DrakeEngine.tuning_candidates(SEED, 0.90)
@@ -110,7 +140,7 @@ def test_tuning_candidates_are_short_and_aimed():
 
 def test_a_softer_damped_contact_lowers_r():
     """The knob the lower-target candidates turn (measured r = 0.946 at 0.5 alpha, 0.6 % below Housner's)."""
-    res = DrakeEngine(stiffness=2e6, relaxation_time=1e-3).simulate(
+    res = DrakeEngine(**SAP, stiffness=2e6, relaxation_time=1e-3).simulate(
         SEED, GroundMotion.free_vibration(0.5 * SEED.alpha, 1.2, dt=1e-3)
     )
     assert first_impact_ratio(res, SEED.alpha) < SEED.r_housner * 0.998
