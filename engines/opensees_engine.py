@@ -35,12 +35,20 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
    The static compression under the block's weight, m g / (4 k_n) =
    0.64 um per corner for the seed specimen, is the initial state.
 5. Time integration: Newmark average acceleration (gamma 1/2, beta 1/4: no
-   numerical damping), Newton iterations until the unbalanced force is below
-   ``tolerance`` (1 mN, 2.6e-5 of the seed's weight), fixed step ``timestep``
-   (each sample interval cut into the fewest equal steps no longer than it).
-   A sample interval whose step fails is redone in steps ten times shorter,
-   then a hundred times shorter with Krylov-Newton; if that fails too the
-   engine raises an ``EngineError`` naming the motion and the time.
+   numerical damping), iterations of ``algorithm`` (Krylov-Newton, which
+   forms the tangent once per step and accelerates the iterations on it;
+   or full Newton) until the unbalanced force is below ``tolerance`` (1 mN,
+   2.6e-5 of the seed's weight), fixed step ``timestep`` (each sample
+   interval cut into the fewest equal steps no longer than it).
+   A sample interval whose step fails is redone in steps ten times shorter
+   with Newton, then a hundred times shorter with Krylov-Newton; if that
+   fails too the engine raises an ``EngineError`` naming the motion and the time.
+   Krylov-Newton replaced Newton as the default on 2026-11-26 (``housner
+   frontier opensees``, ``engines/models/opensees.md``): 0.69x the CPU time
+   (0.154 against 0.222 CPU s per simulated s), the same r, small-amplitude r
+   and pulses to 0.01 % (the tuner's score 5.70 for both), agreement 18 %
+   against 14 % on 50 ``elcentro`` motions; the 40-impact free decay, which
+   neither meets, is 11.8 % off against 7.6 %.
 
 The beta_K and k_n were tuned (``engines/models/opensees.md``): first-impact
 r within 0.07 % of Housner's at 0.2-0.9 alpha (within 0.7 % at 0.01-0.19 alpha)
@@ -150,8 +158,10 @@ class OpenSeesEngine(PlanarEngine):
         Coulomb friction coefficient corner/ground [-]; it must exceed
         max |ug''| / g with a margin for the impacts.
     tolerance : float
-        Newton iterations stop when the norm of the unbalanced forces is below
+        The iterations stop when the norm of the unbalanced forces is below
         this [N, N m].
+    algorithm : {"KrylovNewton", "Newton"}
+        OpenSees' solution algorithm of each step (step 5 of the module docstring).
     timestep, impact_energy_factor
         As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
 
@@ -166,7 +176,8 @@ class OpenSeesEngine(PlanarEngine):
     package = "openseespy"
 
     #: Default settings (2026-11-24, openseespy 3.7.1.2, seed specimen): first-impact r within
-    #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.2 CPU s per simulated s.
+    #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.15 CPU s per simulated s (Krylov-Newton,
+    #: since 2026-11-26; Newton: 0.22).
     DEFAULTS: ClassVar[dict] = {
         "timestep": 2.0e-4,
         "contact_stiffness": 1.5e7,
@@ -174,10 +185,16 @@ class OpenSeesEngine(PlanarEngine):
         "friction": 1.5,
         "tolerance": 1.0e-3,
         "impact_energy_factor": 1.0,
+        "algorithm": "KrylovNewton",
     }
-    #: The accuracy-cost frontier's axes (``housner frontier opensees``): the step [s] and the contact
-    #: springs' stiffness [N/m].
-    FRONTIER: ClassVar[dict] = {"timestep": (1e-4, 2e-4, 5e-4, 1e-3), "contact_stiffness": (5e6, 1.5e7, 5e7)}
+    #: The accuracy-cost frontier's axes (``housner frontier opensees``): the step [s], the contact
+    #: springs' stiffness [N/m] and the solution algorithm.
+    FRONTIER: ClassVar[dict] = {
+        "timestep": (1e-4, 2e-4, 5e-4, 1e-3),
+        "contact_stiffness": (5e6, 1.5e7, 5e7),
+        "algorithm": ("KrylovNewton", "Newton"),
+    }
+    CHOICES: ClassVar[dict] = {"algorithm": ("KrylovNewton", "Newton")}
 
     LABEL = "OpenSees"
     RANGES: ClassVar[dict] = {
@@ -253,7 +270,7 @@ class OpenSeesEngine(PlanarEngine):
         ops.numberer("Plain")
         ops.system("BandGeneral")
         ops.test("NormUnbalance", s["tolerance"], _MAX_ITER)
-        ops.algorithm("Newton")
+        ops.algorithm(s["algorithm"])
         ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
         return ops
@@ -323,7 +340,7 @@ class OpenSeesEngine(PlanarEngine):
         return 0
 
     def _retry(self, ops, motion: GroundMotion, i: int, h: float) -> None:
-        """Redo the rest of sample interval i in shorter steps (then with Krylov-Newton), or raise EngineError."""
+        """Redo the rest of sample interval i in shorter steps (Newton, then Krylov-Newton), or raise EngineError."""
         target = i * motion.dt
         try:
             for divisor, algorithm in _RETRIES:
@@ -335,8 +352,8 @@ class OpenSeesEngine(PlanarEngine):
                 if ops.analyze(steps, rest / steps) == 0:
                     return
         finally:
-            ops.algorithm("Newton")
+            ops.algorithm(self._settings["algorithm"])
         raise EngineError(
-            f"OpenSees failed on motion {motion.name!r} at t = {ops.getTime():.6g} s: Newton did not converge "
+            f"OpenSees failed on motion {motion.name!r} at t = {ops.getTime():.6g} s: the iterations did not converge "
             f"even in steps of {h / _RETRIES[-1][0]:.3g} s; try a smaller `timestep` or a larger `tolerance`"
         )
