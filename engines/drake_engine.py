@@ -52,7 +52,7 @@ reused for every record (numbered as in ``engines/models/drake.md``):
    it meets the tuner's checks with a smaller largest error (0.35 of the
    tolerances against 0.73) at 0.4x the CPU time (0.098 against 0.247 CPU s
    per simulated s); TAMSI at 1/4 ms is cheaper still but its free decay is
-   5.0 % off (SAP's 2.2 %, TAMSI at 1/8 ms 1.5 %).
+   6.6 % off, beyond the 5 % (SAP's 2.2 %, TAMSI at 1/8 ms 1.5 %).
 6. Ground motion: the d'Alembert force -m ug''(t) on the x coordinate,
    through the plant's applied-generalized-force input port, set before every
    step to m times the exact mean of the linearly interpolated -ug'' over
@@ -179,8 +179,9 @@ class DrakeEngine(PlanarEngine):
         Within 0.2 % of Housner's r: the stiff default contact on TAMSI at 1/8 and
         1/10 ms, then SAP at 1/4 ms on 5e8 N/m (the defaults until 2026-11-26). TAMSI's
         free decay moves with the step by more than its r does (seed specimen,
-        2026-11-26: 5.0 % off at 1/4 ms, 6.8 % at 1/6, 4.4 % at 1/7, 3.5 % at
-        1/8, 2.9 % at 1/10; SAP 2.2 % at 1/4), so the coarser steps are not
+        2026-11-26, on 5e8 N/m: 5.0 % off at 1/4 ms, 6.8 % at 1/6, 4.4 % at 1/7,
+        3.5 % at 1/8, 2.9 % at 1/10; SAP 2.2 % at 1/4; on 2.5e9 N/m: 6.6 % at
+        1/4, 1.5 % at 1/8), so the coarser steps are not
         offered. Away from Housner's r the contact is SAP's at 1/4 ms, whose
         stiffness and dissipation time were measured there. Above it: softer
         undamped pivots, which give part of the impact's energy back (seed

@@ -109,6 +109,9 @@ _STICK_K = 1.0e9
 _MAX_ITER = 25
 _RETRIES = ((10, "Newton"), (100, "KrylovNewton"))
 
+#: The solution algorithms offered (``algorithm``), the default first.
+_ALGORITHMS = ("KrylovNewton", "Newton")
+
 
 def _quiet_exit() -> None:
     """Send the process's standard streams to /dev/null at exit: openseespy's library prints
@@ -192,9 +195,9 @@ class OpenSeesEngine(PlanarEngine):
     FRONTIER: ClassVar[dict] = {
         "timestep": (1e-4, 2e-4, 5e-4, 1e-3),
         "contact_stiffness": (5e6, 1.5e7, 5e7),
-        "algorithm": ("KrylovNewton", "Newton"),
+        "algorithm": _ALGORITHMS,
     }
-    CHOICES: ClassVar[dict] = {"algorithm": ("KrylovNewton", "Newton")}
+    CHOICES: ClassVar[dict] = {"algorithm": _ALGORITHMS}
 
     LABEL = "OpenSees"
     RANGES: ClassVar[dict] = {
