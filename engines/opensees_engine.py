@@ -22,11 +22,16 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
 4. Contact, per corner, two elements between the ground node and the
    corner node, in parallel:
 
-   * a ``flatSliderBearing`` (local x vertical): normal spring ``Elastic``
-     k_n (the element cuts it off in tension: uplift), Coulomb friction
-     mu = 1.5 on that normal force with a stick stiffness of 1e9 N/m, and a
-     rotational (``-Mz``) material of zero stiffness, so that the corner is a
-     hinge;
+   * a ``zeroLengthContact2D`` node-to-node contact (the corner constrained,
+     the ground retained, normal +y): penalty k_n in the normal direction,
+     released in tension (uplift), Coulomb friction mu = 1.5 on that normal
+     force with a stick (tangential penalty) stiffness of 1e9 N/m. It carries
+     no moment, so the corner is a hinge. ``contact_element =
+     "flatSliderBearing"`` puts OpenSees' friction bearing there instead
+     (the same normal spring, friction and stick stiffness, and a
+     zero-stiffness ``-Mz`` material for the hinge): the model until
+     2026-11-27, which rocks alike (first-impact r within 0.25 % of each
+     other at 0.2-0.8 alpha) at 1.34 times the CPU time;
    * a ``zeroLength`` spring, vertical, elastic-no-tension (``ENT``) k_n, with
      stiffness-proportional Rayleigh damping beta_K on its current stiffness
      (``-doRayleigh``), so that it damps only while the corner presses on the
@@ -50,6 +55,12 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
    against 14 % on 50 ``elcentro`` motions; the 40-impact free decay, which
    neither meets, is 11.8 % off against 7.6 %.
 
+The node-to-node contact replaced the bearing on 2026-11-27 (``housner frontier opensees``,
+``engines/models/opensees.md``): 0.745x the CPU time on ``elcentro-strong`` records
+(``benchmarks/bench_engine_solvers.py``), the tuner's checks the same to 0.1 % (r worst 0.44 %
+against 0.45 %, small-amplitude 0.99 % against 0.99 %, pulses 2.85 % for both, 40-impact decay
+11.0 % against 11.8 %).
+
 The beta_K and k_n were tuned (``engines/models/opensees.md``): first-impact
 r within 0.07 % of Housner's at 0.2-0.9 alpha (within 0.7 % at 0.01-0.19 alpha)
 with k_n = 1.5e7 N/m, beta_K = 3.5e-4 s and 0.2 ms steps.
@@ -59,7 +70,7 @@ References
 OpenSees: McKenna, F., Scott, M. H. and Fenves, G. L. (2010). Nonlinear
 finite-element analysis software architecture using object composition.
 J. Comput. Civ. Eng. 24(1), 95-107; https://opensees.github.io/OpenSeesDocumentation
-(flatSliderBearing, zeroLength, ENT, Corotational, UniformExcitation, Newmark).
+(zeroLengthContact2D, flatSliderBearing, zeroLength, ENT, Corotational, UniformExcitation, Newmark).
 Housner, G. W. (1963). BSSA 53(2), 403-417.
 Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
 """
@@ -112,6 +123,9 @@ _RETRIES = ((10, "Newton"), (100, "KrylovNewton"))
 #: The solution algorithms offered (``algorithm``), the default first.
 _ALGORITHMS = ("KrylovNewton", "Newton")
 
+#: The frictional contact elements offered (``contact_element``), the default first.
+_CONTACT_ELEMENTS = ("zeroLengthContact2D", "flatSliderBearing")
+
 
 def _quiet_exit() -> None:
     """Send the process's standard streams to /dev/null at exit: openseespy's library prints
@@ -152,7 +166,7 @@ class OpenSeesEngine(PlanarEngine):
     ----------
     contact_stiffness : float
         k_n [N/m]: stiffness of each of the two normal springs per corner (the
-        bearing's and the damped one's), so 2 k_n per corner in contact.
+        contact element's and the damped one's), so 2 k_n per corner in contact.
     contact_damping : float
         beta_K [s]: stiffness-proportional damping of the no-tension spring
         (on its current stiffness: none once the corner lifts). More damping,
@@ -165,6 +179,8 @@ class OpenSeesEngine(PlanarEngine):
         this [N, N m].
     algorithm : {"KrylovNewton", "Newton"}
         OpenSees' solution algorithm of each step (step 5 of the module docstring).
+    contact_element : {"zeroLengthContact2D", "flatSliderBearing"}
+        The frictional contact element at each corner (step 4 of the module docstring).
     timestep, impact_energy_factor
         As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
 
@@ -179,8 +195,9 @@ class OpenSeesEngine(PlanarEngine):
     package = "openseespy"
 
     #: Default settings (2026-11-24, openseespy 3.7.1.2, seed specimen): first-impact r within
-    #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.15 CPU s per simulated s (Krylov-Newton,
-    #: since 2026-11-26; Newton: 0.22).
+    #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.12 CPU s per simulated s on
+    #: ``elcentro-strong`` (Krylov-Newton since 2026-11-26, node-to-node contact since 2026-11-27;
+    #: with Newton and the bearing: 0.22).
     DEFAULTS: ClassVar[dict] = {
         "timestep": 2.0e-4,
         "contact_stiffness": 1.5e7,
@@ -189,15 +206,17 @@ class OpenSeesEngine(PlanarEngine):
         "tolerance": 1.0e-3,
         "impact_energy_factor": 1.0,
         "algorithm": "KrylovNewton",
+        "contact_element": "zeroLengthContact2D",
     }
     #: The accuracy-cost frontier's axes (``housner frontier opensees``): the step [s], the contact
-    #: springs' stiffness [N/m] and the solution algorithm.
+    #: springs' stiffness [N/m], the solution algorithm and the contact element.
     FRONTIER: ClassVar[dict] = {
         "timestep": (1e-4, 2e-4, 5e-4, 1e-3),
         "contact_stiffness": (5e6, 1.5e7, 5e7),
         "algorithm": _ALGORITHMS,
+        "contact_element": _CONTACT_ELEMENTS,
     }
-    CHOICES: ClassVar[dict] = {"algorithm": _ALGORITHMS}
+    CHOICES: ClassVar[dict] = {"algorithm": _ALGORITHMS, "contact_element": _CONTACT_ELEMENTS}
 
     LABEL = "OpenSees"
     RANGES: ClassVar[dict] = {
@@ -255,13 +274,18 @@ class OpenSeesEngine(PlanarEngine):
         ops.geomTransf("Corotational", 1)
         for tag, corner in ((1, 2), (2, 3)):
             ops.element("elasticBeamColumn", tag, 1, corner, 1.0, _BEAM_EA, _BEAM_EI / _BEAM_EA, 1)  # A = 1 m^2
-        ops.uniaxialMaterial("Elastic", 1, k)  # the bearing's normal spring (it handles the uplift)
+        ops.uniaxialMaterial("Elastic", 1, k)  # flatSliderBearing's normal spring (it handles the uplift)
         ops.uniaxialMaterial("Elastic", 2, 0.0)  # no moment at the corner: a hinge
         ops.uniaxialMaterial("ENT", 3, k)  # the damped spring
         ops.frictionModel("Coulomb", 1, s["friction"])
+        bearing = s["contact_element"] == "flatSliderBearing"
         for i, (ground, corner) in enumerate(((4, 2), (5, 3))):
-            ops.element("flatSliderBearing", 10 + i, ground, corner, 1, _STICK_K, "-P", 1, "-Mz", 2,
-                        "-orient", 0.0, 1.0, 0.0, -1.0, 0.0, 0.0)  # fmt: skip
+            if bearing:
+                ops.element("flatSliderBearing", 10 + i, ground, corner, 1, _STICK_K, "-P", 1, "-Mz", 2,
+                            "-orient", 0.0, 1.0, 0.0, -1.0, 0.0, 0.0)  # fmt: skip
+            else:  # the corner is the constrained node, the ground's upward normal the retained side's
+                ops.element("zeroLengthContact2D", 10 + i, corner, ground, k, _STICK_K, s["friction"],
+                            "-normal", 0.0, 1.0)  # fmt: skip
             ops.element("zeroLength", 20 + i, ground, corner, "-mat", 3, "-dir", 2, "-doRayleigh", 1)
         ops.rayleigh(0.0, beta, 0.0, 0.0)  # current stiffness: only the contact springs opt in
         ops.timeSeries("Path", 1, "-dt", motion.dt, "-values", *motion.acc.tolist())

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
 from housner.engines import get_engine
 from housner.scenarios.catalogue.scenario import load_scenario
 from housner.scenarios.motions.build import build_motions
+from housner.scenarios.runs import chaos
 from housner.scenarios.runs.chaos import (
     ChaosFloor,
     EngineErrors,
@@ -64,6 +67,29 @@ def test_run_errors_for_every_engine_but_the_reference(motions):
     assert errors_from_dict(d).eps_r == pytest.approx(d["eps_r"])
     # no floor without the analytic model as the reference
     assert run_engine_errors(SPEC, {"mujoco": {}, "pybullet": {}}, motions[:2], reference="mujoco") == {}
+
+
+def test_errors_are_cached_and_measured_meanwhile(motions, tmp_path, monkeypatch):
+    """The cache gives back the very numbers measured; a changed setting is measured again; the
+    background variant returns what the direct call does, and raises what the measurement raised."""
+    engines = {"housner": {}, "mujoco": {}}
+    first = run_engine_errors(SPEC, engines, motions[:2], cache_dir=tmp_path)
+    (entry,) = (tmp_path / "engine-errors").glob("*.json")
+    calls = []
+    real = chaos.measure_engine_errors
+    monkeypatch.setattr(chaos, "measure_engine_errors", lambda *a, **k: calls.append(1) or real(*a, **k))
+    assert chaos.run_engine_errors_meanwhile(SPEC, engines, motions[:2], cache_dir=tmp_path)() == first
+    assert calls == []  # read back, not measured
+    changed = run_engine_errors(SPEC, {"housner": {}, "mujoco": {"timestep": 1e-4}}, motions[:2], cache_dir=tmp_path)
+    assert calls == [1] and changed["mujoco"]["r_rel_errors"] != first["mujoco"]["r_rel_errors"]
+    entry.write_text("{not json")  # a damaged entry: measured again, and written whole
+    assert run_engine_errors(SPEC, engines, motions[:2], cache_dir=tmp_path) == first and calls == [1, 1]
+    assert json.loads(entry.read_text()) == first["mujoco"]
+    monkeypatch.setattr(chaos, "measure_engine_errors", lambda *a, **k: 1 / 0)  # a record error: named
+    assert "ZeroDivisionError" in chaos.run_engine_errors_meanwhile(SPEC, engines, motions[:2])()["mujoco"]["error"]
+    monkeypatch.setattr(chaos, "measure_engine_errors", lambda *a, **k: {}[0])  # a bug: raised where it waits
+    with pytest.raises(KeyError):
+        chaos.run_engine_errors_meanwhile(SPEC, engines, motions[:2])()
 
 
 def test_verdict_names_the_figures_and_the_side():

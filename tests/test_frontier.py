@@ -78,16 +78,15 @@ def test_points_are_the_defaults_then_each_axis():
 @pytest.mark.parametrize("engine", ENGINES)
 def test_each_engine_declares_a_step_and_a_contact_setting_of_three_to_five_values(engine):
     """The step and the main contact setting, 3-5 numbers each (the issue); then, where the engine offers more
-    than one, its solver (a choice), every one it offers a point."""
+    than one solver or contact element, each such choice, every value it offers a point."""
     axes = frontier_axes(engine)
     names = list(axes)
-    assert names[0] == "timestep" and len(axes) in (2, 3)
+    assert names[0] == "timestep" and len(axes) in (2, 3, 4)
     cls = engine_class(engine)
     for name in names[:2]:
         assert 3 <= len(axes[name]) <= 5, name  # the issue's 3-5 points per setting
         assert any(np.allclose(v, cls.DEFAULTS[name]) for v in axes[name]), f"{name}: the default is a point"
-    if len(axes) == 3:
-        choice = names[2]
+    for choice in names[2:]:
         assert cls.DEFAULTS[choice] in axes[choice] and set(axes[choice]) <= set(cls.CHOICES[choice])
 
 
@@ -145,6 +144,31 @@ def test_report_section_shows_the_decomposition_and_the_frontier(tmp_path, monke
     assert "chaos 67%" in html and "below it" in html
     assert "swept from, knee" in html and "data:image/png;base64," in html
     assert "NOT met" in html  # the cheap point that fails a check
+
+
+def test_frontier_figures_are_drawn_once_per_machine(tmp_path, monkeypatch):
+    """The figure of a stored frontier is kept in the cache folder and read back; other data, or a damaged
+    entry, is drawn again."""
+    from housner.reports import page
+    from housner.reports.frontier_figure import frontier_figure
+
+    monkeypatch.setenv("HOUSNER_CACHE_DIR", str(tmp_path))
+    drawn = []
+
+    def draw(fr):
+        drawn.append(fr.engine)
+        return frontier_figure(fr)
+
+    d = _frontier_file()
+    fr = Frontier.from_dict(d)
+    first = page.html_stored_figure(draw, (fr,), d, "caption", "alt")
+    (entry,) = (tmp_path / "figures").glob("*.b64")
+    assert page.html_stored_figure(draw, (fr,), d, "caption", "alt") == first and len(drawn) == 1
+    other = {**d, "date": "another day"}
+    page.html_stored_figure(draw, (Frontier.from_dict(other),), other, "caption", "alt")
+    assert len(drawn) == 2 and len(list((tmp_path / "figures").glob("*.b64"))) == 2
+    entry.write_text("garbage")
+    assert page.html_stored_figure(draw, (fr,), d, "caption", "alt") == first and len(drawn) == 3
 
 
 def test_the_report_marks_the_point_that_is_the_engines_defaults_now():

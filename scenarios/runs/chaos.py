@@ -29,15 +29,22 @@ blocks to earthquakes. Earthquake Engineering & Structural Dynamics 8, 565-587.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
-from collections.abc import Sequence
+import os
+import threading
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from housner.engines.base import RECORD_ERRORS, Engine, get_engine
 from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
+from housner.scenarios.execution.cache import code_version
 from housner.specimen import Specimen
 from housner.stats import per_record_agreement, wilson_interval
 
@@ -58,6 +65,7 @@ __all__ = [
     "measure_engine_errors",
     "rms",
     "run_engine_errors",
+    "run_engine_errors_meanwhile",
 ]
 
 #: Release amplitudes theta0 / alpha [-] of the free-rocking measurement: the range where the
@@ -152,7 +160,12 @@ def measure_engine_errors(
 
 
 def run_engine_errors(
-    specimen: Specimen, engines: dict[str, dict], motions: Sequence[GroundMotion], reference: str = "housner"
+    specimen: Specimen,
+    engines: dict[str, dict],
+    motions: Sequence[GroundMotion],
+    reference: str = "housner",
+    *,
+    cache_dir: str | Path | None = None,
 ) -> dict[str, dict]:
     """Every engine's measured free-rocking errors for a run, as plain data for run.json.
 
@@ -167,6 +180,11 @@ def run_engine_errors(
         The ensemble; its median sample step is the measurement's.
     reference : str
         The run's reference engine.
+    cache_dir : str or Path, optional
+        The result cache's folder: an engine's errors measured before with the same specimen,
+        settings, engine version, code, reference r and step are read back from
+        ``cache_dir/engine-errors/`` (and new ones written there) instead of measured again.
+        None: always measured.
 
     Returns
     -------
@@ -183,12 +201,80 @@ def run_engine_errors(
         if name == reference:
             continue
         try:
-            err = measure_engine_errors(get_engine(name, **settings), specimen, r_reference=r_ref, dt=dt)
+            engine = get_engine(name, **settings)
+            path = None if cache_dir is None else _errors_path(cache_dir, specimen, engine, float(r_ref), dt)
+            if path is not None and (cached := _read_errors(path)) is not None:
+                out[name] = cached
+                continue
+            err = measure_engine_errors(engine, specimen, r_reference=r_ref, dt=dt)
         except RECORD_ERRORS as e:
             out[name] = {"error": f"{type(e).__name__}: {e}"}
             continue
-        out[name] = {**asdict(err), "eps_r": err.eps_r, "eps_p": err.eps_p, "r_reference": float(r_ref)}
+        # as plain JSON data (lists of floats), the same whether measured now or read back from the cache
+        out[name] = json.loads(json.dumps({**asdict(err), "eps_r": err.eps_r, "eps_p": err.eps_p,
+                                           "r_reference": float(r_ref)}, default=float))  # fmt: skip
+        if path is not None:
+            _write_errors(path, out[name])
     return out
+
+
+def run_engine_errors_meanwhile(*args, **kwargs) -> Callable[[], dict[str, dict]]:
+    """:func:`run_engine_errors` started in a thread of this process; call the result to wait for it.
+
+    ``housner run`` measures the engines' errors while its worker processes run the records: the
+    calling process only waits on them then, so the measurement (about 6 s of CPU for five engines)
+    takes the time the pool leaves over instead of adding to the run. An exception of the
+    measurement is raised by the call that waits.
+    """
+    box: dict[str, Any] = {}
+
+    def work() -> None:
+        try:
+            box["value"] = run_engine_errors(*args, **kwargs)
+        except BaseException as e:  # handed to the caller, who raises it where it waits
+            box["error"] = e
+
+    thread = threading.Thread(target=work, name="housner-engine-errors", daemon=True)
+    thread.start()
+
+    def wait() -> dict[str, dict]:
+        thread.join()
+        if "error" in box:
+            raise box["error"]
+        return box["value"]
+
+    return wait
+
+
+def _errors_path(cache_dir: str | Path, specimen: Specimen, engine: Engine, r_ref: float, dt: float) -> Path:
+    """The cache file of an engine's free-rocking errors: a hash of everything that determines them."""
+    content = {"what": "engine errors", "specimen": specimen.describe(), "engine": engine.name,
+               "settings": engine.settings(), "engine_version": engine.version(), "code": code_version(),
+               "r_reference": r_ref, "dt": dt, "amplitudes": list(RELEASE_AMPLITUDES)}  # fmt: skip
+    key = hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode()).hexdigest()[:32]
+    return Path(cache_dir) / "engine-errors" / f"{key}.json"
+
+
+def _read_errors(path: Path) -> dict | None:
+    """A cached measurement, or None when there is none or it cannot be read (then it is measured again)."""
+    try:
+        d = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    keys = ("engine", "amplitudes", "r_rel_errors", "p_rel_errors", "dt", "eps_r", "eps_p", "r_reference")
+    return d if isinstance(d, dict) and all(k in d for k in keys) else None
+
+
+def _write_errors(path: Path, d: dict) -> None:
+    """Store a measurement (written whole, then renamed: a reader never sees half a file); a cache that
+    cannot be written is skipped, not an error."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
+        tmp.write_text(json.dumps(d, allow_nan=True))
+        os.replace(tmp, path)
+    except OSError:
+        pass
 
 
 def errors_from_dict(d: dict) -> EngineErrors:

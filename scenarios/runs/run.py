@@ -5,6 +5,7 @@ the spread of Table 2 over independent ensembles, and the run directory
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,12 +17,13 @@ import pandas as pd
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.schema import effects_label
+from housner.scenarios.execution.cache import default_cache_dir
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES, effect_data, provenance, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import build_motions
-from housner.scenarios.runs.chaos import run_engine_errors
+from housner.scenarios.runs.chaos import run_engine_errors, run_engine_errors_meanwhile
 from housner.scenarios.runs.spread import seed_spread
 
 __all__ = ["RunResult", "effects_series", "run_scenario"]
@@ -110,13 +112,18 @@ def run_scenario(
     motions, mmeta = build_motions(scenario, n_motions, seed=seed, band_check=True)  # the report shows the bands
     t_motions = time.perf_counter() - t0
     eng_settings = {n: dict(scenario.engine_settings.get(n, {})) for n in names}
+    # each engine's free-rocking r and p errors: the report's chaos floor perturbs the analytic model by them.
+    # Measured here while worker processes run the records (this process only waits on them then).
+    reference = str(scenario.analysis.get("reference", "housner"))
+    errors_args = (scenario.specimen, eng_settings, motions, reference)
+    errors_cache = (opts.cache_dir or default_cache_dir()) if opts.use_cache else None
+    in_pool = opts.scheduler is not None or (opts.jobs or os.cpu_count() or 1) > 1
+    engine_errors = run_engine_errors_meanwhile(*errors_args, cache_dir=errors_cache) if in_pool else None
     results, histories, info = run_engines(scenario.specimen, motions, eng_settings, opts)
     if scenario.effects:
         results, histories, info = _with_effects(scenario, motions, eng_settings, results, histories, info, opts)
     fails = results[results["status"] != "ok"]
-    # each engine's free-rocking r and p errors: the report's chaos floor perturbs the analytic model by them
-    reference = str(scenario.analysis.get("reference", "housner"))
-    engine_errors = run_engine_errors(scenario.specimen, eng_settings, motions, reference)
+    engine_errors = engine_errors() if in_pool else run_engine_errors(*errors_args, cache_dir=errors_cache)
     spread = None
     k = int(scenario.analysis.get("seed_spread", 0) or 0)
     if k > 1 and "housner" in names and n_motions is None and seed is None:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 from housner.reports.frontier_figure import frontier_figure
-from housner.reports.page import engine_tag, esc, fmt_g, html_figure, html_note, html_table, status_badge
+from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_stored_figure, html_table, status_badge
 from housner.reports.run.sections.tuning import _engine_defaults, _settings_differ, model_data, model_file
 from housner.reports.run.view import Run
 from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
@@ -155,7 +155,7 @@ def _frontier(run: Run, name: str, d: dict) -> str:
     used = ((run.meta.get("engines") or {}).get(name) or {}).get("settings") or {}
     differ = _settings_differ(fr.knee_settings(), used)
     note = html_note(f"This run's {esc(', '.join(differ))} differ from the knee's.", "warn") if differ else ""
-    fig = html_figure(frontier_figure(fr), f"{esc(name)}: accuracy against cost", f"{name} frontier")
+    fig = html_stored_figure(frontier_figure, (fr,), d, f"{esc(name)}: accuracy against cost", f"{name} frontier")
     return f"<h4>{engine_tag(name, run)}</h4>{table}{note}{fig}"
 
 
