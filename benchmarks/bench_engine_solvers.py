@@ -1,4 +1,4 @@
-"""CPU time of the engines' solver defaults of 2026-11-26 against the settings they replaced, in the same run.
+"""CPU time of the engines' solver defaults of 2026-11-26/27 against the settings they replaced, in the same run.
 
 Run from the repository root::
 
@@ -10,7 +10,9 @@ checks and the per-record agreement decided, this measures only the cost):
 
 * Drake: TAMSI at 1/8 ms on 2.5e9 N/m, was SAP at 1/4 ms on 5e8 N/m (``contact_approximation``,
   ``timestep``, ``stiffness``);
-* OpenSees: Krylov-Newton, was Newton (``algorithm``);
+* OpenSees: Krylov-Newton, was Newton (``algorithm``, 2026-11-26); a node-to-node contact element,
+  was a friction bearing (``contact_element``, 2026-11-27): both changes together, and the contact
+  element alone;
 * DART: its own collision detector, was FCL (``collision_detector``).
 
 Motions: the first ``--n`` of ``elcentro-strong`` (the six-engine run's, 42 % of which overturn
@@ -38,12 +40,13 @@ from housner.engines import get_engine  # noqa: E402
 from housner.scenarios.catalogue.scenario import load_scenario  # noqa: E402
 from housner.scenarios.motions.build import build_motions  # noqa: E402
 
-#: Engine -> the settings its new defaults replaced.
-REPLACED = {
-    "drake": {"contact_approximation": "sap", "timestep": 2.5e-4, "stiffness": 5e8},
-    "opensees": {"algorithm": "Newton"},
-    "dart": {"collision_detector": "fcl"},
-}
+#: (engine, the settings its new defaults replaced), in the order measured.
+REPLACED = (
+    ("drake", {"contact_approximation": "sap", "timestep": 2.5e-4, "stiffness": 5e8}),
+    ("opensees", {"algorithm": "Newton", "contact_element": "flatSliderBearing"}),
+    ("opensees", {"contact_element": "flatSliderBearing"}),
+    ("dart", {"collision_detector": "fcl"}),
+)
 
 
 def cpu_per_sim_second(engine, specimen, motions) -> float:
@@ -57,15 +60,18 @@ def cpu_per_sim_second(engine, specimen, motions) -> float:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--engines", nargs="*", default=list(REPLACED), help="engines (default: all three)")
+    names = list(dict.fromkeys(name for name, _ in REPLACED))
+    ap.add_argument("--engines", nargs="*", default=names, help="engines (default: all three)")
     ap.add_argument("--n", type=int, default=6, help="motions of elcentro-strong (default 6)")
     ap.add_argument("--rounds", type=int, default=3, help="rounds of old and new (default 3)")
     args = ap.parse_args(argv)
     sc = load_scenario("elcentro-strong")
     motions, _ = build_motions(sc, args.n)
     print(f"{'engine':10s} {'old CPU s/s':>12s} {'new CPU s/s':>12s} {'new/old':>8s} {'range':>14s}  old settings")
-    for name in args.engines:
-        old, new = get_engine(name, **REPLACED[name]), get_engine(name)
+    for name, replaced in REPLACED:
+        if name not in args.engines:
+            continue
+        old, new = get_engine(name, **replaced), get_engine(name)
         for e in (old, new):
             e.simulate(sc.specimen, motions[0])  # model building, first-call costs
         olds, news = [], []
@@ -76,7 +82,7 @@ def main(argv=None) -> int:
             news.append(cost[id(new)])
         ratios = [b / a for a, b in zip(olds, news, strict=True)]
         print(f"{name:10s} {statistics.median(olds):12.4f} {statistics.median(news):12.4f} "
-              f"{statistics.median(ratios):8.3f} {min(ratios):6.3f}-{max(ratios):.3f}  {REPLACED[name]}")  # fmt: skip
+              f"{statistics.median(ratios):8.3f} {min(ratios):6.3f}-{max(ratios):.3f}  {replaced}")  # fmt: skip
     return 0
 
 
