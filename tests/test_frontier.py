@@ -171,6 +171,14 @@ def test_frontier_figures_are_drawn_once_per_machine(tmp_path, monkeypatch):
     assert page.html_stored_figure(draw, (fr,), d, "caption", "alt") == first and len(drawn) == 3
 
 
+def test_an_error_that_could_not_be_measured_is_a_dash_not_nan():
+    """OpenSees at 1 ms has no first impact in some releases: its r error is NaN, shown as a dash."""
+    from housner.reports.run.sections.engines_explained import _signed
+
+    assert _signed(float("nan"), "+.2%") == _signed(None, "+.2%") == _signed(float("inf"), "+.1%") == "&ndash;"
+    assert _signed(-0.0123, "+.2%") == "-1.23%"
+
+
 def test_the_report_marks_the_point_that_is_the_engines_defaults_now():
     from housner.reports.run.sections.engines_explained import current_point
 

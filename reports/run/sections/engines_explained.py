@@ -29,6 +29,11 @@ def _pct(x) -> str:
     return "&ndash;" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.0%}"
 
 
+def _signed(x, fmt: str) -> str:
+    """A signed error in ``fmt`` (e.g. ``"+.2%"``), or a dash where it could not be measured (None, NaN, inf)."""
+    return "&ndash;" if x is None or not math.isfinite(float(x)) else format(x, fmt)
+
+
 def _effects_html(effects) -> str:
     if not effects:
         return "none"
@@ -115,10 +120,10 @@ def _frontier_rows(fr: Frontier, now: int | None) -> list[list[str]]:
         rows.append(
             [
                 f"<code>{esc(p.label)}</code>" + (f" <b>{mark}</b>" if mark else ""),
-                f"{p.r_error:+.2%}",
-                f"{p.small_error:+.2%}",
-                f"{p.decay_error:+.1%}",
-                f"{p.pulse_error:+.2%}",
+                _signed(p.r_error, "+.2%"),
+                _signed(p.small_error, "+.2%"),
+                _signed(p.decay_error, "+.1%"),
+                _signed(p.pulse_error, "+.2%"),
                 status_badge(p.checks_met, "met", "NOT met") + _score_html(p),
                 f"{p.agreement:.0%} &plusmn; {se:.0%}",
                 _pct(p.floor),
