@@ -19,22 +19,14 @@ from housner.cli.args import (
     _check_output_file,
 )
 from housner.engines.base import get_engine
-from housner.engines.tuning import tune
-from housner.reports.diagnosis import write_diagnosis_report
-from housner.reports.frontier_figure import frontier_figure
 from housner.reports.run.page import write_report
 from housner.reports.run.view import Run, engine_verdict
 from housner.reports.study.page import write_study_report
-from housner.reports.tuning_figure import tuning_report_figure
-from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
 from housner.scenarios.catalogue.scenario import SCENARIOS, list_scenarios, load_scenario
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES
 from housner.scenarios.execution.workers import connect_scheduler
-from housner.scenarios.runs.explain import explain_engine
-from housner.scenarios.runs.frontier import engine_frontier, frontier_axes
 from housner.scenarios.runs.run import run_scenario
 from housner.scenarios.studies.study import STUDY_FILES, run_study
 from housner.specimen import Specimen
@@ -205,6 +197,9 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_tune(args: argparse.Namespace) -> int:
+    from housner.engines.tuning import tune  # each command imports its own layers: `housner run` starts faster
+    from housner.reports.tuning_figure import tuning_report_figure
+
     specimen = Specimen.bachmann2017()
     if args.scenario:
         specimen = load_scenario(args.scenario).specimen
@@ -254,6 +249,10 @@ def _print_best_candidates(result, n: int = 10) -> None:
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
+    from housner.reports.diagnosis import write_diagnosis_report
+    from housner.scenarios.campaigns.campaign import load_campaign
+    from housner.scenarios.campaigns.diagnose import diagnose
+
     _check_campaign(args.campaign)  # inputs and outputs checked before the work
     _check_effects(args.effects, "--effects")
     _check_effects(args.add, "--add")
@@ -321,6 +320,8 @@ def _engine_work(args: argparse.Namespace, scenario, what: str, records: str) ->
 
 
 def _cmd_explain(args: argparse.Namespace) -> int:
+    from housner.scenarios.runs.explain import explain_engine
+
     # inputs and outputs checked before the work: scenario, engine, options, files
     scenario = _engine_scenario(args, "explain an engine on")
     _check_effects(args.effects, "--effects")
@@ -342,6 +343,9 @@ def _cmd_explain(args: argparse.Namespace) -> int:
 
 
 def _cmd_frontier(args: argparse.Namespace) -> int:
+    from housner.reports.frontier_figure import frontier_figure
+    from housner.scenarios.runs.frontier import engine_frontier, frontier_axes
+
     # inputs and outputs checked before the work: engine, scenario, options, files
     if args.engine == "housner":
         raise UsageError("argument ENGINE: 'housner' is the reference the frontier is measured against; "
