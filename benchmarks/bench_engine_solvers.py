@@ -23,7 +23,8 @@ machine whose speed drifts moves both. Printed: each engine's CPU s per simulate
 and the median ratio with its range over the rounds.
 
 Measured 2026-11-26 (6 motions, 3 rounds, a 2-core machine otherwise idle): Drake 0.387 (0.365-0.399),
-OpenSees 0.696 (0.617-0.699), DART 0.931 (0.906-0.952).
+OpenSees 0.696 (0.617-0.699), DART 0.931 (0.906-0.952). Measured 2026-11-27 (the same way), OpenSees against
+Newton and the bearing 0.530 (0.523-0.533), against the bearing alone 0.762 (0.757-0.768).
 """
 
 from __future__ import annotations
