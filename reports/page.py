@@ -12,9 +12,7 @@ from __future__ import annotations
 import hashlib
 import html
 import inspect
-import json
 import math
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from housner.reports import figures
-from housner.scenarios.execution.cache import code_version, default_cache_dir
+from housner.scenarios.execution.cache import code_version, content_key, default_cache_dir, store_text
 from housner.scenarios.execution.rundir import json_number
 
 
@@ -111,13 +109,7 @@ def html_stored_figure(draw: Callable[..., Any], args: tuple, data: Any, caption
             pass
     png = figures.to_png_base64(draw(*args))
     if path is not None:
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_text(png, encoding="ascii")
-            os.replace(tmp, path)
-        except OSError:
-            pass
+        store_text(path, png)
     return _figure_html(png, caption, alt)
 
 
@@ -129,10 +121,10 @@ def _stored_figure_path(draw: Callable[..., Any], data: Any) -> Path | None:
         source = Path(inspect.getsourcefile(draw) or "").read_bytes()
     except (TypeError, OSError):
         return None
-    h = hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode())
-    h.update(source)
-    h.update(f"{draw.__module__}.{draw.__qualname__} {matplotlib.__version__} {code_version()}".encode())
-    return default_cache_dir() / "figures" / f"{h.hexdigest()[:32]}.b64"
+    content = {"what": "figure", "data": data, "draw": f"{draw.__module__}.{draw.__qualname__}",
+               "source": hashlib.sha256(source).hexdigest(), "matplotlib": matplotlib.__version__,
+               "code": code_version()}  # fmt: skip
+    return default_cache_dir() / "figures" / f"{content_key(content)[:32]}.b64"
 
 
 def html_note(text: str, kind: str = "note") -> str:

@@ -213,3 +213,16 @@ def test_guided_chunks_end_the_run_on_short_chunks():
     assert [len(p) for p in parts[:8]] == [10] * 8 and all(len(p) <= 3 for p in parts[8:])
     assert [len(p) for p in _parts(list(range(100)), 10, 2, guided=False)] == [10] * 10
     assert [len(p) for p in _parts(list(range(100)), 10, 1, guided=True)] == [10] * 10  # one worker: no tail
+
+
+def test_options_say_where_the_cache_is_and_how_many_workers_start(tmp_path, monkeypatch):
+    """The one place the runner and the run's error measurement take the cache folder and the worker count from."""
+    import os
+
+    from housner.scenarios.execution.options import RunOptions
+
+    monkeypatch.setenv("HOUSNER_CACHE_DIR", str(tmp_path / "env"))
+    assert RunOptions().cache_folder() == tmp_path / "env"
+    assert RunOptions(cache_dir=tmp_path / "mine").cache_folder() == tmp_path / "mine"
+    assert RunOptions(cache_dir=tmp_path / "mine", use_cache=False).cache_folder() is None
+    assert RunOptions(jobs=3).local_jobs() == 3 and RunOptions().local_jobs() == (os.cpu_count() or 1)

@@ -13,6 +13,8 @@ import inspect
 import json
 import logging
 import os
+import threading
+from contextlib import suppress
 from pathlib import Path
 
 import housner
@@ -113,8 +115,30 @@ def _shared_content(specimen: Specimen, engine: str, settings: dict, version: st
 
 def _key(shared: dict, motion: GroundMotion) -> str:
     """SHA-256 of the canonical JSON of the shared content and the motion's content hash."""
-    payload = json.dumps({**shared, "motion": motion.content_hash()}, sort_keys=True)
-    return hashlib.sha256(payload.encode()).hexdigest()
+    return content_key({**shared, "motion": motion.content_hash()})
+
+
+def content_key(content) -> str:
+    """SHA-256 (hex) of the canonical JSON of ``content``: keys sorted, a value JSON cannot hold as its ``str``.
+
+    The key of every cache file: a record's entry (:func:`cache_key`), an engine's free-rocking errors, a
+    stored figure.
+    """
+    return hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def store_text(path: str | Path, text: str) -> None:
+    """Write a cache file whole: a temporary file of this process and thread, renamed into place, so that a
+    reader never sees half of it. A cache that cannot be written is skipped, not an error."""
+    path = Path(path)
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError:
+        with suppress(OSError):
+            tmp.unlink()
 
 
 # --------------------------------------------------------------------------
@@ -122,5 +146,5 @@ def _key(shared: dict, motion: GroundMotion) -> str:
 # written and read in housner.scenarios.execution.chunks (which the worker processes load by its path).
 _log = logging.getLogger("housner.runner")
 
-__all__ = ["cache_key", "cache_keys", "code_version", "default_cache_dir", "effect_code_hash", "entry_path",
-           "load_entry", "store_entry"]  # fmt: skip
+__all__ = ["cache_key", "cache_keys", "code_version", "content_key", "default_cache_dir", "effect_code_hash",
+           "entry_path", "load_entry", "store_entry", "store_text"]  # fmt: skip

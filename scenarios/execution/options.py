@@ -71,6 +71,19 @@ class RunOptions:
         if not isinstance(self.use_cache, (bool, np.bool_)):
             raise ValueError(f"`use_cache` must be True or False, got {self.use_cache!r}")
 
+    def local_jobs(self) -> int:
+        """Worker processes [count] a local run starts: ``jobs``, else one per CPU (1: in the calling process)."""
+        return self.jobs or os.cpu_count() or 1
+
+    def cache_folder(self) -> Path | None:
+        """The result cache's folder: ``cache_dir``, else ``$HOUSNER_CACHE_DIR`` or ``~/.cache/housner``
+        (read now); None when ``use_cache`` is False."""
+        if not self.use_cache:
+            return None
+        from housner.scenarios.execution.cache import default_cache_dir  # the cache's module imports the engines
+
+        return self.cache_dir or default_cache_dir()
+
     def replace(self, **changes: Any) -> RunOptions:
         """A copy with ``changes`` (option name -> value), checked like a new one."""
         return dataclasses.replace(self, **changes)

@@ -14,7 +14,6 @@ How it executes is a :class:`~housner.scenarios.execution.options.RunOptions`.
 from __future__ import annotations
 
 import math
-import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +24,7 @@ import pandas as pd
 from housner.engines.base import engine_class
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.schema import effects_label
-from housner.scenarios.execution.cache import _log, cache_keys, default_cache_dir, entry_path, load_entry, store_entry
+from housner.scenarios.execution.cache import _log, cache_keys, entry_path, load_entry, store_entry
 from housner.scenarios.execution.chunks import engine_batches, entry_file, iter_chunk
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.rundir import RESULT_COLUMNS
@@ -103,8 +102,7 @@ def run_engines(
     once. Every (engine, motion) of the run has exactly one row.
     """
     opts = RunOptions.merged(options, execution, "run_engines")
-    cache_dir = Path(opts.cache_dir) if opts.cache_dir else default_cache_dir()
-    jobs, scheduler = opts.jobs or os.cpu_count() or 1, opts.scheduler
+    jobs, scheduler = opts.local_jobs(), opts.scheduler
     n_workers = 1 if scheduler is None and jobs == 1 else jobs
     per_worker = 4
     if scheduler is not None:
@@ -112,7 +110,7 @@ def run_engines(
         # length: an overturn ends one early); a task costs milliseconds. With 4 per worker, 2 workers ran
         # an engine-bound study 1.74 x faster than one, the last chunk keeping one worker alone.
         n_workers, per_worker = _cluster_threads(scheduler, jobs), 16
-    plan = _plan(specimen, motions, engines, effects, cache_dir if opts.use_cache else None, n_workers,
+    plan = _plan(specimen, motions, engines, effects, opts.cache_folder(), n_workers,
                  opts.chunk_size, per_worker, histories)  # fmt: skip
     elapsed = _execute(plan, specimen, jobs, scheduler, opts.progress)
     for name in plan.info:

@@ -29,10 +29,8 @@ blocks to earthquakes. Earthquake Engineering & Structural Dynamics 8, 565-587.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
-import os
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -44,7 +42,7 @@ import numpy as np
 from housner.engines.base import RECORD_ERRORS, Engine, get_engine
 from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
-from housner.scenarios.execution.cache import code_version
+from housner.scenarios.execution.cache import code_version, content_key, store_text
 from housner.specimen import Specimen
 from housner.stats import per_record_agreement, wilson_interval
 
@@ -214,7 +212,7 @@ def run_engine_errors(
         out[name] = json.loads(json.dumps({**asdict(err), "eps_r": err.eps_r, "eps_p": err.eps_p,
                                            "r_reference": float(r_ref)}, default=float))  # fmt: skip
         if path is not None:
-            _write_errors(path, out[name])
+            store_text(path, json.dumps(out[name], allow_nan=True))
     return out
 
 
@@ -251,8 +249,7 @@ def _errors_path(cache_dir: str | Path, specimen: Specimen, engine: Engine, r_re
     content = {"what": "engine errors", "specimen": specimen.describe(), "engine": engine.name,
                "settings": engine.settings(), "engine_version": engine.version(), "code": code_version(),
                "r_reference": r_ref, "dt": dt, "amplitudes": list(RELEASE_AMPLITUDES)}  # fmt: skip
-    key = hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode()).hexdigest()[:32]
-    return Path(cache_dir) / "engine-errors" / f"{key}.json"
+    return Path(cache_dir) / "engine-errors" / f"{content_key(content)[:32]}.json"
 
 
 def _read_errors(path: Path) -> dict | None:
@@ -263,18 +260,6 @@ def _read_errors(path: Path) -> dict | None:
         return None
     keys = ("engine", "amplitudes", "r_rel_errors", "p_rel_errors", "dt", "eps_r", "eps_p", "r_reference")
     return d if isinstance(d, dict) and all(k in d for k in keys) else None
-
-
-def _write_errors(path: Path, d: dict) -> None:
-    """Store a measurement (written whole, then renamed: a reader never sees half a file); a cache that
-    cannot be written is skipped, not an error."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-        tmp.write_text(json.dumps(d, allow_nan=True))
-        os.replace(tmp, path)
-    except OSError:
-        pass
 
 
 def errors_from_dict(d: dict) -> EngineErrors:

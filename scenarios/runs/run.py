@@ -5,7 +5,6 @@ the spread of Table 2 over independent ensembles, and the run directory
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +16,6 @@ import pandas as pd
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.schema import effects_label
-from housner.scenarios.execution.cache import default_cache_dir
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES, effect_data, provenance, write_run
@@ -116,8 +114,8 @@ def run_scenario(
     # Measured here while worker processes run the records (this process only waits on them then).
     reference = str(scenario.analysis.get("reference", "housner"))
     errors_args = (scenario.specimen, eng_settings, motions, reference)
-    errors_cache = (opts.cache_dir or default_cache_dir()) if opts.use_cache else None
-    in_pool = opts.scheduler is not None or (opts.jobs or os.cpu_count() or 1) > 1
+    errors_cache = opts.cache_folder()
+    in_pool = opts.scheduler is not None or opts.local_jobs() > 1
     engine_errors = run_engine_errors_meanwhile(*errors_args, cache_dir=errors_cache) if in_pool else None
     results, histories, info = run_engines(scenario.specimen, motions, eng_settings, opts)
     if scenario.effects:
