@@ -15,7 +15,7 @@ if __name__ != "housner.scenarios":  # this folder imported by its 0.1 name from
 
     become(__name__)
 
-import importlib
+from housner._lazy import lazy_exports
 
 #: Each public name -> the sub-package that defines it. They are imported when first used (PEP 562), not
 #: with the package: a worker process that runs records needs ``execution`` only, and importing
@@ -39,21 +39,9 @@ _EXPORTS = {
 }
 
 
-def __getattr__(name: str):
-    """A public name or a sub-package, imported on first use."""
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
-    elif name in ("campaigns", "catalogue", "execution", "motions", "runs", "studies"):
-        value = importlib.import_module(f"{__name__}.{name}")
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
-
+__getattr__, __dir__ = lazy_exports(
+    __name__, _EXPORTS, globals(), submodules=("campaigns", "catalogue", "execution", "motions", "runs", "studies")
+)
 
 __all__ = [
     "Campaign",

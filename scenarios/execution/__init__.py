@@ -1,6 +1,6 @@
 """Running engines on motions: plan -> execute -> table, cached, parallel, fault-tolerant; it never sees a scenario."""
 
-import importlib
+from housner._lazy import lazy_exports
 
 #: Each public name -> its module, imported on first use (PEP 562): a worker process loads ``chunks``
 #: alone (the standard library and numpy), not the runner, the scenario schema and the motion models.
@@ -23,18 +23,7 @@ _EXPORTS = {
 }
 
 
-def __getattr__(name: str):
-    """A public name, imported from its module on first use."""
-    if name not in _EXPORTS:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
-
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
 __all__ = [
     "CRASH_ENV",
