@@ -152,12 +152,16 @@ class DartEngine(PlanarEngine):
         block.setPositions(states[0, :3].tolist())
         block.setVelocities(states[0, 3:].tolist())
         gx_rows = gravity_x(motion.acc, k)  # step 1 of the module docstring
+        # One gravity vector, its x written in place before each step: dartpy converts an ndarray to its
+        # Eigen vector faster than a new list (about 1.6 us of a 9.9 us step, 2026-11-27), same numbers.
+        gravity = np.array([0.0, 0.0, -G])
         set_gravity, step = world.setGravity, world.step
         law = self.impact_law(specimen, effects, h, motion.theta0)
 
         def advance(i: int) -> np.ndarray:
             for gxi in gx_rows[i - 1]:
-                set_gravity([gxi, 0.0, -G])
+                gravity[0] = gxi
+                set_gravity(gravity)
                 step()
                 if law.active and (c := law.after_step(block.getPosition(2), block.getVelocity(2))) is not None:
                     block.setVelocities(c * block.getVelocities())
