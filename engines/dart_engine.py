@@ -91,7 +91,7 @@ class DartEngine(PlanarEngine):
     #: The accuracy-cost frontier's axes (``housner frontier dart``): the step [s], the radius of
     #: the pivot spheres [m] (the contact's geometry: DART's contact is rigid, an LCP) and the detector.
     FRONTIER: ClassVar[dict] = {
-        "timestep": (5e-5, 1e-4, 2e-4, 4e-4),
+        "timestep": (5e-5, 1e-4, 1.25e-4, 2e-4, 4e-4),
         "pivot_radius": (1e-6, 1e-5, 1e-4),
         "collision_detector": ("dart", "fcl"),
     }

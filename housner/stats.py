@@ -48,6 +48,8 @@ from housner.errors import unknown_choice
 __all__ = [
     "ECDF",
     "KSResult",
+    "KS_MAX",
+    "OVERTURN_TOL",
     "PercentileEstimate",
     "ProportionCI",
     "RecordAgreement",
@@ -61,6 +63,12 @@ __all__ = [
     "wasserstein",
     "wilson_interval",
 ]
+
+#: The distribution criterion of a run's headline verdict and of users' CI
+#: (:func:`housner.reports.assertions.runs.assert_cdf_agreement`): a two-sample KS distance of theta_max/alpha
+#: at most KS_MAX [-] and P[overturn] within OVERTURN_TOL [-] of the reference's.
+KS_MAX = 0.15
+OVERTURN_TOL = 0.08
 
 #: Bootstrap resamples are drawn in blocks of at most this many values, to bound memory.
 _BOOT_BLOCK_VALUES = 4_000_000

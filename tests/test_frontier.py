@@ -24,6 +24,7 @@ from housner.scenarios.runs.frontier import (
     engine_frontier,
     frontier_axes,
     knee,
+    knee_reason,
     unmet_everywhere,
 )
 
@@ -54,6 +55,24 @@ def test_knee_trades_no_checked_accuracy_for_time():
     assert knee([d, coarse]) == 0
     coarse.score = 0.5  # as well checked: the cheaper step is the knee
     assert knee([d, coarse]) == 1
+
+
+def test_knee_keeps_the_reports_distribution_verdict():
+    # DART's sweep on elcentro (2026-11-27): 1/8 ms checks as well as 1/10 ms at 0.80x the CPU time, but its
+    # KS 0.19 would fail the run report's criterion (0.15) that the defaults pass at 0.13
+    d, coarse = point(0.35, 0.0707), point(0.36, 0.0564)
+    d.score, coarse.score, d.ks, coarse.ks = 0.55, 0.46, 0.13, 0.19
+    assert knee([d, coarse]) == 0
+    f = Frontier(engine="dart", scenario="elcentro", n_motions=100, defaults={"timestep": 1e-4},
+                 axes={"timestep": [1.25e-4]}, points=[d, coarse], knee=0, default=0, model_form_floor=0.5)  # fmt: skip
+    assert "fail the run report's KS criterion" in knee_reason(f)
+    coarse.ks = 0.15  # at the criterion: kept
+    assert knee([d, coarse]) == 1
+    # defaults that already fail it: a point no worse than theirs may still be chosen
+    d.ks, coarse.ks = 0.16, 0.16
+    assert knee([d, coarse]) == 1
+    coarse.ks = 0.17
+    assert knee([d, coarse]) == 0
 
 
 def test_knee_needs_the_tuner_checks_and_skips_failed_points():

@@ -43,6 +43,7 @@ from housner.reports.assertions.criteria import (
 )
 from housner.scenarios.execution.rundir import REPORT_FILE, RESULTS_FILE, load_results
 from housner.scenarios.execution.tables import split_failed
+from housner.stats import KS_MAX, OVERTURN_TOL
 
 __all__ = [
     "AgreementReport",
@@ -192,8 +193,8 @@ def assert_cdf_agreement(
     engine: str = "mujoco",
     reference: str = "housner",
     *,
-    ks_max: float | None = 0.15,
-    overturn_tol: float | None = 0.08,
+    ks_max: float | None = KS_MAX,
+    overturn_tol: float | None = OVERTURN_TOL,
     percentiles: Mapping[float, float] | None = None,
     wasserstein_max: float | None = None,
     min_records: int | None = 20,

@@ -29,6 +29,7 @@ from housner.scenarios.execution.tables import compare_engines, split_failed
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
 from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, floor_check, floor_verdict
 from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
+from housner.stats import KS_MAX, OVERTURN_TOL
 
 #: Bootstrap resamples for percentile intervals (Efron and Tibshirani 1993, ch. 13, ask for at
 #: least 1000 for percentile intervals) and the fixed seed that makes pages reproducible.
@@ -293,10 +294,10 @@ def _record(run: Run):
 
 #: Default tolerances of the headline verdict; the same as the defaults of
 #: :func:`housner.reports.assertions.runs.assert_cdf_agreement`, so the page says what users' CI says.
-DEFAULT_KS_MAX = 0.15
+DEFAULT_KS_MAX = KS_MAX
 
 
-DEFAULT_OVERTURN_TOL = 0.08
+DEFAULT_OVERTURN_TOL = OVERTURN_TOL
 
 
 #: Fewest records of each engine that a distribution verdict is drawn from: one record moves the KS distance
