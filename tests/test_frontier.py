@@ -73,6 +73,9 @@ def test_knee_keeps_the_reports_distribution_verdict():
     assert knee([d, coarse]) == 1
     coarse.ks = 0.17
     assert knee([d, coarse]) == 0
+    # a sweep where no point ran still says why (it raised on an empty min() before)
+    f.points = [point(math.nan, 0.07, error="diverged")]
+    assert knee(f.points) == 0 and "within 1.96 standard errors" in knee_reason(f)
 
 
 def test_knee_needs_the_tuner_checks_and_skips_failed_points():

@@ -304,11 +304,15 @@ def _ran(points: Sequence[FrontierPoint]) -> list[int]:
     return [i for i, p in enumerate(points) if not p.error and math.isfinite(p.agreement)]
 
 
-def _candidates(points: Sequence[FrontierPoint]) -> list[int]:
-    """The points the knee is chosen among: ran, admissible, checked no worse than the defaults, keeping the
-    distribution verdict."""
+def _checked(points: Sequence[FrontierPoint]) -> list[int]:
+    """The points that ran, are admissible and check no worse than the defaults."""
     ran = _ran(points)
-    return keeps_the_verdict(points, not_worse_checked(points, admissible(points, ran))) if ran else []
+    return not_worse_checked(points, admissible(points, ran)) if ran else []
+
+
+def _candidates(points: Sequence[FrontierPoint]) -> list[int]:
+    """The points the knee is chosen among: :func:`_checked`, keeping the distribution verdict."""
+    return keeps_the_verdict(points, _checked(points))
 
 
 def keeps_the_verdict(points: Sequence[FrontierPoint], idx: Sequence[int]) -> list[int]:
@@ -358,14 +362,14 @@ def knee_reason(f: Frontier) -> str:
     """Why the knee is where it is, in one sentence or two."""
     pts = f.points
     k = pts[f.knee]
-    best = max((pts[i] for i in _candidates(pts)), key=lambda p: p.agreement, default=k)
+    checked = _checked(pts)
+    ok = keeps_the_verdict(pts, checked)
+    best = max((pts[i] for i in ok), key=lambda p: p.agreement, default=k)
     never = unmet_everywhere(pts, _ran(pts))
     lead = ("it meets every tuner check" if k.checks_met else
             f"no point meets the {', '.join(sorted(never))} check; it meets every other")  # fmt: skip
     lead += f", scores {k.score:.2f} on them (the defaults {pts[0].score:.2f})"
-    checked = not_worse_checked(pts, admissible(pts, _ran(pts)))
-    held = [pts[i] for i in checked if i not in keeps_the_verdict(pts, checked)
-            and pts[i].cpu_per_sim_second < k.cpu_per_sim_second]  # fmt: skip
+    held = [pts[i] for i in checked if i not in ok and pts[i].cpu_per_sim_second < k.cpu_per_sim_second]
     tail = ""
     if held:
         verb = "checks" if len(held) == 1 else "check"
