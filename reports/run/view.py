@@ -292,18 +292,17 @@ def _record(run: Run):
     return RECORDS[key](), ""
 
 
-#: Default tolerances of the headline verdict; the same as the defaults of
+#: The headline verdict's tolerances under the names ``housner.reports.run.page`` exports: they are
+#: :data:`housner.stats.KS_MAX` and :data:`housner.stats.OVERTURN_TOL`, the defaults of
 #: :func:`housner.reports.assertions.runs.assert_cdf_agreement`, so the page says what users' CI says.
 DEFAULT_KS_MAX = KS_MAX
-
-
 DEFAULT_OVERTURN_TOL = OVERTURN_TOL
 
 
 #: Fewest records of each engine that a distribution verdict is drawn from: one record moves the KS distance
-#: by 1/n, so below 3 / DEFAULT_KS_MAX = 20 records a single record's difference is a third of the tolerance
+#: by 1/n, so below 3 / KS_MAX = 20 records a single record's difference is a third of the tolerance
 #: or more, and one record gives KS 0 or 1 whatever the engines do. Fewer records: "inconclusive".
-MIN_RECORDS = math.ceil(3 / DEFAULT_KS_MAX)
+MIN_RECORDS = math.ceil(3 / KS_MAX)
 
 
 @dataclass(frozen=True)
@@ -354,10 +353,10 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
     if math.isnan(ks) or math.isnan(dp):
         return EngineVerdict("no data", ((False, "no usable records to compare"),))
     checks = (
-        (ks <= DEFAULT_KS_MAX, f"KS {ks:.3f} {'<=' if ks <= DEFAULT_KS_MAX else '>'} {DEFAULT_KS_MAX}"),
+        (ks <= KS_MAX, f"KS {ks:.3f} {'<=' if ks <= KS_MAX else '>'} {KS_MAX}"),
         (
-            abs(dp) <= DEFAULT_OVERTURN_TOL,
-            f"|dP[overturn]| {abs(dp):.3f} {'<=' if abs(dp) <= DEFAULT_OVERTURN_TOL else '>'} {DEFAULT_OVERTURN_TOL}",
+            abs(dp) <= OVERTURN_TOL,
+            f"|dP[overturn]| {abs(dp):.3f} {'<=' if abs(dp) <= OVERTURN_TOL else '>'} {OVERTURN_TOL}",
         ),
         (nf == 0, f"{nf} failed record{'s' if nf != 1 else ''}"),
     )

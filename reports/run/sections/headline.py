@@ -30,14 +30,13 @@ from housner.reports.page import (
 from housner.reports.run.sections.tuning import _settings_html, _tuning, _tuning_caveats
 from housner.reports.run.view import (
     BOOT_SEED,
-    DEFAULT_KS_MAX,
-    DEFAULT_OVERTURN_TOL,
     MIN_RECORDS,
     N_BOOT,
     Run,
     checks_html,
     engine_verdict,
 )
+from housner.stats import KS_MAX, OVERTURN_TOL
 from housner.units import G
 
 
@@ -158,11 +157,11 @@ def _headline(run: Run) -> str:
         how_sure = (
             f"With {n} record{'s' if n != 1 else ''} the distribution verdict is <strong>inconclusive</strong>: one "
             f"record moves the KS distance by 1/n, so at least {MIN_RECORDS} records are needed for a tolerance of "
-            f"{DEFAULT_KS_MAX}; the figures are shown, not judged."
+            f"{KS_MAX}; the figures are shown, not judged."
         )
     parts.append(
         html_note(
-            f"Pass means KS distance &le; {DEFAULT_KS_MAX}, |&Delta;P[overturn]| &le; {DEFAULT_OVERTURN_TOL} and no "
+            f"Pass means KS distance &le; {KS_MAX}, |&Delta;P[overturn]| &le; {OVERTURN_TOL} and no "
             "failed record (the defaults of <code>housner.reports.assertions.runs.assert_cdf_agreement</code>), "
             f"on at least {MIN_RECORDS} records. Record by record, an engine is <em>at the chaos floor</em> when its "
             "share of records within the agreement tolerance reaches what the analytic model keeps under its own "

@@ -21,8 +21,9 @@ from housner.engines.base import engine_class
 from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR
 from housner.reports import figures
 from housner.reports.page import engine_tag, esc, fmt_g, fmt_num, html_figure, html_note, html_table, status_badge
-from housner.reports.run.view import DEFAULT_KS_MAX, Run, engine_verdict
+from housner.reports.run.view import Run, engine_verdict
 from housner.scenarios.execution.rundir import json_number
+from housner.stats import KS_MAX
 
 #: Folder of the tuning results ``tuning-<engine>.json`` written by ``housner tune``;
 #: None means ``engines/models`` of the installed package.
@@ -61,7 +62,7 @@ def _tuning_caveats(run: Run) -> dict[str, str]:
         if ok:
             text += (
                 f"It does not change this verdict, which is measured on this run's own motions (KS {ks:.3f} "
-                f"&le; {DEFAULT_KS_MAX}): a loss that mattered for them would show there"
+                f"&le; {KS_MAX}): a loss that mattered for them would show there"
             )
             if math.isfinite(small_limit):
                 v = run.values(run.reference)
