@@ -39,6 +39,12 @@ def _housner(checkout: Path) -> Path:
     return checkout / ".venv" / "bin" / "housner"
 
 
+def _six_engine_run(cmd: Path, tmp: str, *extra: str, **kwargs) -> subprocess.CompletedProcess:
+    """``cmd run elcentro-strong`` on the six engines, its run folder and an empty result cache under ``tmp``."""
+    argv = [str(cmd), "run", "elcentro-strong", "--engines", ENGINES, "-q", "--out", f"{tmp}/run", *extra]
+    return subprocess.run(argv, env={**os.environ, "HOUSNER_CACHE_DIR": f"{tmp}/cache"}, **kwargs)
+
+
 def setup(ref: str, where: Path) -> int:
     if not (where / ".git").exists():
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(where), ref], check=True)
@@ -48,9 +54,7 @@ def setup(ref: str, where: Path) -> int:
         pip = [str(where / ".venv" / "bin" / "python"), "-m", "pip", "install", "-q"]
         subprocess.run([*pip, "-e", f"{where}[all]"], check=True)
     with tempfile.TemporaryDirectory() as tmp:  # numba compiles the analytic kernels on their first run
-        env = {**os.environ, "HOUSNER_CACHE_DIR": f"{tmp}/cache"}
-        argv = [str(cmd), "run", "elcentro-strong", "--engines", ENGINES, "--n-motions", "2", "-q"]
-        subprocess.run([*argv, "--out", f"{tmp}/run"], check=True, env=env, stdout=subprocess.DEVNULL)
+        _six_engine_run(cmd, tmp, "--n-motions", "2", check=True, stdout=subprocess.DEVNULL)
     print(f"baseline {ref} ready: {cmd}")
     return 0
 
@@ -62,8 +66,7 @@ def run(checkout: Path) -> int:
         return 2
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        done = subprocess.run([str(cmd), "run", "elcentro-strong", "--engines", ENGINES, "-q", "--out", f"{tmp}/run"],
-                              env={**os.environ, "HOUSNER_CACHE_DIR": f"{tmp}/cache"})  # fmt: skip
+        done = _six_engine_run(cmd, tmp)
         wall = time.perf_counter() - t0
     print(f"{checkout}: {wall:.1f} s wall, exit status {done.returncode}")
     return done.returncode

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from statistics import NormalDist
 
 import numpy as np
@@ -400,8 +401,6 @@ def test_ks_of_near_identical_ensembles_prints_no_warning():
     as an engine and the model fitted to it give: scipy's exact p-value does not converge for them and it falls
     back to the asymptotic one with a RuntimeWarning, which reached users' terminals. The fallback is the
     documented behaviour (exact or asymptotic); the warning is not printed. D is 2/60, and p near 1."""
-    import warnings
-
     rng = np.random.default_rng(1)
     x = rng.uniform(0.0, 1.0, 60)
     x[rng.random(60) < 0.35] = np.inf
