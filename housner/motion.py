@@ -57,6 +57,10 @@ class _Channels(dict):
         return (_Channels, (dict(self),))
 
 
+#: Corner frequency of the high-pass before a record's acceleration is integrated into a PGV [Hz].
+PGV_HIGHPASS = 0.1
+
+
 @dataclass(frozen=True, eq=False)
 class GroundMotion:
     """Horizontal ground acceleration sampled at a uniform step.
@@ -174,6 +178,19 @@ class GroundMotion:
     def pga(self) -> float:
         """Peak ground acceleration max |ug''| [m/s^2]."""
         return float(np.max(np.abs(self.acc)))
+
+    def pgv(self, highpass: float = PGV_HIGHPASS) -> float:
+        """Peak ground velocity [m/s]: the acceleration integrated (trapezoids) after a zero-phase 4th-order
+        Butterworth high-pass at ``highpass`` [Hz], which removes the drift that a sensor's offset integrates
+        into (prefer a measured displacement channel where there is one)."""
+        from scipy import signal
+
+        a = np.asarray(self.acc, dtype=float)
+        if highpass > 0 and a.size > 27:
+            sos = signal.butter(4, highpass, btype="highpass", fs=1.0 / self.dt, output="sos")
+            a = signal.sosfiltfilt(sos, a)
+        v = np.concatenate(([0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * self.dt)))
+        return float(np.max(np.abs(v - v.mean())))
 
     def content_hash(self) -> str:
         """SHA-256 of samples, step, initial state and channels (for result caching).

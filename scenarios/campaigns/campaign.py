@@ -53,7 +53,9 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["KINDS", "OVERTURN_ANGLE", "Campaign", "MeasuredRecord", "estimate_release", "load_campaign"]
+__all__ = [
+    "KINDS", "OVERTURN_ANGLE", "Campaign", "MeasuredRecord", "OutcomeRecord", "estimate_release", "load_campaign",
+]
 
 #: Record kinds of the format.
 KINDS = ("free_vibration", "ground_motion")
@@ -69,7 +71,24 @@ _RELEASE_DROP = 0.3
 _RELEASE_MIN_SIGMAS = 10.0
 
 _SPECIMEN_KEYS = {"height": "2H [m]", "width": "2B [m]", "depth": "[m]", "mass": "[kg]", "p": "[1/s] (optional)"}
-_RECORD_KEYS = {"id": "str", "kind": "str", "file": "str", "overturned": "bool (optional)"}
+#: A specimen from a scan mesh (:func:`housner.scan.specimen_from_mesh`), in place of the block's dimensions.
+_MESH_KEYS = {
+    "mesh": "file [m], relative to campaign.toml",
+    "azimuth": "[deg] (optional, 0)",
+    "contact": "hull | flat:TOL (optional, hull)",
+    "density": "[kg/m^3] (optional, 2700)",
+}
+_RECORD_KEYS = {
+    "id": "str",
+    "kind": "str",
+    "file": "str",
+    "overturned": "bool (optional; required for a record without theta)",
+    "theta_max": "[rad] (optional, outcome records)",
+    "residual_displacement": "[m] (optional, outcome records)",
+    "pgv": "[m/s] (optional, outcome records: the measured peak table velocity)",
+}
+#: The numeric keys of an outcome record: each, where given, a number >= 0 in SI.
+_OUTCOME_KEYS = ("theta_max", "residual_displacement", "pgv")
 _TOP_KEYS = {"name", "description", "specimen", "record"}
 
 
@@ -139,6 +158,54 @@ class MeasuredRecord:
         return imp
 
 
+@dataclass(frozen=True, eq=False)
+class OutcomeRecord:
+    """One test of which only the table motion and the outcome were measured (no theta channel).
+
+    Attributes
+    ----------
+    id : str
+    kind : str
+        ``"ground_motion"``.
+    file : pathlib.Path
+    motion : GroundMotion
+        The measured table acceleration [m/s^2].
+    overturned : bool
+        The observed outcome.
+    theta_max : float or None
+        Measured largest |theta| [rad], where it was measured.
+    residual_displacement : float or None
+        Measured residual displacement of the block [m], where measured.
+    pgv_measured : float or None
+        The measured peak table velocity [m/s] (from a displacement channel), where given.
+    """
+
+    id: str
+    kind: str
+    file: Path
+    motion: GroundMotion
+    overturned: bool
+    theta_max: float | None = None
+    residual_displacement: float | None = None
+    pgv_measured: float | None = None
+
+    @property
+    def dt(self) -> float:
+        """Sample step [s]."""
+        return self.motion.dt
+
+    @property
+    def pga(self) -> float:
+        """Peak table acceleration [m/s^2]."""
+        return float(np.max(np.abs(self.motion.acc)))
+
+    @cached_property
+    def pgv(self) -> float:
+        """Peak table velocity [m/s]: the measured one where given, else the acceleration integrated after a
+        high-pass (:meth:`housner.GroundMotion.pgv`)."""
+        return self.pgv_measured if self.pgv_measured is not None else self.motion.pgv()
+
+
 @dataclass(eq=False)
 class Campaign:
     """A measurement campaign: the specimen and its records.
@@ -154,6 +221,11 @@ class Campaign:
         (record id, file, error message) of each record left out.
     path : pathlib.Path
         The campaign directory.
+    outcomes : list of OutcomeRecord
+        The records with only an observed outcome (no theta channel), in the order of campaign.toml.
+    scan : housner.scan.ScanSpecimen or None
+        The specimen's scan-mesh derivation (per-side alpha, p, its alpha bracket) when ``[specimen]`` names a
+        ``mesh``; ``specimen`` is then its equivalent block.
     """
 
     name: str
@@ -161,6 +233,8 @@ class Campaign:
     records: list[MeasuredRecord]
     skipped: list[tuple[str, str, str]] = field(default_factory=list)
     path: Path = Path(".")
+    outcomes: list[OutcomeRecord] = field(default_factory=list)
+    scan: object = None
     _cache: dict = field(default_factory=dict, init=False, repr=False)
 
     @property
@@ -184,9 +258,10 @@ class Campaign:
         return len(self.records)
 
     def __repr__(self) -> str:
+        outcomes = f" + {len(self.outcomes)} outcome records" if self.outcomes else ""
         return (
             f"Campaign({self.name!r}, {len(self.free_vibration)} free-vibration + {len(self.ground_motion)} "
-            f"ground-motion records, {len(self.skipped)} skipped)"
+            f"ground-motion records{outcomes}, {len(self.skipped)} skipped)"
         )
 
 
@@ -258,7 +333,8 @@ def _read_toml(path: Path) -> tuple[dict, str]:
     return data, text
 
 
-def _specimen(path: Path, text: str, data: dict) -> Specimen:
+def _specimen(path: Path, text: str, data: dict) -> tuple[Specimen, object]:
+    """The campaign's specimen, and its scan derivation (None unless ``[specimen]`` names a ``mesh``)."""
     spec = data.get("specimen")
     if spec is None:
         raise DataFileError(path, "missing table [specimen] (height, width, depth, mass, optional p)")
@@ -269,9 +345,11 @@ def _specimen(path: Path, text: str, data: dict) -> Specimen:
             f"got {type(spec).__name__} {spec!r}",
             line=_key_line(text, "specimen") or _table_line(text, "specimen"),
         )
+    if "mesh" in spec:
+        return _mesh_specimen(path, text, spec, str(data.get("name", path.parent.name)))
     for key in spec:
         if key not in _SPECIMEN_KEYS:
-            raise _unknown_key(path, text, "[specimen] ", key, _SPECIMEN_KEYS, "specimen")
+            raise _unknown_key(path, text, "[specimen] ", key, {**_SPECIMEN_KEYS, "mesh": ""}, "specimen")
     kwargs = {}
     for key, unit in _SPECIMEN_KEYS.items():
         if key not in spec:
@@ -287,9 +365,38 @@ def _specimen(path: Path, text: str, data: dict) -> Specimen:
             )
         kwargs[key] = float(v)
     try:
-        return Specimen(name=str(data.get("name", path.parent.name)), **kwargs)
+        return Specimen(name=str(data.get("name", path.parent.name)), **kwargs), None
     except ValueError as e:
         raise DataFileError(path, f"[specimen]: {e}", line=_table_line(text, "specimen")) from None
+
+
+def _mesh_specimen(path: Path, text: str, spec: dict, name: str) -> tuple[Specimen, object]:
+    """``[specimen] mesh = ...``: the equivalent planar block of a scan mesh (:mod:`housner.scan`)."""
+    from housner.scan import specimen_from_mesh
+
+    for key in spec:
+        if key not in _MESH_KEYS:
+            raise _unknown_key(path, text, "[specimen] (with a mesh) ", key, _MESH_KEYS, "specimen")
+    kinds = {"mesh": str, "azimuth": (int, float), "contact": str, "density": (int, float)}
+    for key, kind in kinds.items():
+        if key in spec and (isinstance(spec[key], bool) or not isinstance(spec[key], kind)):
+            raise DataFileError(path, f"[specimen] {key!r} must be {_MESH_KEYS[key]}, got {spec[key]!r}",
+                                line=_key_line(text, key, "specimen"))  # fmt: skip
+    mesh = Path(spec["mesh"])
+    mesh = mesh if mesh.is_absolute() else path.parent / mesh
+    try:
+        scan = specimen_from_mesh(
+            mesh,
+            azimuth=float(spec.get("azimuth", 0.0)),
+            contact=spec.get("contact", "hull"),
+            density=float(spec.get("density", 2700.0)),
+            name=name,
+        )
+    except DataFileError:
+        raise
+    except ValueError as e:
+        raise DataFileError(path, f"[specimen]: {e}", line=_table_line(text, "specimen")) from None
+    return scan.specimen(), scan
 
 
 def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
@@ -345,6 +452,13 @@ def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
                 path, f"{where}'overturned' must be true or false, got {rec['overturned']!r}",
                 line=_key_line(text, "overturned", "record", i),
             )  # fmt: skip
+        for key in _OUTCOME_KEYS:
+            v = rec.get(key, 0.0)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise DataFileError(
+                    path, f"{where}{key!r} must be a number >= 0 {_RECORD_KEYS[key].split(' (')[0]}, got {v!r}",
+                    line=_key_line(text, key, "record", i),
+                )  # fmt: skip
         out.append(rec)
     return out
 
@@ -432,10 +546,13 @@ def estimate_release(t, theta, noise: float) -> tuple[int, float]:
     return best[1], best[2]
 
 
-def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord:
+def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord | OutcomeRecord:
     path = (root / rec["file"]).resolve() if not Path(rec["file"]).is_absolute() else Path(rec["file"])
+    header = read_csv_header(path)
+    if "theta" not in header and "ground_acc" in header and rec["kind"] == "ground_motion":
+        return _read_outcome_record(path, rec)
     # optional extra channels: every column named ground_acc_<what> (e.g. ground_acc_vertical [m/s^2])
-    extra = [c for c in dict.fromkeys(read_csv_header(path)) if c.startswith(CHANNEL_PREFIX)]
+    extra = [c for c in dict.fromkeys(header) if c.startswith(CHANNEL_PREFIX)]
     quantities = {**QUANTITIES, **{c: "acceleration" for c in extra}}
     table = read_csv_si(path, quantities)  # converted to SI from the units in the header (none: SI)
     (t, acc, theta), lines = table.values[:3], table.lines
@@ -498,6 +615,33 @@ def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord:
     )
 
 
+def _read_outcome_record(path: Path, rec: dict) -> OutcomeRecord:
+    """A ground-motion record without a theta column: the table motion and the observed outcome."""
+    if "overturned" not in rec:
+        raise DataFileError(
+            path,
+            f"record {rec['id']!r} has no theta column and no outcome: write `overturned = true` or `false` in its "
+            "[[record]] table (a record needs a measured theta or an observed outcome)",
+            line=1,
+        )
+    table = read_csv_si(path, {"time": "time", "ground_acc": "acceleration"})
+    (t, acc), lines = table.values[:2], table.lines
+    dt = uniform_step(path, t, lines, "time", assumed_seconds=table.units[0] is None)
+    if acc.size < 16:
+        raise DataFileError(path, f"only {acc.size} samples; a record needs at least 16", line=int(lines[-1]))
+    motion = GroundMotion(acc=acc, dt=dt, name=rec["id"], provenance=f"{path.name} (campaign outcome record)")
+    return OutcomeRecord(
+        id=rec["id"],
+        kind=rec["kind"],
+        file=path,
+        motion=motion,
+        overturned=bool(rec["overturned"]),
+        theta_max=rec.get("theta_max"),
+        residual_displacement=rec.get("residual_displacement"),
+        pgv_measured=None if rec.get("pgv") is None else float(rec["pgv"]),
+    )
+
+
 def load_campaign(path: str | Path) -> Campaign:
     """Read a measurement campaign.
 
@@ -542,18 +686,21 @@ def load_campaign(path: str | Path) -> Campaign:
         v = data.get(key, "")
         if not isinstance(v, str):
             raise DataFileError(toml, f"{key!r} must be a string, got {v!r}", line=_key_line(text, key))
-    specimen = _specimen(toml, text, data)
+    specimen, scan = _specimen(toml, text, data)
     entries = _record_entries(toml, text, data)
-    records, skipped, errors = [], [], []
+    records, outcomes, skipped, errors = [], [], [], []
     for rec in entries:
         try:
-            records.append(_read_record(root, rec, specimen))
+            r = _read_record(root, rec, specimen)
         except DataFileError as e:
             skipped.append((rec["id"], rec["file"], str(e)))
             errors.append(e)
+            continue
+        (outcomes if isinstance(r, OutcomeRecord) else records).append(r)
     if 2 * len(skipped) > len(entries):
         raise DataFileError(toml, _unreadable_message(name, len(entries), skipped, errors))
-    return Campaign(name=name, specimen=specimen, records=records, skipped=skipped, path=root)
+    return Campaign(name=name, specimen=specimen, records=records, skipped=skipped, path=root, outcomes=outcomes,
+                    scan=scan)  # fmt: skip
 
 
 def _cause(e: DataFileError) -> tuple[str, str]:

@@ -1,0 +1,655 @@
+"""Outcome records: predict P(overturn) from an ensemble, find the effect the outcomes need, judge at the floor.
+
+A test whose only measurement is whether the block overturned (and the
+table motion) is scored as a probability. :func:`diagnose_outcomes` runs the
+mission loop on a campaign's outcome records:
+
+1. **The plain model.** The specimen as built: the planar block of the scan
+   mesh (:mod:`housner.scan`), both pivots, Housner's impact law. What is
+   uncertain is sampled: each pivot over the specimen's bracket of alpha
+   (the base is resolved to about a centimetre) and the table's amplitude
+   within +-:data:`AMPLITUDE_SPREAD` (a sensor's calibration, and the
+   chaos of a long record: a nearby record may end otherwise). P(overturn)
+   of a record is the share of its ensemble that overturns, kept off 0 and
+   1 by a lapse rate fitted on the training folds (the share of outcomes
+   decided by what no model here holds: how the rock was placed, a knock).
+   The lapse is the outcomes' noise model, fitted in every model alike; it
+   is not an effect.
+2. **Where it fails.** The records it misses, in which direction
+   (overturns it did not predict, or the converse), over PGA and PGV/PGA,
+   and what the direction points to: a block that overturns more readily
+   than its footprint allows rests on a contact inside the footprint (a
+   convex base: a smaller effective alpha); one that survives more
+   dissipates more at impact (a smaller r).
+3. **Effects, fitted with cross-validation.** The candidates are
+   ``contact_inside`` (an effective symmetric contact, alpha_eff with a
+   log-normal spread that the fit sets: how well the contact is known),
+   ``restitution`` (r of the impacts) and both together. Each is fitted by
+   minimising the log loss on the training folds and scored out of fold on
+   the same stratified folds as the baselines. An effect is added only when
+   the mean of its paired per-record falls of the held-out log loss passes a
+   one-sided Diebold-Mariano test at 5 % (Bonferroni over the candidates).
+4. **Verdict.** The final model's out-of-fold probabilities against the
+   floor a correct model would reach (:func:`outcome_scores.outcome_floor`),
+   beside logistic regressions on the measured PGA and PGV fitted on the same
+   folds: physics is worth running only where it beats these.
+
+The ensembles are computed once, as tables of overturns over a grid of the
+effects' parameters (:func:`housner.model.theta_max_many`, every record in one
+compiled call per grid point); fitting reweights these tables, so the
+cross-validation costs no further simulation.
+
+References
+----------
+Diebold, F. X., Mariano, R. S. (1995). Comparing predictive accuracy. Journal of
+Business & Economic Statistics 13(3), 253-263.
+Housner, G. W. (1963). The behavior of inverted pendulum structures during
+earthquakes. BSSA 53(2), 403-417.
+Purvance, M. D., Abdolrasool, A., Brune, J. N. (2008). Freestanding block
+overturning fragilities: numerical simulation and experimental validation.
+EESD 37(5), 791-808 (overturning depends on alpha, p and PGV/PGA).
+Chen, Z. et al. (2024). Virtual Shake Robot: simulating dynamics of precariously
+balanced rocks for overturning and large-displacement processes. Seismica 3(1),
+doi:10.26443/seismica.v3i1.692 (the ASU granite tests).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats as sps
+
+from housner.model import theta_max_many
+from housner.rocking_params import RockingParams
+from housner.scenarios.campaigns.campaign import Campaign, OutcomeRecord
+from housner.scenarios.campaigns.outcome_scores import (
+    OutcomeFloor,
+    calibration_table,
+    logistic_oof,
+    outcome_floor,
+    outcome_scores,
+    per_record_log_loss,
+    stratified_folds,
+)
+from housner.units import G
+
+__all__ = [
+    "ALPHA_GRID",
+    "AMPLITUDE_SPREAD",
+    "OUTCOME_EFFECTS",
+    "R_GRID",
+    "Geometry",
+    "OutcomeDiagnosis",
+    "OutcomeStep",
+    "diagnose_outcomes",
+]
+
+#: The table's amplitude is sampled within +-this share [-] (a 2 % calibration of the accelerometer, and a
+#: nearby record for the chaos of a long one).
+AMPLITUDE_SPREAD = 0.02
+#: Points of the effective-contact grid (alpha_eff, log-spaced) [-].
+ALPHA_GRID = 28
+#: The grid spans alpha_eff from this share of the plain model's smaller alpha up to its larger alpha [-].
+ALPHA_GRID_LOW = 0.25
+#: Restitution values tried [-] (besides Housner's impact law of each geometry, which needs no parameter).
+R_GRID = (0.95, 0.9, 0.8, 0.7, 0.6)
+#: Log-normal spreads of alpha_eff the fit chooses from [-] (0.3: alpha known to within about 30 %).
+SPREADS = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.7)
+#: Lapse rates the fit chooses from [-]: the share of outcomes the model does not decide (:func:`_lapse`).
+LAPSES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.25)
+#: Points of the finer grid of log(alpha_eff) the fit searches (the weights interpolate between the runs) [-].
+_MU_POINTS = 80
+#: Family-wise level of the test that adds an effect [-].
+LEVEL = 0.05
+#: The candidate effects of outcome records, and what each stands for.
+OUTCOME_EFFECTS = {
+    "contact_inside": "a contact inside the footprint (a convex or uneven base): an effective alpha, with its spread",
+    "restitution": "the impacts' restitution r, fitted (Housner's law fixes it from the geometry)",
+}
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The planar block behind an outcome model: centre-of-mass height, pivots, inertia.
+
+    Attributes
+    ----------
+    h : float
+        Centre-of-mass height above the contact [m].
+    b_pos, b_neg : float
+        Horizontal distance from the centre of mass to the +x and -x pivot [m].
+    ic : float
+        Centroidal moment of inertia about the rocking axis [kg m^2].
+    mass : float
+        [kg]
+    bracket : dict
+        ``{"pos": (lo, hi), "neg": (lo, hi)}``: each pivot's range of b [m] (the specimen's uncertainty).
+    """
+
+    h: float
+    b_pos: float
+    b_neg: float
+    ic: float
+    mass: float
+    bracket: dict = field(default_factory=dict)
+
+    @property
+    def alpha_pos(self) -> float:
+        return math.atan2(self.b_pos, self.h)
+
+    @property
+    def alpha_neg(self) -> float:
+        return math.atan2(self.b_neg, self.h)
+
+    def params(self, b_pos: float | None = None, b_neg: float | None = None, r: float | None = None):
+        """RockingParams of the block with these pivots [m]; ``r`` None is Housner's impact law (angular
+        momentum about the landing pivot, per side), else one r [-] for every impact."""
+        bp = self.b_pos if b_pos is None else b_pos
+        bn = self.b_neg if b_neg is None else b_neg
+        m, h, ic = self.mass, self.h, self.ic
+        side = {}
+        for name, b in (("pos", bp), ("neg", bn)):
+            rr = math.hypot(b, h)
+            side[name] = (math.atan2(b, h), math.sqrt(m * G * rr / (ic + m * rr * rr)))
+        if r is None:
+            common = ic + m * (h * h - bp * bn)
+            rho_pn = common / (ic + m * (h * h + bn * bn))  # ends on +x, lands on -x
+            rho_np = common / (ic + m * (h * h + bp * bp))
+            r_neg, r_pos = min(rho_pn**2, 1.0), min(rho_np**2, 1.0)
+            return RockingParams(side["pos"][0], side["neg"][0], side["pos"][1], side["neg"][1],
+                                 math.sqrt(r_pos * r_neg), r_pos=r_pos, r_neg=r_neg)  # fmt: skip
+        return RockingParams(side["pos"][0], side["neg"][0], side["pos"][1], side["neg"][1], r)
+
+    @classmethod
+    def of(cls, campaign: Campaign) -> Geometry:
+        """The campaign's block: from its scan mesh (with the bracket of alpha) or from its dimensions."""
+        scan = campaign.scan
+        if scan is not None:
+            h = scan.pos.h
+            bracket = {s: tuple(h * math.tan(a) for a in scan.alpha_bracket[s]) for s in ("pos", "neg")}
+            return cls(h, scan.pos.b, scan.neg.b, scan.centroidal_inertia, scan.mass, bracket)
+        s = campaign.specimen
+        return cls(s.H, s.B, s.B, s.centroidal_inertia, s.mass, {"pos": (s.B, s.B), "neg": (s.B, s.B)})
+
+
+@dataclass(frozen=True)
+class OutcomeStep:
+    """One rung of the ladder: a model, its out-of-fold probabilities and scores.
+
+    Attributes
+    ----------
+    name : str
+        ``"plain"`` or the effects in, joined by "+".
+    params : dict
+        Fitted on all records (what the model is), by effect.
+    fold_params : list of dict
+        Fitted without each fold (what scored it).
+    p : ndarray
+        Out-of-fold P(overturn) per record [-].
+    scores : dict
+        :func:`outcome_scores` of ``p``.
+    improvement : float
+        Mean per-record fall of the held-out log loss from the previous rung [nats] (0 for the plain model).
+    improvement_se : float
+    p_value : float
+        One-sided p-value of that fall (Diebold-Mariano; nan for the plain model).
+    """
+
+    name: str
+    params: dict
+    fold_params: list
+    p: np.ndarray
+    scores: dict
+    improvement: float = 0.0
+    improvement_se: float = 0.0
+    p_value: float = math.nan
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "params": self.params, "scores": self.scores, "improvement": self.improvement,
+                "improvement_se": self.improvement_se, "p_value": _nan_none(self.p_value)}  # fmt: skip
+
+
+@dataclass
+class OutcomeDiagnosis:
+    """The mission loop on a campaign's outcome records (:func:`diagnose_outcomes`).
+
+    Attributes
+    ----------
+    campaign : str
+    ids : list of str
+    observed : ndarray of bool
+    pga, pgv : ndarray
+        Measured peak table acceleration [m/s^2] and velocity [m/s] per record.
+    steps : list of OutcomeStep
+        The plain model, then each effect added.
+    candidates : list of dict
+        Every candidate tried: name, held-out log loss, fall, p-value, added or not.
+    baselines : dict
+        Name -> :func:`outcome_scores` of the logistic regressions on the same folds.
+    baseline_p : dict
+        Name -> out-of-fold probabilities of each baseline.
+    floor : OutcomeFloor
+        The final model against what a correct model would score.
+    pointer : str
+        What the plain model's misses point to.
+    misses : list of dict
+        The plain and the final model's misses, record by record.
+    status : str
+        ``no_effect_needed``, ``explained``, ``partly_explained`` or ``unexplained``.
+    geometry : dict
+    folds : int
+    seed : int
+    elapsed : float
+        [s]
+    """
+
+    campaign: str
+    ids: list
+    observed: np.ndarray
+    pga: np.ndarray
+    pgv: np.ndarray
+    steps: list
+    candidates: list
+    baselines: dict
+    baseline_p: dict
+    floor: OutcomeFloor
+    pointer: str
+    misses: list
+    status: str
+    geometry: dict
+    folds: int
+    seed: int
+    elapsed: float = 0.0
+    calibration: list = field(default_factory=list)
+
+    @property
+    def final(self) -> OutcomeStep:
+        return self.steps[-1]
+
+    @property
+    def effects(self) -> list[str]:
+        return [] if self.final.name == "plain" else self.final.name.split("+")
+
+    def summary(self) -> str:
+        """The verdict in words: the figures, their intervals, the floor, the baselines, what remains."""
+        f, s = self.final, self.final.scores
+        best = min(self.baselines, key=lambda k: self.baselines[k]["log_loss"])
+        b = self.baselines[best]
+        eff = "no effect added" if f.name == "plain" else f"effect {f.name} ({_params_text(f.params)})"
+        floor = self.floor
+        lines = [
+            f"{len(self.ids)} outcome records ({int(self.observed.sum())} overturned); {self.folds}-fold "
+            f"cross-validation (seed {self.seed}); {eff}.",
+            f"held-out accuracy {s['accuracy']:.3f} [{s['accuracy_ci'][0]:.3f}, {s['accuracy_ci'][1]:.3f}], "
+            f"F1 {s['f1']:.3f} [{s['f1_ci'][0]:.3f}, {s['f1_ci'][1]:.3f}], log loss {s['log_loss']:.3f} "
+            f"[{s['log_loss_ci'][0]:.3f}, {s['log_loss_ci'][1]:.3f}]; plain model: accuracy "
+            f"{self.steps[0].scores['accuracy']:.3f}, F1 {self.steps[0].scores['f1']:.3f}, log loss "
+            f"{self.steps[0].scores['log_loss']:.3f}.",
+            f"best baseline ({best}): accuracy {b['accuracy']:.3f}, F1 {b['f1']:.3f}, log loss {b['log_loss']:.3f} "
+            f"on the same folds: the model is {'ahead' if s['log_loss'] < b['log_loss'] else 'NOT ahead'} "
+            "in log loss.",
+            f"floor (a correct model with these probabilities): log loss {floor.log_loss:.3f} "
+            f"[{floor.log_loss_ci[0]:.3f}, {floor.log_loss_ci[1]:.3f}], measured {floor.measured_log_loss:.3f} "
+            f"(z {floor.z:+.1f}): {'at the floor' if floor.at_floor else 'above the floor: a part is unexplained'}.",
+        ]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        f = self.final
+        outcomes = {k: f.scores[k] for k in f.scores}
+        outcomes.update(model=f.name, effect=self._effect(), baselines=self.baselines, floor=self.floor.to_dict(),
+                        at_floor=self.floor.at_floor, calibration=self.calibration)  # fmt: skip
+        return {
+            "kind": "outcomes",
+            "campaign": self.campaign,
+            "status": self.status,
+            "n_records": len(self.ids),
+            "n_overturned": int(self.observed.sum()),
+            "folds": self.folds,
+            "seed": self.seed,
+            "outcomes": outcomes,
+            "baselines": self.baselines,
+            "effect": self._effect(),
+            "ladder": [s.to_dict() for s in self.steps],
+            "candidates": self.candidates,
+            "pointer": self.pointer,
+            "misses": self.misses,
+            "geometry": self.geometry,
+            "summary": self.summary(),
+            "elapsed_s": self.elapsed,
+        }
+
+    def _effect(self) -> dict | None:
+        f = self.final
+        return None if f.name == "plain" else {"name": f.name, "params": f.params}
+
+
+# ----------------------------------------------------------------------------
+# the ensembles
+def _overturns(accs: list, dts: np.ndarray, geo: Geometry, specimen, settings: list) -> np.ndarray:
+    """Overturned or not, per record and per setting (b_pos, b_neg, r, amplitude): (records, settings) bool."""
+    out = np.empty((len(accs), len(settings)), dtype=bool)
+    for j, (bp, bn, r, amp) in enumerate(settings):
+        rows = accs if amp == 1.0 else [a * amp for a in accs]
+        _, ov, _ = theta_max_many(specimen, rows, dts, params=geo.params(bp, bn, r))
+        out[:, j] = ov
+    return out
+
+
+def _bracket_points(geo: Geometry) -> list[tuple[float, float]]:
+    """The pivots' (b_pos, b_neg) over their bracket: low, as built, high on each side (9 at most)."""
+    pts = []
+    for bp in sorted({geo.bracket["pos"][0], geo.b_pos, geo.bracket["pos"][1]}):
+        for bn in sorted({geo.bracket["neg"][0], geo.b_neg, geo.bracket["neg"][1]}):
+            pts.append((bp, bn))
+    return pts
+
+
+@dataclass(frozen=True)
+class _Tables:
+    """The overturn tables every model reads."""
+
+    plain: np.ndarray  # (records, bracket points x amplitudes)
+    rest: np.ndarray  # (records, bracket points, len(R_GRID))
+    contact: np.ndarray  # (records, ALPHA_GRID, 1 + len(R_GRID)): Housner's law, then R_GRID
+    log_alpha: np.ndarray  # (ALPHA_GRID,)
+
+
+def _tables(accs, dts, geo: Geometry, specimen, say: Callable) -> _Tables:
+    pts = _bracket_points(geo)
+    amps = (1.0 - AMPLITUDE_SPREAD, 1.0, 1.0 + AMPLITUDE_SPREAD)
+    t0 = time.perf_counter()
+    plain = _overturns(accs, dts, geo, specimen, [(bp, bn, None, a) for bp, bn in pts for a in amps])
+    say(f"plain model: {len(pts)} pivot pairs x {len(amps)} amplitudes, {time.perf_counter() - t0:.1f} s")
+    rest = _overturns(accs, dts, geo, specimen, [(bp, bn, r, 1.0) for bp, bn in pts for r in R_GRID])
+    rest = rest.reshape(len(accs), len(pts), len(R_GRID))
+    lo = ALPHA_GRID_LOW * min(geo.alpha_pos, geo.alpha_neg)
+    hi = max(geo.alpha_pos, geo.alpha_neg)
+    alphas = np.geomspace(lo, hi, ALPHA_GRID)
+    bs = geo.h * np.tan(alphas)
+    contact = _overturns(accs, dts, geo, specimen, [(b, b, r, 1.0) for b in bs for r in (None, *R_GRID)])
+    contact = contact.reshape(len(accs), ALPHA_GRID, 1 + len(R_GRID))
+    say(f"effect tables: {len(pts) * len(R_GRID) + contact.shape[1] * contact.shape[2]} runs of "
+        f"{len(accs)} records, {time.perf_counter() - t0:.1f} s in all")  # fmt: skip
+    return _Tables(plain, rest, contact, np.log(alphas))
+
+
+# ----------------------------------------------------------------------------
+# the models: each maps (tables, records, params) to P, and fits its params on records
+def _p_plain(t: _Tables, idx, params) -> np.ndarray:
+    return _lapse(t.plain[idx].mean(axis=1), params["lapse"])
+
+
+def _p_rest(t: _Tables, idx, params) -> np.ndarray:
+    j = R_GRID.index(params["r"])
+    return _lapse(t.rest[idx, :, j].mean(axis=1), params["lapse"])
+
+
+def _weights(log_alpha: np.ndarray, mu: float, sigma: float) -> np.ndarray:
+    w = np.exp(-0.5 * ((log_alpha - mu) / sigma) ** 2)
+    return w / w.sum()
+
+
+def _p_contact(t: _Tables, idx, params) -> np.ndarray:
+    w = _weights(t.log_alpha, math.log(params["alpha_eff"]), params["spread"])
+    j = 0 if params.get("r") is None else 1 + R_GRID.index(params["r"])
+    return _lapse(t.contact[idx, :, j] @ w, params["lapse"])
+
+
+def _lapse(p: np.ndarray, lapse: float) -> np.ndarray:
+    """P with a share ``lapse`` [-] of outcomes decided by what the model does not hold (a placement, a knock):
+    lapse/2 + (1 - lapse) P. It keeps the probabilities off 0 and 1 by what the data show, and leaves the
+    side of 1/2 that each record is on (so the accuracy) unchanged."""
+    return 0.5 * lapse + (1.0 - lapse) * p
+
+
+def _log_loss(p, y) -> float:
+    return float(np.mean(per_record_log_loss(p, y)))
+
+
+def _fit_plain(t: _Tables, idx, y) -> dict:
+    """The plain model fits only its lapse: how often the outcomes escape any model (not a physical effect)."""
+    return min(({"lapse": e} for e in LAPSES), key=lambda q: _log_loss(_p_plain(t, idx, q), y[idx]))
+
+
+def _fit_rest(t: _Tables, idx, y) -> dict:
+    qs = ({"r": r, "lapse": e} for r in R_GRID for e in LAPSES)
+    return min(qs, key=lambda q: _log_loss(_p_rest(t, idx, q), y[idx]))
+
+
+def _fit_contact(with_r: bool):
+    def fit(t: _Tables, idx, y) -> dict:
+        mus = np.linspace(t.log_alpha[0], t.log_alpha[-1], _MU_POINTS)
+        best, best_v = None, math.inf
+        for r in ((None, *R_GRID) if with_r else (None,)):
+            j = 0 if r is None else 1 + R_GRID.index(r)
+            table = t.contact[idx, :, j]
+            for sigma in SPREADS:
+                W = np.exp(-0.5 * ((t.log_alpha[None, :] - mus[:, None]) / sigma) ** 2)
+                W /= W.sum(axis=1, keepdims=True)
+                P0 = table @ W.T  # (records, mus)
+                yy = np.repeat(y[idx][:, None], mus.size, axis=1)
+                for lapse in LAPSES:
+                    ll = np.mean(per_record_log_loss(_lapse(P0, lapse), yy), axis=0)
+                    k = int(np.argmin(ll))
+                    if ll[k] < best_v:
+                        best_v = float(ll[k])
+                        best = {"alpha_eff": float(math.exp(mus[k])), "spread": sigma, "lapse": lapse}
+                        if with_r:
+                            best["r"] = r
+        return best
+
+    return fit
+
+
+#: Model name -> (probabilities, fit); "plain" fits only the lapse.
+_MODELS = {
+    "plain": (_p_plain, _fit_plain),
+    "restitution": (_p_rest, _fit_rest),
+    "contact_inside": (_p_contact, _fit_contact(False)),
+    "contact_inside+restitution": (_p_contact, _fit_contact(True)),
+}
+
+
+def _cross_validate(name: str, t: _Tables, y: np.ndarray, fold: np.ndarray) -> tuple[np.ndarray, dict, list]:
+    """Out-of-fold P of model ``name``, its fit on all records, and its fit without each fold."""
+    predict, fit = _MODELS[name]
+    p = np.empty(y.size)
+    fold_params = []
+    for f in range(int(fold.max()) + 1):
+        te = np.flatnonzero(fold == f)
+        tr = np.flatnonzero(fold != f)
+        q = fit(t, tr, y)
+        fold_params.append(q)
+        p[te] = predict(t, te, q)
+    return p, fit(t, np.arange(y.size), y), fold_params
+
+
+def _paired_fall(p_old, p_new, y) -> tuple[float, float, float]:
+    """Mean per-record fall of the held-out log loss [nats], its standard error, and the one-sided p-value of
+    "no fall" (Diebold and Mariano's test of equal expected scores: the mean of the paired differences over its
+    standard error, against Student's t with n - 1 degrees of freedom).
+
+    The mean is tested, not the median (a rank test would be): the log loss that is reported and compared is a
+    mean, and a model that improves most records slightly while failing a few badly has not improved it."""
+    d = per_record_log_loss(p_old, y) - per_record_log_loss(p_new, y)
+    mean = float(np.mean(d))
+    se = float(np.std(d, ddof=1) / math.sqrt(d.size))
+    pv = float(sps.t.sf(mean / se, d.size - 1)) if se > 0 else (0.0 if mean > 0 else 1.0)
+    return mean, se, pv
+
+
+# ----------------------------------------------------------------------------
+# where it fails
+def _misses(step: OutcomeStep, ids, y, pga, pgv) -> list[dict]:
+    pred = step.p >= 0.5
+    out = []
+    for i in np.flatnonzero(pred != y):
+        out.append({"model": step.name, "id": ids[i], "observed": "overturned" if y[i] else "stood",
+                    "predicted_p": float(step.p[i]), "pga_g": float(pga[i] / G), "pgv_over_pga_s":
+                    float(pgv[i] / pga[i])})  # fmt: skip
+    return out
+
+
+def _pointer(step: OutcomeStep, y, pga, pgv) -> str:
+    """What the plain model's misses point to, in words, with the counts over PGV/PGA."""
+    pred = step.p >= 0.5
+    fn = ~pred & y
+    fp = pred & ~y
+    ratio = pgv / pga
+    edges = np.percentile(ratio, [100 / 3, 200 / 3])
+    band = np.searchsorted(edges, ratio)
+    where = ", ".join(
+        f"{name} PGV/PGA: {int(np.sum(fn & (band == k)))} missed overturns, {int(np.sum(fp & (band == k)))} false"
+        for k, name in enumerate(("short", "middle", "long"))
+    )
+    n_fn, n_fp = int(fn.sum()), int(fp.sum())
+    if n_fn > 2 * max(n_fp, 1):
+        what = ("the rock overturns under motions that the model's footprint survives: its contact sits inside the "
+                "footprint (a convex or uneven base, a smaller effective alpha), or its impacts dissipate less")
+    elif n_fp > 2 * max(n_fn, 1):
+        what = ("the model overturns where the rock stood: a wider effective contact or more dissipation at impact "
+                "(a smaller r)")
+    else:
+        what = "misses in both directions: the effective geometry is uncertain rather than biased"
+    return f"{n_fn} overturns missed and {n_fp} predicted that did not happen ({where}): {what}"
+
+
+# ----------------------------------------------------------------------------
+def diagnose_outcomes(
+    campaign: Campaign,
+    *,
+    folds: int = 5,
+    seed: int = 0,
+    progress: Callable[[str], None] | None = None,
+) -> OutcomeDiagnosis:
+    """The mission loop on a campaign's outcome records: plain model, misses, effect, error falling, verdict.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        With outcome records (:attr:`Campaign.outcomes`): the table motion and overturned or not.
+    folds : int
+        Stratified cross-validation folds [-] (at least 2); the model and the baselines share them.
+    seed : int
+        Seed of the folds, the bootstrap intervals and the simulated floor.
+    progress : callable, optional
+        Receives one line per stage.
+
+    Returns
+    -------
+    OutcomeDiagnosis
+
+    Raises
+    ------
+    ValueError
+        Fewer than 10 outcome records, or all of one outcome (nothing to score), or more folds than the
+        smaller class has records.
+    """
+    say = progress or (lambda line: None)
+    t_start = time.perf_counter()
+    recs: list[OutcomeRecord] = list(campaign.outcomes)
+    y = np.array([r.overturned for r in recs], dtype=bool)
+    if len(recs) < 10:
+        raise ValueError(f"campaign {campaign.name!r}: {len(recs)} outcome records; scoring outcomes needs 10")
+    if y.all() or not y.any():
+        raise ValueError(f"campaign {campaign.name!r}: every record {'overturned' if y.all() else 'stood'}; "
+                         "scores of outcomes need both")  # fmt: skip
+    folds = int(folds)
+    if folds < 2 or folds > min(int(y.sum()), int((~y).sum())):
+        raise ValueError(f"`folds` must lie in 2 .. {min(int(y.sum()), int((~y).sum()))} (records of the smaller "
+                         f"outcome), got {folds}")  # fmt: skip
+    ids = [r.id for r in recs]
+    pga = np.array([r.pga for r in recs])
+    pgv = np.array([r.pgv for r in recs])
+    accs = [np.asarray(r.motion.acc, dtype=np.float64) for r in recs]
+    dts = np.array([r.dt for r in recs])
+    geo = Geometry.of(campaign)
+    fold = stratified_folds(y, folds, seed)
+    say(f"{len(recs)} outcome records ({int(y.sum())} overturned), {folds} stratified folds; block h "
+        f"{geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad")  # fmt: skip
+    tables = _tables(accs, dts, geo, campaign.specimen, say)
+
+    def step(name: str, prev: OutcomeStep | None) -> OutcomeStep:
+        p, params, fold_params = _cross_validate(name, tables, y, fold)
+        if not np.all(np.isfinite(p)):
+            raise RuntimeError(f"model {name} gave no probability for {int(np.sum(~np.isfinite(p)))} records")
+        fall = _paired_fall(prev.p, p, y) if prev is not None else (0.0, 0.0, math.nan)
+        return OutcomeStep(name, params, fold_params, p, outcome_scores(p, y, seed=seed), *fall)
+
+    plain = step("plain", None)
+    steps = [plain]
+    say(f"plain model: held-out log loss {plain.scores['log_loss']:.3f}, accuracy {plain.scores['accuracy']:.3f}")
+    pointer = _pointer(plain, y, pga, pgv)
+    say(f"where it fails: {pointer}")
+    candidates = []
+    rounds = (("contact_inside", "restitution"), ("contact_inside+restitution",))
+    for pool in rounds:
+        cur = steps[-1]
+        pool = [n for n in pool if _extends(n, cur.name)]
+        tried = [step(n, cur) for n in pool]
+        level = LEVEL / max(len(tried), 1)
+        for c in tried:
+            candidates.append({"name": c.name, "log_loss": c.scores["log_loss"], "improvement": c.improvement,
+                               "improvement_se": c.improvement_se, "p_value": c.p_value, "added": False,
+                               "params": c.params})  # fmt: skip
+            say(f"  {c.name}: held-out log loss {c.scores['log_loss']:.3f} ({c.improvement:+.3f} "
+                f"+- {c.improvement_se:.3f}, p {c.p_value:.2g}) {_params_text(c.params)}")  # fmt: skip
+        good = [c for c in tried if c.improvement > 0 and c.p_value < level]
+        if not good:
+            break
+        best = min(good, key=lambda c: c.scores["log_loss"])
+        next(d for d in candidates if d["name"] == best.name)["added"] = True
+        steps.append(best)
+    final = steps[-1]
+    baselines, baseline_p = {}, {}
+    for name, X in (("logistic_pga", np.log(pga)), ("logistic_pgv", np.log(pgv)),
+                    ("logistic_pga_pgv", np.column_stack((np.log(pga), np.log(pgv))))):  # fmt: skip
+        baseline_p[name] = logistic_oof(X, y, fold)
+        baselines[name] = outcome_scores(baseline_p[name], y, seed=seed)
+    floor = outcome_floor(final.p, y, seed=seed)
+    if floor.at_floor:
+        status = "explained" if len(steps) > 1 else "no_effect_needed"
+    else:
+        status = "partly_explained" if len(steps) > 1 else "unexplained"
+    misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
+    geometry = {"h_m": geo.h, "b_pos_m": geo.b_pos, "b_neg_m": geo.b_neg, "alpha_pos_rad": geo.alpha_pos,
+                "alpha_neg_rad": geo.alpha_neg, "centroidal_inertia_kgm2": geo.ic, "mass_kg": geo.mass,
+                "b_bracket_m": {k: list(v) for k, v in geo.bracket.items()}}  # fmt: skip
+    diag = OutcomeDiagnosis(
+        campaign=campaign.name, ids=ids, observed=y, pga=pga, pgv=pgv, steps=steps, candidates=candidates,
+        baselines=baselines, baseline_p=baseline_p, floor=floor, pointer=pointer, misses=misses, status=status,
+        geometry=geometry, folds=folds, seed=seed, calibration=calibration_table(final.p, y),
+    )  # fmt: skip
+    diag.elapsed = time.perf_counter() - t_start
+    return diag
+
+
+def _extends(name: str, current: str) -> bool:
+    """A candidate of the next round adds to the current model (never re-tries what is in)."""
+    if current == "plain":
+        return True
+    return name != current and set(current.split("+")) < set(name.split("+"))
+
+
+def _params_text(params: dict) -> str:
+    parts = []
+    for k, v in params.items():
+        if v is None:
+            parts.append(f"{k} Housner")
+        elif k == "alpha_eff":
+            parts.append(f"alpha_eff {v:.4f} rad")
+        elif k == "spread":
+            parts.append(f"spread {v:.2f} (log)")
+        else:
+            parts.append(f"{k} {v:.3g}")
+    return ", ".join(parts)
+
+
+def _nan_none(v: float):
+    return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v
+

@@ -1,0 +1,217 @@
+"""Outcome records: the campaign format, the scores, the floor, and the diagnosis on outcomes of known cause."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from housner import GroundMotion, Specimen
+from housner.cli import main
+from housner.model import theta_max_many
+from housner.scenarios.campaigns.campaign import Campaign, OutcomeRecord, load_campaign
+from housner.scenarios.campaigns.outcome_scores import (
+    logistic_oof,
+    outcome_floor,
+    outcome_scores,
+    stratified_folds,
+)
+from housner.scenarios.campaigns.outcomes import Geometry, diagnose_outcomes
+
+# A slender block like a small rock: 2H = 0.6 m, 2B = 0.06 m (alpha = 0.0997 rad), solid.
+SPEC = Specimen(height=0.6, width=0.06, depth=0.3, mass=50.0)
+DT = 0.01
+
+
+def _pulses(n: int, seed: int) -> list[np.ndarray]:
+    """``n`` one-sine pulses with a random frequency (2-6 Hz) and amplitude (0.05-0.35 g), then 4 s of rest."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        f = rng.uniform(2.0, 6.0)
+        amp = rng.uniform(0.05, 0.35) * 9.80665
+        t = np.arange(0.0, 1.0 / f, DT)
+        out.append(np.concatenate((amp * np.sin(2 * np.pi * f * t), np.zeros(int(4.0 / DT)))))
+    return out
+
+
+def _campaign(accs, overturned, specimen=SPEC) -> Campaign:
+    recs = [
+        OutcomeRecord(id=f"t{i:03d}", kind="ground_motion", file=None,
+                      motion=GroundMotion(acc=a, dt=DT, name=f"t{i:03d}"), overturned=bool(o))  # fmt: skip
+        for i, (a, o) in enumerate(zip(accs, overturned, strict=True))
+    ]
+    return Campaign(name="synthetic", specimen=specimen, records=[], outcomes=recs)
+
+
+def _truth(accs, alpha_true: float) -> np.ndarray:
+    """Outcomes of the same block on a contact inside its footprint (alpha_true < the block's alpha)."""
+    geo = Geometry.of(_campaign(accs, [False] * len(accs)))
+    b = geo.h * math.tan(alpha_true)
+    _, ov, _ = theta_max_many(SPEC, accs, DT, params=geo.params(b, b))
+    return ov
+
+
+# ----------------------------------------------------------------------------
+# scores
+def test_scores_match_hand_counts_and_pairwise_auc():
+    y = np.array([1, 1, 1, 0, 0, 0, 0, 1], dtype=bool)
+    p = np.array([0.9, 0.6, 0.4, 0.2, 0.7, 0.1, 0.5, 0.8])
+    s = outcome_scores(p, y, seed=0, n_boot=50)
+    pred = p >= 0.5  # tp 3 (0.9, 0.6, 0.8), fp 2 (0.7, 0.5), fn 1 (0.4), tn 2
+    assert (s["tp"], s["fp"], s["fn"], s["tn"]) == (3, 2, 1, 2)
+    assert s["accuracy"] == pytest.approx(np.mean(pred == y))
+    assert s["f1"] == pytest.approx(2 * 3 / (5 + 4))
+    assert s["log_loss"] == pytest.approx(-np.mean(np.where(y, np.log(p), np.log(1 - p))))
+    pairs = [(a > b) + 0.5 * (a == b) for a in p[y] for b in p[~y]]  # AUC as P(score_pos > score_neg)
+    assert s["roc_auc"] == pytest.approx(np.mean(pairs))
+    lo, hi = s["accuracy_ci"]
+    assert lo <= s["accuracy"] <= hi
+
+
+def test_stratified_folds_keep_the_share_of_overturns():
+    y = np.r_[np.ones(30, bool), np.zeros(70, bool)]
+    fold = stratified_folds(y, 5, seed=1)
+    for f in range(5):  # 6 overturned and 14 standing in each fold: exact, by construction
+        assert (y[fold == f].sum(), (~y[fold == f]).sum()) == (6, 14)
+
+
+def test_logistic_baseline_recovers_a_logistic_truth():
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=2000)
+    y = rng.random(2000) < 1 / (1 + np.exp(-(0.5 + 2.0 * x)))
+    p = logistic_oof(x, y, stratified_folds(y, 2, 0))
+    # out of fold on 1000 records each: the fitted P within 0.05 of the true P (the slope's standard error is
+    # about 0.1, which moves P by at most 0.025 at |x| < 1)
+    true = 1 / (1 + np.exp(-(0.5 + 2.0 * x)))
+    sel = np.abs(x) < 1
+    assert np.max(np.abs(p[sel] - true[sel])) < 0.05
+
+
+def test_floor_holds_for_outcomes_drawn_from_the_model():
+    """Outcomes drawn from the probabilities themselves are at the floor about 97.5 % of the time (its upper
+    bound is the 97.5th percentile); outcomes that disagree with them are not."""
+    rng = np.random.default_rng(5)
+    p = rng.uniform(0.02, 0.98, 150)
+    hits = [outcome_floor(p, rng.random(150) < p, seed=i, n_sim=400).at_floor for i in range(200)]
+    # 200 campaigns: the share of 0.975 has a binomial sd of 0.011; 0.93 is four of them below
+    assert np.mean(hits) > 0.93
+    wrong = outcome_floor(p, rng.random(150) < (1 - p), seed=0)
+    assert not wrong.at_floor and wrong.z > 5
+
+
+# ----------------------------------------------------------------------------
+# the diagnosis on outcomes whose cause is known
+@pytest.fixture(scope="module")
+def inside_contact():
+    accs = _pulses(160, seed=11)
+    y = _truth(accs, 0.06)
+    assert 30 < y.sum() < 130  # both outcomes well represented
+    return accs, y, diagnose_outcomes(_campaign(accs, y), folds=4, seed=0)
+
+
+def test_diagnosis_finds_a_contact_inside_the_footprint(inside_contact):
+    accs, y, d = inside_contact
+    assert d.steps[0].name == "plain"
+    assert d.effects[0] == "contact_inside"
+    # the fitted alpha_eff within two steps of the alpha grid (28 points over a factor 4 in alpha: 5 % each)
+    # of the truth, 0.06 rad
+    assert d.final.params["alpha_eff"] == pytest.approx(0.06, rel=0.11)
+    assert d.final.scores["log_loss"] < d.steps[0].scores["log_loss"] - 0.1
+    assert d.final.scores["accuracy"] > 0.9
+    # the plain model misses overturns (its footprint is wider than the contact): the pointer says so
+    assert "inside the footprint" in d.pointer
+    assert d.status in ("explained", "partly_explained")
+    data = json.loads(json.dumps(d.to_dict(), default=float))
+    for key in ("accuracy", "f1", "log_loss"):
+        assert key in data["outcomes"]
+        for name in ("logistic_pga", "logistic_pgv", "logistic_pga_pgv"):
+            assert key in data["outcomes"]["baselines"][name]
+    assert data["effect"]["name"].startswith("contact_inside")
+
+
+def test_diagnosis_of_a_right_model_adds_nothing():
+    accs = _pulses(120, seed=12)
+    _, y, _ = theta_max_many(SPEC, accs, DT)
+    d = diagnose_outcomes(_campaign(accs, y), folds=4, seed=1)
+    # the plain model is the model that made the outcomes: no effect may lower its held-out log loss
+    assert d.status == "no_effect_needed", d.summary()
+    assert d.steps[0].scores["accuracy"] == 1.0
+
+
+def test_diagnosis_refuses_too_few_or_one_sided_outcomes():
+    accs = _pulses(12, seed=1)
+    with pytest.raises(ValueError, match="every record stood"):
+        diagnose_outcomes(_campaign(accs, [False] * 12))
+    with pytest.raises(ValueError, match="10"):
+        diagnose_outcomes(_campaign(accs[:5], [True, False, True, False, True]))
+
+
+# ----------------------------------------------------------------------------
+# the campaign format
+def _write(tmp_path, records_toml: str, files: dict) -> None:
+    (tmp_path / "records").mkdir()
+    (tmp_path / "campaign.toml").write_text(
+        'name = "mixed"\n[specimen]\nheight = 0.6\nwidth = 0.06\ndepth = 0.3\nmass = 50.0\n' + records_toml
+    )
+    for name, text in files.items():
+        (tmp_path / "records" / name).write_text(text)
+
+
+def _csv(acc, theta=None) -> str:
+    head = "time,ground_acc" + (",theta" if theta is not None else "")
+    rows = [f"{i * DT:.3f},{a:.6g}" + (f",{theta[i]:.6g}" if theta is not None else "") for i, a in enumerate(acc)]
+    return head + "\n" + "\n".join(rows) + "\n"
+
+
+def test_campaign_mixes_outcome_records_with_theta_records(tmp_path):
+    acc = _pulses(3, seed=2)
+    r = theta_max_many  # noqa: F841 - the theta record below is rest, a valid record
+    _write(
+        tmp_path,
+        '[[record]]\nid = "a"\nkind = "ground_motion"\nfile = "records/a.csv"\noverturned = true\npgv = 0.3\n'
+        'theta_max = 1.5708\n'
+        '[[record]]\nid = "b"\nkind = "ground_motion"\nfile = "records/b.csv"\noverturned = false\n'
+        '[[record]]\nid = "c"\nkind = "ground_motion"\nfile = "records/c.csv"\n'
+        '[[record]]\nid = "d"\nkind = "ground_motion"\nfile = "records/d.csv"\n',
+        {"a.csv": _csv(acc[0]), "b.csv": _csv(acc[1]), "c.csv": _csv(acc[2]),
+         "d.csv": _csv(np.zeros(50), theta=1e-4 * np.sin(np.arange(50)))},  # fmt: skip
+    )
+    c = load_campaign(tmp_path)
+    assert [o.id for o in c.outcomes] == ["a", "b"]
+    assert [r.id for r in c.records] == ["d"]
+    assert c.outcomes[0].overturned and not c.outcomes[1].overturned
+    assert c.outcomes[0].pgv == 0.3 and c.outcomes[0].theta_max == pytest.approx(1.5708)
+    # PGV of the one-sine pulse without a measured one: A / (pi f) from the integrated acceleration, within
+    # the 10 % that the 0.1 Hz high-pass and the 4 s of rest change it by
+    assert c.outcomes[1].pgv > 0
+    (rid, file, msg), = c.skipped
+    assert rid == "c" and "no outcome" in msg and "overturned = true" in msg
+
+
+def test_outcome_record_key_of_the_wrong_type_names_it(tmp_path):
+    _write(tmp_path, '[[record]]\nid = "a"\nkind = "ground_motion"\nfile = "records/a.csv"\noverturned = true\n'
+           'pgv = "fast"\n', {"a.csv": _csv(np.ones(40))})  # fmt: skip
+    from housner.errors import DataFileError
+
+    with pytest.raises(DataFileError, match=r"line 12: .*'pgv' must be a number >= 0 \[m/s\]"):
+        load_campaign(tmp_path)
+
+
+def test_diagnose_command_on_an_outcome_campaign(tmp_path, capsys):
+    accs = _pulses(40, seed=21)
+    y = _truth(accs, 0.06)
+    recs = "".join(
+        f'[[record]]\nid = "t{i}"\nkind = "ground_motion"\nfile = "records/t{i}.csv"\n'
+        f"overturned = {'true' if o else 'false'}\n"
+        for i, o in enumerate(y)
+    )
+    _write(tmp_path, recs, {f"t{i}.csv": _csv(a) for i, a in enumerate(accs)})
+    out = tmp_path / "d.json"
+    assert main(["diagnose", str(tmp_path), "--folds", "3", "--json", str(out), "-q"]) == 0
+    data = json.loads(out.read_text())
+    assert data["kind"] == "outcomes" and data["n_records"] == 40
+    assert {"accuracy", "f1", "log_loss", "baselines"} <= set(data["outcomes"])
+    assert "verdict:" in capsys.readouterr().out
