@@ -265,6 +265,16 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
     if not args.quiet:
         print(f"{campaign!r}", file=sys.stderr)
+    outcomes = _diagnose_outcomes(args, campaign) if campaign.outcomes else None
+    if not campaign.records:  # outcome records only
+        if args.json:
+            Path(args.json).write_text(json.dumps(outcomes.to_dict(), indent=1, default=_json_default) + "\n")
+            print(f"json:   {args.json}")
+        if args.report is not None:
+            from housner.reports.diagnosis import write_outcome_report
+
+            print(f"report: {write_outcome_report(outcomes, args.report)}")
+        return 0
     want_report = args.report is not None
     diag = diagnose(
         campaign,
@@ -289,10 +299,47 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
           f"sensor noise sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
     if args.json:
         diag.to_json(args.json)
+        if outcomes is not None:  # a campaign of both kinds: the outcome diagnosis under its own key
+            data = json.loads(Path(args.json).read_text())
+            data["outcomes_diagnosis"] = outcomes.to_dict()
+            data["outcomes"] = data["outcomes_diagnosis"]["outcomes"]
+            Path(args.json).write_text(json.dumps(data, indent=1, default=_json_default) + "\n")
         print(f"json:   {args.json}")
     if want_report:
         print(f"report: {write_diagnosis_report(diag, args.report)}")
     return 0
+
+
+def _json_default(o):
+    """numpy scalars and arrays in the diagnosis' JSON."""
+    import numpy as np
+
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"{type(o).__name__} is not JSON serialisable")
+
+
+def _diagnose_outcomes(args: argparse.Namespace, campaign):
+    """The outcome records' diagnosis (:func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes`), printed."""
+    from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS
+    from housner.scenarios.campaigns.outcomes import diagnose_outcomes
+
+    d = diagnose_outcomes(campaign, folds=args.folds, seed=args.seed,
+                          progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)))  # fmt: skip
+    print(f"verdict: {d.status}")
+    print(d.summary())
+    print()
+    keys = SCORE_KEYS[:4]
+    print(f"{'held out, same folds':34s}" + "".join(f"{k:>22s}" for k in keys))
+    rows = [(s.name if i == 0 else f"+ {s.name}", s.scores) for i, s in enumerate(d.steps)]
+    rows += [(name, sc) for name, sc in d.baselines.items()]
+    for name, sc in rows:
+        cells = "".join(f"{sc[k]:>9.3f} [{sc[k + '_ci'][0]:.3f},{sc[k + '_ci'][1]:.3f}]" for k in keys)
+        print(f"{name[:34]:34s}{cells}")
+    print(f"{d.elapsed:.1f} s")
+    return d
 
 
 def _engine_scenario(args: argparse.Namespace, purpose: str):

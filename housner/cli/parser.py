@@ -6,6 +6,8 @@ import argparse
 import math
 from collections.abc import Callable
 
+from housner.cli import campaign as _campaign_cmd
+from housner.cli import specimen as _specimen_cmd
 from housner.cli.args import (
     _amplitudes,
     _engine_name,
@@ -91,6 +93,8 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     _add_diagnose(sub, names)
     _add_explain(sub, names)
     _add_frontier(sub, names)
+    _specimen_cmd.add_parser(sub)
+    _campaign_cmd.add_parser(sub)
     return p
 
 
