@@ -30,6 +30,13 @@ eqs. 7-8, Figs. 5 and 10.
 """
 
 from housner.reports.diagnosis.figures import history_records
+from housner.reports.diagnosis.outcomes import render_outcome_report, write_outcome_report
 from housner.reports.diagnosis.page import render_diagnosis, write_diagnosis_report
 
-__all__ = ["history_records", "render_diagnosis", "write_diagnosis_report"]
+__all__ = [
+    "history_records",
+    "render_diagnosis",
+    "render_outcome_report",
+    "write_diagnosis_report",
+    "write_outcome_report",
+]

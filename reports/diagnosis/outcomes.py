@@ -1,0 +1,400 @@
+"""The outcome report: the mission loop on records whose only measurement is whether the block overturned.
+
+:func:`render_outcome_report` turns a :class:`housner.scenarios.campaigns.outcomes.OutcomeDiagnosis` into one
+self-contained HTML page (the page pieces of :mod:`housner.reports.page`: inline style sheet, base64 PNG
+figures of :mod:`housner.reports.diagnosis.outcome_figures`, no script, no network);
+:func:`write_outcome_report` writes it.
+
+What it shows, top first: the verdict, stated once (the status in words, the final model with its fitted
+parameters and units, the held-out accuracy, F1 and log loss with their intervals, the floor a correct model
+reaches, the best baseline, and what remains unexplained); the scores of every rung of the ladder and of every
+baseline; the measured outcomes over PGA and PGV/PGA with the P = 0.5 lines before and after; the confusion
+matrices; the calibration curve; where the plain model fails and the records missed; the candidate effects;
+the block's geometry and the settings.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from housner.reports.diagnosis.outcome_figures import baseline_label, calibration_figure, outcome_map_figure
+from housner.reports.page import (
+    Section,
+    ci_cell,
+    document,
+    esc,
+    fmt_num,
+    fmt_p,
+    fmt_signed,
+    guarded,
+    html_figure,
+    html_note,
+    html_table,
+    write_page,
+)
+from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS, calibration_table, per_record_log_loss
+from housner.scenarios.campaigns.outcomes import AMPLITUDE_SPREAD, LEVEL
+
+__all__ = ["MISSES_SHOWN", "STATUS", "render_outcome_report", "step_label", "write_outcome_report"]
+
+#: Rows of the table of misses shown per model (the most confident misses first); the rest are counted.
+MISSES_SHOWN = 30
+
+#: Status -> (the verdict's words, its style class, its sentence; ``{effects}`` is the effects added).
+STATUS = {
+    "no_effect_needed": ("NO EFFECT NEEDED", "ok",
+                         "The plain model's held-out log loss is at the floor that a correct model with its "
+                         "probabilities reaches; no candidate effect lowered it significantly."),
+    "explained": ("EXPLAINED", "ok",
+                  "With {effects} added, the held-out log loss is at the floor that a correct model with its "
+                  "probabilities reaches."),
+    "partly_explained": ("PARTLY EXPLAINED", "bad",
+                         "Adding {effects} lowered the held-out log loss significantly, but it stays above the floor "
+                         "that a correct model with its probabilities reaches: a part of the outcomes is "
+                         "unexplained."),
+    "unexplained": ("UNEXPLAINED", "bad",
+                    "The plain model's held-out log loss is above the floor that a correct model with its "
+                    "probabilities reaches, and no candidate effect lowered it significantly."),
+}  # fmt: skip
+
+#: Score key -> column heading.
+_SCORE_HEADINGS = {"accuracy": "accuracy", "f1": "F1", "log_loss": "log loss [nats]", "brier": "Brier",
+                   "precision": "precision", "recall": "recall", "roc_auc": "ROC AUC"}  # fmt: skip
+
+#: Fitted parameter -> (what it is, symbol, unit).
+_PARAMS = {
+    "alpha_eff": ("effective contact angle", "alpha_eff", "rad"),
+    "spread": ("log-normal spread of alpha_eff", "sigma", "-"),
+    "lapse": ("lapse rate (share of outcomes the model does not decide)", "lapse", "-"),
+    "r": ("kinetic-energy ratio at impact", "r", "-"),
+}
+
+#: Geometry key -> (label, unit).
+_GEOMETRY = {
+    "h_m": ("centre-of-mass height above the contact h", "m"),
+    "b_pos_m": ("centre of mass to the +x pivot b+", "m"),
+    "b_neg_m": ("centre of mass to the -x pivot b-", "m"),
+    "alpha_pos_rad": ("alpha+ = atan(b+/h)", "rad"),
+    "alpha_neg_rad": ("alpha- = atan(b-/h)", "rad"),
+    "centroidal_inertia_kgm2": ("centroidal moment of inertia", "kg m²"),
+    "mass_kg": ("mass", "kg"),
+}
+
+
+def render_outcome_report(diag) -> str:
+    """The outcome report as one HTML string (self-contained: inline CSS, base64 PNG figures, no script).
+
+    Parameters
+    ----------
+    diag : housner.scenarios.campaigns.outcomes.OutcomeDiagnosis
+        From :func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes`.
+    """
+    if not diag.steps or not diag.baselines:
+        raise ValueError("`diag` has no ladder or no baselines; pass the result of diagnose_outcomes")
+    t0 = time.perf_counter()
+    best = _best_baseline(diag)
+    sections = [
+        ("verdict", "Verdict", _verdict(diag, best)),
+        ("scores", "Scores of the ladder and the baselines", _scores(diag, best)),
+        ("map", "Outcomes over PGA and PGV/PGA", guarded("The outcome map", lambda: _map(diag, best))),
+        ("confusion", "Confusion matrices", _confusion(diag)),
+        ("calibration", "Calibration", guarded("The calibration curve", lambda: _calibration(diag, best))),
+        ("where", "Where it fails", _where(diag)),
+        ("candidates", "Candidate effects", _candidates(diag)),
+        ("settings", "Geometry and settings", _settings(diag)),
+    ]
+    took = time.perf_counter() - t0
+    n, k = len(diag.ids), int(np.sum(diag.observed))
+    return document(
+        f"{diag.campaign}: outcome diagnosis",
+        f"Outcome diagnosis: <code>{esc(diag.campaign)}</code>",
+        f'<p class="sub">{n} shake-table tests whose only measurement is whether the block overturned ({k} did): '
+        "P(overturn) from the specimen's model, judged on held-out records against the floor a correct model "
+        "reaches and against logistic regressions on the measured peaks.</p>",
+        [Section(i, t, b) for i, t, b in sections],
+        f"Page built in {took:.1f} s; diagnosis {diag.elapsed:.1f} s.",
+    )
+
+
+def write_outcome_report(diag, path: str | Path) -> Path:
+    """Write :func:`render_outcome_report` to ``path`` (parents created) and return the path."""
+    return write_page(path, render_outcome_report(diag))
+
+
+# ----------------------------------------------------------------------------
+# cells and words
+def step_label(name: str) -> str:
+    """A rung of the ladder in words: ``"plain"`` -> "plain model", ``"a+b"`` -> "plain + a + b"."""
+    return "plain model" if name == "plain" else "plain + " + " + ".join(name.split("+"))
+
+
+def _best_baseline(diag) -> str:
+    """The baseline with the lowest held-out log loss (the one the verdict compares with)."""
+    return min(diag.baselines, key=lambda k: diag.baselines[k]["log_loss"])
+
+
+def _ci(scores: dict, key: str, digits: int = 3) -> str:
+    """'value [lo, hi]' of a score; the value alone where it has no interval."""
+    ci = scores.get(f"{key}_ci")
+    if not ci:
+        return fmt_num(scores.get(key, math.nan), digits)
+    return ci_cell(scores[key], ci[0], ci[1], digits)
+
+
+def _param(key: str, value, geometry: dict, *, long: bool) -> str:
+    """A fitted parameter with its unit; ``long`` says what it is (the verdict), else only its symbol (tables)."""
+    what, sym, unit = _PARAMS.get(key, (key, key, "?"))
+    if value is None:
+        return f"{esc(sym)}: Housner's impact law" + (" (from the geometry)" if long else "")
+    text = (f"{esc(what)} " if long else "") + f"{esc(sym)} = {float(value):.4g} " + ("[-]" if unit == "-" else unit)
+    if key == "alpha_eff":
+        a = [geometry.get("alpha_pos_rad"), geometry.get("alpha_neg_rad")]
+        if all(isinstance(v, (int, float)) and v > 0 for v in a):
+            if math.isclose(a[0], a[1]):
+                share = f"{100 * float(value) / a[0]:.0f} % of the footprint's alpha, {a[0]:.4f} rad"
+            else:  # an asymmetric footprint: a share of either side would mislead; both sides are given
+                share = f"the footprint's pivots: alpha {a[0]:.4f} / {a[1]:.4f} rad (+x / -x)"
+            if long or math.isclose(a[0], a[1]):
+                text += f" ({share})"
+    return text
+
+
+def _params(params: dict, geometry: dict, *, long: bool = False) -> str:
+    return "; ".join(_param(k, v, geometry, long=long) for k, v in params.items()) or "&ndash;"
+
+
+def _n(count: int, noun: str, plural: str | None = None) -> str:
+    """``count`` with its noun, singular or plural."""
+    return f"{count} {noun if count == 1 else plural or noun + 's'}"
+
+
+def _effects(name: str) -> str:
+    return " + ".join(f"<code>{esc(n)}</code>" for n in name.split("+"))
+
+
+# ----------------------------------------------------------------------------
+# sections
+def _verdict(diag, best: str) -> str:
+    """The verdict (the only place the page states it) and its evidence, then what remains, in words."""
+    f, s, p0 = diag.final, diag.final.scores, diag.steps[0].scores
+    words, cls, sentence = STATUS.get(diag.status, (diag.status.replace("_", " ").upper(), "", ""))
+    lead = (f'<p class="lead"><span class="{cls}">{esc(words)}</span> &mdash; '
+            f"{sentence.format(effects=_effects(f.name))}</p>")  # fmt: skip
+    if f.name == "plain":
+        spread = f"&plusmn;{100 * AMPLITUDE_SPREAD:g} %"
+        model = ("the plain model: the specimen's block as built, Housner's impact law; each pivot sampled over "
+                 f"the specimen's bracket and the table amplitude within {spread}.")  # fmt: skip
+    else:
+        model = f"{esc(step_label(f.name))}: {_params(f.params, diag.geometry, long=True)}."
+    held = f"accuracy {_ci(s, 'accuracy')}, F1 {_ci(s, 'f1')}, log loss {_ci(s, 'log_loss')} nats"
+    if f is not diag.steps[0]:
+        held += (f"; the plain model: accuracy {_ci(p0, 'accuracy')}, F1 {_ci(p0, 'f1')}, log loss "
+                 f"{_ci(p0, 'log_loss')} nats")  # fmt: skip
+    fl = diag.floor
+    floor = (f"a correct model with these probabilities would score a log loss of {fmt_num(fl.log_loss)} "
+             f"<span class=ci>[{fmt_num(fl.log_loss_ci[0])}, {fmt_num(fl.log_loss_ci[1])}]</span> nats (central 95 % "
+             f"of campaigns drawn from them); measured {fmt_num(fl.measured_log_loss)} (z = {fmt_signed(fl.z, 1)}), "
+             + ('inside that range: <span class="ok">at the floor</span>' if fl.at_floor
+                else 'beyond that range: <span class="bad">above the floor</span>'))  # fmt: skip
+    items = [
+        f"<li><b>Final model</b>: {model}</li>",
+        f"<li><b>Held out</b> ({diag.folds} stratified folds, 95 % bootstrap intervals over the records): {held}.</li>",
+        f"<li><b>Floor</b>: {floor}.</li>",
+        f"<li><b>Best baseline</b>: {_against_baseline(diag, best)}</li>",
+        f"<li><b>What remains</b>: {_remains(diag)}</li>",
+    ]
+    note = html_note(
+        "The floor is the log loss a model scores when the outcomes are drawn from its own probabilities: the nearer "
+        "they lie to 1/2, the higher it is. At the floor means the outcomes are no more surprising than the model "
+        "said; whether its probabilities are sharp enough to be useful is what the baselines and the confusion "
+        "matrices show."
+    )
+    return lead + f'<ul class="cause">{"".join(items)}</ul>' + note
+
+
+def _against_baseline(diag, best: str) -> str:
+    """The final model against the best baseline in log loss, with the paired difference and its doubt."""
+    b = diag.baselines[best]
+    ahead = diag.final.scores["log_loss"] < b["log_loss"]
+    d = per_record_log_loss(diag.baseline_p[best], diag.observed) - per_record_log_loss(diag.final.p, diag.observed)
+    se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else math.nan
+    mean = float(np.mean(d))
+    text = (f"{esc(baseline_label(best))} on the same folds, log loss {_ci(b, 'log_loss')} nats, accuracy "
+            f"{_ci(b, 'accuracy')}: the model is "
+            + ('<span class="ok">ahead</span>' if ahead else '<span class="bad">NOT ahead</span>')
+            + f" in log loss (the baseline's minus the model's, record by record: {fmt_signed(mean, 3)} &plusmn; "
+            f"{fmt_num(se)} nats")  # fmt: skip
+    if ahead and math.isfinite(se) and mean < 2 * se:
+        text += ", within two standard errors: not a clear lead"
+    text += ")."
+    if not ahead:
+        text += " The measured peaks alone predict these outcomes at least as well as the model does."
+    return text
+
+
+def _remains(diag) -> str:
+    """What the final model leaves unexplained, in words: its misses against what its own probabilities allow."""
+    s, n, fl = diag.final.scores, len(diag.ids), diag.floor
+    fn, fp = int(s["fn"]), int(s["fp"])
+    lo, hi = n * (1 - fl.accuracy_ci[1]), n * (1 - fl.accuracy_ci[0])
+    expect = (f"a correct model with these probabilities would miss about {n * (1 - fl.accuracy):.0f} "
+              f"<span class=ci>[{lo:.0f}, {hi:.0f}]</span>")  # fmt: skip
+    if fn + fp == 0:
+        text = f"no record is missed: the final model puts all {n} on the right side of P = 0.5 ({expect})."
+    else:
+        text = (f"{fn + fp} of {n} records {'is' if fn + fp == 1 else 'are'} missed by the final model: "
+                f"{_n(fn, 'overturn')} it gave P &lt; 0.5 and {_n(fp, 'standing record')} it gave P &ge; 0.5 "
+                f'(listed under <a href="#where">Where it fails</a>); {expect}.')  # fmt: skip
+    if not fl.at_floor:
+        text += (f" The log loss lies {fmt_num(fl.z, 1)} standard deviations above the floor: the outcomes are more "
+                 "surprising than the model's probabilities say, which no candidate effect removed.")  # fmt: skip
+    return text
+
+
+def _scores(diag, best: str) -> str:
+    rows = []
+    for st in diag.steps:
+        tag = " <span class=muted>(final)</span>" if st is diag.final else ""
+        rows.append([esc(step_label(st.name)) + tag] + [_ci(st.scores, k) for k in SCORE_KEYS])
+    for name, sc in diag.baselines.items():
+        tag = " <span class=muted>(best baseline)</span>" if name == best else ""
+        rows.append([esc(baseline_label(name)) + tag] + [_ci(sc, k) for k in SCORE_KEYS])
+    return html_table(
+        ["model"] + [_SCORE_HEADINGS.get(k, esc(k)) for k in SCORE_KEYS],
+        rows,
+        caption=(
+            f"Out-of-fold scores: every record predicted by the fit without its fold ({diag.folds} stratified folds, "
+            f"seed {diag.seed}), the ladder's steps and the logistic baselines on the same folds; value [95 % "
+            "bootstrap interval over the records]. Accuracy, F1, precision and recall count P &ge; 0.5 as a "
+            "predicted overturn; log loss (nats) and Brier score the probabilities, lower is better."
+        ),
+    )
+
+
+def _map(diag, best: str) -> str:
+    return html_figure(
+        outcome_map_figure(diag, best),
+        "Every record at its measured PGA and PGV/PGA (log axes): overturned and stood. The lines are where "
+        f"P(overturn) = 0.5: for {'the plain and the final model' if len(diag.steps) > 1 else 'the model'}, the 0.5 "
+        "level of a logistic surface with quadratic "
+        "terms in log PGA and log PGV/PGA fitted to the model's out-of-fold probabilities as soft targets (a smooth "
+        "summary of the records' P, not the model run off the records); for the best baseline, dashed, the same "
+        "with linear terms (it is linear in the logs). Circled: the records the final model misses.",
+        "measured outcomes over PGA and PGV/PGA with the P = 0.5 lines",
+    )
+
+
+def _confusion(diag) -> str:
+    steps = [diag.steps[0]] if len(diag.steps) == 1 else [diag.steps[0], diag.final]
+    tables = []
+    for st in steps:
+        c = st.scores
+        title = step_label(st.name) + (" (final)" if st is diag.final else "")
+        tables.append(
+            f'<div><h4>{esc(title)}</h4>'
+            + html_table(
+                ["observed \\ predicted", "overturn", "stand"],
+                [["<b>overturned</b>", f"{c['tp']}", f"<span class=bad>{c['fn']}</span>" if c["fn"] else "0"],
+                 ["<b>stood</b>", f"<span class=bad>{c['fp']}</span>" if c["fp"] else "0", f"{c['tn']}"]],
+            )
+            + "</div>"
+        )  # fmt: skip
+    return (
+        '<div style="display:flex;flex-wrap:wrap;gap:0 2.5rem">' + "".join(tables) + "</div>"
+        + html_note(f"Out-of-fold predictions of all {len(diag.ids)} records: rows are what was observed, columns "
+                    "what the model predicted (overturn where P &ge; 0.5). The off-diagonal cells are the misses.")
+    )  # fmt: skip
+
+
+def _calibration(diag, best: str) -> str:
+    fig = calibration_figure(
+        diag.calibration, calibration_table(diag.baseline_p[best], diag.observed),
+        f"final model: {step_label(diag.final.name)}", f"best baseline: {baseline_label(best)}",
+    )  # fmt: skip
+    return html_figure(
+        fig,
+        "Records binned by their out-of-fold P (bins of 0.2): the observed share of overturns against the mean P of "
+        "the bin, with its 95 % Wilson interval and the bin's number of records. A calibrated model lies on the "
+        "diagonal; a model whose probabilities are all near 0 or 1 puts every record in the end bins.",
+        "calibration curve",
+    )
+
+
+def _where(diag) -> str:
+    pointer = f"<p>The plain model's misses: {esc(diag.pointer)}.</p>"
+    by_model: dict[str, list] = {}
+    for m in diag.misses:
+        by_model.setdefault(m["model"], []).append(m)
+    if not by_model:
+        return pointer + "<p>No record is missed by the plain or the final model.</p>"
+    rows, more = [], []
+    for model, ms in by_model.items():
+        ms = sorted(ms, key=lambda m: -abs(m["predicted_p"] - 0.5))
+        for m in ms[:MISSES_SHOWN]:
+            rows.append([esc(step_label(model)), f"<code>{esc(m['id'])}</code>", esc(m["observed"]),
+                         fmt_num(m["predicted_p"]), fmt_num(m["pga_g"]), fmt_num(m["pgv_over_pga_s"])])  # fmt: skip
+        if len(ms) > MISSES_SHOWN:
+            more.append(f"{len(ms) - MISSES_SHOWN} more of {esc(step_label(model))} not listed")
+    counts = "; ".join(f"{esc(step_label(m))}: {len(v)}" for m, v in by_model.items())
+    rest = f"; {'; '.join(more)}" if more else ""
+    caption = (f"Records on the wrong side of P = 0.5, by model ({counts}), the most confident misses first (up "
+               f"to {MISSES_SHOWN} per model){rest}. P is out of fold.")  # fmt: skip
+    table = html_table(["model", "record", "observed", "predicted P [-]", "PGA [g]", "PGV/PGA [s]"], rows,
+                       caption=caption)  # fmt: skip
+    return pointer + table
+
+
+def _candidates(diag) -> str:
+    if not diag.candidates:
+        return "<p>No candidate effect was tried.</p>"
+    rows = [
+        [
+            _effects(c["name"]),
+            _params(c.get("params", {}), diag.geometry),
+            fmt_num(c["log_loss"]),
+            f"{fmt_signed(c['improvement'], 3)} &plusmn; {fmt_num(c['improvement_se'])}",
+            fmt_p(c["p_value"]),
+            '<span class="ok">yes</span>' if c["added"] else "no",
+        ]
+        for c in diag.candidates
+    ]
+    return html_table(
+        ["candidate (added to the model of its round)", "fitted parameters (on all records)",
+         "held-out log loss [nats]", "fall of the held-out log loss [nats per record]", "p (one-sided)", "added"],
+        rows,
+        caption=(
+            "Each candidate is fitted on the training folds by minimising the log loss and scored out of fold on the "
+            "same folds; its fall is the mean paired per-record fall from the model it extends, with its standard "
+            "error. It is added when the fall passes a one-sided Diebold-Mariano test at a family-wise "
+            f"{100 * LEVEL:g} % (Bonferroni over the candidates of its round); the best of those passing is added."
+        ),
+    )  # fmt: skip
+
+
+def _settings(diag) -> str:
+    rows = []
+    for key, value in diag.geometry.items():
+        if key in _GEOMETRY:
+            label, unit = _GEOMETRY[key]
+            rows.append([esc(label), f"{float(value):.5g} {esc(unit)}"])
+        elif key == "b_bracket_m" and isinstance(value, dict):
+            for side, (lo, hi) in value.items():
+                rows.append([f"bracket of b{'+' if side == 'pos' else '-' if side == 'neg' else esc(side)} "
+                             "(the specimen's uncertainty)", f"{lo:.5g} .. {hi:.5g} m"])  # fmt: skip
+        else:
+            rows.append([esc(key), f"<code>{esc(value)}</code>"])
+    rows += [
+        ["records", f"{len(diag.ids)} ({int(np.sum(diag.observed))} overturned)"],
+        ["plain model's ensemble", f"pivots over their bracket &times; table amplitude &plusmn;"
+                                   f"{100 * AMPLITUDE_SPREAD:g} %"],
+        ["folds", f"{diag.folds} (stratified)"],
+        ["seed", esc(diag.seed)],
+        ["elapsed", f"{diag.elapsed:.1f} s"],
+    ]  # fmt: skip
+    return html_table(
+        ["", ""], rows, cls="kv", caption="The planar block behind the model, and the diagnosis' settings."
+    )
