@@ -14,6 +14,12 @@ Units understood (:func:`parse_unit`), with the factor to SI:
 * acceleration: ``m/s^2`` 1, ``g`` 9.80665, ``cm/s^2`` (gal, CM/S/S,
   CM/SEC/SEC, cm/s2) 0.01, ``mm/s^2`` 1e-3, ``in/s^2`` 0.0254, ``ft/s^2`` 0.3048;
 * angle: ``rad`` 1, ``mrad`` 1e-3, ``urad`` (µrad) 1e-6, ``deg`` (°, degrees) pi/180.
+
+One input rule for every reader: an acceleration without a unit above :data:`PLAUSIBLE_ACC` (5 g)
+and one in a declared unit above :data:`DECLARED_ACC_CEILING` (50 g, after conversion) are refused
+with the file, line and column; a record needs :data:`MIN_RECORD_SAMPLES` samples
+(:func:`require_samples`); a file whose first line is not a CSV header of names is refused
+without quoting that line (a message never echoes a file that is not a record).
 """
 from __future__ import annotations
 
@@ -34,6 +40,8 @@ from housner.units import G
 
 __all__ = [
     "CHANNEL_PREFIX",
+    "DECLARED_ACC_CEILING",
+    "MIN_RECORD_SAMPLES",
     "PLAUSIBLE_ACC",
     "QUANTITIES",
     "SI_UNITS",
@@ -44,6 +52,7 @@ __all__ = [
     "read_csv_header",
     "read_csv_motion",
     "read_csv_si",
+    "require_samples",
     "uniform_step",
 ]
 
@@ -57,6 +66,11 @@ _ROUNDING_SHARE = 0.01
 #: 10 Hz to 100 kHz covers every strong-motion and shake-table record; a step outside it is far
 #: more likely milliseconds (or microseconds) taken for seconds than a real record.
 PLAUSIBLE_STEP = (1e-5, 0.1)
+
+#: The fewest samples a measured or user-given record may have [-]: the calibration's noise estimate and
+#: impact detection need 16 (:mod:`housner.calibration`); a shorter file is a stub or a truncated export.
+#: One rule for every reader of records: campaigns and the records of a scenario.
+MIN_RECORD_SAMPLES = 16
 
 #: The quantity each column of the suite's CSV formats measures (docs/reference/campaign-format.md), SI unit
 #: in brackets.
@@ -118,6 +132,13 @@ def parse_unit(text: str) -> tuple[str, str, float] | None:
         return "acceleration", label, _LENGTH[length]
     return None
 
+
+def require_samples(path: str | Path, n: int, line: int | None = None) -> None:
+    """Refuse a record file of fewer than :data:`MIN_RECORD_SAMPLES` samples (DataFileError naming the file)."""
+    if n < MIN_RECORD_SAMPLES:
+        raise DataFileError(path, f"only {n} samples; a record needs at least {MIN_RECORD_SAMPLES}", line=line)
+
+
 _NPTS_DT = re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([0-9.EeDd+-]+)", re.IGNORECASE)
 
 
@@ -170,19 +191,21 @@ def read_at2(path: str | Path, *, units: str | None = None) -> tuple[np.ndarray,
         raise DataFileError(path, f"cannot read DT from {m.group(0)!r}", line=header_line + 1) from None
     unit_label, factor, unit_where = _at2_units(path, lines[: header_line + 1], given)
     values: list[float] = []
+    starts: list[tuple[int, int]] = []  # (index of the line's first value, 1-based line): a sample's line
     for i in range(header_line + 1, len(lines)):
         line = lines[i].strip()
         if not line:
             continue
         if line.startswith("*"):
             break
+        starts.append((len(values), i + 1))
         for tok in line.split():
             try:
                 v = float(tok.replace("D", "E"))
             except ValueError:
-                raise DataFileError(path, f"not a number: {tok!r}", line=i + 1) from None
+                raise DataFileError(path, f"not a number: {_shown(tok)}", line=i + 1) from None
             if not math.isfinite(v):
-                raise DataFileError(path, f"acceleration is not finite: {tok!r}", line=i + 1)
+                raise DataFileError(path, f"acceleration is not finite: {_shown(tok)}", line=i + 1)
             values.append(v)
     if not values:
         raise DataFileError(path, "no acceleration samples after the header", line=header_line + 1)
@@ -192,7 +215,11 @@ def read_at2(path: str | Path, *, units: str | None = None) -> tuple[np.ndarray,
         raise DataFileError(path, f"DT must be positive, got {dt}", line=header_line + 1)
     title = " / ".join(s.strip() for s in lines[1:header_line] if s.strip())[:200]
     conv = f"g -> m/s^2 with g = {G}" if unit_label == "g" else f"{unit_label} -> m/s^2 x {factor:g}"
-    return np.asarray(values) * factor, dt, f"{path.name} (PEER AT2, {conv}; units {unit_where}); {title}"
+    acc = np.asarray(values) * factor
+    first, line_of = zip(*starts, strict=True)
+    sample_lines = np.repeat(np.asarray(line_of), np.diff(np.append(first, len(values))))
+    _check_declared_acceleration(path, None, acc, sample_lines, unit_label)
+    return acc, dt, f"{path.name} (PEER AT2, {conv}; units {unit_where}); {title}"
 
 
 def read_csv_motion(
@@ -290,7 +317,7 @@ def _at2_units(path: Path, header: list[str], given: tuple[str, str, float] | No
         tok, line = unread[0]
         raise DataFileError(
             path,
-            f"cannot read the acceleration units {tok!r} in the header (understood: "
+            f"cannot read the acceleration units {_shown(tok)} in the header (understood: "
             f"{_UNIT_CHOICES['acceleration']}); declare the unit: `units = \"g\"` in the scenario's "
             "[motions] table, units=\"g\" in Python",
             line=line,
@@ -401,9 +428,7 @@ def read_csv_si(
     units: list[str | None] = []
     for c, quantity in columns.items():
         if c not in names:
-            close = difflib.get_close_matches(c, names, n=1)
-            hint = f"; did you mean `{close[0]}`?" if close else ""
-            raise DataFileError(path, f"missing column `{c}`{hint} (header has: {', '.join(names)})", line=1)
+            raise _missing_column(path, c, columns, names, text.partition("\n")[0].rstrip("\r"))
         j = names.index(c)
         written = cells[j][1]
         default = (default_units or {}).get(c)
@@ -413,18 +438,21 @@ def read_csv_si(
                 continue
             u = parse_unit(u_text)
             if quantity is None:
-                raise DataFileError(path, f"column `{c}` takes no unit, got [{u_text}]", line=1, column=c)
+                raise DataFileError(path, f"column `{c}` takes no unit, got [{_shown(u_text, quote=False)}]", line=1,
+                                    column=c)  # fmt: skip
             if u is None or u[0] != quantity:
                 what = "unknown unit" if u is None else f"{u[0]} unit"
                 raise DataFileError(
                     path,
-                    f"{what} [{u_text}] for {quantity} (use {_UNIT_CHOICES[quantity]}; SI {SI_UNITS[quantity]})",
+                    f"{what} [{_shown(u_text, quote=False)}] for {quantity} (use {_UNIT_CHOICES[quantity]}; "
+                    f"SI {SI_UNITS[quantity]})",
                     line=1,
                     column=c,
                 )
             if source == "default" and label is not None and label != u[1]:
                 raise DataFileError(
-                    path, f"the header says [{written}] but units={default!r} was given", line=1, column=c
+                    path, f"the header says [{_shown(written, quote=False)}] but units={default!r} was given", line=1,
+                    column=c,
                 )
             if label is None:
                 factor, label = u[2], u[1]
@@ -444,9 +472,9 @@ def read_csv_si(
             try:
                 v = float(tok)
             except ValueError:
-                raise DataFileError(path, f"not a number: {tok!r}", line=lineno, column=c) from None
+                raise DataFileError(path, f"not a number: {_shown(tok)}", line=lineno, column=c) from None
             if not math.isfinite(v):
-                raise DataFileError(path, f"value is not finite: {tok!r}", line=lineno, column=c)
+                raise DataFileError(path, f"value is not finite: {_shown(tok)}", line=lineno, column=c)
             out[k].append(v)
         lines.append(lineno)
     if not lines:
@@ -455,12 +483,84 @@ def read_csv_si(
     for (c, quantity), v, u in zip(columns.items(), values, units, strict=True):
         if quantity == "acceleration" and u is None:  # read in m/s^2 because nothing said otherwise
             _check_plausible_acceleration(path, c, v, np.asarray(lines))
+        elif quantity == "acceleration":  # a declared unit is checked too, after conversion
+            _check_declared_acceleration(path, c, v, np.asarray(lines), u)
     return CsvColumns(values, np.asarray(lines), units)
+
+
+#: A header cell longer than this is shown cut to it in messages [characters].
+_SHOWN_NAME = 40
+#: At most this many header names are listed in a "missing column" message.
+_SHOWN_NAMES = 10
+#: A first line longer than this is not taken for a header of names [characters] (100 columns of 20).
+_HEADER_MAX = 2000
+
+
+def _shown(text: str, *, quote: bool = True) -> str:
+    """A piece of a file for a message: cut to :data:`_SHOWN_NAME` characters, control characters escaped."""
+    cut = text if len(text) <= _SHOWN_NAME else text[:_SHOWN_NAME] + "..."
+    return repr(cut) if quote else "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in cut)
+
+
+def _looks_like_header(first: str, names: list[str], wanted) -> bool:
+    """True if a CSV's first line reads as a header of short column names, so that listing them echoes no
+    content of a file that is not a record: printable, not too long, comma-separated, no ``:`` fields, and
+    naming at least one column of the formats (``time``, ``ground_acc``, ``theta``, ``ground_acc_<what>``)
+    or of the call."""
+    first = first.replace("\ufeff", "")
+    if len(first) > _HEADER_MAX or not first.isprintable() or ":" in first or "," not in first:
+        return False
+    known = {*QUANTITIES, *wanted}
+    return any(n in known or n.startswith(CHANNEL_PREFIX) for n in names)
+
+
+def _missing_column(path: Path, column: str, wanted, names: list[str], first: str) -> DataFileError:
+    """The error of a column the header lacks: the names listed only when the first line looks like a header."""
+    if not _looks_like_header(first, names, wanted):
+        example = ",".join(wanted)
+        return DataFileError(
+            path,
+            f"the first line is not a CSV header with a `{column}` column ({len(first)} characters; a record "
+            f"starts with a header line such as `{example}`)",
+            line=1,
+        )
+    close = difflib.get_close_matches(column, names, n=1)
+    hint = f"; did you mean `{_shown(close[0], quote=False)}`?" if close else ""
+    listed = ", ".join(_shown(n, quote=False) for n in names[:_SHOWN_NAMES])
+    more = f", ... ({len(names)} columns)" if len(names) > _SHOWN_NAMES else ""
+    return DataFileError(path, f"missing column `{column}`{hint} (header has: {listed}{more})", line=1)
 
 
 #: The largest ground or table acceleration read without a declared unit [m/s^2]: 5 g. Recorded
 #: earthquake peaks stay below about 4 g; a column above this bound is almost surely in other units.
 PLAUSIBLE_ACC = 5.0 * G
+
+
+#: The largest acceleration read in a declared unit [m/s^2]: 50 g. Table and ground motions do not exceed a
+#: few g, and unfiltered sensor spikes stay near 6 g (the ASU granite tests' reach 5.9 g, read in m/s^2), so the
+#: 5 g bound of an undeclared unit would refuse real records; a declared column above 50 g is a wrong unit
+#: (``[g]`` written over values in m/s^2 or cm/s^2) or a damaged file, not a motion.
+DECLARED_ACC_CEILING = 50.0 * G
+
+
+def _check_declared_acceleration(
+    path: Path, column: str | None, values: np.ndarray, lines: np.ndarray, unit: str
+) -> None:
+    """Refuse an acceleration read in a declared unit whose peak, converted to m/s^2, exceeds 50 g."""
+    if values.size == 0:
+        return
+    k = int(np.argmax(np.abs(values)))
+    peak = float(abs(values[k]))
+    if peak <= DECLARED_ACC_CEILING:
+        return
+    raise DataFileError(
+        path,
+        f"peak {peak:.4g} m/s^2 = {peak / G:.3g} g, read in the declared unit {unit}, is above "
+        f"{DECLARED_ACC_CEILING / G:g} g, beyond any table or ground motion: the unit is wrong or the file "
+        "is damaged",
+        line=int(lines[k]),
+        column=column,
+    )
 
 
 def _check_plausible_acceleration(path: Path, column: str, values: np.ndarray, lines: np.ndarray) -> None:

@@ -60,8 +60,10 @@ def main(argv: list[str] | None = None) -> int:
         for path in _plugin_args(argv):
             try:
                 load_plugin(path)
-            except ValueError as e:
-                _error(f"--plugin: {e}")
+            except Exception as e:  # a bad plugin is bad input, whatever it raised: exit 2, naming the file
+                if debug:
+                    traceback.print_exc()
+                _error(f"--plugin: {_plugin_message(path, e)}")
                 return EXIT_USAGE
         try:
             parser = build_parser(full_help=any(a in ("-h", "--help") for a in argv))
@@ -94,6 +96,14 @@ def main(argv: list[str] | None = None) -> int:
             message += " (run with --debug or HOUSNER_DEBUG=1 for the traceback)"
         _error(message)
         return status
+
+
+def _plugin_message(path: str, e: Exception) -> str:
+    """The error of a plugin file that cannot be loaded, naming the file (load_plugin's errors already do)."""
+    if isinstance(e, OSError):
+        return f"effect plugin {path!r}: cannot read ({e.strerror or type(e).__name__})"
+    text = one_line(e)
+    return text if isinstance(e, ValueError) else f"effect plugin {path!r}: {type(e).__name__}: {text}"
 
 
 def _classify(e: Exception) -> tuple[int, str]:

@@ -42,7 +42,7 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     # Everything is checked before the first simulation: scenario, engines, arguments, outputs, scheduler.
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario, allow_outside=args.allow_outside)
     engines = args.engines or scenario.engines
     scenario.check_engines(engines)
     _check_ensemble_option(scenario, "--n-motions", args.n_motions)
@@ -260,7 +260,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         _check_output_file(args.json, "--json")
     if args.report is not None:
         _check_output_file(args.report, "--report")
-    campaign = load_campaign(args.campaign)
+    campaign = load_campaign(args.campaign, allow_outside=args.allow_outside)
     for rid, file, msg in campaign.skipped:
         print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
     if not args.quiet:

@@ -139,6 +139,8 @@ def _add_run(sub, names: dict) -> None:
     r.add_argument("--jobs", type=_positive_int, help="worker processes (default: all CPUs; 1 = this process)")
     r.add_argument("--scheduler", help="address of a Dask distributed scheduler to run on (5 s to connect)")
     r.add_argument("--no-cache", action="store_true", help="recompute instead of reusing cached results")
+    r.add_argument("--allow-outside", action="store_true",
+                   help="read record files outside the scenario file's folder (refused by default)")  # fmt: skip
     r.add_argument("--no-report", action="store_true", help="skip the HTML report")
     r.add_argument(
         "--allow-failures",
@@ -196,6 +198,8 @@ def _add_diagnose(sub, names: dict) -> None:
                    help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
     d.add_argument("--seed", type=_nonneg_int, default=0, help="seed of the fold assignment (0)")
     d.add_argument("--max-effects", type=_nonneg_int, default=3, help="most effects the search adds (3)")
+    d.add_argument("--allow-outside", action="store_true",
+                   help="read record files and a mesh that resolve outside the campaign folder")  # fmt: skip
     _plugin_option(d)
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
 

@@ -10,6 +10,7 @@ import hashlib
 import importlib
 import math
 import sys
+import traceback
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
@@ -342,8 +343,10 @@ def load_plugin(path) -> tuple[str, ...]:
     Raises
     ------
     ValueError
-        One line naming the file: it does not exist, is not a ``.py`` file, or registers no effect.
-        An exception raised by the file itself propagates.
+        One line naming the file: it does not exist, is not a ``.py`` file, registers no effect, has a
+        syntax error (with its line), or raises while it is imported (the exception's type, text and the
+        file's line; the exception is the error's ``__cause__``). A bad plugin is bad input, as a bad
+        record is: ``housner`` exits 2 on it.
     """
     p = Path(path).expanduser()
     if not p.is_file():
@@ -362,7 +365,7 @@ def load_plugin(path) -> tuple[str, ...]:
     for n in [n for n, cls in EFFECTS.items() if cls.__module__ in same]:
         del EFFECTS[n]
     try:
-        import_file(modname, p)
+        _import_plugin(modname, p)
         names = tuple(n for n, cls in EFFECTS.items() if cls.__module__ == modname)
         if not names:
             sys.modules.pop(modname, None)
@@ -380,6 +383,23 @@ def load_plugin(path) -> tuple[str, ...]:
         # on it (housner.scenarios.execution.cache.effect_code_hash)
         EFFECTS[n]._housner_code_hash = code_hash
     return names
+
+
+def _import_plugin(modname: str, p: Path) -> None:
+    """Import the plugin file; its syntax error, or an exception it raises, becomes one ValueError naming it."""
+    try:
+        import_file(modname, p)
+    except SyntaxError as e:  # IndentationError too
+        where = f" line {e.lineno}" if e.filename == str(p) and e.lineno else ""
+        elsewhere = f" in {e.filename} line {e.lineno}" if e.filename != str(p) else ""
+        raise ValueError(f"effect plugin {str(p)!r}{where}: syntax error{elsewhere} ({e.msg})") from e
+    except (Exception, SystemExit) as e:  # the file's own code failed; Ctrl-C still propagates
+        lines = [f.lineno for f in traceback.extract_tb(e.__traceback__) if f.filename == str(p)]
+        where = f" line {lines[-1]}" if lines else ""
+        text = " ".join(str(e).split())
+        raise ValueError(
+            f"effect plugin {str(p)!r}{where}: raises {type(e).__name__} when imported" + (f": {text}" if text else "")
+        ) from e
 
 
 def _rebuild_effect(module: str, qualname: str, plugin: str | None, values: dict) -> Effect:

@@ -15,6 +15,10 @@ the measured rotation and the ground motion that drives a model of the same
 test (:class:`housner.GroundMotion`, with the initial angle of a
 free-vibration release).
 
+Paths: a record's ``file`` and ``[specimen] mesh`` are relative to the campaign folder and must resolve
+(symbolic links and ``..`` followed) inside it; a record outside is left out like an unreadable one, a
+mesh outside refuses the campaign, unless ``allow_outside=True`` (``housner diagnose --allow-outside``).
+
 Errors: a malformed ``campaign.toml`` (also a value of the wrong type) raises
 :class:`housner.errors.DataFileError` naming the key (and the line); a malformed record file is reported with its
 file, line and column in :attr:`Campaign.skipped` and left out, the other
@@ -46,6 +50,7 @@ from housner.calibration import estimate_noise
 from housner.errors import DataFileError, unknown_choice
 from housner.impacts import noise_crossings
 from housner.motion import CHANNEL_PREFIX, QUANTITIES, GroundMotion, read_csv_header, read_csv_si, uniform_step
+from housner.readers import require_samples
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):
@@ -333,7 +338,7 @@ def _read_toml(path: Path) -> tuple[dict, str]:
     return data, text
 
 
-def _specimen(path: Path, text: str, data: dict) -> tuple[Specimen, object]:
+def _specimen(path: Path, text: str, data: dict, allow_outside: bool = False) -> tuple[Specimen, object]:
     """The campaign's specimen, and its scan derivation (None unless ``[specimen]`` names a ``mesh``)."""
     spec = data.get("specimen")
     if spec is None:
@@ -346,7 +351,7 @@ def _specimen(path: Path, text: str, data: dict) -> tuple[Specimen, object]:
             line=_key_line(text, "specimen") or _table_line(text, "specimen"),
         )
     if "mesh" in spec:
-        return _mesh_specimen(path, text, spec, str(data.get("name", path.parent.name)))
+        return _mesh_specimen(path, text, spec, str(data.get("name", path.parent.name)), allow_outside)
     for key in spec:
         if key not in _SPECIMEN_KEYS:
             raise _unknown_key(path, text, "[specimen] ", key, {**_SPECIMEN_KEYS, "mesh": ""}, "specimen")
@@ -370,7 +375,7 @@ def _specimen(path: Path, text: str, data: dict) -> tuple[Specimen, object]:
         raise DataFileError(path, f"[specimen]: {e}", line=_table_line(text, "specimen")) from None
 
 
-def _mesh_specimen(path: Path, text: str, spec: dict, name: str) -> tuple[Specimen, object]:
+def _mesh_specimen(path: Path, text: str, spec: dict, name: str, allow_outside: bool) -> tuple[Specimen, object]:
     """``[specimen] mesh = ...``: the equivalent planar block of a scan mesh (:mod:`housner.scan`)."""
     from housner.scan import specimen_from_mesh
 
@@ -384,6 +389,10 @@ def _mesh_specimen(path: Path, text: str, spec: dict, name: str) -> tuple[Specim
                                 line=_key_line(text, key, "specimen"))  # fmt: skip
     mesh = Path(spec["mesh"])
     mesh = mesh if mesh.is_absolute() else path.parent / mesh
+    outside = None if allow_outside else _outside(mesh, path.parent, "the files it names")
+    if outside is not None:
+        raise DataFileError(path, f"[specimen] 'mesh' {spec['mesh']!r} {outside}",
+                            line=_key_line(text, "mesh", "specimen"))  # fmt: skip
     try:
         scan = specimen_from_mesh(
             mesh,
@@ -546,6 +555,18 @@ def estimate_release(t, theta, noise: float) -> tuple[int, float]:
     return best[1], best[2]
 
 
+def _outside(path: Path, folder: Path, what: str = "records") -> str | None:
+    """None if ``path`` resolves (links and ``..`` followed) inside ``folder``; else the end of the message."""
+    inside = folder.resolve()
+    try:
+        if path.resolve().is_relative_to(inside):
+            return None
+    except (OSError, RuntimeError):  # a loop of symbolic links (RuntimeError before Python 3.13)
+        return "cannot be resolved (a loop of symbolic links?)"
+    return (f"resolves outside the campaign folder {inside} ({what} must lie inside it; pass --allow-outside "
+            "to read it anyway, allow_outside=True in Python)")  # fmt: skip
+
+
 def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord | OutcomeRecord:
     path = (root / rec["file"]).resolve() if not Path(rec["file"]).is_absolute() else Path(rec["file"])
     header = read_csv_header(path)
@@ -568,8 +589,7 @@ def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord | 
             line=int(lines[k]),
             column="theta",
         )
-    if theta.size < 16:
-        raise DataFileError(path, f"only {theta.size} samples; a record needs at least 16", line=int(lines[-1]))
+    require_samples(path, theta.size, line=int(lines[-1]))
     noise = estimate_noise(theta)
     overturned = bool(rec.get("overturned", False)) or bool(np.max(np.abs(theta)) >= OVERTURN_ANGLE)
     k_rel = 0
@@ -627,8 +647,7 @@ def _read_outcome_record(path: Path, rec: dict) -> OutcomeRecord:
     table = read_csv_si(path, {"time": "time", "ground_acc": "acceleration"})
     (t, acc), lines = table.values[:2], table.lines
     dt = uniform_step(path, t, lines, "time", assumed_seconds=table.units[0] is None)
-    if acc.size < 16:
-        raise DataFileError(path, f"only {acc.size} samples; a record needs at least 16", line=int(lines[-1]))
+    require_samples(path, acc.size, line=int(lines[-1]))
     motion = GroundMotion(acc=acc, dt=dt, name=rec["id"], provenance=f"{path.name} (campaign outcome record)")
     return OutcomeRecord(
         id=rec["id"],
@@ -642,13 +661,17 @@ def _read_outcome_record(path: Path, rec: dict) -> OutcomeRecord:
     )
 
 
-def load_campaign(path: str | Path) -> Campaign:
+def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
     """Read a measurement campaign.
 
     Parameters
     ----------
     path : path
         The campaign directory (or its ``campaign.toml``).
+    allow_outside : bool
+        Read record files and a mesh that resolve outside the campaign folder (default False: such a
+        record is left out and listed in ``skipped``, such a mesh refuses the campaign, each with one
+        line naming the key, the path and the folder).
 
     Returns
     -------
@@ -686,11 +709,15 @@ def load_campaign(path: str | Path) -> Campaign:
         v = data.get(key, "")
         if not isinstance(v, str):
             raise DataFileError(toml, f"{key!r} must be a string, got {v!r}", line=_key_line(text, key))
-    specimen, scan = _specimen(toml, text, data)
+    specimen, scan = _specimen(toml, text, data, allow_outside)
     entries = _record_entries(toml, text, data)
     records, outcomes, skipped, errors = [], [], [], []
-    for rec in entries:
+    for i, rec in enumerate(entries):
         try:
+            outside = None if allow_outside else _outside(root / rec["file"], root)
+            if outside is not None:
+                raise DataFileError(toml, f"record {rec['id']!r}: file {rec['file']!r} {outside}",
+                                    line=_key_line(text, "file", "record", i))  # fmt: skip
             r = _read_record(root, rec, specimen)
         except DataFileError as e:
             skipped.append((rec["id"], rec["file"], str(e)))

@@ -8,7 +8,10 @@ follows from the file and its seed.
 A record is a shipped one (:data:`housner.scenarios.motions.records.RECORDS`) or a user's
 ``.AT2`` / ``.csv`` file, its path relative to the scenario file's folder;
 record files are read, and refused with a one-line error, when the scenario
-is loaded.
+is loaded. A record path must resolve (symbolic links and ``..`` followed)
+inside the scenario file's folder, unless ``load_scenario(...,
+allow_outside=True)``; a record needs at least 16 samples, as a campaign's does
+(:data:`housner.readers.MIN_RECORD_SAMPLES`).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import numpy as np
 from housner.engines.base import ENGINES, engine_class
 from housner.errors import one_line, unknown_choice
 from housner.motion import GroundMotion
+from housner.readers import require_samples
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):
@@ -93,6 +97,8 @@ class Scenario:
     #: The [study] table (housner.scenarios.studies.Study): stripes and sizes to run and fit fragility curves to;
     #: None: a run.
     study: Any = None
+    #: Read record files that resolve outside the scenario file's folder (load_scenario's opt-out).
+    allow_outside: bool = field(default=False, repr=False)
     #: Record files read from the [motions] table: key -> [(motion, facts)]; None until read.
     _files: dict | None = field(default=None, init=False, repr=False, compare=False)
 
@@ -149,9 +155,28 @@ class Scenario:
             return p
         return (self.path.parent if self.path is not None else Path.cwd()) / p
 
+    def _check_inside(self, key: str, written: str, path: Path) -> None:
+        """Refuse a record path that resolves (links and ``..`` followed) outside the scenario file's folder."""
+        if self.allow_outside:
+            return
+        folder = (self.path.parent if self.path is not None else Path.cwd()).resolve()
+        try:
+            if path.resolve().is_relative_to(folder):
+                return
+            why = f"resolves outside the scenario folder {folder}"
+        except (OSError, RuntimeError):  # a loop of symbolic links (RuntimeError before Python 3.13)
+            why = "cannot be resolved (a loop of symbolic links?)"
+        raise self.error(
+            key,
+            f"[motions] {key!r} names {written!r}: it {why} (records must lie inside it: keep the scenario file "
+            "in a folder above its records, pass --allow-outside to housner run, or "
+            "load_scenario(..., allow_outside=True) in Python)",
+        )
+
     def _read_file(self, key: str, written: str) -> tuple[GroundMotion, dict]:
         """One record file, and its facts for the metadata; any failure is one ScenarioError naming key and path."""
         path = self._record_path(written)
+        self._check_inside(key, written, path)
         what = f"[motions] {key!r} names {written!r}"
         if path.suffix.lower() in RECORD_SUFFIXES and not path.exists():
             hint = f"; shipped records: {', '.join(RECORDS)}" if key == "record" else ""
@@ -164,6 +189,7 @@ class Scenario:
             )
         try:
             motion = read_record_file(path, units=self.motions.get("units"))
+            require_samples(path, motion.n)  # the rule of every reader of records (campaigns too)
             sha = file_sha256(path)
         except (OSError, ValueError) as e:
             raise self.error(key, f"{what}: {one_line(e)}") from None
@@ -185,6 +211,7 @@ class Scenario:
         spec = self.motions["records"]
         if isinstance(spec, str):
             folder = self._record_path(spec)
+            self._check_inside("records", spec, folder)
             what = f"[motions] 'records' names folder {spec!r}"
             if not folder.exists():
                 raise self.error(
@@ -381,8 +408,16 @@ def _resolve(name_or_path: str | Path) -> Path:
     return SCENARIOS[text]
 
 
-def load_scenario(name_or_path: str | Path) -> Scenario:
+def load_scenario(name_or_path: str | Path, *, allow_outside: bool = False) -> Scenario:
     """Load and validate a scenario by catalogue name or by path to a TOML file.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A catalogue name (:data:`SCENARIOS`) or a TOML file.
+    allow_outside : bool
+        Read record files that resolve outside the scenario file's folder (default False: refused
+        with one line naming the key, the path and the folder).
 
     Raises
     ------
@@ -431,6 +466,7 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         raw=raw,
         raw_text=text,
         effects=effects,
+        allow_outside=allow_outside,
     )
     if "study" in raw:
         scen.study = read_study(f, raw["study"], mot, specimen, scen.S)

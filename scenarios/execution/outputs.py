@@ -5,11 +5,18 @@ must be refused before it starts, with one line that names the path and the
 option it came from. Both checks create what they need (the directory, its
 parents) and write then delete a probe file, so "writable" is tested, not
 guessed from permission bits.
+
+A run or study directory's files are replaced only when they are a previous
+run's: a user's own ``results.parquet`` or ``report.html`` in ``--out`` is not
+overwritten without a word. A previous run is known by its manifest
+(``run.json`` or ``study.json``, a JSON object with the scenario and housner's
+provenance, as :func:`housner.scenarios.execution.rundir.provenance` writes it).
 """
 
 from __future__ import annotations
 
 import errno
+import json
 import os
 import uuid
 from collections.abc import Iterable
@@ -50,6 +57,41 @@ def _reason(e: OSError) -> str:
     return e.strerror or type(e).__name__
 
 
+#: The manifests of a run and a study directory: a caller that writes one writes a run (or study) directory.
+MANIFESTS = ("run.json", "study.json")
+#: A manifest larger than this is not read to recognise it [bytes] (a run.json is a few hundred kB at most).
+_MANIFEST_MAX = 64 * 2**20
+
+
+def _is_housner_manifest(path: Path) -> bool:
+    """True if ``path`` is a run.json / study.json housner wrote: a JSON object with the scenario and
+    housner's version in its provenance."""
+    try:
+        if not path.is_file() or path.stat().st_size > _MANIFEST_MAX:
+            return False
+        data = json.loads(path.read_bytes())
+    except (OSError, ValueError):
+        return False
+    prov = data.get("provenance") if isinstance(data, dict) else None
+    versions = prov.get("versions") if isinstance(prov, dict) else None
+    return "scenario" in data and isinstance(versions, dict) and "housner" in versions
+
+
+def _refuse_foreign(path: Path, what: str, files: list[str]) -> None:
+    """Refuse to write a run or study directory over files of its names that no housner run wrote there."""
+    if not any(name in MANIFESTS for name in files):
+        return
+    present = [name for name in files if (path / name).is_file()]
+    if not present or any(_is_housner_manifest(path / m) for m in MANIFESTS):
+        return
+    raise OutputPathError(
+        what,
+        path,
+        f"{present[0]!r} inside it is not from a housner run (no run.json or study.json of one beside it) and "
+        f"would be overwritten; give another {what} or remove the file",
+    )
+
+
 def _probe(directory: Path, what: str, shown: Path) -> None:
     """Create and delete a probe file in ``directory`` (raises OutputPathError)."""
     probe = directory / f".housner-write-probe-{os.getpid()}-{uuid.uuid4().hex[:8]}"
@@ -86,7 +128,10 @@ def check_output_dir(path: str | Path, what: str = "output directory", files: It
     what : str
         The option or role named in the error (``--out``).
     files : iterable of str
-        Names of files the caller will write in the directory: none may be a directory.
+        Names of files the caller will write in the directory: none may be a directory. When they
+        include a manifest (:data:`MANIFESTS`: a run or a study directory), those that exist must be a
+        previous housner run's: a directory without a housner run.json / study.json whose files of
+        these names exist is refused, so that a user's own files are not overwritten.
 
     Returns
     -------
@@ -96,11 +141,14 @@ def check_output_dir(path: str | Path, what: str = "output directory", files: It
     Raises
     ------
     OutputPathError
-        The path is a file, lies under a file, cannot be created or is not writable.
+        The path is a file, lies under a file, cannot be created or is not writable, or holds a
+        file of a run's name that no housner run wrote.
     """
     path = Path(path)
+    files = list(files)
     _make_dir(path, what, path)
     _probe(path, what, path)
+    _refuse_foreign(path, what, files)
     for name in files:
         target = path / name
         if target.is_dir():
