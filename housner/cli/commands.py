@@ -25,7 +25,7 @@ from housner.reports.study.page import write_study_report
 from housner.scenarios.catalogue.scenario import SCENARIOS, list_scenarios, load_scenario
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import RUN_FILES
+from housner.scenarios.execution.rundir import RUN_FILES, IncompleteRunError
 from housner.scenarios.execution.workers import connect_scheduler
 from housner.scenarios.runs.run import run_scenario
 from housner.scenarios.studies.study import STUDY_FILES, run_study
@@ -189,6 +189,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
         check_output_dir(run_dir, "run directory", files=("report.html",))
     try:
         path = write(run_dir, out)
+    except IncompleteRunError:  # its own line names the directory and what does not match
+        raise
     except (OSError, ValueError) as e:  # a damaged run directory: name it, no traceback
         detail = " ".join(str(e).split()) or type(e).__name__
         raise UsageError(f"run directory {run_dir}: cannot build the report ({type(e).__name__}: {detail})") from e

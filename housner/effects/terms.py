@@ -65,6 +65,15 @@ records x 4000 samples with one moment term, the chosen one on the whole kernel 
   friction and a vertical input cost 1.05-1.14x, 1.19-1.27x and 1.12-1.13x plain Housner (their
   physics differ: other impacts, fewer overturns).
 
+The cache heals itself. Every generated file is written atomically (a temporary file, then
+``os.replace``) and checked on load against its key: its content must be the text generated for
+the structure whose hash names it. A truncated or garbled file is removed and written again, and
+numba's cache files of a kernel (its ``.nbi`` index and ``.nbc`` data, read with ``pickle``) are
+read before numba reads them: one that does not load is removed, with the rest of that
+function's cache, and numba compiles again. A kernel whose cached machine code still fails to load
+at its first call is run again once without its cache files. Each repair is counted
+(:func:`kernel_cache_repairs`) and logged to ``housner.effects.terms``.
+
 A term's function must be importable by its module and qualified name (a module-level
 ``@njit`` function of an installed module or of a plugin loaded with
 :func:`housner.effects.load_plugin`), and should be written ``@njit(cache=True)``. Only the term
@@ -78,8 +87,10 @@ import hashlib
 import importlib
 import importlib.util
 import inspect
+import logging
 import math
 import os
+import pickle
 import sys
 import tempfile
 import threading
@@ -91,7 +102,17 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CoulombTerm", "ImpactTerm", "MomentTerm", "TermSet", "kernel_dir", "kernel_module"]
+__all__ = [
+    "CoulombTerm",
+    "ImpactTerm",
+    "MomentTerm",
+    "TermSet",
+    "kernel_cache_repairs",
+    "kernel_dir",
+    "kernel_module",
+]
+
+_LOG = logging.getLogger(__name__)
 
 #: The plain kernel's modules: the steps (with the hooks), the record loop (importing the steps), the parts.
 _CORE = Path(__file__).resolve().parent.parent
@@ -243,9 +264,11 @@ class TermSet:
         """Every term's parameters in one float64 array, in kernel order."""
         return np.array([x for t in self.terms for x in t.q], dtype=np.float64)
 
-    def kernel(self) -> ModuleType:
-        """The compiled kernel module of this structure (generated, imported and cached once)."""
-        return kernel_module(self.structure)
+    def kernel(self) -> Any:
+        """The compiled kernel of this structure (generated, imported and cached once): its module, whose
+        entry points (``run_one``, ``run_batch``, ``run_batch_parallel``) run again once without numba's
+        cache files when loading those raises."""
+        return _HealingKernel(kernel_module(self.structure))
 
     def describe(self) -> list[dict]:
         """Plain data for ``Response.info``: each term's kind, function and parameters."""
@@ -386,7 +409,7 @@ def import_file(name: str, path: Path) -> ModuleType:
 
 def kernel_module(structure: tuple) -> ModuleType:
     """The compiled kernel for ``structure`` (its record loop's module): written to :func:`kernel_dir` once,
-    imported once per process."""
+    imported once per process; a damaged file or numba cache file of it is removed and rebuilt first."""
     with _LOCK:
         mod = _MODULES.get(structure)
         if mod is not None:
@@ -399,17 +422,168 @@ def kernel_module(structure: tuple) -> ModuleType:
         name = f"housner_terms_{h.hexdigest()[:24]}"
         d = kernel_dir()
         steps, run = generated_source(structure, f"{name}_steps")
-        for stem, src in ((f"{name}_steps", steps), (name, run)):
-            if not (d / f"{stem}.py").exists():
-                # write once, atomically: rewriting an existing file would change its stamp and void numba's cache
-                fd, tmp = tempfile.mkstemp(dir=d, suffix=".tmp")
-                with os.fdopen(fd, "w") as f:
-                    f.write(src)
-                os.replace(tmp, d / f"{stem}.py")
-        import_file(f"{name}_steps", d / f"{name}_steps.py")  # first: the loop's module imports it by this name
+        rebuilt = [stem for stem, src in ((f"{name}_steps", steps), (name, run)) if _ensure_file(d / f"{stem}.py", src)]
+        steps_mod = import_file(f"{name}_steps", d / f"{name}_steps.py")  # first: the loop's module imports it by name
         mod = import_file(name, d / f"{name}.py")
+        for m in (steps_mod, mod):
+            _check_numba_cache(m, drop=m.__name__ in rebuilt)
         _MODULES[structure] = mod
         return mod
+
+
+# ----------------------------------------------------------------------
+# the cache's repairs
+_REPAIRS = {"kernel_files": 0, "numba_caches": 0, "numba_retries": 0}
+
+
+def kernel_cache_repairs() -> dict[str, int]:
+    """The damaged kernel-cache entries this process found, removed and rebuilt.
+
+    Returns
+    -------
+    dict
+        ``kernel_files``: generated kernel files whose content did not match their key (truncated,
+        garbled); ``numba_caches``: functions whose numba cache files (index or data) did not load;
+        ``numba_retries``: kernel calls run again without the cache files after numba failed to load
+        them. All zero in a healthy cache.
+    """
+    return dict(_REPAIRS)
+
+
+def _ensure_file(path: Path, src: str) -> bool:
+    """Write ``src`` to ``path`` unless it already holds exactly that; True when a damaged file was replaced.
+
+    The name hashes everything the text is made from, so the text itself is the file's content key.
+    A file that holds it is left alone (rewriting would change its stamp and void numba's cache); one
+    that does not is damaged and written again, atomically, as is a missing one.
+    """
+    want = src.encode()
+    try:
+        have = path.read_bytes()
+    except FileNotFoundError:
+        have = None
+    if have == want:
+        return False
+    # write once, atomically (a temporary file in the same folder, then os.replace): a process killed
+    # mid-write leaves a stray temporary file, never a half-written kernel
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(want)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    if have is None:
+        return False
+    _REPAIRS["kernel_files"] += 1
+    _LOG.warning("kernel cache: %s did not match its key (%d bytes, %d expected); rebuilt", path, len(have), len(want))
+    return True
+
+
+def _cache_dir(mod: ModuleType) -> Path | None:
+    """Where numba keeps the cache of ``mod``'s functions (None when it holds no cached function)."""
+    for obj in vars(mod).values():
+        cache = getattr(obj, "_cache", None)
+        py = getattr(obj, "py_func", None)
+        if py is not None and py.__module__ == mod.__name__ and getattr(cache, "cache_path", None):
+            return Path(cache.cache_path)
+    return None
+
+
+def _numba_files(mod: ModuleType) -> list[Path]:
+    """numba's cache files (``<file stem>.<function>-<line>.pyXY[.n].nbi/.nbc``) of ``mod``'s functions."""
+    d = _cache_dir(mod)
+    if d is None or not d.is_dir():
+        return []
+    stem = Path(mod.__file__).stem
+    return [p for p in d.glob(f"{stem}.*") if p.suffix in (".nbi", ".nbc")]
+
+
+def _unloadable(index: Path) -> tuple[Path, Exception] | None:
+    """The file of numba's cache index ``index`` (it, or a data file it lists) that would not load as numba
+    reads it, with the error; None when all load."""
+    import numba
+
+    path = index
+    try:
+        with open(index, "rb") as f:
+            version = pickle.load(f)
+            rest = f.read()
+        if version != numba.__version__:
+            return None  # numba skips an index of another version without reading the rest
+        _stamp, overloads = pickle.loads(rest)
+        for data_name in dict(overloads).values():
+            path = index.parent / data_name
+            if path.exists():
+                pickle.loads(path.read_bytes())
+    except FileNotFoundError:
+        return None  # removed meanwhile by another process
+    except Exception as e:  # anything pickle raises on garbage: UnpicklingError, EOFError, MemoryError, ...
+        return path, e
+    return None
+
+
+def _check_numba_cache(mod: ModuleType, drop: bool = False) -> None:
+    """Remove the numba cache files of ``mod``'s functions that would not load (all of them if ``drop``)."""
+    files = _numba_files(mod)
+    if drop:
+        for p in files:
+            p.unlink(missing_ok=True)
+        return
+    for index in (p for p in files if p.suffix == ".nbi"):
+        bad = _unloadable(index)
+        if bad is None:
+            continue
+        base = index.name[: -len(".nbi")]
+        for p in [index, *index.parent.glob(f"{base}.*.nbc")]:
+            p.unlink(missing_ok=True)
+        _REPAIRS["numba_caches"] += 1
+        _LOG.warning("kernel cache: numba's %s does not load (%s: %s); its cache removed, recompiling",
+                     bad[0], type(bad[1]).__name__, bad[1])  # fmt: skip
+
+
+def _raised_by_numba_cache(e: BaseException) -> bool:
+    """Whether ``e`` was raised while numba loaded a cached function (its traceback passes numba's caching)."""
+    tb = e.__traceback__
+    while tb is not None:
+        if tb.tb_frame.f_code.co_filename.replace(os.sep, "/").endswith("numba/core/caching.py"):
+            return True
+        tb = tb.tb_next
+    return False
+
+
+class _HealingKernel:
+    """A generated kernel module whose entry points run again once without numba's cache files when
+    numba fails to load those (damaged after :func:`kernel_module` checked them); every other name is
+    the module's."""
+
+    _ENTRIES = ("run_one", "run_batch", "run_batch_parallel")
+
+    def __init__(self, mod: ModuleType):
+        self._mod = mod
+
+    def __getattr__(self, name: str) -> Any:
+        fn = getattr(self._mod, name)
+        if name not in self._ENTRIES:
+            return fn
+        mod = self._mod
+
+        def call(*args, **kwargs):
+            try:
+                return fn(*args, **kwargs)
+            except Exception as e:
+                if not _raised_by_numba_cache(e):
+                    raise
+                _REPAIRS["numba_retries"] += 1
+                _LOG.warning("kernel cache: numba failed to load %s.%s (%s: %s); its cache removed, recompiling",
+                             mod.__name__, name, type(e).__name__, e)  # fmt: skip
+                for m in {mod, sys.modules.get(f"{mod.__name__}_steps")} - {None}:
+                    _check_numba_cache(m, drop=True)
+                return fn(*args, **kwargs)
+
+        call.__name__ = call.__qualname__ = name
+        return call
 
 
 def term_set(terms: Sequence, vertical: bool = False) -> TermSet | None:

@@ -52,6 +52,15 @@ effect library (:data:`housner.effects.EFFECTS`) and the analytic engine:
 Effects may also be added by hand (``add``): they enter first, in the order
 given, fitted the same way, and the ladder shows what each one did.
 
+No verdict is made of non-finite numbers. A candidate whose model gives a
+non-finite theta history on any record is rejected, with the record, in its
+round (before any score); an effect added by hand that does so stops the
+diagnosis with :class:`NonFiniteHistory` naming it and the first record; a
+score or a floor that is not finite all the same stops it with
+:class:`NonFiniteScore` (both ``ValueError``: the command line's exit status 2,
+bad input, as the model handed in is at fault and the same command can only
+fail again).
+
 The cross-validation (folds, scorers, out-of-fold errors) is
 :mod:`housner.scenarios.campaigns.crossval`'s, a candidate's trial (fit,
 screen, fold refits, judgement, pairs) :mod:`housner.scenarios.campaigns.trial`'s
@@ -96,7 +105,15 @@ from housner.scenarios.campaigns.pointers import order_drift
 from housner.scenarios.campaigns.probes import PROBES
 from housner.scenarios.campaigns.residual import RATIO_MISFIT, Z_MISFIT, residual_test
 from housner.scenarios.campaigns.results import Candidate, Diagnosis, Step
-from housner.scenarios.campaigns.scoring import DEFAULT_FOLDS, check_train_fraction, cv_folds, split_records
+from housner.scenarios.campaigns.scoring import (
+    DEFAULT_FOLDS,
+    NonFiniteHistory,
+    NonFiniteScore,
+    check_finite,
+    check_train_fraction,
+    cv_folds,
+    split_records,
+)
 from housner.scenarios.campaigns.trial import (
     NOISE_MARGIN,
     PRACTICAL,
@@ -117,6 +134,8 @@ __all__ = [
     "PRACTICAL",
     "Candidate",
     "Diagnosis",
+    "NonFiniteHistory",
+    "NonFiniteScore",
     "Step",
     "cv_folds",
     "diagnose",
@@ -156,10 +175,25 @@ class _Search(Trials):
 
     # -- the ladder
     def add_by_hand(self, name: str) -> None:
-        """Add effect ``name`` whatever its significance (``add`` of :func:`diagnose`)."""
+        """Add effect ``name`` whatever its significance (``add`` of :func:`diagnose`).
+
+        Raises :class:`NonFiniteHistory` naming ``name`` and the first record when the model with it
+        gives a non-finite theta history (anywhere in its fit).
+        """
         reason = _compatible(self.campaign, build_model(self.cur.full), name)
         if reason:
             raise ValueError(f"cannot add {name!r} to {[n for n, _ in self.cur.full] or 'the plain model'}: {reason}")
+        try:
+            self._add_by_hand(name)
+        except NonFiniteHistory as e:
+            on = f" on top of {', '.join(n for n, _p in self.cur.full)}" if self.cur.full else ""
+            raise NonFiniteHistory(
+                f"effect {name!r}, added by hand{on}, gives a non-finite theta history on record {e.record!r}: "
+                "the model is refused before any score",
+                e.effects, e.record,
+            ) from e  # fmt: skip
+
+    def _add_by_hand(self, name: str) -> None:
         params, _tr, _n = fit_effect(name, effect_objective(self.allsc, build_model(self.cur.full), []), self.spec,
                                      pinned=self.pinned)  # fmt: skip
         cv_new = self.add_cv(self.cur, name, params)
@@ -264,6 +298,11 @@ class _Search(Trials):
         self.family = family
         floor_base = floor_fin if not self.cur.full else measure_floor(
             self.allsc, [], self.base.folds, self.fold_of, n_replicas=n_rep, seed=seed_int, family=family)  # fmt: skip
+        for what, v in (("the plain model's held-out error", self.base_held),
+                        ("the final model's held-out error", self.cur_held),
+                        ("the plain model's correct-model floor", floor_base.mean),
+                        ("the final model's correct-model floor", floor_fin.mean)):  # fmt: skip
+            check_finite(what, v, self.ids)
         self.say(f"floor: correct integrators of the family {family!r}")
         probes = self.probe()
         mf = measured_features(self.campaign)

@@ -6,6 +6,10 @@ perturbs fitted parameters within the same bounds). The objective is any
 function of an effect instance, in practice the training loss of
 :class:`housner.scenarios.campaigns.scoring.Scorer` [alpha]; parameters are searched in log
 space where their bounds span more than a factor 20.
+
+A parameter value the effect refuses (a ``ValueError``) is a point the search avoids; a model whose
+histories are not finite (:class:`housner.scenarios.campaigns.scoring.NonFiniteScore`) is not: it
+stops the fit, and the caller refuses the effect by name.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import numpy as np
 from scipy import optimize
 
 from housner.effects import effect_class, make_effect
+from housner.scenarios.campaigns.scoring import NonFiniteScore
 
 __all__ = [
     "FIT_BOUNDS",
@@ -155,6 +160,8 @@ def fit_effect(
         if key not in cache:
             try:
                 cache[key] = float(objective(make_effect(name, **params)))
+            except NonFiniteScore:
+                raise  # a non-finite model is refused, not avoided
             except ValueError:
                 cache[key] = math.inf  # a combination the effect refuses (e.g. an impossible inertia)
         return cache[key]
@@ -263,6 +270,8 @@ def joint_refit(
     def f(u) -> float:
         try:
             return scorer.loss(build_model(build(u)))
+        except NonFiniteScore:
+            raise
         except ValueError:
             return math.inf
 

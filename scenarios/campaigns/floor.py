@@ -30,6 +30,11 @@ measured here from the campaign itself, by a parametric bootstrap
 
 The real held-out errors are tested against it by
 :func:`housner.scenarios.campaigns.residual.residual_test`.
+
+A replica whose truth or scoring model gives a non-finite theta history stops the measurement
+(:class:`housner.scenarios.campaigns.scoring.NonFiniteHistory`, naming the model and the record),
+and so does a floor that comes out non-finite (:class:`~housner.scenarios.campaigns.scoring.NonFiniteScore`):
+a floor made of clipped errors would pass for a measured one.
 """
 
 from __future__ import annotations
@@ -51,6 +56,7 @@ from housner.scenarios.campaigns.compare import (
 )
 from housner.scenarios.campaigns.fitting import param_dims
 from housner.scenarios.campaigns.model_form import ModelForm, acc_channel_noise
+from housner.scenarios.campaigns.scoring import NonFiniteHistory, check_finite, model_text, non_finite
 
 __all__ = ["N_REPLICAS", "Floor", "measure_floor"]
 
@@ -173,6 +179,13 @@ def measure_floor(
                 model_sens[i] = g
         for i, rec in enumerate(recs):
             tr, mo = truth[i], model[i]
+            for what, res, eff in (("truth", tr, truth_eff), ("scoring model", mo, eff_of.get(int(fold_of[i]), []))):
+                if non_finite(res):
+                    raise NonFiniteHistory(
+                        f"the correct-model floor: replica {b + 1}'s {what}, {model_text(eff)}, gives a non-finite "
+                        f"theta history on record {rec.id!r}",
+                        [getattr(e, "name", str(e)) for e in eff], rec.id,
+                    )  # fmt: skip
             if isinstance(tr, str) or isinstance(mo, str) or mo is None:
                 errs[b, i] = 1.0
                 continue
@@ -187,6 +200,7 @@ def measure_floor(
             errs[b, i] = record_error(th_mod, meas, scorer.ends[i], alpha, align=release_shift_samples(rec),
                                       sensitivity=None if g is None else g[: rec.theta.size],
                                       max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise)  # fmt: skip
+    check_finite("the correct-model floor", errs.mean(axis=0), [r.id for r in recs])
     pert = {k: v for k, v in sd.items() if v > 0}
     pert["substeps"] = model_settings["substeps"]
     pert["model_form"] = {"family": family, "replicas": [f.describe() for f in forms], "acc_noise": acc_noise}

@@ -5,6 +5,12 @@ cross-validation), :func:`split_records` makes the older single split, and
 :class:`Scorer` runs the analytic engine on a fixed set of records (each cut
 to its error window) and scores a list of effects by the time-history error
 of :mod:`housner.scenarios.campaigns.history_error` [alpha].
+
+No score is made of a non-finite number: a model whose theta history is not finite on a record
+is refused by name, with the record, before any score (:class:`NonFiniteHistory`), and a score
+that comes out non-finite all the same stops with :class:`NonFiniteScore` (:func:`check_finite`).
+Both are ``ValueError``: the model or the records handed in are at fault, and the same
+command can only fail again.
 """
 
 from __future__ import annotations
@@ -20,11 +26,69 @@ from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
 from housner.scenarios.campaigns.compare import release_sensitivities, simulate_records
 from housner.scenarios.campaigns.history_error import ERROR_CLIP, error_window, scored_error
 
-__all__ = ["DEFAULT_FOLDS", "Scorer", "check_train_fraction", "cv_folds", "split_records"]
+__all__ = [
+    "DEFAULT_FOLDS",
+    "NonFiniteHistory",
+    "NonFiniteScore",
+    "Scorer",
+    "check_finite",
+    "check_train_fraction",
+    "cv_folds",
+    "model_text",
+    "non_finite",
+    "split_records",
+]
 
 #: Cross-validation folds [-]: every record is held out once, so the answer rests on all of them
 #: and depends far less on the assignment than one random split does.
 DEFAULT_FOLDS = 5
+#: What :func:`housner.engines.base.check_response` says of a response that is not finite (its message
+#: reaches the scorer as text, through :func:`housner.scenarios.campaigns.compare.simulate_records`).
+_NON_FINITE_MARKS = ("non-finite", "no theta_max")
+
+
+class NonFiniteScore(ValueError):
+    """A score, an error or a floor of the diagnosis is not finite (NaN or infinite); the message says which."""
+
+
+class NonFiniteHistory(NonFiniteScore):
+    """A model's theta history is not finite on a record: the model is refused before any score.
+
+    Attributes
+    ----------
+    effects : tuple of str
+        The names of the model's effects (empty: the plain Housner model).
+    record : str
+        The first record (in campaign order) on which the history is not finite.
+    """
+
+    def __init__(self, message: str, effects: Sequence[str] = (), record: str = ""):
+        super().__init__(message)
+        self.effects = tuple(effects)
+        self.record = record
+
+
+def model_text(effects: Sequence[Any]) -> str:
+    """A model in words: "the plain Housner model" or "the model with restitution(r=0.9) + ..."."""
+    if not effects:
+        return "the plain Housner model"
+    parts = []
+    for e in effects:
+        d = e.describe() if hasattr(e, "describe") else {"name": str(e)}
+        args = ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in d.items() if k != "name")
+        parts.append(f"{d['name']}({args})")
+    return "the model with " + " + ".join(parts)
+
+
+def check_finite(what: str, values, ids: Sequence[str] | None = None) -> None:
+    """NonFiniteScore naming ``what`` (and the first record of ``ids`` concerned) unless every value is finite."""
+    v = np.asarray(values, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        where = f" on record {ids[int(bad[0])]!r}" if ids is not None and bad[0] < len(ids) else ""
+        raise NonFiniteScore(
+            f"{what} is not finite ({v.flat[int(bad[0])]}){where}; the diagnosis stops rather than judge on it"
+        )
 
 
 def check_train_fraction(train_fraction) -> float:
@@ -140,17 +204,44 @@ class Scorer:
         return 0.5 * float(e[fv].mean()) + 0.5 * float(e[~fv].mean())
 
     def errors(self, effects: Sequence[Any]) -> np.ndarray:
-        """Error per record [alpha]; a record the model fails on scores the clip value (1)."""
+        """Error per record [alpha]; a record the model fails on scores the clip value (1).
+
+        Raises
+        ------
+        NonFiniteHistory
+            The model's theta history is not finite on a record (the first is named): no score is
+            made of it (a clipped error would pass for a poor fit, and one per record for a floor).
+        NonFiniteScore
+            An error came out non-finite all the same.
+        """
         self.n_evaluations += 1
         alpha = self.campaign.specimen.alpha
         spec = self.campaign.specimen
         res = simulate_records(spec, self.records, "housner", effects, self.engine_settings)
+        for rec, r in zip(self.records, res, strict=True):
+            if non_finite(r):
+                names = [getattr(e, "name", str(e)) for e in effects]
+                raise NonFiniteHistory(
+                    f"{model_text(effects)} gives a non-finite theta history on record {rec.id!r}: "
+                    "it is refused before any score",
+                    names, rec.id,
+                )  # fmt: skip
         sens = (release_sensitivities(spec, self.records, res, "housner", effects, self.engine_settings)
                 if self.release_angle else [None] * len(res))  # fmt: skip
         out = np.empty(len(self.records))
         for k, (rec, r, end) in enumerate(zip(self.records, res, self.ends, strict=True)):
             out[k] = ERROR_CLIP if isinstance(r, str) else scored_error(r.theta, rec, end, alpha, sens[k])
+        check_finite(f"the time-history error of {model_text(effects)}", out, [r.id for r in self.records])
         return out
+
+
+def non_finite(result: Any) -> bool:
+    """Whether one result of :func:`simulate_records` (a response, a theta history [rad] or a failure's
+    message) is a non-finite history."""
+    if isinstance(result, str):
+        return any(m in result for m in _NON_FINITE_MARKS)
+    theta = result if isinstance(result, np.ndarray) else getattr(result, "theta", None)
+    return theta is not None and not bool(np.all(np.isfinite(np.asarray(theta, dtype=float))))
 
 
 #: Samples simulated beyond the end of the error window [s] (the library's largest time lag is 0.1 s).

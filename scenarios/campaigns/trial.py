@@ -7,8 +7,10 @@ records it was fitted to, its fall per record passes the screen (:data:`SCREEN_L
 is refitted in every fold and judged on its out-of-fold errors against the current model's
 (:func:`_judge`: a one-sided Wilcoxon signed-rank test and the practical margin); an effect that
 brings its own kernel must also beat that kernel with its physics faded out. When no single effect
-helps, pairs are fitted together (:meth:`Trials.try_pairs`). The greedy search that uses them is
-:mod:`housner.scenarios.campaigns.diagnose`'s.
+helps, pairs are fitted together (:meth:`Trials.try_pairs`). A candidate (or pair) whose model
+gives a non-finite theta history anywhere in its fit is rejected, with the record named in its
+reason (:class:`housner.scenarios.campaigns.scoring.NonFiniteHistory`). The greedy search that
+uses them is :mod:`housner.scenarios.campaigns.diagnose`'s.
 """
 
 from __future__ import annotations
@@ -25,8 +27,9 @@ from housner.scenarios.campaigns.crossval import FOLD_ITERATIONS, CrossValidatio
 from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit, param_dims
 from housner.scenarios.campaigns.fv_check import FreeVibrationCheck
 from housner.scenarios.campaigns.results import Candidate
+from housner.scenarios.campaigns.scoring import NonFiniteHistory
 
-__all__ = ["NOISE_MARGIN", "PRACTICAL", "SCREEN_LEVEL", "Trials"]
+__all__ = ["NOISE_MARGIN", "PRACTICAL", "SCREEN_LEVEL", "Trials", "rejected_text"]
 
 #: An improvement must be at least this fraction of the sensor noise sigma/alpha per record [-]: the
 #: smallest fall taken for physics rather than for the model's own conventions. Measured on a plain
@@ -117,6 +120,11 @@ def held_text(c: Candidate, held_out: bool = True) -> str:
            f"{'*' if c.significant else ' '}"  # fmt: skip
 
 
+def rejected_text(e: NonFiniteHistory) -> str:
+    """A rejected candidate's reason: its history is not finite on a record."""
+    return f"rejected: its theta history is not finite on record {e.record!r} (no score is made of NaN)"
+
+
 class Trials(CrossValidation):
     """Candidates tried on top of the current model of a campaign's cross-validation.
 
@@ -158,7 +166,16 @@ class Trials(CrossValidation):
                          wins)  # fmt: skip
 
     def try_candidate(self, name: str, rnd: int, test_level: float) -> tuple[Candidate, CVModel | None]:
-        """Fit ``name`` on top of the current model and, when it may pass, in every fold."""
+        """Fit ``name`` on top of the current model and, when it may pass, in every fold.
+
+        A candidate whose model gives a non-finite history on a record is rejected (not held out).
+        """
+        try:
+            return self._try_candidate(name, rnd, test_level)
+        except NonFiniteHistory as e:
+            return self.candidate(name, {}, rnd, math.nan, test_level, reason=rejected_text(e)), None
+
+    def _try_candidate(self, name: str, rnd: int, test_level: float) -> tuple[Candidate, CVModel | None]:
         fixed = build_model(self.cur.full)
         if effect_class(name).changes_mechanics:
             start, rejected = self._mechanics_start(name, fixed, rnd, test_level)
@@ -286,7 +303,12 @@ class Trials(CrossValidation):
             a, b = helped[i], helped[j]
             if _compatible(self.campaign, [*fixed, make_effect(a.effect, **a.params)], b.effect):
                 continue
-            out.append(self._pair(a, b, fixed, test_level))
+            try:
+                out.append(self._pair(a, b, fixed, test_level))
+            except NonFiniteHistory as e:
+                name, why = f"{a.effect} + {b.effect}", rejected_text(e)
+                self.say(f"round {a.round}: {name:32s} {why} (pair)")
+                out.append((self.candidate(name, {}, a.round, math.nan, test_level, reason=why), None, math.nan))
         return out
 
     def _pair(self, a: Candidate, b: Candidate, fixed: list, test_level: float):

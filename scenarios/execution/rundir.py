@@ -14,17 +14,35 @@ and :mod:`housner.reports.assertions.runs`):
 - ``motions.npz``: the ensemble's accelerations [m/s^2] and steps [s];
 - ``run.json``: scenario, specimen, engine settings and versions, seed,
   metadata, failures, wall times, provenance; non-finite floats are written
-  as the strings "inf", "-inf", "nan" (:func:`jsonable`).
+  as the strings "inf", "-inf", "nan" (:func:`jsonable`). It is the run's
+  manifest: ``"complete": true`` and ``"content"``, the size [bytes] and SHA-256
+  of each of the other files (:data:`DATA_FILES`) it was written with.
+
+A run counts only once it is written completely. :func:`write_run` writes
+every file into a temporary folder inside the run directory, marks the
+directory incomplete (a run.json with ``"complete": false`` replaces the
+previous run's), moves the files into place and moves run.json last. A run
+killed on the way leaves a directory that :func:`load_results` refuses with
+one line (:class:`IncompleteRunError`), as it refuses one whose files are not
+those run.json was written with (two runs mixed). A run.json without the
+marker, written by a version before it, is read as it is, with an
+:class:`UnverifiedRunWarning` (refusing would make every earlier run
+unreadable); a results table without any run.json beside it is a table, read
+as before.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
 import platform
+import shutil
 import subprocess
+import tempfile
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +72,30 @@ RESULT_COLUMNS = [
 #: Files a run writes into its directory (``report.html`` is written by the CLI after it).
 RUN_FILES = ("results.parquet", "histories.parquet", "motions.npz", "run.json", "report.html")
 RESULTS_FILE, HISTORIES_FILE, MOTIONS_FILE, RUN_FILE, REPORT_FILE = RUN_FILES
+#: The files run.json's content key covers (those written before it).
+DATA_FILES = (RESULTS_FILE, HISTORIES_FILE, MOTIONS_FILE)
+#: Prefix of the temporary folder a run is written into, inside its directory.
+_TMP_PREFIX = ".housner-run-"
+
+
+class IncompleteRunError(DataFileError):
+    """A run directory whose writing did not finish, or whose files are not those its run.json was written with.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The run directory.
+    file : str
+        The file that does not match (``run.json`` when the run is marked incomplete).
+    """
+
+    def __init__(self, run_dir: str | Path, file: str, why: str):
+        self.path, self.file, self.line, self.column = Path(run_dir), file, None, None
+        ValueError.__init__(self, f"run directory {self.path} is incomplete or mixes two runs: {why}; run again")
+
+
+class UnverifiedRunWarning(UserWarning):
+    """A run directory written before run.json carried its completion marker: read, but not checked."""
 
 
 def jsonable(x: Any, *, nonfinite: str = "string") -> Any:
@@ -135,9 +177,42 @@ def write_run(
     motions: list[GroundMotion],
     meta: dict,
 ) -> None:
-    """Write results.parquet, histories.parquet, motions.npz and run.json into ``out``."""
+    """Write results.parquet, histories.parquet, motions.npz and run.json into ``out``, as one run.
+
+    The files are written into a temporary folder inside ``out`` and moved into place, run.json
+    last, with its completion marker and content key (module docstring); while they move, run.json
+    says the directory is incomplete. A previous run's files that this run does not write
+    (histories.parquet when there are none, the previous report.html) are removed with it, when
+    the run.json there is housner's; files of those names that no run wrote are left, and the
+    readers refuse the directory while they lie there.
+    """
     out.mkdir(parents=True, exist_ok=True)
-    results.to_parquet(out / RESULTS_FILE, index=False)
+    _remove_stale_temporaries(out)
+    tmp = Path(tempfile.mkdtemp(prefix=f"{_TMP_PREFIX}{os.getpid()}-", dir=out))
+    try:
+        _write_files(tmp, results, histories, motions)
+        content = {name: _digest(tmp / name) for name in DATA_FILES if (tmp / name).is_file()}
+        manifest = jsonable(meta)
+        (tmp / RUN_FILE).write_text(json.dumps({**manifest, "complete": True, "content": content}, indent=2))
+        previous_ours = _is_ours(out / RUN_FILE)
+        # from here on the directory says it is incomplete until run.json is moved in, last
+        _replace_text(out / RUN_FILE, json.dumps({**manifest, "complete": False}, indent=2))
+        for name in DATA_FILES:
+            if name in content:
+                os.replace(tmp / name, out / name)
+        # the previous run's files this one does not replace (a user's own are left, and the readers refuse
+        # the directory while they lie there: nothing is deleted without a word)
+        for name in (n for n in (*DATA_FILES, REPORT_FILE) if n not in content):
+            if previous_ours and (out / name).is_file():
+                (out / name).unlink()
+        os.replace(tmp / RUN_FILE, out / RUN_FILE)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _write_files(d: Path, results: pd.DataFrame, histories: dict, motions: list[GroundMotion]) -> None:
+    """results.parquet, histories.parquet (when there are histories) and motions.npz, into folder ``d``."""
+    results.to_parquet(d / RESULTS_FILE, index=False)
     parts = []
     for (name, i), theta in histories.items():
         n = len(theta)
@@ -152,20 +227,96 @@ def write_run(
             )
         )
     if parts:
-        pd.concat(parts, ignore_index=True).to_parquet(out / HISTORIES_FILE, index=False)
+        pd.concat(parts, ignore_index=True).to_parquet(d / HISTORIES_FILE, index=False)
     lengths = np.array([m.n for m in motions])
     acc = np.zeros((len(motions), int(lengths.max()) if len(motions) else 0), dtype=np.float32)
     for i, m in enumerate(motions):
         acc[i, : m.n] = m.acc
     np.savez_compressed(
-        out / MOTIONS_FILE,
+        d / MOTIONS_FILE,
         acc=acc,
         n=lengths,
         dt=np.array([m.dt for m in motions]),
         theta0=np.array([m.theta0 for m in motions]),
         names=np.array([m.name for m in motions]),
     )
-    (out / RUN_FILE).write_text(json.dumps(jsonable(meta), indent=2))
+
+
+def _digest(path: Path) -> dict:
+    """A file's content key: its size [bytes] and SHA-256."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return {"bytes": path.stat().st_size, "sha256": h.hexdigest()}
+
+
+def _replace_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (a temporary file beside it, then os.replace)."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _is_ours(path: Path) -> bool:
+    """Whether ``path`` is a run.json housner wrote (a JSON object with housner's provenance)."""
+    try:
+        data = json.loads(path.read_bytes()) if path.is_file() else None
+    except (OSError, ValueError):
+        return False
+    prov = data.get("provenance") if isinstance(data, dict) else None
+    return isinstance(prov, dict) and isinstance(prov.get("versions"), dict) and "housner" in prov["versions"]
+
+
+def _remove_stale_temporaries(out: Path) -> None:
+    """Remove the temporary folders of runs killed while writing into ``out`` (their process is gone)."""
+    for d in out.glob(f"{_TMP_PREFIX}*"):
+        try:
+            pid = int(d.name[len(_TMP_PREFIX) :].split("-", 1)[0])
+            os.kill(pid, 0)  # raises when no such process
+        except ProcessLookupError:
+            shutil.rmtree(d, ignore_errors=True)
+        except (ValueError, OSError):
+            continue  # not ours to judge: a name of another form, or another user's live process
+
+
+def check_run(run_dir: Path, meta: dict) -> None:
+    """Refuse a run directory that is not one complete run (:class:`IncompleteRunError`).
+
+    ``meta`` is its run.json. A run.json marked complete must list, with their size and SHA-256,
+    exactly the files of :data:`DATA_FILES` present; one marked incomplete is refused; one
+    without the marker (an earlier version's) is accepted with an :class:`UnverifiedRunWarning`.
+    """
+    if "complete" not in meta:
+        if _is_ours(run_dir / RUN_FILE):
+            warnings.warn(
+                f"run directory {run_dir} was written before runs carried a completion marker: read as it is, "
+                "not checked to hold one run's files (run it again to have it checked)",
+                UnverifiedRunWarning,
+                stacklevel=3,
+            )
+        return
+    if meta.get("complete") is not True:
+        raise IncompleteRunError(run_dir, RUN_FILE, "its writing did not finish (run.json is marked incomplete)")
+    content = meta.get("content")
+    if not isinstance(content, dict):
+        raise IncompleteRunError(run_dir, RUN_FILE, "run.json has no content key")
+    for name in DATA_FILES:
+        path, want = run_dir / name, content.get(name)
+        if want is None:
+            if path.exists():
+                raise IncompleteRunError(run_dir, name, f"{name} is not listed in run.json")
+            continue
+        if not path.is_file():
+            raise IncompleteRunError(run_dir, name, f"{name} is missing")
+        ok = isinstance(want, dict) and path.stat().st_size == want.get("bytes") and _digest(path) == want
+        if not ok:
+            raise IncompleteRunError(run_dir, name, f"{name} does not match run.json")
 
 
 # ----------------------------------------------------------------------------
@@ -188,6 +339,9 @@ def load_results(path: str | Path) -> pd.DataFrame:
 
     Raises
     ------
+    IncompleteRunError
+        The table is a run directory's whose writing did not finish, or whose files are not
+        those its run.json was written with (:func:`check_run`).
     housner.errors.DataFileError
         When the path does not exist, cannot be read, or lacks a column of
         :data:`housner.scenarios.execution.tables.REQUIRED_COLUMNS` (the message names the file and the column).
@@ -203,6 +357,10 @@ def load_results(path: str | Path) -> pd.DataFrame:
     elif not path.exists():
         raise DataFileError(path, f"no such file or directory (expected a run directory or a {RESULTS_FILE})")
     path = path.resolve()
+    # a run directory's table counts only as part of one complete run: checked before it is read
+    meta = read_run_json(path.parent / RUN_FILE)
+    if isinstance(meta, dict) and meta and path.name == RESULTS_FILE:
+        check_run(path.parent, meta)
     suffix = path.suffix.lower()
     try:
         df = pd.read_csv(path) if suffix == ".csv" else pd.read_parquet(path)
@@ -217,7 +375,7 @@ def load_results(path: str | Path) -> pd.DataFrame:
                 column=col,
             )
     df.attrs["source"] = str(path)
-    df.attrs["run"] = read_run_json(path.parent / RUN_FILE)
+    df.attrs["run"] = meta
     return df
 
 
