@@ -489,9 +489,13 @@ def _drain(pool: _Pool, take: Any, quiet: float = 0.05, limit: float = 0.5) -> N
 def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_record: Any) -> None:
     """Run ``chunks`` on a Dask cluster; a task that fails twice (Dask retries it once) fails its records.
 
+    ``scheduler`` is a connected client, used as it is (never the process's default client, which a
+    command-line run has none of), or an address, connected to here and closed after. A worker that dies
+    is the scheduler's to handle: its tasks are run again on the others (up to the scheduler's
+    ``allowed-failures``, then they fail with ``KilledWorker`` and their records are listed as failed).
     The results (histories included) come back in bulk, one packed set per chunk; the caller stores the
     cache entries (a cluster's workers need not see this machine's cache)."""
-    from distributed import Client, as_completed
+    from distributed import Client, KilledWorker, as_completed
 
     client = scheduler if isinstance(scheduler, Client) else connect_scheduler(scheduler)
     futs: dict[Any, _Chunk] = {}
@@ -500,11 +504,17 @@ def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_recor
             f = client.submit(run_chunk, c.engine, c.settings, specimen, c.items, c.effects, c.batched, pure=False,
                               retries=1)  # fmt: skip
             futs[f] = c
-        for f in as_completed(futs):
+        # Without a loop, as_completed takes the default client's, and a command-line run has no default client.
+        for f in as_completed(futs, loop=client.loop):
             c = futs[f]
             try:
                 res = unpack(f.result())
-            except Exception as e:  # the worker died or the task could not run, twice
+            except KilledWorker as e:  # the workers running it died, as often as the scheduler allows
+                n = e.allowed_failures
+                msg = (f"KilledWorker: the Dask workers running it died {n + 1} time(s), all that the scheduler "
+                       f"allows (distributed.scheduler.allowed-failures = {n}); see the workers' logs")  # fmt: skip
+                res = [_failed(i, msg) for i, _ in c.items]
+            except Exception as e:  # the task raised, or could not run, twice
                 res = [_failed(i, f"Dask task failed twice: {type(e).__name__}: {e}") for i, _ in c.items]
             for r in res:
                 on_record(c.engine, r)
