@@ -306,3 +306,49 @@ def test_stale_files_of_the_previous_run_go_and_old_runs_are_read_with_a_warning
     _run(out, 2)
     assert not dead.exists()
     assert isinstance(pd.read_parquet(out / "results.parquet"), pd.DataFrame)
+
+
+RUN_WITH_EFFECT = textwrap.dedent(
+    """
+    import json, sys
+    from housner import GroundMotion, Specimen
+    from housner.effects import load_plugin, make_effect
+    from housner.scenarios.execution.runner import run_engines
+
+    load_plugin(sys.argv[2])  # the library's own effects need no generated kernel; a user's moment term does
+    spec = Specimen.bachmann2017()
+    motions = [GroundMotion.free_vibration(f * spec.alpha, 2.0) for f in (0.3, 0.5, 0.7, 0.4)]
+    fx = (make_effect("pivot_friction", moment=0.05),)
+    df, _, info = run_engines(spec, motions, {"housner": {}}, effects=fx, jobs=int(sys.argv[1]), use_cache=False,
+                              progress=False)
+    print(json.dumps({"ok": int((df.status == "ok").sum()), "repairs": info["housner"]["kernel_cache_repairs"],
+                      "theta": [round(v, 12) for v in df.theta_max_over_alpha]}))
+    """
+)
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_kernel_repairs_made_by_the_processes_of_a_run_are_counted_in_its_info(kernel_cache, tmp_path, jobs):
+    cache, _, kdir = _fresh_copy(kernel_cache, tmp_path)
+    env = {k: v for k, v in os.environ.items() if k != "HOUSNER_KERNEL_DIR"}
+    env["HOUSNER_CACHE_DIR"] = str(cache)
+
+    def run() -> dict:
+        plugin = Path(__file__).resolve().parents[1] / "examples" / "effects" / "pivot_friction.py"
+        res = subprocess.run([sys.executable, "-c", RUN_WITH_EFFECT, str(jobs), str(plugin)], capture_output=True,
+                             text=True, env=env, timeout=300)  # fmt: skip
+        assert res.returncode == 0, res.stderr
+        return json.loads(res.stdout.strip().splitlines()[-1])
+
+    healthy = run()
+    assert healthy["ok"] == 4 and healthy["repairs"] == 0
+    files = sorted(kdir.glob("housner_terms_*.py"))
+    assert len(files) > 2  # the fixture's kernel, and the plugin's that the healthy run generated
+    for p in files:
+        p.write_bytes(p.read_bytes()[:2000])
+    damaged = run()
+    # every record computed as before, and the run's info counts the damaged kernel files rebuilt (the
+    # plugin's; whichever process of the run loaded each first, the planning process or a worker)
+    assert damaged["ok"] == 4 and damaged["theta"] == healthy["theta"]
+    assert damaged["repairs"] >= 1
+    assert run()["repairs"] == 0  # healed

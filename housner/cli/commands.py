@@ -64,6 +64,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         ok = sub[sub.status == "ok"]
         info = run.meta["engines"][name]
         rejected = f", {info['cache_rejected']} cache entries rejected" if info.get("cache_rejected") else ""
+        if info.get("kernel_cache_repairs"):
+            rejected += f", {info['kernel_cache_repairs']} damaged kernel-cache entries rebuilt"
         median = ok.theta_max_over_alpha.median() if len(ok) else math.nan
         print(
             f"  {name:9s} {len(ok)}/{len(sub)} ok, {int(ok.overturned.sum())} overturned, "

@@ -56,6 +56,11 @@ _ENGINE_CACHE: dict[str, Any] = {}
 
 # --------------------------------------------------------------------------
 # The cache entry: one .npz per key, holding theta and the row, with the key and a checksum.
+
+#: The row field that carries, from the process that computed a record, the damaged kernel-cache entries it
+#: repaired meanwhile (never stored in the cache; the runner adds it to the engine's info).
+REPAIRS = "kernel_cache_repairs"
+
 def _entry_checksum(key: str, meta: dict, theta: np.ndarray) -> str:
     """SHA-256 of an entry's payload: its key, its row fields (canonical JSON) and theta's bytes."""
     h = hashlib.sha256()
@@ -159,7 +164,7 @@ def _write_entry(path: str, key: str, row: dict) -> None:
     the analytic record it stores, in the process that simulates it. Deflated entries (written by earlier
     versions) read the same.
     """
-    meta = {k: v for k, v in row.items() if k not in ("theta", "motion_id")}
+    meta = {k: v for k, v in row.items() if k not in ("theta", "motion_id", REPAIRS)}
     meta["theta_max_over_alpha"] = str(meta["theta_max_over_alpha"])
     meta["key"] = key
     theta = np.ascontiguousarray(row["theta"], dtype=np.float32)
@@ -379,16 +384,33 @@ def iter_chunk(
         yield rows
 
 
+def _repairs() -> int:
+    """Damaged kernel-cache entries repaired so far in this process (see housner.effects.terms.kernel_cache_repairs)."""
+    from housner.effects.terms import kernel_cache_repairs
+
+    return sum(kernel_cache_repairs().values())
+
+
+def _counted(rows: list[dict], before: int) -> list[dict]:
+    """``rows``, the first carrying the kernel-cache repairs made while they were computed (when there were)."""
+    n = _repairs() - before
+    if n and rows:
+        rows[0][REPAIRS] = n
+    return rows
+
+
 def _parts(eng: Any, name: str, specimen: Any, items: list, effects: tuple, batched: bool):
     """The chunk's rows: all at once from one batched call, or one record at a time."""
     if batched and len(items) > 1:
         for i, _ in items:
             _maybe_crash(name, i)
-        yield _simulate_batch(eng, specimen, items, effects)
+        before = _repairs()
+        yield _counted(_simulate_batch(eng, specimen, items, effects), before)
         return
     for i, m in items:
         _maybe_crash(name, i)
-        yield [_simulate_one(eng, specimen, i, m, effects)]
+        before = _repairs()
+        yield _counted([_simulate_one(eng, specimen, i, m, effects)], before)
 
 
 def run_chunk(name: str, settings: dict, specimen: Any, items: list, effects: tuple = (), batched: bool = False):
@@ -411,6 +433,7 @@ def pack(rows: list[dict], thetas: bool) -> dict:
         "theta_max_over_alpha": np.array([r.get("theta_max_over_alpha", np.nan) for r in rows], dtype=np.float64),
         "overturned": np.array([bool(r.get("overturned", False)) for r in rows], dtype=bool),
         "n_impacts": np.array([int(r.get("n_impacts", 0)) for r in rows], dtype=np.int64),
+        REPAIRS: np.array([int(r.get(REPAIRS, 0)) for r in rows], dtype=np.int64),
         "theta": None,
     }
     if thetas:
@@ -426,17 +449,19 @@ def unpack(packed: dict) -> list[dict]:
     """The rows of :func:`pack` (the same fields and Python types as the rows it was given; theta as a view)."""
     rows = []
     th, off = packed["theta"], packed.get("offsets")
+    repairs = packed.get(REPAIRS)
     for j, i in enumerate(packed["motion_id"].tolist()):
         wall = float(packed["wall_s"][j])
+        extra = {REPAIRS: int(repairs[j])} if repairs is not None and repairs[j] else {}
         if not packed["ok"][j]:
-            rows.append({"motion_id": i, "status": "failed", "error": packed["error"][j], "wall_s": wall})
+            rows.append({"motion_id": i, "status": "failed", "error": packed["error"][j], "wall_s": wall, **extra})
             continue
         r = {"motion_id": i, "status": "ok", "error": "", "wall_s": wall,
              "theta_max_over_alpha": float(packed["theta_max_over_alpha"][j]),
              "overturned": bool(packed["overturned"][j]), "n_impacts": int(packed["n_impacts"][j])}  # fmt: skip
         if th is not None:
             r["theta"] = th[off[j] : off[j + 1]]
-        rows.append(r)
+        rows.append({**r, **extra})
     return rows
 
 

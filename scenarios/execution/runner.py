@@ -25,7 +25,7 @@ from housner.engines.base import engine_class
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.execution.cache import _log, cache_keys, entry_path, load_entry, store_entry
-from housner.scenarios.execution.chunks import engine_batches, entry_file, iter_chunk
+from housner.scenarios.execution.chunks import REPAIRS, _repairs, engine_batches, entry_file, iter_chunk
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.rundir import RESULT_COLUMNS
 from housner.scenarios.execution.workers import RunInterrupted, _Chunk, _failed, _Progress, _run_dask, _run_pool
@@ -79,7 +79,9 @@ def run_engines(
         Per engine: settings, version, wall seconds (engine time, summed over records; a batched
         chunk's time is shared evenly by its records), ``cached`` (entries reused), ``cache_rejected``
         (entries found but refused: another key, checksum mismatch, unreadable; recomputed),
-        ``worker_deaths`` (worker processes that died while running its records) and ``elapsed_s``.
+        ``worker_deaths`` (worker processes that died while running its records), ``kernel_cache_repairs``
+        (damaged generated-kernel cache entries that the processes running its records removed and rebuilt)
+        and ``elapsed_s``.
 
     Raises
     ------
@@ -135,6 +137,7 @@ class _Plan:
         """Take a computed record: into the rows, its time into the engine's total, into the cache if it is ok
         (unless the process that computed it stored it already)."""
         r["cached"] = False
+        self.info[name][REPAIRS] += r.pop(REPAIRS, 0)
         self.rows[(name, r["motion_id"])] = r
         self.info[name]["wall_s"] += r["wall_s"]
         if self.store_here and self.cache_dir is not None and r["status"] == "ok":
@@ -161,12 +164,15 @@ def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | No
     plan = _Plan({}, {}, {}, [], cache_dir, histories)
     per_engine: list[list[_Chunk]] = []
     for name, settings in engines.items():
+        repaired = _repairs()  # a damaged kernel found while planning (the cache keys load the effects' kernels)
         probe = engine_class(name)(**settings)
         full_settings, version = probe.settings(), probe.version()
         plan.info[name] = {"settings": full_settings, "version": version, "wall_s": 0.0, "cached": 0,
-                           "cache_rejected": 0, "worker_deaths": 0}  # fmt: skip
+                           "cache_rejected": 0, "worker_deaths": 0, REPAIRS: 0}  # fmt: skip
         todo = []
-        for i, k in enumerate(cache_keys(specimen, motions, name, full_settings, version, effects)):
+        keys = cache_keys(specimen, motions, name, full_settings, version, effects)
+        plan.info[name][REPAIRS] += _repairs() - repaired
+        for i, k in enumerate(keys):
             plan.keys[(name, i)] = k
             row = _cached_row(plan, name, i, k)
             if row is not None:
