@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import functools
+import html
 import math
+import re
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -190,3 +192,15 @@ def assert_pulses_follow_the_analytic_model(engine, specimen, *, rel: float, sam
         assert d.theta_max == pytest.approx(a.theta_max, rel=rel), m.name
         if same_impacts:
             assert d.n_impacts == a.n_impacts, m.name
+
+
+def page_text(page: str) -> str:
+    """An HTML page's visible text (figures and tags removed, entities decoded, whitespace collapsed)."""
+    body = re.sub(r'src="data:image/png;base64,[^"]*"', "", page)
+    return html.unescape(re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", body)))
+
+
+def page_section(page: str, sid: str) -> str:
+    """The HTML of a page's ``<section id="sid">``."""
+    i = page.index(f'<section id="{sid}">')
+    return page[i : page.index("</section>", i)]

@@ -9,7 +9,6 @@ median) are made by editing copies of that diagnosis.
 from __future__ import annotations
 
 import copy
-import html
 import math
 import re
 from dataclasses import replace
@@ -18,6 +17,7 @@ from pathlib import Path
 import campaign_generators as cg
 import numpy as np
 import pytest
+from shared import page_section, page_text
 
 import housner.scenarios.campaigns.verdict as verdict_mod
 from housner.reports.diagnosis import history_records, render_diagnosis
@@ -45,17 +45,6 @@ def diag(tmp_path_factory):
 @pytest.fixture(scope="module")
 def page(diag):
     return render_diagnosis(diag)
-
-
-def _text(page: str) -> str:
-    """The page's visible text (figures and tags removed, entities decoded)."""
-    body = re.sub(r'src="data:image/png;base64,[^"]*"', "", page)
-    return html.unescape(re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", body)))
-
-
-def _section(page: str, sid: str) -> str:
-    i = page.index(f'<section id="{sid}">')
-    return page[i : page.index("</section>", i)]
 
 
 # ----------------------------------------------------------------------------
@@ -94,7 +83,7 @@ def test_changes_are_said_with_a_positive_figure():
 # ----------------------------------------------------------------------------
 # 1. the top: measured against modelled theta(t)
 def test_histories_come_first_after_the_headline(diag, page):
-    top = _section(page, "summary")
+    top = page_section(page, "summary")
     first_fig = top.index("<figure>")
     assert 'alt="measured and modelled theta(t)"' in top[first_fig : top.index("</figure>", first_fig)]
     # nothing but the headline before it: the verdict table and the rest of the page follow
@@ -128,14 +117,14 @@ def test_without_an_effect_the_histories_show_the_plain_model_only(diag):
     labels = {ln.get_label() for ax in histories_figure(plain).get_axes() for ln in ax.get_lines()}
     assert "measured" in labels and "before: Housner (plain)" in labels
     assert not any(lab.startswith("after") for lab in labels)
-    assert "No effect was added" in _text(render_diagnosis(plain))
+    assert "No effect was added" in page_text(render_diagnosis(plain))
 
 
 # ----------------------------------------------------------------------------
 # 2. the fall of the held-out error, before and after, with standard errors
 def test_headline_states_the_fall_with_standard_errors(diag, page):
     b, f = diag.baseline, diag.final
-    lead = _text(_section(page, "summary").split("<figure>")[0])
+    lead = page_text(page_section(page, "summary").split("<figure>")[0])
     before = fmt_pm(b.heldout_error, b.heldout_se, sep=" ± ")
     after = fmt_pm(f.heldout_error, f.heldout_se, sep=" ± ")
     pct = f"{100 * diag.reduction:.0f}"
@@ -149,7 +138,7 @@ def test_headline_states_the_fall_with_standard_errors(diag, page):
 # ----------------------------------------------------------------------------
 # 3. the verdict once; parameters with units
 def test_verdict_is_stated_once(diag, page):
-    text = _text(page)
+    text = page_text(page)
     body = diag.verdict.text.split(":", 1)[1].strip()  # after "Explained:"
     assert text.count(body[1:]) == 1
     assert len(re.findall(r"(?i)\bexplained\b", text)) == 1  # the status, in the headline only
@@ -160,10 +149,10 @@ def test_effect_parameters_carry_their_units(diag, page):
     c = dict(diag.final.effects)["rotational_damping"]["c"]
     want = params_text("rotational_damping", {"c": c})
     assert want.endswith(" 1/s")
-    assert want in _text(_section(page, "summary"))  # the headline
-    assert want in _text(_section(page, "ladder"))
+    assert want in page_text(page_section(page, "summary"))  # the headline
+    assert want in page_text(page_section(page, "ladder"))
     assert want in diag.summary()
-    assert re.search(r"offset = [-0-9.e]+ rad", _text(_section(page, "candidates")))
+    assert re.search(r"offset = [-0-9.e]+ rad", page_text(page_section(page, "candidates")))
 
 
 # ----------------------------------------------------------------------------
@@ -182,7 +171,7 @@ def _risen(diag):
 
 def test_a_rising_error_rises_and_never_falls_by_a_negative_amount(diag):
     d = _risen(diag)
-    text, summary = _text(render_diagnosis(d)), d.summary()
+    text, summary = page_text(render_diagnosis(d)), d.summary()
     for t in (text, summary):
         assert not re.search(r"(falls|fell|lowers?[\w ]*) by [-−]", t), t
     assert "Held-out error rises by" in text and "rises by 0.050 ± 0.011" in text
@@ -196,7 +185,7 @@ def test_no_standard_error_is_rounded_to_zero(diag, page):
     assert not re.search(r"&plusmn; 0\.0*(?![0-9])", page)
     assert not re.search(r"\+- 0\.0*(?![0-9])", diag.summary())
     f = diag.final
-    assert fmt_pm(f.heldout_error, f.heldout_se, sep=" &plusmn; ") in _section(page, "ladder")
+    assert fmt_pm(f.heldout_error, f.heldout_se, sep=" &plusmn; ") in page_section(page, "ladder")
 
 
 # ----------------------------------------------------------------------------
@@ -218,14 +207,14 @@ def test_overturned_is_written_without_an_uncertainty(diag):
     assert row.count("overturned") == 1 + len(d.steps)
     # the records table too: a measured overturn reads "overturned"
     assert any(r.overturned for r in diag.campaign.ground_motion)
-    assert "overturned" in _section(page, "records")
+    assert "overturned" in page_section(page, "records")
 
 
 # ----------------------------------------------------------------------------
 # 7. one threshold for a localisation quantity, on the page and in the documentation
 def test_page_and_docs_state_the_same_localisation_threshold(diag, page, monkeypatch):
     z_local, z_misfit = verdict_mod.Z_LOCAL, verdict_mod.Z_MISFIT
-    text = _text(page)
+    text = page_text(page)
     assert f"more than {z_local:g} combined standard errors" in text
     assert f"z > {z_misfit:g}" in text and f"more than {z_local:g} standard errors" in text
     doc = DIAGNOSIS_DOC.read_text(encoding="utf-8")
@@ -236,6 +225,6 @@ def test_page_and_docs_state_the_same_localisation_threshold(diag, page, monkeyp
     # the page reads the constants, it does not repeat a number
     monkeypatch.setattr(verdict_mod, "Z_LOCAL", 7.5)
     monkeypatch.setattr(verdict_mod, "Z_MISFIT", 6.5)
-    text = _text(render_diagnosis(diag))
+    text = page_text(render_diagnosis(diag))
     assert "more than 7.5 combined standard errors" in text and "z > 6.5" in text
     assert f"more than {z_local:g} combined" not in text

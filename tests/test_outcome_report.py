@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import page_section, page_text
 
 from housner.model import theta_max_many
 from housner.motion import GroundMotion
@@ -74,17 +75,6 @@ def page(diag):
     return render_outcome_report(diag)
 
 
-def _text(page: str) -> str:
-    """The page's visible text (figures and tags removed, entities decoded)."""
-    body = re.sub(r'src="data:image/png;base64,[^"]*"', "", page)
-    return html.unescape(re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", body)))
-
-
-def _section(page: str, sid: str) -> str:
-    i = page.index(f'<section id="{sid}">')
-    return page[i : page.index("</section>", i)]
-
-
 # ----------------------------------------------------------------------------
 # the page
 def test_the_page_is_one_self_contained_document(page):
@@ -97,9 +87,9 @@ def test_the_page_is_one_self_contained_document(page):
 
 def test_the_verdict_is_stated_once_at_the_top(diag, page):
     words = STATUS[diag.status][0]
-    text = _text(page)
+    text = page_text(page)
     assert text.count(words) == 1
-    assert words in _text(_section(page, "verdict"))
+    assert words in page_text(page_section(page, "verdict"))
     assert page.index('<section id="verdict">') < page.index('<section id="scores">') < page.index('id="map"')
     for other, (w, _, _) in STATUS.items():
         if other != diag.status and w not in words:
@@ -114,14 +104,14 @@ def test_every_status_is_stated_once_and_alone(diag, status):
     steps = diag.steps if status in ("explained", "partly_explained") else diag.steps[:1]
     d = replace(diag, status=status, steps=steps, floor=replace(diag.floor, at_floor=at_floor),
                 misses=[m for m in diag.misses if m["model"] in {s.name for s in steps}])  # fmt: skip
-    text = _text(render_outcome_report(d))
+    text = page_text(render_outcome_report(d))
     assert text.count(STATUS[status][0]) == 1
     assert not [w for k, (w, _, _) in STATUS.items() if k != status and w not in STATUS[status][0] and w in text]
     assert ("at the floor" in text) == at_floor and ("above the floor" in text) != at_floor
 
 
 def test_the_verdict_gives_the_model_its_scores_the_floor_and_the_baseline(diag, page):
-    v = _text(_section(page, "verdict"))
+    v = page_text(page_section(page, "verdict"))
     s = diag.final.scores
     assert f"log loss {s['log_loss']:.3f} [{s['log_loss_ci'][0]:.3f}, {s['log_loss_ci'][1]:.3f}]" in v
     assert f"accuracy {s['accuracy']:.3f} [{s['accuracy_ci'][0]:.3f}, {s['accuracy_ci'][1]:.3f}]" in v
@@ -138,7 +128,7 @@ def test_the_verdict_gives_the_model_its_scores_the_floor_and_the_baseline(diag,
 
 
 def test_the_table_has_every_ladder_step_and_every_baseline(diag, page):
-    t = _section(page, "scores")
+    t = page_section(page, "scores")
     for st in diag.steps:
         assert f"<td>{html.escape(step_label(st.name))}" in t
     for name in diag.baselines:
@@ -150,7 +140,7 @@ def test_the_table_has_every_ladder_step_and_every_baseline(diag, page):
 
 
 def test_the_confusion_matrices_add_up(diag, page):
-    c = _text(_section(page, "confusion"))
+    c = page_text(page_section(page, "confusion"))
     for st in {id(s): s for s in (diag.steps[0], diag.final)}.values():
         sc = st.scores
         assert sc["tp"] + sc["fp"] + sc["fn"] + sc["tn"] == len(diag.ids)
@@ -158,7 +148,7 @@ def test_the_confusion_matrices_add_up(diag, page):
 
 
 def test_the_misses_table_lists_each_models_misses(diag, page):
-    w = _section(page, "where")
+    w = page_section(page, "where")
     assert html.escape(diag.pointer[:40]) in w
     models = {m["model"] for m in diag.misses}
     assert models == {s.name for s in (diag.steps[0], diag.final) if s.scores["fn"] + s.scores["fp"]}
@@ -168,17 +158,17 @@ def test_the_misses_table_lists_each_models_misses(diag, page):
 
 def test_the_misses_table_stops_at_its_rows_per_model_and_counts_the_rest(diag):
     many = [dict(diag.misses[0], id=f"extra{i:03d}", predicted_p=0.5 + 0.001 * i) for i in range(MISSES_SHOWN + 7)]
-    w = _section(render_outcome_report(replace(diag, misses=many)), "where")
+    w = page_section(render_outcome_report(replace(diag, misses=many)), "where")
     assert w.count("<code>extra") == MISSES_SHOWN
     assert "<code>extra036</code>" in w and "<code>extra006</code>" not in w  # the most confident first
     assert f"7 more of {step_label(many[0]['model'])} not listed" in w
 
 
 def test_the_candidates_and_the_settings_are_shown(diag, page):
-    c = _section(page, "candidates")
+    c = page_section(page, "candidates")
     for cand in diag.candidates:
         assert f"<code>{cand['name'].split('+')[0]}</code>" in c
-    s = _text(_section(page, "settings"))
+    s = page_text(page_section(page, "settings"))
     assert f"{diag.geometry['h_m']:.5g} m" in s and f"{diag.folds} (stratified)" in s
 
 
