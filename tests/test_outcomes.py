@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -219,7 +220,7 @@ def test_diagnose_command_on_an_outcome_campaign(tmp_path, capsys):
 
 # ----------------------------------------------------------------------------
 # the real tests: ASU granite, SP1 (../shared/data/asu-granite beside the checkout)
-ASU = __import__("pathlib").Path(__file__).resolve().parents[2] / "shared" / "data" / "asu-granite"
+ASU = Path(__file__).resolve().parents[2] / "shared" / "data" / "asu-granite"
 
 
 @pytest.mark.skipif(not (ASU / "index.csv").is_file(), reason="the ASU granite data are not beside the checkout")
@@ -243,3 +244,29 @@ def test_sp1_diagnosis_beats_every_alternative_on_real_outcomes(tmp_path):
     geo = d["geometry"]  # inside the footprint: a symmetric contact narrower than the footprint's wide side
     assert d["effect"]["params"]["alpha_eff"] < max(geo["alpha_pos_rad"], geo["alpha_neg_rad"])
     assert isinstance(o["at_floor"], bool) and d["status"] in ("explained", "partly_explained")
+
+
+def test_a_campaign_of_both_kinds_gets_both_diagnoses(tmp_path, capsys):
+    """theta records and outcome records in one campaign: the theta diagnosis as before, the outcome diagnosis
+    under ``outcomes`` (its scores) and ``outcomes_diagnosis`` (whole) in the same JSON."""
+    import shutil
+
+    from housner.model import theta_max_many as tmm
+
+    root = tmp_path / "both"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "examples" / "campaigns" / "pivot-friction", root)
+    spec = load_campaign(root).specimen
+    accs = [2.0 * a for a in _pulses(30, seed=31)]  # twice as strong: the ETH block is stockier (11 overturn)
+    _, y, _ = tmm(spec, accs, DT)
+    text = (root / "campaign.toml").read_text()
+    for i, (a, o) in enumerate(zip(accs, y, strict=True)):
+        (root / "records" / f"o{i}.csv").write_text(_csv(a))
+        text += (f'\n[[record]]\nid = "o{i}"\nkind = "ground_motion"\nfile = "records/o{i}.csv"\n'
+                 f"overturned = {'true' if o else 'false'}\n")  # fmt: skip
+    (root / "campaign.toml").write_text(text)
+    out = tmp_path / "d.json"
+    assert main(["diagnose", str(root), "--effects", "none", "--folds", "3", "--json", str(out), "-q"]) == 0
+    data = json.loads(out.read_text())
+    assert "steps" in data or "ladder" in data or "verdict" in data  # the theta diagnosis' own keys
+    assert data["outcomes_diagnosis"]["n_records"] == 30
+    assert {"accuracy", "f1", "log_loss", "baselines"} <= set(data["outcomes"])
