@@ -67,12 +67,7 @@ RUNAWAY_M = 10.0
 QUIET = 2e-3
 
 #: |theta| / alpha [-] a swing must exceed for the impact law to count its next sign change as an
-#: impact. The tuner's free decay reaches 0.0011 alpha after 40 impacts, so the law must act down to
-#: there (at 5e-3 alpha, the adapters' ROCKING_TOL, the 40th decay peak was 67 % high); a block that
-#: has not lifted tilts far less: under a 5 Hz sine of 0.14 g, just below the seed specimen's uplift at
-#: 0.15 g, at most 1.1e-4 alpha in OpenSees (its springs), 6e-6 alpha in Drake and DART, 4e-6 in MuJoCo
-#: and 3e-6 in PyBullet (measured 2026-11-24), so its elastic tilt is not taken for rocking. For the
-#: seed specimen 1e-3 alpha is 0.15 mrad, a fifth of what its markers resolve.
+#: impact (why 1e-3: docs/results.md#defaults-planar).
 IMPACT_LAW_TOL = 1e-3
 
 #: Time [s] from an impact's sign change to the impact law's scaling: the contacts the adapters
@@ -264,8 +259,7 @@ class ImpactLaw:
 
     Housner's r follows from a plastic impact at the new pivot, and a rigid or
     stiff contact reproduces exactly that loss; no engine's contact has a knob
-    that takes uniformly more (measured 2026-11-24: damping knobs saturate near
-    r = 0.94 or make r depend on the amplitude, ``engines/models/README.md``).
+    that takes uniformly more (docs/results.md#defaults-planar).
     A specimen that loses more at impact (a measured r below Housner's) is
     modelled by this law, the same in every adapter. The engine still does
     everything else: the flight, the uplift, the impact itself and the overturn.
@@ -284,9 +278,8 @@ class ImpactLaw:
        between impacts, so the energy ratio of the impact (the seed's eq. 8,
        which compares exactly these energies at the peaks) is ``factor``
        times the contact's, whatever the delay. Scaling at the sign change
-       itself, in the middle of a compliant contact's impact, was measured to
-       scatter each impact's ratio by about 0.3 % at 0.004 alpha (MuJoCo), 17 %
-       on the tuner's 40th decay peak.
+       itself, in the middle of a compliant contact's impact, scatters each
+       impact's ratio (docs/results.md#defaults-planar).
 
     Parameters
     ----------

@@ -21,9 +21,8 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
    step; impacts are velocity-level impulses, so no contact stiffness or
    damping needs tuning. Collisions are found by DART's own detector
    (``collision_detector`` "dart": ``DARTCollisionDetector``, which handles
-   sphere-box pairs), not DART's default FCL: the same first-impact r to
-   2e-8 at 0.2, 0.5 and 0.8 alpha and the same impact counts, at 0.8x the
-   CPU time (2026-11-26; ``engines/models/README.md``).
+   sphere-box pairs), not DART's default FCL: the same first-impact r and
+   impact counts at less CPU time (docs/results.md#defaults-dart).
 
 With these settings and a 0.1 ms step the first impact's energy ratio after
 releases at 0.2, 0.5 and 0.8 alpha is within 0.1 % of Housner's r for the
@@ -71,8 +70,7 @@ class DartEngine(PlanarEngine):
     name = "dart"
     package = "dartpy"
 
-    #: Default settings (2026-11-24, dartpy 6.20, seed specimen): first-impact r within 0.1 % of
-    #: Housner's at 0.2, 0.5 and 0.8 alpha with no tuning (step 0.1 ms; 0.2 ms is 0.11 % off at 0.8 alpha).
+    #: Default settings, with no tuning (why a 0.1 ms step: docs/results.md#defaults-dart).
     DEFAULTS: ClassVar[dict] = {
         "timestep": 1.0e-4,
         "friction": 1.5,
@@ -153,7 +151,7 @@ class DartEngine(PlanarEngine):
         block.setVelocities(states[0, 3:].tolist())
         gx_rows = gravity_x(motion.acc, k)  # step 1 of the module docstring
         # One gravity vector, its x written in place before each step: dartpy converts an ndarray to its
-        # Eigen vector faster than a new list (about 1.6 us of a 9.9 us step, 2026-11-27), same numbers.
+        # Eigen vector faster than a new list, same numbers (docs/results.md#defaults-dart).
         gravity = np.array([0.0, 0.0, -G])
         set_gravity, step = world.setGravity, world.step
         law = self.impact_law(specimen, effects, h, motion.theta0)

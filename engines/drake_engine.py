@@ -47,12 +47,7 @@ reused for every record (numbered as in ``engines/models/drake.md``):
    softer 5e8 N/m also overturned the block less often than the analytic
    model on ``elcentro-strong`` (34 of 100 motions against 42; 2.5e9 N/m: 38;
    SAP at 5e8 N/m: 41), and checked worse on the free decay (3.5 % against 1.5 %).
-   TAMSI at 1/8 ms on 2.5e9 N/m replaced SAP at 1/4 ms on 5e8 N/m as the
-   default on 2026-11-26 (``housner frontier drake``, ``engines/models/drake.md``):
-   it meets the tuner's checks with a smaller largest error (0.35 of the
-   tolerances against 0.73) at 0.4x the CPU time (0.098 against 0.247 CPU s
-   per simulated s); TAMSI at 1/4 ms is cheaper still but its free decay is
-   6.6 % off, beyond the 5 % (SAP's 2.2 %, TAMSI at 1/8 ms 1.5 %).
+   Why TAMSI at 1/8 ms on 2.5e9 N/m is the default: docs/results.md#defaults-drake.
 6. Ground motion: the d'Alembert force -m ug''(t) on the x coordinate,
    through the plant's applied-generalized-force input port, set before every
    step to m times the exact mean of the linearly interpolated -ug'' over
@@ -125,9 +120,7 @@ class DrakeEngine(PlanarEngine):
     name = "drake"
     package = "drake"
 
-    #: Default settings (2026-11-26, drake 1.51.1, seed specimen, ``housner frontier drake``): r within
-    #: 0.18 % of Housner's at 0.2-0.9 alpha with no tuning, pulses within 0.3 %, free decay within 1.5 %;
-    #: about 0.1 CPU s per simulated s (SAP at 1/4 ms on 5e8 N/m, the defaults until then: 0.25).
+    #: Default settings, with no tuning (what they measure: docs/results.md#defaults-drake).
     DEFAULTS: ClassVar[dict] = {
         "timestep": 1.25e-4,
         "stiffness": 2.5e9,
@@ -177,21 +170,15 @@ class DrakeEngine(PlanarEngine):
         """Settings to try when tuning the contact to an energy ratio, cheap to expensive.
 
         Within 0.2 % of Housner's r: the stiff default contact on TAMSI at 1/8 and
-        1/10 ms, then SAP at 1/4 ms on 5e8 N/m (the defaults until 2026-11-26). TAMSI's
-        free decay moves with the step by more than its r does (seed specimen,
-        2026-11-26, on 5e8 N/m: 5.0 % off at 1/4 ms, 6.8 % at 1/6, 4.4 % at 1/7,
-        3.5 % at 1/8, 2.9 % at 1/10; SAP 2.2 % at 1/4; on 2.5e9 N/m: 6.6 % at
-        1/4, 1.5 % at 1/8), so the coarser steps are not
+        1/10 ms, then SAP at 1/4 ms on 5e8 N/m (the earlier defaults). TAMSI's
+        free decay moves with the step by more than its r does, so the coarser steps are not
         offered. Away from Housner's r the contact is SAP's at 1/4 ms, whose
         stiffness and dissipation time were measured there. Above it: softer
-        undamped pivots, which give part of the impact's energy back (seed
-        specimen, 2026-11-24: k = 1e7 N/m keeps r = 0.946-0.948, 5e6 N/m
-        0.949-0.958, 2e6 N/m 0.955-0.970 over 0.1-0.8 alpha). Below it: softer
+        undamped pivots, which give part of the impact's energy back. Below it: softer
         pivots with SAP's linear dissipation, the only knob that takes more
-        energy at an impact; none keeps r flat below about 0.94 (k = 2e6 N/m,
-        tau = 1 ms: 0.935-0.944; k = 1e6 N/m, tau = 4 ms: 0.882 at 0.1 alpha,
-        0.933 at 0.8 alpha), and soft pivots tilt before uplift, which puts the
-        pulses' first peaks 14-170 % off; the tuner then reports the closest it found.
+        energy at an impact; none keeps r flat below about 0.94, and soft pivots tilt before
+        uplift, which puts the pulses' first peaks 14-170 % off; the tuner then reports the
+        closest it found. The figures: docs/results.md#defaults-drake.
         Returns keyword settings of :class:`DrakeEngine` (at most 8) for ``target_r``,
         the target kinetic-energy ratio at impact [-].
         """

@@ -31,8 +31,7 @@ steps and the state is sampled there exactly (no interpolation). The whole
 record runs in C through :func:`mujoco.rollout.rollout` with one control value
 per step, in chunks of about half a second; the run stops at an overturn. At
 the default 0.2 ms step (0.198 ms for the El Centro records sampled every
-3.16 ms) a step costs about 3 us and a record about 0.016 CPU s per simulated
-s: the seed's 100 El Centro motions of 15 s take 24 CPU s, 12 s on 2 cores.
+3.16 ms) its cost is in docs/results.md#defaults-mujoco.
 
 Response
 --------
@@ -200,25 +199,10 @@ class MujocoEngine(PlanarEngine):
 
     Notes
     -----
-    Defaults (``DEFAULTS``) came from ``housner tune mujoco``
-    (``housner tune mujoco``) on 2026-11-21 with MuJoCo 4.0.0, for the seed
-    specimen and Housner's r = 0.94652: of the 120 candidates, 26 passed every
-    check of :mod:`housner.engines.tuning` at both sample steps (1 ms and 3.16 ms);
-    the tuner took the one with the widest margin among those within 15 % of
-    the cheapest cost. Measured there (worst of the two sample steps):
-
-    * r at 71 amplitudes 0.20-0.90 alpha: worst -0.29 % (accepted 0.5 %), mean -0.03 %;
-    * r at 18 amplitudes 0.02-0.19 alpha: worst +0.66 % (accepted 1.5 %), mean -0.09 % (0.5 %);
-    * free decay from 0.1 alpha, peaks after 10-40 impacts: within 1.6 % (5 %);
-    * pulses: first peaks within 0.14 %, theta_max within 0.26 % (0.5 %) on
-      the strong pulses and 0.85 % (1.5 %) on the near-threshold ones;
-    * cost 0.0155 CPU s per simulated s.
-
-    On the seed's El Centro ensemble (100 RDK motions, model scale) the
-    distribution of theta_max/alpha matches the analytic model's: KS distance
-    0.08-0.09, quartiles 0.163 / 0.203 / 0.282 against 0.153 / 0.198 / 0.289,
-    no overturn in either (the first tuned contact: KS 0.19, 0.090 / 0.173 /
-    0.249, one overturn). What matters, and why:
+    Defaults (``DEFAULTS``) came from ``housner tune mujoco`` for the seed
+    specimen and Housner's r; how the tuner chose them and what they measure,
+    on the tuner's checks and on the seed's El Centro ensemble:
+    docs/results.md#defaults-mujoco. What matters, and why:
 
     * The ground carries the pivots' ``solref`` and ``solimp``: MuJoCo averages
       the two geoms' values, and a ground at MuJoCo's default solref
@@ -323,8 +307,7 @@ class MujocoEngine(PlanarEngine):
         stiff = (0.99, 0.999, 0.0001, 0.5, 2.0)
         if target_r < specimen.r_housner * 0.999:
             # Below Housner's r the only knob is the contact's damping: over-damped contacts at the
-            # default step. Measured (2026-11-24): dampratio 8 lowers r by at most 2.6 % and unevenly
-            # (0.922 at 0.05 alpha, 0.942 at 0.8 alpha); direct damping b h > 1 is unstable. The
+            # default step (what they reach: docs/results.md#defaults-mujoco). The
             # tuner then says how far below Housner's r MuJoCo gets.
             h = 2e-4
             return [dict(timestep=h, solref=(tc, dr)) for dr in (1.0, 2.0, 4.0, 8.0) for tc in (2 * h, 4 * h)]

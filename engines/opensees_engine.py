@@ -29,9 +29,8 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
      no moment, so the corner is a hinge. ``contact_element =
      "flatSliderBearing"`` puts OpenSees' friction bearing there instead
      (the same normal spring, friction and stick stiffness, and a
-     zero-stiffness ``-Mz`` material for the hinge): the model until
-     2026-11-27, which rocks alike (first-impact r within 0.25 % of each
-     other at 0.2-0.8 alpha) at 1.34 times the CPU time;
+     zero-stiffness ``-Mz`` material for the hinge): the earlier model,
+     which rocks alike at more CPU time (docs/results.md#defaults-opensees);
    * a ``zeroLength`` spring, vertical, elastic-no-tension (``ENT``) k_n, with
      stiffness-proportional Rayleigh damping beta_K on its current stiffness
      (``-doRayleigh``), so that it damps only while the corner presses on the
@@ -51,18 +50,9 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
    corner touching down after a lift of nanometres; counted in
    ``info["loose_samples"]``); if that fails too the engine raises an
    ``EngineError`` naming the motion and the time.
-   Krylov-Newton replaced Newton as the default on 2026-11-26 (``housner
-   frontier opensees``, ``engines/models/opensees.md``): 0.69x the CPU time
-   (0.154 against 0.222 CPU s per simulated s), the same r, small-amplitude r
-   and pulses to 0.01 % (the tuner's score 5.70 for both), agreement 18 %
-   against 14 % on 50 ``elcentro`` motions; the 40-impact free decay, which
-   neither meets, is 11.8 % off against 7.6 %.
+   Why Krylov-Newton is the default: docs/results.md#defaults-opensees.
 
-The node-to-node contact replaced the bearing on 2026-11-27 (``housner frontier opensees``,
-``engines/models/opensees.md``): 0.745x the CPU time on ``elcentro-strong`` records
-(``benchmarks/bench_engine_solvers.py``), the tuner's checks the same to 0.1 % (r worst 0.44 %
-against 0.45 %, small-amplitude 0.99 % against 0.99 %, pulses 2.85 % for both, 40-impact decay
-11.0 % against 11.8 %).
+Why the node-to-node contact and not the bearing: docs/results.md#defaults-opensees.
 
 The beta_K and k_n were tuned (``engines/models/opensees.md``): first-impact
 r within 0.07 % of Housner's at 0.2-0.9 alpha (within 0.7 % at 0.01-0.19 alpha)
@@ -204,10 +194,7 @@ class OpenSeesEngine(PlanarEngine):
     name = "opensees"
     package = "openseespy"
 
-    #: Default settings (2026-11-24, openseespy 3.7.1.2, seed specimen): first-impact r within
-    #: 0.3 % of Housner's at 0.2, 0.5 and 0.8 alpha; about 0.12 CPU s per simulated s on
-    #: ``elcentro-strong`` (Krylov-Newton since 2026-11-26, node-to-node contact since 2026-11-27;
-    #: with Newton and the bearing: 0.22).
+    #: Default settings, seed specimen (what they measure: docs/results.md#defaults-opensees).
     DEFAULTS: ClassVar[dict] = {
         "timestep": 2.0e-4,
         "contact_stiffness": 1.5e7,

@@ -168,9 +168,9 @@ class PybulletEngine(PlanarEngine):
 
     Notes
     -----
-    The defaults come from the contact tuner (:mod:`housner.engines.tuning`) run on
-    2026-11-21 for the seed specimen and Housner's r: see :attr:`DEFAULTS` for
-    the measured errors. Each instance owns one PyBullet ``DIRECT`` client
+    The defaults come from the contact tuner (:mod:`housner.engines.tuning`) run
+    for the seed specimen and Housner's r; their measured errors:
+    docs/results.md#defaults-pybullet. Each instance owns one PyBullet ``DIRECT`` client
     (opened on first use and reused by every :meth:`simulate` call, which
     resets the world in it); a pickled engine carries only its settings.
 
@@ -188,16 +188,8 @@ class PybulletEngine(PlanarEngine):
     package = "pybullet"
     LABEL = "PyBullet"
 
-    #: Default settings: the choice of ``housner tune pybullet``
-    #: (housner.engines.tuning.tune) on 2026-11-21 for Specimen.bachmann2017() and
-    #: r_housner = 0.94652, pybullet 3.2.7: first-impact r within 0.29 % of
-    #: Housner's at the tuner's 15 amplitudes 0.2 ... 0.9 alpha (mean -0.05 %),
-    #: first peaks of its two one-sine pulses within 0.02 % of the analytic
-    #: model, 0.043 CPU s per simulated s. On a 0.01 alpha grid the worst r
-    #: error is 0.31 %. Settings other than the step were fixed beforehand
-    #: (see the module docstring): contact_breaking_threshold = 1e-6 m and
-    #: contact_slop = 0 remove a -0.2 % bias of r; solver_iterations above
-    #: 10 change nothing measurable here and cost up to 2x.
+    #: Default settings: the choice of ``housner tune pybullet`` (housner.engines.tuning.tune) for
+    #: Specimen.bachmann2017() and Housner's r (what they measure: docs/results.md#defaults-pybullet).
     DEFAULTS: dict = {
         "timestep": 2.0e-4,
         "solver_iterations": 10,

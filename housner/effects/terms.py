@@ -43,27 +43,9 @@ functions (their parameters are run-time data, so a new value of M_f recompiles 
 ``~/.cache/housner/kernels``; ``HOUSNER_KERNEL_DIR`` overrides), named by a SHA-256 of the hook
 section, of the kernel's sources and of every term's module source, and imports them. Numba
 compiles them with ``cache=True`` next to the files, so the machine code is reused by every later
-process, and a changed term (or kernel) gets new files instead of a stale cache. Measured on
-this project's shared 2-core machine (numba 0.68; the routes on a prototype RK4 loop of 100
-records x 4000 samples with one moment term, the chosen one on the whole kernel with
-``benchmarks/bench_terms.py``):
-
-* dispatcher-argument specialisation (the term passed as an argument of an ``@njit`` kernel):
-  as fast as generated code warm (1.03-1.14x the plain loop), but numba does not cache a
-  function specialised on a dispatcher: every process (every worker of a run) compiles it again,
-  0.6 s for the prototype as for a cold compile, so the kernel's ~3 s each time;
-* numba first-class functions (``cfunc`` pointers passed as ``types.FunctionType``): cached, but
-  each call is indirect and cannot be inlined, 1.22-1.23x the plain loop, with one fixed scalar
-  signature (no array for q);
-* generated code (chosen): the calls are direct and inlined, 1.02-1.04x the plain loop; cached
-  across processes. The whole kernel with a term compiles in 2.7-3.1 s once per structure and
-  machine (its parallel batch 1.6-1.7 s more, when used), and a new process loads it from
-  numba's cache in 0.01-0.02 s. Warm, serial, on 100 records of 16 s (two runs; the machine was
-  shared, so +-10 %): the kernel's own overhead, on identical trajectories, is 1.11-1.13x for
-  ``rotational_damping`` as a moment term and 1.13-1.18x for ``restitution`` as an impact term
-  against their fast paths (without terms it is the plain kernel); a user drag moment, pivot
-  friction and a vertical input cost 1.05-1.14x, 1.19-1.27x and 1.12-1.13x plain Housner (their
-  physics differ: other impacts, fewer overturns).
+process, and a changed term (or kernel) gets new files instead of a stale cache. Why generated
+code and not a dispatcher argument or first-class functions (the routes measured):
+docs/results.md#defaults-terms.
 
 The cache heals itself. Every generated file is written atomically (a temporary file, then
 ``os.replace``) and checked on load against its key: its content must be the text generated for

@@ -32,11 +32,8 @@ from housner.scenarios.campaigns.scoring import NonFiniteHistory
 __all__ = ["NOISE_MARGIN", "PRACTICAL", "SCREEN_LEVEL", "Trials", "rejected_text"]
 
 #: An improvement must be at least this fraction of the sensor noise sigma/alpha per record [-]: the
-#: smallest fall taken for physics rather than for the model's own conventions. Measured on a plain
-#: campaign written by an independent integrator (tests/campaign_generators.py, 60 ground motions):
-#: feeding the library's model its input 0.05 samples early or late moves the records' median error
-#: by 0.02 sigma (and the mean by more, through the one or two records it carries off by chaos, which
-#: the rank test discounts). A 12 ms sensor lag lowers the error by ~0.9 sigma, an 8 ms one by ~0.5.
+#: smallest fall taken for physics rather than for the model's own conventions.
+#: Why 0.1: docs/results.md#defaults-trial.
 PRACTICAL = 0.1
 #: Older name of PRACTICAL (the margin was a whole sigma, which dropped small effects many records prove).
 NOISE_MARGIN = PRACTICAL

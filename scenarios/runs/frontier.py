@@ -318,8 +318,8 @@ def _candidates(points: Sequence[FrontierPoint]) -> list[int]:
 def keeps_the_verdict(points: Sequence[FrontierPoint], idx: Sequence[int]) -> list[int]:
     """The points of ``idx`` whose KS distance is within the run report's criterion (:data:`~housner.stats.KS_MAX`)
     or, where the defaults' is not, no larger than theirs: a default never makes its engine fail a report it
-    passed. DART's 1/8 ms step on ``elcentro`` (2026-11-27) checked as well as 1/10 ms at 0.80x the CPU
-    time but gave KS 0.19 against 0.13. A point without a KS (not measured) is not held back by it."""
+    passed (an example: docs/results.md#defaults-frontier). A point without a KS (not measured) is not held
+    back by it."""
     d = points[0]
     if 0 not in idx or not math.isfinite(d.ks):
         return list(idx)
