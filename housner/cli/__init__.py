@@ -9,8 +9,14 @@ Exit status: 0 done; 1 a runtime failure (``run``: a record failed, unless
 scheduler; an unexpected error); 2 bad input (arguments, scenario, campaign
 or record files, output paths); 130 interrupted by Ctrl-C; 143 terminated (SIGTERM).
 
-Modules: :mod:`~housner.cli.args` (argument types, input checks, exit statuses),
-:mod:`~housner.cli.commands` (the subcommands), :mod:`~housner.cli.parser` (the parser),
+Modules: one per subcommand, each with its ``SUMMARY``, its ``add_parser`` and its ``run``
+(:mod:`~housner.cli.scenarios`, :mod:`~housner.cli.run`, :mod:`~housner.cli.report`,
+:mod:`~housner.cli.tune`, :mod:`~housner.cli.diagnose`, :mod:`~housner.cli.explain`,
+:mod:`~housner.cli.frontier`, :mod:`~housner.cli.specimen`, :mod:`~housner.cli.campaign`);
+what they share: :mod:`~housner.cli.args` (argument types, input checks, exit statuses),
+:mod:`~housner.cli.command` (a subcommand's parser, the exit-status help, ``--plugin``),
+:mod:`~housner.cli.engine_command` (what ``explain`` and ``frontier`` share);
+:mod:`~housner.cli.parser` (the parser, assembling the subcommands in order),
 :mod:`~housner.cli.app` (``main``: plugins, signals, errors).
 
 This package's own import is light on purpose: the ``housner`` script imports :func:`main` from

@@ -10,7 +10,6 @@ import housner
 from housner.effects import available_effects
 from housner.engines.base import ENGINE_PACKAGES, ENGINES
 from housner.errors import unknown_choice
-from housner.scenarios.execution.outputs import check_output_file
 
 #: Exit statuses of the command (see the module docstring).
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -24,7 +23,7 @@ class UsageError(ValueError):
     """Bad input found by the command itself (an argument, a path); exit status 2."""
 
 
-class _Parser(argparse.ArgumentParser):
+class Parser(argparse.ArgumentParser):
     """argparse, with one-line errors raised as :class:`UsageError` instead of usage text and exit."""
 
     def error(self, message: str):  # noqa: D102 - argparse API
@@ -46,8 +45,9 @@ def _int_at_least(minimum: int, what: str):
     return parse
 
 
-def _folds_int(value: str) -> int:
-    n = _nonneg_int(value)
+def folds_int(value: str) -> int:
+    """``--folds``: an integer of at least 2 (an argument's type)."""
+    n = nonneg_int(value)
     if n < 2:
         raise argparse.ArgumentTypeError(f"must be an integer of at least 2, got {value!r}")
     return n
@@ -61,7 +61,7 @@ def _as_float(text: str) -> float:
         return math.nan
 
 
-def _float_within(inside, what: str):
+def float_within(inside, what: str):
     """An argparse type: a float for which ``inside(x)`` holds, else "must be WHAT, got 'TEXT'"."""
 
     def parse(value: str) -> float:
@@ -73,7 +73,8 @@ def _float_within(inside, what: str):
     return parse
 
 
-def _amplitudes(value: str) -> tuple[float, ...]:
+def amplitudes(value: str) -> tuple[float, ...]:
+    """Comma-separated release amplitudes theta0/alpha, each in (0, 1) (an argument's type)."""
     out = []
     for part in value.split(","):
         a = _as_float(part)
@@ -85,18 +86,19 @@ def _amplitudes(value: str) -> tuple[float, ...]:
     return tuple(out)
 
 
-def _engine_name(value: str) -> str:
+def engine_name(value: str) -> str:
     """One registered engine name (an argument's type)."""
     if value not in ENGINES:
         raise argparse.ArgumentTypeError(str(unknown_choice("engine", value, ENGINES)))
     return value
 
 
-def _engines_arg(value: str) -> list[str]:
+def engines_arg(value: str) -> list[str]:
+    """Comma-separated registered engine names, at least one (an argument's type)."""
     names = [v.strip() for v in value.split(",") if v.strip()]
     if not names:
         raise argparse.ArgumentTypeError("give at least one engine name, e.g. housner,mujoco")
-    return [_engine_name(n) for n in names]
+    return [engine_name(n) for n in names]
 
 
 def _versions() -> str:
@@ -115,7 +117,9 @@ def _versions() -> str:
     return f"housner {housner.__version__} (python {platform.python_version()}; engines: {', '.join(parts)})"
 
 
-class _VersionAction(argparse.Action):
+class VersionAction(argparse.Action):
+    """``--version``: print :func:`_versions` and exit 0."""
+
     def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
         super().__init__(option_strings=option_strings, dest=dest, default=default, nargs=0, help=help)
 
@@ -124,17 +128,14 @@ class _VersionAction(argparse.Action):
         parser.exit(0)
 
 
-def _check_output_file(path: str, option: str) -> Path:
-    return check_output_file(path, option)
-
-
-def _names_arg(value: str) -> list[str]:
+def names_arg(value: str) -> list[str]:
+    """Comma-separated names, or ``none`` for an empty list (an argument's type; checked by :func:`check_effects`)."""
     if value.strip().lower() == "none":
         return []
     return [v.strip() for v in value.split(",") if v.strip()]
 
 
-def _check_campaign(path: str) -> None:
+def check_campaign(path: str) -> None:
     """The campaign argument is a directory with campaign.toml, or a .toml file: checked before the work."""
     p = Path(path)
     if not p.exists():
@@ -148,14 +149,24 @@ def _check_campaign(path: str) -> None:
         raise UsageError(f"campaign {toml} is a directory, not a file")
 
 
-def _check_effects(names: list[str] | None, option: str) -> None:
+def check_effects(names: list[str] | None, option: str) -> None:
+    """Every name is a registered effect (plugins loaded), else one line naming ``option`` and the closest."""
     known = available_effects()
     for n in names or ():
         if n not in known:
             raise UsageError(f"argument {option}: {unknown_choice('effect', n, known)}")
 
 
-_positive_int = _int_at_least(1, "a positive integer")
-_nonneg_int = _int_at_least(0, "a non-negative integer")
-_open_fraction = _float_within(lambda x: 0.0 < x < 1.0, "a number between 0 and 1 (exclusive)")
-_ratio = _float_within(lambda x: 0.0 < x <= 1.0, "a kinetic-energy ratio in (0, 1]")
+def check_ensemble_option(scenario, opt: str, value) -> None:
+    """``--n-motions`` and ``--seed`` apply to RDK ensembles: refused for a scenario with a fixed set of motions."""
+    if value is not None and scenario.source != "rdk":
+        raise UsageError(
+            f"argument {opt}: scenario {scenario.name!r} has a fixed set of {scenario.n_motions} motions "
+            f"(source {scenario.source!r}); {opt} applies to RDK ensembles"
+        )
+
+
+positive_int = _int_at_least(1, "a positive integer")
+nonneg_int = _int_at_least(0, "a non-negative integer")
+open_fraction = float_within(lambda x: 0.0 < x < 1.0, "a number between 0 and 1 (exclusive)")
+ratio = float_within(lambda x: 0.0 < x <= 1.0, "a kinetic-energy ratio in (0, 1]")

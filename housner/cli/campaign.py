@@ -6,7 +6,7 @@ import argparse
 import math
 import sys
 
-from housner.cli.args import UsageError, _float_within
+from housner.cli.args import UsageError, float_within
 
 SUMMARY = "write a campaign from another project's measured data (from-asu: the ASU granite shake-table tests)"
 
@@ -36,7 +36,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     a.add_argument("--flags", metavar="COLUMN", help="index.csv's outcome column (default overturn_<specimen>)")
     a.add_argument("--mesh", metavar="FILE", help="the specimen's scan mesh [m] (default DATA/<specimen>.obj)")
     # the range, [0, 360), is checked by housner.scan.specimen_from_mesh, with the mesh
-    a.add_argument("--azimuth", type=_float_within(math.isfinite, "a number of degrees"), default=0.0, metavar="DEG",
+    a.add_argument("--azimuth", type=float_within(math.isfinite, "a number of degrees"), default=0.0, metavar="DEG",
                    help="shaking direction from the mesh x axis [deg], in [0, 360) (default 0)")  # fmt: skip
     a.add_argument("--contact", default="hull", metavar="hull|flat:TOL",
                    help="the contact polygon: the hull's rest facet, or the vertices within TOL [m] of it")  # fmt: skip

@@ -6,6 +6,8 @@ import argparse
 import json
 import math
 
+from housner.scenarios.execution.outputs import check_output_file
+
 SUMMARY = "the equivalent planar rocking block of a scan mesh: alpha, R, I and p on each side, and its footprint"
 
 
@@ -40,11 +42,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Print the planar block's table; write the JSON and the figure when asked. Returns the exit status."""
-    from housner.cli.args import _check_output_file
-
     # Output paths are checked before the mesh is read; bad arguments raise ValueError before it too.
-    json_path = _check_output_file(args.json, "--json") if args.json else None
-    figure_path = _check_output_file(args.figure, "--figure") if args.figure else None
+    json_path = check_output_file(args.json, "--json") if args.json else None
+    figure_path = check_output_file(args.figure, "--figure") if args.figure else None
     from housner.scan import footprint_figure, specimen_from_mesh  # lazy: trimesh loads only for this command
 
     scan = specimen_from_mesh(args.mesh, azimuth=args.azimuth, contact=args.contact, density=args.density)

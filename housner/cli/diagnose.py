@@ -1,0 +1,136 @@
+"""``housner diagnose CAMPAIGN``: the physical effects a measurement campaign needs, by the error ladder (its
+parser and its run)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from housner.cli.args import check_campaign, check_effects, folds_int, names_arg, nonneg_int, open_fraction
+from housner.cli.command import add_command, plugin_option
+from housner.scenarios.execution.outputs import check_output_file
+
+SUMMARY = "find the physical effect a measurement campaign needs (error ladder)"
+
+
+def add_parser(sub, names: dict) -> argparse.ArgumentParser:
+    """The ``diagnose`` subcommand's arguments; ``names`` are the registries' names for the help texts."""
+    d = add_command(sub, "diagnose", SUMMARY, run, epilog=f"effects: {names['effects']}")
+    d.add_argument("campaign", help="campaign directory (campaign.toml + records/)")
+    d.add_argument(
+        "--effects",
+        type=names_arg,
+        help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}",
+    )
+    d.add_argument("--add", action="append", metavar="NAME", help="add this effect by hand first (repeatable)")
+    d.add_argument("--json", help="write the diagnosis to this JSON file")
+    d.add_argument("--report", help="write the HTML report to this file")
+    d.add_argument("--folds", type=folds_int, default=5,
+                   help="cross-validation folds: every record is held out once (5; at least 2)")
+    d.add_argument("--train-fraction", type=open_fraction, default=None,
+                   help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
+    d.add_argument("--seed", type=nonneg_int, default=0, help="seed of the fold assignment (0)")
+    d.add_argument("--max-effects", type=nonneg_int, default=3, help="most effects the search adds (3)")
+    d.add_argument("--allow-outside", action="store_true",
+                   help="read record files and a mesh that resolve outside the campaign folder")  # fmt: skip
+    plugin_option(d)
+    d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    return d
+
+
+def run(args: argparse.Namespace) -> int:
+    """Diagnose the campaign (its motion records, its outcome records, or both); print the error ladder, write
+    the JSON and the report asked for. Returns the exit status."""
+    from housner.reports.diagnosis import write_diagnosis_report
+    from housner.scenarios.campaigns.campaign import load_campaign
+    from housner.scenarios.campaigns.diagnose import diagnose
+
+    check_campaign(args.campaign)  # inputs and outputs checked before the work
+    check_effects(args.effects, "--effects")
+    check_effects(args.add, "--add")
+    if args.json:
+        check_output_file(args.json, "--json")
+    if args.report is not None:
+        check_output_file(args.report, "--report")
+    campaign = load_campaign(args.campaign, allow_outside=args.allow_outside)
+    for rid, file, msg in campaign.skipped:
+        print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
+    if not args.quiet:
+        print(f"{campaign!r}", file=sys.stderr)
+    outcomes = _diagnose_outcomes(args, campaign) if campaign.outcomes else None
+    if not campaign.records:  # outcome records only
+        if args.json:
+            Path(args.json).write_text(json.dumps(outcomes.to_dict(), indent=1, default=_json_default) + "\n")
+            print(f"json:   {args.json}")
+        if args.report is not None:
+            from housner.reports.diagnosis import write_outcome_report
+
+            print(f"report: {write_outcome_report(outcomes, args.report)}")
+        return 0
+    want_report = args.report is not None
+    diag = diagnose(
+        campaign,
+        effects=args.effects,
+        add=tuple(args.add or ()),
+        folds=args.folds,
+        train_fraction=args.train_fraction,
+        seed=args.seed,
+        max_effects=args.max_effects,
+        compare_steps=want_report,
+        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
+    )
+    print(f"verdict: {diag.status}")
+    print(diag.summary())
+    print()
+    print(f"{'step':45s} {'held-out error [alpha]':>24s} {'improvement':>20s}")
+    for s in diag.steps:
+        imp = "" if s.added is None else f"{s.improvement:+.4f} +- {s.improvement_se:.2g}"
+        print(f"{s.label()[:45]:45s} {s.heldout_error:>13.4f} +- {s.heldout_se:<8.2g} {imp:>20s}")
+    res = diag.verdict.residual
+    print(f"correct-model floor {res.floor:.4f} (measured), error/floor {res.ratio:.2f}, z {res.z:+.1f}; "
+          f"sensor noise sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
+    if args.json:
+        diag.to_json(args.json)
+        if outcomes is not None:  # a campaign of both kinds: the outcome diagnosis under its own key
+            data = json.loads(Path(args.json).read_text())
+            data["outcomes_diagnosis"] = outcomes.to_dict()
+            data["outcomes"] = data["outcomes_diagnosis"]["outcomes"]
+            Path(args.json).write_text(json.dumps(data, indent=1, default=_json_default) + "\n")
+        print(f"json:   {args.json}")
+    if want_report:
+        print(f"report: {write_diagnosis_report(diag, args.report)}")
+    return 0
+
+
+def _json_default(o):
+    """numpy scalars and arrays in the diagnosis' JSON."""
+    import numpy as np
+
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"{type(o).__name__} is not JSON serialisable")
+
+
+def _diagnose_outcomes(args: argparse.Namespace, campaign):
+    """The outcome records' diagnosis (:func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes`), printed."""
+    from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS
+    from housner.scenarios.campaigns.outcomes import diagnose_outcomes
+
+    d = diagnose_outcomes(campaign, folds=args.folds, seed=args.seed,
+                          progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)))  # fmt: skip
+    print(f"verdict: {d.status}")
+    print(d.summary())
+    print()
+    keys = SCORE_KEYS[:4]
+    print(f"{'held out, same folds':34s}" + "".join(f"{k:>22s}" for k in keys))
+    rows = [(s.name if i == 0 else f"+ {s.name}", s.scores) for i, s in enumerate(d.steps)]
+    rows += [(name, sc) for name, sc in d.baselines.items()]
+    for name, sc in rows:
+        cells = "".join(f"{sc[k]:>9.3f} [{sc[k + '_ci'][0]:.3f},{sc[k + '_ci'][1]:.3f}]" for k in keys)
+        print(f"{name[:34]:34s}{cells}")
+    print(f"{d.elapsed:.1f} s")
+    return d
