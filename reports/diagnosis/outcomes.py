@@ -1,6 +1,6 @@
 """The outcome report: the mission loop on records whose only measurement is whether the block overturned.
 
-:func:`render_outcome_report` turns a :class:`housner.scenarios.campaigns.outcomes.OutcomeDiagnosis` into one
+:func:`render_outcome_report` turns a :class:`housner.scenarios.campaigns.outcome_results.OutcomeDiagnosis` into one
 self-contained HTML page (the page pieces of :mod:`housner.reports.page`: inline style sheet, base64 PNG
 figures of :mod:`housner.reports.diagnosis.outcome_figures`, no script, no network);
 :func:`write_outcome_report` writes it.
@@ -90,7 +90,7 @@ def render_outcome_report(diag) -> str:
 
     Parameters
     ----------
-    diag : housner.scenarios.campaigns.outcomes.OutcomeDiagnosis
+    diag : housner.scenarios.campaigns.outcome_results.OutcomeDiagnosis
         From :func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes`.
     """
     if not diag.steps or not diag.baselines:
