@@ -8,11 +8,12 @@ from concurrent.futures import ThreadPoolExecutor
 
 import housner
 from housner.effects import EFFECTS, apply_effects, discover_effects
-from housner.engines.base import RECORD_ERRORS, Engine, _check_errors, check_response
-from housner.model import REST_TOL, RockingParams, simulate
+from housner.engines.base import RECORD_ERRORS, Engine, check_errors, check_response
+from housner.model import REST_TOL, simulate
 from housner.model import simulate_many as simulate_batch
 from housner.motion import GroundMotion
 from housner.response import Response
+from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 
 __all__ = ["HousnerEngine"]
@@ -32,7 +33,7 @@ class HousnerEngine(Engine):
     It realises every effect of :data:`housner.effects.EFFECTS`, including
     those registered later by users (``@register_effect``, plugin files,
     installed packages in the entry-point group ``housner.effects``):
-    parameter effects through :class:`housner.model.RockingParams`, term
+    parameter effects through :class:`housner.rocking_params.RockingParams`, term
     effects through a kernel generated with their terms
     (:mod:`housner.effects.terms`), mechanics effects through their own
     kernels, sensor effects on the response (:func:`housner.effects.apply_effects`).
@@ -96,7 +97,7 @@ class HousnerEngine(Engine):
         specimen, motions, effects, errors
             As for :meth:`housner.engines.base.Engine.simulate_many`.
         """
-        _check_errors(errors)
+        check_errors(errors)
         motions = list(motions)
         effects = tuple(effects)
         self._refuse_unrealised(effects)

@@ -130,7 +130,7 @@ class Engine:
             One :class:`housner.Response` per motion, in order, each passed by
             :func:`check_response` (or, with ``errors="return"``, the exception of a failed record).
         """
-        _check_errors(errors)
+        check_errors(errors)
         out: list = []
         for m in motions:
             try:
@@ -216,6 +216,6 @@ def check_response(resp: Response, engine: str, motion: GroundMotion) -> Respons
 RECORD_ERRORS = (EngineError, ValueError, FloatingPointError, ArithmeticError)
 
 
-def _check_errors(errors: str) -> None:
+def check_errors(errors: str) -> None:
     if errors not in ("raise", "return"):
         raise ValueError(f"`errors` must be 'raise' or 'return', got {errors!r}")

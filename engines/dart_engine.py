@@ -42,12 +42,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from housner.engines._planar import OVERTURN_ANGLE, PIVOT_RANGES, ROCKING_TOL, PlanarEngine, gravity_x
+from housner.engines._planar import PIVOT_RANGES, PlanarEngine, gravity_x
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["DartEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL"]
+__all__ = ["DartEngine", "INSTALL"]
 
 #: How to install the package this engine needs (named in the error when it is missing).
 INSTALL = "pip install -e '.[dart]'  (or: pip install dartpy)"

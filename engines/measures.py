@@ -46,7 +46,7 @@ def free_rocking_quarter_period(specimen: Specimen, theta0: float) -> float:
         T/4 = int_0^theta0 dtheta / sqrt(2 p^2 (cos(alpha - theta0) - cos(alpha - theta))).
 
     That integral is F(theta0, alpha) / p with F from
-    :func:`housner.calibration.half_cycle_integral`; a free half-cycle (impact
+    :func:`housner.free_rocking.half_cycle_integral`; a free half-cycle (impact
     to impact) lasts twice as long, since its rise and fall are symmetric.
 
     Parameters

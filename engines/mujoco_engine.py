@@ -109,13 +109,13 @@ from mujoco import rollout
 from housner.engines._planar import IMPACT_LAW_RANGE, PlanarEngine, checked_settings
 from housner.engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 from housner.engines.mujoco_terms import (
-    _OWN_EFFECTS,
-    _THETA_DOF,
-    _moment_couple,
-    _RealisedEffects,
-    _roll_with_couple,
-    _term_refusal,
-    _terms_of,
+    OWN_EFFECTS,
+    THETA_DOF,
+    RealisedEffects,
+    moment_couple,
+    roll_with_couple,
+    term_refusal,
+    terms_of,
 )
 from housner.errors import EngineError, unknown_choice
 from housner.impacts import impact_times
@@ -237,7 +237,7 @@ class MujocoEngine(PlanarEngine):
 
     name: ClassVar[str] = "mujoco"
     #: rotational_damping and restitution, and the registered effects realised through their moment terms
-    effects_supported = _RealisedEffects()  # the registry may grow after import
+    effects_supported = RealisedEffects()  # the registry may grow after import
 
     #: Tuned defaults (see the class notes for their provenance and measured errors).
     DEFAULTS: ClassVar[dict] = {**MJCF_DEFAULTS, "impact_energy_factor": 1.0}
@@ -334,9 +334,9 @@ class MujocoEngine(PlanarEngine):
         An effect realised through terms whose terms here are not all moment terms that vanish at rest
         (named), or a ``restitution`` above the contact's r.
         """
-        if any(e.name not in _OWN_EFFECTS for e in effects):
-            for e, terms in _terms_of(specimen, effects)[1]:
-                why = _term_refusal(self.name, e, terms)
+        if any(e.name not in OWN_EFFECTS for e in effects):
+            for e, terms in terms_of(specimen, effects)[1]:
+                why = term_refusal(self.name, e, terms)
                 if why:
                     return why
         return super().effect_refusal(specimen, effects)
@@ -344,7 +344,7 @@ class MujocoEngine(PlanarEngine):
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
         model, data = self._model(specimen)
         # every call sets the hinge's damping (the model is cached per specimen): c I0 [N m s], 0 without the effect
-        model.dof_damping[_THETA_DOF] = sum(e.c for e in effects if e.name == "rotational_damping") * specimen.inertia
+        model.dof_damping[THETA_DOF] = sum(e.c for e in effects if e.name == "rotational_damping") * specimen.inertia
         n_sub = max(1, math.ceil(motion.dt / self._settings["timestep"] * (1.0 - 1e-12)))
         h = motion.dt / n_sub
         model.opt.timestep = h
@@ -379,14 +379,14 @@ class MujocoEngine(PlanarEngine):
         if law.active:
             chunk = min(chunk, max(n_sub, round(_LAW_CHUNK_S / h)))
         # the effects' moment terms as a couple on the hinge, evaluated before each step (None: the rollout alone)
-        moment = _moment_couple(specimen, motion, effects, h, nstep)
+        moment = moment_couple(specimen, motion, effects, h, nstep)
         while done < nstep:
             k1 = min(nstep, done + chunk)
             if moment is None:
                 out, _ = rollout.rollout(model, data, state, ctrl[done:k1], initial_warmstart=warm)
                 out = out[0]
             else:
-                out = _roll_with_couple(model, data, state, ctrl[done:k1], warm, moment[0], done)
+                out = roll_with_couple(model, data, state, ctrl[done:k1], warm, moment[0], done)
             if law.active and (hit := law.first_scale(out[:, i_q + 2], out[:, i_v + 2])) is not None:
                 # the chunk ends at the scaling's step; the next one starts from its scaled velocities
                 j, c = hit

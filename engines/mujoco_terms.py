@@ -38,16 +38,16 @@ import numpy as np
 
 from housner.effects import EFFECTS, Effect, discover_effects
 from housner.effects.terms import CoulombTerm, ImpactTerm, MomentTerm, TermSet
-from housner.model import RockingParams
 from housner.motion import GroundMotion
+from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 from housner.units import G
 
 #: Degree of freedom of the theta hinge (joints x, z, theta, one dof each).
-_THETA_DOF = 2
+THETA_DOF = 2
 
 #: Effects with a route of their own (hinge damping, the impact law); the others are realised through their terms.
-_OWN_EFFECTS = frozenset({"rotational_damping", "restitution"})
+OWN_EFFECTS = frozenset({"rotational_damping", "restitution"})
 
 #: The hooks of an effect realised through its terms that must stay :class:`housner.effects.Effect`'s no-ops.
 _NO_OP_HOOKS = ("modify_params", "transform_input", "observe", "solver")
@@ -56,7 +56,7 @@ _NO_OP_HOOKS = ("modify_params", "transform_input", "observe", "solver")
 _BY_TERMS: dict[type, bool] = {}
 
 
-def _term_refusal(engine: str, effect: Any, terms: tuple) -> str | None:
+def term_refusal(engine: str, effect: Any, terms: tuple) -> str | None:
     """One line naming ``effect`` when one of its ``terms`` is not a moment term that vanishes at rest, else None."""
     for t in terms:
         if isinstance(t, MomentTerm) and not t.at_rest:
@@ -111,23 +111,23 @@ def _realised_by_terms(cls: type) -> bool:
         try:
             effect = cls(**{k: _active_value(p, seed) for k, p in cls.params.items()})
             terms = tuple(effect.terms(RockingParams.from_specimen(seed), seed))
-            ok = bool(terms) and _term_refusal("mujoco", effect, terms) is None
+            ok = bool(terms) and term_refusal("mujoco", effect, terms) is None
         except Exception:  # a user's effect that breaks here is not realised; it must not break the others
             ok = False
     _BY_TERMS[cls] = ok
     return ok
 
 
-class _RealisedEffects:
+class RealisedEffects:
     """``effects_supported`` read live from the effect registry (it may grow after import), on the class and on
     instances: the effects with a route of their own and those realised through their moment terms."""
 
     def __get__(self, obj: Any, objtype: Any = None) -> frozenset[str]:
         discover_effects()
-        return _OWN_EFFECTS | frozenset(n for n, cls in tuple(EFFECTS.items()) if _realised_by_terms(cls))
+        return OWN_EFFECTS | frozenset(n for n, cls in tuple(EFFECTS.items()) if _realised_by_terms(cls))
 
 
-def _terms_of(specimen: Specimen, effects: tuple) -> tuple[Any, list]:
+def terms_of(specimen: Specimen, effects: tuple) -> tuple[Any, list]:
     """The rocking parameters and, for each effect realised through terms, (effect, its terms).
 
     As :func:`housner.effects.apply_effects` forms them: the parameters after every ``modify_params`` in the
@@ -139,13 +139,13 @@ def _terms_of(specimen: Specimen, effects: tuple) -> tuple[Any, list]:
         prm = e.modify_params(prm, specimen)
     out = []
     for e in ordered:
-        if e.name not in _OWN_EFFECTS:
+        if e.name not in OWN_EFFECTS:
             e.check(specimen)
             out.append((e, tuple(e.terms(prm, specimen))))
     return prm, out
 
 
-def _moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: float, nstep: int) -> tuple | None:
+def moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: float, nstep: int) -> tuple | None:
     """The couple of the effects' moment terms on the theta hinge, and the terms described; None without terms.
 
     Returns ``(couple, described)``: ``couple(i, theta, theta_dot) -> float`` is the couple [N m] over engine
@@ -157,9 +157,9 @@ def _moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: 
     couple turns the block with the acceleration the terms give; a generalised force on theta is a pure
     couple, the same moment about the pivot as about the centre of mass.
     """
-    if all(e.name in _OWN_EFFECTS for e in effects):
+    if all(e.name in OWN_EFFECTS for e in effects):
         return None
-    prm, by_effect = _terms_of(specimen, effects)
+    prm, by_effect = terms_of(specimen, effects)
     terms = tuple(t for _e, ts in by_effect for t in ts)
     if not terms:
         return None
@@ -185,7 +185,7 @@ def _moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: 
     return couple, TermSet(terms).describe()
 
 
-def _roll_with_couple(model: Any, data: Any, state: np.ndarray, ctrl: np.ndarray, warm: np.ndarray,
+def roll_with_couple(model: Any, data: Any, state: np.ndarray, ctrl: np.ndarray, warm: np.ndarray,
                       couple: Any, first: int) -> np.ndarray:  # fmt: skip
     """One chunk as :func:`mujoco.rollout.rollout` runs it, with the couple [N m] on the theta hinge.
 
@@ -202,9 +202,9 @@ def _roll_with_couple(model: Any, data: Any, state: np.ndarray, ctrl: np.ndarray
     try:
         for i in range(ctrl.shape[0]):
             dctrl[:] = ctrl[i]
-            qfrc[_THETA_DOF] = couple(first + i, float(qpos[_THETA_DOF]), float(qvel[_THETA_DOF]))
+            qfrc[THETA_DOF] = couple(first + i, float(qpos[THETA_DOF]), float(qvel[THETA_DOF]))
             mujoco.mj_step(model, data)
             mujoco.mj_getState(model, data, out[i], spec)
     finally:
-        qfrc[_THETA_DOF] = 0.0
+        qfrc[THETA_DOF] = 0.0
     return out

@@ -82,7 +82,6 @@ import numpy as np
 from housner.engines._planar import (
     OVERTURN_ANGLE,
     PIVOT_RANGES,
-    ROCKING_TOL,
     RUNAWAY_M,
     ImpactLaw,
     PlanarEngine,
@@ -95,7 +94,7 @@ from housner.response import Response
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["OpenSeesEngine", "OVERTURN_ANGLE", "ROCKING_TOL", "INSTALL", "SYSTEM_LIBRARIES"]
+__all__ = ["OpenSeesEngine", "INSTALL", "SYSTEM_LIBRARIES"]
 
 #: How to install the package this engine needs (named in the error when it is missing).
 INSTALL = "pip install -e '.[opensees]'  (or: pip install 'openseespy>=3.7.1.2,<3.8')"

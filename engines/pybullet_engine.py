@@ -78,7 +78,6 @@ import numpy as np
 from housner.engines._planar import (
     IMPACT_LAW_RANGE,
     OVERTURN_ANGLE,
-    ROCKING_TOL,
     RUNAWAY_M,
     PlanarEngine,
     gravity_x,
@@ -92,7 +91,7 @@ from housner.response import Response
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["PybulletEngine", "ROCKING_TOL", "OVERTURN_ANGLE"]
+__all__ = ["PybulletEngine"]
 
 #: Sliding is measured while |theta| stays below this [rad]: past it a falling
 #: block's normal force fades and it slides, as a real one does.

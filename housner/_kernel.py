@@ -25,53 +25,50 @@ import numpy as np
 from numba import njit, prange
 
 from housner._kernel_parts import (
-    _EV_IMPACT,
-    _EV_NONE,
-    _EV_OVERTURN,
-    _EV_REVERSE,
-    _EV_STALL,
-    _MAX_EVENTS_PER_SAMPLE,
+    EV_IMPACT,
+    EV_NONE,
+    EV_OVERTURN,
+    EV_REVERSE,
+    EV_STALL,
     I_ALPHA_NEG,
     I_ALPHA_POS,
     I_DAMPING,
     I_P_NEG,
     I_P_POS,
-    I_R,
     I_R_EXP,
     I_R_NEG,
     I_R_POS,
-    N_PARAMS,
+    MAX_EVENTS_PER_SAMPLE,
     OVERTURNED,
     REST,
     ROCKING,
     STUCK,
-    _grid,
-    _initial_state,
-    _pivot_constants,
-    _restitution,
-    _store,
-    _substep_of,
-    _uplift,
+    grid,
+    initial_state,
+    pivot_constants,
+    restitution,
+    store,
+    substep_of,
+    uplift,
 )
 from housner._kernel_steps import (
     AT_REST,
     HAS_DRY,
     HAS_IMPACT,
     TERMS,
-    _accel,
-    _after_reversal,
-    _frame,
-    _hold_margin,
-    _impact,
-    _leave,
-    _rk4,
-    _step_event,
-    _step_event_dry,
+    accel,
+    after_reversal,
+    frame,
+    hold_margin,
+    impact_ratio,
+    leave,
+    rk4,
+    step_event,
+    step_event_dry,
 )
 
-#: The parameter vector's layout (:mod:`housner._kernel_parts`), and the entry points.
-__all__ = ["I_ALPHA_NEG", "I_ALPHA_POS", "I_DAMPING", "I_P_NEG", "I_P_POS", "I_R", "I_R_EXP", "I_R_NEG", "I_R_POS",
-           "N_PARAMS", "run_batch", "run_batch_parallel", "run_one"]  # fmt: skip
+#: The entry points (the parameter vector's layout is :mod:`housner._kernel_parts`'s).
+__all__ = ["run_batch", "run_batch_parallel", "run_one"]
 
 #: The terms' parameters of a kernel without terms: a constant, so that the hot calls count no
 #: references to it (an array argument passed down them costs ~10 % of the plain kernel's time).
@@ -134,8 +131,8 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
     p2_p = prm[I_P_POS] * prm[I_P_POS]
     p2_n = prm[I_P_NEG] * prm[I_P_NEG]
     c = prm[I_DAMPING]
-    tan_p, tan_n, wrest2_p, wrest2_n = _pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol)
-    at_rest, s, phi, w, t_uplift = _initial_state(theta0, theta_dot0)
+    tan_p, tan_n, wrest2_p, wrest2_n = pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol)
+    at_rest, s, phi, w, t_uplift = initial_state(theta0, theta_dot0)
     mode = REST if at_rest else ROCKING
     sig = 0.0
     if HAS_DRY and not at_rest:
@@ -143,11 +140,11 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
             sig = 1.0 if w > 0.0 else -1.0
         else:
             k1 = 1 if acc_g.size > 1 else 0
-            fr = _frame(s, acc_g[0], acc_g[k1], v_g[0], v_g[k1], dt, 0.0, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
-            if _hold_margin(phi, True, 0.0, fr, q) <= 0.0:
+            fr = frame(s, acc_g[0], acc_g[k1], v_g[0], v_g[k1], dt, 0.0, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
+            if hold_margin(phi, True, 0.0, fr, q) <= 0.0:
                 mode = STUCK
             else:
-                sig = 1.0 if _accel(phi, 0.0, 0.0, fr, q) > 0.0 else -1.0
+                sig = 1.0 if accel(phi, 0.0, 0.0, fr, q) > 0.0 else -1.0
     theta_max = abs(theta0)
     t_over = math.nan
     n_imp = 0
@@ -165,7 +162,7 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
         while mode != OVERTURNED:
             if mode == REST or mode == STUCK:
                 if AT_REST:
-                    tl, sd, sg = _leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n,
+                    tl, sd, sg = leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n,
                                         p2_p, p2_n, c, q)  # fmt: skip
                     if tl == math.inf:
                         break
@@ -177,7 +174,7 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
                     tau = tl
                     sig = sg
                 else:
-                    tu_p, tu_n = _uplift(g0, g1, tau, dt, tan_p, tan_n)
+                    tu_p, tu_n = uplift(g0, g1, tau, dt, tan_p, tan_n)
                     if tu_p == math.inf and tu_n == math.inf:
                         break
                     s = 1.0 if tu_p < tu_n else -1.0
@@ -188,31 +185,31 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
                     sig = 1.0
                 mode = ROCKING
                 w = 0.0
-                j = _substep_of(tau, m, dt)
-            tgt = _grid(j + 1, m, dt)
+                j = substep_of(tau, m, dt)
+            tgt = grid(j + 1, m, dt)
             if tgt > tau:
-                fr = _frame(s, g0, g1, u0, u1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, sig)
+                fr = frame(s, g0, g1, u0, u1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, sig)
                 H = tgt - tau
-                phi1, w1 = _rk4(phi, w, tau, H, fr, q)
+                phi1, w1 = rk4(phi, w, tau, H, fr, q)
                 ph_h = 0.0
                 if HAS_DRY:
-                    event, h, ph_h, w_h, theta_max = _step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max)
+                    event, h, ph_h, w_h, theta_max = step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max)
                 else:
-                    event, h, w_h, theta_max = _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max)
-                if event == _EV_OVERTURN:
+                    event, h, w_h, theta_max = step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max)
+                if event == EV_OVERTURN:
                     mode = OVERTURNED
                     t_over = t_k + tau + h
                     break
-                if event == _EV_IMPACT or event == _EV_REVERSE:
-                    if event == _EV_IMPACT:
+                if event == EV_IMPACT or event == EV_REVERSE:
+                    if event == EV_IMPACT:
                         if n_imp < impacts.size:
                             impacts[n_imp] = t_k + tau + h
                         n_imp += 1
                         tau = tau + h
                         r_imp = prm[I_R_NEG] if s > 0.0 else prm[I_R_POS]
                         if HAS_IMPACT:
-                            r_imp = _impact(-w_h, r_imp, s, fr[6], fr[7], q)
-                        w = _restitution(-w_h, r_imp, prm[I_R_EXP], fr[7], fr[6])
+                            r_imp = impact_ratio(-w_h, r_imp, s, fr[6], fr[7], q)
+                        w = restitution(-w_h, r_imp, prm[I_R_EXP], fr[7], fr[6])
                         phi = 0.0
                         s = -s
                         sig = 1.0
@@ -223,25 +220,25 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
                         tau = tau + h
                         phi = ph_h
                         w = 0.0
-                        sig = _after_reversal(phi, tau, fr, q, sig) if phi > 0.0 else 0.0
+                        sig = after_reversal(phi, tau, fr, q, sig) if phi > 0.0 else 0.0
                         if sig == 0.0:
                             mode = STUCK if phi > 0.0 else REST
                             if mode == REST:
                                 phi = 0.0
                     n_ev += 1
-                    if n_ev > _MAX_EVENTS_PER_SAMPLE:
+                    if n_ev > MAX_EVENTS_PER_SAMPLE:
                         mode = REST
                         phi = 0.0
                         w = 0.0
                         guard += 1
                         break
                     continue
-                if event == _EV_NONE:
+                if event == EV_NONE:
                     phi = phi1
                     w = w1
                     if phi > theta_max:
                         theta_max = phi
-                elif event == _EV_STALL:
+                elif event == EV_STALL:
                     mode = STUCK if phi > 0.0 else REST
                     w = 0.0
                 else:  # settle
@@ -253,7 +250,7 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
             if j >= m:
                 break
         if record:
-            _store(theta_out, theta_dot_out, k + 1, s, phi, w, mode == ROCKING or mode == STUCK, mode == OVERTURNED)
+            store(theta_out, theta_dot_out, k + 1, s, phi, w, mode == ROCKING or mode == STUCK, mode == OVERTURNED)
     return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard
 
 

@@ -27,15 +27,15 @@ REST, ROCKING, OVERTURNED, STUCK = 0, 1, 2, 3
 
 #: Event codes of one step; the velocity reaching zero (dry terms) and a block released at w = 0
 #: that does not move within the step come with terms only.
-_EV_NONE, _EV_IMPACT, _EV_OVERTURN, _EV_SETTLE, _EV_REVERSE, _EV_STALL = 0, 1, 2, 3, 4, 5
+EV_NONE, EV_IMPACT, EV_OVERTURN, EV_SETTLE, EV_REVERSE, EV_STALL = 0, 1, 2, 3, 4, 5
 
 #: Safety net: most events allowed inside one sample interval before the
 #: block is put to rest (never reached with rest_tol >= 1e-15, see model.py).
-_MAX_EVENTS_PER_SAMPLE = 100_000
+MAX_EVENTS_PER_SAMPLE = 100_000
 
 
 @njit(cache=True)
-def _rk4_update(y, v, h, v1, v2, v3, v4, a1, a2, a3, a4):
+def rk4_update(y, v, h, v1, v2, v3, v4, a1, a2, a3, a4):
     """End (y, v) of an RK4 step of length h [s] for a coordinate y with rate v.
 
     v1..v4 are the stage rates of y, a1..a4 those of v (weights 1, 2, 2, 1).
@@ -45,7 +45,7 @@ def _rk4_update(y, v, h, v1, v2, v3, v4, a1, a2, a3, a4):
 
 
 @njit(cache=True)
-def _secant(hl, gl, hr, gr):
+def secant(hl, gl, hr, gr):
     """Next trial point of the bracket [hl, hr] [s] with values gl, gr: the secant root, or the midpoint."""
     h = hr - gr * (hr - hl) / (gr - gl)
     if not (hl < h < hr):
@@ -70,7 +70,7 @@ def _uplift_side(b0, b1, tau_c, dt, thr):
 
 
 @njit(cache=True)
-def _grid(j, m, dt):
+def grid(j, m, dt):
     """Local time of substep boundary j of m [s] (exactly dt at j = m)."""
     if j >= m:
         return dt
@@ -78,7 +78,7 @@ def _grid(j, m, dt):
 
 
 @njit(cache=True)
-def _substep_of(tau, m, dt):
+def substep_of(tau, m, dt):
     """Index of the substep of m that contains local time tau [s] (m - 1 at tau = dt)."""
     j = int(tau * m / dt)
     if j > m - 1:
@@ -87,7 +87,7 @@ def _substep_of(tau, m, dt):
 
 
 @njit(cache=True)
-def _pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol):
+def pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol):
     """tan(alpha) [-] and the squared rest speed [rad^2/s^2] of the +x and the -x pivot.
 
     Rest rule: the free-rocking peak phi_pk of post-impact speed w obeys
@@ -103,7 +103,7 @@ def _pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol):
 
 
 @njit(cache=True)
-def _initial_state(theta0, theta_dot0):
+def initial_state(theta0, theta_dot0):
     """(at_rest, s, phi, w, t_uplift) of a block released at theta0 [rad] with theta_dot0 [rad/s]."""
     if theta0 == 0.0 and theta_dot0 == 0.0:
         return True, 1.0, 0.0, 0.0, math.nan
@@ -114,7 +114,7 @@ def _initial_state(theta0, theta_dot0):
 
 
 @njit(cache=True)
-def _uplift(g0, g1, tau, dt, thr_p, thr_n):
+def uplift(g0, g1, tau, dt, thr_p, thr_n):
     """First local times >= tau [s] at which g0 -> g1 [g] falls below -thr_p and rises above thr_n (inf: not here).
 
     With thr = tan(alpha) of each pivot: when a block at rest tips onto the +x and onto the -x corner.
@@ -123,7 +123,7 @@ def _uplift(g0, g1, tau, dt, thr_p, thr_n):
 
 
 @njit(cache=True)
-def _reduced_ground(s, g0, g1, dt):
+def reduced_ground(s, g0, g1, dt):
     """Reduced ground acceleration on pivot s: a0 = s g0 [-] at the sample start and its slope [1/s]."""
     if s > 0.0:
         a0 = g0
@@ -135,7 +135,7 @@ def _reduced_ground(s, g0, g1, dt):
 
 
 @njit(cache=True)
-def _restitution(v, r, r_exp, p2, alpha):
+def restitution(v, r, r_exp, p2, alpha):
     """Speed [rad/s] after an impact at speed v: sqrt(r_eff) v, r_eff = clip(r (v / (p alpha))^r_exp, 0, 1)."""
     r_eff = r
     if r_exp != 0.0 and v > 0.0:
@@ -148,7 +148,7 @@ def _restitution(v, r, r_exp, p2, alpha):
 
 
 @njit(cache=True)
-def _store(theta_out, theta_dot_out, i, s, phi, w, rocking, overturned):
+def store(theta_out, theta_dot_out, i, s, phi, w, rocking, overturned):
     """Write sample i of the history: the state while rocking, +-pi/2 once overturned, else rest."""
     if rocking:
         theta_out[i] = s * phi

@@ -11,7 +11,7 @@ pivots, with four hooks that the effects' terms (:mod:`housner.effects.terms`) f
             + _moment(phi, w, t, a, v, s, alpha_s, p_s^2, q)          smooth moments (sum of the terms)
             - sig * _dry(phi, t, a, v, s, alpha_s, p_s^2, q)           Coulomb moments, sig = sgn(w)
 
-    at an impact: r = _impact(w_before, r, s, alpha_s, p_s^2, q)      the energy ratio, chained
+    at an impact: r = impact_ratio(w_before, r, s, alpha_s, p_s^2, q)      the energy ratio, chained
 
 ``q`` is every term's parameters in one array; a generated hook passes each term its own slice.
 The section between the ``hooks`` markers below is what :mod:`housner.effects.terms` replaces to
@@ -44,19 +44,19 @@ import math
 from numba import njit
 
 from housner._kernel_parts import (
-    _EV_IMPACT,
-    _EV_NONE,
-    _EV_OVERTURN,
-    _EV_REVERSE,
-    _EV_SETTLE,
-    _EV_STALL,
     EPS,
+    EV_IMPACT,
+    EV_NONE,
+    EV_OVERTURN,
+    EV_REVERSE,
+    EV_SETTLE,
+    EV_STALL,
     HALF_PI,
-    _grid,
-    _reduced_ground,
-    _rk4_update,
-    _secant,
-    _substep_of,
+    grid,
+    reduced_ground,
+    rk4_update,
+    secant,
+    substep_of,
 )
 
 # <hooks>
@@ -81,7 +81,7 @@ def _dry(phi, t, a, v, s, alpha, p2, q):
 
 
 @njit(cache=True)
-def _impact(w, r, s, alpha, p2, q):
+def impact_ratio(w, r, s, alpha, p2, q):
     """Energy ratio [-] of an impact at speed w [rad/s] after the impact terms, from the ratio r in force."""
     return r
 
@@ -95,13 +95,13 @@ TERMS = HAS_MOMENT or HAS_DRY or HAS_IMPACT
 # ----------------------------------------------------------------------
 # the right-hand side on one step: a frame of constants
 @njit(cache=True)
-def _frame(s, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, sig):
+def frame(s, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, sig):
     """Constants of a step on pivot s: (a0, a slope, v0, v slope, t_k, s, alpha, p^2, c, sig).
 
     a = a0 + slope tau and v = v0 + v_slope tau at local time tau [s] of the sample that starts at
     t_k [s]; sig is the frozen direction of motion (dry terms), 0 for none.
     """
-    a0, slope = _reduced_ground(s, g0, g1, dt)
+    a0, slope = reduced_ground(s, g0, g1, dt)
     alpha = alpha_p if s > 0.0 else alpha_n
     p2 = p2_p if s > 0.0 else p2_n
     return (a0, slope, v0, (v1 - v0) / dt, t_k, s, alpha, p2, c, sig)
@@ -114,7 +114,7 @@ def _with_sig(fr, sig):
 
 
 @njit(cache=True)
-def _accel(phi, w, tau, fr, q):
+def accel(phi, w, tau, fr, q):
     """phi'' [rad/s^2] at local time tau [s]: Housner's, the viscous rate, and the terms."""
     a = fr[0] + fr[1] * tau
     d = fr[6] - phi
@@ -138,17 +138,17 @@ def _capacity(phi, tau, fr, q):
 
 
 @njit(cache=True)
-def _rk4(phi, w, tau, h, fr, q):
+def rk4(phi, w, tau, h, fr, q):
     """One classic RK4 step of length h [s] from local time tau [s], a(tau) = a0 + slope tau (the frame's)."""
     hh = 0.5 * h
-    k1 = _accel(phi, w, tau, fr, q)
+    k1 = accel(phi, w, tau, fr, q)
     w2 = w + hh * k1
-    k2 = _accel(phi + hh * w, w2, tau + hh, fr, q)
+    k2 = accel(phi + hh * w, w2, tau + hh, fr, q)
     w3 = w + hh * k2
-    k3 = _accel(phi + hh * w2, w3, tau + hh, fr, q)
+    k3 = accel(phi + hh * w2, w3, tau + hh, fr, q)
     w4 = w + h * k3
-    k4 = _accel(phi + h * w3, w4, tau + h, fr, q)
-    return _rk4_update(phi, w, h, w, w2, w3, w4, k1, k2, k3, k4)
+    k4 = accel(phi + h * w3, w4, tau + h, fr, q)
+    return rk4_update(phi, w, h, w, w2, w3, w4, k1, k2, k3, k4)
 
 
 @njit(cache=True)
@@ -164,19 +164,19 @@ def _locate(kind, target, hl, gl, hr, gr, phi0, w0, tau, fr, q):
     Returns (h, phi(h), w(h)).
     """
     if gr == 0.0:
-        ph, wh = _rk4(phi0, w0, tau, hr, fr, q)
+        ph, wh = rk4(phi0, w0, tau, hr, fr, q)
         return hr, ph, wh
-    h = _secant(hl, gl, hr, gr)
+    h = secant(hl, gl, hr, gr)
     ph = 0.0
     wh = 0.0
     for _ in range(200):
-        ph, wh = _rk4(phi0, w0, tau, h, fr, q)
+        ph, wh = rk4(phi0, w0, tau, h, fr, q)
         if kind == 0:
             g = ph - target
             d = wh
         else:
             g = wh
-            d = _accel(ph, wh, tau + h, fr, q)
+            d = accel(ph, wh, tau + h, fr, q)
         if g == 0.0:
             break
         if (g > 0.0) == (gl > 0.0):
@@ -201,9 +201,9 @@ def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
     """Does phi cross zero inside the step (phi, w) -> (phi1, w1) of length H [s]?
 
     ``hp``, ``php``: time and value of a peak inside the step (hp < 0 if none).
-    Returns (event, hl, gl, hr, gr): ``_EV_IMPACT`` with a bracket [hl, hr] of
-    the first crossing (phi = gl > 0 at hl, gr <= 0 at hr), ``_EV_SETTLE`` or
-    ``_EV_NONE``.
+    Returns (event, hl, gl, hr, gr): ``EV_IMPACT`` with a bracket [hl, hr] of
+    the first crossing (phi = gl > 0 at hl, gr <= 0 at hr), ``EV_SETTLE`` or
+    ``EV_NONE``.
     """
     hl = -1.0
     gl = 0.0
@@ -221,7 +221,7 @@ def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
             # step with phi > 0 to bracket the next crossing
             hb = 0.5 * H
             for _ in range(80):
-                pb, _wb = _rk4(phi, w, tau, hb, fr, q)
+                pb, _wb = rk4(phi, w, tau, hb, fr, q)
                 if pb > 0.0:
                     hl = hb
                     gl = pb
@@ -229,7 +229,7 @@ def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
                 hb *= 0.5
         if hl < 0.0:
             # fresh uplift that did not lift (threshold met to rounding only)
-            return _EV_SETTLE, hl, gl, hr, gr
+            return EV_SETTLE, hl, gl, hr, gr
     elif w < 0.0 and w1 > 0.0 and phi1 > 0.0 and phi > 0.0:
         # a minimum inside the step: does it dip below zero?
         hm, phm, _wm = _locate(1, 0.0, 0.0, w, H, w1, phi, w, tau, fr, q)
@@ -238,11 +238,11 @@ def _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q):
             gl = phi
             hr = hm
             gr = phm
-    return (_EV_IMPACT if hl >= 0.0 else _EV_NONE), hl, gl, hr, gr
+    return (EV_IMPACT if hl >= 0.0 else EV_NONE), hl, gl, hr, gr
 
 
 @njit(cache=True, inline="always")
-def _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max):
+def step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max):
     """First event of the RK4 step (phi, w) -> (phi1, w1) of length H [s] from local time tau [s].
 
     Returns (event, h, w_h, theta_max): the event code (``_EV_*``), the time
@@ -262,27 +262,27 @@ def _step_event(phi, w, phi1, w1, tau, H, fr, q, theta_max):
             hr = hp
             gr = php - HALF_PI
         h_o, _ph, _wh = _locate(0, HALF_PI, 0.0, phi - HALF_PI, hr, gr, phi, w, tau, fr, q)
-        return _EV_OVERTURN, h_o, 0.0, HALF_PI
+        return EV_OVERTURN, h_o, 0.0, HALF_PI
     if hp >= 0.0 and php > theta_max:
         theta_max = php
     # impact: phi crosses zero inside the step
     event, hl, gl, hr, gr = _crossing(phi, w, phi1, w1, hp, php, tau, H, fr, q)
-    if event == _EV_IMPACT:
+    if event == EV_IMPACT:
         h_i, _ph, w_i = _locate(0, 0.0, hl, gl, hr, gr, phi, w, tau, fr, q)
-        return _EV_IMPACT, h_i, w_i, theta_max
+        return EV_IMPACT, h_i, w_i, theta_max
     return event, 0.0, 0.0, theta_max
 
 
 # ----------------------------------------------------------------------
 # events of a step with dry terms: phi is monotone between reversals
 @njit(cache=True, inline="always")
-def _step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max):
+def step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max):
     """First event of the step (phi, w) -> (phi1, w1) of length H [s] with the direction sig = fr[9] frozen.
 
-    Returns (event, h, phi_h, w_h, theta_max): ``_EV_REVERSE`` at the first zero of w (h, phi
-    there), ``_EV_IMPACT`` (h, w there), ``_EV_OVERTURN``, ``_EV_STALL`` (released at w = 0, the
-    block does not move in the direction sig), ``_EV_SETTLE`` (reaches phi = 0 at w = 0) or
-    ``_EV_NONE``. Until its first zero w keeps the sign sig, so phi is monotone there and every
+    Returns (event, h, phi_h, w_h, theta_max): ``EV_REVERSE`` at the first zero of w (h, phi
+    there), ``EV_IMPACT`` (h, w there), ``EV_OVERTURN``, ``EV_STALL`` (released at w = 0, the
+    block does not move in the direction sig), ``EV_SETTLE`` (reaches phi = 0 at w = 0) or
+    ``EV_NONE``. Until its first zero w keeps the sign sig, so phi is monotone there and every
     bracket below is a bracket of the only root.
     """
     sig = fr[9]
@@ -297,14 +297,14 @@ def _step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max):
             hl = -1.0
             hb = 0.5 * H
             for _ in range(80):
-                _pb, wb = _rk4(phi, w, tau, hb, fr, q)
+                _pb, wb = rk4(phi, w, tau, hb, fr, q)
                 if sig * wb > 0.0:
                     hl = hb
                     gl = wb
                     break
                 hb *= 0.5
             if hl < 0.0:
-                return _EV_STALL, 0.0, phi, 0.0, theta_max
+                return EV_STALL, 0.0, phi, 0.0, theta_max
         if w1 == 0.0:
             h_end = H
         else:
@@ -313,31 +313,31 @@ def _step_event_dry(phi, w, phi1, w1, tau, H, fr, q, theta_max):
     if sig > 0.0:
         if p_end >= HALF_PI:
             h_o, _ph, _wh = _locate(0, HALF_PI, 0.0, phi - HALF_PI, h_end, p_end - HALF_PI, phi, w, tau, fr, q)
-            return _EV_OVERTURN, h_o, HALF_PI, 0.0, HALF_PI
+            return EV_OVERTURN, h_o, HALF_PI, 0.0, HALF_PI
         if rev and p_end > theta_max:
             theta_max = p_end
     elif p_end < 0.0 or (p_end == 0.0 and not rev):
         if phi > 0.0:
             h_i, _ph, w_i = _locate(0, 0.0, 0.0, phi, h_end, p_end, phi, w, tau, fr, q)
-            return _EV_IMPACT, h_i, 0.0, w_i, theta_max
-        return _EV_SETTLE, 0.0, 0.0, 0.0, theta_max
+            return EV_IMPACT, h_i, 0.0, w_i, theta_max
+        return EV_SETTLE, 0.0, 0.0, 0.0, theta_max
     elif p_end == 0.0:
-        return _EV_SETTLE, 0.0, 0.0, 0.0, theta_max
+        return EV_SETTLE, 0.0, 0.0, 0.0, theta_max
     if rev:
-        return _EV_REVERSE, h_end, p_end, 0.0, theta_max
-    return _EV_NONE, 0.0, 0.0, 0.0, theta_max
+        return EV_REVERSE, h_end, p_end, 0.0, theta_max
+    return EV_NONE, 0.0, 0.0, 0.0, theta_max
 
 
 # ----------------------------------------------------------------------
 # a block held still: when does it start to move?
 @njit(cache=True)
-def _hold_margin(phi, stuck, tau, fr, q):
+def hold_margin(phi, stuck, tau, fr, q):
     """> 0 when a block held at phi (w = 0) starts to move at local time tau [s] [rad/s^2].
 
     At rest on the ground (``stuck`` False) it lifts onto the frame's pivot when phi'' > capacity;
     stuck at phi > 0 it moves either way when |phi''| > capacity (phi'' without the dry terms).
     """
-    acc = _accel(phi, 0.0, tau, fr, q)
+    acc = accel(phi, 0.0, tau, fr, q)
     if stuck:
         acc = abs(acc)
     return acc - _capacity(phi, tau, fr, q)
@@ -357,7 +357,7 @@ def _first_positive(phi, stuck, tl, fl, th, fh, fr, q, scale):
         t = th - fh * (th - tl) / (fh - fl)
         if not (tl < t < th):
             t = 0.5 * (tl + th)
-        f = _hold_margin(phi, stuck, t, fr, q)
+        f = hold_margin(phi, stuck, t, fr, q)
         if f > 0.0:
             th = t
             fh = f
@@ -374,29 +374,29 @@ def _first_positive(phi, stuck, tl, fl, th, fh, fr, q, scale):
 
 
 @njit(cache=True)
-def _leave(stuck, phi, s, tau, m, dt, g0, g1, v0, v1, t_k, alpha_p, alpha_n, p2_p, p2_n, c, q):
+def leave(stuck, phi, s, tau, m, dt, g0, g1, v0, v1, t_k, alpha_p, alpha_n, p2_p, p2_n, c, q):
     """(local time [s], pivot, direction) at which a block held still starts to move in [tau, dt].
 
     At rest (``stuck`` False, phi = 0) both corners are tried and the earlier wins; stuck at
-    phi > 0 it stays on pivot s. The margin (:func:`_hold_margin`) is checked at tau and at every
+    phi > 0 it stays on pivot s. The margin (:func:`hold_margin`) is checked at tau and at every
     substep boundary after it. Time inf when the block stays put through the sample.
     """
     best = math.inf
     s_best = s
     for i in range(1 if stuck else 2):
         sd = s if stuck else (1.0 if i == 0 else -1.0)
-        fr = _frame(sd, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
+        fr = frame(sd, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
         tl = tau
-        fl = _hold_margin(phi, stuck, tl, fr, q)
+        fl = hold_margin(phi, stuck, tl, fr, q)
         t_go = math.inf
         if fl > 0.0:
             t_go = tau
         else:
-            j = _substep_of(tau, m, dt)
+            j = substep_of(tau, m, dt)
             while j < m:
-                th = _grid(j + 1, m, dt)
+                th = grid(j + 1, m, dt)
                 if th > tl:
-                    fh = _hold_margin(phi, stuck, th, fr, q)
+                    fh = hold_margin(phi, stuck, th, fr, q)
                     if fh > 0.0:
                         t_go = _first_positive(phi, stuck, tl, fl, th, fh, fr, q, dt)
                         break
@@ -408,20 +408,20 @@ def _leave(stuck, phi, s, tau, m, dt, g0, g1, v0, v1, t_k, alpha_p, alpha_n, p2_
             s_best = sd
     sig = 0.0
     if best < math.inf:
-        fr = _frame(s_best, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
-        sig = 1.0 if _accel(phi, 0.0, best, fr, q) > 0.0 else -1.0
+        fr = frame(s_best, g0, g1, v0, v1, dt, t_k, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
+        sig = 1.0 if accel(phi, 0.0, best, fr, q) > 0.0 else -1.0
     return best, s_best, sig
 
 
 @njit(cache=True)
-def _after_reversal(phi, tau, fr, q, sig_before):
+def after_reversal(phi, tau, fr, q, sig_before):
     """The direction after w reached 0 at phi > 0 moving in sig_before: 0 (stuck) or -sig_before.
 
     It turns back when phi'' at w = 0 without the dry terms exceeds their capacity; a phi'' that
     still points along sig_before (it was slowing down, so only by rounding) counts as stuck.
     """
     fr = _with_sig(fr, 0.0)
-    acc = _accel(phi, 0.0, tau, fr, q)
+    acc = accel(phi, 0.0, tau, fr, q)
     if abs(acc) <= _capacity(phi, tau, fr, q) or (acc > 0.0) == (sig_before > 0.0):
         return 0.0
     return -sig_before

@@ -31,28 +31,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from housner.free_rocking import (
-    _check_alpha,
-    _potential,
-    amplitude_from_state,
+    check_alpha,
     energy_ratios,
     half_cycle_integral,
-    half_cycle_time,
     p_from_half_cycle,
+    potential,
 )
 from housner.impacts import HYSTERESIS_SIGMAS, MIN_SAMPLES, fit_crossing, fit_peak, hysteresis_crossings
 
 __all__ = [
     "FreeVibrationCalibration",
     "FreeVibrationPeaks",
-    "amplitude_from_state",
     "calibrate_free_vibration",
-    "energy_ratios",
     "estimate_noise",
     "free_vibration_peaks",
     "half_cycle_durations",
-    "half_cycle_integral",
-    "half_cycle_time",
-    "p_from_half_cycle",
 ]
 
 #: Default noise floor: half-cycles whose amplitude falls below this many noise
@@ -205,7 +198,7 @@ def free_vibration_peaks(
     """
     t, theta = _check_record(t, theta)
     if alpha is not None:
-        alpha = _check_alpha(alpha)
+        alpha = check_alpha(alpha)
     if noise is None:
         sigma = estimate_noise(theta)
     else:
@@ -490,7 +483,7 @@ def calibrate_free_vibration(
     ----------
     Housner (1963); Bachmann et al. (2017), section 3.2, eqs. 7 and 8.
     """
-    alpha = _check_alpha(alpha)
+    alpha = check_alpha(alpha)
     if not (isinstance(n_p, (int, np.integer)) and n_p >= 1):
         raise ValueError(f"`n_p` must be a positive integer, got {n_p!r}")
     pk = free_vibration_peaks(t, theta, alpha, noise=noise, min_amplitude=min_amplitude)
@@ -499,7 +492,7 @@ def calibrate_free_vibration(
 
     # --- r: energy-decay line over all impacts
     amp = pk.amplitude
-    E = _potential(amp, alpha)
+    E = potential(amp, alpha)
     s_amp = np.maximum(pk.amplitude_std, 1e-12 * amp)
     var_lnE = (np.sin(alpha - amp) * s_amp / E) ** 2
     i = np.arange(amp.size, dtype=float)

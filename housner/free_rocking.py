@@ -34,7 +34,7 @@ __all__ = [
 ]
 
 
-def _check_alpha(alpha: float) -> float:
+def check_alpha(alpha: float) -> float:
     try:
         a = float(alpha)
     except (TypeError, ValueError):
@@ -44,7 +44,7 @@ def _check_alpha(alpha: float) -> float:
     return a
 
 
-def _potential(theta: np.ndarray, alpha: float) -> np.ndarray:
+def potential(theta: np.ndarray, alpha: float) -> np.ndarray:
     """Potential energy over m g R at |theta| [-]: cos(alpha - |theta|) - cos(alpha)."""
     th = np.abs(theta)
     # 2 sin(alpha - th/2) sin(th/2): the same quantity without cancellation at small th.
@@ -86,7 +86,7 @@ def half_cycle_integral(theta0, alpha: float):
     ----------
     Housner (1963), eq. for the free rocking period; Bachmann et al. (2017) eq. 7.
     """
-    alpha = _check_alpha(alpha)
+    alpha = check_alpha(alpha)
     th = np.asarray(theta0, dtype=float)
     if np.any(~np.isfinite(th)) or np.any(th < 0) or np.any(th >= alpha):
         raise ValueError(f"`theta0` must lie in [0, alpha = {alpha:.6g}) rad, got {theta0!r}")
@@ -175,7 +175,7 @@ def p_from_half_cycle(T_half, theta0, alpha: float, *, method: str = "linearised
     ----------
     Housner (1963); Bachmann et al. (2017), eq. 7.
     """
-    alpha = _check_alpha(alpha)
+    alpha = check_alpha(alpha)
     T = np.asarray(T_half, dtype=float)
     th = np.asarray(theta0, dtype=float)
     if np.any(~np.isfinite(T)) or np.any(T <= 0):
@@ -216,7 +216,7 @@ def amplitude_from_state(theta, theta_dot, alpha: float, p: float):
     - cos(alpha - |theta|)) (Housner 1963). Useful to get exact peaks from a
     noise-free simulated record, and for the free rocking after a pulse.
     """
-    alpha = _check_alpha(alpha)
+    alpha = check_alpha(alpha)
     th = np.abs(np.asarray(theta, dtype=float))
     c = np.cos(alpha - th) + np.asarray(theta_dot, dtype=float) ** 2 / (2.0 * p * p)
     with np.errstate(invalid="ignore"):
@@ -248,12 +248,12 @@ def energy_ratios(peaks, alpha: float) -> np.ndarray:
     ----------
     Bachmann et al. (2017), eq. 8.
     """
-    alpha = _check_alpha(alpha)
+    alpha = check_alpha(alpha)
     amp = getattr(peaks, "amplitude", peaks)  # a FreeVibrationPeaks (housner.calibration) or the amplitudes
     amp = np.abs(np.asarray(amp, dtype=float))
     if amp.ndim != 1:
         raise ValueError(f"`peaks` must be one-dimensional, got shape {amp.shape}")
     if np.any(~np.isfinite(amp)) or np.any(amp >= alpha):
         raise ValueError(f"`peaks` must be finite amplitudes below alpha = {alpha:.6g} rad")
-    E = _potential(amp, alpha)
+    E = potential(amp, alpha)
     return E[1:] / E[:-1]

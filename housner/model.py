@@ -77,7 +77,7 @@ from dataclasses import asdict
 
 import numpy as np
 
-from housner import _kernel
+from housner._kernel import run_batch, run_batch_parallel
 from housner._validate import finite as _finite
 from housner.motion import VERTICAL, GroundMotion
 from housner.response import Response
@@ -85,7 +85,7 @@ from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["REST_TOL", "RockingParams", "default_substeps", "simulate", "simulate_many", "theta_max_many"]
+__all__ = ["REST_TOL", "default_substeps", "simulate", "simulate_many", "theta_max_many"]
 
 #: Default accuracy target: the RK4 step h is chosen so that p h <= PH_MAX [-].
 #: RK4's global error scales as (p h)^4; at 0.01 theta_max is converged to
@@ -299,10 +299,12 @@ def _vertical(motions, terms) -> np.ndarray:
 def _run_kernel(terms, parallel: bool, acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta,
                 theta_dot, impacts, imp_off, out) -> None:  # fmt: skip
     """Run the plain kernel (``terms`` None: no v_g nor q) or the one generated for ``terms``."""
-    mod = _kernel if terms is None else terms.kernel()
-    kern = mod.run_batch_parallel if parallel else mod.run_batch
     if terms is None:
+        kern = run_batch_parallel if parallel else run_batch
         v_g, q = acc_g, _no_terms(dts.size)
+    else:
+        mod = terms.kernel()
+        kern = mod.run_batch_parallel if parallel else mod.run_batch
     kern(acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta, theta_dot, impacts, imp_off, out)
 
 
@@ -442,7 +444,7 @@ def theta_max_many(
     acc_g = np.concatenate(rows) / G
     out = np.empty((n_rec, 6))
     empty = np.empty(0)
-    kern = _kernel.run_batch_parallel if parallel and n_rec > 1 else _kernel.run_batch
+    kern = run_batch_parallel if parallel and n_rec > 1 else run_batch
     kern(acc_g, acc_g, offsets, dts, ms, prm_a, _no_terms(n_rec), th0, thd0, tol, False, empty, empty, empty,
          np.zeros(n_rec + 1, np.int64), out)  # fmt: skip
     overturned = out[:, 1] != 0.0

@@ -15,31 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from housner.readers import (
-    CHANNEL_PREFIX,
-    QUANTITIES,
-    CsvColumns,
-    parse_unit,
-    read_at2,
-    read_csv_columns,
-    read_csv_header,
-    read_csv_motion,
-    read_csv_si,
-    uniform_step,
-)
+from housner.readers import CHANNEL_PREFIX, read_at2, read_csv_motion
 
-__all__ = [
-    "CHANNEL_PREFIX",
-    "QUANTITIES",
-    "VERTICAL",
-    "CsvColumns",
-    "GroundMotion",
-    "parse_unit",
-    "read_csv_columns",
-    "read_csv_header",
-    "read_csv_si",
-    "uniform_step",
-]
+__all__ = ["VERTICAL", "GroundMotion"]
 
 #: The vertical table acceleration [m/s^2], positive upward (g -> g + a_v).
 VERTICAL = "ground_acc_vertical"

@@ -12,7 +12,18 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from housner import _kernel
+from housner._kernel_parts import (
+    I_ALPHA_NEG,
+    I_ALPHA_POS,
+    I_DAMPING,
+    I_P_NEG,
+    I_P_POS,
+    I_R,
+    I_R_EXP,
+    I_R_NEG,
+    I_R_POS,
+    N_PARAMS,
+)
 from housner._validate import finite as _finite
 from housner.specimen import Specimen
 
@@ -184,15 +195,15 @@ class RockingParams:
         return max(self.p_pos, self.p_neg)
 
     def as_array(self) -> np.ndarray:
-        """The kernel's parameter vector (float64, layout of ``housner._kernel``)."""
-        v = np.empty(_kernel.N_PARAMS)
-        v[_kernel.I_ALPHA_POS] = self.alpha_pos
-        v[_kernel.I_ALPHA_NEG] = self.alpha_neg
-        v[_kernel.I_P_POS] = self.p_pos
-        v[_kernel.I_P_NEG] = self.p_neg
-        v[_kernel.I_R] = self.r
-        v[_kernel.I_R_POS] = self.r_impact_pos
-        v[_kernel.I_R_NEG] = self.r_impact_neg
-        v[_kernel.I_R_EXP] = self.r_amp_exponent
-        v[_kernel.I_DAMPING] = self.damping
+        """The kernel's parameter vector (float64, layout of ``housner._kernel_parts``)."""
+        v = np.empty(N_PARAMS)
+        v[I_ALPHA_POS] = self.alpha_pos
+        v[I_ALPHA_NEG] = self.alpha_neg
+        v[I_P_POS] = self.p_pos
+        v[I_P_NEG] = self.p_neg
+        v[I_R] = self.r
+        v[I_R_POS] = self.r_impact_pos
+        v[I_R_NEG] = self.r_impact_neg
+        v[I_R_EXP] = self.r_amp_exponent
+        v[I_DAMPING] = self.damping
         return v

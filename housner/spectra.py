@@ -35,18 +35,15 @@ import numpy as np
 from housner.errors import unknown_choice
 from housner.model import simulate_many
 from housner.motion import GroundMotion
-from housner.pulses import RICKER_KINDS, one_sine, ricker, ricker_half_width, ricker_shape
+from housner.pulses import one_sine, ricker, ricker_half_width
 from housner.specimen import Specimen
 from housner.units import G
 
 __all__ = [
     "PULSES",
-    "RICKER_KINDS",
     "RockingSpectrum",
     "free_rocking_peak",
     "pulse_motion",
-    "ricker_half_width",
-    "ricker_shape",
     "rocking_spectrum",
 ]
 

@@ -99,7 +99,7 @@ def _theta_over_alpha(values, name: str = "values", *, allow_empty: bool = False
     return v
 
 
-def _check_ci(ci: float, name: str = "ci") -> float:
+def check_ci(ci: float, name: str = "ci") -> float:
     try:
         c = float(ci)
     except (TypeError, ValueError):
@@ -213,7 +213,7 @@ def dkw_band(F, n: int, ci: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
     ----------
     Dvoretzky, Kiefer and Wolfowitz (1956); Massart (1990), tight constant 2.
     """
-    ci = _check_ci(ci)
+    ci = check_ci(ci)
     if not (isinstance(n, (int, np.integer)) and n > 0):
         raise ValueError(f"`n` must be a positive integer, got {n!r}")
     F = np.asarray(F, dtype=np.float64)
@@ -305,7 +305,7 @@ def percentiles(
         raise ValueError(f"`q` must be percentile levels in [0, 100], got {q!r}") from None
     if qa.ndim != 1 or qa.size == 0 or not np.all((qa >= 0) & (qa <= 100)):
         raise ValueError(f"`q` must be percentile levels in [0, 100], got {q!r}")
-    ci = _check_ci(ci)
+    ci = check_ci(ci)
     if not (isinstance(n_boot, (int, np.integer)) and n_boot >= 0):
         raise ValueError(f"`n_boot` must be a non-negative integer, got {n_boot!r}")
     value = _percentile_inf(v, qa, method)
@@ -415,7 +415,7 @@ def overturn_probability(overturned, *, ci: float = 0.95, method: str = "wilson"
         if not np.all(np.isin(o, (0, 1))):
             raise ValueError("`overturned` must hold booleans (or 0/1), one verdict per record")
         o = o.astype(bool)
-    ci = _check_ci(ci)
+    ci = check_ci(ci)
     if method not in _PROPORTION_METHODS:
         raise unknown_choice("`method`", method, _PROPORTION_METHODS)
     n = int(o.size)

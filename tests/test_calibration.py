@@ -10,12 +10,14 @@ from scipy.integrate import solve_ivp
 
 from housner import GroundMotion, Specimen
 from housner.calibration import (
-    amplitude_from_state,
     calibrate_free_vibration,
-    energy_ratios,
     estimate_noise,
     free_vibration_peaks,
     half_cycle_durations,
+)
+from housner.free_rocking import (
+    amplitude_from_state,
+    energy_ratios,
     half_cycle_integral,
     half_cycle_time,
     p_from_half_cycle,

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from housner import GroundMotion, Specimen
-from housner.calibration import half_cycle_integral
 from housner.cli import main
 from housner.errors import DataFileError
+from housner.free_rocking import half_cycle_integral
 from housner.model import simulate
-from housner.motion import uniform_step
+from housner.readers import uniform_step
 from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, estimate_release, load_campaign
 from housner.scenarios.campaigns.compare import (
     ERROR_CLIP,

@@ -24,7 +24,8 @@ from housner import Specimen
 from housner.effects import available_effects, effect_class
 from housner.reports.diagnosis import write_diagnosis_report
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import PRACTICAL, _judge, diagnose, fit_effect, split_records
+from housner.scenarios.campaigns.diagnose import PRACTICAL, diagnose, fit_effect, split_records
+from housner.scenarios.campaigns.trial import judge
 
 DEFAULT_CASES = ("none", "rotational_damping", "sensor_offset")
 _RESULTS: dict[str, tuple] = {}
@@ -238,13 +239,13 @@ def test_a_small_fall_that_many_records_prove_is_significant_a_negligible_one_is
     floor = 0.0054
     cur = floor + rng.normal(0, 1e-4, 200)
     # every record better by 0.05 sigma: overwhelming statistics, but below the practical margin
-    sig, d, se, _z, p, why = _judge(cur, cur - 0.5 * PRACTICAL * floor, 0.005, floor)
+    sig, d, se, _z, p, why = judge(cur, cur - 0.5 * PRACTICAL * floor, 0.005, floor)
     assert p < 1e-10 and not sig and "tenth of the sensor noise" in why
     # a 12 ms sensor lag's fall (0.0046 alpha, less than one sigma per record) over 100 records that
     # scatter by 0.01 alpha: z ~ 4.6, significant (the old one-sigma gate dropped it)
     cur100 = floor + np.abs(rng.normal(0, 0.01, 100))
     new100 = cur100 - 0.0046 + rng.normal(0, 0.002, 100)
-    assert _judge(cur100, new100, 0.05 / 9, floor)[0]
+    assert judge(cur100, new100, 0.05 / 9, floor)[0]
     # a large but inconsistent change is not significant either
     noisy = cur + rng.normal(0, 0.05, 200)
-    assert not _judge(cur, noisy, 0.005, floor)[0]
+    assert not judge(cur, noisy, 0.005, floor)[0]

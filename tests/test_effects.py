@@ -30,7 +30,8 @@ from housner.effects import (
     simulate_with_effects,
 )
 from housner.engines.analytic import HousnerEngine
-from housner.model import RockingParams, simulate
+from housner.model import simulate
+from housner.rocking_params import RockingParams
 from housner.units import G
 
 SPEC = Specimen.bachmann2017()

@@ -13,7 +13,7 @@ from housner import GroundMotion, Specimen
 from housner.engines import get_engine
 from housner.engines._planar import IMPACT_LAW_DELAY, IMPACT_LAW_TOL, ImpactLaw
 from housner.engines.measures import decay_peaks, first_impact_ratio, half_cycle_peaks
-from housner.engines.tuning import DECAY_IMPACTS, _best, _suite, tune
+from housner.engines.tuning import DECAY_IMPACTS, _best, check_suite, tune
 from housner.impacts import impact_times
 
 SPEC = Specimen.bachmann2017()
@@ -145,9 +145,9 @@ def test_tuner_prefers_a_contact_that_meets_the_target_alone():
 
 
 def test_decay_peaks_below_the_floor_are_not_compared():
-    assert _suite(SPEC, SPEC.r_housner, (0.5,), (), True, False, 1e-3).decay_impacts == DECAY_IMPACTS
+    assert check_suite(SPEC, SPEC.r_housner, (0.5,), (), True, False, 1e-3).decay_impacts == DECAY_IMPACTS
     # at r = 0.9 the peaks after 30 and 40 impacts are 0.004 and 0.0014 alpha, below 0.01 alpha
-    assert _suite(SPEC, 0.9, (0.5,), (), True, False, 1e-3).decay_impacts == (10, 20)
+    assert check_suite(SPEC, 0.9, (0.5,), (), True, False, 1e-3).decay_impacts == (10, 20)
 
 
 @pytest.mark.parametrize("name", PLANAR)

@@ -14,7 +14,8 @@ from scipy.integrate import quad, solve_ivp
 from shared import reference_solve_ivp
 
 from housner import G, GroundMotion, Specimen
-from housner.model import RockingParams, default_substeps, simulate, simulate_many, theta_max_many
+from housner.model import default_substeps, simulate, simulate_many, theta_max_many
+from housner.rocking_params import RockingParams
 
 DATA = Path(__file__).resolve().parents[1] / "scenarios" / "catalogue" / "data"
 SPEC = Specimen.bachmann2017()

@@ -9,12 +9,11 @@ import pytest
 
 from housner import G, GroundMotion, Specimen, pulses
 from housner.model import simulate
+from housner.pulses import ricker_half_width, ricker_shape
 from housner.spectra import (
     PULSES,
     free_rocking_peak,
     pulse_motion,
-    ricker_half_width,
-    ricker_shape,
     rocking_spectrum,
 )
 

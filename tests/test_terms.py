@@ -35,7 +35,8 @@ from housner.effects import (
 )
 from housner.effects.parameters import damping_moment, restitution_law
 from housner.effects.terms import kernel_dir, kernel_module
-from housner.model import RockingParams, simulate
+from housner.model import simulate
+from housner.rocking_params import RockingParams
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.compare import simulate_records
 from housner.scenarios.campaigns.fitting import fit_effect

@@ -11,7 +11,6 @@ from scipy.integrate import solve_ivp
 from shared import SoftGroundMujoco
 
 from housner import GroundMotion, Specimen
-from housner.calibration import half_cycle_time
 from housner.engines.base import ENGINES
 from housner.engines.mujoco_engine import MujocoEngine
 from housner.engines.tuning import (
@@ -32,6 +31,7 @@ from housner.engines.tuning import (
     pulse_motions,
     tune,
 )
+from housner.free_rocking import half_cycle_time
 from housner.model import simulate as housner_simulate
 from housner.reports.tuning_figure import tuning_report_figure
 

@@ -46,7 +46,7 @@ from housner.engines.tuning.checks import (
     pulse_motions,
 )
 from housner.engines.tuning.checks import (
-    _suite as _suite,  # re-exported for tests/test_impact_law.py
+    check_suite as check_suite,  # re-exported for tests/test_impact_law.py
 )
 from housner.engines.tuning.result import TuningResult
 from housner.engines.tuning.search import COST_TIE, impact_law_candidates, tune

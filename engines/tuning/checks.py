@@ -168,7 +168,7 @@ def free_vibration_motions(specimen: Specimen, amplitudes: Sequence[float], dt: 
 
 
 @dataclass
-class _Suite:
+class CheckSuite:
     """The records of the checks at one sample step, and the analytic references."""
 
     dt: float
@@ -182,7 +182,7 @@ class _Suite:
     decay_impacts: tuple = DECAY_IMPACTS  # the impacts after which the decay's peak is compared
 
 
-def _suite(specimen: Specimen, target: float, amps, small_amps, check_decay: bool, check_pulses: bool, dt: float):
+def check_suite(specimen: Specimen, target: float, amps, small_amps, check_decay: bool, check_pulses: bool, dt: float):
     """The checks' records at sample step ``dt`` [s] and their analytic references at r = ``target``.
 
     Decay peaks whose analytic value lies below :data:`DECAY_FLOOR` are left out (none: no decay record).
@@ -198,7 +198,7 @@ def _suite(specimen: Specimen, target: float, amps, small_amps, check_decay: boo
         pulses = pulse_motions(specimen, PULSES, dt) + pulse_motions(specimen, THRESHOLD_PULSES, dt)
         tol = [(1.0, 1.0)] * len(PULSES) + [(1.0, SMALL_WORST_FACTOR)] * len(THRESHOLD_PULSES)
     refs = [simulate(specimen, m, r=target) for m in pulses]
-    return _Suite(
+    return CheckSuite(
         dt,
         free_vibration_motions(specimen, amps, dt),
         free_vibration_motions(specimen, small_amps, dt),
@@ -219,7 +219,7 @@ def _worst(rel) -> float:
     return float(np.max(np.abs(rel))) if np.all(np.isfinite(rel)) else math.inf
 
 
-def _errors(meas: list[dict], suites: list[_Suite], target: float, rtol: float) -> dict:
+def candidate_errors(meas: list[dict], suites: list[CheckSuite], target: float, rtol: float) -> dict:
     """Relative errors of one candidate per suite, each check's worst over the suites, and the score.
 
     The score is the largest error over its tolerance (check 2's mean is the

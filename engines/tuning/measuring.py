@@ -8,11 +8,11 @@ import time
 import numpy as np
 
 from housner.engines.measures import first_impact_ratio, first_peak, half_cycle_peaks
-from housner.engines.tuning.checks import _Suite
+from housner.engines.tuning.checks import CheckSuite
 from housner.specimen import Specimen
 
 
-def _measure(engine, specimen: Specimen, suites: list[_Suite]) -> list[dict]:
+def measure(engine, specimen: Specimen, suites: list[CheckSuite]) -> list[dict]:
     """Every check's raw measurement per suite, and CPU and wall seconds per simulated second (over all).
 
     Per suite: ``r`` and ``small`` (the first impact's energy ratio of each release [-]), ``decay``
@@ -47,7 +47,7 @@ def _measure(engine, specimen: Specimen, suites: list[_Suite]) -> list[dict]:
     return found
 
 
-def _failed(suite: _Suite) -> dict:
+def failed_measurement(suite: CheckSuite) -> dict:
     """The measurements of a candidate whose engine failed: all NaN, infinite cost."""
     return {
         "r": np.full(len(suite.releases), np.nan),

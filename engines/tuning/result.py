@@ -14,7 +14,7 @@ from housner.engines.tuning.checks import DECAY_RTOL, RTOL, SMALL_WORST_FACTOR
 __all__ = ["TuningResult"]
 
 
-def _settings_text(settings: dict) -> str:
+def settings_text(settings: dict) -> str:
     """Settings as one line, ``key=value, ...`` (floats to 4 significant digits)."""
 
     def fmt(v):
@@ -168,7 +168,7 @@ class TuningResult:
             f"{self.engine} tuned to r = {self.target_r:.5g} for {self.specimen} "
             f"({self.date}, version {self.version}): "
             f"{verdict} (tolerance {self.rtol:.2%}; {n_ok} of {len(self.candidates)} candidates met it)",
-            f"settings: {_settings_text(self.settings)}",
+            f"settings: {settings_text(self.settings)}",
         ]
         mean, lo, hi = self.reached_r
         amps = self.table["amplitude"].to_numpy(float)
@@ -219,7 +219,7 @@ class TuningResult:
         return "\n".join(lines)
 
 
-def _result_tables(suites, e: dict, alpha: float, target: float, amps, small_amps, rtol: float) -> dict:
+def result_tables(suites, e: dict, alpha: float, target: float, amps, small_amps, rtol: float) -> dict:
     """The chosen candidate's checks as tables, every sample step stacked: r, small r, decay, pulses."""
     meas = e["_meas"]
     chosen, small_t, decay_t, pulse_t = [], [], [], []

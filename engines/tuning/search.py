@@ -10,9 +10,16 @@ import pandas as pd
 from tqdm.auto import tqdm
 
 from housner.engines.base import engine_class
-from housner.engines.tuning.checks import DEFAULT_AMPLITUDES, RTOL, SAMPLE_STEPS, SMALL_AMPLITUDES, _errors, _suite
-from housner.engines.tuning.measuring import _failed, _measure
-from housner.engines.tuning.result import TuningResult, _result_tables, _settings_text
+from housner.engines.tuning.checks import (
+    DEFAULT_AMPLITUDES,
+    RTOL,
+    SAMPLE_STEPS,
+    SMALL_AMPLITUDES,
+    candidate_errors,
+    check_suite,
+)
+from housner.engines.tuning.measuring import failed_measurement, measure
+from housner.engines.tuning.result import TuningResult, result_tables, settings_text
 from housner.errors import EngineError
 from housner.specimen import Specimen
 
@@ -103,13 +110,13 @@ def tune(
     candidates = [dict(c) for c in candidates]
     if not candidates:
         raise ValueError("`candidates` is empty")
-    suites = [_suite(specimen, target, amps, small_amps, check_decay, check_pulses, d) for d in steps]
+    suites = [check_suite(specimen, target, amps, small_amps, check_decay, check_pulses, d) for d in steps]
     it = candidates
     if progress:
         it = tqdm(candidates, desc=f"tuning {engine_name}", unit="candidate")
     table, errs, version = _try_all(cls, it, specimen, suites, target, rtol)
     best = _best(table)
-    tables = _result_tables(suites, errs[best], specimen.alpha, target, amps, small_amps, rtol)
+    tables = result_tables(suites, errs[best], specimen.alpha, target, amps, small_amps, rtol)
     return TuningResult(
         engine=engine_name,
         specimen=specimen.name,
@@ -190,16 +197,16 @@ def _try_all(cls, candidates, specimen, suites, target: float, rtol: float) -> t
         try:
             engine = cls(**settings)
             version = engine.version()
-            meas = _measure(engine, specimen, suites)
+            meas = measure(engine, specimen, suites)
         except EngineError as exc:
             err = str(exc)
-            meas = [_failed(suite) for suite in suites]
-        e = _errors(meas, suites, target, rtol)
+            meas = [failed_measurement(suite) for suite in suites]
+        e = candidate_errors(meas, suites, target, rtol)
         e["_meas"] = meas
         errs.append(e)
         rows.append(
             {
-                "settings": _settings_text(settings),
+                "settings": settings_text(settings),
                 "impact_energy_factor": float(settings.get("impact_energy_factor", 1.0)),
                 **{k: v for k, v in e.items() if not k.startswith("_")},
                 "cost_per_sim_second": meas[0]["cpu"],

@@ -6,7 +6,7 @@ fitting, the neutral value at which the effect does nothing) and overrides
 only the hooks it needs; the others are no-ops:
 
 ``modify_params(params, specimen)``
-    returns a changed :class:`housner.model.RockingParams` (restitution,
+    returns a changed :class:`housner.rocking_params.RockingParams` (restitution,
     amplitude-dependent restitution, rotational damping, asymmetric pivots,
     frequency parameter);
 ``transform_input(motion)``

@@ -36,7 +36,7 @@ from housner.specimen import Specimen
 from housner.units import G
 
 
-def _pos_int_or_none(name: str, v) -> int | None:
+def pos_int_or_none(name: str, v) -> int | None:
     if v is None:
         return None
     if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
@@ -44,7 +44,7 @@ def _pos_int_or_none(name: str, v) -> int | None:
     return int(v)
 
 
-def _corner_geometry(specimen: Specimen, params) -> dict:
+def corner_geometry(specimen: Specimen, params) -> dict:
     """Per-unit-mass geometry of the two corners from the rocking parameters.
 
     Returns b (horizontal distance centre of mass -> corner [m]), R [m],
@@ -96,7 +96,7 @@ MAX_EVENTS_PER_SAMPLE = 20_000
 
 
 @njit(cache=True)
-def _illinois(h, v, hl, vl, hr, vr, side):
+def illinois(h, v, hl, vl, hr, vr, side):
     """The bracket after trial h with value v (Illinois false position).
 
     h replaces the right end when v < 0 (``side`` -1), else the left end

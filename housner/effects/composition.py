@@ -8,9 +8,10 @@ from typing import Any
 
 from housner.effects.registry import Effect
 from housner.effects.terms import TermSet
-from housner.model import RockingParams, simulate
+from housner.model import simulate
 from housner.motion import VERTICAL, GroundMotion
 from housner.response import Response
+from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 
 __all__ = ["EffectPlan", "apply_effects", "simulate_with_effects"]

@@ -9,12 +9,13 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from housner._kernel_parts import EPS, HALF_PI, _grid, _rk4_update, _secant
-from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, _corner_geometry, _illinois, _pos_int_or_none, run_kernel
+from housner._kernel_parts import EPS, HALF_PI, grid, rk4_update, secant
+from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, corner_geometry, illinois, pos_int_or_none, run_kernel
 from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
-from housner.model import PH_MAX, RockingParams
+from housner.model import PH_MAX
 from housner.motion import GroundMotion
 from housner.response import Response
+from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -82,8 +83,8 @@ def _ff_rk4(th, thd, w, wd, tau, h, a0, slope, s, ap, an, q):
     v4t = thd + h * k3t
     v4w = wd + h * k3w
     k4t, k4w = _ff_acc(th + h * v3t, v4t, w + h * v3w, v4w, g_end, s, ap, an, q)
-    th_h, thd_h = _rk4_update(th, thd, h, thd, v2t, v3t, v4t, k1t, k2t, k3t, k4t)
-    w_h, wd_h = _rk4_update(w, wd, h, wd, v2w, v3w, v4w, k1w, k2w, k3w, k4w)
+    th_h, thd_h = rk4_update(th, thd, h, thd, v2t, v3t, v4t, k1t, k2t, k3t, k4t)
+    w_h, wd_h = rk4_update(w, wd, h, wd, v2w, v3w, v4w, k1w, k2w, k3w, k4w)
     return th_h, thd_h, w_h, wd_h
 
 
@@ -129,7 +130,7 @@ def _ff_bracket(kind, th, thd, w, wd, tau, hl, vl, hr, vr, a0, slope, s, ap, an,
     for _ in range(200):
         if hr - hl <= 4.0 * EPS * (tau + hr):
             break
-        h = _secant(hl, vl, hr, vr)
+        h = secant(hl, vl, hr, vr)
         z0, z1, z2, z3 = _ff_rk4(th, thd, w, wd, tau, h, a0, slope, s, ap, an, q)
         if kind == 0:
             v = _ff_margin(z0, z1, z2, z3, s, ap, an, q)
@@ -137,7 +138,7 @@ def _ff_bracket(kind, th, thd, w, wd, tau, hl, vl, hr, vr, a0, slope, s, ap, an,
             v = s * z1
         if v < 0.0:
             y0, y1, y2, y3 = z0, z1, z2, z3
-        hl, vl, hr, vr, side = _illinois(h, v, hl, vl, hr, vr, side)
+        hl, vl, hr, vr, side = illinois(h, v, hl, vl, hr, vr, side)
     return hr, y0, y1, y2, y3
 
 
@@ -239,7 +240,7 @@ def run_flexible(
         tau = 0.0
         n_ev = 0
         for j in range(msub):
-            tend = _grid(j + 1, msub, dt)
+            tend = grid(j + 1, msub, dt)
             while tau < tend and not over:
                 event, hs, th, thd, w, wd, theta_max = _ff_step(
                     th, thd, w, wd, tau, tend, a0, slope, s, ap, an, q, theta_max
@@ -350,7 +351,7 @@ def simulate_flexible(
         raise ValueError(f"`frequency` must be positive and finite [Hz], got {frequency!r}")
     if not (math.isfinite(zeta) and zeta >= 0):
         raise ValueError(f"`damping_ratio` must be >= 0, got {damping_ratio!r}")
-    geo = _corner_geometry(specimen, prm)
+    geo = corner_geometry(specimen, prm)
     bp, _rp, i0p, icp = geo["pos"]
     bn, _rn, i0n, icn = geo["neg"]
     # a rigid block has one centroidal inertia; p scaled on an asymmetric block implies two: take their mean
@@ -366,7 +367,7 @@ def simulate_flexible(
     bmax = max(bp, bn)
     lam = math.sqrt(kappa * max(2.0, 1.0 + bmax * bmax / ic)) * (zeta + math.sqrt(1.0 + zeta * zeta))
     dt = motion.dt
-    m = _pos_int_or_none("substeps", substeps)
+    m = pos_int_or_none("substeps", substeps)
     if m is None:
         m = max(math.ceil(dt * lam / _FLEX_STEP - 1e-9), math.ceil(prm.p_max * dt / PH_MAX - 1e-9), 1)
     th0, thd0 = motion.theta0, motion.theta_dot0

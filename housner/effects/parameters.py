@@ -31,7 +31,7 @@ def restitution_law(w, r, s, alpha, p2, q):
 
 @njit(cache=True)
 def amplitude_law(w, r, s, alpha, p2, q):
-    """r (w / (p alpha))^n clipped to [0, 1], q = (n,): :func:`housner._kernel_parts._restitution`'s arithmetic."""
+    """r (w / (p alpha))^n clipped to [0, 1], q = (n,): :func:`housner._kernel_parts.restitution`'s arithmetic."""
     r_eff = r
     if q[0] != 0.0 and w > 0.0:
         r_eff = r * (w / (math.sqrt(p2) * alpha)) ** q[0]
@@ -250,7 +250,7 @@ class AsymmetricPivots(Effect):
     each clipped to 1, where r_in_force is the ratio in force before this
     effect (per side where set). With Housner's r in force this is
     r_neg = rho+-^2 and r_pos = rho-+^2; a later ``restitution`` effect
-    rescales both (:meth:`housner.model.RockingParams.with_r`), keeping
+    rescales both (:meth:`housner.rocking_params.RockingParams.with_r`), keeping
     r_neg / r_pos = (I+ / I-)^2.
 
     Parameters

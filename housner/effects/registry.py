@@ -22,7 +22,8 @@ import numpy as np
 
 from housner.effects.terms import import_file
 from housner.errors import unknown_choice
-from housner.motion import CHANNEL_PREFIX, GroundMotion
+from housner.motion import GroundMotion
+from housner.readers import CHANNEL_PREFIX
 from housner.response import Response
 from housner.specimen import Specimen
 

@@ -12,22 +12,23 @@ from numba import njit
 from housner._kernel_parts import (
     EPS,
     HALF_PI,
-    _grid,
-    _initial_state,
-    _pivot_constants,
-    _reduced_ground,
-    _restitution,
-    _rk4_update,
-    _secant,
-    _store,
-    _substep_of,
-    _uplift,
+    grid,
+    initial_state,
+    pivot_constants,
+    reduced_ground,
+    restitution,
+    rk4_update,
+    secant,
+    store,
+    substep_of,
+    uplift,
 )
-from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, _corner_geometry, _illinois, _pos_int_or_none, run_kernel
+from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, corner_geometry, illinois, pos_int_or_none, run_kernel
 from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
-from housner.model import RockingParams, default_substeps
+from housner.model import default_substeps
 from housner.motion import GroundMotion
 from housner.response import Response
+from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -95,8 +96,8 @@ def _sl_rk4(mode, s, sig, fric, phi, w, x, xd, tau, h, a0, slope, q):
     w4 = w + h * k3
     v4 = xd + h * l3
     k4, l4 = _sl_acc(mode, s, sig, fric, phi + h * w3, w4, a_end, q)
-    phi_h, w_h = _rk4_update(phi, w, h, w, w2, w3, w4, k1, k2, k3, k4)
-    x_h, xd_h = _rk4_update(x, xd, h, xd, v2, v3, v4, l1, l2, l3, l4)
+    phi_h, w_h = rk4_update(phi, w, h, w, w2, w3, w4, k1, k2, k3, k4)
+    x_h, xd_h = rk4_update(x, xd, h, xd, v2, v3, v4, l1, l2, l3, l4)
     return phi_h, w_h, x_h, xd_h
 
 
@@ -165,7 +166,7 @@ def _sl_bracket(kind, mode, s, sig, fric, jam, phi, w, x, xd, tau, hl, vl, hr, v
     for _ in range(200):
         if hr - hl <= 4.0 * EPS * (tau + hr):
             break
-        h = _secant(hl, vl, hr, vr)
+        h = secant(hl, vl, hr, vr)
         z0, z1, z2, z3 = _sl_rk4(mode, s, sig, fric, phi, w, x, xd, tau, h, a0, slope, q)
         if kind == 0:
             v = _sl_margin(mode, s, sig, fric, jam, z0, z1, z3, a0 + slope * (tau + h), q)
@@ -173,7 +174,7 @@ def _sl_bracket(kind, mode, s, sig, fric, jam, phi, w, x, xd, tau, hl, vl, hr, v
             v = z1
         if v < 0.0:
             y0, y1, y2, y3 = z0, z1, z2, z3
-        hl, vl, hr, vr, side = _illinois(h, v, hl, vl, hr, vr, side)
+        hl, vl, hr, vr, side = illinois(h, v, hl, vl, hr, vr, side)
     return hr, y0, y1, y2, y3
 
 
@@ -246,8 +247,8 @@ def _sl_leave_rest(g0, g1, tau, dt, s, sig, fric, jam, tan_p, tan_n, q):
     whether the start counts a jam, lifts a corner, slips the base.
     """
     mu = q[S_MU]
-    tu_p, tu_n = _uplift(g0, g1, tau, dt, tan_p, tan_n)
-    ts_p, ts_n = _uplift(g0, g1, tau, dt, mu, mu)  # slides toward +x, -x
+    tu_p, tu_n = uplift(g0, g1, tau, dt, tan_p, tan_n)
+    ts_p, ts_n = uplift(g0, g1, tau, dt, mu, mu)  # slides toward +x, -x
     t_tip = min(tu_p, tu_n)
     t_sl = min(ts_p, ts_n)
     if t_tip == math.inf and t_sl == math.inf:
@@ -272,7 +273,7 @@ def _sl_impact(s, sig, fric, jam, w, xd, g_now, wrest2_p, wrest2_n, tan_p, tan_n
     Returns (mode, s, sig, fric, jam, w, xd, n_jam) after the impact (the block lands on the other corner, phi = 0).
     """
     alpha, _rr, _i0, p2 = _sl_side(q, s)
-    w = _restitution(-w, q[S_R], q[S_REXP], p2, alpha)
+    w = restitution(-w, q[S_R], q[S_REXP], p2, alpha)
     s = -s
     if w * w < (wrest2_p if s > 0.0 else wrest2_n):
         if xd == 0.0:
@@ -345,8 +346,8 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
     the number of Painleve jams, and t_lift the time spent with a negative
     normal-force demand [s].
     """
-    tan_p, tan_n, wrest2_p, wrest2_n = _pivot_constants(q[S_ALPHA_P], q[S_ALPHA_N], q[S_P2_P], q[S_P2_N], rest_tol)
-    at_rest, s, phi, w, t_uplift = _initial_state(theta0, theta_dot0)
+    tan_p, tan_n, wrest2_p, wrest2_n = pivot_constants(q[S_ALPHA_P], q[S_ALPHA_N], q[S_P2_P], q[S_P2_N], rest_tol)
+    at_rest, s, phi, w, t_uplift = initial_state(theta0, theta_dot0)
     sig, fric, jam, x, xd = 0.0, True, False, 0.0, 0.0
     mode, t_slide = REST, math.nan
     if not at_rest:
@@ -383,14 +384,14 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
                 if slipped and math.isnan(t_slide):
                     t_slide = t_k + tau
                 phi, w, xd = 0.0, 0.0, 0.0
-                j = _substep_of(tau, msub, dt)
-            tgt = _grid(j + 1, msub, dt)
+                j = substep_of(tau, msub, dt)
+            tgt = grid(j + 1, msub, dt)
             if tgt <= tau:
                 j += 1
                 if j >= msub:
                     break
                 continue
-            a0, slope = _reduced_ground(s, g0, g1, dt)
+            a0, slope = reduced_ground(s, g0, g1, dt)
             event, hs, phi, w, x, xd, theta_max = _sl_step(
                 mode, s, sig, fric, jam, phi, w, x, xd, tau, tgt, a0, slope, q, theta_max
             )
@@ -436,7 +437,7 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
         if record:
             x_out[k + 1] = x
             reg_out[k + 1] = mode
-            _store(th_out, thd_out, k + 1, s, phi, w, mode == ROCK or mode == SLIDE_ROCK, mode == OVERTURNED)
+            store(th_out, thd_out, k + 1, s, phi, w, mode == ROCK or mode == SLIDE_ROCK, mode == OVERTURNED)
     return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard, x_max, t_slide, n_jam, t_lift
 
 
@@ -483,7 +484,7 @@ def simulate_sliding(
         raise ValueError(f"`mu` must be positive and finite, got {mu!r}")
     if not (isinstance(rest_tol, (int, float)) and 0.0 < rest_tol < 1.0):
         raise ValueError(f"`rest_tol` must lie in (0, 1), got {rest_tol!r}")
-    geo = _corner_geometry(specimen, prm)
+    geo = corner_geometry(specimen, prm)
     q = np.zeros(N_SLIDE)
     q[S_G], q[S_MU], q[S_C], q[S_R], q[S_REXP] = G, mu, prm.damping, prm.r, prm.r_amp_exponent
     for side, (ia, ir, ii, ip) in (
@@ -495,7 +496,7 @@ def simulate_sliding(
         q[ir] = rr
         q[ii] = i0
         q[ip] = getattr(prm, f"p_{side}") ** 2
-    m = _pos_int_or_none("substeps", substeps)
+    m = pos_int_or_none("substeps", substeps)
     if m is None:
         m = default_substeps(prm.p_max, motion.dt)
     n = motion.n

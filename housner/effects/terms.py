@@ -350,7 +350,7 @@ def _hooks(structure: tuple) -> str:
         "",
         "",
         "@njit(cache=True)",
-        "def _impact(w, r, s, alpha, p2, q):",
+        "def impact_ratio(w, r, s, alpha, p2, q):",
         *calls["impact"],
         "    return r",
         "",

@@ -12,7 +12,7 @@ import numpy as np
 from housner.scenarios.execution.rundir import REPORT_FILE
 
 #: Failed motions named in a message, at most.
-_SHOW_FAILED = 3
+SHOW_FAILED = 3
 
 
 @dataclass(frozen=True)
@@ -121,7 +121,7 @@ class RecordAgreementError(CDFAgreementError):
     """Two engines disagree on too many records (see :func:`assert_record_agreement`)."""
 
 
-def _fmt(x: float, digits: int = 3) -> str:
+def fmt_value(x: float, digits: int = 3) -> str:
     if np.isposinf(x):
         return "overturn"
     if np.isnan(x):
@@ -129,7 +129,7 @@ def _fmt(x: float, digits: int = 3) -> str:
     return f"{x:.{digits}f}"
 
 
-def _limit(what: str, value: float, threshold: float, *, upper: bool = True) -> tuple[str, float]:
+def limit_text(what: str, value: float, threshold: float, *, upper: bool = True) -> tuple[str, float]:
     """Words for 'value against threshold' and the excess (> 0 = failed)."""
     excess = value - threshold if upper else threshold - value
     if math.isnan(excess):
@@ -139,29 +139,29 @@ def _limit(what: str, value: float, threshold: float, *, upper: bool = True) -> 
     return f"limit {what} = {threshold:g}; margin {-excess:.3g}", excess
 
 
-def _check_tol(name: str, value, *, allow_none: bool = True) -> None:
+def check_tol(name: str, value, *, allow_none: bool = True) -> None:
     if value is None and allow_none:
         return
     if not (isinstance(value, (int, float, np.integer, np.floating)) and math.isfinite(value) and value >= 0):
         raise ValueError(f"`{name}` must be a finite number >= 0{' or None' if allow_none else ''}, got {value!r}")
 
 
-def _short(text, limit: int = 160) -> str:
+def shorten(text, limit: int = 160) -> str:
     """First line of an error, cut to ``limit`` characters."""
     line = str(text).strip().splitlines()[0] if str(text).strip() else ""
     return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
-def _fields(c: Criterion) -> tuple:
+def criterion_fields(c: Criterion) -> tuple:
     return c.passed, c.detail, c.value, c.threshold, c.excess
 
 
-def _check_count(name: str, value) -> None:
+def check_count(name: str, value) -> None:
     if value is not None and not (isinstance(value, (int, np.integer)) and value >= 0):
         raise ValueError(f"`{name}` must be a non-negative integer or None, got {value!r}")
 
 
-def _check_percentiles(percentiles) -> list[tuple[float, float]]:
+def check_percentiles(percentiles) -> list[tuple[float, float]]:
     if percentiles is None:
         return []
     if not isinstance(percentiles, Mapping):

@@ -28,18 +28,18 @@ import pandas as pd
 from housner import stats
 from housner.errors import unknown_choice
 from housner.reports.assertions.criteria import (
-    _SHOW_FAILED,
+    SHOW_FAILED,
     AgreementReport,
     CDFAgreementError,
     Criterion,
     RecordAgreementError,
-    _check_count,
-    _check_percentiles,
-    _check_tol,
-    _fields,
-    _fmt,
-    _limit,
-    _short,
+    check_count,
+    check_percentiles,
+    check_tol,
+    criterion_fields,
+    fmt_value,
+    limit_text,
+    shorten,
 )
 from housner.scenarios.execution.rundir import REPORT_FILE, RESULTS_FILE, load_results
 from housner.scenarios.execution.tables import split_failed
@@ -152,9 +152,9 @@ def _record_criteria(s: _Sides, min_records: int | None, max_failed: int | None)
             if len(rows):
                 label = rows["motion_name"] if "motion_name" in rows.columns else rows["motion_id"]
                 errors = rows["error"] if "error" in rows.columns else [""] * len(rows)
-                shown = [f"{m}{': ' + _short(e) if str(e) else ''}" for m, e in zip(label, errors, strict=True)]
-                shown = shown[:_SHOW_FAILED]
-                more = f", and {len(rows) - _SHOW_FAILED} more" if len(rows) > _SHOW_FAILED else ""
+                shown = [f"{m}{': ' + shorten(e) if str(e) else ''}" for m, e in zip(label, errors, strict=True)]
+                shown = shown[:SHOW_FAILED]
+                more = f", and {len(rows) - SHOW_FAILED} more" if len(rows) > SHOW_FAILED else ""
                 text += f" ({'; '.join(shown)}{more})"
             parts.append(text)
         excess = worst - max_failed
@@ -260,10 +260,10 @@ def assert_cdf_agreement(
     """
     __tracebackhide__ = True
     for name, tol in (("ks_max", ks_max), ("overturn_tol", overturn_tol), ("wasserstein_max", wasserstein_max)):
-        _check_tol(name, tol)
-    _check_count("min_records", min_records)
-    _check_count("max_failed", max_failed)
-    levels = _check_percentiles(percentiles)
+        check_tol(name, tol)
+    check_count("min_records", min_records)
+    check_count("max_failed", max_failed)
+    levels = check_percentiles(percentiles)
     s = _prepare(results, engine, reference, report)
     criteria = _record_criteria(s, min_records, max_failed)
     have = s.a.size > 0 and s.b.size > 0
@@ -340,14 +340,14 @@ def assert_record_agreement(
     same model integrated two ways).
     """
     __tracebackhide__ = True
-    _check_tol("rtol", rtol, allow_none=False)
-    _check_tol("atol", atol, allow_none=False)
+    check_tol("rtol", rtol, allow_none=False)
+    check_tol("atol", atol, allow_none=False)
     for name, v in (("min_share", min_share), ("min_verdict_share", min_verdict_share)):
         if v is not None and not (isinstance(v, (int, float, np.floating)) and 0.0 <= v <= 1.0):
             raise ValueError(f"`{name}` must be a share in [0, 1] or None, got {v!r}")
-    _check_count("min_records", min_records)
-    _check_count("max_failed", max_failed)
-    _check_count("show", show)
+    check_count("min_records", min_records)
+    check_count("max_failed", max_failed)
+    check_count("show", show)
     s = _prepare(results, engine, reference, report)
     sub = s.ok[s.ok["engine"].astype(str).isin([engine, reference])]
     wide = sub.pivot(index="motion_id", columns="engine", values="theta_max_over_alpha")
@@ -357,7 +357,7 @@ def assert_record_agreement(
     paired = _Sides(engine, reference, s.ok, s.failed, a, b, s.source, s.report)
     criteria = _record_criteria(paired, min_records, max_failed)
     if criteria and criteria[0].name == "usable records":
-        criteria[0] = Criterion("paired records", *_fields(criteria[0]))
+        criteria[0] = Criterion("paired records", *criterion_fields(criteria[0]))
     agreement = stats.per_record_agreement(a, b, rtol=rtol, atol=atol)
     for name, share, k, limit in (
         (f"records within atol={atol:g} + rtol={rtol:g}", agreement.share, agreement.n_agree, min_share),
@@ -368,7 +368,7 @@ def assert_record_agreement(
         if agreement.n == 0:
             criteria.append(Criterion(name, False, "not evaluated: no paired records", math.nan, limit, math.inf))
             continue
-        words, excess = _limit("minimum share", share, limit, upper=False)
+        words, excess = limit_text("minimum share", share, limit, upper=False)
         criteria.append(
             Criterion(name, excess <= 0, f"{k} of {agreement.n} ({share:.1%}); {words}", share, limit, excess)
         )
@@ -382,7 +382,7 @@ def assert_record_agreement(
         names = _motion_names(s.ok, wide.index.to_numpy())
         notes.append(f"  Worst disagreeing records ({engine} vs {reference}, theta_max/alpha):")
         for i in order:
-            notes.append(f"    {names[i]}: {_fmt(a[i])} vs {_fmt(b[i])}")
+            notes.append(f"    {names[i]}: {fmt_value(a[i])} vs {fmt_value(b[i])}")
     result = AgreementReport(
         f"Record-by-record agreement of {engine!r} with {reference!r}",
         tuple(criteria),
@@ -410,7 +410,7 @@ def _ks_criterion(s: _Sides, ks_max: float) -> Criterion:
         )
     else:
         where = "both sides overturned on every record"
-    words, excess = _limit("ks_max", ks.distance, ks_max)
+    words, excess = limit_text("ks_max", ks.distance, ks_max)
     detail = f"D = {ks.distance:.3f} (p = {ks.pvalue:.3g}); {where}; {words}"
     return Criterion("KS distance", excess <= 0, detail, ks.distance, ks_max, excess)
 
@@ -422,7 +422,7 @@ def _overturn_criterion(s: _Sides, tol: float) -> Criterion:
         k = int(np.isposinf(v).sum())
         sides.append((p.estimate, f"{name} {p.estimate:.3f} ({k}/{v.size}, 95% CI {p.low:.3f}-{p.high:.3f})"))
     diff = abs(sides[0][0] - sides[1][0])
-    words, excess = _limit("overturn_tol", diff, tol)
+    words, excess = limit_text("overturn_tol", diff, tol)
     detail = f"{sides[0][1]}, {sides[1][1]}; |difference| {diff:.3f}; {words}"
     return Criterion("P[overturn]", excess <= 0, detail, diff, tol, excess)
 
@@ -430,7 +430,7 @@ def _overturn_criterion(s: _Sides, tol: float) -> Criterion:
 def _percentile_criterion(s: _Sides, q: float, tol: float, name: str) -> Criterion:
     pa = stats.percentiles(s.a, [q], n_boot=0).value[0]
     pb = stats.percentiles(s.b, [q], n_boot=0).value[0]
-    both = f"{s.engine} {_fmt(pa)}, {s.reference} {_fmt(pb)}"
+    both = f"{s.engine} {fmt_value(pa)}, {s.reference} {fmt_value(pb)}"
     if np.isposinf(pa) and np.isposinf(pb):
         return Criterion(name, True, f"{both}; both overturn at this level; limit {tol:g}", 0.0, tol, -tol)
     if np.isposinf(pa) or np.isposinf(pb):
@@ -438,7 +438,7 @@ def _percentile_criterion(s: _Sides, q: float, tol: float, name: str) -> Criteri
             name, False, f"{both}; only one side overturns at this level; limit {tol:g}", math.inf, tol, math.inf
         )
     diff = abs(pa - pb)
-    words, excess = _limit(f"percentiles[{q:g}]", diff, tol)
+    words, excess = limit_text(f"percentiles[{q:g}]", diff, tol)
     return Criterion(name, excess <= 0, f"{both}; |difference| {diff:.3f}; {words}", diff, tol, excess)
 
 
@@ -449,8 +449,8 @@ def _wasserstein_criterion(s: _Sides, limit: float, name: str) -> Criterion:
         f = v[np.isfinite(v)]
         med = f"median {np.median(f):.3f}" if f.size else "none rocked without overturning"
         sides.append(f"{side} {med} over {f.size} records")
-    words, excess = _limit("wasserstein_max", w, limit)
-    return Criterion(name, excess <= 0, f"W1 = {_fmt(w)} alpha ({'; '.join(sides)}); {words}", w, limit, excess)
+    words, excess = limit_text("wasserstein_max", w, limit)
+    return Criterion(name, excess <= 0, f"W1 = {fmt_value(w)} alpha ({'; '.join(sides)}); {words}", w, limit, excess)
 
 
 # ----------------------------------------------------------------------------

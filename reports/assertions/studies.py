@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from housner.reports.assertions.criteria import AgreementReport, CDFAgreementError, Criterion, _check_count, _check_tol
+from housner.reports.assertions.criteria import AgreementReport, CDFAgreementError, Criterion, check_count, check_tol
 from housner.scenarios.studies.study import StudyResult, load_study
 
 __all__ = ["FragilityAgreementError", "assert_fragility_agreement"]
@@ -114,9 +114,9 @@ def assert_fragility_agreement(
         Unknown engine or size, a bad tolerance, or a directory that is not a study.
     """
     __tracebackhide__ = True
-    _check_tol("median_rtol", median_rtol, allow_none=False)
-    _check_tol("beta_atol", beta_atol, allow_none=False)
-    _check_count("max_failed", max_failed)
+    check_tol("median_rtol", median_rtol, allow_none=False)
+    check_tol("beta_atol", beta_atol, allow_none=False)
+    check_count("max_failed", max_failed)
     st = _study(results)
     meta_ref = st.meta.get("study", {}).get("reference")
     if meta_ref is not None and reference != meta_ref:

@@ -5,7 +5,14 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from housner.reports.diagnosis.sections import _candidates, _ladder, _localisation, _records, _settings, _summary
+from housner.reports.diagnosis.sections import (
+    candidates_section,
+    ladder_section,
+    localisation_section,
+    records_section,
+    settings_section,
+    summary_section,
+)
 from housner.reports.page import Section, document, esc, write_page
 
 __all__ = ["render_diagnosis", "write_diagnosis_report"]
@@ -24,12 +31,12 @@ def render_diagnosis(diag) -> str:
         raise ValueError("the diagnosis has no comparisons per step; run diagnose(..., compare_steps=True)")
     t0 = time.perf_counter()
     sections = [
-        ("summary", "Verdict", _summary(diag)),
-        ("ladder", "Error ladder", _ladder(diag)),
-        ("candidates", "Candidate effects", _candidates(diag)),
-        ("where", "Where the model fails, step by step", _localisation(diag)),
-        ("records", "Records", _records(diag)),
-        ("settings", "Settings", _settings(diag)),
+        ("summary", "Verdict", summary_section(diag)),
+        ("ladder", "Error ladder", ladder_section(diag)),
+        ("candidates", "Candidate effects", candidates_section(diag)),
+        ("where", "Where the model fails, step by step", localisation_section(diag)),
+        ("records", "Records", records_section(diag)),
+        ("settings", "Settings", settings_section(diag)),
     ]
     took = time.perf_counter() - t0
     return document(

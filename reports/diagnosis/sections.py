@@ -196,7 +196,7 @@ def _verdict_detail(diag) -> str:
     return table + dist + nxt + freq
 
 
-def _summary(diag) -> str:
+def summary_section(diag) -> str:
     spec = diag.campaign.specimen
     c = diag.campaign
     skipped = ""
@@ -214,7 +214,7 @@ def _summary(diag) -> str:
     )  # fmt: skip
 
 
-def _ladder(diag) -> str:
+def ladder_section(diag) -> str:
     rows = []
     for s in diag.steps:
         prm = "<br>".join(f"<code>{esc(n)}</code>: {_params(n, p)}" for n, p in s.effects)
@@ -244,7 +244,7 @@ def _ladder(diag) -> str:
     return table + fig
 
 
-def _candidates(diag) -> str:
+def candidates_section(diag) -> str:
     out = []
     for k, rnd in enumerate(diag.rounds):
         base = " + ".join(rnd[0].base) if rnd and rnd[0].base else "the plain Housner model"
@@ -281,7 +281,7 @@ def _candidates(diag) -> str:
     return "".join(out)
 
 
-def _localisation(diag) -> str:
+def localisation_section(diag) -> str:
     parts = [
         html_figure(
             cdf_figure(diag),
@@ -380,7 +380,7 @@ def _metric_table(diag) -> str:
     )
 
 
-def _records(diag) -> str:
+def records_section(diag) -> str:
     steps = diag.steps
     held = set(diag.heldout_ids)
     header = ["record", "kind", "set", "window [s]"] + [f"error: {esc(step_label(s))}" for s in steps] + [
@@ -400,7 +400,7 @@ def _records(diag) -> str:
     return html_table(header, rows, caption="Errors in units of alpha over each record's window; failures show a dash.")
 
 
-def _settings(diag) -> str:
+def settings_section(diag) -> str:
     rows = [[esc(k), f"<code>{esc(v)}</code>"] for k, v in diag.settings.items()]
     rows.append(["elapsed", f"{diag.elapsed:.1f} s"])
     rows.append(["campaign", f"<code>{esc(diag.campaign.path)}</code>"])

@@ -28,12 +28,12 @@ from pathlib import Path
 
 from housner.reports._scenario_page import scenario_page
 from housner.reports.page import Section, guarded, render_directory, write_directory_report
-from housner.reports.run.sections.agreement import _agreement, _free_vibration, _spectra
-from housner.reports.run.sections.distribution import _distribution
+from housner.reports.run.sections.agreement import agreement_section, free_vibration_section, spectra_section
+from housner.reports.run.sections.distribution import distribution_section
 from housner.reports.run.sections.engines_explained import engines_explained, has_engine_measurements
-from housner.reports.run.sections.ensemble import _ensemble
-from housner.reports.run.sections.headline import _headline, _specimen
-from housner.reports.run.sections.run_info import _failures, _provenance
+from housner.reports.run.sections.ensemble import ensemble_section
+from housner.reports.run.sections.headline import headline_section, specimen_section
+from housner.reports.run.sections.run_info import failures_section, provenance_section
 from housner.reports.run.view import DEFAULT_KS_MAX, DEFAULT_OVERTURN_TOL, RECORD_RTOL, Run
 from housner.scenarios.execution.rundir import REPORT_FILE
 
@@ -97,21 +97,23 @@ def write_report(run_dir: str | Path, out: str | Path | None = None, *, view: Ru
 # sections
 def _build_sections(run: Run) -> list[Section]:
     out = [
-        Section("verdict", "How far is each engine from the reference?", _headline(run)),
-        Section("specimen", "Specimen and engines", _specimen(run)),
-        Section("ensemble", "Ground motions", _ensemble(run)),
-        Section("distribution", "Distribution of the peak rotation", _distribution(run)),
-        Section("agreement", "Cross-engine agreement", _agreement(run)),
+        Section("verdict", "How far is each engine from the reference?", headline_section(run)),
+        Section("specimen", "Specimen and engines", specimen_section(run)),
+        Section("ensemble", "Ground motions", ensemble_section(run)),
+        Section("distribution", "Distribution of the peak rotation", distribution_section(run)),
+        Section("agreement", "Cross-engine agreement", agreement_section(run)),
     ]
     if has_engine_measurements(run):
         out.append(Section("engines-explained", "What each engine's departure is made of, and what it costs",
                            guarded("The engines' decomposition and frontiers", lambda: engines_explained(run))))
     if run.source == "pulses":
-        out.append(Section("rocking-spectra", "Rocking spectra", guarded("The rocking spectra", lambda: _spectra(run))))
+        out.append(Section("rocking-spectra", "Rocking spectra",
+                           guarded("The rocking spectra", lambda: spectra_section(run))))
     if run.source == "free_vibration":
-        out.append(Section("free-vibration", "Free rocking", guarded("Free rocking", lambda: _free_vibration(run))))
-    out.append(Section("failures", "Failed records", _failures(run)))
-    out.append(Section("provenance", "Provenance", _provenance(run)))
+        out.append(Section("free-vibration", "Free rocking",
+                           guarded("Free rocking", lambda: free_vibration_section(run))))
+    out.append(Section("failures", "Failed records", failures_section(run)))
+    out.append(Section("provenance", "Provenance", provenance_section(run)))
     return out
 
 

@@ -39,7 +39,7 @@ N_BOOT = 2000
 BOOT_SEED = 0
 
 
-_Q = (25.0, 50.0, 75.0)
+QUARTILES = (25.0, 50.0, 75.0)
 
 
 @dataclass
@@ -150,7 +150,7 @@ class Run:
         return compare_engines(
             self.results,
             self.reference,
-            q=_Q,
+            q=QUARTILES,
             ci=0.90,
             p_ci=0.95,
             n_boot=N_BOOT,
@@ -166,7 +166,7 @@ class Run:
     @cached_property
     def record_gap(self) -> dict:
         """:func:`housner.scenarios.runs.spread.record_against_ensemble` for this run: the record among its ensemble."""
-        record, why = _record(self)
+        record, why = source_record(self)
         if record is None:
             raise DataFileError(self.path / "run.json", why)
         if self.motions is None:
@@ -179,7 +179,7 @@ class Run:
             if v is not None
         }
         ids = self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int)
-        motions = _motion_list(self)
+        motions = motion_list(self)
         return record_against_ensemble(
             specimen,
             record,
@@ -204,7 +204,7 @@ class Run:
         if not targets or self.motions is None:
             return None
         ids = self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int)
-        motions = _motion_list(self)
+        motions = motion_list(self)
         return equivalent_amplitude(
             self.specimen_obj, [motions[i] for i in ids if i < len(motions)], targets, seed=BOOT_SEED
         )
@@ -221,7 +221,7 @@ class Run:
         stored = self.meta.get("engine_errors") or {}
         if not stored or self.motions is None or self.reference != "housner":
             return {}
-        motions = _motion_list(self)
+        motions = motion_list(self)
         r = ((self.meta.get("engines") or {}).get(self.reference, {}).get("settings") or {}).get("r")
         ref_ok = set(self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int))
         out = {}
@@ -261,7 +261,7 @@ class Run:
         return read_histories(self.path, ids, {i: self.motion_dt(i) for i in ids})
 
 
-def _motion_list(run: Run):
+def motion_list(run: Run):
     m = run.motions
     out = []
     names = m.get("names", [])
@@ -271,7 +271,7 @@ def _motion_list(run: Run):
     return out
 
 
-def _record(run: Run):
+def source_record(run: Run):
     """(the record the run's motions come from, at prototype scale, None) or (None, why not)."""
     scen = run.meta.get("scenario") or {}
     facts = run.motions_meta.get("record") or {}

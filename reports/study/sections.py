@@ -7,7 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 from housner.reports.page import ci_cell, engine_tag, esc, fmt_g, guarded, html_figure, html_note, html_table
-from housner.reports.run.sections.tuning import _settings_html
+from housner.reports.run.sections.tuning import settings_html
 from housner.reports.study.figures import plot_exceedance, plot_fragility, plot_size_effect
 from housner.reports.study.view import StudyView, key
 
@@ -191,7 +191,7 @@ def provenance(study: StudyView) -> str:
             [
                 engine_tag(name, study),
                 esc(i.get("version", "")) or "&ndash;",
-                (_settings_html(settings) if isinstance(settings, dict) else esc(settings)) or "defaults",
+                (settings_html(settings) if isinstance(settings, dict) else esc(settings)) or "defaults",
                 f"{fmt_g(i.get('wall_s'), 4)} s" if "wall_s" in i else "&ndash;",
                 esc(i["cached"]) if "cached" in i else "&ndash;",
             ]

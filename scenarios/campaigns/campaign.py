@@ -49,8 +49,15 @@ import numpy as np
 from housner.calibration import estimate_noise
 from housner.errors import DataFileError, unknown_choice
 from housner.impacts import noise_crossings
-from housner.motion import CHANNEL_PREFIX, QUANTITIES, GroundMotion, read_csv_header, read_csv_si, uniform_step
-from housner.readers import require_samples
+from housner.motion import GroundMotion
+from housner.readers import (
+    CHANNEL_PREFIX,
+    QUANTITIES,
+    read_csv_header,
+    read_csv_si,
+    require_samples,
+    uniform_step,
+)
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):

@@ -118,12 +118,12 @@ from housner.scenarios.campaigns.trial import (
     NOISE_MARGIN,
     PRACTICAL,
     Trials,
-    _compatible,
-    _fmt_params,
-    _judge,
-    _rank,
-    _se,
+    compatible,
+    fmt_params,
     held_text,
+    judge,
+    rank_key,
+    sem,
 )
 from housner.scenarios.campaigns.verdict import decide
 
@@ -167,7 +167,7 @@ class _Search(Trials):
         self.noise_loss = self.allsc.noise_loss()
         self.base_held = base_train_errors.copy()  # no fitted parameter: out-of-fold errors are the plain errors
         h = self.base_held
-        baseline = Step((), None, False, self.base_train, float(h.mean()), _se(h), math.nan, math.nan, False, h)
+        baseline = Step((), None, False, self.base_train, float(h.mean()), sem(h), math.nan, math.nan, False, h)
         self.say(f"baseline: held-out error {baseline.heldout_error:.4f} +- {baseline.heldout_se:.4f} alpha "
                  f"(sigma/alpha {self.floor:.4f}); {self.k_folds}-fold cross-validation")  # fmt: skip
         self.steps = [baseline]
@@ -180,7 +180,7 @@ class _Search(Trials):
         Raises :class:`NonFiniteHistory` naming ``name`` and the first record when the model with it
         gives a non-finite theta history (anywhere in its fit).
         """
-        reason = _compatible(self.campaign, build_model(self.cur.full), name)
+        reason = compatible(self.campaign, build_model(self.cur.full), name)
         if reason:
             raise ValueError(f"cannot add {name!r} to {[n for n, _ in self.cur.full] or 'the plain model'}: {reason}")
         try:
@@ -200,10 +200,10 @@ class _Search(Trials):
         full, tr = joint_refit(cv_new.full, self.allsc, self.spec, pinned=self.pinned)
         cv_new = self.refit_folds(CVModel(full, cv_new.folds))
         he = self.oof(cv_new)
-        sig, d, se, _z, _p, _why = _judge(self.cur_held, he, self.level_for(1), self.floor)
-        self.steps.append(Step(tuple(cv_new.full), name, True, tr, float(he.mean()), _se(he), d, se, sig, he))
+        sig, d, se, _z, _p, _why = judge(self.cur_held, he, self.level_for(1), self.floor)
+        self.steps.append(Step(tuple(cv_new.full), name, True, tr, float(he.mean()), sem(he), d, se, sig, he))
         self.cur, self.cur_held, self.cur_train = cv_new, he, tr
-        self.say(f"+ {name} (by hand) {_fmt_params(params)}: held-out error {he.mean():.4f}")
+        self.say(f"+ {name} (by hand) {fmt_params(params)}: held-out error {he.mean():.4f}")
 
     def greedy(self, cands: list[str], max_effects: int, pairs: bool) -> tuple[list[list[Candidate]], list[str], float]:
         """The greedy rounds (module docstring, step 5): every round, the selected effects, the first round's level."""
@@ -213,7 +213,7 @@ class _Search(Trials):
         for rnd in range(1, max_effects + 1):
             in_model = {n for n, _ in self.cur.full}
             pool = [n for n in cands
-                    if n not in in_model and not _compatible(self.campaign, build_model(self.cur.full), n)]  # fmt: skip
+                    if n not in in_model and not compatible(self.campaign, build_model(self.cur.full), n)]  # fmt: skip
             if not pool:
                 break
             zc = self.level_for(len(pool))
@@ -243,8 +243,8 @@ class _Search(Trials):
             results.append(c)
             models[name] = cv_new
             held = held_text(c, cv_new is not None)
-            self.say(f"round {rnd}: {name:32s} {_fmt_params(c.params):40s} {held} ({time.perf_counter() - t0:.1f} s)")
-        results.sort(key=_rank)
+            self.say(f"round {rnd}: {name:32s} {fmt_params(c.params):40s} {held} ({time.perf_counter() - t0:.1f} s)")
+        results.sort(key=rank_key)
         best = results[0]
         if best.significant:
             return results, (best, models[best.effect])
@@ -252,7 +252,7 @@ class _Search(Trials):
         if pairs:
             tried = self.try_pairs(results, self.level_for(len(pool) + 3))
             results.extend(p[0] for p in tried)
-            results.sort(key=_rank)
+            results.sort(key=rank_key)
             good = sorted((p for p in tried if p[0].significant), key=lambda p: -p[0].improvement)
             if good:
                 chosen = (good[0][0], good[0][1])
@@ -263,10 +263,10 @@ class _Search(Trials):
         full, tr = joint_refit(cv_new.full, self.allsc, self.spec, pinned=self.pinned)
         cv_new = self.refit_folds(CVModel(full, cv_new.folds))
         he = self.oof(cv_new)
-        _sig, d, se, _z, _p, _why = _judge(self.cur_held, he, zc, self.floor)
-        self.steps.append(Step(tuple(cv_new.full), cand.effect, False, tr, float(he.mean()), _se(he), d, se, True, he))
+        _sig, d, se, _z, _p, _why = judge(self.cur_held, he, zc, self.floor)
+        self.steps.append(Step(tuple(cv_new.full), cand.effect, False, tr, float(he.mean()), sem(he), d, se, True, he))
         self.cur, self.cur_held, self.cur_train = cv_new, he, tr
-        self.say(f"+ {cand.effect}: held-out error {he.mean():.4f} +- {_se(he):.4f} alpha")
+        self.say(f"+ {cand.effect}: held-out error {he.mean():.4f} +- {sem(he):.4f} alpha")
 
     # -- the verdict
     def conclude(self, library: list[str], selected: list[str], compare_steps: bool, n_rep: int, seed,
@@ -334,7 +334,7 @@ class _Search(Trials):
         level = float(sps.norm.sf(Z_MISFIT)) / len(PROBES)
         for name, cls_name in PROBES.items():
             c, _cv = self.try_candidate(name, 0, level)  # fitted, screened and judged as a candidate is
-            self.say(f"probe {name} {_fmt_params(c.params)}: {held_text(c, _cv is not None)}")
+            self.say(f"probe {name} {fmt_params(c.params)}: {held_text(c, _cv is not None)}")
             if c.significant:
                 out.append({"probe": name, "class": cls_name, "params": c.params, "error": float(self.cur_held.mean()),
                             "error_with": c.heldout_error, "improvement": c.improvement, "se": c.improvement_se,

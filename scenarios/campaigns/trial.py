@@ -5,7 +5,7 @@ held out only when its training error falls by more than :data:`PRACTICAL` of th
 does not contradict the free vibrations (:mod:`housner.scenarios.campaigns.fv_check`) and, on the
 records it was fitted to, its fall per record passes the screen (:data:`SCREEN_LEVEL`). Held out, it
 is refitted in every fold and judged on its out-of-fold errors against the current model's
-(:func:`_judge`: a one-sided Wilcoxon signed-rank test and the practical margin); an effect that
+(:func:`judge`: a one-sided Wilcoxon signed-rank test and the practical margin); an effect that
 brings its own kernel must also beat that kernel with its physics faded out. When no single effect
 helps, pairs are fitted together (:meth:`Trials.try_pairs`). A candidate (or pair) whose model
 gives a non-finite theta history anywhere in its fit is rejected, with the record named in its
@@ -48,7 +48,7 @@ def _paired(base: np.ndarray, new: np.ndarray) -> tuple[float, float]:
     return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size))
 
 
-def _judge(cur: np.ndarray, new: np.ndarray, test_level: float, floor: float):
+def judge(cur: np.ndarray, new: np.ndarray, test_level: float, floor: float):
     """Is the held-out improvement from ``cur`` to ``new`` (per-record errors) significant?
 
     Returns (significant, mean improvement, its standard error, z = mean / se, p-value, reason).
@@ -74,7 +74,7 @@ def _judge(cur: np.ndarray, new: np.ndarray, test_level: float, floor: float):
     return True, d, se, z, pval, f"p = {pval:.2g} <= {test_level:.2g} and {d:.4f} >= {need:.4f} alpha"
 
 
-def _compatible(campaign: Campaign, model_effects: list, name: str) -> str:
+def compatible(campaign: Campaign, model_effects: list, name: str) -> str:
     """'' if ``name`` can join the model, else the reason."""
     cls = effect_class(name)
     try:
@@ -97,15 +97,15 @@ def _compatible(campaign: Campaign, model_effects: list, name: str) -> str:
     return ""
 
 
-def _se(v: np.ndarray) -> float:
+def sem(v: np.ndarray) -> float:
     return float(np.std(v, ddof=1) / math.sqrt(v.size)) if v.size > 1 else math.nan
 
 
-def _rank(c: Candidate) -> float:
+def rank_key(c: Candidate) -> float:
     return -c.improvement if math.isfinite(c.improvement) else math.inf
 
 
-def _fmt_params(p: dict) -> str:
+def fmt_params(p: dict) -> str:
     return ", ".join(f"{k}={v:.4g}" for k, v in p.items())
 
 
@@ -157,9 +157,9 @@ class Trials(CrossValidation):
         if he is None:
             return Candidate(name, params, base, rnd, tr_err, math.nan, math.nan, math.nan, math.nan, math.nan, 1.0,
                              False, reason, None)  # fmt: skip
-        sig, d, se, z, pval, why = _judge(self.cur_held, he, test_level, self.floor)
+        sig, d, se, z, pval, why = judge(self.cur_held, he, test_level, self.floor)
         wins = self.fold_means(self.cur_held - he)
-        return Candidate(name, params, base, rnd, tr_err, float(he.mean()), _se(he), d, se, z, pval, sig, why, he,
+        return Candidate(name, params, base, rnd, tr_err, float(he.mean()), sem(he), d, se, z, pval, sig, why, he,
                          wins)  # fmt: skip
 
     def try_candidate(self, name: str, rnd: int, test_level: float) -> tuple[Candidate, CVModel | None]:
@@ -253,10 +253,10 @@ class Trials(CrossValidation):
                     faded[d.key] = min(max(base + 1e-6 * (d.hi - d.lo), d.lo), d.hi)
             ctrl_model = [*fixed, *[make_effect(m, **(faded if i == k else p)) for i, (m, p) in enumerate(members)]]
             ctrl = self.allsc.errors(ctrl_model)
-            sig, _d, _se, _z, pval, _why = _judge(ctrl, he, test_level, self.floor)
+            sig, _d, _stderr, _z, pval, _why = judge(ctrl, he, test_level, self.floor)
             if not sig:
                 return (f"its kernel's numerics, not its physics: the same kernel with {name} faded out "
-                        f"({_fmt_params(faded)}) does as well (p = {pval:.2g})")  # fmt: skip
+                        f"({fmt_params(faded)}) does as well (p = {pval:.2g})")  # fmt: skip
         return ""
 
     def _not_held_out(self, name: str, params: dict, fixed: list, tr_err: float) -> str:
@@ -298,7 +298,7 @@ class Trials(CrossValidation):
             if j >= len(helped):
                 continue
             a, b = helped[i], helped[j]
-            if _compatible(self.campaign, [*fixed, make_effect(a.effect, **a.params)], b.effect):
+            if compatible(self.campaign, [*fixed, make_effect(a.effect, **a.params)], b.effect):
                 continue
             try:
                 out.append(self._pair(a, b, fixed, test_level))
@@ -331,5 +331,5 @@ class Trials(CrossValidation):
         he = self.oof(cv_new)
         cand = self.candidate(name, prm, a.round, tr, test_level, he)
         cand = self._beyond_kernel(cand, build_model(self.cur.full), both[n0:], he, test_level)
-        self.say(f"round {a.round}: {name:32s} {_fmt_params(prm):40s} {held_text(cand)} (pair)")
+        self.say(f"round {a.round}: {name:32s} {fmt_params(prm):40s} {held_text(cand)} (pair)")
         return cand, cv_new, tr

@@ -37,19 +37,19 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from housner.scenarios.catalogue.schema import (
-    _TOML_LINE_RE,
+    TOML_LINE_RE,
     ScenarioError,
-    _check_analysis,
-    _check_table,
-    _File,
-    _grid,
-    _is_path,
-    _table_line,
+    ScenarioFile,
+    check_analysis,
     check_motions,
+    check_table,
+    is_path,
+    parse_grid,
     read_effects,
     read_engines,
     read_plugins,
     read_specimen,
+    table_line,
 )
 from housner.scenarios.catalogue.study_table import read_study
 from housner.scenarios.motions.records import RECORD_SUFFIXES, RECORDS, file_sha256, read_record_file
@@ -138,15 +138,15 @@ class Scenario:
     def pulse_grid(self) -> tuple[np.ndarray, np.ndarray]:
         """Flattened (omega_p/p, a_p/(g tan alpha)) pairs of a pulse scenario, row-major in omega."""
         text = self.raw_text
-        w = _grid(self.path, "omega_ratio", self.motions["omega_ratio"], text)
-        a = _grid(self.path, "accel_ratio", self.motions["accel_ratio"], text)
+        w = parse_grid(self.path, "omega_ratio", self.motions["omega_ratio"], text)
+        a = parse_grid(self.path, "accel_ratio", self.motions["accel_ratio"], text)
         W, A = np.meshgrid(w, a, indexing="ij")
         return W.ravel(), A.ravel()
 
     # ------------------------------------------------------------------ records
     def error(self, key: str | None, message: str) -> ScenarioError:
         """A one-line error about the [motions] table's ``key``, naming this scenario's file and the key's line."""
-        return _File(self.path or Path(f"scenario {self.name!r}"), self.raw_text).error("motions", key, message)
+        return ScenarioFile(self.path or Path(f"scenario {self.name!r}"), self.raw_text).error("motions", key, message)
 
     def _record_path(self, written: str) -> Path:
         """A record path as written in the file: relative to the scenario file's folder, or absolute."""
@@ -242,7 +242,7 @@ class Scenario:
             return self._files
         files: dict[str, list] = {}
         src, m = self.source, self.motions
-        if src in ("rdk", "record") and _is_path(m.get("record", "elcentro")):
+        if src in ("rdk", "record") and is_path(m.get("record", "elcentro")):
             files["record"] = [self._read_file("record", m["record"])]
         elif src == "records":
             written = self._suite_files()
@@ -280,7 +280,7 @@ class Scenario:
             if name not in ENGINES:
                 raise ValueError(f"{unknown_choice('engine', name, ENGINES)}")
             settings = self.engine_settings.get(name, {})
-            line = _table_line(self.raw_text, f"engines.{name}") if settings else None
+            line = table_line(self.raw_text, f"engines.{name}") if settings else None
             at = f"{where} line {line}" if line is not None else where
             cls = engine_class(name)
             try:
@@ -433,11 +433,11 @@ def load_scenario(name_or_path: str | Path, *, allow_outside: bool = False) -> S
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        m = _TOML_LINE_RE.search(str(e))
+        m = TOML_LINE_RE.search(str(e))
         where = f"{path} line {m.group(1)}" if m else f"{path}"
         raise ScenarioError(f"{where}: invalid TOML: {e}") from None
-    f = _File(path, text)
-    _check_table(f, "", raw)
+    f = ScenarioFile(path, text)
+    check_table(f, "", raw)
     for required in ("specimen", "motions"):
         if required not in raw:
             raise ScenarioError(f"{path}: missing table [{required}]")
@@ -451,7 +451,7 @@ def load_scenario(name_or_path: str | Path, *, allow_outside: bool = False) -> S
     names, eng_t = read_engines(f, raw.get("engines", {}))
     src = mot["source"]
     analysis = dict(raw.get("analysis", {}))
-    _check_analysis(f, analysis)
+    check_analysis(f, analysis)
     read_plugins(f, raw.get("plugins", []))  # before [[effects]]: they may name the plugins' effects
     effects = read_effects(f, raw.get("effects", []), specimen)
     scen = Scenario(

@@ -19,7 +19,7 @@ import numpy as np
 from housner.effects import available_effects, load_plugin, make_effect
 from housner.engines.base import ENGINES
 from housner.errors import one_line, unknown_choice
-from housner.motion import parse_unit
+from housner.readers import parse_unit
 from housner.scenarios.motions.build import DEFAULT_RDK_MODEL, RDK_MODELS
 from housner.scenarios.motions.records import RECORDS
 from housner.specimen import Specimen
@@ -90,7 +90,7 @@ class ScenarioError(ValueError):
 
 
 _TABLE_RE = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\-\"' ]+?)\s*\]")
-_TOML_LINE_RE = re.compile(r"\(at line (\d+), column (\d+)\)")
+TOML_LINE_RE = re.compile(r"\(at line (\d+), column (\d+)\)")
 
 
 def _key_line(text: str, table: str, key: str) -> int | None:
@@ -113,7 +113,7 @@ def _key_line(text: str, table: str, key: str) -> int | None:
     return None
 
 
-class _File:
+class ScenarioFile:
     """A scenario file being checked: builds messages that name the file, the line and the key."""
 
     def __init__(self, path: Path, text: str):
@@ -123,14 +123,14 @@ class _File:
     def error(self, table: str, key: str | None, message: str) -> ScenarioError:
         line = _key_line(self.text, table, key) if key is not None else None
         if line is None and key is not None:  # the key is a table of its own: [key] or [table.key]
-            line = _table_line(self.text, f"{table}.{key}" if table else key)
+            line = table_line(self.text, f"{table}.{key}" if table else key)
         if line is None and table:
-            line = _table_line(self.text, table)
+            line = table_line(self.text, table)
         where = f"{self.path} line {line}" if line is not None else f"{self.path}"
         return ScenarioError(f"{where}: {message}")
 
 
-def _table_line(text: str, table: str) -> int | None:
+def table_line(text: str, table: str) -> int | None:
     for n, line in enumerate(text.splitlines(), start=1):
         m = _TABLE_RE.match(line)
         if m and m.group(1).replace('"', "").replace("'", "").strip() == table:
@@ -138,7 +138,7 @@ def _table_line(text: str, table: str) -> int | None:
     return None
 
 
-def _check_table(f: _File, table: str, data: dict) -> None:
+def check_table(f: ScenarioFile, table: str, data: dict) -> None:
     allowed = _SCHEMA[table]
     for key, value in data.items():
         if table == "engines" and key != "names":
@@ -162,11 +162,11 @@ def _check_table(f: _File, table: str, data: dict) -> None:
         if table and isinstance(value, dict) and table != "analysis":
             continue
         if isinstance(value, dict) and key in _SCHEMA:
-            _check_table(f, key, value)
+            check_table(f, key, value)
 
 
-def _grid(path: Path, key: str, spec: Any, text: str = "") -> np.ndarray:
-    f = _File(path, text)
+def parse_grid(path: Path, key: str, spec: Any, text: str = "") -> np.ndarray:
+    f = ScenarioFile(path, text)
     try:
         if isinstance(spec, list):
             arr = np.asarray(spec, dtype=float)
@@ -187,12 +187,12 @@ def _grid(path: Path, key: str, spec: Any, text: str = "") -> np.ndarray:
     return arr
 
 
-def _is_path(record: str) -> bool:
+def is_path(record: str) -> bool:
     """True if ``record`` names a file: not a shipped name, and with a suffix or a path separator."""
     return record not in RECORDS and (bool(Path(record).suffix) or "/" in record or "\\" in record)
 
 
-def read_specimen(f: _File, table: dict) -> Specimen:
+def read_specimen(f: ScenarioFile, table: dict) -> Specimen:
     """The [specimen] table as a :class:`housner.Specimen`: a preset, optionally with keys replaced, or keys alone."""
     spec_t = dict(table)
     preset = spec_t.pop("preset", None)
@@ -216,7 +216,7 @@ def read_specimen(f: _File, table: dict) -> Specimen:
     return specimen
 
 
-def check_motions(f: _File, mot: dict) -> None:
+def check_motions(f: ScenarioFile, mot: dict) -> None:
     """Check the [motions] table: its source, the keys the source needs, ranges and the record's name."""
     src = mot.get("source")
     if src not in MOTION_SOURCES:
@@ -254,7 +254,7 @@ def check_motions(f: _File, mot: dict) -> None:
         )
     if src in ("rdk", "record"):
         rec = mot.get("record", "elcentro")
-        if not _is_path(rec) and rec not in RECORDS:
+        if not is_path(rec) and rec not in RECORDS:
             msg = unknown_choice("record", rec, RECORDS)
             raise f.error("motions", "record", f"[motions] {msg}, or a path to an .AT2 / .csv file")
     if mot.get("model", DEFAULT_RDK_MODEL) not in RDK_MODELS:
@@ -269,7 +269,7 @@ def check_motions(f: _File, mot: dict) -> None:
             )
 
 
-def read_engines(f: _File, table: dict) -> tuple[list[str], dict]:
+def read_engines(f: ScenarioFile, table: dict) -> tuple[list[str], dict]:
     """The [engines] table: the engine names to run and the per-engine settings tables (all registered names)."""
     eng_t = dict(table)
     names = list(eng_t.pop("names", ["housner"]))
@@ -283,14 +283,14 @@ def read_engines(f: _File, table: dict) -> tuple[list[str], dict]:
             key = "names" if n in names else None
             err = f.error("engines", key, f"[engines] {unknown_choice('engine', n, ENGINES)}")
             if key is None:
-                line = _table_line(f.text, f"engines.{n}")
+                line = table_line(f.text, f"engines.{n}")
                 if line is not None:
                     err = ScenarioError(f"{f.path} line {line}: [engines] {unknown_choice('engine', n, ENGINES)}")
             raise err
     return names, eng_t
 
 
-def _check_analysis(f: _File, analysis: dict) -> None:
+def check_analysis(f: ScenarioFile, analysis: dict) -> None:
     """The [analysis] table is read after the simulation (report): check it now."""
     ref = analysis.get("reference")
     if ref is not None:
@@ -328,7 +328,7 @@ def _array_table_line(text: str, table: str, k: int) -> int | None:
     return lines[k] if k < len(lines) else None
 
 
-def read_plugins(f: _File, entries: list) -> tuple[str, ...]:
+def read_plugins(f: ScenarioFile, entries: list) -> tuple[str, ...]:
     """Load the effects files of the top-level ``plugins`` list (paths relative to the scenario's folder).
 
     ``plugins = ["effects/pivot_friction.py"]`` does for a scenario what ``--plugin FILE`` does on the
@@ -351,7 +351,7 @@ def read_plugins(f: _File, entries: list) -> tuple[str, ...]:
     return tuple(names)
 
 
-def read_effects(f: _File, entries: list, specimen: Specimen) -> tuple:
+def read_effects(f: ScenarioFile, entries: list, specimen: Specimen) -> tuple:
     """The ``[[effects]]`` tables as effects of :mod:`housner.effects`, each checked against the specimen.
 
     Each table names an effect (``name = "rotational_damping"``) and gives its

@@ -105,7 +105,7 @@ def read_study(f, table: dict, motions: dict, specimen, S0: float) -> Study:
 
     Parameters
     ----------
-    f : housner.scenarios.catalogue.schema._File
+    f : housner.scenarios.catalogue.schema.ScenarioFile
         The scenario file (messages name it, the key and its line).
     table : dict
         The ``[study]`` table.

@@ -20,7 +20,6 @@ from pathlib import Path
 import housner
 from housner import engines
 from housner.motion import GroundMotion
-from housner.scenarios.execution.chunks import entry_path, load_entry, store_entry
 from housner.scenarios.execution.rundir import effect_data, jsonable
 from housner.specimen import Specimen
 
@@ -144,7 +143,7 @@ def store_text(path: str | Path, text: str) -> None:
 # --------------------------------------------------------------------------
 # Result cache: one .npz per key, holding theta and the row, with the key and a checksum. The format is
 # written and read in housner.scenarios.execution.chunks (which the worker processes load by its path).
-_log = logging.getLogger("housner.runner")
+runner_logger = logging.getLogger("housner.runner")
 
 __all__ = ["cache_key", "cache_keys", "code_version", "content_key", "default_cache_dir", "effect_code_hash",
-           "entry_path", "load_entry", "store_entry", "store_text"]  # fmt: skip
+           "store_text"]  # fmt: skip

@@ -384,7 +384,7 @@ def iter_chunk(
         yield rows
 
 
-def _repairs() -> int:
+def repairs_so_far() -> int:
     """Damaged kernel-cache entries repaired so far in this process (see housner.effects.terms.kernel_cache_repairs)."""
     from housner.effects.terms import kernel_cache_repairs
 
@@ -393,7 +393,7 @@ def _repairs() -> int:
 
 def _counted(rows: list[dict], before: int) -> list[dict]:
     """``rows``, the first carrying the kernel-cache repairs made while they were computed (when there were)."""
-    n = _repairs() - before
+    n = repairs_so_far() - before
     if n and rows:
         rows[0][REPAIRS] = n
     return rows
@@ -404,12 +404,12 @@ def _parts(eng: Any, name: str, specimen: Any, items: list, effects: tuple, batc
     if batched and len(items) > 1:
         for i, _ in items:
             _maybe_crash(name, i)
-        before = _repairs()
+        before = repairs_so_far()
         yield _counted(_simulate_batch(eng, specimen, items, effects), before)
         return
     for i, m in items:
         _maybe_crash(name, i)
-        before = _repairs()
+        before = repairs_so_far()
         yield _counted([_simulate_one(eng, specimen, i, m, effects)], before)
 
 

@@ -24,11 +24,20 @@ import pandas as pd
 from housner.engines.base import engine_class
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.schema import effects_label
-from housner.scenarios.execution.cache import _log, cache_keys, entry_path, load_entry, store_entry
-from housner.scenarios.execution.chunks import REPAIRS, _repairs, engine_batches, entry_file, iter_chunk
+from housner.scenarios.execution.cache import cache_keys, runner_logger
+from housner.scenarios.execution.chunks import (
+    REPAIRS,
+    engine_batches,
+    entry_file,
+    entry_path,
+    iter_chunk,
+    load_entry,
+    repairs_so_far,
+    store_entry,
+)
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.rundir import RESULT_COLUMNS
-from housner.scenarios.execution.workers import RunInterrupted, _Chunk, _failed, _Progress, _run_dask, _run_pool
+from housner.scenarios.execution.workers import Chunk, Progress, RunInterrupted, failed_record, run_dask, run_pool
 from housner.specimen import Specimen
 
 #: Most records per chunk (without ``chunk_size``): for an engine that runs record by record, and one that batches.
@@ -57,7 +66,7 @@ def run_engines(
     options : RunOptions, optional
         How the records execute: worker processes (``jobs``, default one per CPU; 1 runs in this
         process) or a Dask ``scheduler``, the result cache (``cache_dir``, ``use_cache``), the
-        progress bar, ``chunk_size``. A bar of the caller's (``housner.scenarios.execution.workers._Progress``,
+        progress bar, ``chunk_size``. A bar of the caller's (``housner.scenarios.execution.workers.Progress``,
         e.g. one over a whole study) as ``progress`` is advanced, not closed, and keeps its runs'
         worker processes from one run to the next until the caller closes it.
     effects : tuple of housner.effects.Effect
@@ -128,7 +137,7 @@ class _Plan:
     rows: dict[tuple[str, int], dict]  # (engine, motion_id) -> record, cached or computed
     keys: dict[tuple[str, int], str]  # (engine, motion_id) -> cache key
     info: dict[str, dict]  # engine -> settings, version, counters
-    chunks: list[_Chunk]
+    chunks: list[Chunk]
     cache_dir: Path | None  # None: the cache is not used
     histories: bool = True  # False: a record's theta is dropped once it is cached
     store_here: bool = True  # False: the process that computes a record stores its entry (pool, this process)
@@ -162,16 +171,16 @@ def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | No
           chunk_size: int | None, per_worker: int = 4, histories: bool = True) -> _Plan:  # fmt: skip
     """Probe each engine (settings, version), take what the cache holds, cut the rest into chunks."""
     plan = _Plan({}, {}, {}, [], cache_dir, histories)
-    per_engine: list[list[_Chunk]] = []
+    per_engine: list[list[Chunk]] = []
     for name, settings in engines.items():
-        repaired = _repairs()  # a damaged kernel found while planning (the cache keys load the effects' kernels)
+        repaired = repairs_so_far()  # a damaged kernel found while planning (the cache keys load the effects' kernels)
         probe = engine_class(name)(**settings)
         full_settings, version = probe.settings(), probe.version()
         plan.info[name] = {"settings": full_settings, "version": version, "wall_s": 0.0, "cached": 0,
                            "cache_rejected": 0, "worker_deaths": 0, REPAIRS: 0}  # fmt: skip
         todo = []
         keys = cache_keys(specimen, motions, name, full_settings, version, effects)
-        plan.info[name][REPAIRS] += _repairs() - repaired
+        plan.info[name][REPAIRS] += repairs_so_far() - repaired
         for i, k in enumerate(keys):
             plan.keys[(name, i)] = k
             row = _cached_row(plan, name, i, k)
@@ -183,7 +192,7 @@ def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | No
         cap = BATCH_CAP if batched else CHUNK_CAP
         size = chunk_size or max(1, min(cap, math.ceil(len(todo) / (per_worker * n_workers))))
         per_engine.append([
-            _Chunk(0, name, settings, part, effects, batched, {i: plan.keys[(name, i)] for i, _ in part})
+            Chunk(0, name, settings, part, effects, batched, {i: plan.keys[(name, i)] for i, _ in part})
             for part in _parts(todo, size, n_workers, guided=not (chunk_size or batched))
         ])  # fmt: skip
     # Engines interleaved, chunk by chunk: the progress bar's rate (and time left) then mixes fast
@@ -215,7 +224,7 @@ def _cached_row(plan: _Plan, name: str, i: int, k: str) -> dict | None:
     row, problem = load_entry(path, k)
     if problem is not None:
         plan.info[name]["cache_rejected"] += 1
-        _log.warning("housner: warning: cache entry %s (%s, motion %d) %s; recomputed", path, name, i, problem)
+        runner_logger.warning("housner: warning: cache entry %s (%s, motion %d) %s; recomputed", path, name, i, problem)
     if row is None:
         return None
     if not plan.histories:
@@ -235,8 +244,8 @@ def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress) -> float:
         how = "in this process"
     else:
         how = f"starting {min(jobs, len(chunks))} worker processes"
-    own_bar = not isinstance(progress, _Progress)
-    bar = _Progress(total, progress, how) if own_bar else progress
+    own_bar = not isinstance(progress, Progress)
+    bar = Progress(total, progress, how) if own_bar else progress
     if not own_bar:
         bar.advance(len(plan.rows))  # the records the cache held count as done
 
@@ -251,7 +260,7 @@ def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress) -> float:
     try:
         if chunks:
             if scheduler is not None:  # the cluster's workers need not see this machine's cache: stored here
-                _run_dask(chunks, specimen, scheduler, on_record)
+                run_dask(chunks, specimen, scheduler, on_record)
             elif jobs == 1:
                 plan.store_here = False
                 for c in chunks:
@@ -262,7 +271,7 @@ def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress) -> float:
             else:
                 plan.store_here = False
                 pool = None if own_bar else bar.pool_for(jobs)
-                _run_pool(chunks, specimen, jobs, on_record, deaths, worker_deaths=worker_deaths, pool=pool,
+                run_pool(chunks, specimen, jobs, on_record, deaths, worker_deaths=worker_deaths, pool=pool,
                           cache_dir=cache_dir, thetas=plan.histories)  # fmt: skip
     except KeyboardInterrupt:
         bar.close()
@@ -279,7 +288,7 @@ def _table(rows: dict, engines: list[str], motions: list[GroundMotion], effects:
     for name in engines:
         for i in range(len(motions)):
             if (name, i) not in rows:  # cannot happen by design; never leave a record out silently
-                rows[(name, i)] = _failed(i, "no result came back from the workers")
+                rows[(name, i)] = failed_record(i, "no result came back from the workers")
     table, histories = [], {}
     label = effects_label(effects)
     for (name, i), r in sorted(rows.items(), key=lambda kv: (engines.index(kv[0][0]), kv[0][1])):

@@ -162,7 +162,7 @@ async def _identity(address: str, timeout: float) -> str:
 
 
 @dataclass
-class _Chunk:
+class Chunk:
     """Records of one engine sent to a worker together; ``id`` identifies it (never its size)."""
 
     id: int
@@ -173,12 +173,12 @@ class _Chunk:
     batched: bool = False  # one simulate_many call for the chunk (the engine batches)
     keys: dict[int, str] | None = None  # motion_id -> cache key, for the process that computes to store the entry
 
-    def part(self, chunk_id: int, items: list[tuple[int, GroundMotion]], batched: bool | None = None) -> _Chunk:
+    def part(self, chunk_id: int, items: list[tuple[int, GroundMotion]], batched: bool | None = None) -> Chunk:
         """Some of this chunk's records, as a chunk of their own."""
         return replace(self, id=chunk_id, items=items, batched=self.batched if batched is None else batched)
 
 
-def _failed(i: int, msg: str) -> dict:
+def failed_record(i: int, msg: str) -> dict:
     return {"motion_id": i, "status": "failed", "error": msg, "wall_s": 0.0}
 
 
@@ -250,7 +250,7 @@ class _Worker:
             self.proc.start()
         child.close()
         self.conn = parent
-        self.chunks: deque[_Chunk] = deque()  # given to it, in order
+        self.chunks: deque[Chunk] = deque()  # given to it, in order
         self.running = False  # the first of `chunks` has started
         self.next = 0  # records of the running chunk reported so far
         self.ready = False  # the process has started and can run records
@@ -268,11 +268,11 @@ class _Worker:
             except Exception:  # the worker died (broken pipe) or the pipe was closed: the parent's loop sees it
                 return
 
-    def takes(self, chunk: _Chunk) -> bool:
+    def takes(self, chunk: Chunk) -> bool:
         """Whether to give it ``chunk`` now: when idle, or as the next of a batched chunk (prefetched)."""
         return not self.chunks or (len(self.chunks) == 1 and self.chunks[0].batched and chunk.batched)
 
-    def give(self, chunk: _Chunk, specimen: Specimen, cache_dir: str | None, thetas: bool) -> None:
+    def give(self, chunk: Chunk, specimen: Specimen, cache_dir: str | None, thetas: bool) -> None:
         """Queue ``chunk`` for it. The message is pickled here (an object that cannot be raises here, as
         ``Connection.send`` would) and sent by the sender thread, as ``send`` sends it."""
         keys = chunk.keys if cache_dir is not None else None
@@ -304,7 +304,7 @@ class _Worker:
 
 class _Pool:
     """Worker processes, started as the work needs them and kept until :meth:`close`: across the runs
-    of one caller (a study's sizes, through its progress bar: :meth:`_Progress.pool_for`), or one run."""
+    of one caller (a study's sizes, through its progress bar: :meth:`Progress.pool_for`), or one run."""
 
     def __init__(self, jobs: int):
         self.jobs = jobs
@@ -336,8 +336,8 @@ class _Pool:
         self.workers.clear()
 
 
-def _run_pool(
-    chunks: list[_Chunk],
+def run_pool(
+    chunks: list[Chunk],
     specimen: Specimen,
     jobs: int,
     on_record: Any,
@@ -402,7 +402,7 @@ def _run_pool(
         reasons.append(reason)
         if len(reasons) >= 2:
             msg = f"the worker process died while simulating this record: {reasons[0]}; on the retry: {reasons[1]}"
-            on_record(chunk.engine, _failed(i, msg))
+            on_record(chunk.engine, failed_record(i, msg))
         else:
             todo.append(chunk.part(next_id, [(i, m)], batched=False))  # the one retry, last
             next_id += 1
@@ -426,7 +426,7 @@ def _run_pool(
                 w.chunks.clear()
         for c in todo:
             for i, _ in c.items:
-                on_record(c.engine, _failed(i, msg))
+                on_record(c.engine, failed_record(i, msg))
         todo.clear()
         pool.kill()
 
@@ -486,7 +486,7 @@ def _drain(pool: _Pool, take: Any, quiet: float = 0.05, limit: float = 0.5) -> N
             take(busy[conn])
 
 
-def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_record: Any) -> None:
+def run_dask(chunks: list[Chunk], specimen: Specimen, scheduler: Any, on_record: Any) -> None:
     """Run ``chunks`` on a Dask cluster; a task that fails twice (Dask retries it once) fails its records.
 
     ``scheduler`` is a connected client, used as it is (never the process's default client, which a
@@ -498,7 +498,7 @@ def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_recor
     from distributed import Client, KilledWorker, as_completed
 
     client = scheduler if isinstance(scheduler, Client) else connect_scheduler(scheduler)
-    futs: dict[Any, _Chunk] = {}
+    futs: dict[Any, Chunk] = {}
     try:
         for c in chunks:
             f = client.submit(run_chunk, c.engine, c.settings, specimen, c.items, c.effects, c.batched, pure=False,
@@ -513,9 +513,9 @@ def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_recor
                 n = e.allowed_failures
                 msg = (f"KilledWorker: the Dask workers running it died {n + 1} time(s), all that the scheduler "
                        f"allows (distributed.scheduler.allowed-failures = {n}); see the workers' logs")  # fmt: skip
-                res = [_failed(i, msg) for i, _ in c.items]
+                res = [failed_record(i, msg) for i, _ in c.items]
             except Exception as e:  # the task raised, or could not run, twice
-                res = [_failed(i, f"Dask task failed twice: {type(e).__name__}: {e}") for i, _ in c.items]
+                res = [failed_record(i, f"Dask task failed twice: {type(e).__name__}: {e}") for i, _ in c.items]
             for r in res:
                 on_record(c.engine, r)
     except BaseException:
@@ -526,7 +526,7 @@ def _run_dask(chunks: list[_Chunk], specimen: Specimen, scheduler: Any, on_recor
             client.close(timeout=2)
 
 
-class _Progress:
+class Progress:
     """Progress on stderr. Until the first record comes back (workers starting, engines
     loading and, after an update, numba compiling for 10-20 s) one line says so; the bar,
     and with it the time-left estimate, starts with the first finished record, so the

@@ -47,7 +47,7 @@ DEFAULT_SD_RANGE = (0.5, 3.0)
 CHECK_PER_BAND = 5
 
 
-def _check_range(value, name: str) -> tuple[float, float]:
+def check_range(value, name: str) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in value)
     except (TypeError, ValueError):
@@ -65,7 +65,7 @@ def band_centres(t_min: float, t_max: float) -> np.ndarray:
     band may reach up to a sixth of an octave beyond the range). For 0.05-3 s:
     19 bands, centres 0.0496 .. 3.17 s, spanning 0.0442 .. 3.56 s.
     """
-    lo, hi = _check_range((t_min, t_max), "period range")
+    lo, hi = check_range((t_min, t_max), "period range")
     k0 = math.ceil(3.0 * math.log2(lo) - 0.5 - 1e-9)
     k1 = math.floor(3.0 * math.log2(hi) + 0.5 + 1e-9)
     return 2.0 ** (np.arange(k0, k1 + 1) / 3.0)
@@ -192,7 +192,7 @@ class BandCheck:
         )
 
 
-def _band_table(
+def band_table(
     quantity: str, centres: np.ndarray, per_band: int, ens: np.ndarray, rec: np.ndarray, bounds
 ) -> BandTable:
     """Band table from spectra ``ens`` (motions x periods) and ``rec`` (periods) at band_periods(centres, per_band)."""
@@ -218,7 +218,7 @@ def _band_table(
     )
 
 
-def _check_bounds(bounds, name: str) -> tuple[float, float]:
+def check_bounds(bounds, name: str) -> tuple[float, float]:
     try:
         lo, hi = (float(b) for b in bounds)
     except (TypeError, ValueError):
@@ -274,9 +274,9 @@ def band_check(
         raise ValueError("`motions` is empty")
     if not isinstance(record, GroundMotion):
         raise TypeError(f"`record` must be a housner.GroundMotion, got {type(record).__name__}")
-    bounds = _check_bounds(bounds, "bounds")
-    c_psa = band_centres(*_check_range(psa_range, "psa_range"))
-    c_sd = band_centres(*_check_range(sd_range, "sd_range"))
+    bounds = check_bounds(bounds, "bounds")
+    c_psa = band_centres(*check_range(psa_range, "psa_range"))
+    c_sd = band_centres(*check_range(sd_range, "sd_range"))
     c_all = np.unique(np.concatenate([c_psa, c_sd]))
     periods = band_periods(c_all, per_band)
     psa, sd = ensemble_spectra(motions, periods, damping)
@@ -288,8 +288,8 @@ def band_check(
 
     i_psa, i_sd = pick(c_psa), pick(c_sd)
     return BandCheck(
-        psa=_band_table("PSa", c_psa, per_band, psa[:, i_psa], rec_psa[i_psa], bounds),
-        sd=_band_table("Sd", c_sd, per_band, sd[:, i_sd], rec_sd[i_sd], bounds),
+        psa=band_table("PSa", c_psa, per_band, psa[:, i_psa], rec_psa[i_psa], bounds),
+        sd=band_table("Sd", c_sd, per_band, sd[:, i_sd], rec_sd[i_sd], bounds),
         record=record.name,
         damping=float(damping),
     )

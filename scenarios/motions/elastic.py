@@ -157,7 +157,7 @@ def sdof_history(f: np.ndarray, dt: float, omega: float, zeta: float) -> tuple[n
 
 def _check_spectrum_args(periods, damping, points_per_period) -> tuple[np.ndarray, float, int]:
     """Periods [s], damping ratio [-] and integration points per period, checked (in that order)."""
-    T, zeta = _check_periods(periods), _check_damping(damping)
+    T, zeta = _check_periods(periods), check_damping(damping)
     if int(points_per_period) < 1:
         raise ValueError(f"`points_per_period` must be a positive integer, got {points_per_period!r}")
     return T, zeta, int(points_per_period)
@@ -178,7 +178,7 @@ def _check_periods(periods) -> np.ndarray:
     return T
 
 
-def _check_damping(damping: float) -> float:
+def check_damping(damping: float) -> float:
     try:
         z = float(damping)
     except (TypeError, ValueError):

@@ -71,7 +71,7 @@ from scipy.optimize import minimize_scalar
 
 from housner.motion import GroundMotion
 from housner.scenarios.motions.elastic import sdof_history
-from housner.scenarios.motions.rdk_envelope import _P5, _P45, _P95
+from housner.scenarios.motions.rdk_envelope import P5, P45, P95
 from housner.scenarios.motions.rdk_params import DEFAULT_OMEGA_C, RDKParams, settle_time
 from housner.scenarios.motions.records import arias_intensity, husid_time, pmnm_count, upcrossing_count
 
@@ -384,7 +384,7 @@ def fit(
             return signal.sosfiltfilt(sos, a, axis=0)
 
     Ia = arias_intensity(record)
-    t5, t45, t95 = (float(v) for v in husid_time(record, [_P5, _P45, _P95]))
+    t5, t45, t95 = (float(v) for v in husid_time(record, [P5, P45, P95]))
     t = record.t
     j0 = int(np.searchsorted(t, t5, side="left"))
     j1 = int(np.searchsorted(t, t95, side="right")) - 1

@@ -31,7 +31,7 @@ from housner.units import G
 _K_MIN = 0.1
 
 #: Husid fractions that define D5-95 and t_mid.
-_P5, _P45, _P95 = 0.05, 0.45, 0.95
+P5, P45, P95 = 0.05, 0.45, 0.95
 
 
 def _husid_times(k: float, a3: float, T0: float, w0: float, w1: float, p) -> np.ndarray:
@@ -55,7 +55,7 @@ def _alpha3_for_tmid(k: float, t_mid: float, T0: float, w0: float, w1: float) ->
     """The alpha3 [1/s] that puts 45 % of the windowed envelope energy at t_mid, or None if none does."""
 
     def g(log_a3: float) -> float:
-        return float(_husid_times(k, math.exp(log_a3), T0, w0, w1, _P45)) - t_mid
+        return float(_husid_times(k, math.exp(log_a3), T0, w0, w1, P45)) - t_mid
 
     span = w1 - T0
     lo, hi = math.log(1e-6 / span), math.log(1e6 / span)
@@ -72,12 +72,12 @@ def _d595(k: float, t_mid: float, T0: float, w0: float, w1: float) -> float:
     a3 = _alpha3_for_tmid(k, t_mid, T0, w0, w1)
     if a3 is None:
         return math.nan
-    t5, t95 = _husid_times(k, a3, T0, w0, w1, [_P5, _P95])
+    t5, t95 = _husid_times(k, a3, T0, w0, w1, [P5, P95])
     return float(t95 - t5)
 
 
 @functools.lru_cache(maxsize=64)
-def _solve_envelope(Ia: float, D: float, t_mid: float, T0: float, duration: float) -> tuple[float, float, float]:
+def solve_envelope(Ia: float, D: float, t_mid: float, T0: float, duration: float) -> tuple[float, float, float]:
     """alpha1 [m/s^2 s^(1 - alpha2)], alpha2 [-] and alpha3 [1/s] of q, or raise ValueError naming the cause."""
     w0, w1 = max(T0, 0.0), duration
 

@@ -87,14 +87,14 @@ from housner.scenarios.motions.bands import (
     DEFAULT_SD_RANGE,
     BandCheck,
     BandTable,
-    _band_table,
-    _check_bounds,
-    _check_range,
     band_centres,
     band_check,
     band_periods,
+    band_table,
+    check_bounds,
+    check_range,
 )
-from housner.scenarios.motions.elastic import POINTS_PER_PERIOD, _check_damping, linear_step_coefficients
+from housner.scenarios.motions.elastic import POINTS_PER_PERIOD, check_damping, linear_step_coefficients
 from housner.scenarios.motions.rdk import RDKParams
 
 __all__ = [
@@ -472,14 +472,14 @@ def fit_matched(
         raise ValueError(f"`beta` must lie in (0, 1], got {beta!r}")
     if not (math.isfinite(tol) and tol >= 0.0):
         raise ValueError(f"`tol` must be non-negative, got {tol!r}")
-    g_lo, g_hi = _check_bounds(gain_bounds, "gain_bounds")
+    g_lo, g_hi = check_bounds(gain_bounds, "gain_bounds")
     if not g_lo <= 1.0 <= g_hi:
         raise ValueError(f"`gain_bounds` must contain 1, got {gain_bounds!r}")
-    damping = _check_damping(damping)
+    damping = check_damping(damping)
     if not (isinstance(fir_length, (int, float, np.number)) and math.isfinite(fir_length) and fir_length > 0.0):
         raise ValueError(f"`fir_length` must be a positive number of seconds, got {fir_length!r}")
     ss = rdk._seed_sequence(seed)
-    centres = band_centres(*_check_range(psa_range, "psa_range"))
+    centres = band_centres(*check_range(psa_range, "psa_range"))
     periods = band_periods(centres, per_band)
     if params is None:
         params = rdk.fit(record, seed=ss)
@@ -506,11 +506,11 @@ def fit_matched(
         log_g = np.clip(log_g - beta * band_log, math.log(g_lo), math.log(g_hi))
         done += 1
     # in-sample tables; Sd = PSa / omega^2 at each period, over the bands of DEFAULT_SD_RANGE
-    table = _band_table("PSa", centres, per_band, psa, rec_psa, BAND_BOUNDS)
+    table = band_table("PSa", centres, per_band, psa, rec_psa, BAND_BOUNDS)
     in_sd = np.isin(centres, band_centres(*DEFAULT_SD_RANGE))
     cols = np.repeat(in_sd, per_band)
     w2 = (2.0 * np.pi / periods[cols]) ** 2
-    sd_table = _band_table("Sd", centres[in_sd], per_band, psa[:, cols] / w2, rec_psa[cols] / w2, BAND_BOUNDS)
+    sd_table = band_table("Sd", centres[in_sd], per_band, psa[:, cols] / w2, rec_psa[cols] / w2, BAND_BOUNDS)
     return MatchedRDK(
         params,
         tuple(centres),

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from housner.scenarios.motions.rdk_envelope import _solve_envelope
+from housner.scenarios.motions.rdk_envelope import solve_envelope
 
 __all__ = ["DEFAULT_OMEGA_C", "RDKParams", "settle_time"]
 
@@ -152,7 +152,7 @@ class RDKParams:
             raise ValueError(f"`omega_mid` ({self.omega_mid} rad/s) must exceed `omega_c` ({self.omega_c} rad/s)")
         if self.omega_mid * self.dt >= math.pi:
             raise ValueError(f"`omega_mid` ({self.omega_mid} rad/s) must be below the Nyquist frequency pi / `dt`")
-        object.__setattr__(self, "_alphas", _solve_envelope(self.Ia, self.D5_95, self.t_mid, self.T0, self.duration))
+        object.__setattr__(self, "_alphas", solve_envelope(self.Ia, self.D5_95, self.t_mid, self.T0, self.duration))
 
     # --- derived -------------------------------------------------------
     @property

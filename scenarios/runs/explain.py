@@ -65,7 +65,7 @@ from housner.scenarios.runs.explain_floor import (
 )
 from housner.stats import ks_2samp, per_record_agreement
 
-__all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "RECORD_RTOL", "Explanation", "explain_engine", "record_agreement",
+__all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "Explanation", "explain_engine", "record_agreement",
            "record_thetas"]  # fmt: skip
 
 #: Noise added to the engine's theta before the diagnosis [rad]. The diagnosis takes a record as signal plus

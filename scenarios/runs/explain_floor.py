@@ -51,7 +51,6 @@ from housner.stats import per_record_agreement
 
 __all__ = [
     "PERTURBATIONS",
-    "RECORD_RTOL",
     "SHIFT",
     "ModelFormFloor",
     "engine_chaos_floor",

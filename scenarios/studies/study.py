@@ -68,7 +68,7 @@ from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import jsonable, provenance
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.execution.workers import _Progress
+from housner.scenarios.execution.workers import Progress
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.motions.elastic import response_spectrum
 from housner.scenarios.studies.fragility import (
@@ -271,7 +271,7 @@ def run_study(
     eng_settings = {e: dict(scenario.engine_settings.get(e, {})) for e in names}
     total = len(names) * n * len(study.levels) * len(study.S)
     how = "on the Dask cluster" if scheduler is not None else ("in this process" if jobs == 1 else "worker processes")
-    bar = _Progress(total, progress, f"{len(study.S)} sizes x {len(study.levels)} stripes x {n} motions, {how}")
+    bar = Progress(total, progress, f"{len(study.S)} sizes x {len(study.levels)} stripes x {n} motions, {how}")
     parts, info, hist = [], {}, {}
     try:
         for k, S in enumerate(study.S):

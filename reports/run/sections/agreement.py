@@ -54,7 +54,7 @@ def _floor_cell(fl) -> str:
     return f"{fl.share:.0%}<br><small>{fl.share_min:.0%}&ndash;{fl.share_max:.0%}</small>"
 
 
-def _agreement(run: Run) -> str:
+def agreement_section(run: Run) -> str:
     if not run.others:
         return html_note("Only one engine: no cross-engine comparison.")
     cmp = run.comparison
@@ -169,7 +169,7 @@ def _agreement(run: Run) -> str:
     return "".join(parts)
 
 
-def _spectra(run: Run) -> str:
+def spectra_section(run: Run) -> str:
     mm = run.motions_meta
     w = np.asarray([json_number(x) for x in mm.get("omega_ratio", [])])
     a = np.asarray([json_number(x) for x in mm.get("accel_ratio", [])])
@@ -214,7 +214,7 @@ def _nan_to_num(v: np.ndarray) -> np.ndarray:
     return np.where(np.isposinf(v), 1e300, v)
 
 
-def _free_vibration(run: Run) -> str:
+def free_vibration_section(run: Run) -> str:
     alpha = run.alpha
     if not math.isfinite(alpha):
         return html_note("run.json holds no specimen: cannot normalise the free rocking.", "warn")

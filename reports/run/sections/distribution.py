@@ -27,12 +27,12 @@ from housner.reports.page import (
     html_note,
     html_table,
 )
-from housner.reports.run.view import _Q, Run, _record
+from housner.reports.run.view import QUARTILES, Run, source_record
 from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.execution.tables import percentile_table
 
 
-def _distribution(run: Run) -> str:
+def distribution_section(run: Run) -> str:
     cmp = run.comparison
     samples = {e: run.values(e) for e in run.engines if run.values(e).size}
     if not samples:
@@ -58,7 +58,7 @@ def _distribution(run: Run) -> str:
         header.append("seed paper<br><small>(numerical, Table 2)</small>")
     header += [engine_tag(e, run) for e in run.engines]
     rows = []
-    for q in _Q:
+    for q in QUARTILES:
         qn = f"q{q:g}"
         r = [stats.percentile_label(q) if hasattr(stats, "percentile_label") else f"{q:g}th"]
         if paper:
@@ -123,7 +123,7 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
     ref = run.reference
     head, gap = _gap_head(run, cmp, paper, spread)
     parts = [f"<p>{head}</p>"]
-    record, why = _record(run)
+    record, why = source_record(run)
     if run.source != "rdk" or record is None or run.motions is None:
         why = why or (
             "motions.npz is missing" if run.motions is None else "the motions are not simulated from a record"
@@ -189,7 +189,7 @@ def _gap_verdict(gap: list[float], pct: float, lo: float, hi: float, x: float, p
 
 def _gap_head(run: Run, cmp, paper: dict[float, float], spread: dict | None) -> tuple[str, list[float]]:
     """Where the paper's percentiles stand against this run's noise: the sentence, and the levels outside it."""
-    qs = [q for q in _Q if q in paper]
+    qs = [q for q in QUARTILES if q in paper]
     n = int(cmp["n_ok"])
     ref = run.reference
     summary = {json_number(k): v for k, v in ((spread or {}).get("summary") or {}).items()}
@@ -375,12 +375,12 @@ def _factor_line(run: Run) -> str:
 
 def _table2(run: Run, paper: dict[float, float]) -> str:
     """Percentiles and their differences to the reference (and to the paper), one row per quantity."""
-    t2 = percentile_table(run.results, run.reference, q=_Q)
+    t2 = percentile_table(run.results, run.reference, q=QUARTILES)
     labels = [esc(i) for i in t2.index]
     rows = []
     ref = t2.iloc[:, 0].to_numpy(float)
     if paper:
-        pv = np.array([paper.get(q, math.nan) for q in _Q])
+        pv = np.array([paper.get(q, math.nan) for q in QUARTILES])
         rows.append(["seed paper, numerical [&alpha;]"] + [fmt_num(v, 2) for v in pv])
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = np.where(np.isfinite(ref) & np.isfinite(pv), (ref - pv) / pv, np.nan)

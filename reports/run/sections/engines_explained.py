@@ -18,7 +18,7 @@ import math
 
 from housner.reports.frontier_figure import frontier_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_stored_figure, html_table, status_badge
-from housner.reports.run.sections.tuning import _engine_defaults, _settings_differ, model_data, model_file
+from housner.reports.run.sections.tuning import engine_defaults, model_data, model_file, settings_differ
 from housner.reports.run.view import Run
 from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
 
@@ -152,13 +152,13 @@ def _frontier(run: Run, name: str, d: dict) -> str:
             "KS",
             "CPU s per sim. s",
         ],  # fmt: skip
-        _frontier_rows(fr, current_point(fr, _engine_defaults(name))),
+        _frontier_rows(fr, current_point(fr, engine_defaults(name))),
         caption=f"{engine_tag(name, run)} on <code>{esc(fr.scenario)}</code> ({fr.n_motions} motions), measured "
         f"{esc(fr.date)}, version {esc(fr.version)}; errors are the worst by magnitude. Knee: "
         f"{esc(knee_reason(fr))}.",
     )
     used = ((run.meta.get("engines") or {}).get(name) or {}).get("settings") or {}
-    differ = _settings_differ(fr.knee_settings(), used)
+    differ = settings_differ(fr.knee_settings(), used)
     note = html_note(f"This run's {esc(', '.join(differ))} differ from the knee's.", "warn") if differ else ""
     fig = html_stored_figure(frontier_figure, (fr,), d, f"{esc(name)}: accuracy against cost", f"{name} frontier")
     return f"<h4>{engine_tag(name, run)}</h4>{table}{note}{fig}"

@@ -13,12 +13,12 @@ import numpy as np
 
 from housner.reports.page import esc, fmt_g, fmt_num, guarded, html_figure, html_note, html_table, status_badge
 from housner.reports.run.ground_figures import plot_ensemble_spectra
-from housner.reports.run.view import Run, _motion_list, _record
+from housner.reports.run.view import Run, motion_list, source_record
 from housner.scenarios.execution.rundir import json_number
 from housner.units import G
 
 
-def _ensemble(run: Run) -> str:
+def ensemble_section(run: Run) -> str:
     mm = run.motions_meta
     parts = []
     src = run.source or "unknown"
@@ -216,13 +216,13 @@ def _rdk_table(params: dict) -> str:
 def _spectra_figure(run: Run) -> str:
     if run.motions is None:
         return html_note("motions.npz is missing: no spectra.")
-    record, why = _record(run)
+    record, why = source_record(run)
     if record is None:
         return html_note(f"{why}: no spectra.", "warn" if "catalogue" in why or "Record file" in why else "note")
     S = run.S
     # motions.npz holds the model-scale motions (time compressed by sqrt(S), seed eq. 9); the figure takes
     # the prototype-scale ensemble and draws the time-scaled spectra itself.
-    prototype = [m.scaled(time=math.sqrt(S)) for m in _motion_list(run)]
+    prototype = [m.scaled(time=math.sqrt(S)) for m in motion_list(run)]
     fig = plot_ensemble_spectra(record, prototype, S=S if S != 1.0 else None)
     return html_figure(
         fig,

@@ -27,7 +27,7 @@ from housner.reports.page import (
     html_table,
     status_badge,
 )
-from housner.reports.run.sections.tuning import _settings_html, _tuning, _tuning_caveats
+from housner.reports.run.sections.tuning import settings_html, tuning_caveats, tuning_section
 from housner.reports.run.view import (
     BOOT_SEED,
     MIN_RECORDS,
@@ -62,7 +62,7 @@ def _moved(run: Run, base: str, series: str) -> str:
     )
 
 
-def _headline(run: Run) -> str:
+def headline_section(run: Run) -> str:
     cmp = run.comparison
     ref = run.reference
     parts = []
@@ -76,7 +76,7 @@ def _headline(run: Run) -> str:
     # one line per engine, the answer first
     lines = []
     try:
-        caveats = _tuning_caveats(run)
+        caveats = tuning_caveats(run)
     except Exception as e:  # an unreadable tuning file must not lose the verdict; say so instead
         caveats = {}
         parts.append(
@@ -214,7 +214,7 @@ _SPECIMEN_ROWS = {
 }
 
 
-def _specimen(run: Run) -> str:
+def specimen_section(run: Run) -> str:
     spec = run.specimen
     parts = []
     if spec:
@@ -235,9 +235,9 @@ def _specimen(run: Run) -> str:
     for name in run.engines:
         info = engines.get(name, {})
         settings = info.get("settings") or {}
-        sset = _settings_html(settings) or "defaults"
+        sset = settings_html(settings) or "defaults"
         rows.append([engine_tag(name, run), esc(info.get("version", "")) or "&ndash;", sset])
     parts.append("<h3>Engines</h3>")
     parts.append(html_table(["engine", "version", "settings"], rows))
-    parts.append(guarded("The tuning summary", lambda: _tuning(run)))
+    parts.append(guarded("The tuning summary", lambda: tuning_section(run)))
     return "".join(parts)

@@ -14,7 +14,7 @@ from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_table
 from housner.reports.run.view import Run
 
 
-def _failures(run: Run) -> str:
+def failures_section(run: Run) -> str:
     failed = run.failed
     if failed.empty:
         return html_note("No record failed.", "good")
@@ -29,7 +29,7 @@ def _failures(run: Run) -> str:
     ) + html_table(["engine", "motion", "name", "error"], rows, cls="failures")
 
 
-def _provenance(run: Run) -> str:
+def provenance_section(run: Run) -> str:
     meta = run.meta
     prov = meta.get("provenance") or {}
     parts = []

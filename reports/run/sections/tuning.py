@@ -30,7 +30,7 @@ from housner.stats import KS_MAX
 TUNING_DIR: Path | None = None
 
 
-def _tuning_caveats(run: Run) -> dict[str, str]:
+def tuning_caveats(run: Run) -> dict[str, str]:
     """engine -> HTML: the tuning checks its tuning file did not meet, by how much, and what that means here."""
     out = {}
     cmp = run.comparison
@@ -82,7 +82,7 @@ def _tuning_caveats(run: Run) -> dict[str, str]:
     return out
 
 
-def _settings_html(settings: dict) -> str:
+def settings_html(settings: dict) -> str:
     """Engine settings one per line; None (the engine's default) is written as such."""
     return "<br>".join(
         f"<code>{esc(k)} = {'default' if v is None else esc(json.dumps(v))}</code>" for k, v in settings.items()
@@ -253,7 +253,7 @@ def _tuning_series(d: dict) -> tuple[dict, dict]:
     return curves, dec
 
 
-def _settings_differ(tuned: dict, used: dict) -> list[str]:
+def settings_differ(tuned: dict, used: dict) -> list[str]:
     """Settings where the run differs from the tuning file (keys the run sets); empty when it runs as tuned."""
 
     def norm(v):
@@ -262,7 +262,7 @@ def _settings_differ(tuned: dict, used: dict) -> list[str]:
     return [k for k, v in used.items() if k in tuned and norm(tuned[k]) != norm(v)]
 
 
-def _engine_defaults(name: str) -> dict:
+def engine_defaults(name: str) -> dict:
     """The registered engine's DEFAULTS, or none for an engine the registry does not know."""
     try:
         return dict(getattr(engine_class(name), "DEFAULTS", {}) or {})
@@ -270,7 +270,7 @@ def _engine_defaults(name: str) -> dict:
         return {}
 
 
-def _tuning(run: Run) -> str:
+def tuning_section(run: Run) -> str:
     """Tuned contact checks and r against amplitude, from housner.engines/models/tuning-<engine>.json when present."""
     found = model_data(run)
     if not found:
@@ -292,10 +292,10 @@ def _tuning(run: Run) -> str:
         used = (engines.get(name) or {}).get("settings") or {}
         # a setting the file lacks did not exist when it was written: the engine's default keeps the
         # behaviour of that time (e.g. impact_energy_factor 1)
-        tuned = {**_engine_defaults(name), **tuned}
-        differ = _settings_differ(tuned, used)
+        tuned = {**engine_defaults(name), **tuned}
+        differ = settings_differ(tuned, used)
         if not used:
-            same = f"{_settings_html(tuned) or '&ndash;'}<br><small>(the run recorded no settings)</small>"
+            same = f"{settings_html(tuned) or '&ndash;'}<br><small>(the run recorded no settings)</small>"
         elif differ:
             same = '<span class="bad">the run differs:</span><br>' + "<br>".join(
                 f"<code>{esc(k)}</code>: tuned {esc(json.dumps(tuned[k]))}, run {esc(json.dumps(used[k]))}"

@@ -15,10 +15,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from housner.scenarios.studies.fragility.checks import _check_im, _check_n_boot, _outcomes
-from housner.scenarios.studies.fragility.lognormal import BETA_BOUNDS, LognormalFit, _fit_counts, fit_lognormal
-from housner.scenarios.studies.fragility.newton import _newton_rows
-from housner.stats import _check_ci
+from housner.scenarios.studies.fragility.checks import check_im, check_n_boot, outcomes
+from housner.scenarios.studies.fragility.lognormal import BETA_BOUNDS, LognormalFit, fit_counts, fit_lognormal
+from housner.scenarios.studies.fragility.newton import newton_rows
+from housner.stats import check_ci
 
 __all__ = ["BootstrapFit", "bootstrap_fit"]
 
@@ -96,7 +96,7 @@ def _replicate_fits(st: _Stripes, n: np.ndarray, k: np.ndarray, start: Lognormal
     """(median, beta) per replicate row of the counts (R x U), NaN where the fit is not usable.
 
     Rows are solved together by Newton's method from the point fit; a row that does not converge or
-    whose beta leaves :data:`BETA_BOUNDS` is refitted alone by :func:`_fit_counts`.
+    whose beta leaves :data:`BETA_BOUNDS` is refitted alone by :func:`fit_counts`.
     """
     out = np.full((n.shape[0], 2), np.nan)
     if not start.beta > 0:
@@ -106,20 +106,20 @@ def _replicate_fits(st: _Stripes, n: np.ndarray, k: np.ndarray, start: Lognormal
     rows = np.flatnonzero(~_separable(n, k))
     a0 = np.full(rows.size, -math.log(start.median) / start.beta)
     b0 = np.full(rows.size, 1.0 / start.beta)
-    a, b, converged = _newton_rows(st.lx, n[rows], k[rows], a0, b0)
+    a, b, converged = newton_rows(st.lx, n[rows], k[rows], a0, b0)
     inside = converged & (b >= 1.0 / BETA_BOUNDS[1]) & (b <= 1.0 / BETA_BOUNDS[0])
     out[rows[inside], 0] = np.exp(-a[inside] / b[inside])
     out[rows[inside], 1] = 1.0 / b[inside]
     x0 = np.array([math.log(start.median), math.log(start.beta)])
     for i in rows[~inside]:
         keep = n[i] > 0
-        fit = _fit_counts(st.lx[keep], n[i, keep], k[i, keep], x0)
+        fit = fit_counts(st.lx[keep], n[i, keep], k[i, keep], x0)
         if fit.status in _USABLE:
             out[i] = fit.median, fit.beta
     return out
 
 
-def _percentile_interval(values: np.ndarray, ci: float) -> tuple[float, float]:
+def percentile_interval(values: np.ndarray, ci: float) -> tuple[float, float]:
     v = values[np.isfinite(values)]
     if v.size == 0:
         return math.nan, math.nan
@@ -127,7 +127,7 @@ def _percentile_interval(values: np.ndarray, ci: float) -> tuple[float, float]:
     return float(low), float(high)
 
 
-def _resampled_fits(x: np.ndarray, samples, n_boot: int, seed) -> tuple[list[LognormalFit], list[np.ndarray]]:
+def resampled_fits(x: np.ndarray, samples, n_boot: int, seed) -> tuple[list[LognormalFit], list[np.ndarray]]:
     """Point fits of (overturned, valid) samples of the same motions, and their replicates on the same resamples.
 
     Returns the fits and, per sample, the (n_boot, 2) replicate estimates (median, beta), NaN where not usable;
@@ -193,15 +193,15 @@ def bootstrap_fit(im, overturned, valid=None, n_boot: int = 1000, seed=0, ci: fl
     ----------
     Efron and Tibshirani (1993), ch. 13; Baker (2015).
     """
-    o, v = _outcomes(overturned, valid)
-    x = _check_im(im, o.shape[1])
-    n_boot, ci = _check_n_boot(n_boot), _check_ci(ci)
-    (fit,), (est,) = _resampled_fits(x, [(o, v)], n_boot, seed)
+    o, v = outcomes(overturned, valid)
+    x = check_im(im, o.shape[1])
+    n_boot, ci = check_n_boot(n_boot), check_ci(ci)
+    (fit,), (est,) = resampled_fits(x, [(o, v)], n_boot, seed)
     medians, betas = est[:, 0], est[:, 1]
     return BootstrapFit(
         fit,
-        *_percentile_interval(medians, ci),
-        *_percentile_interval(betas, ci),
+        *percentile_interval(medians, ci),
+        *percentile_interval(betas, ci),
         n_boot,
         int(np.count_nonzero(np.isnan(medians))),
         medians,

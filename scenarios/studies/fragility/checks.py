@@ -11,7 +11,7 @@ import numpy as np
 __all__: list[str] = []
 
 
-def _check_im(im, n_stripes: int | None = None) -> np.ndarray:
+def check_im(im, n_stripes: int | None = None) -> np.ndarray:
     try:
         x = np.asarray(im, dtype=np.float64)
     except (TypeError, ValueError):
@@ -25,7 +25,7 @@ def _check_im(im, n_stripes: int | None = None) -> np.ndarray:
     return x
 
 
-def _check_matrix(values, name: str) -> np.ndarray:
+def check_matrix(values, name: str) -> np.ndarray:
     try:
         a = np.asarray(values)
     except (TypeError, ValueError):
@@ -35,9 +35,9 @@ def _check_matrix(values, name: str) -> np.ndarray:
     return a
 
 
-def _outcomes(overturned, valid, name: str = "overturned", valid_name: str = "valid") -> tuple[np.ndarray, np.ndarray]:
+def outcomes(overturned, valid, name: str = "overturned", valid_name: str = "valid") -> tuple[np.ndarray, np.ndarray]:
     """(overturned & valid, valid) as float 0/1 matrices; NaN in ``overturned`` marks a failed record."""
-    o = _check_matrix(overturned, name)
+    o = check_matrix(overturned, name)
     if o.dtype == np.bool_:
         failed = np.zeros(o.shape, dtype=bool)
     else:
@@ -49,11 +49,11 @@ def _outcomes(overturned, valid, name: str = "overturned", valid_name: str = "va
         if not np.all(np.isin(o[~failed], (0.0, 1.0))):
             raise ValueError(f"`{name}` must hold booleans (or 0/1, NaN for a failed record)")
         o = np.where(failed, 0.0, o).astype(bool)
-    v = _valid_mask(valid, o.shape, valid_name) & ~failed
+    v = valid_mask(valid, o.shape, valid_name) & ~failed
     return (o & v).astype(np.float64), v.astype(np.float64)
 
 
-def _valid_mask(valid, shape: tuple[int, ...], name: str = "valid") -> np.ndarray:
+def valid_mask(valid, shape: tuple[int, ...], name: str = "valid") -> np.ndarray:
     if valid is None:
         return np.ones(shape, dtype=bool)
     v = np.asarray(valid)
@@ -66,7 +66,7 @@ def _valid_mask(valid, shape: tuple[int, ...], name: str = "valid") -> np.ndarra
     return v
 
 
-def _check_counts(n, k) -> tuple[np.ndarray, np.ndarray]:
+def check_counts(n, k) -> tuple[np.ndarray, np.ndarray]:
     arrays = []
     for name, a in (("n", n), ("k", k)):
         try:
@@ -85,7 +85,7 @@ def _check_counts(n, k) -> tuple[np.ndarray, np.ndarray]:
     return n_, k_
 
 
-def _check_n_boot(n_boot) -> int:
+def check_n_boot(n_boot) -> int:
     if not (isinstance(n_boot, (int, np.integer)) and n_boot >= 1):
         raise ValueError(f"`n_boot` must be a positive integer, got {n_boot!r}")
     return int(n_boot)

@@ -13,10 +13,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from housner.scenarios.studies.fragility.bootstrap import _percentile_interval, _resampled_fits
-from housner.scenarios.studies.fragility.checks import _check_im, _check_n_boot, _outcomes
+from housner.scenarios.studies.fragility.bootstrap import percentile_interval, resampled_fits
+from housner.scenarios.studies.fragility.checks import check_im, check_n_boot, outcomes
 from housner.scenarios.studies.fragility.lognormal import LognormalFit
-from housner.stats import _check_ci
+from housner.stats import check_ci
 
 __all__ = ["FitComparison", "compare_fits", "interval_disagreement"]
 
@@ -121,18 +121,18 @@ def compare_fits(
     ----------
     Efron and Tibshirani (1993), ch. 13; Baker (2015).
     """
-    oe, ve = _outcomes(overturned_engine, valid_engine, "overturned_engine", "valid_engine")
-    orf, vr = _outcomes(overturned_reference, valid_reference, "overturned_reference", "valid_reference")
+    oe, ve = outcomes(overturned_engine, valid_engine, "overturned_engine", "valid_engine")
+    orf, vr = outcomes(overturned_reference, valid_reference, "overturned_reference", "valid_reference")
     if oe.shape != orf.shape:
         raise ValueError(
             f"`overturned_engine` {oe.shape} and `overturned_reference` {orf.shape} must pair the same motions "
             "and stripes"
         )
-    x = _check_im(im, oe.shape[1])
-    n_boot, ci = _check_n_boot(n_boot), _check_ci(ci)
-    (fe, fr), (eng, ref) = _resampled_fits(x, [(oe, ve), (orf, vr)], n_boot, seed)
-    ratio_low, ratio_high = _percentile_interval(eng[:, 0] / ref[:, 0], ci)
-    diff_low, diff_high = _percentile_interval(eng[:, 1] - ref[:, 1], ci)
+    x = check_im(im, oe.shape[1])
+    n_boot, ci = check_n_boot(n_boot), check_ci(ci)
+    (fe, fr), (eng, ref) = resampled_fits(x, [(oe, ve), (orf, vr)], n_boot, seed)
+    ratio_low, ratio_high = percentile_interval(eng[:, 0] / ref[:, 0], ci)
+    diff_low, diff_high = percentile_interval(eng[:, 1] - ref[:, 1], ci)
     disagree = any(interval_disagreement(ratio_low, ratio_high, diff_low, diff_high))
     return FitComparison(
         fe.median / fr.median,

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from housner.scenarios.studies.fragility.checks import _check_counts, _outcomes
-from housner.stats import _check_ci, wilson_interval
+from housner.scenarios.studies.fragility.checks import check_counts, outcomes
+from housner.stats import check_ci, wilson_interval
 
 __all__ = ["proportion_intervals", "stripe_counts"]
 
@@ -32,7 +32,7 @@ def stripe_counts(overturned, valid=None) -> tuple[np.ndarray, np.ndarray]:
     n, k : ndarray of int, shape (S,)
         Valid records and overturns among them, per stripe.
     """
-    o, v = _outcomes(overturned, valid)
+    o, v = outcomes(overturned, valid)
     return v.sum(axis=0).astype(np.int64), o.sum(axis=0).astype(np.int64)
 
 
@@ -65,8 +65,8 @@ def proportion_intervals(k, n, ci: float = 0.95) -> tuple[np.ndarray, np.ndarray
     ----------
     Wilson (1927).
     """
-    n_, k_ = _check_counts(n, k)
+    n_, k_ = check_counts(n, k)
     with np.errstate(invalid="ignore", divide="ignore"):
         p = k_ / n_
-    low, high = wilson_interval(k_, n_, _check_ci(ci))
+    low, high = wilson_interval(k_, n_, check_ci(ci))
     return p, low, high

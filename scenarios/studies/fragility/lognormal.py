@@ -17,8 +17,8 @@ from typing import NamedTuple
 import numpy as np
 from scipy import optimize, special
 
-from housner.scenarios.studies.fragility.checks import _check_counts, _check_im
-from housner.scenarios.studies.fragility.newton import _LOG_SQRT_2PI, _newton_rows
+from housner.scenarios.studies.fragility.checks import check_counts, check_im
+from housner.scenarios.studies.fragility.newton import LOG_SQRT_2PI, newton_rows
 
 __all__ = ["BETA_BOUNDS", "LognormalFit", "fit_lognormal", "fragility_curve"]
 
@@ -74,7 +74,7 @@ def _neg_loglik(theta: np.ndarray, lx: np.ndarray, n: np.ndarray, k: np.ndarray,
     # log_ndtr of both tails keeps p and 1 - p accurate far out where 1 - Phi(z) rounds to 0.
     lp, lq = special.log_ndtr(z), special.log_ndtr(-z)
     f = -(k @ lp + (n - k) @ lq) * scale
-    lpdf = -0.5 * z * z - _LOG_SQRT_2PI
+    lpdf = -0.5 * z * z - LOG_SQRT_2PI
     dz = -(k * np.exp(lpdf - lp) - (n - k) * np.exp(lpdf - lq)) * scale
     return f, np.array([-inv_beta * dz.sum(), -(dz @ z)])
 
@@ -150,13 +150,13 @@ def _polish(lx: np.ndarray, n: np.ndarray, k: np.ndarray, mu: float, beta: float
     Returns (median, beta), or None where Newton fails.
     """
     b_lo, b_hi = 1.0 / BETA_BOUNDS[1], 1.0 / BETA_BOUNDS[0]
-    a, b, converged = _newton_rows(lx, n[None], k[None], np.array([-mu / beta]), np.array([1.0 / beta]))
+    a, b, converged = newton_rows(lx, n[None], k[None], np.array([-mu / beta]), np.array([1.0 / beta]))
     if converged[0] and b_lo <= b[0] <= b_hi:
         return math.exp(-a[0] / b[0]), 1.0 / b[0]
     if np.isnan(b[0]) or b_lo <= b[0] <= b_hi:
         return None  # stalled inside the bounds: no reason to look on them
     b_fix = b_lo if b[0] < b_lo else b_hi
-    a, b, converged = _newton_rows(lx, n[None], k[None], np.array([-mu * b_fix]), np.array([b_fix]), fixed_b=True)
+    a, b, converged = newton_rows(lx, n[None], k[None], np.array([-mu * b_fix]), np.array([b_fix]), fixed_b=True)
     return (math.exp(-a[0] / b_fix), 1.0 / b_fix) if converged[0] else None
 
 
@@ -173,7 +173,7 @@ def _at_bound(median: float, beta: float) -> LognormalFit | None:
     return None
 
 
-def _fit_counts(lx: np.ndarray, n: np.ndarray, k: np.ndarray, start: np.ndarray | None = None) -> LognormalFit:
+def fit_counts(lx: np.ndarray, n: np.ndarray, k: np.ndarray, start: np.ndarray | None = None) -> LognormalFit:
     """The fit on aggregated stripes (ln IM ascending, n > 0)."""
     if lx.size == 0:
         return LognormalFit(math.nan, math.nan, "no_data", "no valid record at any stripe")
@@ -246,13 +246,13 @@ def fit_lognormal(im, n, k) -> LognormalFit:
     ----------
     Baker (2015); Albert and Anderson (1984).
     """
-    x = _check_im(im)
-    n_, k_ = _check_counts(n, k)
+    x = check_im(im)
+    n_, k_ = check_counts(n, k)
     if n_.size != x.size:
         raise ValueError(f"`n` must have one count per stripe of `im` ({x.size}), got {n_.size}")
     if n_.sum() == 0:
         raise ValueError("`n` is zero at every stripe: no valid record to fit")
-    return _fit_counts(*_aggregate(np.log(x), n_, k_))
+    return fit_counts(*_aggregate(np.log(x), n_, k_))
 
 
 def fragility_curve(x, median: float, beta: float) -> np.ndarray:

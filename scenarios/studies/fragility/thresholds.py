@@ -11,14 +11,14 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from housner.scenarios.studies.fragility.checks import _check_matrix, _valid_mask
+from housner.scenarios.studies.fragility.checks import check_matrix, valid_mask
 from housner.scenarios.studies.fragility.counts import proportion_intervals
 
 __all__ = ["exceedance"]
 
 
 def _check_ratios(values) -> np.ndarray:
-    r = _check_matrix(values, "theta_max_over_alpha")
+    r = check_matrix(values, "theta_max_over_alpha")
     try:
         r = r.astype(np.float64)
     except (TypeError, ValueError):
@@ -74,7 +74,7 @@ def exceedance(theta_max_over_alpha, thresholds=(0.5, 0.8, 1.0), valid=None, ci:
     Wilson (1927).
     """
     r, t = _check_ratios(theta_max_over_alpha), _check_thresholds(thresholds)
-    v = _valid_mask(valid, r.shape) & ~np.isnan(r)
+    v = valid_mask(valid, r.shape) & ~np.isnan(r)
     # Overturned (>= 1) becomes +inf so that it lies above every threshold, also those above 1.
     r = np.where(r >= 1.0, np.inf, r)
     n = np.broadcast_to(v.sum(axis=0)[:, None], (r.shape[1], t.size))
