@@ -26,8 +26,9 @@ from housner._kernel_parts import (
 )
 from housner._validate import finite as _finite
 from housner.specimen import Specimen
+from housner.units import G
 
-__all__ = ["RockingParams"]
+__all__ = ["RockingParams", "pivot_impact_ratios"]
 
 
 @dataclass(frozen=True)
@@ -130,6 +131,37 @@ class RockingParams:
         p = specimen.frequency_parameter
         return cls(alpha, alpha, p, p, specimen.r_housner if r is None else r)
 
+    @classmethod
+    def from_pivots(cls, b_pos: float, b_neg: float, h: float, centroidal_inertia: float, mass: float):
+        """A rigid block on two pivots under Housner's impact law, per side.
+
+        Parameters
+        ----------
+        b_pos, b_neg : float
+            Horizontal distance from the centre of mass to the +x and the -x pivot [m].
+        h : float
+            Height of the centre of mass above the pivots [m].
+        centroidal_inertia : float
+            I_c about the rocking axis through the centre of mass [kg m^2].
+        mass : float
+            [kg]
+
+        Returns
+        -------
+        RockingParams
+            alpha_s = atan(b_s / h), p_s = sqrt(m g R_s / (I_c + m R_s^2)) with R_s = hypot(b_s, h), and the
+            restitution of each impact from angular momentum about the landing pivot
+            (:func:`pivot_impact_ratios`): r_neg = rho+-^2, r_pos = rho-+^2 (each at most 1) and r their
+            geometric mean. With b_pos = b_neg this is Housner's symmetric block.
+        """
+        side = {}
+        for name, b in (("pos", b_pos), ("neg", b_neg)):
+            rr = math.hypot(b, h)
+            side[name] = (math.atan2(b, h), math.sqrt(mass * G * rr / (centroidal_inertia + mass * rr * rr)))
+        rho_pn, rho_np = pivot_impact_ratios(b_pos, b_neg, h, centroidal_inertia, mass)
+        return cls(side["pos"][0], side["neg"][0], side["pos"][1], side["neg"][1], min(1.0, abs(rho_pn * rho_np)),
+                   r_pos=min(1.0, rho_np * rho_np), r_neg=min(1.0, rho_pn * rho_pn))  # fmt: skip
+
     @property
     def is_housner(self) -> bool:
         """True for the plain symmetric Housner model (no asymmetry, constant r, no damping)."""
@@ -207,3 +239,21 @@ class RockingParams:
         v[I_R_EXP] = self.r_amp_exponent
         v[I_DAMPING] = self.damping
         return v
+
+
+def pivot_impact_ratios(b_pos: float, b_neg: float, h: float, centroidal_inertia: float, mass: float):
+    """Angular-velocity ratios [-] of the two impacts of a rigid block on two pivots (Housner's assumptions).
+
+    The centre of mass is h [m] above the pivots and b_pos, b_neg [m] from each horizontally. Angular
+    momentum about the pivot that lands is conserved: with I+- = I_c + m (h^2 + b+-^2) the inertia about each
+    pivot, theta'_after / theta'_before = (I_c + m (h^2 - b+ b-)) / I_landing.
+
+    Returns
+    -------
+    (rho_pos_to_neg, rho_neg_to_pos) : tuple of float
+        For an impact that ends rocking on the +x pivot and lands on the -x one, and for the reverse. For a
+        symmetric block both are 1 - 2 m b^2 / I0 = sqrt(r_housner).
+    """
+    common = centroidal_inertia + mass * (h * h - b_pos * b_neg)
+    return (common / (centroidal_inertia + mass * (h * h + b_neg * b_neg)),
+            common / (centroidal_inertia + mass * (h * h + b_pos * b_pos)))  # fmt: skip

@@ -47,7 +47,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from housner._validate import finite, positive
 from housner.errors import DataFileError, one_line
-from housner.rocking_params import RockingParams
+from housner.rocking_params import RockingParams, pivot_impact_ratios
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -189,8 +189,7 @@ class ScanSpecimen:
         (I_c + m (h^2 - b+ b-)) / I_landing. rho+- ends rocking on the + pivot and lands on the
         - pivot; rho-+ the reverse.
         """
-        common = self.centroidal_inertia + self.mass * (self.h**2 - self.pos.b * self.neg.b)
-        return common / self.neg.I, common / self.pos.I
+        return pivot_impact_ratios(self.pos.b, self.neg.b, self.h, self.centroidal_inertia, self.mass)
 
     def rocking_params(self, r: float | None = None) -> RockingParams:
         """The parameters of the rocking equation: alpha and p per side, and the impact law.
@@ -208,16 +207,7 @@ class ScanSpecimen:
         -------
         RockingParams
         """
-        rho_pn, rho_np = self.impact_ratios()
-        params = RockingParams(
-            alpha_pos=self.pos.alpha,
-            alpha_neg=self.neg.alpha,
-            p_pos=self.pos.p,
-            p_neg=self.neg.p,
-            r=min(1.0, abs(rho_pn * rho_np)),
-            r_pos=min(1.0, rho_np * rho_np),
-            r_neg=min(1.0, rho_pn * rho_pn),
-        )
+        params = RockingParams.from_pivots(self.pos.b, self.neg.b, self.h, self.centroidal_inertia, self.mass)
         return params if r is None else params.with_r(r)
 
     def specimen(self) -> Specimen:

@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     outcomes = _diagnose_outcomes(args, campaign) if campaign.outcomes else None
     if not campaign.records:  # outcome records only
         if args.json:
-            Path(args.json).write_text(json.dumps(outcomes.to_dict(), indent=1, default=_json_default) + "\n")
+            outcomes.to_json(args.json)
             print(f"json:   {args.json}")
         if args.report is not None:
             from housner.reports.diagnosis import write_outcome_report
@@ -92,27 +92,19 @@ def run(args: argparse.Namespace) -> int:
     print(f"correct-model floor {res.floor:.4f} (measured), error/floor {res.ratio:.2f}, z {res.z:+.1f}; "
           f"sensor noise sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
     if args.json:
-        diag.to_json(args.json)
-        if outcomes is not None:  # a campaign of both kinds: the outcome diagnosis under its own key
-            data = json.loads(Path(args.json).read_text())
-            data["outcomes_diagnosis"] = outcomes.to_dict()
-            data["outcomes"] = data["outcomes_diagnosis"]["outcomes"]
-            Path(args.json).write_text(json.dumps(data, indent=1, default=_json_default) + "\n")
+        if outcomes is None:
+            diag.to_json(args.json)
+        else:  # a campaign of both kinds: the outcome diagnosis under its own key, its scores under `outcomes`
+            from housner.scenarios.execution.rundir import jsonable
+
+            both = outcomes.to_dict()
+            text = json.dumps(jsonable({**diag.to_dict(), "outcomes_diagnosis": both, "outcomes": both["outcomes"]},
+                                       nonfinite="null"), indent=2, allow_nan=False)  # fmt: skip
+            Path(args.json).write_text(text + "\n")
         print(f"json:   {args.json}")
     if want_report:
         print(f"report: {write_diagnosis_report(diag, args.report)}")
     return 0
-
-
-def _json_default(o):
-    """numpy scalars and arrays in the diagnosis' JSON."""
-    import numpy as np
-
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(f"{type(o).__name__} is not JSON serialisable")
 
 
 def _diagnose_outcomes(args: argparse.Namespace, campaign):

@@ -17,6 +17,7 @@ from housner.effects.registry import (
     register_effect,
 )
 from housner.effects.terms import ImpactTerm, MomentTerm
+from housner.rocking_params import pivot_impact_ratios
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -210,13 +211,7 @@ def asymmetric_impact_ratios(specimen: Specimen, e: float) -> tuple[float, float
         on the -x corner, and for the reverse. For e = 0 both are
         1 - 2 m B^2 / I0 = sqrt(r_housner).
     """
-    m = specimen.mass
-    hh = specimen.H
-    bp = specimen.B - e
-    bn = specimen.B + e
-    ic = specimen.centroidal_inertia
-    common = ic + m * (hh * hh - bp * bn)
-    return common / (ic + m * (hh * hh + bn * bn)), common / (ic + m * (hh * hh + bp * bp))
+    return pivot_impact_ratios(specimen.B - e, specimen.B + e, specimen.H, specimen.centroidal_inertia, specimen.mass)
 
 
 @register_effect

@@ -3,12 +3,15 @@ ladder of models and the whole diagnosis, as values with their summary in words 
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from housner.scenarios.campaigns.outcome_scores import OutcomeFloor
+from housner.scenarios.execution.rundir import jsonable
 
 __all__ = ["OutcomeDiagnosis", "OutcomeStep", "params_text"]
 
@@ -159,6 +162,13 @@ class OutcomeDiagnosis:
             "summary": self.summary(),
             "elapsed_s": self.elapsed,
         }
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """The JSON text of :meth:`to_dict` (non-finite numbers as null); also written to ``path`` when given."""
+        text = json.dumps(jsonable(self.to_dict(), nonfinite="null"), indent=1, allow_nan=False)
+        if path is not None:
+            Path(path).write_text(text + "\n")
+        return text
 
     def _effect(self) -> dict | None:
         f = self.final

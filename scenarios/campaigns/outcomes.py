@@ -60,7 +60,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import stats as sps
@@ -150,19 +150,8 @@ class Geometry:
         momentum about the landing pivot, per side), else one r [-] for every impact."""
         bp = self.b_pos if b_pos is None else b_pos
         bn = self.b_neg if b_neg is None else b_neg
-        m, h, ic = self.mass, self.h, self.ic
-        side = {}
-        for name, b in (("pos", bp), ("neg", bn)):
-            rr = math.hypot(b, h)
-            side[name] = (math.atan2(b, h), math.sqrt(m * G * rr / (ic + m * rr * rr)))
-        if r is None:
-            common = ic + m * (h * h - bp * bn)
-            rho_pn = common / (ic + m * (h * h + bn * bn))  # ends on +x, lands on -x
-            rho_np = common / (ic + m * (h * h + bp * bp))
-            r_neg, r_pos = min(rho_pn**2, 1.0), min(rho_np**2, 1.0)
-            return RockingParams(side["pos"][0], side["neg"][0], side["pos"][1], side["neg"][1],
-                                 math.sqrt(r_pos * r_neg), r_pos=r_pos, r_neg=r_neg)  # fmt: skip
-        return RockingParams(side["pos"][0], side["neg"][0], side["pos"][1], side["neg"][1], r)
+        params = RockingParams.from_pivots(bp, bn, self.h, self.ic, self.mass)
+        return params if r is None else replace(params, r=r, r_pos=None, r_neg=None)
 
     @classmethod
     def of(cls, campaign: Campaign) -> Geometry:
@@ -237,13 +226,14 @@ def _p_rest(t: _Tables, idx, params) -> np.ndarray:
     return _lapse(t.rest[idx, :, j].mean(axis=1), params["lapse"])
 
 
-def _weights(log_alpha: np.ndarray, mu: float, sigma: float) -> np.ndarray:
-    w = np.exp(-0.5 * ((log_alpha - mu) / sigma) ** 2)
-    return w / w.sum()
+def _weights(log_alpha: np.ndarray, mu, sigma: float) -> np.ndarray:
+    """Log-normal weights over the alpha grid, one row per centre ``mu`` (log alpha_eff) [-]."""
+    w = np.exp(-0.5 * ((log_alpha[None, :] - np.atleast_1d(mu)[:, None]) / sigma) ** 2)
+    return w / w.sum(axis=1, keepdims=True)
 
 
 def _p_contact(t: _Tables, idx, params) -> np.ndarray:
-    w = _weights(t.log_alpha, math.log(params["alpha_eff"]), params["spread"])
+    w = _weights(t.log_alpha, math.log(params["alpha_eff"]), params["spread"])[0]
     j = 0 if params.get("r") is None else 1 + R_GRID.index(params["r"])
     return _lapse(t.contact[idx, :, j] @ w, params["lapse"])
 
@@ -277,9 +267,7 @@ def _fit_contact(with_r: bool):
             j = 0 if r is None else 1 + R_GRID.index(r)
             table = t.contact[idx, :, j]
             for sigma in SPREADS:
-                W = np.exp(-0.5 * ((t.log_alpha[None, :] - mus[:, None]) / sigma) ** 2)
-                W /= W.sum(axis=1, keepdims=True)
-                P0 = table @ W.T  # (records, mus)
+                P0 = table @ _weights(t.log_alpha, mus, sigma).T  # (records, mus)
                 yy = np.repeat(y[idx][:, None], mus.size, axis=1)
                 for lapse in LAPSES:
                     ll = np.mean(per_record_log_loss(_lapse(P0, lapse), yy), axis=0)
