@@ -58,6 +58,7 @@ from housner.readers import (
     require_samples,
     uniform_step,
 )
+from housner.scenarios.campaigns.sensor_noise import WHITE, SensorNoise
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):
@@ -134,6 +135,17 @@ class MeasuredRecord:
     t_offset : float
         Time in the file of the first sample kept [s] (the release of a
         free-vibration record held before it; else the file's first time).
+    hold : ndarray
+        The theta samples of the hold before a free vibration's release [rad] (the block still at
+        ``theta0``: a quiet part for the sensor's noise); empty when the record starts at the release.
+    noise_model : SensorNoise
+        The correlation in time of the sensor's noise (:mod:`housner.scenarios.campaigns.sensor_noise`):
+        white until the campaign's sensor is assessed (:func:`housner.scenarios.campaigns.sensor.assess_sensor`).
+    valid : ndarray of bool or None
+        Samples the sensor recorded truly (None: all). A sensor fault's samples (saturation, a spike, a
+        dropout) are False: no error is taken on them.
+    clip : tuple of float
+        The sensor's range (low, high) [rad]: a saturating sensor reads no further (default unbounded).
     """
 
     id: str
@@ -145,6 +157,10 @@ class MeasuredRecord:
     noise: float
     overturned: bool
     t_offset: float = 0.0
+    hold: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    noise_model: SensorNoise = WHITE
+    valid: np.ndarray | None = None
+    clip: tuple[float, float] = (-math.inf, math.inf)
 
     @property
     def dt(self) -> float:
@@ -238,6 +254,9 @@ class Campaign:
     scan : housner.scan.ScanSpecimen or None
         The specimen's scan-mesh derivation (per-side alpha, p, its alpha bracket) when ``[specimen]`` names a
         ``mesh``; ``specimen`` is then its equivalent block.
+    sensor : housner.scenarios.campaigns.sensor.SensorReport or None
+        What the assessment of the theta sensor found (its noise, its faults and what was done about them);
+        None until :func:`housner.scenarios.campaigns.sensor.assess_sensor` ran.
     """
 
     name: str
@@ -247,6 +266,7 @@ class Campaign:
     path: Path = Path(".")
     outcomes: list[OutcomeRecord] = field(default_factory=list)
     scan: object = None
+    sensor: object = None
     _cache: dict = field(default_factory=dict, init=False, repr=False)
 
     @property
@@ -615,6 +635,7 @@ def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord | 
                 column="theta",
             )
     t_off = float(t[k_rel])
+    theta_file = theta
     acc = acc[k_rel:]
     theta = theta[k_rel:]
     try:
@@ -639,6 +660,7 @@ def _read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord | 
         noise=noise,
         overturned=overturned,
         t_offset=t_off,
+        hold=np.array(theta_file[:k_rel]),
     )
 
 

@@ -547,13 +547,16 @@ OBSERVATION_SEED = 20170615
 
 
 def observe(theta: np.ndarray, rec: MeasuredRecord, index: int) -> np.ndarray:
-    """The model's theta as the record's sensor would show it: plus Gaussian noise of the record's sigma.
+    """The model's theta as the record's sensor would show it: plus Gaussian noise of the record's sigma and
+    correlation in time (``rec.noise_model``), within the sensor's range (``rec.clip``).
 
     Seeded by the record's position in the campaign, so a comparison is reproducible and two models
     compared on the same campaign see the same noise.
     """
     rng = np.random.default_rng(np.random.SeedSequence([OBSERVATION_SEED, index]))
-    return theta + rng.normal(0.0, rec.noise, theta.size)
+    seen = theta + rec.noise_model.draw(rng, rec.noise, theta.size)
+    lo, hi = rec.clip
+    return seen if (lo, hi) == (-math.inf, math.inf) else np.clip(seen, lo, hi)
 
 
 def on_grid(res: Response, rec: MeasuredRecord) -> np.ndarray:

@@ -9,8 +9,11 @@ measured here from the campaign itself, by a parametric bootstrap
 1. the fitted model is taken as the truth and run on the measured table
    motions (free vibrations released at the measured angle): the records a
    correct model would have produced;
-2. Gaussian noise of each record's measured sigma is added (a fresh draw per
-   replica);
+2. noise of each record's measured sigma and of the sensor's measured
+   correlation in time (:mod:`housner.scenarios.campaigns.sensor_noise`; white
+   where the quiet samples cannot tell it from white) is added, a fresh draw
+   per replica, and read within the sensor's range where it saturates; the
+   samples a sensor fault touched are left out of the error, as in the real one;
 3. the model that scores them is the one the real held-out errors use: the
    records of fold k are scored by the model fitted without fold k (its
    parameters differ from the full fit's as they do in the real scoring,
@@ -190,7 +193,10 @@ def measure_floor(
                 errs[b, i] = 1.0
                 continue
             th_true = tr
-            meas = th_true + rng.normal(0.0, rec.noise, th_true.size)
+            # the record's sensor: its noise (sigma and correlation in time) and its range
+            meas = th_true + rec.noise_model.draw(rng, rec.noise, th_true.size)
+            if rec.clip != (-math.inf, math.inf):
+                meas = np.clip(meas, *rec.clip)
             g = model_sens[i]
             if rec.kind == "free_vibration":
                 # the model of a free vibration starts from the release angle read off the noisy record
@@ -199,7 +205,7 @@ def measure_floor(
             th_mod = np.asarray(mo.theta, dtype=float)[: rec.theta.size]
             errs[b, i] = record_error(th_mod, meas, scorer.ends[i], alpha, align=release_shift_samples(rec),
                                       sensitivity=None if g is None else g[: rec.theta.size],
-                                      max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise)  # fmt: skip
+                                      max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise, valid=rec.valid)  # fmt: skip
     check_finite("the correct-model floor", errs.mean(axis=0), [r.id for r in recs])
     pert = {k: v for k, v in sd.items() if v > 0}
     pert["substeps"] = model_settings["substeps"]

@@ -113,22 +113,29 @@ def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | Non
 
 
 def record_error(
-    theta_model, theta_measured, end: int, alpha: float, *, align: int = 0, sensitivity=None, max_dtheta0: float = 0.0
+    theta_model, theta_measured, end: int, alpha: float, *, align: int = 0, sensitivity=None, max_dtheta0: float = 0.0,
+    valid=None,
 ) -> float:
     """RMS of min(|theta_model - theta_measured| / alpha, 1) over the first ``end`` samples [-].
 
     ``align`` > 0 (a free vibration): the release instant and angle are nuisance parameters,
-    :func:`release_error`.
+    :func:`release_error`. ``valid`` (bool per sample, None: all): only those samples count (a sensor
+    fault's samples are not measurements).
     """
+    keep = None if valid is None else np.asarray(valid[:end], dtype=bool)
+    if keep is not None and not keep.any():
+        return math.nan
     if align > 0:
-        return release_error(theta_model, theta_measured, end, alpha, align, sensitivity, max_dtheta0)
+        return release_error(theta_model, theta_measured, end, alpha, align, sensitivity, max_dtheta0, keep)
     d = np.abs(np.asarray(theta_model[:end]) - np.asarray(theta_measured[:end])) / alpha
     np.minimum(d, ERROR_CLIP, out=d)
+    if keep is not None:
+        d = d[keep[: d.size]]
     return float(math.sqrt(float(np.mean(d * d))))
 
 
 def release_error(theta_model, theta_measured, end: int, alpha: float, max_shift: int, sensitivity=None,
-                  max_dtheta0: float = 0.0) -> float:  # fmt: skip
+                  max_dtheta0: float = 0.0, keep=None) -> float:  # fmt: skip
     """:func:`record_error` of a free vibration, minimised over its release instant and angle [-].
 
     A free-vibration record's time axis starts at the release its own theta channel shows and its
@@ -155,6 +162,9 @@ def release_error(theta_model, theta_measured, end: int, alpha: float, max_shift
 
     def errors(rows_m: np.ndarray, rows_g: np.ndarray | None) -> np.ndarray:
         r = y - rows_m
+        if keep is not None:
+            r = r[:, keep[:n]]
+            rows_g = None if rows_g is None else rows_g[:, keep[:n]]
         if rows_g is not None:
             gg = np.einsum("ij,ij->i", rows_g, rows_g)
             d = np.where(gg > 0, np.einsum("ij,ij->i", r, rows_g) / np.where(gg > 0, gg, 1.0), 0.0)
@@ -192,7 +202,7 @@ def release_shift_samples(rec: MeasuredRecord) -> int:
 def scored_error(theta_model, rec: MeasuredRecord, end: int, alpha: float, sensitivity=None) -> float:
     """The time-history error of one record as the comparison and the diagnosis score it [-]."""
     return record_error(theta_model, rec.theta, end, alpha, align=release_shift_samples(rec), sensitivity=sensitivity,
-                        max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise)  # fmt: skip
+                        max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise, valid=rec.valid)  # fmt: skip
 
 
 def divergence_time(theta_model, theta_measured, t, noise: float, alpha: float) -> float:

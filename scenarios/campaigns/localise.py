@@ -352,12 +352,14 @@ def _smooth(x: np.ndarray, k: int) -> np.ndarray:
     return out
 
 
-def _gm_features(theta, acc, noise: float, alpha: float, tan_alpha: float, margin: int):
+def _gm_features(theta, acc, smooth_sd: float, alpha: float, tan_alpha: float, margin: int):
     """First uplift of one record: detection sample, direction, onset ratio [-] and the rest baseline [rad].
 
     The baseline is the median theta before |ug''| first exceeds half the uplift threshold (the block
     is surely at rest then); the block is seen to move where theta, averaged over 9 samples, leaves
-    it by 5 of the average's noise sigmas (plus 1e-3 alpha for a noise-free model).
+    it by 5 of the average's noise sigmas (plus 1e-3 alpha for a noise-free model). ``smooth_sd`` is that
+    average's noise sigma [rad]: sigma / 3 for white noise, up to sigma for noise that wanders slowly
+    (:meth:`housner.scenarios.campaigns.sensor_noise.SensorNoise.mean_sd`).
     """
     gta = G * tan_alpha
     n = theta.size
@@ -365,7 +367,7 @@ def _gm_features(theta, acc, noise: float, alpha: float, tan_alpha: float, margi
     k_quiet = int(quiet[0]) if quiet.size else n
     base = float(np.median(theta[:k_quiet])) if k_quiet >= 10 else 0.0
     sm = _smooth(theta - base, UPLIFT_SMOOTH)
-    h = UPLIFT_SIGMAS * noise / math.sqrt(UPLIFT_SMOOTH) + 1e-3 * alpha
+    h = UPLIFT_SIGMAS * smooth_sd + 1e-3 * alpha
     moved = np.flatnonzero(np.abs(sm) > h)
     if moved.size:
         kd = int(moved[0])
@@ -502,7 +504,8 @@ class _Pool:
         gta = G * self.tan_alpha
         acc = rec.motion.acc
         margin = int(round(UPLIFT_MARGIN / rec.dt))
-        kd, s, onset, base, stood = _gm_features(th, acc, rec.noise, alpha, self.tan_alpha, margin)
+        smooth_sd = rec.noise_model.mean_sd(rec.noise, UPLIFT_SMOOTH)
+        kd, s, onset, base, stood = _gm_features(th, acc, smooth_sd, alpha, self.tan_alpha, margin)
         self.on_s.append(s)
         self.on_r.append(onset)
         self.st_p.append(stood[0])

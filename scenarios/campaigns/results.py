@@ -259,6 +259,9 @@ class Diagnosis:
                     f"The best candidate, {best.effect}, would {verb} the held-out error by "
                     f"{fmt_pm(abs(best.improvement), best.improvement_se)} alpha ({signed_words(best.reason)})."
                 )
+        sensor = getattr(self.campaign, "sensor", None)
+        if sensor is not None and sensor.noise.white and not sensor.faults:
+            parts.append(f"Sensor noise: {sensor.noise.describe()}.")  # else the verdict's text says it
         k = self.settings.get("folds", "?")
         parts.append(f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha "
                      f"{self.noise_floor:.2g}.)")  # fmt: skip
@@ -293,6 +296,7 @@ class Diagnosis:
             "folds": [list(f) for f in self.folds],
             "selection_frequency": dict(self.selection_frequency),
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
+            "sensor": None if getattr(self.campaign, "sensor", None) is None else self.campaign.sensor.to_dict(),
             "floor": None if not self.floors else {"baseline": _floor(self.floors[0]), "final": _floor(self.floors[1])},
             "localisation": {
                 "baseline": self.baseline.comparison.summary() if self.baseline.comparison is not None else None,

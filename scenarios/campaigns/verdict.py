@@ -51,8 +51,10 @@ __all__ = [
     "Z_MISFIT",
     "Floor",
     "Residual",
+    "STATUS_RULE",
     "Verdict",
     "decide",
+    "status_rule",
     "distribution_checks",
     "measure_floor",
     "order_drift",
@@ -227,14 +229,27 @@ def decide(
     where = [_evidence_text(ev) for c in final_classes for ev in c["evidence"]]
     if drift is not None:
         where = [_evidence_text(ev) for ev in drift["evidence"]] + where
-    # a localisation quantity beyond Z_LOCAL standard errors is a misfit the errors may not show
+    # a localisation quantity beyond Z_LOCAL standard errors points to where to look; it is no misfit by
+    # itself (the status follows from the residual's tests alone: status_rule)
     loc_base = evidence_beyond(base_classes, Z_LOCAL)
     loc_final = evidence_beyond(final_classes, Z_LOCAL)
-    # a significant probe is physics the final model misses, whatever the residual test says
-    base_mis = baseline.misfit or bool(dist_base) or bool(loc_base) or drift is not None or bool(probes)
-    fin_mis = final.misfit or bool(dist_final) or bool(loc_final) or drift is not None or bool(probes)
+    # the residual's tests: against the floor, along the recording order, and against a probe of physics
+    # outside the library (held-out errors, each at the verdict's level); a localisation quantity beyond Z_LOCAL
+    # counts only for a residual above the floor's band (ratio > RATIO_MISFIT) that its own test cannot call
+    # significant: it never turns a residual at the floor into a misfit
+    base_mis = baseline.misfit or drift is not None or bool(probes) or (bool(loc_base) and baseline.ratio > RATIO_MISFIT)
+    fin_mis = final.misfit or drift is not None or bool(probes) or (bool(loc_final) and final.ratio > RATIO_MISFIT)
     powered = final.detectable_ratio <= DETECTABLE_RATIO
     model = [*added, *[n for n in selected if n not in added]]
+    status = status_rule(n_records >= MIN_RECORDS, bool(model), base_mis, fin_mis, powered)
+    unusual = ""
+    if status in ("no_misfit", "explained"):
+        loc = loc_final if model else loc_base
+        dist = dist_final if model else dist_base
+        bits = [_evidence_text(e) for c in loc for e in c["evidence"][:1]] + dist
+        if bits:
+            unusual = (f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
+                       ". It says where a model with more physics would differ first, not that this one fails.")
     need = final.records_needed if model else baseline.records_needed
     eff = "; ".join(f"{n} ({', '.join(f'{k} = {v:.4g}' for k, v in params.get(n, {}).items())})" for n in model)
     fam = f" (correct integrators of the family '{family}')" if family else ""
@@ -248,12 +263,11 @@ def decide(
         change = "falls" if final.error < baseline.error else "rises"
         how = "added by hand" if not selected else "found by the search" if not added else "added by hand and found"
         fall = f"with {eff} ({how}) the held-out error {change} from {baseline.error:.4f} to {final.error:.4f} alpha"
-    if n_records < MIN_RECORDS:
-        status = "inconclusive"
+    if status == "inconclusive" and n_records < MIN_RECORDS:
         text = (f"Inconclusive: {n_records} usable records are too few to tell a misfit from chance (at least "
                 f"{MIN_RECORDS} are needed, with free vibrations among them); {base_figs}.")  # fmt: skip
     elif not model and not base_mis:
-        status, text = _unless_underpowered(
+        _status, text = _unless_underpowered(
             powered, "no_misfit",
             f"No misfit: {base_figs}; no group is more than {RATIO_MISFIT}x above it with significance, which is "
             f"what a correct model shows on these records. No effect is needed. This campaign would have detected "
@@ -263,7 +277,6 @@ def decide(
             f"are needed to see one of {DETECTABLE_RATIO}x.",
         )  # fmt: skip
     elif not model:
-        status = "unexplained"
         if library:
             text = (f"Unexplained: {base_figs}, a misfit that no effect in the library "
                     f"({', '.join(library)}) reduces significantly.")  # fmt: skip
@@ -276,7 +289,7 @@ def decide(
         doubt = "" if final.ratio <= RATIO_MISFIT else (
             f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
             f"(z = {final.z:+.1f} <= {Z_MISFIT:g}): these records cannot tell it from the floor.")  # fmt: skip
-        status, text = _unless_underpowered(
+        _status, text = _unless_underpowered(
             powered, "explained",
             f"Explained: {base_figs}; {fall}, residual ratio {final.ratio:.2f} ({_groups_text(final)}), no group "
             f"more than {RATIO_MISFIT}x above it with significance: what a correct model shows. "
@@ -285,17 +298,22 @@ def decide(
             f"of {final.detectable_ratio:.2f}x or more; about {need} more ground-motion records are needed.",
         )  # fmt: skip
     else:
-        status = "partly_explained"
-        if final.misfit or dist_final or not (loc_final or drift or probes):
+        searched = "that no effect in the library explains" if library else "(no library search ran)"
+        if final.misfit or not (drift or probes or loc_final):
             text = (f"Partly explained: {base_figs}; {fall}, to a {figs}. A misfit of {final.ratio:.2f}x the floor "
-                    f"(the typical record) remains that no effect in the library explains.")  # fmt: skip
+                    f"(the typical record) remains {searched}.")  # fmt: skip
         else:
             probed = [c for c in classes if any(e["metric"].startswith("probe:") for e in c["evidence"])]
             ev = "; ".join(_evidence_text(e) for c in ([drift] if drift else []) + probed + loc_final
                            for e in c["evidence"][:2])  # fmt: skip
-            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}, but the localisation (beyond {Z_LOCAL:g} "
-                    f"standard errors), the recording order or a probe of physics outside the library still "
-                    f"points to a misfit ({ev}) that no effect in the library explains.")  # fmt: skip
+            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}: above the floor's {RATIO_MISFIT}x band, "
+                    f"and the recording order, a probe of physics outside the library or the localisation (beyond "
+                    f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}) {searched}.")  # fmt: skip
+    text += unusual
+    if status != "inconclusive" or n_records >= MIN_RECORDS:
+        text += (" (Residual ratio: the held-out error over the correct-model floor, the error a correct model "
+                 f"shows on these records; z: its excess over the floor in standard errors, significant above "
+                 f"{Z_MISFIT:g}.)")  # fmt: skip
     if status in ("partly_explained", "unexplained"):
         if dist_final:
             text += " The distributions disagree too: " + "; ".join(dist_final) + "."
@@ -306,6 +324,39 @@ def decide(
                     "in the time histories only."  # fmt: skip
     return Verdict(status, final, baseline, text, where, classes, dist_final,
                    need if status == "inconclusive" else 0)  # fmt: skip
+
+
+#: The status rule (docs/explanation/verdict.md): (enough records, an effect in the final model, the plain
+#: model's residual a misfit, the final model's a misfit, powered) -> status; None: any. A residual is a misfit
+#: when its tests say so (:func:`status_rule`).
+STATUS_RULE: tuple[tuple[tuple, str], ...] = (
+    ((False, None, None, None, None), "inconclusive"),
+    ((True, False, False, None, True), "no_misfit"),
+    ((True, False, False, None, False), "inconclusive"),
+    ((True, False, True, None, None), "unexplained"),
+    ((True, True, None, False, True), "explained"),
+    ((True, True, None, False, False), "inconclusive"),
+    ((True, True, None, True, None), "partly_explained"),
+)
+
+
+def status_rule(enough_records: bool, has_effects: bool, plain_misfit: bool, final_misfit: bool,
+                powered: bool) -> str:  # fmt: skip
+    """The status from the residual's tests alone (:data:`STATUS_RULE`, one truth table).
+
+    ``plain_misfit`` / ``final_misfit``: the plain / final model's held-out error is significantly (z >
+    :data:`Z_MISFIT`) and materially (> :data:`RATIO_MISFIT` x) above its correct-model floor in a group of records,
+    or drifts along the recording order, or a probe of physics outside the library lowers it significantly, or it
+    lies above the floor's band (ratio > :data:`RATIO_MISFIT`) and a localisation quantity differs by more than
+    :data:`Z_LOCAL` standard errors;
+    ``powered``: the records would show a misfit of :data:`DETECTABLE_RATIO` x the floor. A residual within the
+    band is never a misfit, whatever a localisation quantity or a distribution test says: they say where to look.
+    """
+    got = (bool(enough_records), bool(has_effects), bool(plain_misfit), bool(final_misfit), bool(powered))
+    for row, status in STATUS_RULE:
+        if all(r is None or r == g for r, g in zip(row, got, strict=True)):
+            return status
+    raise AssertionError(f"the status rule has no row for {got}")  # the table covers every case
 
 
 def _unless_underpowered(powered: bool, status: str, text: str, weak: str) -> tuple[str, str]:

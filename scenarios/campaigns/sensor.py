@@ -1,0 +1,420 @@
+"""The theta sensor of a campaign, assessed before any physics is fitted: its noise, and its faults.
+
+A diagnosis compares a model with what a sensor recorded. Before physics is
+asked to explain a misfit, :func:`assess_sensor` asks the records what the
+sensor did, and returns the campaign with what it found:
+
+1. **Faults that touch samples** are named and their samples masked (the
+   errors leave them out: ``MeasuredRecord.valid``), instead of fitting
+   physics to them:
+
+   * *saturation*: records flat-topped at one level, the sensor's range. The
+     samples at the level are masked, and a model is seen through the same
+     range (``MeasuredRecord.clip``);
+   * *spikes*: single samples off both neighbours by more than
+     :data:`SPIKE_SIGMAS` robust standard deviations of that difference;
+   * *dropouts*: runs of at least :data:`DROPOUT_RUN` identical samples (the
+     logger repeating its last value) that noise cannot produce. Spikes and
+     dropouts are also bridged linearly, so that impact and peak detections
+     do not read them.
+
+2. **The noise as measured** (:mod:`housner.scenarios.campaigns.sensor_noise`),
+   on the samples where the block is surely still: the hold before a free
+   vibration's release, and the rest after the last motion, where the plain
+   Housner model (the stated specimen) has come to rest :data:`REST_MARGIN`
+   earlier and the table is quiet (|ug''| below :data:`QUIET_ACC` g tan alpha to the
+   end). When that noise is correlated in time, each record's sigma becomes the
+   difference-based estimate times the ratio measured on the quiet samples,
+   and the floor, the model seen through the sensor and the uplift detection
+   use its correlation.
+
+3. **Faults along the recording order**, each a linear trend tested over the
+   records (|t| > :data:`T_TREND`, two-sided p ~ 6e-5) and corrected relative to
+   the first record (the sensor as it was when the campaign began):
+
+   * *offset drift*: the rest level after each record's motion;
+   * *gain drift*: each ground motion's first excursion (uplift to the first
+     impact, where no impact law and no chaos has acted yet) against the
+     plain model's, by least squares.
+
+Every finding is in :class:`SensorReport`, as the diagnosis' text and JSON say it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from housner.calibration import estimate_noise
+from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
+from housner.scenarios.campaigns.compare import on_grid, simulate_records
+from housner.scenarios.campaigns.sensor_noise import WHITE, SensorNoise, estimate_sensor_noise
+
+__all__ = [
+    "DROPOUT_RUN",
+    "QUIET_ACC",
+    "REST_MARGIN",
+    "SPIKE_SIGMAS",
+    "T_TREND",
+    "SensorFault",
+    "SensorReport",
+    "assess_sensor",
+]
+
+G = 9.80665
+#: A spike: a sample off the mean of its two neighbours by more than this many robust standard deviations of
+#: that difference (a record's own, from its median absolute deviation) [-]. An impact's kink at 200 Hz and
+#: 0.5 rad/s moves it by ~3.
+SPIKE_SIGMAS = 10.0
+#: A dropout: at least this many identical consecutive samples (noise of one sensor sigma over its
+#: quantisation step makes even two rare) [-].
+DROPOUT_RUN = 4
+#: Fewest samples at one extreme level for a record to be flat-topped there [-].
+SATURATION_RUN = 3
+#: Time after the plain model's last motion before a rest counts as quiet [s] (a true block with more
+#: energy left than the model may still rock for a few small half-cycles).
+REST_MARGIN = 1.0
+#: The table is quiet below this share of the uplift acceleration g tan(alpha) [-].
+QUIET_ACC = 0.05
+#: Shortest quiet segment measured [s].
+MIN_QUIET = 0.25
+#: A rest level further than this share of alpha from the campaign's typical one is no rest [-] (a block
+#: that rocks on, or toppled, where the plain model rests; a still sensor's offset is a few mrad).
+REST_LEVEL_ALPHA = 0.05
+#: A ground motion's rest is measured only when its standard deviation is within this factor of the
+#: typical rest's [-].
+QUIET_SD_RATIO = 1.25
+#: |t| of a linear trend along the recording order that names a drift [-] (two-sided p ~ 6e-5; two trends tested).
+T_TREND = 4.0
+#: Fewest records with a usable first excursion or rest level for a trend [-].
+MIN_TREND_RECORDS = 8
+#: A first excursion is used for the gain when the model's exceeds this many noise sigmas [-].
+GAIN_MIN_SIGMAS = 10.0
+
+
+@dataclass(frozen=True)
+class SensorFault:
+    """One sensor fault: ``kind`` (saturation, spikes, dropouts, offset_drift, gain_drift), the records it
+    touched, the samples masked, the figures that named it and one sentence."""
+
+    kind: str
+    records: tuple[str, ...]
+    samples: int
+    figures: dict
+    text: str
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "records": list(self.records), "samples": self.samples,
+                "figures": dict(self.figures), "text": self.text}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SensorReport:
+    """What :func:`assess_sensor` found: the noise, the faults (what was masked or corrected)."""
+
+    noise: SensorNoise = WHITE
+    faults: tuple[SensorFault, ...] = ()
+    sigma_before: float = math.nan
+    sigma_after: float = math.nan
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def fault_kinds(self) -> list[str]:
+        return [f.kind for f in self.faults]
+
+    def text(self) -> str:
+        """One paragraph: the noise, then each fault and what was done."""
+        out = f"Sensor noise: {self.noise.describe()}."
+        if not self.noise.white and math.isfinite(self.sigma_before):
+            out += (f" Each record's sigma is the difference-based estimate times {self.noise.diff_ratio:.2f} "
+                    f"(mean {self.sigma_before * 1e3:.3g} -> {self.sigma_after * 1e3:.3g} mrad), and the floor's "
+                    "replicas draw noise of this correlation.")  # fmt: skip
+        for f in self.faults:
+            out += " Sensor fault: " + f.text
+        for n in self.notes:
+            out += " " + n
+        return out
+
+    def verdict_sentence(self) -> str:
+        """What the verdict adds about the sensor: its faults and what was done, and a noise that is not white
+        ('' when the sensor is white and faultless)."""
+        bits = [f.text for f in self.faults]
+        if not self.noise.white:
+            bits.append(f"the sensor's noise is correlated in time ({self.noise.describe()}); the floor was measured "
+                        "with noise of that correlation")  # fmt: skip
+        if not bits:
+            return ""
+        names = ", ".join(f.kind.replace("_", " ") for f in self.faults)
+        head = f" The sensor, not the physics: {names}." if self.faults else ""
+        return head + " " + " ".join(b[0].upper() + b[1:] + ("" if b.endswith(".") else ".") for b in bits)
+
+    def to_dict(self) -> dict:
+        return {"noise": self.noise.to_dict(), "faults": [f.to_dict() for f in self.faults],
+                "sigma_before": self.sigma_before, "sigma_after": self.sigma_after, "notes": list(self.notes),
+                "text": self.text()}  # fmt: skip
+
+
+# ----------------------------------------------------------------------------
+# faults on samples
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of each run of True."""
+    m = np.concatenate(([False], mask, [False])).astype(np.int8)
+    d = np.diff(m)
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist(), strict=True))
+
+
+def _saturation(theta: np.ndarray) -> tuple[np.ndarray, list[float]]:
+    """Samples at a flat top (the record's maximum or minimum repeated in a run) and those levels."""
+    bad = np.zeros(theta.size, dtype=bool)
+    levels = []
+    for v in (float(theta.max()), float(theta.min())):
+        at = theta == v
+        if int(at.sum()) >= SATURATION_RUN and any(b - a >= 2 for a, b in _runs(at)):
+            bad |= at
+            levels.append(v)
+    return bad, levels
+
+
+def _spikes(theta: np.ndarray) -> np.ndarray:
+    """Single samples off both neighbours (module docstring)."""
+    out = np.zeros(theta.size, dtype=bool)
+    if theta.size < 5:
+        return out
+    d = theta[1:-1] - 0.5 * (theta[:-2] + theta[2:])
+    s = 1.4826 * float(np.median(np.abs(d - np.median(d))))
+    if not s > 0:
+        return out
+    big = np.abs(d) > SPIKE_SIGMAS * s
+    # a spike at i leaves its neighbours' differences at about -d_i / 2: opposite signs
+    left = np.concatenate(([0.0], d[:-1]))
+    right = np.concatenate((d[1:], [0.0]))
+    spike = (big & (np.sign(left) == -np.sign(d)) & (np.sign(right) == -np.sign(d))
+             & (np.abs(d) >= np.abs(left)) & (np.abs(d) >= np.abs(right)))  # fmt: skip
+    out[1:-1] = spike
+    return out
+
+
+def _dropouts(theta: np.ndarray, skip: np.ndarray) -> np.ndarray:
+    """Samples of runs of identical values (all but the first of each run), outside ``skip``."""
+    out = np.zeros(theta.size, dtype=bool)
+    same = np.concatenate(([False], np.diff(theta) == 0.0))
+    for a, b in _runs(same & ~skip):
+        if b - a + 1 >= DROPOUT_RUN:
+            out[a:b] = True
+    return out
+
+
+def _bridge(theta: np.ndarray, bad: np.ndarray) -> np.ndarray:
+    """``theta`` with the ``bad`` samples replaced by the straight line between their good neighbours."""
+    if not bad.any() or bad.all():
+        return theta
+    k = np.arange(theta.size)
+    return np.where(bad, np.interp(k, k[~bad], theta[~bad]), theta)
+
+
+# ----------------------------------------------------------------------------
+# trends along the order
+def _trend(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares line y = a + b x: (a, b, t of b)."""
+    n = x.size
+    xm, ym = x.mean(), y.mean()
+    sxx = float(np.sum((x - xm) ** 2))
+    if n < 3 or sxx <= 0:
+        return float(ym), 0.0, 0.0
+    b = float(np.sum((x - xm) * (y - ym)) / sxx)
+    a = float(ym - b * xm)
+    res = y - a - b * x
+    s2 = float(np.sum(res * res) / (n - 2))
+    se = math.sqrt(s2 / sxx) if s2 > 0 else 0.0
+    return a, b, (b / se if se > 0 else (math.inf if b != 0 else 0.0))
+
+
+def _quiet_start(rec: MeasuredRecord, model: np.ndarray | None, alpha: float) -> int | None:
+    """First sample of the record's final rest (module docstring), None when it has none long enough."""
+    n = rec.theta.size
+    if model is None or model.size < n or not np.all(np.isfinite(model[:n])):
+        return None
+    m = model[:n]
+    if np.max(np.abs(m)) >= 0.5 * math.pi - 1e-9:
+        return None  # the model overturned
+    moving = np.flatnonzero(m != 0.0)
+    k = (int(moving[-1]) + 1 if moving.size else 0) + int(round(REST_MARGIN / rec.dt))
+    loud = np.flatnonzero(np.abs(rec.motion.acc[:n]) > QUIET_ACC * G * math.tan(alpha))
+    if loud.size:
+        k = max(k, int(loud[-1]) + 1)
+    if rec.kind == "free_vibration" and not moving.size:
+        return None
+    # a motion that is still dying out (a foundation's vibration, the last small rocking) is no rest: the
+    # tail's first half may not be louder than its second by more than QUIET_SD_RATIO, else it is dropped
+    need = int(round(MIN_QUIET / rec.dt))
+    while n - k >= 2 * need:
+        mid = (k + n) // 2
+        if float(np.std(rec.theta[k:mid])) <= QUIET_SD_RATIO * float(np.std(rec.theta[mid:])):
+            break
+        k = mid
+    return k if n - k >= need else None
+
+
+def _first_excursion(rec: MeasuredRecord, model: np.ndarray) -> slice | None:
+    """The samples from the model's uplift to its first impact (or overturn) on a ground motion."""
+    m = model[: rec.theta.size]
+    moving = np.flatnonzero(m != 0.0)
+    if rec.kind != "ground_motion" or not moving.size:
+        return None
+    a = int(moving[0])
+    s = np.sign(m[a]) if m[a] != 0 else 1.0
+    back = np.flatnonzero(s * m[a:] <= 0.0)
+    b = a + int(back[0]) if back.size else m.size
+    return slice(a, b) if b - a >= 10 else None
+
+
+def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Campaign:
+    """The campaign with its theta sensor assessed (module docstring); itself when already assessed.
+
+    Returns a new :class:`Campaign` whose records carry the measured noise (``noise``, ``noise_model``), the
+    masks of faulty samples (``valid``), the sensor's range (``clip``) and the corrections of drifts, and whose
+    ``sensor`` is the :class:`SensorReport`.
+    """
+    if campaign.sensor is not None or not campaign.records:
+        return campaign
+    alpha = campaign.specimen.alpha
+    recs = list(campaign.records)
+    faults: list[SensorFault] = []
+
+    # 1. faults on samples
+    sat_ids, sat_levels, sat_n = [], [], 0
+    spk_ids, spk_n, drop_ids, drop_n = [], 0, [], 0
+    masks: list[np.ndarray] = []
+    thetas: list[np.ndarray] = []
+    for rec in recs:
+        th = np.asarray(rec.theta, dtype=float)
+        sat, levels = _saturation(th)
+        spk = _spikes(th) & ~sat
+        drp = _dropouts(th, sat)
+        if levels:
+            sat_ids.append(rec.id)
+            sat_levels += levels
+            sat_n += int(sat.sum())
+        if spk.any():
+            spk_ids.append(rec.id)
+            spk_n += int(spk.sum())
+        if drp.any():
+            drop_ids.append(rec.id)
+            drop_n += int(drp.sum())
+        masks.append(~(sat | spk | drp))
+        thetas.append(_bridge(th, spk | drp))
+    clip = (-math.inf, math.inf)
+    if sat_ids:
+        hi = [v for v in sat_levels if v > 0]
+        lo = [v for v in sat_levels if v < 0]
+        clip = (max(lo) if lo else -math.inf, min(hi) if hi else math.inf)
+        rng_txt = " and ".join(f"{v:+.4g} rad ({v / alpha:+.2f} alpha)" for v in (clip[0], clip[1]) if math.isfinite(v))
+        faults.append(SensorFault("saturation", tuple(sat_ids), sat_n, {"low": clip[0], "high": clip[1]},
+                                  f"saturation: {len(sat_ids)} record(s) flat-topped at {rng_txt}, the sensor's "
+                                  f"range; their {sat_n} samples at it are left out of every error, and models "
+                                  "are read through the same range."))  # fmt: skip
+    if spk_ids:
+        faults.append(SensorFault("spikes", tuple(spk_ids), spk_n, {"sigmas": SPIKE_SIGMAS},
+                                  f"spikes: {spk_n} single samples in {len(spk_ids)} record(s) lie more than "
+                                  f"{SPIKE_SIGMAS:g} robust sigmas off both neighbours; they are left out of the "
+                                  "errors and bridged for the impact and peak detections."))  # fmt: skip
+    if drop_ids:
+        faults.append(SensorFault("dropouts", tuple(drop_ids), drop_n, {"run": DROPOUT_RUN},
+                                  f"dropouts: {drop_n} samples in {len(drop_ids)} record(s) repeat the value before "
+                                  f"them {DROPOUT_RUN} or more times in a row, which noise cannot do; they are left "
+                                  "out of the errors and bridged."))  # fmt: skip
+    recs = [replace(r, theta=th, valid=None if m.all() else m, clip=clip)
+            for r, th, m in zip(recs, thetas, masks, strict=True)]  # fmt: skip
+
+    # 2. the plain model: where the block is surely still, and each first excursion
+    res = simulate_records(campaign.specimen, recs, "housner", (), engine_settings)
+    models = [None if isinstance(r, str) else np.asarray(on_grid(r, rec), dtype=float) for r, rec in zip(res, recs,
+                                                                                                           strict=True)]
+    order = np.arange(len(recs), dtype=float)
+    tails: list[tuple[int, int]] = []  # (record, start)
+    for i, (rec, m) in enumerate(zip(recs, models, strict=True)):
+        k = _quiet_start(rec, m, alpha)
+        if k is not None:
+            v = rec.valid
+            if v is None or v[k:].all():
+                tails.append((i, k))
+    level_of = {i: float(np.median(recs[i].theta[k:])) for i, k in tails}
+    if level_of:
+        # a block that went on rocking, or toppled, where the plain model rests is no rest level
+        mid = float(np.median(list(level_of.values())))
+        tails = [(i, k) for i, k in tails if abs(level_of[i] - mid) <= REST_LEVEL_ALPHA * alpha]
+        level_of = {i: level_of[i] for i, _k in tails}
+    # 3a. offset drift: the rest levels along the order
+    offsets = np.zeros(len(recs))
+    if len(tails) >= MIN_TREND_RECORDS:
+        xi = np.array([i for i, _ in tails], dtype=float)
+        yi = np.array([level_of[i] for i, _ in tails])
+        a, b, t = _trend(xi, yi)
+        change = b * (len(recs) - 1)
+        if abs(t) > T_TREND:
+            offsets = b * order  # relative to the first record
+            faults.append(SensorFault("offset_drift", tuple(r.id for r in recs), 0,
+                                      {"slope_per_record": b, "change": change, "t": t},
+                                      f"offset drift: the rest level after each record's motion moves by "
+                                      f"{change * 1e3:+.3g} mrad from the first record to the last (t = {t:+.1f} over "
+                                      f"{len(tails)} records); theta is corrected to the first record's offset."))  # fmt: skip
+            recs = [replace(r, theta=r.theta - offsets[i], hold=r.hold - offsets[i]) for i, r in enumerate(recs)]
+            level_of = {i: v - offsets[i] for i, v in level_of.items()}
+    # 3b. gain drift: each ground motion's first excursion against the model's
+    gains, gx = [], []
+    sig0 = float(np.median([r.noise for r in recs]))
+    for i, (rec, m) in enumerate(zip(recs, models, strict=True)):
+        if m is None:
+            continue
+        sl = _first_excursion(rec, m)
+        if sl is None or np.max(np.abs(m[sl])) < GAIN_MIN_SIGMAS * max(sig0, 1e-9):
+            continue
+        y = rec.theta[sl] - level_of.get(i, float(np.median(rec.theta[: max(sl.start, 1)])))
+        ok = rec.valid[sl] if rec.valid is not None else np.ones(y.size, dtype=bool)
+        mm = m[sl][ok]
+        den = float(np.dot(mm, mm))
+        if den > 0:
+            gains.append(float(np.dot(mm, y[ok]) / den))
+            gx.append(float(i))
+    if len(gains) >= MIN_TREND_RECORDS:
+        xg, yg = np.array(gx), np.array(gains)
+        a, b, t = _trend(xg, yg)
+        if abs(t) > T_TREND and a > 0:
+            rel = (a + b * order) / a  # the gain relative to the first record's
+            change = rel[-1] - 1.0
+            faults.append(SensorFault("gain_drift", tuple(r.id for r in recs), 0,
+                                      {"gain_first": a, "slope_per_record": b, "relative_change": change, "t": t},
+                                      f"gain drift: the first excursion of each ground motion against the plain "
+                                      f"model's reads {change * 100:+.1f} % more from the first record to the last "
+                                      f"(t = {t:+.1f} over {len(gains)} ground motions, before any impact, so no "
+                                      f"impact law can cause it); theta is corrected to the first record's gain."))  # fmt: skip
+            recs = [replace(r, theta=r.theta / rel[i], hold=r.hold / rel[i]) for i, r in enumerate(recs)]
+            level_of = {i: v / rel[i] for i, v in level_of.items()}
+
+    # 4. the noise, on the quiet samples
+    dt = float(np.median([r.dt for r in recs]))
+    segs, lev = [], []
+    rest = float(np.median(list(level_of.values()))) if level_of else 0.0
+    # only the rests as quiet as the typical one: a block that rocks on where the plain model rests is louder
+    sd = {i: float(np.std(recs[i].theta[k:])) for i, k in tails}
+    ref = float(np.median(list(sd.values()))) if sd else 0.0
+    use = [(i, k) for i, k in tails if sd[i] <= QUIET_SD_RATIO * ref]
+    for i, k in use:
+        segs.append((f"rest after a {recs[i].kind.replace('_', ' ')}", recs[i].theta[k:]))
+        lev.append(rest)
+    for r in recs:
+        if r.hold.size >= int(round(MIN_QUIET / r.dt)):
+            segs.append(("hold before a release", r.hold))
+            lev.append(float(np.mean(r.hold)))
+    same_rate = all(abs(r.dt - dt) <= 1e-9 * dt for r in recs)
+    noise = estimate_sensor_noise(segs, dt, lev) if same_rate else WHITE
+    notes = [] if same_rate else ["The records have different sample rates: the noise is treated as white."]
+    before = float(np.mean([r.noise for r in recs]))
+    if not noise.white and math.isfinite(noise.diff_ratio) and noise.diff_ratio > 0:
+        recs = [replace(r, noise=float(noise.diff_ratio * estimate_noise(r.theta)) if r.noise > 0 else r.noise,
+                        noise_model=noise) for r in recs]  # fmt: skip
+    after = float(np.mean([r.noise for r in recs]))
+    report = SensorReport(noise, tuple(faults), before, after, tuple(notes))
+    return replace(campaign, records=recs, sensor=report)

@@ -1,0 +1,123 @@
+"""The theta sensor assessed before the physics: its noise as measured, its faults named and masked.
+
+Unit checks on synthetic noise and samples; the campaigns of the second generator
+(tests/independent_campaigns.py) check the whole assessment (test_sensor_campaigns).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from housner.scenarios.campaigns.history_error import record_error
+from housner.scenarios.campaigns.sensor import _dropouts, _saturation, _spikes, _trend
+from housner.scenarios.campaigns.sensor_noise import WHITE, estimate_sensor_noise
+from housner.scenarios.campaigns.verdict import STATUS_RULE, status_rule
+
+DT = 0.002
+
+
+def _ou(rng, n, tau, sd):
+    a = math.exp(-DT / tau)
+    e = rng.normal(0.0, sd * math.sqrt(1 - a * a), n)
+    x = np.empty(n)
+    x[0] = rng.normal(0.0, sd)
+    for i in range(1, n):
+        x[i] = a * x[i - 1] + e[i]
+    return x
+
+
+def _colored(rng, n, white=0.4e-3, ou=0.6e-3, tau=0.1, hum=0.6e-3, f=50.0):
+    t = np.arange(n) * DT
+    return rng.normal(0, white, n) + _ou(rng, n, tau, ou) + hum * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
+
+
+def test_white_noise_is_called_white_and_keeps_the_independent_sample_formulas():
+    rng = np.random.default_rng(0)
+    sn = estimate_sensor_noise([("rest", rng.normal(0, 8e-4, 3000)) for _ in range(8)], DT)
+    assert sn.white and sn.sigma == pytest.approx(8e-4, rel=0.02)  # 24000 samples: sd to ~0.5 %
+    assert sn.mean_sd(1.0, 9) == pytest.approx(1 / 3)
+    assert WHITE.white and WHITE.effective_samples(50) == pytest.approx(50)
+
+
+def test_correlated_noise_is_measured_with_its_variance_and_its_correlation():
+    rng = np.random.default_rng(1)
+    segs = [("rest", _colored(rng, 3000)) for _ in range(20)]
+    true_sd = math.sqrt(0.4e-3**2 + 0.6e-3**2 + 0.6e-3**2 / 2)
+    sn = estimate_sensor_noise(segs, DT)
+    assert not sn.white
+    # 60000 samples, but correlated over ~50 samples (tau 0.1 s): ~1200 independent ones, sd to ~3 %
+    assert sn.sigma == pytest.approx(true_sd, rel=0.06)
+    # the difference-based estimate sees mostly the white part: about twice too small
+    assert sn.diff_ratio > 1.6
+    # the sd of a 9-sample mean: the measured model against the empirical one (not 1/3 of sigma)
+    emp = np.std([x[i : i + 9].mean() for _s, x in segs for i in range(0, 2990, 37)]) / true_sd
+    assert sn.mean_sd(1.0, 9) == pytest.approx(emp, rel=0.08)
+    assert sn.mean_sd(1.0, 9) > 0.6
+    # the measured autocorrelation against the truth's: white at lag 0 only, the OU part exp(-k dt / tau), the
+    # hum's cos(2 pi f k dt) (it pulls lag 5, half its period, down); ~1200 independent samples: +-0.05
+    d = [sn.draw(rng, 1.0, 3000) for _ in range(100)]
+    for k in (1, 5, 10):
+        truth = (0.6e-3**2 * math.exp(-k * DT / 0.1) + 0.6e-3**2 / 2 * math.cos(2 * np.pi * 50 * k * DT)) / true_sd**2
+        assert sn.rho[k] == pytest.approx(truth, abs=0.05)
+        # drawn noise has the measured correlation (100 draws of 3000: ~6000 independent samples, +-0.04)
+        drawn = sum(float(np.dot(x[:-k], x[k:])) for x in d) / sum(float(np.dot(x, x)) for x in d)
+        assert drawn == pytest.approx(sn.rho[k], abs=0.04)
+    assert np.std(np.concatenate(d)) == pytest.approx(1.0, rel=0.05)
+
+
+def test_too_few_quiet_samples_leave_the_noise_white_and_unmeasured():
+    sn = estimate_sensor_noise([("rest", np.zeros(100))], DT)
+    assert sn.white and sn.n_samples == 0 and "not measured" in sn.describe()
+
+
+def test_flat_tops_spikes_and_dropouts_are_found_where_they_are():
+    rng = np.random.default_rng(2)
+    t = np.arange(2000) * DT
+    th = 0.05 * np.sin(2 * np.pi * 1.0 * t) + rng.normal(0, 8e-4, t.size)
+    clipped = np.clip(th, -0.03, 0.03)
+    bad, levels = _saturation(clipped)
+    assert sorted(levels) == [-0.03, 0.03]
+    assert np.array_equal(bad, np.abs(clipped) == 0.03)
+    assert not _saturation(th)[1]  # unclipped: no flat top
+    spiky = th.copy()
+    spiky[[300, 900, 1500]] += [0.025, -0.025, 0.025]
+    assert list(np.flatnonzero(_spikes(spiky))) == [300, 900, 1500]
+    assert not _spikes(th).any()  # a smooth swing and its noise make none
+    held = th.copy()
+    held[700:760] = held[699]
+    got = np.flatnonzero(_dropouts(held, np.zeros(th.size, dtype=bool)))
+    assert got[0] == 700 and got[-1] == 759 and got.size == 60
+    assert not _dropouts(th, np.zeros(th.size, dtype=bool)).any()
+
+
+def test_masked_samples_are_left_out_of_the_error():
+    y = np.zeros(100)
+    m = np.zeros(100)
+    y[10:20] = 1.0  # a fault's samples, far off
+    valid = np.ones(100, dtype=bool)
+    valid[10:20] = False
+    assert record_error(m, y, 100, 1.0) > 0.3
+    assert record_error(m, y, 100, 1.0, valid=valid) == 0.0
+
+
+def test_a_trend_along_the_order_is_told_from_scatter():
+    rng = np.random.default_rng(3)
+    x = np.arange(60.0)
+    _a, _b, t0 = _trend(x, rng.normal(1.0, 0.02, 60))
+    _a, b, t1 = _trend(x, 1.0 + 0.25 * x / 59 + rng.normal(0, 0.02, 60))
+    assert abs(t0) < 4 and t1 > 4 and b * 59 == pytest.approx(0.25, abs=0.03)
+
+
+def test_the_status_rule_is_one_table_that_covers_every_case():
+    for combo in np.ndindex(2, 2, 2, 2, 2):
+        status_rule(*map(bool, combo))  # no case without a row
+    assert status_rule(True, False, False, False, True) == "no_misfit"
+    assert status_rule(True, True, True, False, True) == "explained"
+    assert status_rule(True, True, True, True, True) == "partly_explained"
+    assert status_rule(True, False, True, True, True) == "unexplained"
+    assert status_rule(False, False, False, False, True) == "inconclusive"
+    assert {s for _row, s in STATUS_RULE} == {"no_misfit", "explained", "partly_explained", "unexplained",
+                                              "inconclusive"}  # fmt: skip
