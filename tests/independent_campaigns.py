@@ -62,17 +62,52 @@ Conventions, and how they differ from the first generator
   (:func:`momentum_ratio`); ``restitution`` and ``restitution_drift`` impose sqrt(r) instead.
 * Ground motions (:func:`ground_motion`): Clough-Penzien filtered white noise (a Kanai-Tajimi filter followed
   by a second-order high-pass) under a Saragoni-Hart envelope; half the records add a
-  Mavroeidis-Papageorgiou velocity pulse; scaled to a PGA of 1.0-2.5 g tan(alpha); 8 s at 500 Hz of which
-  the last 1.5 s are quiet. The first generator: a band-pass, a (t/t1)^2 exp envelope, sine pulses, 6 s.
+  Mavroeidis-Papageorgiou velocity pulse; scaled to a PGA of 1.0-2.5 g tan(alpha); 8 s (at 500 Hz unless
+  the option ``dt`` says otherwise) of which the last 1.5 s are quiet. The first generator: a band-pass, a
+  (t/t1)^2 exp envelope, sine pulses, 6 s.
 * Noise: Gaussian 0.8 mrad on theta (seed section 3.4); optional Gaussian noise ``acc_noise`` [m/s^2] on
-  the written ground_acc column (the block felt the clean input).
+  the written ground_acc column (the block felt the clean input). The sensor options below replace the
+  theta noise where they are given.
 * Random numbers: numpy ``Generator`` seeded from ``SeedSequence([seed, 0x5EED2])``; record i draws from
-  the child with spawn key (1, i) (free vibrations: (0, j)), so a record does not change when n grows.
-* Writer: time ``%.6f``, values ``%.10g``; 4000 samples per ground-motion record (t = 0 .. 7.998 s).
+  the child with spawn key (1, i) (free vibrations: (0, j)), so a record does not change when n grows. That
+  child spawns four: the ground motion, the theta noise, the acc_noise and the sensor faults.
+* Writer: time ``%.6f``, values ``%.10g``; 4000 samples per ground-motion record at 500 Hz (t = 0 .. 7.998 s).
   Free vibrations (12 s, ground_acc = 0) are released at rest from +0.75, -0.55 and +0.4 alpha (stated
   alpha; the asymmetric block, which would topple, from +0.6, -0.2, +0.4 alpha) and are recorded first,
   in the middle (after n_ground // 2 ground motions) and last. The first generator: ``%.4f``/``%.9e``,
   6 s, releases 0.8, -0.65, 0.5 alpha, all free vibrations first.
+
+Sample rate, specimen scale, sensors (campaign options; the first generator has none of them)
+----------------------------------------------------------------------------------------------
+All are optional keys of a case's parameters (or of ``write_campaign(..., options=...)``); left out, a campaign
+is byte-identical to one written before they existed.
+
+* ``dt`` [s]: the sample interval of every record (default :data:`DT` = 0.002 s, 500 Hz; 0.005 and 0.001 s are
+  used and tested). Ground motions and free vibrations are generated at that dt with their durations in seconds
+  kept (8 s and 12 s: 1600 / 8000 samples per ground motion at 200 / 1000 Hz); the integrator (its steps end on
+  the samples) and its event location are the same at every rate. The time column follows.
+* ``scale`` [-]: a geometrically similar block: 2H, 2B and the depth x scale, m x scale^3, the inertia about a
+  pivot x scale^5 (I0 = scale^5 m g R / p^2 of the seed specimen), so that p = P_STATED / sqrt(scale) while
+  alpha and Housner's r = (1 - 2 m B^2 / I0)^2 stay the seed's. campaign.toml's [specimen] states the scaled
+  height, width, depth, mass and p (the scaled block's true p). The ground motions' frequencies (Kanai-Tajimi
+  ground frequency :data:`FG_RANGE` and its high-pass, pulse frequency :data:`FP_RANGE`) are multiplied by
+  1 / sqrt(scale) (the same random numbers drawn), so that omega / p, and with the PGA kept at 1.0-2.5
+  g tan(alpha) the block's dimensionless response, are those of the seed block's campaign (the envelope, the
+  pulse's timing and the durations are not scaled).
+* Sensor noise on theta (:func:`sensor_noise`; given any of these keys it replaces the white 0.8 mrad):
+  ``noise_white`` [rad] white Gaussian sd (default :data:`NOISE`); ``noise_ou`` [rad] the stationary sd of an
+  Ornstein-Uhlenbeck part of correlation time ``noise_tau`` [s] (exact AR(1) discretisation, started from its
+  stationary distribution in every record); ``hum_amp`` [rad] and ``hum_freq`` [Hz] (default 50 Hz) a mains
+  hum, a sinusoid plus its second harmonic at a third of the amplitude, phase-locked, a random phase per
+  record, sampled without an anti-alias filter. Total sd sqrt(white^2 + ou^2 + hum_amp^2 / 2 (1 + 1/9))
+  (:func:`noise_truth`). Drawn from the record's noise stream, so deterministic per seed.
+* Sensor faults on theta (:func:`sensor_faults`, drawn from the record's fault stream): the sensor's output is
+  gain_k (theta(t - tau) + offset) + noise, where ``gain_end`` [-] makes gain_k drift linearly from 1.0 at the
+  first record to gain_end at the last (recording order; the noise is not scaled); then clipped to
+  +-``saturation`` [rad] (the sensor's range); then the transmission adds isolated one-sample spikes of
+  +-``spike_amp`` [rad] at Poisson times of rate ``spike_rate`` [1/s] (not clipped); then the logger drops out
+  at Poisson times of rate ``dropout_rate`` [1/s], repeating the last value received for ``dropout_len`` [s].
+  The ground_acc column is not affected.
 
 Cases: :data:`CASES` maps a name to (the generator's own truth parameters, the expected diagnosis): a tuple
 of registry effect names, or the localisation class (``housner.scenarios.campaigns.verdict.CLASSES``, "drift" and
@@ -80,7 +115,11 @@ of registry effect names, or the localisation class (``housner.scenarios.campaig
 gives the library's parameterisation of each case the library can represent. :data:`EXAMPLE_CASES` are the
 campaigns of the effects shipped as plugins in ``examples/effects`` (pivot friction with asymmetric pivots, an
 accelerometer that reads 12 % high, a vertical table whose acceleration is recorded in a ``ground_acc_vertical``
-column): they are not part of the diagnosis matrix.
+column): they are not part of the diagnosis matrix. The ``colored_*`` and ``white_big_1000hz`` cases of
+:data:`CASES` are Housner's physics read with the sensor options and other rates and specimens (the diagnosis
+should find nothing). :data:`FAULT_CASES` (not in the matrix either) add sensor faults: name -> (truth
+parameters, expected diagnosis, the faults' names (:func:`expected_faults`)); :func:`noise_truth` gives a
+case's theta noise for comparison with an estimate.
 """
 
 from __future__ import annotations
@@ -108,6 +147,7 @@ R_HOUSNER = RHO_STATED**2  # 0.9465
 
 DT = 0.002  # 500 Hz [s]
 NOISE = 0.8e-3  # theta noise [rad] (seed section 3.4)
+HUM_FREQ = 50.0  # mains hum of the sensor options, when hum_amp is given without hum_freq [Hz]
 GM_DURATION = 8.0  # [s]
 QUIET = 1.5  # quiet end of a ground-motion record [s]
 FV_DURATION = 12.0  # [s]
@@ -129,7 +169,10 @@ _SEED_TAG = 0x5EED2
 #: foundation_freq [Hz] and foundation_zeta [-] (two-spring foundation), mu [-] (Coulomb friction at the
 #: base), pivot_moment [N m], vertical_ratio [-], vertical_cutoff [Hz], vertical_delay [s], r_end [-]
 #: (restitution drifting linearly from r to r_end along the recording order), and the campaign options
-#: convention ("linear"/"held"), acc_noise [m/s^2] and fv_releases (release angles over the stated alpha).
+#: convention ("linear"/"held"), acc_noise [m/s^2], fv_releases (release angles over the stated alpha), dt [s],
+#: scale [-], noise_white [rad], noise_ou [rad], noise_tau [s], hum_amp [rad], hum_freq [Hz], and the faults
+#: saturation [rad], gain_end [-], spike_rate [1/s], spike_amp [rad], dropout_rate [1/s], dropout_len [s]
+#: (module docstring, "Sample rate, specimen scale, sensors").
 CASES: dict[str, tuple[dict, tuple[str, ...] | str]] = {
     "none": ({}, ()),
     "none_held": ({"convention": "held"}, ()),
@@ -156,6 +199,32 @@ CASES: dict[str, tuple[dict, tuple[str, ...] | str]] = {
     "pivot_friction": ({"pivot_moment": 0.09}, "dissipation"),
     "vertical_table": ({"vertical_ratio": 0.25, "vertical_cutoff": 8.0, "vertical_delay": 0.03}, "vertical_input"),
     "restitution_drift": ({"r": 0.947, "r_end": 0.852}, "drift"),
+    # Housner's physics read by realistic sensors and on other specimens (see "Sample rate, specimen scale,
+    # sensors" in the module docstring): nothing physical to find
+    "colored_tau0.02": ({"noise_white": 0.3e-3, "noise_ou": 0.8e-3, "noise_tau": 0.02}, ()),
+    "colored_tau0.2": ({"noise_white": 0.3e-3, "noise_ou": 0.8e-3, "noise_tau": 0.2}, ()),
+    "colored_hum50": ({"noise_white": 0.4e-3, "noise_ou": 0.6e-3, "noise_tau": 0.1, "hum_amp": 0.6e-3,
+                       "hum_freq": 50.0}, ()),
+    "colored_hum60_big_200hz": ({"scale": 2.0, "dt": 0.005, "noise_white": 0.4e-3, "noise_ou": 0.8e-3,
+                                 "noise_tau": 0.5, "hum_amp": 0.5e-3, "hum_freq": 60.0}, ()),
+    "white_big_1000hz": ({"scale": 1.6, "dt": 0.001, "noise_white": 0.8e-3}, ()),
+    "colored_small_1000hz": ({"scale": 0.7, "dt": 0.001, "noise_white": 0.2e-3, "noise_ou": 0.6e-3,
+                              "noise_tau": 0.05, "hum_amp": 0.3e-3, "hum_freq": 50.0}, ()),
+}  # fmt: skip
+
+#: Campaigns with sensor faults, kept out of :data:`CASES` (the diagnosis matrix): name -> (truth parameters,
+#: expected diagnosis as in CASES, the faults present). Fault names: "saturation" (the theta channel clipped at
+#: +-saturation [rad]), "gain_drift" (the theta sensor's gain drifting from 1 to gain_end [-] along the recording
+#: order), "spikes" (isolated one-sample spikes of +-spike_amp [rad] at spike_rate [1/s]), "dropouts" (the logger
+#: holding the last value for dropout_len [s], at dropout_rate [1/s]). A saturation of 0.45 alpha (67 mrad) clips
+#: the larger ground-motion records' peaks and the starts of the free vibrations released at +0.75 and -0.55 alpha.
+FAULT_CASES: dict[str, tuple[dict, tuple[str, ...], tuple[str, ...]]] = {
+    "saturation": ({"saturation": 0.45 * ALPHA}, (), ("saturation",)),
+    "gain_drift": ({"gain_end": 1.25}, (), ("gain_drift",)),
+    "spikes_dropouts": ({"spike_rate": 0.3, "spike_amp": 25e-3, "dropout_rate": 0.1, "dropout_len": 0.1}, (),
+                        ("spikes", "dropouts")),
+    "saturation_colored_restitution": ({"r": 0.90, **CASES["colored_hum50"][0], "saturation": 0.45 * ALPHA},
+                                       ("restitution",), ("saturation",)),
 }  # fmt: skip
 
 #: Campaigns of the example effects (examples/effects, loaded as plugins), not diagnosed: name -> truth parameters.
@@ -169,7 +238,13 @@ EXAMPLE_CASES: dict[str, dict] = {
                                 "vertical_channel": True},
 }  # fmt: skip
 
-_INPUT_KEYS = ("convention", "acc_noise", "fv_releases", "acc_gain", "vertical_channel")
+#: Campaign options: parameters of the recording (and the specimen's size), not of the physics' effects.
+#: scale is the only one that changes the block (:func:`truth_for`); the sensor's are described in
+#: :func:`sensor_noise` and :func:`sensor_faults`.
+_SENSOR_KEYS = ("noise_white", "noise_ou", "noise_tau", "hum_amp", "hum_freq")
+_FAULT_KEYS = ("saturation", "gain_end", "spike_rate", "spike_amp", "dropout_rate", "dropout_len")
+_INPUT_KEYS = ("convention", "acc_noise", "fv_releases", "acc_gain", "vertical_channel", "dt", "scale",
+               *_SENSOR_KEYS, *_FAULT_KEYS)  # fmt: skip
 
 
 # ----------------------------------------------------------------------------
@@ -277,32 +352,106 @@ def momentum_ratio(b_pos: float, b_neg: float, height: float, i_c: float, mass: 
 
 
 def case_parameters(case: str) -> dict:
-    """The generator's own truth parameters of ``case`` (a copy of :data:`CASES`' or :data:`EXAMPLE_CASES`' entry)."""
+    """The generator's own truth parameters of ``case`` (a copy of its :data:`CASES`', :data:`EXAMPLE_CASES`' or
+    :data:`FAULT_CASES`' entry)."""
     if case in EXAMPLE_CASES:
         return dict(EXAMPLE_CASES[case])
+    if case in FAULT_CASES:
+        return dict(FAULT_CASES[case][0])
     if case not in CASES:
-        raise KeyError(f"unknown case {case!r}; known: {', '.join([*CASES, *EXAMPLE_CASES])}")
+        raise KeyError(f"unknown case {case!r}; known: {', '.join([*CASES, *EXAMPLE_CASES, *FAULT_CASES])}")
     return dict(CASES[case][0])
 
 
 def expected_diagnosis(case: str):
-    """What the diagnosis should say of ``case`` (:data:`CASES`), None for an example case."""
-    return None if case in EXAMPLE_CASES else CASES[case][1]
+    """What the diagnosis should say of ``case`` (:data:`CASES`, :data:`FAULT_CASES`), None for an example case."""
+    if case in EXAMPLE_CASES:
+        return None
+    if case in FAULT_CASES:
+        return FAULT_CASES[case][1]
+    return CASES[case][1]
 
 
-def truth_for(case: str, n_records: int = 0) -> Truth:
-    """The :class:`Truth` of ``case`` (``n_records`` sets the length of a restitution drift)."""
+def expected_faults(case: str) -> tuple[str, ...]:
+    """The sensor faults in ``case``'s campaign (:data:`FAULT_CASES`); () for every other case."""
+    case_parameters(case)  # unknown names raise
+    return FAULT_CASES[case][2] if case in FAULT_CASES else ()
+
+
+def sample_interval(case: str, *, options: dict | None = None) -> float:
+    """The sample interval of every record of ``case`` [s] (option ``dt``, default :data:`DT` = 0.002 s)."""
+    return float(campaign_options(case, options).get("dt", DT))
+
+
+def stated_specimen(case: str, *, options: dict | None = None) -> dict[str, float]:
+    """The [specimen] table of ``case``'s campaign.toml: height = 2H, width = 2B, depth [m], mass [kg] and p [1/s].
+
+    With the option ``scale`` the block is the seed specimen geometrically enlarged: lengths x scale, mass x
+    scale^3, the inertia about a pivot x scale^5, so p = P_STATED / sqrt(scale), the stated p being the scaled
+    block's true one (alpha and Housner's r are those of the seed specimen). ``options`` overrides the case's
+    options as in :func:`write_campaign`.
+    """
+    scale = float(campaign_options(case, options).get("scale", 1.0))
+    if scale == 1.0:
+        return {"height": HEIGHT, "width": WIDTH, "depth": DEPTH, "mass": MASS, "p": P_STATED}
+    return {"height": HEIGHT * scale, "width": WIDTH * scale, "depth": DEPTH * scale, "mass": MASS * scale**3,
+            "p": P_STATED / math.sqrt(scale)}  # fmt: skip
+
+
+def noise_truth(case: str, *, options: dict | None = None) -> dict[str, float]:
+    """The theta channel's noise of ``case`` (:func:`sensor_noise`), for comparison with an estimate.
+
+    Returns a dict: ``sd`` the total standard deviation sqrt(white^2 + ou^2 + hum_amp^2 / 2 (1 + 1/9)) [rad];
+    ``white`` [rad], ``ou`` [rad] (stationary sd), ``tau`` [s] (NaN without an OU part), ``hum_amp`` [rad],
+    ``hum_freq`` [Hz], ``dt`` [s]; ``lag1`` the autocorrelation at one sample, (ou^2 exp(-dt/tau) + hum_amp^2 / 2
+    (cos(w dt) + cos(2 w dt) / 9)) / sd^2 with w = 2 pi hum_freq [-]. ``options`` overrides the case's options
+    as in :func:`write_campaign`.
+    """
+    kw = campaign_options(case, options)
+    white = float(kw.get("noise_white", NOISE))
+    ou = float(kw.get("noise_ou", 0.0))
+    tau = float(kw.get("noise_tau", math.nan)) if ou > 0.0 else math.nan
+    hum = float(kw.get("hum_amp", 0.0))
+    f_hum = float(kw.get("hum_freq", HUM_FREQ))
+    dt = float(kw.get("dt", DT))
+    var_hum = 0.5 * hum**2 * (1.0 + 1.0 / 9.0)
+    var = white**2 + ou**2 + var_hum
+    w = 2 * math.pi * f_hum
+    cov1 = (ou**2 * math.exp(-dt / tau) if ou > 0.0 else 0.0) + 0.5 * hum**2 * (
+        math.cos(w * dt) + math.cos(2 * w * dt) / 9.0
+    )
+    return {"sd": math.sqrt(var), "white": white, "ou": ou, "tau": tau, "hum_amp": hum, "hum_freq": f_hum,
+            "dt": dt, "lag1": cov1 / var}  # fmt: skip
+
+
+def truth_for(case: str, n_records: int = 0, *, options: dict | None = None) -> Truth:
+    """The :class:`Truth` of ``case`` (``n_records`` sets the length of a restitution drift).
+
+    The option ``scale`` (of the case, or in ``options`` as in :func:`write_campaign`) enlarges the seed block
+    first (:func:`stated_specimen`); ``p`` and ``e`` then act on the scaled block (``e`` in metres).
+    """
     kw = {k: v for k, v in case_parameters(case).items() if k not in _INPUT_KEYS}
     truth = Truth()
+    scale = float(campaign_options(case, options).get("scale", 1.0))
+    if scale != 1.0:
+        # lengths x scale, mass x scale^3, inertia about a pivot x scale^5: p -> p / sqrt(scale), same alpha, r
+        m_s, h_s, b_s = MASS * scale**3, H_COM * scale, B_HALF * scale
+        i0_s = I0_STATED * scale**5
+        truth = replace(truth, b_pos=b_s, b_neg=b_s, height=h_s, mass=m_s, i_c=i0_s - m_s * math.hypot(b_s, h_s) ** 2)
     if "p" in kw:
         # the block rocks with another p than the stated one: its inertia about a pivot follows from that p,
         # its impacts keep the stated specimen's r (the mis-stated p is then the only thing wrong)
-        i0 = MASS * G * R_STATED / kw.pop("p") ** 2
-        truth = replace(truth, i_c=i0 - MASS * R_STATED**2)
+        if scale == 1.0:
+            i0 = MASS * G * R_STATED / kw.pop("p") ** 2
+            truth = replace(truth, i_c=i0 - MASS * R_STATED**2)
+        else:
+            rr = math.hypot(truth.b_pos, truth.height)
+            i0 = truth.mass * G * rr / kw.pop("p") ** 2
+            truth = replace(truth, i_c=i0 - truth.mass * rr**2)
     if "e" in kw:
         e = kw.pop("e")
-        b_pos, b_neg = B_HALF - e, B_HALF + e
-        rho_pn, rho_np = momentum_ratio(b_pos, b_neg, H_COM, truth.i_c, MASS)
+        b_pos, b_neg = truth.b_pos - e, truth.b_neg + e
+        rho_pn, rho_np = momentum_ratio(b_pos, b_neg, truth.height, truth.i_c, truth.mass)
         truth = replace(truth, b_pos=b_pos, b_neg=b_neg, rho_pn=rho_pn, rho_np=rho_np)
     if "r" in kw:
         rho = math.sqrt(kw.pop("r"))
@@ -358,7 +507,7 @@ def library_parameters(case: str) -> dict[str, dict[str, float]]:
         out["flexible_foundation"] = {"frequency": kw["foundation_freq"], "damping_ratio": kw["foundation_zeta"]}
     if "mu" in kw:
         out["sliding"] = {"mu": kw["mu"]}
-    if not isinstance(CASES[case][1], tuple):
+    if not isinstance(expected_diagnosis(case), tuple):
         out[case] = {k: v for k, v in kw.items() if k not in _INPUT_KEYS}
     return out
 
@@ -944,8 +1093,12 @@ def _mp_pulse_acc(t: np.ndarray, fp: float, gamma: float, nu: float, t0: float) 
     return np.where(inside, a, 0.0)
 
 
-def ground_motion(rng: np.random.Generator, *, dt: float = DT, duration: float = GM_DURATION) -> np.ndarray:
+def ground_motion(rng: np.random.Generator, *, dt: float = DT, duration: float = GM_DURATION,
+                  freq_scale: float = 1.0) -> np.ndarray:  # fmt: skip
     """One synthetic ground motion at model scale [m/s^2], ``duration`` s at ``dt`` (n = duration / dt samples).
+
+    ``freq_scale`` [-] multiplies the drawn ground and pulse frequencies (the same random numbers are drawn):
+    a block enlarged by ``scale`` gets 1 / sqrt(scale), so that it responds as the seed block does.
 
     Clough-Penzien: white noise through a Kanai-Tajimi filter (ground frequency :data:`FG_RANGE`, 2.5-5 Hz,
     damping 0.3-0.6) and a second-order high-pass (a tenth of the ground frequency, the same damping),
@@ -963,7 +1116,7 @@ def ground_motion(rng: np.random.Generator, *, dt: float = DT, duration: float =
     n = int(round(duration / dt))
     n_shake = int(round((duration - QUIET) / dt))
     t = np.arange(n_shake) * dt
-    fg = rng.uniform(*FG_RANGE)
+    fg = rng.uniform(*FG_RANGE) * freq_scale
     zg = rng.uniform(0.3, 0.6)
     wg, wf = 2 * math.pi * fg, 2 * math.pi * 0.1 * fg
     num = np.polymul([2 * zg * wg, wg * wg], [1.0, 0.0, 0.0])
@@ -975,8 +1128,8 @@ def ground_motion(rng: np.random.Generator, *, dt: float = DT, duration: float =
     x = x * (t / tp) ** bb * np.exp(bb * (1 - t / tp))
     x /= np.max(np.abs(x))
     if rng.random() < 0.5:
-        pulse = _mp_pulse_acc(t, rng.uniform(*FP_RANGE), rng.uniform(1.5, 3.0), rng.uniform(0, 2 * math.pi),
-                              rng.uniform(1.5, 3.5))  # fmt: skip
+        pulse = _mp_pulse_acc(t, rng.uniform(*FP_RANGE) * freq_scale, rng.uniform(1.5, 3.0),
+                              rng.uniform(0, 2 * math.pi), rng.uniform(1.5, 3.5))  # fmt: skip
         x = x + rng.uniform(*PULSE_RANGE) * pulse / np.max(np.abs(pulse))
     k = int(round(0.3 / dt))
     x[-k:] *= 0.5 * (1 + np.cos(np.linspace(0.0, math.pi, k)))
@@ -987,13 +1140,112 @@ def ground_motion(rng: np.random.Generator, *, dt: float = DT, duration: float =
 
 # ----------------------------------------------------------------------------
 # campaigns
-def _observe(truth: Truth, theta: np.ndarray, dt: float, rng: np.random.Generator) -> np.ndarray:
-    """What the theta channel records: theta(t - tau) (held at the start), plus the offset and the noise."""
+def sensor_noise(
+    rng: np.random.Generator,
+    n: int,
+    dt: float,
+    *,
+    white: float = NOISE,
+    ou: float = 0.0,
+    tau: float = math.nan,
+    hum_amp: float = 0.0,
+    hum_freq: float = HUM_FREQ,
+) -> np.ndarray:
+    """The theta channel's noise over one record of ``n`` samples at ``dt`` [s] (zero mean) [rad].
+
+    The sum of: white Gaussian noise of sd ``white`` [rad]; an Ornstein-Uhlenbeck process of stationary sd ``ou``
+    [rad] and correlation time ``tau`` [s], discretised exactly (AR(1): x_k+1 = a x_k + ou sqrt(1 - a^2) e_k,
+    a = exp(-dt / tau)) and started from its stationary distribution (x_0 ~ N(0, ou^2)); a mains hum
+    hum_amp (sin(phi_k) + sin(2 phi_k) / 3), phi_k = 2 pi hum_freq k dt + phi, its phase phi uniform per record
+    and the second harmonic locked to it (a distorted mains waveform), sampled as it is (no anti-alias filter: at
+    200 Hz a 120 Hz harmonic appears at 80 Hz). Drawn in that order from ``rng``: n normals, n normals when ou > 0,
+    one uniform when hum_amp > 0 (with the defaults this is the first generator's ``rng.normal(0, NOISE, n)``).
+    Total sd sqrt(white^2 + ou^2 + hum_amp^2 / 2 (1 + 1/9)) (:func:`noise_truth`).
+    """
+    x = rng.normal(0.0, white, n)
+    if ou > 0.0:
+        if not tau > 0.0:
+            raise ValueError(f"an Ornstein-Uhlenbeck part needs a correlation time noise_tau > 0 s, got {tau!r}")
+        a = math.exp(-dt / tau)
+        e = rng.standard_normal(n)
+        e[0] *= ou
+        e[1:] *= ou * math.sqrt(-math.expm1(-2.0 * dt / tau))  # ou sqrt(1 - a^2), without cancellation
+        x = x + signal.lfilter([1.0], [1.0, -a], e)
+    if hum_amp > 0.0:
+        phase = 2 * math.pi * hum_freq * dt * np.arange(n) + rng.uniform(0.0, 2 * math.pi)
+        x = x + hum_amp * (np.sin(phase) + np.sin(2.0 * phase) / 3.0)
+    return x
+
+
+def sensor_faults(
+    x: np.ndarray,
+    dt: float,
+    rng: np.random.Generator,
+    *,
+    saturation: float = math.inf,
+    spike_rate: float = 0.0,
+    spike_amp: float = 0.0,
+    dropout_rate: float = 0.0,
+    dropout_len: float = 0.0,
+) -> tuple[np.ndarray, dict]:
+    """The written theta channel: the sensor's output ``x`` [rad] (signal, gain and noise) through the faults.
+
+    In this order: the sensor's range clips x to +-``saturation`` [rad]; the transmission adds isolated
+    one-sample spikes of +-``spike_amp`` [rad] (sign uniform) at the times of a Poisson process of rate
+    ``spike_rate`` [1/s] (a spike on a sample next to an earlier one is dropped, so all are isolated; the
+    spikes are not clipped); the logger drops out at the times of a Poisson process of rate ``dropout_rate``
+    [1/s] (a start on sample 0 moves to sample 1), repeating the last value it received (the sample before
+    the start) for round(``dropout_len`` / dt) samples, cut at the record's end (a later dropout may extend an
+    earlier one; a held run may hide a spike). Poisson counts over the record's duration n dt, times uniform
+    (drawn from ``rng``: spikes' count, times, signs, then dropouts' count, times).
+
+    Returns
+    -------
+    (written, log)
+        log: ``clipped`` (number of clipped samples), ``spikes`` (sample indices), ``dropouts`` ((start,
+        length) per run, in samples).
+    """
+    y = np.clip(x, -saturation, saturation) if math.isfinite(saturation) else x.copy()
+    n = y.size
+    clipped = int(np.count_nonzero(np.abs(x) > saturation)) if math.isfinite(saturation) else 0
+    spikes: list[int] = []
+    if spike_rate > 0.0:
+        count = rng.poisson(spike_rate * n * dt)
+        idx = np.sort(np.floor(rng.uniform(0.0, n, count)).astype(np.int64))
+        sign = rng.choice(np.array([-1.0, 1.0]), count)
+        last = -2
+        for i, sg in zip(idx, sign, strict=True):
+            if i <= last + 1:
+                continue
+            y[i] += sg * spike_amp
+            spikes.append(int(i))
+            last = i
+    dropouts: list[tuple[int, int]] = []
+    if dropout_rate > 0.0:
+        count = rng.poisson(dropout_rate * n * dt)
+        starts = np.sort(np.maximum(np.floor(rng.uniform(0.0, n, count)).astype(np.int64), 1))
+        length = max(1, int(round(dropout_len / dt)))
+        for i in starts:
+            j = min(int(i) + length, n)
+            y[i:j] = y[i - 1]
+            dropouts.append((int(i), j - int(i)))
+    return y, {"clipped": clipped, "spikes": spikes, "dropouts": dropouts}
+
+
+def _observe(truth: Truth, theta: np.ndarray, dt: float, rng: np.random.Generator, *, gain: float = 1.0,
+             noise: dict | None = None) -> np.ndarray:  # fmt: skip
+    """What the theta sensor puts out: gain x (theta(t - tau) (held at the start) + the offset), plus the noise
+    (:func:`sensor_noise` with ``noise``' keyword arguments; default white :data:`NOISE`)."""
     th = theta
     if truth.tau != 0.0:
         k = np.arange(th.size, dtype=float)
         th = np.interp(k - truth.tau / dt, k, th)  # np.interp holds the end values outside the record
-    return th + truth.offset + rng.normal(0.0, NOISE, th.size)
+    if noise is None and gain == 1.0:
+        return th + truth.offset + rng.normal(0.0, NOISE, th.size)
+    signal_out = th + truth.offset
+    if gain != 1.0:
+        signal_out = gain * signal_out
+    return signal_out + sensor_noise(rng, th.size, dt, **(noise or {}))
 
 
 def _write_csv(path: Path, acc: np.ndarray, theta: np.ndarray, dt: float, vertical: np.ndarray | None = None) -> None:
@@ -1020,6 +1272,20 @@ def _seed(seed: int, kind: int, i: int) -> np.random.SeedSequence:
     return np.random.SeedSequence([seed, _SEED_TAG], spawn_key=(kind, i))
 
 
+def campaign_options(case: str, options: dict | None = None) -> dict:
+    """The campaign options of ``case`` (its :data:`_INPUT_KEYS` entries) updated with ``options``."""
+    extra = set(options or {}) - set(_INPUT_KEYS)
+    if extra:
+        raise KeyError(f"not campaign options: {sorted(extra)}; known: {', '.join(_INPUT_KEYS)}")
+    kw = {k: v for k, v in case_parameters(case).items() if k in _INPUT_KEYS}
+    kw.update(options or {})
+    return kw
+
+
+def _toml_number(x: float) -> str:
+    return repr(float(round(x, 12)))  # 0.12, not 0.12000000000000001; 1.0, not the integer 1
+
+
 def write_campaign(
     root: str | Path,
     case: str = "none",
@@ -1028,6 +1294,7 @@ def write_campaign(
     seed: int = 0,
     convention: str | None = None,
     acc_noise: float | None = None,
+    options: dict | None = None,
 ) -> dict:
     """Write the synthetic campaign of ``case`` to ``root`` and return what it holds.
 
@@ -1036,7 +1303,7 @@ def write_campaign(
     root : path
         Directory to create (campaign.toml and records/).
     case : str
-        Key of :data:`CASES` or :data:`EXAMPLE_CASES`.
+        Key of :data:`CASES`, :data:`EXAMPLE_CASES` or :data:`FAULT_CASES`.
     n_ground : int
         Number of ground-motion records.
     seed : int
@@ -1045,41 +1312,66 @@ def write_campaign(
         Input between samples as the block feels it; default the case's ("linear" but for ``none_held``).
     acc_noise : float, optional
         Standard deviation of Gaussian noise on the written ground_acc column [m/s^2]; default the case's.
+    options : dict, optional
+        Campaign options (keys of :data:`_INPUT_KEYS`: dt, scale, the sensor's noise and faults, ...) that
+        replace the case's.
 
     Returns
     -------
     dict
-        ``root``, ``case``, ``expected`` (None for an example case), ``truth``, ``overturned`` (bool array per
+        ``root``, ``case``, ``expected`` (None for an example case), ``faults`` (:func:`expected_faults`),
+        ``truth``, ``dt`` [s], ``specimen`` (the stated [specimen] table), ``overturned`` (bool array per
         ground-motion record), ``gm_ids``, ``theta_max`` (the block's largest sampled |theta| per ground-motion
-        record [rad]).
+        record [rad]), ``sensor`` (record id -> the theta sensor's gain and the log of :func:`sensor_faults`,
+        for the records with a fault option only).
     """
     root = Path(root)
     (root / "records").mkdir(parents=True, exist_ok=True)
-    kw = case_parameters(case)
+    kw = campaign_options(case, options)
     convention = kw.get("convention", "linear") if convention is None else convention
     acc_noise = float(kw.get("acc_noise", 0.0) if acc_noise is None else acc_noise)
+    dt = float(kw.get("dt", DT))
+    scale = float(kw.get("scale", 1.0))
+    freq_scale = 1.0 / math.sqrt(scale) if scale != 1.0 else 1.0
+    noise = None
+    if any(k in kw for k in _SENSOR_KEYS):
+        nt = noise_truth(case, options=options)
+        noise = {"white": nt["white"], "ou": nt["ou"], "tau": nt["tau"], "hum_amp": nt["hum_amp"],
+                 "hum_freq": nt["hum_freq"]}  # fmt: skip
+    faults = {k: float(kw[k]) for k in ("saturation", "spike_rate", "spike_amp", "dropout_rate", "dropout_len")
+              if k in kw}  # fmt: skip
+    gain_end = float(kw.get("gain_end", 1.0))
     order = recording_order(n_ground)
-    truth = truth_for(case, n_records=len(order))
-    overturned, gm_ids, theta_max = [], [], []
-    lines = [f'name = "independent synthetic campaign, case: {case}"', "[specimen]", f"height = {HEIGHT}",
-             f"width = {WIDTH}", f"depth = {DEPTH}", f"mass = {MASS}", f"p = {P_STATED}"]  # fmt: skip
+    truth = truth_for(case, n_records=len(order), options=options)
+    spec = stated_specimen(case, options=options)
+    overturned, gm_ids, theta_max, sensor_log = [], [], [], {}
+    if scale == 1.0:
+        lines = [f'name = "independent synthetic campaign, case: {case}"', "[specimen]", f"height = {HEIGHT}",
+                 f"width = {WIDTH}", f"depth = {DEPTH}", f"mass = {MASS}", f"p = {P_STATED}"]  # fmt: skip
+    else:
+        lines = [f'name = "independent synthetic campaign, case: {case}"', "[specimen]",
+                 *(f"{k} = {_toml_number(v)}" for k, v in spec.items())]  # fmt: skip
     for k, (rid, kind, i) in enumerate(order):
         ss = _seed(seed, 1 if kind == "ground_motion" else 0, i)
-        motion_ss, noise_ss, acc_noise_ss = ss.spawn(3)
+        # the first three children are those of the first generator's ss.spawn(3); the fourth draws the faults
+        motion_ss, noise_ss, acc_noise_ss, fault_ss = ss.spawn(4)
         if kind == "ground_motion":
-            acc = ground_motion(np.random.default_rng(motion_ss))
+            acc = ground_motion(np.random.default_rng(motion_ss), dt=dt, freq_scale=freq_scale)
             theta0 = 0.0
         else:
-            acc = np.zeros(int(round(FV_DURATION / DT)))
+            acc = np.zeros(int(round(FV_DURATION / dt)))
             theta0 = kw.get("fv_releases", FV_RELEASES)[i] * ALPHA
-        theta, over = simulate(truth, acc, DT, theta0=theta0, record_index=k, convention=convention)
+        theta, over = simulate(truth, acc, dt, theta0=theta0, record_index=k, convention=convention)
         written = acc * kw.get("acc_gain", 1.0)  # the table's accelerometer reads the gain times what was felt
         if acc_noise > 0.0 and kind == "ground_motion":
             written = written + np.random.default_rng(acc_noise_ss).normal(0.0, acc_noise, acc.size)
-        vertical = vertical_input(truth, acc, DT) if kw.get("vertical_channel") else None
-        _write_csv(root / "records" / f"{rid}.csv", written, _observe(truth, theta, DT,
-                                                                     np.random.default_rng(noise_ss)), DT,
-                   vertical)  # fmt: skip
+        vertical = vertical_input(truth, acc, dt) if kw.get("vertical_channel") else None
+        gain = 1.0 + (gain_end - 1.0) * k / max(len(order) - 1, 1) if gain_end != 1.0 else 1.0
+        theta_w = _observe(truth, theta, dt, np.random.default_rng(noise_ss), gain=gain, noise=noise)
+        if faults or gain_end != 1.0:
+            theta_w, log = sensor_faults(theta_w, dt, np.random.default_rng(fault_ss), **faults)
+            sensor_log[rid] = {"gain": gain, **log}
+        _write_csv(root / "records" / f"{rid}.csv", written, theta_w, dt, vertical)
         lines += ["[[record]]", f'id = "{rid}"', f'kind = "{kind}"', f'file = "records/{rid}.csv"']
         if kind == "ground_motion":
             overturned.append(over)
@@ -1090,10 +1382,14 @@ def write_campaign(
         "root": root,
         "case": case,
         "expected": expected_diagnosis(case),
+        "faults": expected_faults(case),
         "truth": truth,
+        "dt": dt,
+        "specimen": spec,
         "overturned": np.array(overturned, dtype=bool),
         "gm_ids": gm_ids,
         "theta_max": np.array(theta_max),
+        "sensor": sensor_log,
     }
 
 
@@ -1104,7 +1400,15 @@ def cached_campaign(base: str | Path, case: str, *, n_ground: int = 60, seed: in
     done = root / ".complete"
     if done.exists():
         n_rec = len(recording_order(n_ground))
-        return {"root": root, "case": case, "expected": expected_diagnosis(case), "truth": truth_for(case, n_rec)}
+        return {
+            "root": root,
+            "case": case,
+            "expected": expected_diagnosis(case),
+            "faults": expected_faults(case),
+            "truth": truth_for(case, n_rec),
+            "dt": sample_interval(case),
+            "specimen": stated_specimen(case),
+        }
     info = write_campaign(root, case, n_ground=n_ground, seed=seed)
     done.write_text("ok\n")
     return info
