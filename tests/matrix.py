@@ -6,13 +6,19 @@ from __future__ import annotations
 CONTROL_RATIO = 1.25
 
 
-def judge(expected, diag) -> tuple[bool, str]:
+def judge(expected, diag, faults: tuple[str, ...] | None = None) -> tuple[bool, str]:
     """Whether ``diag`` is right for ``expected``, and why not ('' when it is).
 
     ``expected`` is () for a control (``no_misfit``, ratio <= 1.25), a tuple of registry names for
     library effects (``explained``, naming exactly those), or the class that should come first for an
-    effect outside the library (``partly_explained`` or ``unexplained``).
+    effect outside the library (``partly_explained`` or ``unexplained``). ``faults``: the sensor faults
+    the assessment must name, exactly (None: not checked).
     """
+    if faults is not None:
+        sensor = getattr(diag.campaign, "sensor", None)
+        named = set(sensor.fault_kinds) if sensor is not None else set()
+        if named != set(faults):
+            return False, f"sensor faults {sorted(named)} (expected {sorted(faults)})"
     v = diag.verdict
     if isinstance(expected, str):
         first = v.next[0]["class"] if v.next else "none"

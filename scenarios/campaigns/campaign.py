@@ -40,7 +40,7 @@ import math
 import re
 import sys
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -146,6 +146,9 @@ class MeasuredRecord:
         dropout) are False: no error is taken on them.
     clip : tuple of float
         The sensor's range (low, high) [rad]: a saturating sensor reads no further (default unbounded).
+    position : int
+        The record's place among the campaign's ``[[record]]`` tables, the recording order, counting the
+        records that could not be read (-1: not from a campaign file).
     """
 
     id: str
@@ -161,6 +164,7 @@ class MeasuredRecord:
     noise_model: SensorNoise = WHITE
     valid: np.ndarray | None = None
     clip: tuple[float, float] = (-math.inf, math.inf)
+    position: int = -1
 
     @property
     def dt(self) -> float:
@@ -748,6 +752,8 @@ def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
                 raise DataFileError(toml, f"record {rec['id']!r}: file {rec['file']!r} {outside}",
                                     line=_key_line(text, "file", "record", i))  # fmt: skip
             r = _read_record(root, rec, specimen)
+            if isinstance(r, MeasuredRecord):
+                r = replace(r, position=i)
         except DataFileError as e:
             skipped.append((rec["id"], rec["file"], str(e)))
             errors.append(e)

@@ -33,9 +33,10 @@ sensor did, and returns the campaign with what it found:
    the first record (the sensor as it was when the campaign began):
 
    * *offset drift*: the rest level after each record's motion;
-   * *gain drift*: each ground motion's first excursion (uplift to the first
-     impact, where no impact law and no chaos has acted yet) against the
-     plain model's, by least squares.
+   * *gain drift*: each ground motion's first large excursion (beyond
+     :data:`GAIN_MIN_SIGMAS` noise sigmas, after excursions too small for an
+     impact law to matter, before chaos has acted) against the plain model's,
+     by least squares.
 
 Every finding is in :class:`SensorReport`, as the diagnosis' text and JSON say it.
 """
@@ -90,7 +91,10 @@ QUIET_SD_RATIO = 1.25
 T_TREND = 4.0
 #: Fewest records with a usable first excursion or rest level for a trend [-].
 MIN_TREND_RECORDS = 8
-#: A first excursion is used for the gain when the model's exceeds this many noise sigmas [-].
+#: Every excursion before the one used for the gain stays below this share of its amplitude [-] (their impacts
+#: carried at most 4 % of its energy).
+GAIN_PRIOR_SHARE = 0.2
+#: The excursion used for the gain is the first beyond this many noise sigmas [-].
 GAIN_MIN_SIGMAS = 10.0
 
 
@@ -144,6 +148,7 @@ class SensorReport:
         if not self.noise.white:
             bits.append(f"the sensor's noise is correlated in time ({self.noise.describe()}); the floor was measured "
                         "with noise of that correlation")  # fmt: skip
+        bits += list(self.notes)
         if not bits:
             return ""
         names = ", ".join(f.kind.replace("_", " ") for f in self.faults)
@@ -177,21 +182,25 @@ def _saturation(theta: np.ndarray) -> tuple[np.ndarray, list[float]]:
     return bad, levels
 
 
-def _spikes(theta: np.ndarray) -> np.ndarray:
-    """Single samples off both neighbours (module docstring)."""
+def _spikes(theta: np.ndarray, skip: np.ndarray | None = None, alpha: float = math.inf) -> np.ndarray:
+    """Single samples off both neighbours (module docstring), outside ``skip`` (a flat top, whose repeated samples
+    say nothing of the noise) and within alpha of rest (beyond, a toppling block stops against the table)."""
     out = np.zeros(theta.size, dtype=bool)
     if theta.size < 5:
         return out
     d = theta[1:-1] - 0.5 * (theta[:-2] + theta[2:])
-    s = 1.4826 * float(np.median(np.abs(d - np.median(d))))
+    use = np.ones(d.size, dtype=bool) if skip is None else ~(skip[:-2] | skip[1:-1] | skip[2:])
+    if use.sum() < 5:
+        return out
+    s = 1.4826 * float(np.median(np.abs(d[use] - np.median(d[use]))))
     if not s > 0:
         return out
     big = np.abs(d) > SPIKE_SIGMAS * s
     # a spike at i leaves its neighbours' differences at about -d_i / 2: opposite signs
     left = np.concatenate(([0.0], d[:-1]))
     right = np.concatenate((d[1:], [0.0]))
-    spike = (big & (np.sign(left) == -np.sign(d)) & (np.sign(right) == -np.sign(d))
-             & (np.abs(d) >= np.abs(left)) & (np.abs(d) >= np.abs(right)))  # fmt: skip
+    spike = (big & use & (np.sign(left) == -np.sign(d)) & (np.sign(right) == -np.sign(d))
+             & (np.abs(d) >= np.abs(left)) & (np.abs(d) >= np.abs(right)) & (np.abs(theta[1:-1]) < alpha))  # fmt: skip
     out[1:-1] = spike
     return out
 
@@ -257,17 +266,33 @@ def _quiet_start(rec: MeasuredRecord, model: np.ndarray | None, alpha: float) ->
     return k if n - k >= need else None
 
 
-def _first_excursion(rec: MeasuredRecord, model: np.ndarray) -> slice | None:
-    """The samples from the model's uplift to its first impact (or overturn) on a ground motion."""
+def _first_excursion(rec: MeasuredRecord, model: np.ndarray, least: float) -> slice | None:
+    """The model's first excursion beyond ``least`` [rad] on a ground motion (from its uplift or the impact
+    before it to the next impact, or an overturn), when every excursion before it stayed below
+    :data:`GAIN_PRIOR_SHARE` of it: the impacts before carried too little energy for an impact law to matter."""
     m = model[: rec.theta.size]
-    moving = np.flatnonzero(m != 0.0)
-    if rec.kind != "ground_motion" or not moving.size:
+    if rec.kind != "ground_motion" or not np.any(m != 0.0):
         return None
-    a = int(moving[0])
-    s = np.sign(m[a]) if m[a] != 0 else 1.0
-    back = np.flatnonzero(s * m[a:] <= 0.0)
-    b = a + int(back[0]) if back.size else m.size
-    return slice(a, b) if b - a >= 10 else None
+    sgn = np.sign(m)
+    edges = np.flatnonzero(np.diff(sgn) != 0) + 1  # where the side (or rest) changes
+    bounds = np.concatenate(([0], edges, [m.size]))
+    prior = 0.0
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        amp = float(np.max(np.abs(m[a:b])))
+        if amp > least:
+            return slice(int(a), int(b)) if prior <= GAIN_PRIOR_SHARE * amp and b - a >= 10 else None
+        prior = max(prior, amp)
+    return None
+
+
+def _corrected(rec: MeasuredRecord, fix, gain: float = 1.0) -> MeasuredRecord:
+    """``rec`` with ``fix`` applied to every theta it carries: the samples, the hold and a free vibration's
+    release angle (read off the uncorrected samples); its noise sigma divided by ``gain`` (the noise read
+    through a gain corrected away)."""
+    motion = rec.motion
+    if rec.kind == "free_vibration":
+        motion = replace(motion, theta0=float(fix(np.array([motion.theta0]))[0]))
+    return replace(rec, theta=fix(rec.theta), hold=fix(rec.hold), motion=motion, noise=rec.noise / gain)
 
 
 def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Campaign:
@@ -291,7 +316,7 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
     for rec in recs:
         th = np.asarray(rec.theta, dtype=float)
         sat, levels = _saturation(th)
-        spk = _spikes(th) & ~sat
+        spk = _spikes(th, sat, alpha) & ~sat
         drp = _dropouts(th, sat)
         if levels:
             sat_ids.append(rec.id)
@@ -327,12 +352,25 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
                                   "out of the errors and bridged."))  # fmt: skip
     recs = [replace(r, theta=th, valid=None if m.all() else m, clip=clip)
             for r, th, m in zip(recs, thetas, masks, strict=True)]  # fmt: skip
+    # a free vibration released beyond the sensor's range has no measured release angle: left out, and said so
+    skipped = list(campaign.skipped)
+    lost = [r for r in recs if r.kind == "free_vibration" and r.valid is not None and not r.valid[: 3].all()]
+    for r in lost:
+        skipped.append((r.id, str(r.file), f"{r.file}: the free vibration starts beyond the sensor's range "
+                        f"(flat at {r.theta[0]:+.4g} rad): its release angle was not measured, so it cannot pin p "
+                        "or r; left out"))  # fmt: skip
+    notes: list[str] = []
+    if lost:
+        recs = [r for r in recs if r not in lost]
+        notes.append(f"{len(lost)} free vibration(s) ({', '.join(r.id for r in lost)}) start beyond the sensor's "
+                     "range, so their release angle was not measured: left out.")  # fmt: skip
 
     # 2. the plain model: where the block is surely still, and each first excursion
     res = simulate_records(campaign.specimen, recs, "housner", (), engine_settings)
     models = [None if isinstance(r, str) else np.asarray(on_grid(r, rec), dtype=float) for r, rec in zip(res, recs,
                                                                                                            strict=True)]
-    order = np.arange(len(recs), dtype=float)
+    # the recording order: each record's place among the [[record]] tables, those that could not be read counted
+    order = np.array([r.position if r.position >= 0 else i for i, r in enumerate(recs)], dtype=float)
     tails: list[tuple[int, int]] = []  # (record, start)
     for i, (rec, m) in enumerate(zip(recs, models, strict=True)):
         k = _quiet_start(rec, m, alpha)
@@ -349,18 +387,18 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
     # 3a. offset drift: the rest levels along the order
     offsets = np.zeros(len(recs))
     if len(tails) >= MIN_TREND_RECORDS:
-        xi = np.array([i for i, _ in tails], dtype=float)
+        xi = np.array([order[i] for i, _ in tails], dtype=float)
         yi = np.array([level_of[i] for i, _ in tails])
         a, b, t = _trend(xi, yi)
-        change = b * (len(recs) - 1)
+        change = b * (order[-1] - order[0])
         if abs(t) > T_TREND:
-            offsets = b * order  # relative to the first record
+            offsets = b * (order - order[0])  # relative to the first record
             faults.append(SensorFault("offset_drift", tuple(r.id for r in recs), 0,
                                       {"slope_per_record": b, "change": change, "t": t},
                                       f"offset drift: the rest level after each record's motion moves by "
                                       f"{change * 1e3:+.3g} mrad from the first record to the last (t = {t:+.1f} over "
                                       f"{len(tails)} records); theta is corrected to the first record's offset."))  # fmt: skip
-            recs = [replace(r, theta=r.theta - offsets[i], hold=r.hold - offsets[i]) for i, r in enumerate(recs)]
+            recs = [_corrected(r, lambda x, i=i: x - offsets[i]) for i, r in enumerate(recs)]
             level_of = {i: v - offsets[i] for i, v in level_of.items()}
     # 3b. gain drift: each ground motion's first excursion against the model's
     gains, gx = [], []
@@ -368,8 +406,8 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
     for i, (rec, m) in enumerate(zip(recs, models, strict=True)):
         if m is None:
             continue
-        sl = _first_excursion(rec, m)
-        if sl is None or np.max(np.abs(m[sl])) < GAIN_MIN_SIGMAS * max(sig0, 1e-9):
+        sl = _first_excursion(rec, m, GAIN_MIN_SIGMAS * max(sig0, 1e-9))
+        if sl is None:
             continue
         y = rec.theta[sl] - level_of.get(i, float(np.median(rec.theta[: max(sl.start, 1)])))
         ok = rec.valid[sl] if rec.valid is not None else np.ones(y.size, dtype=bool)
@@ -377,20 +415,22 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
         den = float(np.dot(mm, mm))
         if den > 0:
             gains.append(float(np.dot(mm, y[ok]) / den))
-            gx.append(float(i))
+            gx.append(float(order[i]))
     if len(gains) >= MIN_TREND_RECORDS:
         xg, yg = np.array(gx), np.array(gains)
         a, b, t = _trend(xg, yg)
-        if abs(t) > T_TREND and a > 0:
-            rel = (a + b * order) / a  # the gain relative to the first record's
-            change = rel[-1] - 1.0
+        if abs(t) > T_TREND and a + b * order[0] > 0:
+            g0 = a + b * order[0]
+            rel = (a + b * order) / g0  # the gain relative to the first record's
+            change = float(rel[-1] - 1.0)
             faults.append(SensorFault("gain_drift", tuple(r.id for r in recs), 0,
-                                      {"gain_first": a, "slope_per_record": b, "relative_change": change, "t": t},
-                                      f"gain drift: the first excursion of each ground motion against the plain "
+                                      {"gain_first": a + b * order[0], "slope_per_record": b, "relative_change": change, "t": t},
+                                      f"gain drift: the first large excursion of each ground motion against the plain "
                                       f"model's reads {change * 100:+.1f} % more from the first record to the last "
-                                      f"(t = {t:+.1f} over {len(gains)} ground motions, before any impact, so no "
-                                      f"impact law can cause it); theta is corrected to the first record's gain."))  # fmt: skip
-            recs = [replace(r, theta=r.theta / rel[i], hold=r.hold / rel[i]) for i, r in enumerate(recs)]
+                                      f"(t = {t:+.1f} over {len(gains)} ground motions, each before any impact large "
+                                      f"enough for an impact law to matter); theta is corrected to the first "
+                                      f"record's gain."))  # fmt: skip
+            recs = [_corrected(r, lambda x, i=i: x / rel[i], rel[i]) for i, r in enumerate(recs)]
             level_of = {i: v / rel[i] for i, v in level_of.items()}
 
     # 4. the noise, on the quiet samples
@@ -410,11 +450,12 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
             lev.append(float(np.mean(r.hold)))
     same_rate = all(abs(r.dt - dt) <= 1e-9 * dt for r in recs)
     noise = estimate_sensor_noise(segs, dt, lev) if same_rate else WHITE
-    notes = [] if same_rate else ["The records have different sample rates: the noise is treated as white."]
+    if not same_rate:
+        notes.append("The records have different sample rates: the noise is treated as white.")
     before = float(np.mean([r.noise for r in recs]))
     if not noise.white and math.isfinite(noise.diff_ratio) and noise.diff_ratio > 0:
         recs = [replace(r, noise=float(noise.diff_ratio * estimate_noise(r.theta)) if r.noise > 0 else r.noise,
                         noise_model=noise) for r in recs]  # fmt: skip
     after = float(np.mean([r.noise for r in recs]))
     report = SensorReport(noise, tuple(faults), before, after, tuple(notes))
-    return replace(campaign, records=recs, sensor=report)
+    return replace(campaign, records=recs, sensor=report, skipped=skipped)

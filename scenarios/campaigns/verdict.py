@@ -105,7 +105,8 @@ def distribution_checks(cmp: Comparison | None) -> list[str]:
         return out
     d = cmp.distribution
     if d.ks.pvalue < DIST_LEVEL:
-        out.append(f"the theta_max/alpha distributions differ (KS D = {d.ks.distance:.3f}, p = {d.ks.pvalue:.2g})")
+        out.append(f"the theta_max/alpha distributions differ (Kolmogorov-Smirnov D = {d.ks.distance:.3f}, the "
+                   f"largest gap between the two cumulative distributions; p = {d.ks.pvalue:.2g})")
     n = d.measured.size
     k1, k2 = int(np.isinf(d.measured).sum()), int(np.isinf(d.model).sum())
     pool = (k1 + k2) / (2 * n)
@@ -258,6 +259,10 @@ def decide(
     base_figs = f"the plain Housner model's held-out error is {baseline.error:.4f} alpha against a correct-model " \
                 f"floor of {baseline.floor:.4f}{fam}, residual ratio {baseline.ratio:.2f} " \
                 f"({_groups_text(baseline)})"  # fmt: skip
+    if model and abs(final.floor - baseline.floor) > 1e-12:
+        # one floor per model: say once why the two differ
+        figs += (" (each model has its own floor: a correct model of other physics leaves another error, as chaos "
+                 "carries its records elsewhere)")  # fmt: skip
     fall = ""
     if model:
         change = "falls" if final.error < baseline.error else "rises"
