@@ -396,8 +396,9 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
             faults.append(SensorFault("offset_drift", tuple(r.id for r in recs), 0,
                                       {"slope_per_record": b, "change": change, "t": t},
                                       f"offset drift: the rest level after each record's motion moves by "
-                                      f"{change * 1e3:+.3g} mrad from the first record to the last (t = {t:+.1f} over "
-                                      f"{len(tails)} records); theta is corrected to the first record's offset."))  # fmt: skip
+                                      f"{change * 1e3:+.3g} mrad from the first record to the last "
+                                      f"(t = {t:+.1f} over {len(tails)} records); theta is corrected to the first "
+                                      "record's offset."))  # fmt: skip
             recs = [_corrected(r, lambda x, i=i: x - offsets[i]) for i, r in enumerate(recs)]
             level_of = {i: v - offsets[i] for i, v in level_of.items()}
     # 3b. gain drift: each ground motion's first excursion against the model's
@@ -424,7 +425,8 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
             rel = (a + b * order) / g0  # the gain relative to the first record's
             change = float(rel[-1] - 1.0)
             faults.append(SensorFault("gain_drift", tuple(r.id for r in recs), 0,
-                                      {"gain_first": a + b * order[0], "slope_per_record": b, "relative_change": change, "t": t},
+                                      {"gain_first": a + b * order[0], "slope_per_record": b,
+                                       "relative_change": change, "t": t},
                                       f"gain drift: the first large excursion of each ground motion against the plain "
                                       f"model's reads {change * 100:+.1f} % more from the first record to the last "
                                       f"(t = {t:+.1f} over {len(gains)} ground motions, each before any impact large "

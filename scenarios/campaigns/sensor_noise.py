@@ -40,7 +40,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-__all__ = ["LB_LAGS", "MIN_QUIET_SAMPLES", "WHITE", "WHITE_LEVEL", "WHITE_RATIO", "SensorNoise", "estimate_sensor_noise"]
+__all__ = [
+    "LB_LAGS",
+    "MIN_QUIET_SAMPLES",
+    "WHITE",
+    "WHITE_LEVEL",
+    "WHITE_RATIO",
+    "SensorNoise",
+    "estimate_sensor_noise",
+]
 
 #: Lags of the Ljung-Box whiteness test [samples].
 LB_LAGS = 20

@@ -238,8 +238,9 @@ def decide(
     # outside the library (held-out errors, each at the verdict's level); a localisation quantity beyond Z_LOCAL
     # counts only for a residual above the floor's band (ratio > RATIO_MISFIT) that its own test cannot call
     # significant: it never turns a residual at the floor into a misfit
-    base_mis = baseline.misfit or drift is not None or bool(probes) or (bool(loc_base) and baseline.ratio > RATIO_MISFIT)
-    fin_mis = final.misfit or drift is not None or bool(probes) or (bool(loc_final) and final.ratio > RATIO_MISFIT)
+    residual_tests = drift is not None or bool(probes)
+    base_mis = baseline.misfit or residual_tests or (bool(loc_base) and baseline.ratio > RATIO_MISFIT)
+    fin_mis = final.misfit or residual_tests or (bool(loc_final) and final.ratio > RATIO_MISFIT)
     powered = final.detectable_ratio <= DETECTABLE_RATIO
     model = [*added, *[n for n in selected if n not in added]]
     status = status_rule(n_records >= MIN_RECORDS, bool(model), base_mis, fin_mis, powered)
