@@ -289,15 +289,17 @@ def _integrate(acc_g, dt, m, th0, w0, al_p, al_n, p_p, p_n, rho_pn, rho_np, c, e
 
 
 def simulate_truth(
-    truth: Truth, acc: np.ndarray, *, theta0: float = 0.0, rng: np.random.Generator | None = None
+    truth: Truth, acc: np.ndarray, *, theta0: float = 0.0, rng: np.random.Generator | None = None, dt: float = DT
 ) -> tuple[np.ndarray, bool]:
-    """theta [rad] at the 500 Hz samples of ``acc`` [m/s^2] (block released at rest from theta0), overturned.
+    """theta [rad] at the samples of ``acc`` [m/s^2] (block released at rest from theta0), overturned.
 
-    ``rng`` draws the per-impact energy shares of ``truth.u_low`` < 1 (required then). A truth with
-    compliant contact (``contact_freq`` > 0) runs :func:`simulate_contact` instead.
+    ``dt`` is the sample step [s] (default 500 Hz); the integrator's step stays near DT / SUBSTEPS
+    (0.25 ms) whatever it is. ``rng`` draws the per-impact energy shares of ``truth.u_low`` < 1
+    (required then). A truth with compliant contact (``contact_freq`` > 0) runs
+    :func:`simulate_contact` instead.
     """
     if truth.contact_freq > 0.0:
-        return simulate_contact(truth, acc, theta0=theta0)
+        return simulate_contact(truth, acc, theta0=theta0, dt=dt)
     if truth.mu < math.inf:
         # rigid ground with friction: only mu below tan(alpha) (slide, never rock, from rest) is modelled
         # here; the free vibrations then need mu above their friction demand (0.091 for the seed specimen)
@@ -308,11 +310,16 @@ def simulate_truth(
     out = np.empty(acc.size)
     share = np.ones(1) if truth.u_low >= 1.0 else rng.uniform(truth.u_low, 1.0, 4096)
     over = _integrate(
-        np.ascontiguousarray(acc, dtype=np.float64) / G, DT, SUBSTEPS, float(theta0), 0.0,
+        np.ascontiguousarray(acc, dtype=np.float64) / G, dt, _substeps(dt), float(theta0), 0.0,
         truth.alpha_pos, truth.alpha_neg, truth.p_pos, truth.p_neg, truth.rho_pn, truth.rho_np,
         truth.c, truth.exponent, truth.cd, truth.mu_r, share, out,
     )  # fmt: skip
     return out, bool(over)
+
+
+def _substeps(dt: float) -> int:
+    """Integrator substeps per sample of ``dt`` [s]: SUBSTEPS at DT, a step near DT / SUBSTEPS otherwise."""
+    return SUBSTEPS if dt == DT else max(1, int(math.ceil(SUBSTEPS * dt / DT - 1e-9)))
 
 
 # ----------------------------------------------------------------------------
@@ -402,8 +409,8 @@ def _integrate_contact(acc, dt, m, th0, mass, ic, hh, b_pos, b_neg, kn, cn, kt, 
     return 0
 
 
-def simulate_contact(truth: Truth, acc: np.ndarray, *, theta0: float = 0.0) -> tuple[np.ndarray, bool]:
-    """theta [rad] at the 500 Hz samples of ``acc`` [m/s^2] for a truth with compliant contact."""
+def simulate_contact(truth: Truth, acc: np.ndarray, *, theta0: float = 0.0, dt: float = DT) -> tuple[np.ndarray, bool]:
+    """theta [rad] at the samples of ``acc`` [m/s^2] (step ``dt``, 500 Hz by default), compliant contact."""
     hh = HEIGHT / 2
     R = math.hypot(hh, WIDTH / 2)
     i0 = MASS * G * R / truth.p_pos**2
@@ -413,17 +420,17 @@ def simulate_contact(truth: Truth, acc: np.ndarray, *, theta0: float = 0.0) -> t
     kt = MASS * (2 * math.pi * truth.tangential_freq) ** 2 / 2
     ct = 0.5 * MASS * 2 * math.pi * truth.tangential_freq
     # substeps: 40 per period of the stiffest spring, at least 8 per sample
-    m = max(8, int(math.ceil(40 * max(truth.contact_freq, truth.tangential_freq) * DT)))
+    m = max(8, int(math.ceil(40 * max(truth.contact_freq, truth.tangential_freq) * dt)))
     out = np.empty(acc.size)
     b = WIDTH / 2
-    over = _integrate_contact(np.ascontiguousarray(acc, dtype=np.float64), DT, m, float(theta0), MASS, ic, hh,
+    over = _integrate_contact(np.ascontiguousarray(acc, dtype=np.float64), dt, m, float(theta0), MASS, ic, hh,
                               b, b, kn, cn, kt, ct, truth.mu, truth.both_corners_hold, out)  # fmt: skip
     return out, bool(over)
 
 
 # ----------------------------------------------------------------------------
 # ground motions
-def ground_motion(rng: np.random.Generator, duration: float = 6.0) -> np.ndarray:
+def ground_motion(rng: np.random.Generator, duration: float = 6.0, dt: float = DT) -> np.ndarray:
     """A short pulse-like filtered-noise record at model scale [m/s^2].
 
     White noise through a second-order band-pass (Kanai-Tajimi-like, centre
@@ -432,15 +439,15 @@ def ground_motion(rng: np.random.Generator, duration: float = 6.0) -> np.ndarray
     scaled to a peak of :data:`PGA_RANGE` times g tan(alpha) (1.47 m/s^2 for
     the seed specimen), then 1.5 s of free rocking at the end (zeros). For
     the seed specimen about a quarter of the records overturn and the median
-    theta_max/alpha of the others is ~0.15.
+    theta_max/alpha of the others is ~0.15. ``dt``: the sample step [s] (default 500 Hz).
     """
-    n_shake = int(round((duration - 1.5) / DT))
-    n = int(round(duration / DT)) + 1
-    t = np.arange(n_shake) * DT
+    n_shake = int(round((duration - 1.5) / dt))
+    n = int(round(duration / dt)) + 1
+    t = np.arange(n_shake) * dt
     fg = rng.uniform(FG_RANGE[0], FG_RANGE[1])
     wg, zg = 2 * math.pi * fg, 0.35
     # band-pass 2 z w s / (s^2 + 2 z w s + w^2), discretised with the bilinear transform
-    b, a = signal.bilinear([2 * zg * wg, 0.0], [1.0, 2 * zg * wg, wg * wg], fs=1.0 / DT)
+    b, a = signal.bilinear([2 * zg * wg, 0.0], [1.0, 2 * zg * wg, wg * wg], fs=1.0 / dt)
     y = signal.lfilter(b, a, rng.standard_normal(n_shake))
     t1 = rng.uniform(0.6, 1.4)
     env = (t / t1) ** 2 * np.exp(2.0 * (1.0 - t / t1))
@@ -454,7 +461,7 @@ def ground_motion(rng: np.random.Generator, duration: float = 6.0) -> np.ndarray
     a = a / np.max(np.abs(a)) * rng.uniform(PGA_RANGE[0], PGA_RANGE[1]) * G * WIDTH / HEIGHT
     # taper the last 0.2 s of shaking so the record ends at rest
     taper = np.ones(n_shake)
-    k = int(0.2 / DT)
+    k = int(0.2 / dt)
     taper[-k:] = 0.5 * (1 + np.cos(np.linspace(0, math.pi, k)))
     out = np.zeros(n)
     out[:n_shake] = a * taper
@@ -463,17 +470,18 @@ def ground_motion(rng: np.random.Generator, duration: float = 6.0) -> np.ndarray
 
 # ----------------------------------------------------------------------------
 # campaigns
-def _observe(truth: Truth, theta: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def _observe(truth: Truth, theta: np.ndarray, rng: np.random.Generator, dt: float = DT) -> np.ndarray:
     th = theta
     if truth.tau:
         k = np.arange(th.size)
-        th = np.interp(k - truth.tau / DT, k, th)  # the theta channel shows theta(t - tau)
+        th = np.interp(k - truth.tau / dt, k, th)  # the theta channel shows theta(t - tau)
     return th + truth.offset + rng.normal(0.0, NOISE, th.size)
 
 
-def _write_csv(path: Path, acc: np.ndarray, theta: np.ndarray) -> None:
-    t = np.arange(acc.size) * DT
-    np.savetxt(path, np.column_stack((t, acc, theta)), fmt=("%.4f", "%.9e", "%.9e"), delimiter=",",
+def _write_csv(path: Path, acc: np.ndarray, theta: np.ndarray, dt: float = DT) -> None:
+    t = np.arange(acc.size) * dt
+    tfmt = "%.4f" if dt == DT else f"%.{max(4, 3 + int(math.ceil(-math.log10(dt))))}f"
+    np.savetxt(path, np.column_stack((t, acc, theta)), fmt=(tfmt, "%.9e", "%.9e"), delimiter=",",
                header="time,ground_acc,theta", comments="")  # fmt: skip
 
 
@@ -486,6 +494,7 @@ def write_campaign(
     fv_theta0_over_alpha: tuple[float, ...] = (0.8, -0.65, 0.5),
     fv_duration: float = 12.0,
     gm_duration: float = 6.0,
+    dt: float = DT,
 ) -> dict:
     """Write a synthetic campaign to ``root`` and return what it holds.
 
@@ -504,6 +513,8 @@ def write_campaign(
         Release angles of the free-vibration records over the stated alpha [-].
     fv_duration, gm_duration : float
         Record lengths [s].
+    dt : float
+        Sample step [s] (default :data:`DT`, 500 Hz); the noise per sample stays :data:`NOISE`.
 
     Returns
     -------
@@ -520,18 +531,18 @@ def write_campaign(
     entries = []
     for i, (x, child) in enumerate(zip(fv_theta0_over_alpha, fv_ss.spawn(len(fv_theta0_over_alpha)), strict=True)):
         rid = f"fv{i + 1:02d}"
-        acc = np.zeros(int(round(fv_duration / DT)) + 1)
-        th, _ = simulate_truth(truth, acc, theta0=x * alpha, rng=np.random.default_rng(child.spawn(1)[0]))
-        _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(child)))
+        acc = np.zeros(int(round(fv_duration / dt)) + 1)
+        th, _ = simulate_truth(truth, acc, theta0=x * alpha, rng=np.random.default_rng(child.spawn(1)[0]), dt=dt)
+        _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(child), dt), dt)
         entries.append((rid, "free_vibration"))
     overturned = []
     gm_ids = []
     for i, child in enumerate(gm_ss.spawn(n_ground)):
         rid = f"gm{i + 1:03d}"
         motion_ss, noise_ss, impact_ss = child.spawn(3)
-        acc = ground_motion(np.random.default_rng(motion_ss), gm_duration)
-        th, over = simulate_truth(truth, acc, rng=np.random.default_rng(impact_ss))
-        _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(noise_ss)))
+        acc = ground_motion(np.random.default_rng(motion_ss), gm_duration, dt)
+        th, over = simulate_truth(truth, acc, rng=np.random.default_rng(impact_ss), dt=dt)
+        _write_csv(root / "records" / f"{rid}.csv", acc, _observe(truth, th, np.random.default_rng(noise_ss), dt), dt)
         entries.append((rid, "ground_motion"))
         overturned.append(over)
         gm_ids.append(rid)

@@ -165,10 +165,10 @@ def _verdict_detail(diag) -> str:
             "Held-out (out-of-fold) time-history error against the floor a correct model shows on the same records, "
             "measured by a parametric bootstrap of the fitted model (housner.scenarios.campaigns.verdict). "
             "A misfit is z > "
-            f"{verdict.Z_MISFIT:g} and ratio > {verdict.RATIO_MISFIT:g}, or a localisation quantity more than "
-            f"{verdict.Z_LOCAL:g} "
-            "standard errors from the measured one; the detectable ratio is what these records would reveal "
-            "with 80 % power."
+            f"{verdict.Z_MISFIT:g} and ratio > {verdict.RATIO_MISFIT:g}, or a ratio above {verdict.RATIO_MISFIT:g} "
+            f"with a localisation quantity more than {verdict.Z_LOCAL:g} "
+            "standard errors from the measured one (never a ratio within the band: the status rule); the "
+            "detectable ratio is what these records would reveal with 80 % power."
         ),
     )  # fmt: skip
     nxt = ""
@@ -376,7 +376,8 @@ def _metric_table(diag) -> str:
         rows,
         caption=f"Localisation quantities with standard errors; a model value more than {z_local:g} combined "
         "standard errors from the measurement is marked, with its z: beyond that the verdict counts the quantity "
-        "as a misfit even when the model's errors are at the floor (housner.scenarios.campaigns.verdict.Z_LOCAL).",
+        "as a misfit when the model's errors lie above the floor's band, and calls it unusual when they are within "
+        "it (housner.scenarios.campaigns.verdict.Z_LOCAL, the status rule).",
     )
 
 

@@ -73,6 +73,46 @@ classes :mod:`housner.scenarios.campaigns.results`' and the verdict
 and its conclusion (the public names of the others it uses are importable from
 here too).
 
+Cost, and where it is saved
+---------------------------
+The time goes into simulations of the records, each cut to its error window::
+
+    time ~ sum over evaluations of (records x c_rec + window samples x c_smp)
+           + families x replicas x (truth on a 4x finer grid, 1-4x substeps, + K scoring runs)
+
+An evaluation is one model on the fitting records: per candidate a grid (18 + 9 points for one
+parameter, 82 + 25 for two), a local search (up to 14 and 20 points), and when it is held out K
+fold refits of up to 9-10 points each on (K - 1)/K of the records; pairs, probes and the joint
+refits add their own. Measured on 2 cores (the benchmark, ``benchmarks/bench_diagnose.py``):
+c_rec ~ 0.3 ms per record (the engine's and the score's overhead), c_smp ~ 20-50 ns per window
+sample for Housner's kernel, a free vibration ~ 3-5 ms more at 500 Hz (its release search grows
+as its samples squared), and a mechanics kernel (a 50 Hz flexible foundation) ~ 2.5 ms per second of
+record whatever the rate; one floor family ~ 0.6 s for 103 records of 6 s at 500 Hz, ~ 3 s for 103
+records of 20-30 s at 2000 Hz. So records x length x rate x candidates: 103 records at 500 Hz
+take ~ 25 s, most of it the flexible foundation's grid; at 2000 Hz and 20-30 s the plain search
+took ~ 210 s before the economies below, ~ 60 s with them.
+
+The economies, each said in ``Diagnosis.settings["economies"]`` when it applies:
+
+* a campaign sampled at q >= 2 times :data:`SEARCH_RATE` is searched on every q-th sample
+  (:func:`housner.scenarios.campaigns.scoring.decimated`: theta as sampled, the table acceleration
+  through an anti-alias filter); the ladder is scored again on every sample (:meth:`_Search.full_rate`),
+  and the floors and the verdict are on every sample;
+* on a campaign whose ground motions' windows last more than
+  :data:`housner.scenarios.campaigns.crossval.FIT_SECONDS`, models with an effect that replaces the
+  equation of motion are fitted on the free vibrations and a spread subset of the ground motions
+  (their screens, held-out errors and tests on all records);
+* the floor's family loop measures the widest family second when the narrowest puts the final
+  model far from its floor, and stops there when it is not at the widest's either
+  (:meth:`_Search.floor_family`).
+
+Two more save time without changing any number: a grid point whose records scored first (the free
+vibrations, then the shortest windows) already put its loss above the grid's best so far is not
+scored further (:meth:`housner.scenarios.campaigns.scoring.Scorer.loss_below`; a non-finite history on
+the records it skips goes unseen there, as a point is abandoned only when it cannot be the best), and
+a scorer keeps the errors of the last models it scored. The records are already simulated on both
+cores (numba threads over the records, and threads for the mechanics kernels).
+
 References
 ----------
 Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
@@ -87,6 +127,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterable, Sequence
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -107,6 +148,7 @@ from housner.scenarios.campaigns.residual import RATIO_MISFIT, Z_MISFIT, residua
 from housner.scenarios.campaigns.results import Candidate, Diagnosis, Step
 from housner.scenarios.campaigns.scoring import (
     DEFAULT_FOLDS,
+    SEARCH_RATE,
     NonFiniteHistory,
     NonFiniteScore,
     check_finite,
@@ -114,6 +156,7 @@ from housner.scenarios.campaigns.scoring import (
     cv_folds,
     split_records,
 )
+from housner.scenarios.campaigns.sensor import assess_sensor
 from housner.scenarios.campaigns.trial import (
     NOISE_MARGIN,
     PRACTICAL,
@@ -147,6 +190,9 @@ __all__ = [
 LEVEL = 0.05
 #: Most effects the greedy search adds [-].
 MAX_EFFECTS = 3
+#: The floor's family loop measures the widest family second when the narrowest puts the final model's
+#: ground motions more than this many times RATIO_MISFIT above their floor [-] (:meth:`_Search.floor_family`).
+FAMILY_JUMP = 2.0
 
 
 class _Search(Trials):
@@ -172,6 +218,10 @@ class _Search(Trials):
                  f"(sigma/alpha {self.floor:.4f}); {self.k_folds}-fold cross-validation")  # fmt: skip
         self.steps = [baseline]
         self.cur, self.cur_held, self.cur_train = self.base, self.base_held, self.base_train
+        #: each step's cross-validated fit and the level it was judged at (full_rate rescores them)
+        self.step_cvs: list[CVModel] = [self.base]
+        self.step_levels: list[float] = [math.nan]
+        self._search_state: tuple | None = None
 
     # -- the ladder
     def add_by_hand(self, name: str) -> None:
@@ -194,14 +244,19 @@ class _Search(Trials):
             ) from e  # fmt: skip
 
     def _add_by_hand(self, name: str) -> None:
-        params, _tr, _n = fit_effect(name, effect_objective(self.allsc, build_model(self.cur.full), []), self.spec,
+        fit_sc, fit_train = self.fit_sets([*(n for n, _p in self.cur.full), name])
+        params, _tr, _n = fit_effect(name, effect_objective(fit_sc, build_model(self.cur.full), []), self.spec,
                                      pinned=self.pinned)  # fmt: skip
-        cv_new = self.add_cv(self.cur, name, params)
-        full, tr = joint_refit(cv_new.full, self.allsc, self.spec, pinned=self.pinned)
-        cv_new = self.refit_folds(CVModel(full, cv_new.folds))
+        cv_new = self.add_cv(self.cur, name, params, fit_train)
+        full, tr = joint_refit(cv_new.full, fit_sc, self.spec, pinned=self.pinned)
+        if fit_sc is not self.allsc:
+            tr = self.allsc.loss(build_model(full))  # the training error on every record
+        cv_new = self.refit_folds(CVModel(full, cv_new.folds), train=fit_train)
         he = self.oof(cv_new)
         sig, d, se, _z, _p, _why = judge(self.cur_held, he, self.level_for(1), self.floor)
         self.steps.append(Step(tuple(cv_new.full), name, True, tr, float(he.mean()), sem(he), d, se, sig, he))
+        self.step_cvs.append(cv_new)
+        self.step_levels.append(self.level_for(1))
         self.cur, self.cur_held, self.cur_train = cv_new, he, tr
         self.say(f"+ {name} (by hand) {fmt_params(params)}: held-out error {he.mean():.4f}")
 
@@ -260,13 +315,85 @@ class _Search(Trials):
 
     def accept(self, cand: Candidate, cv_new: CVModel, zc: float) -> None:
         """Add the chosen candidate: all parameters refitted jointly, a new step of the ladder."""
-        full, tr = joint_refit(cv_new.full, self.allsc, self.spec, pinned=self.pinned)
-        cv_new = self.refit_folds(CVModel(full, cv_new.folds))
+        fit_sc, fit_train = self.fit_sets([n for n, _p in cv_new.full])
+        full, tr = joint_refit(cv_new.full, fit_sc, self.spec, pinned=self.pinned)
+        if fit_sc is not self.allsc:
+            tr = self.allsc.loss(build_model(full))  # the training error on every record
+        cv_new = self.refit_folds(CVModel(full, cv_new.folds), train=fit_train)
         he = self.oof(cv_new)
         _sig, d, se, _z, _p, _why = judge(self.cur_held, he, zc, self.floor)
         self.steps.append(Step(tuple(cv_new.full), cand.effect, False, tr, float(he.mean()), sem(he), d, se, True, he))
+        self.step_cvs.append(cv_new)
+        self.step_levels.append(zc)
         self.cur, self.cur_held, self.cur_train = cv_new, he, tr
         self.say(f"+ {cand.effect}: held-out error {he.mean():.4f} +- {sem(he):.4f} alpha")
+
+    # -- the records as measured
+    def full_rate(self) -> None:
+        """The ladder on the records as measured, when the search ran on decimated ones.
+
+        Each step keeps the search's fits; its training error, its out-of-fold errors and its paired
+        fall from the step before are taken again on every sample and judged again at its round's
+        level (a step the search took whose fall is not significant on every sample is said so in
+        ``economies``; it stays in the ladder). The search's own figures are kept for :meth:`probe`.
+        """
+        if self.decimation == 1 or self.rate == "full":
+            return
+        self._search_state = (self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train)
+        rates = sorted({round(1.0 / r.dt, 3) for r in self.campaign.records})
+        rate = f"{rates[0]:g} Hz" if len(rates) == 1 else f"{rates[0]:g}-{rates[-1]:g} Hz"
+        q = self.decimation
+        self.use_rate("full")
+        self.noise_loss = self.allsc.noise_loss()
+        base_errors = self.allsc.errors([])
+        steps: list[Step] = []
+        prev = base_errors
+        for i, (st, cv, lev) in enumerate(zip(self.steps, self.step_cvs, self.step_levels, strict=True)):
+            if i == 0:
+                he, tr = base_errors.copy(), self.allsc.weigh(base_errors)
+                steps.append(replace(st, train_error=tr, heldout_error=float(he.mean()), heldout_se=sem(he),
+                                     heldout_errors=he))  # fmt: skip
+            else:
+                he, tr = self.oof(cv), self.allsc.loss(build_model(cv.full))
+                sig, d, se, _z, pval, _why = judge(prev, he, lev, self.floor)
+                if st.significant and not sig and not st.by_hand:
+                    self.economies.append(
+                        f"On every sample the fall of step {i} (+ {st.added}) is {d:+.4f} +- {se:.4f} alpha, "
+                        f"p = {pval:.2g}: not significant at its round's level {lev:.2g}, as it was on every "
+                        f"{q}th sample; it stays in the ladder."
+                    )  # fmt: skip
+                steps.append(replace(st, train_error=tr, heldout_error=float(he.mean()), heldout_se=sem(he),
+                                     improvement=d, improvement_se=se,
+                                     significant=sig if st.by_hand else st.significant, heldout_errors=he))  # fmt: skip
+            prev = he
+        self.steps = steps
+        self.base_held, self.base_train = steps[0].heldout_errors, steps[0].train_error
+        self.cur_held, self.cur_train = steps[-1].heldout_errors, steps[-1].train_error
+        self.economies.insert(0, (
+            f"The search ran on every {q}th sample ({rate} thinned to {rates[0] / q:g} Hz; {SEARCH_RATE:g} Hz is "
+            "what the physics needs: the fits' ranges are set for it, the fastest, a 100 Hz foundation, has 5 samples "
+            "a period): theta as sampled (its noise stays white of the same sigma, so a record's error is the same "
+            "mean over fewer samples), the table acceleration through an anti-alias filter (zero-phase, below the "
+            "new Nyquist frequency). The candidates' fits, held-out errors and tests, the pairs and the probes are "
+            "on those samples; the ladder's errors, the floors and the verdict on every sample."
+        ))  # fmt: skip
+        self.say(f"the ladder on every sample ({rate}): held-out error {steps[0].heldout_error:.4f} -> "
+                 f"{steps[-1].heldout_error:.4f} alpha")  # fmt: skip
+
+    @contextmanager
+    def _at_search_rate(self):
+        """The search's records and figures for a while (:meth:`probe`), when :meth:`full_rate` left them."""
+        if self._search_state is None or self.rate != "full":
+            yield
+            return
+        full = (self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train)
+        self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train = self._search_state
+        self.use_rate("search")
+        try:
+            yield
+        finally:
+            self.use_rate("full")
+            self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train = full
 
     # -- the verdict
     def conclude(self, library: list[str], selected: list[str], compare_steps: bool, n_rep: int, seed,
@@ -289,12 +416,7 @@ class _Search(Trials):
         # another error, as chaos carries its records elsewhere.)
         kinds = [r.kind for r in self.campaign.records]
         self.say("measuring the correct-model floor (parametric bootstrap over correct integrators)")
-        for family in FAMILIES:
-            floor_fin = measure_floor(self.allsc, self.cur.full, self.cur.folds, self.fold_of, n_replicas=n_rep,
-                                      seed=seed_int, family=family)  # fmt: skip
-            gm = residual_test(self.cur_held, floor_fin, kinds).groups.get("ground_motion")
-            if gm is None or not gm["misfit"] and max(gm["ratio"], gm["ratio_trimmed"]) <= RATIO_MISFIT:
-                break
+        family, floor_fin = self.floor_family(n_rep, seed_int, kinds)
         self.family = family
         floor_base = floor_fin if not self.cur.full else measure_floor(
             self.allsc, [], self.base.folds, self.fold_of, n_replicas=n_rep, seed=seed_int, family=family)  # fmt: skip
@@ -317,6 +439,49 @@ class _Search(Trials):
         self.say(f"verdict: {verdict.status}")
         return verdict, (floor_base, floor_fin)
 
+    def floor_family(self, n_rep: int, seed_int: int, kinds: list[str]) -> tuple[str, object]:
+        """The family of correct integrators of the verdict, and the final model's floor under it.
+
+        The families of :data:`FAMILIES` narrowest first, until the final model's ground motions are
+        at their floor (not a misfit, and within RATIO_MISFIT of it on the mean and on the trimmed
+        mean); the widest when at none. Stopped early: when the narrowest family puts them more than
+        :data:`FAMILY_JUMP` x RATIO_MISFIT above their floor, the widest is measured next, and when
+        they are not at its floor either, the families between are not measured (they are nested:
+        each spans the conventions of the narrower ones, so their floors lie below the widest's, and
+        the answer, the widest, is the one the whole loop gives); ``economies`` says so.
+        """
+        fams = list(FAMILIES)
+        done: dict[str, tuple] = {}
+
+        def measure(family: str) -> tuple:
+            if family not in done:
+                fl = measure_floor(self.allsc, self.cur.full, self.cur.folds, self.fold_of, n_replicas=n_rep,
+                                   seed=seed_int, family=family)  # fmt: skip
+                gm = residual_test(self.cur_held, fl, kinds).groups.get("ground_motion")
+                ratio = math.nan if gm is None else max(gm["ratio"], gm["ratio_trimmed"])
+                done[family] = (fl, gm is None or not gm["misfit"] and ratio <= RATIO_MISFIT, ratio)
+            return done[family]
+
+        for i, family in enumerate(fams):
+            fl, at_floor, ratio = measure(family)
+            if at_floor:
+                return family, fl
+            if i == 0 and len(fams) > 2 and ratio > FAMILY_JUMP * RATIO_MISFIT:
+                wide, wide_at_floor, wide_ratio = measure(fams[-1])
+                if not wide_at_floor:
+                    skipped = ", ".join(repr(f) for f in fams[1:-1])
+                    self.economies.append(
+                        f"The floor's family loop stopped early: the final model's ground motions are {ratio:.2f}x "
+                        f"their floor under the narrowest family ({fams[0]!r}, more than {FAMILY_JUMP:g} x "
+                        f"{RATIO_MISFIT:g}) and {wide_ratio:.2f}x it under the widest ({fams[-1]!r}, not at it "
+                        f"either), so the families between ({skipped}) were not measured: nested, their floors "
+                        f"lie below the widest's."
+                    )  # fmt: skip
+                    self.say(f"floor: not at it under {fams[0]!r} ({ratio:.2f}x) nor under {fams[-1]!r} "
+                             f"({wide_ratio:.2f}x); the families between not measured")  # fmt: skip
+                    return fams[-1], wide
+        return fams[-1], done[fams[-1]][0]
+
     def probe(self) -> list[dict]:
         """Physics outside the library tried on top of the final model (:mod:`housner.scenarios.campaigns.probes`).
 
@@ -325,6 +490,10 @@ class _Search(Trials):
         its physics faded out. Returns, for each that lowers the error
         significantly: {probe, class, params, error, error_with, improvement, se, z, p}.
         """
+        with self._at_search_rate():
+            return self._probe()
+
+    def _probe(self) -> list[dict]:
         if self.cur_train - self.noise_loss <= PRACTICAL * self.floor:
             return []  # nothing above the sensor noise for a probe to take (as a round of the search)
         out = []
@@ -414,13 +583,21 @@ def diagnose(
     t_start = time.perf_counter()
     if not isinstance(campaign, Campaign):
         campaign = load_campaign(campaign)
+    # the sensor first: its noise as measured, its faults masked or corrected (housner.scenarios.campaigns.sensor)
+    campaign = assess_sensor(campaign, engine_settings)
     cands, folds = _checked(campaign, effects, add, folds, train_fraction, max_effects, level)
     n_rep = N_REPLICAS if n_replicas is None else int(n_replicas)
     search = _Search(campaign, folds, seed, level, engine_settings, progress or (lambda s: None))
     for name in add:
         search.add_by_hand(name)
     rounds, selected, first_level = search.greedy(cands, max_effects, pairs)
+    search.full_rate()
     verdict, floors = search.conclude(cands, selected, compare_steps, n_rep, seed, added=list(add))
+    if campaign.sensor is not None:
+        verdict = replace(verdict, text=verdict.text + campaign.sensor.verdict_sentence())
+    if search.economies:
+        # what ran on fewer samples or stopped early: said where the verdict is read
+        verdict = replace(verdict, text=verdict.text + " How it was computed: " + " ".join(search.economies))
     diag = Diagnosis(
         campaign=campaign,
         baseline=search.steps[0],
@@ -445,6 +622,8 @@ def diagnose(
             "replicas": n_rep,
             "engine_settings": dict(engine_settings or {}),
             "floor_family": search.family,
+            "decimation": search.decimation,
+            "economies": list(search.economies),
         },
         folds=search.fold_ids,
         verdict=verdict,

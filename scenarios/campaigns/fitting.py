@@ -153,13 +153,22 @@ def fit_effect(
     fixed = dict((pinned or {}).get(name, {}))
     dims = [d for d in param_dims(name, specimen) if d.key not in fixed]
     cache: dict[tuple, float] = {}
+    below = getattr(objective, "below", None)
 
-    def f_u(u) -> float:
+    def f_u(u, bound: float = math.inf) -> float:
+        """The objective at ``u``; with a finite ``bound`` (a grid's best so far), a value above it may
+        be a lower bound only (the objective's ``below``), and is not kept."""
         params = {**fixed, **{d.key: d.from_u(float(x)) for d, x in zip(dims, np.atleast_1d(u), strict=True)}}
         key = tuple(round(v, 12) for v in params.values())
         if key not in cache:
             try:
-                cache[key] = float(objective(make_effect(name, **params)))
+                if below is not None and math.isfinite(bound):
+                    v = float(below(make_effect(name, **params), bound))
+                    if v > bound:
+                        return v  # abandoned above the bound: not the objective, not kept
+                    cache[key] = v
+                else:
+                    cache[key] = float(objective(make_effect(name, **params)))
             except NonFiniteScore:
                 raise  # a non-finite model is refused, not avoided
             except ValueError:
@@ -189,27 +198,44 @@ def _grid_search(f_u: Callable, dims: list[ParamDim], lo: np.ndarray, hi: np.nda
     The coarse grid holds the neutral value of each parameter that has one within its bounds.
     """
     npd = N_GRID if len(dims) == 1 else N_GRID_MULTI
-    axes = []
+    axes, first = [], []
     for d, a, b in zip(dims, lo, hi, strict=True):
         ax = np.linspace(a, b, npd)
         if d.neutral is not None and d.lo <= d.neutral <= d.hi:
             ax = np.union1d(ax, [d.to_u(d.neutral)])
+            first.append(d.to_u(d.neutral))
+        else:
+            first.append(0.5 * (a + b))
         axes.append(ax)
-    best_u, _v = _grid_best(f_u, axes)
+    best_u, _v = _grid_best(f_u, axes, first)
     step = (hi - lo) / (npd - 1)
     # a zoom grid over +-1 step around the best point
     nz = N_ZOOM if len(dims) == 1 else N_ZOOM_MULTI
     zaxes = [np.linspace(max(a, u - st), min(b, u + st), nz) for a, b, u, st in zip(lo, hi, best_u, step, strict=True)]
-    z_u, z_v = _grid_best(f_u, zaxes)
+    z_u, z_v = _grid_best(f_u, zaxes, best_u)
     if z_v <= f_u(best_u):
         best_u = z_u
     return best_u, step / ((nz - 1) / 2)
 
 
-def _grid_best(f_u: Callable, axes: list[np.ndarray]) -> tuple[np.ndarray, float]:
-    """The point of the grid spanned by ``axes`` where ``f_u`` is least, and its value."""
+def _grid_best(f_u: Callable, axes: list[np.ndarray], first=None) -> tuple[np.ndarray, float]:
+    """The point of the grid spanned by ``axes`` where ``f_u`` is least, and its value.
+
+    Each point is scored with the best value so far as its bound (``f_u(p, bound)``): a point whose
+    records scored first already put it above the bound is abandoned there (its value is then a
+    lower bound above the best, so it is not the least and the answer is the one every point fully
+    scored gives). The point nearest ``first`` (search coordinates: the neutral point, the current
+    model's value, or the best point so far; default the middle of the grid) is scored first, a
+    tight bound from the start.
+    """
     pts = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(axes), -1).T
-    vals = np.array([f_u(p) for p in pts])
+    vals = np.full(len(pts), math.inf)
+    i0 = len(pts) // 2 if first is None else int(np.argmin(np.sum((pts - np.asarray(first)) ** 2, axis=1)))
+    order = [i0, *[i for i in range(len(pts)) if i != i0]]
+    best = math.inf
+    for i in order:
+        vals[i] = f_u(pts[i], best)
+        best = min(best, vals[i])
     return pts[int(np.argmin(vals))], vals.min()
 
 
@@ -237,11 +263,17 @@ def _local_search(f_u: Callable, best_u: np.ndarray, lo: np.ndarray, hi: np.ndar
 
 
 def effect_objective(scorer, before: list, after: list) -> Callable[[Any], float]:
-    """Training loss (``scorer.loss``) of ``before + [effect] + after`` as a function of ``effect``."""
+    """Training loss (``scorer.loss``) of ``before + [effect] + after`` as a function of ``effect``.
+
+    Its ``below(effect, bound)`` is ``scorer.loss_below``: the loss, or a lower bound of it above
+    ``bound`` (the grids' early stop, :func:`_grid_best`).
+    """
 
     def f(effect) -> float:
         return scorer.loss([*before, effect, *after])
 
+    if hasattr(scorer, "loss_below"):
+        f.below = lambda effect, bound: scorer.loss_below([*before, effect, *after], bound)  # type: ignore[attr-defined]
     return f
 
 

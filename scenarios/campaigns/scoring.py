@@ -11,6 +11,11 @@ is refused by name, with the record, before any score (:class:`NonFiniteHistory`
 that comes out non-finite all the same stops with :class:`NonFiniteScore` (:func:`check_finite`).
 Both are ``ValueError``: the model or the records handed in are at fault, and the same
 command can only fail again.
+
+:func:`decimated` makes the records the diagnosis' search runs on when a campaign is sampled far
+above what the physics needs (:data:`SEARCH_RATE`): every q-th sample of theta (the sensor noise
+stays white of the same sigma per sample, so a record's error is the same mean over fewer samples),
+and the table acceleration, the model's input, through an anti-alias filter first.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+from scipy import signal
 
 from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
 from housner.scenarios.campaigns.compare import release_sensitivities, simulate_records
@@ -30,15 +36,24 @@ __all__ = [
     "DEFAULT_FOLDS",
     "NonFiniteHistory",
     "NonFiniteScore",
+    "SEARCH_RATE",
     "Scorer",
     "check_finite",
     "check_train_fraction",
     "cv_folds",
+    "decimated",
     "model_text",
     "non_finite",
     "split_records",
 ]
 
+#: The lowest sample rate the diagnosis' search decimates a campaign to [Hz]. The library's fit ranges
+#: are set for it (:data:`housner.scenarios.campaigns.fitting.FIT_BOUNDS`: the fastest physics it fits,
+#: a 100 Hz foundation, has 5 samples a period; an impact is instantaneous), and so are the seed
+#: campaigns (500 Hz). A campaign sampled at q >= 2 times it is searched on every q-th sample.
+SEARCH_RATE = 500.0
+#: Fewest samples a decimated record keeps [-] (else the campaign is searched as it is).
+_MIN_DECIMATED = 50
 #: Cross-validation folds [-]: every record is held out once, so the answer rests on all of them
 #: and depends far less on the assignment than one random split does.
 DEFAULT_FOLDS = 5
@@ -215,10 +230,89 @@ class Scorer:
             An error came out non-finite all the same.
         """
         self.n_evaluations += 1
+        key = _model_key(effects)
+        memo = self.__dict__.setdefault("_memo", {})
+        if key is not None and key in memo:
+            return memo[key].copy()
+        out = self._errors_of(range(len(self.records)), effects)
+        if key is not None:
+            if len(memo) >= _MEMO_SIZE:
+                memo.pop(next(iter(memo)))
+            memo[key] = out.copy()
+        return out
+
+    def loss_below(self, effects: Sequence[Any], bound: float) -> float:
+        """:meth:`loss`, or, once the records scored first put it above ``bound``, a lower bound of it.
+
+        The records are scored in stages (:meth:`stages`: the free vibrations, then the ground motions
+        from the shortest error window to the longest); an error is never negative, so the weighted
+        sum of the errors scored so far is a lower bound of the loss, and when it exceeds ``bound``
+        the rest are not simulated. Any value returned that is at most ``bound`` is :meth:`loss`
+        exactly (the same errors, the same sum); a value above it is the loss or less. A grid search
+        passes its best value so far: a point abandoned cannot be the best (no statistic changes).
+        """
+        stages = self.stages()
+        key = _model_key(effects)
+        memo = self.__dict__.get("_memo", {})
+        if len(stages) < 2 or not math.isfinite(bound) or (key is not None and key in memo):
+            return self.loss(effects)
+        w = self._weights()
+        out = np.empty(len(self.records))
+        part = 0.0
+        for j, idx in enumerate(stages):
+            try:
+                e = self._errors_of(idx, effects)
+            except NonFiniteScore:
+                return self.loss(effects)  # raised as the whole evaluation raises it (its first record named)
+            out[idx] = e
+            part += float(np.dot(w[idx], e))
+            if part > bound * (1.0 + 1e-12) and j < len(stages) - 1:
+                self.n_evaluations += 1
+                return part
+        return self._remember(key, out)
+
+    def _remember(self, key, out: np.ndarray) -> float:
+        """:meth:`loss` of the errors ``out`` of every record, kept as :meth:`errors` keeps them."""
+        self.n_evaluations += 1
+        if key is not None:
+            memo = self.__dict__.setdefault("_memo", {})
+            if len(memo) >= _MEMO_SIZE:
+                memo.pop(next(iter(memo)))
+            memo[key] = out.copy()
+        return self.weigh(out)
+
+    def _weights(self) -> np.ndarray:
+        """Each record's weight in :meth:`weigh` [-] (the loss is their dot product with the errors)."""
+        fv = self._fv
+        n_fv, n_gm = int(fv.sum()), int((~fv).sum())
+        if n_fv == 0 or n_gm == 0:
+            return np.full(fv.size, 1.0 / fv.size)
+        return np.where(fv, 0.5 / max(n_fv, 1), 0.5 / max(n_gm, 1))
+
+    def stages(self) -> list[np.ndarray]:
+        """The records in the order :meth:`loss_below` scores them (indices into :attr:`records`).
+
+        The free vibrations first (half the loss, a few records), then the ground motions by the
+        length of their error window, shortest first, in :data:`_STAGES` groups: the short windows
+        are cheap, and a model that is off shows first where the block rocks.
+        """
+        if "_stages" not in self.__dict__:
+            fv = np.flatnonzero(self._fv)
+            gm = np.flatnonzero(~self._fv)
+            gm = gm[np.argsort([self.records[i].theta.size for i in gm], kind="stable")]
+            groups = [g for g in np.array_split(gm, min(_STAGES, gm.size)) if g.size] if gm.size else []
+            self._stages = [g for g in [fv, *groups] if g.size]
+        return self._stages
+
+    def _errors_of(self, idx, effects: Sequence[Any]) -> np.ndarray:
+        """The errors of the records ``idx`` (indices into :attr:`records`) [alpha] (:meth:`errors`)."""
+        idx = list(idx)
+        records = [self.records[i] for i in idx]
+        ends = [self.ends[i] for i in idx]
         alpha = self.campaign.specimen.alpha
         spec = self.campaign.specimen
-        res = simulate_records(spec, self.records, "housner", effects, self.engine_settings)
-        for rec, r in zip(self.records, res, strict=True):
+        res = simulate_records(spec, records, "housner", effects, self.engine_settings)
+        for rec, r in zip(records, res, strict=True):
             if non_finite(r):
                 names = [getattr(e, "name", str(e)) for e in effects]
                 raise NonFiniteHistory(
@@ -226,13 +320,30 @@ class Scorer:
                     "it is refused before any score",
                     names, rec.id,
                 )  # fmt: skip
-        sens = (release_sensitivities(spec, self.records, res, "housner", effects, self.engine_settings)
+        sens = (release_sensitivities(spec, records, res, "housner", effects, self.engine_settings)
                 if self.release_angle else [None] * len(res))  # fmt: skip
-        out = np.empty(len(self.records))
-        for k, (rec, r, end) in enumerate(zip(self.records, res, self.ends, strict=True)):
+        out = np.empty(len(records))
+        for k, (rec, r, end) in enumerate(zip(records, res, ends, strict=True)):
             out[k] = ERROR_CLIP if isinstance(r, str) else scored_error(r.theta, rec, end, alpha, sens[k])
-        check_finite(f"the time-history error of {model_text(effects)}", out, [r.id for r in self.records])
+        check_finite(f"the time-history error of {model_text(effects)}", out, [r.id for r in records])
         return out
+
+
+#: Models whose errors a scorer keeps (the last ones scored) [-]: a fit's best point is scored again
+#: by the checks that follow it.
+_MEMO_SIZE = 64
+#: Groups of ground motions :meth:`Scorer.loss_below` scores one after the other [-].
+_STAGES = 4
+
+
+def _model_key(effects: Sequence[Any]):
+    """A key of a model (its effects, which are frozen dataclasses) for the scorer's memo; None if unhashable."""
+    key = tuple((type(e), e) for e in effects)
+    try:
+        hash(key)
+    except TypeError:
+        return None
+    return key
 
 
 def non_finite(result: Any) -> bool:
@@ -253,7 +364,53 @@ def _truncated(rec: MeasuredRecord, end: int) -> MeasuredRecord:
     n = min(rec.theta.size, end + int(math.ceil(_WINDOW_SLACK / rec.dt)))
     if n >= rec.theta.size:
         return rec
-    return replace(rec, motion=rec.motion.sliced(0, n), t=rec.t[:n], theta=rec.theta[:n])
+    return replace(rec, motion=rec.motion.sliced(0, n), t=rec.t[:n], theta=rec.theta[:n],
+                   valid=None if rec.valid is None else rec.valid[:n])
+
+
+def decimation_factor(campaign: Campaign, rate: float = SEARCH_RATE) -> int:
+    """The factor q >= 1 by which :func:`decimated` thins every record of ``campaign`` (1: not at all).
+
+    The largest whole q that keeps every record at ``rate`` [Hz] or above (and at
+    :data:`_MIN_DECIMATED` samples or more).
+    """
+    if not campaign.records:
+        return 1
+    q = min(int(math.floor(1.0 / (r.dt * rate) + 1e-9)) for r in campaign.records)
+    while q >= 2 and min(r.theta.size for r in campaign.records) // q < _MIN_DECIMATED:
+        q -= 1
+    return max(q, 1)
+
+
+def decimated(campaign: Campaign, q: int | None = None) -> tuple[Campaign, int]:
+    """``campaign`` on every q-th sample (q = :func:`decimation_factor` by default), and q.
+
+    theta is taken as sampled (no filter): its noise stays white of the same sigma, so each
+    record's time-history error is the same mean square over every q-th sample, the same
+    statistic on fewer samples. The table acceleration (and every extra channel) is the model's
+    input: it is low-passed below the new Nyquist frequency first (a zero-phase polyphase FIR,
+    :func:`scipy.signal.resample_poly`), so that what the table did above it does not fold back.
+    The noise sigma, the release angle, the sensor's range and its mask of faulty samples (thinned
+    alike) are kept. Returns ``campaign`` itself when q is 1.
+    """
+    q = decimation_factor(campaign) if q is None else int(q)
+    if q < 2:
+        return campaign, 1
+    recs = [_decimated_record(r, q) for r in campaign.records]
+    return replace(campaign, records=recs), q
+
+
+def _decimated_record(rec: MeasuredRecord, q: int) -> MeasuredRecord:
+    """``rec`` on its samples 0, q, 2q, ... (module docstring)."""
+
+    def low(x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        return signal.resample_poly(x, 1, q, padtype="line")[: (x.size + q - 1) // q]
+
+    m = rec.motion
+    motion = replace(m, acc=low(m.acc), dt=m.dt * q, channels={k: low(c) for k, c in m.channels.items()})
+    return replace(rec, motion=motion, t=rec.t[::q], theta=rec.theta[::q],
+                   valid=None if rec.valid is None else rec.valid[::q])  # fmt: skip
 
 
 def cv_folds(campaign: Campaign, folds: int = DEFAULT_FOLDS, seed=0) -> list[list[str]]:

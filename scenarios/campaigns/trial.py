@@ -147,6 +147,42 @@ class Trials(CrossValidation):
         super().__init__(campaign, folds, seed, engine_settings)
         self.level, self.say = level, say
         self.fv = FreeVibrationCheck(campaign, engine_settings, self.measured)
+        #: (effect, round) of the mechanics candidates whose training error was taken on the grid's subset
+        #: of records only (not comparable with the current model's on all records: :meth:`try_pairs`)
+        self.subset_only: set[tuple[str, int]] = set()
+        #: where the diagnosis subsampled or stopped early: plain sentences (Diagnosis.settings["economies"])
+        self.economies: list[str] = []
+
+    def fit_sets(self, names) -> tuple:
+        """The records a model of effects ``names`` is fitted on: (all, each fold's training records).
+
+        Every record, unless the campaign is ``thinned`` and the model has an effect that replaces the
+        equation of motion (:mod:`housner.scenarios.campaigns.crossval`): then the free vibrations and a
+        spread subset of the ground motions (said once in ``economies``).
+        """
+        if not (self.thinned and any(effect_class(n).changes_mechanics for n in names)):
+            return self.allsc, self.train_sc
+        note = "fitted on the free vibrations and"
+        if not any(note in e for e in self.economies):
+            recs, fit = self.allsc.records, self.fit_sc.records
+            n_gm = sum(r.kind != "free_vibration" for r in recs)
+            m_gm = sum(r.kind != "free_vibration" for r in fit)
+            secs = sum(r.theta.size * r.dt for r in recs if r.kind != "free_vibration")
+            fsecs = sum(r.theta.size * r.dt for r in fit if r.kind != "free_vibration")
+            self.economies.append(
+                f"Models with an effect that replaces the equation of motion (its kernel 10-100x slower) were "
+                f"{note} {m_gm} of the {n_gm} ground motions, spread over the campaign ({fsecs:.0f} of "
+                f"{secs:.0f} s of error windows; their grids on {len(self.mech_sc.records)} records); their "
+                "training errors, screens, held-out errors and tests are on every record."
+            )  # fmt: skip
+        return self.fit_sc, self.fit_train_sc
+
+    def _mechanics_path(self, names) -> bool:
+        """Whether the model's new effect is fitted as a mechanics effect is: its grid on ``mech_sc`` (a
+        mechanics effect; on a thinned campaign, any effect of a model with one)."""
+        if effect_class(names[-1]).changes_mechanics:
+            return True
+        return self.thinned and any(effect_class(n).changes_mechanics for n in names)
 
     def level_for(self, m: int) -> float:
         return self.level / max(m, 1)
@@ -174,45 +210,56 @@ class Trials(CrossValidation):
 
     def _try_candidate(self, name: str, rnd: int, test_level: float) -> tuple[Candidate, CVModel | None]:
         fixed = build_model(self.cur.full)
-        if effect_class(name).changes_mechanics:
-            start, rejected = self._mechanics_start(name, fixed, rnd, test_level)
+        names = [*(n for n, _p in self.cur.full), name]
+        fit_sc, fit_train = self.fit_sets(names)
+        if self._mechanics_path(names):
+            start, rejected = self._mechanics_start(name, fixed, rnd, test_level, fit_sc)
             if rejected is not None:
                 return rejected, None
-            params, tr_err, _nev = fit_effect(name, effect_objective(self.allsc, fixed, []), self.spec, start=start,
+            params, tr_err, _nev = fit_effect(name, effect_objective(fit_sc, fixed, []), self.spec, start=start,
                                               local_only=True, local_iterations=FOLD_ITERATIONS,
                                               pinned=self.pinned)  # fmt: skip
         else:
             # a parameter the localisation measures directly (a sensor offset: the rotation at rest, to
             # microradians) is taken as measured (self.pinned): a grid over its bounds can find a basin
             # of the wrong sign, a local search a value off by its own tolerance
-            params, tr_err, _nev = fit_effect(name, effect_objective(self.allsc, fixed, []), self.spec,
+            params, tr_err, _nev = fit_effect(name, effect_objective(fit_sc, fixed, []), self.spec,
                                               pinned=self.pinned)  # fmt: skip
+        if fit_sc is not self.allsc:
+            tr_err = self.allsc.loss([*fixed, make_effect(name, **params)])  # the training error on every record
         why = self._not_held_out(name, params, fixed, tr_err)
         if why:
             return self.candidate(name, params, rnd, tr_err, test_level, reason=why), None
-        cv_new = self.add_cv(self.cur, name, params)
+        cv_new = self.add_cv(self.cur, name, params, fit_train)
         he = self.oof(cv_new)
         cand = self.candidate(name, params, rnd, tr_err, test_level, he)
         return self._beyond_kernel(cand, fixed, [(name, params)], he, test_level), cv_new
 
-    def _mechanics_start(self, name: str, fixed: list, rnd: int, test_level: float) -> tuple[dict, Candidate | None]:
+    def _mechanics_start(self, name: str, fixed: list, rnd: int, test_level: float,
+                         fit_sc=None) -> tuple[dict, Candidate | None]:  # fmt: skip
         """Where a mechanics effect's fit starts, or the candidate it stays when its basin does not pay.
 
         10-100x slower kernels: the grid finds the basin on a spread subset of the records, the local
-        search then fits on all of them.
+        search then fits on all of them (on ``fit_sc``'s, :meth:`fit_sets`).
         """
+        fit_sc = self.allsc if fit_sc is None else fit_sc
         margin = PRACTICAL * self.floor
         start, e_sub, _n = fit_effect(name, effect_objective(self.mech_sc, fixed, []), self.spec, pinned=self.pinned)
         gain_sub = self.mech_sc.loss(fixed) - e_sub
         if not gain_sub > margin:
             why = f"error on {len(self.mech_sc.records)} records falls by {gain_sub:+.4f} < " \
                   f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"  # fmt: skip
+            self.subset_only.add((name, rnd))
             return start, self.candidate(name, start, rnd, e_sub, test_level, reason=why)
         # the basin found on the subset must carry over to every record before the (costly) local fit
-        e_all = self.allsc.loss([*fixed, make_effect(name, **start)])
-        if not self.cur_train - e_all > margin:
-            why = f"the subset's best point lowers the error on all records by {self.cur_train - e_all:+.4f} < " \
+        e_all = fit_sc.loss([*fixed, make_effect(name, **start)])
+        base = self.cur_train if fit_sc is self.allsc else fit_sc.loss(fixed)
+        if not base - e_all > margin:
+            on = "all records" if fit_sc is self.allsc else f"the {len(fit_sc.records)} records it is fitted on"
+            why = f"the subset's best point lowers the error on {on} by {base - e_all:+.4f} < " \
                   f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"  # fmt: skip
+            if fit_sc is not self.allsc:
+                self.subset_only.add((name, rnd))
             return start, self.candidate(name, start, rnd, e_all, test_level, reason=why)
         return start, None
 
@@ -289,8 +336,11 @@ class Trials(CrossValidation):
     def try_pairs(self, results: list[Candidate], test_level: float) -> list[tuple[Candidate, CVModel | None, float]]:
         """The pairs among the three candidates that lowered the training error most, fitted together."""
         # Only candidates that lowered the training error by more than the noise floor pair up:
-        # the others are fitting noise (and cost time).
-        helped = sorted((c for c in results if c.train_error < self.cur_train - PRACTICAL * self.floor),
+        # the others are fitting noise (and cost time). A mechanics candidate stopped on the grid's
+        # subset of records did not (its fall there was below the margin); its error there is on other
+        # records than the current model's, so it is not compared with it.
+        helped = sorted((c for c in results if c.train_error < self.cur_train - PRACTICAL * self.floor
+                         and (c.effect, c.round) not in self.subset_only),
                         key=lambda c: c.train_error)  # fmt: skip
         fixed = build_model(self.cur.full)
         out = []
@@ -308,26 +358,38 @@ class Trials(CrossValidation):
                 out.append((self.candidate(name, {}, a.round, math.nan, test_level, reason=why), None, math.nan))
         return out
 
+    def _fit_given(self, name: str, before: list, after: list, fit_sc) -> dict:
+        """Effect ``name`` fitted between the effects ``before`` and ``after`` on ``fit_sc``'s records; on a
+        thinned campaign a model with a mechanics effect finds its basin on ``mech_sc`` first."""
+        if fit_sc is self.allsc:
+            return fit_effect(name, effect_objective(fit_sc, before, after), self.spec, pinned=self.pinned)[0]
+        start, _e, _n = fit_effect(name, effect_objective(self.mech_sc, before, after), self.spec, pinned=self.pinned)
+        return fit_effect(name, effect_objective(fit_sc, before, after), self.spec, start=start, local_only=True,
+                          local_iterations=FOLD_ITERATIONS, pinned=self.pinned)[0]  # fmt: skip
+
     def _pair(self, a: Candidate, b: Candidate, fixed: list, test_level: float):
         """Candidates ``a`` and ``b`` fitted together on top of the current model, and judged."""
         n0 = len(self.cur.full)
+        names = [*(n for n, _p in self.cur.full), a.effect, b.effect]
+        fit_sc, fit_train = self.fit_sets(names)
         # Two starts, each effect's own fit with the other fitted given it, then both together from
         # each (the joint optimum of correlated parameters lies along a narrow valley that a single
         # local search from one start often misses); the model's own effects keep their parameters.
-        pb, _e, _n = fit_effect(b.effect, effect_objective(self.allsc, [*fixed, make_effect(a.effect, **a.params)], []),
-                                self.spec, pinned=self.pinned)  # fmt: skip
-        pa, _e, _n = fit_effect(a.effect, effect_objective(self.allsc, fixed, [make_effect(b.effect, **b.params)]),
-                                self.spec, pinned=self.pinned)  # fmt: skip
+        pb = self._fit_given(b.effect, [*fixed, make_effect(a.effect, **a.params)], [], fit_sc)
+        pa = self._fit_given(a.effect, fixed, [make_effect(b.effect, **b.params)], fit_sc)
         starts = ([(a.effect, a.params), (b.effect, pb)], [(a.effect, pa), (b.effect, b.params)])
-        tries = [joint_refit([*self.cur.full, *s], self.allsc, self.spec, 30, free_from=n0, pinned=self.pinned)
+        tries = [joint_refit([*self.cur.full, *s], fit_sc, self.spec, 30, free_from=n0, pinned=self.pinned)
                  for s in starts]  # fmt: skip
         both, tr = min(tries, key=lambda x: x[1])
+        if fit_sc is not self.allsc:
+            tr = self.allsc.loss(build_model(both))  # the training error on every record
         name = f"{a.effect} + {b.effect}"
         prm = {f"{n}.{k}": v for n, p in both[n0:] for k, v in p.items()}
         bad = self.fv.reason(build_model(both))
         if bad:
             return self.candidate(name, prm, a.round, tr, test_level, reason=bad), None, tr
-        cv_new = self.refit_folds(CVModel(both, [[*f, *both[n0:]] for f in self.cur.folds]), free_from=n0)
+        cv_new = self.refit_folds(CVModel(both, [[*f, *both[n0:]] for f in self.cur.folds]), free_from=n0,
+                                  train=fit_train)  # fmt: skip
         he = self.oof(cv_new)
         cand = self.candidate(name, prm, a.round, tr, test_level, he)
         cand = self._beyond_kernel(cand, build_model(self.cur.full), both[n0:], he, test_level)
