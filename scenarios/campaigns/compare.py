@@ -85,7 +85,7 @@ from housner import stats
 from housner.effects import make_effects
 from housner.engines.base import Engine, get_engine
 from housner.response import Response
-from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
+from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, Campaign, MeasuredRecord
 from housner.scenarios.campaigns.history_error import (
     DIVERGENCE_SUSTAIN,
     ERROR_CLIP,
@@ -510,7 +510,9 @@ def compare(
         measured = measured_features(campaign)
         observed = {rec.id: observe(on_grid(r.response, rec), rec, i) for i, (rec, r) in
                     enumerate(zip(campaign.records, rows, strict=True)) if r.response is not None}  # fmt: skip
-        model = features(campaign, observed, {r.id: r.overturned_model for r in rows if r.response is not None})
+        seen = {rec.id: rec for rec in campaign.records}
+        model = features(campaign, observed, {r.id: sees_overturn(seen[r.id], r.overturned_model) for r in rows
+                                              if r.response is not None})  # fmt: skip
     floor = float(np.mean([rec.noise for rec in campaign.records])) / alpha
     return Comparison(campaign, name, eff, rows, dist, measured, model, floor)
 
@@ -525,7 +527,8 @@ def _record_comparison(rec: MeasuredRecord, res: Response | str, index: int, alp
         return RecordComparison(rec.id, rec.kind, math.nan, float(rec.t[end - 1]), math.nan, meas_tm, math.nan,
                                 math.nan, rec.overturned, False, rec.noise, None, failure)  # fmt: skip
     th = on_grid(res, rec)
-    obs_tm = math.inf if res.overturned else float(np.max(np.abs(observe(th, rec, index)))) / alpha
+    over = sees_overturn(rec, bool(res.overturned))
+    obs_tm = math.inf if over else float(np.max(np.abs(observe(th, rec, index)))) / alpha
     return RecordComparison(
         id=rec.id,
         kind=rec.kind,
@@ -540,6 +543,12 @@ def _record_comparison(rec: MeasuredRecord, res: Response | str, index: int, alp
         noise=rec.noise,
         response=res,
     )
+
+
+def sees_overturn(rec: MeasuredRecord, overturned: bool) -> bool:
+    """Whether the record's sensor would show a model's overturn: not through a range below the overturn
+    angle (a saturating sensor reads a toppled block and one that stopped at its range alike)."""
+    return overturned and min(-rec.clip[0], rec.clip[1]) >= OVERTURN_ANGLE
 
 
 #: Seed of the sensor noise added to model histories for the localisation and the distributions.

@@ -34,6 +34,8 @@ FV_MIN_SIGMAS = 20.0
 FLIGHT_BAND = 0.6
 FLIGHT_MIN_SIGMAS = 40.0
 #: Uplift detection: theta, averaged over this many samples, leaves rest by 5 of its sigmas.
+#: Fewest records for a pooled regression's standard error to be clustered by record [-].
+MIN_CLUSTERS = 10
 UPLIFT_SMOOTH = 9
 UPLIFT_SIGMAS = 5.0
 #: Samples closer than this to the detected uplift do not count as "before uplift" [s].
@@ -105,7 +107,9 @@ class Features:
         Ground motion: number of excursions toward +theta and -theta.
     tilt_theta, tilt_acc : ndarray
         Ground motion, pooled samples before uplift while |ug''| < g tan(alpha):
-        theta [alpha] and ug''/(g tan alpha) [-] (thinned to every 5th sample).
+        theta [alpha] and ug''/(g tan alpha) [-] (thinned to every 5th sample); ``tilt_record`` the
+        record each came from (their standard errors are clustered by record: a sensor's noise is
+        correlated within a record, not between records).
     theta_max_over_alpha : ndarray
         Ground motion, per record [-] (+inf overturned).
     calibrations : dict
@@ -129,6 +133,7 @@ class Features:
     tilt_acc: np.ndarray
     theta_max_over_alpha: np.ndarray
     calibrations: dict = field(default_factory=dict)
+    tilt_record: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def metrics(self) -> dict[str, Metric]:
         """Every metric of :data:`METRICS` with its standard error."""
@@ -152,7 +157,7 @@ class Features:
             int(np.count_nonzero(self.onset_sign > 0)), int(np.count_nonzero(self.onset_sign))
         )
         out["share_pos"] = _share(self.excursions[0], sum(self.excursions))
-        off, slope = _regression(self.tilt_acc, self.tilt_theta)
+        off, slope = _regression(self.tilt_acc, self.tilt_theta, self.tilt_record)
         out["tilt_offset"], out["tilt_slope"] = off, slope
         out["overturn_fraction"], out["theta_max_median"] = _theta_max_metrics(self.theta_max_over_alpha)
         out["onset_scatter"] = _spread_se(self.onset_ratio)
@@ -273,21 +278,34 @@ def _scatter_se(x: np.ndarray, y: np.ndarray) -> Metric:
     return Metric(s, s / math.sqrt(2.0 * (x.size - 2)), int(x.size))
 
 
-def _regression(x: np.ndarray, y: np.ndarray) -> tuple[Metric, Metric]:
+def _regression(x: np.ndarray, y: np.ndarray, groups: np.ndarray | None = None) -> tuple[Metric, Metric]:
+    """Least-squares line y = a + b x: (a, b) with standard errors; clustered by ``groups`` (the record of each
+    sample) when there are enough of them: the sandwich (A'A)^-1 (sum_g A_g' r_g r_g' A_g) (A'A)^-1 with the
+    small-sample factor G / (G - 1), which holds whatever the correlation within a record (a sensor's noise
+    that wanders, a hum) and reduces to the plain one for independent samples."""
     ok = np.isfinite(x) & np.isfinite(y)
     x, y = np.asarray(x)[ok], np.asarray(y)[ok]
+    g = None if groups is None or np.size(groups) != ok.size else np.asarray(groups)[ok]
     if x.size < 4:
         nan = Metric(math.nan, math.nan, int(x.size))
         return nan, nan
     A = np.column_stack((np.ones_like(x), x))
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     res = y - A @ coef
-    s2 = float(res @ res) / max(x.size - 2, 1)
     try:
-        cov = s2 * np.linalg.inv(A.T @ A)
+        inv = np.linalg.inv(A.T @ A)
+        labels = np.unique(g) if g is not None else np.zeros(0)
+        if labels.size >= MIN_CLUSTERS:
+            meat = np.zeros((2, 2))
+            for lab in labels:
+                u = A[g == lab].T @ res[g == lab]
+                meat += np.outer(u, u)
+            cov = labels.size / (labels.size - 1) * inv @ meat @ inv
+        else:
+            # the pooled samples are thinned to every 5th, which leaves white noise close to independent
+            cov = float(res @ res) / max(x.size - 2, 1) * inv
     except np.linalg.LinAlgError:
         cov = np.full((2, 2), np.nan)
-    # the pooled samples are thinned to every 5th, which leaves them close to independent
     return (
         Metric(float(coef[0]), float(math.sqrt(max(cov[0, 0], 0.0))), int(x.size)),
         Metric(float(coef[1]), float(math.sqrt(max(cov[1, 1], 0.0))), int(x.size)),
@@ -459,7 +477,7 @@ class _Pool:
         self.cals: dict[str, Any] = {}
         self.on_s, self.on_r, self.tm, self.st_p, self.st_n = [], [], [], [], []
         self.npos = self.nneg = 0
-        self.tilt_th, self.tilt_acc = [], []
+        self.tilt_th, self.tilt_acc, self.tilt_rec = [], [], []
 
     def add_free_vibration(self, rec: MeasuredRecord, th: np.ndarray, position: int = 0) -> None:
         """Calibration, energy ratios, half-cycles and energy kept between impacts of one free vibration."""
@@ -515,6 +533,7 @@ class _Pool:
             sel = np.flatnonzero(np.abs(acc[:k_pre]) < gta)[::5]
             self.tilt_th.append(th[sel] / alpha)
             self.tilt_acc.append(acc[sel] / gta)
+            self.tilt_rec.append(np.full(sel.size, len(self.tilt_rec)))
         imp = measured_impacts(th - base, rec.noise)
         if kd < th.size:
             # excursions: the one that starts at uplift and one after each impact
@@ -546,4 +565,5 @@ class _Pool:
             tilt_acc=cat(self.tilt_acc),
             theta_max_over_alpha=np.asarray(self.tm, dtype=float),
             calibrations=self.cals,
+            tilt_record=np.concatenate(self.tilt_rec).astype(int) if self.tilt_rec else np.zeros(0, dtype=int),
         )
