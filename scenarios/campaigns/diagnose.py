@@ -436,7 +436,6 @@ class _Search(Trials):
             baseline_cmp=self.steps[0].comparison, final_cmp=self.steps[-1].comparison, library=library,
             added=added, drift=drift, family=family, probes=probes,
         )  # fmt: skip
-        self.say(f"verdict: {verdict.status}")
         return verdict, (floor_base, floor_fin)
 
     def floor_family(self, n_rep: int, seed_int: int, kinds: list[str]) -> tuple[str, object]:
@@ -592,7 +591,10 @@ def diagnose(
         search.add_by_hand(name)
     rounds, selected, first_level = search.greedy(cands, max_effects, pairs)
     search.full_rate()
-    verdict, floors = search.conclude(cands, selected, compare_steps, n_rep, seed, added=list(add))
+    # the library is claimed only where the search tried it: a first round skipped (the training error already at
+    # the sensor noise) tried no effect
+    tried = [] if rounds and all("not searched" in c.reason for c in rounds[0]) else cands
+    verdict, floors = search.conclude(tried, selected, compare_steps, n_rep, seed, added=list(add))
     if campaign.sensor is not None:
         verdict = replace(verdict, text=verdict.text + campaign.sensor.verdict_sentence())
     if search.economies:

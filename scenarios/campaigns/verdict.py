@@ -287,8 +287,9 @@ def decide(
             text = (f"Unexplained: {base_figs}, a misfit that no effect in the library "
                     f"({', '.join(library)}) reduces significantly.")  # fmt: skip
         else:  # the search was switched off (effects=[] / --effects none) and nothing was added
-            text = (f"Unexplained: {base_figs}, a misfit; no effect was tried (the search was switched off "
-                    "and none added by hand).")  # fmt: skip
+            text = (f"Unexplained: {base_figs}, a misfit; no effect was tried (the search was switched off, or "
+                    "it found the training error already at the sensor noise, and none was added by "
+                    "hand).")  # fmt: skip
     elif not fin_mis:
         small = "" if base_mis else (" The plain model was already within the floor's band, yet the fall is "
                                      "significant on the held-out records: a small effect that many records prove.")
