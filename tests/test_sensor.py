@@ -197,3 +197,14 @@ def test_a_model_is_read_through_the_saturating_sensor_as_the_block_was(indep):
     m, mo = cm.measured.metrics()["overturn_fraction"], cm.model.metrics()["overturn_fraction"]
     assert m.value == mo.value == 0.0
     assert distribution_checks(cm) == []
+
+
+def test_the_report_shows_the_sensor(indep, tmp_path):
+    from housner.reports.diagnosis import render_diagnosis
+    from housner.scenarios.campaigns.diagnose import diagnose
+
+    _ic, _raw, c = indep("gain_drift")
+    page = render_diagnosis(diagnose(c, compare_steps=True, effects=[]))
+    i = page.index('id="sensor"')
+    part = page[i : page.index("</section>", i)]
+    assert "gain drift" in part and "white" in part and "<img" in part

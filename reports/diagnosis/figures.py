@@ -25,6 +25,7 @@ __all__ = [
     "history_records",
     "ladder_figure",
     "onset_figure",
+    "sensor_figure",
     "step_label",
     "tilt_figure",
 ]
@@ -193,6 +194,28 @@ def tilt_figure(diag) -> Figure:
     ax.set_ylim(-4 * sd - 0.01, 4 * sd + 0.01)
     return figures.finish(fig, ax, r"ground acceleration / $g\tan\alpha$ [-]", r"$\theta/\alpha$ before uplift [-]",
                           "Rotation before uplift (while |ground acc.| < g tan alpha)")  # fmt: skip
+
+
+def sensor_figure(diag) -> Figure | None:
+    """The theta sensor's noise as measured on the quiet samples: its autocorrelation against lag, beside white
+    noise's (1 at lag 0, 0 beyond); None when it was not measured."""
+    sensor = getattr(diag.campaign, "sensor", None)
+    if sensor is None or sensor.noise.n_samples == 0:
+        return None
+    noise = sensor.noise
+    fig = Figure(figsize=(7.4, 3.6))
+    ax = fig.add_subplot()
+    if noise.white:
+        ax.axhline(0.0, color=_MEASURED, lw=1.6, label="measured: white (no correlation told apart)")
+    else:
+        lags = np.arange(noise.rho.size) * noise.dt * 1e3
+        ax.plot(lags, noise.rho, color=_MEASURED, lw=1.6, label=f"measured (correlation time "
+                f"{noise.correlation_time * 1e3:.3g} ms)")  # fmt: skip
+    ax.plot([0.0], [1.0], "o", color="#1f77b4", label="white noise: 1 at lag 0, 0 beyond")
+    ax.axhline(0.0, color="#1f77b4", lw=0.8, ls="--")
+    return figures.finish(fig, ax, "lag [ms]", "autocorrelation of the noise [-]",
+                          f"The theta sensor's noise: sigma {noise.sigma * 1e3:.3g} mrad on {noise.n_samples} quiet "
+                          "samples")  # fmt: skip
 
 
 def cdf_figure(diag) -> Figure:

@@ -10,6 +10,7 @@ from housner.reports.diagnosis.sections import (
     ladder_section,
     localisation_section,
     records_section,
+    sensor_section,
     settings_section,
     summary_section,
 )
@@ -35,6 +36,7 @@ def render_diagnosis(diag) -> str:
         ("ladder", "Error ladder", ladder_section(diag)),
         ("candidates", "Candidate effects", candidates_section(diag)),
         ("where", "Where the model fails, step by step", localisation_section(diag)),
+        ("sensor", "The sensor", sensor_section(diag)),
         ("records", "Records", records_section(diag)),
         ("settings", "Settings", settings_section(diag)),
     ]

@@ -18,6 +18,7 @@ from housner.reports.diagnosis.figures import (
     histories_figure,
     ladder_figure,
     onset_figure,
+    sensor_figure,
     step_label,
     tilt_figure,
 )
@@ -399,6 +400,28 @@ def records_section(diag) -> str:
                _f(rl.divergence_time, 3)]
         )  # fmt: skip
     return html_table(header, rows, caption="Errors in units of alpha over each record's window; failures show a dash.")
+
+
+def sensor_section(diag) -> str:
+    """The theta sensor as assessed before the physics: its noise, its faults and what was done about them."""
+    sensor = getattr(diag.campaign, "sensor", None)
+    if sensor is None:
+        return "<p>The sensor was not assessed.</p>"
+    n = sensor.noise
+    rows = [["noise", esc(n.describe())],
+            ["records' sigma", f"mean {sensor.sigma_before * 1e3:.3g} mrad from differences, "
+                               f"{sensor.sigma_after * 1e3:.3g} mrad as used"],
+            ["quiet samples", esc(", ".join(f"{k}: {v}" for k, v in n.sources.items()) or "none")]]  # fmt: skip
+    rows += [[esc(f"fault: {f.kind.replace('_', ' ')}"), esc(f.text)] for f in sensor.faults]
+    rows += [["note", esc(t)] for t in sensor.notes]
+    out = html_table(["", ""], rows, cls="kv", caption="What the records say the theta sensor did, before any physics "
+                     "was fitted (housner.scenarios.campaigns.sensor): faults' samples are left out of every error, "
+                     "drifts are corrected, and the floor draws noise of the measured correlation.")  # fmt: skip
+    fig = sensor_figure(diag)
+    if fig is not None:
+        out += html_figure(fig, "The autocorrelation of the noise on the quiet samples (the hold before a release, "
+                           "the rest after the motion), beside white noise's.", "noise autocorrelation")  # fmt: skip
+    return out
 
 
 def settings_section(diag) -> str:
