@@ -305,10 +305,32 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
     if campaign.sensor is not None or not campaign.records:
         return campaign
     alpha = campaign.specimen.alpha
-    recs = list(campaign.records)
-    faults: list[SensorFault] = []
+    # 1. faults on samples, and the free vibrations whose release the sensor did not see
+    recs, faults = _sample_faults(list(campaign.records), alpha)
+    recs, skipped, notes = _unseen_releases(recs, list(campaign.skipped))
+    # 2. the plain model: where the block is surely still, and each first excursion
+    res = simulate_records(campaign.specimen, recs, "housner", (), engine_settings)
+    models = [None if isinstance(r, str) else np.asarray(on_grid(r, rec), dtype=float)
+              for r, rec in zip(res, recs, strict=True)]  # fmt: skip
+    # the recording order: each record's place among the [[record]] tables, those that could not be read counted
+    order = np.array([r.position if r.position >= 0 else i for i, r in enumerate(recs)], dtype=float)
+    tails, level_of = _rest_tails(recs, models, alpha)
+    # 3. faults along the order, corrected relative to the first record
+    for drift in (_offset_drift, _gain_drift):
+        recs, level_of, fault = drift(recs, models, order, tails, level_of)
+        if fault is not None:
+            faults.append(fault)
+    # 4. the noise, on the quiet samples
+    before = float(np.mean([r.noise for r in recs]))
+    recs, noise, more = _measured_noise(recs, tails, level_of)
+    after = float(np.mean([r.noise for r in recs]))
+    report = SensorReport(noise, tuple(faults), before, after, tuple(notes + more))
+    return replace(campaign, records=recs, sensor=report, skipped=skipped)
 
-    # 1. faults on samples
+
+def _sample_faults(recs: list[MeasuredRecord], alpha: float) -> tuple[list[MeasuredRecord], list[SensorFault]]:
+    """Saturation, spikes and dropouts of every record: the records masked (and bridged) and the faults named."""
+    faults: list[SensorFault] = []
     sat_ids, sat_levels, sat_n = [], [], 0
     spk_ids, spk_n, drop_ids, drop_n = [], 0, [], 0
     masks: list[np.ndarray] = []
@@ -352,62 +374,65 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
                                   "out of the errors and bridged."))  # fmt: skip
     recs = [replace(r, theta=th, valid=None if m.all() else m, clip=clip)
             for r, th, m in zip(recs, thetas, masks, strict=True)]  # fmt: skip
-    # a free vibration released beyond the sensor's range has no measured release angle: left out, and said so
-    skipped = list(campaign.skipped)
-    lost = [r for r in recs if r.kind == "free_vibration" and r.valid is not None and not r.valid[: 3].all()]
+    return recs, faults
+
+
+def _unseen_releases(recs: list[MeasuredRecord], skipped: list) -> tuple[list[MeasuredRecord], list, list[str]]:
+    """A free vibration released beyond the sensor's range has no measured release angle: left out, and said so."""
+    lost = [r for r in recs if r.kind == "free_vibration" and r.valid is not None and not r.valid[:3].all()]
     for r in lost:
         skipped.append((r.id, str(r.file), f"{r.file}: the free vibration starts beyond the sensor's range "
                         f"(flat at {r.theta[0]:+.4g} rad): its release angle was not measured, so it cannot pin p "
                         "or r; left out"))  # fmt: skip
-    notes: list[str] = []
-    if lost:
-        recs = [r for r in recs if r not in lost]
-        notes.append(f"{len(lost)} free vibration(s) ({', '.join(r.id for r in lost)}) start beyond the sensor's "
-                     "range, so their release angle was not measured: left out.")  # fmt: skip
+    if not lost:
+        return recs, skipped, []
+    note = (f"{len(lost)} free vibration(s) ({', '.join(r.id for r in lost)}) start beyond the sensor's range, so "
+            "their release angle was not measured: left out.")  # fmt: skip
+    return [r for r in recs if r not in lost], skipped, [note]
 
-    # 2. the plain model: where the block is surely still, and each first excursion
-    res = simulate_records(campaign.specimen, recs, "housner", (), engine_settings)
-    models = [None if isinstance(r, str) else np.asarray(on_grid(r, rec), dtype=float) for r, rec in zip(res, recs,
-                                                                                                           strict=True)]
-    # the recording order: each record's place among the [[record]] tables, those that could not be read counted
-    order = np.array([r.position if r.position >= 0 else i for i, r in enumerate(recs)], dtype=float)
-    tails: list[tuple[int, int]] = []  # (record, start)
+
+def _rest_tails(recs, models, alpha: float) -> tuple[list[tuple[int, int]], dict[int, float]]:
+    """(record, first sample) of each final rest (:func:`_quiet_start`) with no masked sample, and its level."""
+    tails: list[tuple[int, int]] = []
     for i, (rec, m) in enumerate(zip(recs, models, strict=True)):
         k = _quiet_start(rec, m, alpha)
-        if k is not None:
-            v = rec.valid
-            if v is None or v[k:].all():
-                tails.append((i, k))
+        if k is not None and (rec.valid is None or rec.valid[k:].all()):
+            tails.append((i, k))
     level_of = {i: float(np.median(recs[i].theta[k:])) for i, k in tails}
     if level_of:
         # a block that went on rocking, or toppled, where the plain model rests is no rest level
         mid = float(np.median(list(level_of.values())))
         tails = [(i, k) for i, k in tails if abs(level_of[i] - mid) <= REST_LEVEL_ALPHA * alpha]
         level_of = {i: level_of[i] for i, _k in tails}
-    # 3a. offset drift: the rest levels along the order
-    offsets = np.zeros(len(recs))
-    if len(tails) >= MIN_TREND_RECORDS:
-        xi = np.array([order[i] for i, _ in tails], dtype=float)
-        yi = np.array([level_of[i] for i, _ in tails])
-        a, b, t = _trend(xi, yi)
-        change = b * (order[-1] - order[0])
-        if abs(t) > T_TREND:
-            offsets = b * (order - order[0])  # relative to the first record
-            faults.append(SensorFault("offset_drift", tuple(r.id for r in recs), 0,
-                                      {"slope_per_record": b, "change": change, "t": t},
-                                      f"offset drift: the rest level after each record's motion moves by "
-                                      f"{change * 1e3:+.3g} mrad from the first record to the last "
-                                      f"(t = {t:+.1f} over {len(tails)} records); theta is corrected to the first "
-                                      "record's offset."))  # fmt: skip
-            recs = [_corrected(r, lambda x, i=i: x - offsets[i]) for i, r in enumerate(recs)]
-            level_of = {i: v - offsets[i] for i, v in level_of.items()}
-    # 3b. gain drift: each ground motion's first excursion against the model's
+    return tails, level_of
+
+
+def _offset_drift(recs, models, order, tails, level_of):
+    """The rest levels along the order: (records, levels, fault or None), corrected to the first record's offset."""
+    if len(tails) < MIN_TREND_RECORDS:
+        return recs, level_of, None
+    xi = np.array([order[i] for i, _ in tails], dtype=float)
+    yi = np.array([level_of[i] for i, _ in tails])
+    _a, b, t = _trend(xi, yi)
+    if not abs(t) > T_TREND:
+        return recs, level_of, None
+    change = b * (order[-1] - order[0])
+    offsets = b * (order - order[0])  # relative to the first record
+    fault = SensorFault("offset_drift", tuple(r.id for r in recs), 0, {"slope_per_record": b, "change": change, "t": t},
+                        f"offset drift: the rest level after each record's motion moves by {change * 1e3:+.3g} mrad "
+                        f"from the first record to the last (t = {t:+.1f} over {len(tails)} records); theta is "
+                        "corrected to the first record's offset.")  # fmt: skip
+    recs = [_corrected(r, lambda x, i=i: x - offsets[i]) for i, r in enumerate(recs)]
+    return recs, {i: v - offsets[i] for i, v in level_of.items()}, fault
+
+
+def _gain_drift(recs, models, order, tails, level_of):
+    """Each ground motion's first large excursion against the plain model's, along the order: (records, levels,
+    fault or None), corrected to the first record's gain."""
     gains, gx = [], []
     sig0 = float(np.median([r.noise for r in recs]))
     for i, (rec, m) in enumerate(zip(recs, models, strict=True)):
-        if m is None:
-            continue
-        sl = _first_excursion(rec, m, GAIN_MIN_SIGMAS * max(sig0, 1e-9))
+        sl = None if m is None else _first_excursion(rec, m, GAIN_MIN_SIGMAS * max(sig0, 1e-9))
         if sl is None:
             continue
         y = rec.theta[sl] - level_of.get(i, float(np.median(rec.theta[: max(sl.start, 1)])))
@@ -417,35 +442,38 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
         if den > 0:
             gains.append(float(np.dot(mm, y[ok]) / den))
             gx.append(float(order[i]))
-    if len(gains) >= MIN_TREND_RECORDS:
-        xg, yg = np.array(gx), np.array(gains)
-        a, b, t = _trend(xg, yg)
-        if abs(t) > T_TREND and a + b * order[0] > 0:
-            g0 = a + b * order[0]
-            rel = (a + b * order) / g0  # the gain relative to the first record's
-            change = float(rel[-1] - 1.0)
-            faults.append(SensorFault("gain_drift", tuple(r.id for r in recs), 0,
-                                      {"gain_first": a + b * order[0], "slope_per_record": b,
-                                       "relative_change": change, "t": t},
-                                      f"gain drift: the first large excursion of each ground motion against the plain "
-                                      f"model's reads {change * 100:+.1f} % more from the first record to the last "
-                                      f"(t = {t:+.1f} over {len(gains)} ground motions, each before any impact large "
-                                      f"enough for an impact law to matter); theta is corrected to the first "
-                                      f"record's gain."))  # fmt: skip
-            recs = [_corrected(r, lambda x, i=i: x / rel[i], rel[i]) for i, r in enumerate(recs)]
-            level_of = {i: v / rel[i] for i, v in level_of.items()}
+    if len(gains) < MIN_TREND_RECORDS:
+        return recs, level_of, None
+    a, b, t = _trend(np.array(gx), np.array(gains))
+    g0 = a + b * order[0]
+    if not (abs(t) > T_TREND and g0 > 0):
+        return recs, level_of, None
+    rel = (a + b * order) / g0  # the gain relative to the first record's
+    change = float(rel[-1] - 1.0)
+    fault = SensorFault("gain_drift", tuple(r.id for r in recs), 0,
+                        {"gain_first": g0, "slope_per_record": b, "relative_change": change, "t": t},
+                        f"gain drift: the first large excursion of each ground motion against the plain model's "
+                        f"reads {change * 100:+.1f} % more from the first record to the last (t = {t:+.1f} over "
+                        f"{len(gains)} ground motions, each before any impact large enough for an impact law to "
+                        "matter); theta is corrected to the first record's gain.")  # fmt: skip
+    recs = [_corrected(r, lambda x, i=i: x / rel[i], rel[i]) for i, r in enumerate(recs)]
+    return recs, {i: v / rel[i] for i, v in level_of.items()}, fault
 
-    # 4. the noise, on the quiet samples
+
+def _measured_noise(recs, tails, level_of) -> tuple[list[MeasuredRecord], SensorNoise, list[str]]:
+    """The noise on the quiet samples (:func:`estimate_sensor_noise`): the records with their sigma and its
+    correlation where it is not white, the noise, notes."""
+    notes: list[str] = []
     dt = float(np.median([r.dt for r in recs]))
     segs, lev = [], []
     rest = float(np.median(list(level_of.values()))) if level_of else 0.0
     # only the rests as quiet as the typical one: a block that rocks on where the plain model rests is louder
     sd = {i: float(np.std(recs[i].theta[k:])) for i, k in tails}
     ref = float(np.median(list(sd.values()))) if sd else 0.0
-    use = [(i, k) for i, k in tails if sd[i] <= QUIET_SD_RATIO * ref]
-    for i, k in use:
-        segs.append((f"rest after a {recs[i].kind.replace('_', ' ')}", recs[i].theta[k:]))
-        lev.append(rest)
+    for i, k in tails:
+        if sd[i] <= QUIET_SD_RATIO * ref:
+            segs.append((f"rest after a {recs[i].kind.replace('_', ' ')}", recs[i].theta[k:]))
+            lev.append(rest)
     for r in recs:
         if r.hold.size >= int(round(MIN_QUIET / r.dt)):
             segs.append(("hold before a release", r.hold))
@@ -454,10 +482,7 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
     noise = estimate_sensor_noise(segs, dt, lev) if same_rate else WHITE
     if not same_rate:
         notes.append("The records have different sample rates: the noise is treated as white.")
-    before = float(np.mean([r.noise for r in recs]))
     if not noise.white and math.isfinite(noise.diff_ratio) and noise.diff_ratio > 0:
         recs = [replace(r, noise=float(noise.diff_ratio * estimate_noise(r.theta)) if r.noise > 0 else r.noise,
                         noise_model=noise) for r in recs]  # fmt: skip
-    after = float(np.mean([r.noise for r in recs]))
-    report = SensorReport(noise, tuple(faults), before, after, tuple(notes))
-    return replace(campaign, records=recs, sensor=report, skipped=skipped)
+    return recs, noise, notes
