@@ -166,8 +166,9 @@ def test_report_is_self_contained(base, tmp_path):
     text = path.read_text()
     assert text.startswith("<!DOCTYPE html>")
     assert "Error ladder" in text and "rotational_damping" in text and "explains it" in text
-    # ten figures (measured and modelled theta(t), ladder, CDFs, seven localisation figures), all embedded
-    assert text.count('src="data:image/png;base64,') == 10
+    # eleven figures (measured and modelled theta(t), ladder, CDFs, seven localisation figures, the sensor's noise),
+    # all embedded
+    assert text.count('src="data:image/png;base64,') == 11
     assert "http://" not in text.replace("http://www.w3.org", "") and "https://" not in text
     assert "<script" not in text
 
@@ -194,7 +195,7 @@ def test_cli_diagnose(base, tmp_path):
     assert res.returncode == 0, res.stderr
     assert "sensor_offset" in res.stdout and "explains it" in res.stdout
     assert json.loads(out_json.read_text())["selected"] == ["sensor_offset"]
-    assert out_html.read_text().count("data:image/png;base64,") == 10
+    assert out_html.read_text().count("data:image/png;base64,") == 11  # as test_report_is_self_contained
     bad = subprocess.run([sys.executable, "-m", "housner.cli", "diagnose", str(tmp_path / "none")],
                          capture_output=True, text=True, env=env, timeout=120)  # fmt: skip
     assert bad.returncode == 2 and "campaign.toml" in bad.stderr
