@@ -18,15 +18,15 @@ from housner.free_rocking import half_cycle_integral
 from housner.model import simulate
 from housner.readers import uniform_step
 from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, estimate_release, load_campaign
-from housner.scenarios.campaigns.compare import (
+from housner.scenarios.campaigns.compare import compare
+from housner.scenarios.campaigns.history_error import (
     ERROR_CLIP,
-    compare,
     divergence_time,
     error_window,
-    features,
     measured_impacts,
     record_error,
 )
+from housner.scenarios.campaigns.localise import features
 
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from shared import page_section, page_text
 
+import housner.scenarios.campaigns.residual as residual_mod
 import housner.scenarios.campaigns.verdict as verdict_mod
 from housner.reports.diagnosis import history_records, render_diagnosis
 from housner.reports.diagnosis.figures import histories_figure
@@ -213,7 +214,7 @@ def test_overturned_is_written_without_an_uncertainty(diag):
 # ----------------------------------------------------------------------------
 # 7. one threshold for a localisation quantity, on the page and in the documentation
 def test_page_and_docs_state_the_same_localisation_threshold(diag, page, monkeypatch):
-    z_local, z_misfit = verdict_mod.Z_LOCAL, verdict_mod.Z_MISFIT
+    z_local, z_misfit = verdict_mod.Z_LOCAL, residual_mod.Z_MISFIT
     text = page_text(page)
     assert f"more than {z_local:g} combined standard errors" in text
     assert f"z > {z_misfit:g}" in text and f"more than {z_local:g} standard errors" in text
@@ -224,7 +225,7 @@ def test_page_and_docs_state_the_same_localisation_threshold(diag, page, monkeyp
     assert f"z > {z_misfit:g}" in section and f"`Z_LOCAL` = {z_local:g}" in section
     # the page reads the constants, it does not repeat a number
     monkeypatch.setattr(verdict_mod, "Z_LOCAL", 7.5)
-    monkeypatch.setattr(verdict_mod, "Z_MISFIT", 6.5)
+    monkeypatch.setattr(residual_mod, "Z_MISFIT", 6.5)
     text = page_text(render_diagnosis(diag))
     assert "more than 7.5 combined standard errors" in text and "z > 6.5" in text
     assert f"more than {z_local:g} combined" not in text

@@ -25,8 +25,8 @@ from housner import Specimen
 from housner.cli import main
 from housner.effects import EFFECTS, load_plugin, make_effect
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import NonFiniteHistory, NonFiniteScore, diagnose
-from housner.scenarios.campaigns.scoring import Scorer, check_finite
+from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.campaigns.scoring import NonFiniteHistory, NonFiniteScore, Scorer, check_finite
 from housner.scenarios.execution.rundir import (
     IncompleteRunError,
     UnverifiedRunWarning,

@@ -19,9 +19,11 @@ import numpy as np
 import pytest
 
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import cv_folds, diagnose
-from housner.scenarios.campaigns.floor import _perturbed
-from housner.scenarios.campaigns.verdict import RATIO_MISFIT, STATUSES, Floor, decide, residual_test
+from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.campaigns.floor import Floor, _perturbed
+from housner.scenarios.campaigns.residual import RATIO_MISFIT, residual_test
+from housner.scenarios.campaigns.scoring import cv_folds
+from housner.scenarios.campaigns.verdict import STATUSES, decide
 from housner.specimen import Specimen
 
 _CACHE: dict = {}

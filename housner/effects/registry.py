@@ -197,8 +197,9 @@ class Effect:
     def measured_params(cls, metrics: dict, specimen: Specimen) -> dict | None:
         """Parameters a campaign's localisation measures directly, better than a fit to the histories can.
 
-        ``metrics`` maps the localisation quantities of :data:`housner.scenarios.campaigns.compare.METRICS` (for example
-        ``"tilt_offset"``, the rotation read at rest [alpha]) to objects with ``value`` and ``se``.
+        ``metrics`` maps the localisation quantities of
+        :data:`housner.scenarios.campaigns.localise.METRICS` (for example ``"tilt_offset"``, the rotation
+        read at rest [alpha]) to objects with ``value`` and ``se``.
         The diagnosis takes the parameters returned as measured and fits only the others. Default:
         None (every parameter is fitted within its bounds).
         """

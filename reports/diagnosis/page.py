@@ -24,7 +24,7 @@ def render_diagnosis(diag) -> str:
 
     Parameters
     ----------
-    diag : housner.scenarios.campaigns.diagnose.Diagnosis
+    diag : housner.scenarios.campaigns.results.Diagnosis
         From :func:`housner.scenarios.campaigns.diagnose.diagnose` with ``compare_steps=True``
         (every step carries its comparison with the campaign).
     """

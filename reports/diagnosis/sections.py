@@ -23,8 +23,8 @@ from housner.reports.diagnosis.figures import (
     tilt_figure,
 )
 from housner.reports.page import esc, html_figure, html_table
-from housner.scenarios.campaigns import verdict
-from housner.scenarios.campaigns.compare import METRICS
+from housner.scenarios.campaigns import residual, verdict
+from housner.scenarios.campaigns.localise import METRICS
 from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
 
 
@@ -166,7 +166,7 @@ def _verdict_detail(diag) -> str:
             "Held-out (out-of-fold) time-history error against the floor a correct model shows on the same records, "
             "measured by a parametric bootstrap of the fitted model (housner.scenarios.campaigns.verdict). "
             "A misfit is z > "
-            f"{verdict.Z_MISFIT:g} and ratio > {verdict.RATIO_MISFIT:g}, or a ratio above {verdict.RATIO_MISFIT:g} "
+            f"{residual.Z_MISFIT:g} and ratio > {residual.RATIO_MISFIT:g}, or a ratio above {residual.RATIO_MISFIT:g} "
             f"with a localisation quantity more than {verdict.Z_LOCAL:g} "
             "standard errors from the measured one (never a ratio within the band: the status rule); the "
             "detectable ratio is what these records would reveal with 80 % power."

@@ -87,44 +87,24 @@ from housner.engines.base import Engine, get_engine
 from housner.response import Response
 from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, Campaign, MeasuredRecord
 from housner.scenarios.campaigns.history_error import (
-    DIVERGENCE_SUSTAIN,
-    ERROR_CLIP,
     RELEASE_DTHETA0_SIGMAS,
-    WINDOW_IMPACTS,
-    WINDOW_IMPACTS_FV,
     divergence_time,
     error_window,
-    measured_impacts,
-    record_error,
-    release_error,
-    release_shift_samples,
     scored_error,
 )
 from housner.scenarios.campaigns.localise import METRICS, Features, Metric, features, mean_se, measured_features
 
 __all__ = [
-    "DIVERGENCE_SUSTAIN",
-    "ERROR_CLIP",
-    "METRICS",
-    "RELEASE_DTHETA0_SIGMAS",
-    "WINDOW_IMPACTS",
-    "WINDOW_IMPACTS_FV",
+    "OBSERVATION_SEED",
     "Comparison",
     "DistributionComparison",
-    "Features",
-    "Metric",
     "RecordComparison",
     "compare",
-    "divergence_time",
-    "error_window",
-    "features",
-    "measured_impacts",
-    "record_error",
-    "release_error",
+    "observe",
+    "on_grid",
     "release_sensitivities",
-    "release_shift_samples",
     "resolve_effects",
-    "scored_error",
+    "sees_overturn",
     "simulate_records",
 ]
 

@@ -138,7 +138,7 @@ from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
 from housner.scenarios.campaigns.compare import compare
 from housner.scenarios.campaigns.crossval import CVModel
-from housner.scenarios.campaigns.fitting import FIT_BOUNDS, build_model, effect_objective, fit_effect, joint_refit
+from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit
 from housner.scenarios.campaigns.floor import N_REPLICAS, measure_floor
 from housner.scenarios.campaigns.localise import measured_features
 from housner.scenarios.campaigns.model_form import FAMILIES
@@ -150,15 +150,11 @@ from housner.scenarios.campaigns.scoring import (
     DEFAULT_FOLDS,
     SEARCH_RATE,
     NonFiniteHistory,
-    NonFiniteScore,
     check_finite,
     check_train_fraction,
-    cv_folds,
-    split_records,
 )
 from housner.scenarios.campaigns.sensor import assess_sensor
 from housner.scenarios.campaigns.trial import (
-    NOISE_MARGIN,
     PRACTICAL,
     Trials,
     compatible,
@@ -170,21 +166,7 @@ from housner.scenarios.campaigns.trial import (
 )
 from housner.scenarios.campaigns.verdict import decide
 
-__all__ = [
-    "DEFAULT_FOLDS",
-    "FIT_BOUNDS",
-    "NOISE_MARGIN",
-    "PRACTICAL",
-    "Candidate",
-    "Diagnosis",
-    "NonFiniteHistory",
-    "NonFiniteScore",
-    "Step",
-    "cv_folds",
-    "diagnose",
-    "fit_effect",
-    "split_records",
-]
+__all__ = ["FAMILY_JUMP", "LEVEL", "MAX_EFFECTS", "diagnose"]
 
 #: Family-wise significance level of a round of candidates (one-sided, Bonferroni) [-].
 LEVEL = 0.05
@@ -569,7 +551,7 @@ def diagnose(
         When no single effect helps significantly, also try the pairs among the three that lowered
         the training error most, fitted jointly.
     n_replicas : int, optional
-        Replicas of the floor's parametric bootstrap (default :data:`housner.scenarios.campaigns.verdict.N_REPLICAS`).
+        Replicas of the floor's parametric bootstrap (default :data:`housner.scenarios.campaigns.floor.N_REPLICAS`).
     progress : callable, optional
         Called with a line of text as the search goes.
 

@@ -50,14 +50,9 @@ import numpy as np
 from housner.effects import make_effect
 from housner.model import default_substeps
 from housner.scenarios.campaigns.campaign import estimate_release
-from housner.scenarios.campaigns.compare import (
-    RELEASE_DTHETA0_SIGMAS,
-    record_error,
-    release_sensitivities,
-    release_shift_samples,
-    simulate_records,
-)
+from housner.scenarios.campaigns.compare import release_sensitivities, simulate_records
 from housner.scenarios.campaigns.fitting import param_dims
+from housner.scenarios.campaigns.history_error import RELEASE_DTHETA0_SIGMAS, record_error, release_shift_samples
 from housner.scenarios.campaigns.model_form import ModelForm, acc_channel_noise
 from housner.scenarios.campaigns.scoring import NonFiniteHistory, check_finite, model_text, non_finite
 

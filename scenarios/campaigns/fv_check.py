@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.compare import features, observe, on_grid, simulate_records
+from housner.scenarios.campaigns.compare import observe, on_grid, simulate_records
+from housner.scenarios.campaigns.localise import features
 
 __all__ = ["FV_CHECK", "FV_Z", "FreeVibrationCheck", "fv_metrics"]
 

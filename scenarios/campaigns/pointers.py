@@ -17,7 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.stats import kendalltau, norm
 
-from housner.scenarios.campaigns.compare import METRICS, Comparison
+from housner.scenarios.campaigns.compare import Comparison
+from housner.scenarios.campaigns.localise import METRICS
 
 __all__ = ["CLASSES", "MIN_RECORDS", "Z_DRIFT", "evidence_beyond", "order_drift", "physical_classes"]
 

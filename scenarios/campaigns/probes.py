@@ -76,5 +76,5 @@ class VerticalCoupling(Effect):
         return (MomentTerm(_vertical_moment, ()),) if self.k else ()
 
 
-#: Probe name -> the physical class of housner.scenarios.campaigns.verdict.CLASSES it stands for.
+#: Probe name -> the physical class of housner.scenarios.campaigns.pointers.CLASSES it stands for.
 PROBES: dict[str, str] = {"vertical_coupling": "vertical_input"}

@@ -29,43 +29,29 @@ import numpy as np
 from scipy.stats import norm
 
 from housner.scenarios.campaigns.compare import Comparison
-from housner.scenarios.campaigns.floor import N_REPLICAS, Floor, measure_floor
 from housner.scenarios.campaigns.pointers import (
     CLASSES,
     MIN_RECORDS,
-    Z_DRIFT,
     evidence_beyond,
-    order_drift,
     physical_classes,
 )
-from housner.scenarios.campaigns.residual import DETECTABLE_RATIO, RATIO_MISFIT, Z_MISFIT, Residual, residual_test
+from housner.scenarios.campaigns.residual import DETECTABLE_RATIO, RATIO_MISFIT, Z_MISFIT, Residual
 
-# the floor, the residual test and the pointers live in their own modules; their names are importable from here too
 __all__ = [
-    "CLASSES",
-    "N_REPLICAS",
-    "RATIO_MISFIT",
+    "DIST_LEVEL",
     "STATUSES",
-    "Z_DRIFT",
-    "Z_LOCAL",
-    "Z_MISFIT",
-    "Floor",
-    "Residual",
     "STATUS_RULE",
+    "Z_LOCAL",
     "Verdict",
     "decide",
-    "status_rule",
     "distribution_checks",
-    "measure_floor",
-    "order_drift",
-    "physical_classes",
     "pointer_text",
-    "residual_test",
+    "status_rule",
 ]
 
 STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconclusive")
 #: |z| beyond which a localisation quantity of a model says it misses something even when its errors
-#: are at the floor [-]: with the 17 quantities of housner.scenarios.campaigns.compare.METRICS tested at once, a
+#: are at the floor [-]: with the 17 quantities of housner.scenarios.campaigns.localise.METRICS tested at once, a
 #: two-sided 6e-5 each keeps the chance of a false alarm per model near 0.1 % (Bonferroni).
 Z_LOCAL = 4.0
 #: Significance level of each distribution check (KS of theta_max/alpha, overturn fraction) [-].
