@@ -13,8 +13,9 @@ import sys
 import pandas as pd
 import pytest
 
-from housner.reports.run.view import DEFAULT_KS_MAX, MIN_RECORDS, engine_verdict
+from housner.reports.run.view import MIN_RECORDS, engine_verdict
 from housner.scenarios.runs.chaos import ChaosFloor
+from housner.stats import KS_MAX
 
 
 def _row(ks, dp, n_ok, n_failed=0, share=0.5, n_paired=None):
@@ -23,7 +24,7 @@ def _row(ks, dp, n_ok, n_failed=0, share=0.5, n_paired=None):
 
 
 def test_min_records_follows_from_the_tolerance():
-    assert MIN_RECORDS == 20 and MIN_RECORDS * DEFAULT_KS_MAX >= 3
+    assert MIN_RECORDS == 20 and MIN_RECORDS * KS_MAX >= 3
 
 
 @pytest.mark.parametrize(

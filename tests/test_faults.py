@@ -25,8 +25,8 @@ from housner import GroundMotion, Specimen
 from housner.cli import main
 from housner.engines.analytic import HousnerEngine
 from housner.engines.base import ENGINES, register_engine
+from housner.scenarios.execution.chunks import CRASH_ENV
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.execution.workers import CRASH_ENV
 
 SPEC = Specimen.bachmann2017()
 ROOT = Path(__file__).resolve().parent.parent

@@ -205,7 +205,7 @@ def test_fragility_assertion_reports_every_size_and_fails_honestly(tiny):
 
 
 def test_a_worker_that_dies_loses_one_record_labelled_and_the_study_goes_on(tmp_path, monkeypatch):
-    from housner.scenarios.execution.workers import CRASH_ENV
+    from housner.scenarios.execution.chunks import CRASH_ENV
 
     p = scenario_file(tmp_path, "levels = [1.5, 3.0]\nprototype_heights = [2.5, 10.0]\nbootstrap = 100\n", n=5)
     monkeypatch.setenv(CRASH_ENV, "housner:6:SEGV")  # record 6 of each size's batch: stripe 1, motion 1

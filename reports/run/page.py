@@ -34,13 +34,10 @@ from housner.reports.run.sections.engines_explained import engines_explained, ha
 from housner.reports.run.sections.ensemble import ensemble_section
 from housner.reports.run.sections.headline import headline_section, specimen_section
 from housner.reports.run.sections.run_info import failures_section, provenance_section
-from housner.reports.run.view import DEFAULT_KS_MAX, DEFAULT_OVERTURN_TOL, RECORD_RTOL, Run
+from housner.reports.run.view import Run
 from housner.scenarios.execution.rundir import REPORT_FILE
 
 __all__ = [
-    "DEFAULT_KS_MAX",
-    "DEFAULT_OVERTURN_TOL",
-    "RECORD_RTOL",
     "render_report",
     "write_report",
 ]

@@ -292,11 +292,6 @@ def source_record(run: Run):
     return RECORDS[key](), ""
 
 
-#: The headline verdict's tolerances under the names ``housner.reports.run.page`` exports: they are
-#: :data:`housner.stats.KS_MAX` and :data:`housner.stats.OVERTURN_TOL`, the defaults of
-#: :func:`housner.reports.assertions.runs.assert_cdf_agreement`, so the page says what users' CI says.
-DEFAULT_KS_MAX = KS_MAX
-DEFAULT_OVERTURN_TOL = OVERTURN_TOL
 
 
 #: Fewest records of each engine that a distribution verdict is drawn from: one record moves the KS distance

@@ -16,7 +16,7 @@ _EXPORTS = {
     "run_engines": "runner",
     "compare_engines": "tables",
     "percentile_table": "tables",
-    "CRASH_ENV": "workers",
+    "CRASH_ENV": "chunks",
     "RunInterrupted": "workers",
     "SchedulerError": "workers",
     "connect_scheduler": "workers",

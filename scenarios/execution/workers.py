@@ -33,7 +33,6 @@ from typing import Any
 
 from housner.motion import GroundMotion
 from housner.scenarios.execution.chunks import (
-    CRASH_ENV,
     WORKER_FILE,
     WORKER_RUN_NAME,
     run_chunk,
@@ -42,7 +41,7 @@ from housner.scenarios.execution.chunks import (
 )
 from housner.specimen import Specimen
 
-__all__ = ["CRASH_ENV", "RunInterrupted", "SchedulerError", "connect_scheduler"]
+__all__ = ["RunInterrupted", "SchedulerError", "connect_scheduler"]
 
 
 # --------------------------------------------------------------------------

@@ -63,7 +63,7 @@ import pyarrow as pa
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.scenario import Scenario, load_scenario
-from housner.scenarios.catalogue.study_table import INTENSITIES, Study, read_study
+from housner.scenarios.catalogue.study_table import Study
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import jsonable, provenance
@@ -81,13 +81,11 @@ from housner.scenarios.studies.fragility import (
 from housner.units import G
 
 __all__ = [
-    "INTENSITIES",
     "STUDY_FILES",
     "Study",
     "StudyResult",
     "intensity_measure",
     "load_study",
-    "read_study",
     "compare_ci",
     "run_study",
     "study_motions",
