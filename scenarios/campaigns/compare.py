@@ -105,6 +105,7 @@ __all__ = [
     "release_sensitivities",
     "resolve_effects",
     "sees_overturn",
+    "sensor_reading",
     "simulate_records",
 ]
 
@@ -542,7 +543,12 @@ def observe(theta: np.ndarray, rec: MeasuredRecord, index: int) -> np.ndarray:
     Seeded by the record's position in the campaign, so a comparison is reproducible and two models
     compared on the same campaign see the same noise.
     """
-    rng = np.random.default_rng(np.random.SeedSequence([OBSERVATION_SEED, index]))
+    return sensor_reading(theta, rec, np.random.default_rng(np.random.SeedSequence([OBSERVATION_SEED, index])))
+
+
+def sensor_reading(theta: np.ndarray, rec: MeasuredRecord, rng: np.random.Generator) -> np.ndarray:
+    """``theta`` [rad] as the record's sensor reads it: plus a draw of its noise (``rec.noise`` and
+    ``rec.noise_model``), within its range (``rec.clip``)."""
     seen = theta + rec.noise_model.draw(rng, rec.noise, theta.size)
     lo, hi = rec.clip
     return seen if (lo, hi) == (-math.inf, math.inf) else np.clip(seen, lo, hi)

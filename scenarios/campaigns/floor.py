@@ -50,7 +50,7 @@ import numpy as np
 from housner.effects import make_effect
 from housner.model import default_substeps
 from housner.scenarios.campaigns.campaign import estimate_release
-from housner.scenarios.campaigns.compare import release_sensitivities, simulate_records
+from housner.scenarios.campaigns.compare import release_sensitivities, sensor_reading, simulate_records
 from housner.scenarios.campaigns.fitting import param_dims
 from housner.scenarios.campaigns.history_error import RELEASE_DTHETA0_SIGMAS, record_error, release_shift_samples
 from housner.scenarios.campaigns.model_form import ModelForm, acc_channel_noise
@@ -189,9 +189,7 @@ def measure_floor(
                 continue
             th_true = tr
             # the record's sensor: its noise (sigma and correlation in time) and its range
-            meas = th_true + rec.noise_model.draw(rng, rec.noise, th_true.size)
-            if rec.clip != (-math.inf, math.inf):
-                meas = np.clip(meas, *rec.clip)
+            meas = sensor_reading(th_true, rec, rng)
             g = model_sens[i]
             if rec.kind == "free_vibration":
                 # the model of a free vibration starts from the release angle read off the noisy record

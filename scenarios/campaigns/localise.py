@@ -23,7 +23,7 @@ from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
 from housner.scenarios.campaigns.history_error import FV_FLOOR_SIGMAS, measured_impacts
 from housner.units import G
 
-__all__ = ["METRICS", "Features", "Metric", "features", "mean_se", "measured_features"]
+__all__ = ["METRICS", "Features", "Metric", "features", "line_fit", "mean_se", "measured_features"]
 
 #: Free-vibration half-cycles below this many noise sigmas are left out of the localisation (their
 #: peaks and slopes are known to worse than ~5 %).
@@ -33,9 +33,9 @@ FV_MIN_SIGMAS = 20.0
 #: sigmas (at 0.8 mrad the squared speed ratio then scatters by ~0.13 per half-cycle).
 FLIGHT_BAND = 0.6
 FLIGHT_MIN_SIGMAS = 40.0
-#: Uplift detection: theta, averaged over this many samples, leaves rest by 5 of its sigmas.
 #: Fewest records for a pooled regression's standard error to be clustered by record [-].
 MIN_CLUSTERS = 10
+#: Uplift detection: theta, averaged over this many samples, leaves rest by 5 of its sigmas.
 UPLIFT_SMOOTH = 9
 UPLIFT_SIGMAS = 5.0
 #: Samples closer than this to the detected uplift do not count as "before uplift" [s].
@@ -157,7 +157,7 @@ class Features:
             int(np.count_nonzero(self.onset_sign > 0)), int(np.count_nonzero(self.onset_sign))
         )
         out["share_pos"] = _share(self.excursions[0], sum(self.excursions))
-        off, slope = _regression(self.tilt_acc, self.tilt_theta, self.tilt_record)
+        off, slope = line_fit(self.tilt_acc, self.tilt_theta, self.tilt_record)
         out["tilt_offset"], out["tilt_slope"] = off, slope
         out["overturn_fraction"], out["theta_max_median"] = _theta_max_metrics(self.theta_max_over_alpha)
         out["onset_scatter"] = _spread_se(self.onset_ratio)
@@ -278,7 +278,7 @@ def _scatter_se(x: np.ndarray, y: np.ndarray) -> Metric:
     return Metric(s, s / math.sqrt(2.0 * (x.size - 2)), int(x.size))
 
 
-def _regression(x: np.ndarray, y: np.ndarray, groups: np.ndarray | None = None) -> tuple[Metric, Metric]:
+def line_fit(x: np.ndarray, y: np.ndarray, groups: np.ndarray | None = None) -> tuple[Metric, Metric]:
     """Least-squares line y = a + b x: (a, b) with standard errors; clustered by ``groups`` (the record of each
     sample) when there are enough of them: the sandwich (A'A)^-1 (sum_g A_g' r_g r_g' A_g) (A'A)^-1 with the
     small-sample factor G / (G - 1), which holds whatever the correlation within a record (a sensor's noise

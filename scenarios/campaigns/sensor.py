@@ -51,6 +51,7 @@ import numpy as np
 from housner.calibration import estimate_noise
 from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
 from housner.scenarios.campaigns.compare import on_grid, simulate_records
+from housner.scenarios.campaigns.localise import line_fit
 from housner.scenarios.campaigns.sensor_noise import WHITE, SensorNoise, estimate_sensor_noise
 
 __all__ = [
@@ -226,17 +227,12 @@ def _bridge(theta: np.ndarray, bad: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------
 # trends along the order
 def _trend(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
-    """Least-squares line y = a + b x: (a, b, t of b)."""
-    n = x.size
-    xm, ym = x.mean(), y.mean()
-    sxx = float(np.sum((x - xm) ** 2))
-    if n < 3 or sxx <= 0:
-        return float(ym), 0.0, 0.0
-    b = float(np.sum((x - xm) * (y - ym)) / sxx)
-    a = float(ym - b * xm)
-    res = y - a - b * x
-    s2 = float(np.sum(res * res) / (n - 2))
-    se = math.sqrt(s2 / sxx) if s2 > 0 else 0.0
+    """Least-squares line y = a + b x (:func:`housner.scenarios.campaigns.localise.line_fit`): (a, b, t of b);
+    (mean of y, 0, 0) where no line can be fitted."""
+    off, slope = line_fit(x, y)
+    a, b, se = off.value, slope.value, slope.se
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return float(np.mean(y)), 0.0, 0.0
     return a, b, (b / se if se > 0 else (math.inf if b != 0 else 0.0))
 
 

@@ -40,6 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
+from housner.calibration import estimate_noise
+
 __all__ = [
     "LB_LAGS",
     "MIN_QUIET_SAMPLES",
@@ -181,12 +183,6 @@ class SensorNoise:
 WHITE = SensorNoise()
 
 
-def _diff_sigma(x: np.ndarray) -> float:
-    """The third-difference MAD estimate of a white-noise sigma (:func:`housner.calibration.estimate_noise`'s)."""
-    d3 = np.diff(x, 3)
-    return float(1.4826 * np.median(np.abs(d3 - np.median(d3))) / math.sqrt(20.0)) if d3.size else math.nan
-
-
 def estimate_sensor_noise(segments: Sequence[tuple[str, np.ndarray]], dt: float, level: float = 0.0) -> SensorNoise:
     """Measure the noise on quiet segments (module docstring).
 
@@ -232,7 +228,7 @@ def estimate_sensor_noise(segments: Sequence[tuple[str, np.ndarray]], dt: float,
     k = np.arange(1, LB_LAGS + 1)
     q = float(n * (n + 2) * np.sum(rho[k] ** 2 / np.maximum(n - k, 1)))
     pvalue = float(stats.chi2.sf(q, LB_LAGS))
-    d_sig = float(np.median([_diff_sigma(x) for x in xs if x.size >= 16]))
+    d_sig = float(np.median([estimate_noise(x) for x in xs if x.size >= 16]))
     ratio = sigma / d_sig if d_sig > 0 else math.inf
     if pvalue >= WHITE_LEVEL or ratio < WHITE_RATIO:
         return SensorNoise(sigma, np.ones(1), True, dt, n, pvalue, ratio, sources)
