@@ -1,9 +1,7 @@
 """Physics engines behind one protocol: the analytic Housner model, MuJoCo and PyBullet."""
 
-if __name__ != "housner.engines":  # this folder imported by its 0.1 name from a checkout
-    from housner._legacy import become
-
-    become(__name__)
+if __name__ != "housner.engines":  # this folder imported by its own name, from a checkout's root
+    raise ImportError(f"`{__name__}` is not an import name of this project: import `housner.engines`")
 
 from housner.engines.base import ENGINES, Engine, engine_class, get_engine, register_engine
 

@@ -12,8 +12,6 @@ pytest session loads lives under it; the names below load on first use.
 
 import importlib
 
-from housner import _legacy
-
 __version__ = "0.1.0"
 
 #: The public names and the modules that hold them (loaded on first use).
@@ -28,8 +26,6 @@ _PUBLIC = {
 }
 
 __all__ = [*_PUBLIC, "__version__"]
-
-_legacy.install()  # the import names of 0.1 (engines, scenarios, reports) answer for one more release
 
 
 def __getattr__(name):

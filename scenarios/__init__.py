@@ -10,10 +10,8 @@ The public entry points of the layer; each sub-package's ``__init__`` is its own
 - :mod:`~housner.scenarios.campaigns`: measured data, comparison, localisation, diagnosis, verdict.
 """
 
-if __name__ != "housner.scenarios":  # this folder imported by its 0.1 name from a checkout
-    from housner._legacy import become
-
-    become(__name__)
+if __name__ != "housner.scenarios":  # this folder imported by its own name, from a checkout's root
+    raise ImportError(f"`{__name__}` is not an import name of this project: import `housner.scenarios`")
 
 from housner._lazy import lazy_exports
 

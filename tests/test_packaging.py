@@ -1,4 +1,4 @@
-"""One import name: every package is in the wheel's list, and 0.1's import names answer for one release."""
+"""One import name: every package is in the wheel's list, and ``housner`` is the only import name."""
 
 import subprocess
 import sys
@@ -36,37 +36,27 @@ def _run(code: str, cwd: Path) -> subprocess.CompletedProcess:
                           timeout=120)  # fmt: skip
 
 
-def test_the_old_import_names_answer_with_a_warning(tmp_path):
-    r = _run(
-        "import housner\n"
-        "from scenarios.campaign import load_campaign\n"
-        "from scenarios import rdk\n"
-        "import reports.sections.tuning as t\n"
-        "from housner.scenarios.campaigns.campaign import load_campaign as new\n"
-        "import housner.scenarios.motions.rdk as rdk2\n"
-        "assert load_campaign is new and rdk is rdk2 and t.__name__ == 'housner.reports.run.sections.tuning'\n",
-        tmp_path,
-    )
+def test_housner_installs_no_other_import_name(tmp_path):
+    """``housner`` answers for no other top-level name: outside a checkout, ``scenarios`` is simply not found."""
+    r = _run("import housner\ntry:\n    import scenarios\nexcept ModuleNotFoundError:\n    print('absent')\n", tmp_path)
     assert r.returncode == 0, r.stderr
-    assert "`scenarios.campaign` is now `housner.scenarios.campaigns.campaign`" in r.stderr
-    assert "FutureWarning" in r.stderr
+    assert r.stdout.strip() == "absent"
+    assert not any("housner" in type(f).__module__ for f in sys.meta_path)
 
 
-def test_a_users_own_package_of_an_old_name_wins(tmp_path):
+def test_a_users_own_package_of_a_folders_name_wins(tmp_path):
     (tmp_path / "scenarios").mkdir()
     (tmp_path / "scenarios" / "__init__.py").write_text("MINE = 1\n")
     r = _run("import housner, scenarios\nassert scenarios.MINE == 1\n", tmp_path)
     assert r.returncode == 0, r.stderr
-    assert "FutureWarning" not in r.stderr
 
 
 @pytest.mark.parametrize("name", ["engines", "scenarios", "reports"])
-def test_a_checkout_folder_imported_first_by_its_old_name_is_one_module(name):
-    """From the repository's root, `import scenarios` (before housner) finds the folder itself: it hands over."""
-    r = _run(f"import {name}, sys\nimport housner.{name} as new\nassert sys.modules['{name}'].__doc__ == new.__doc__\n"
-             f"assert 'housner.{name}' in sys.modules\n", ROOT)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    assert "FutureWarning" in r.stderr
+def test_a_checkout_folder_imported_by_its_own_name_refuses_in_one_line(name):
+    """From the repository's root, ``import scenarios`` finds the folder itself: it refuses, naming the import."""
+    r = _run(f"import {name}\n", ROOT)
+    assert r.returncode == 1
+    assert f"ImportError: `{name}` is not an import name of this project: import `housner.{name}`" in r.stderr
 
 
 @pytest.mark.parametrize("package", ["housner.scenarios", "housner.scenarios.execution"])
