@@ -85,7 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     from housner.scenarios.motions import rdk
-    from housner.scenarios.motions.rdk_match import band_check, fit_matched, simulate_matched
+    from housner.scenarios.motions.bands import band_check
+    from housner.scenarios.motions.rdk_match import fit_matched, simulate_matched
     from housner.scenarios.motions.records import elcentro
 
     if args.seed == rdk.DEFAULT_FIT_SEED:

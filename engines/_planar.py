@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from housner.engines.base import Engine
+from housner.engines.base import Engine, SpecAttribute
 from housner.errors import EngineError, EngineUnavailable, unknown_choice
 from housner.impacts import impact_times, uplift_time
 from housner.response import Response
@@ -386,8 +386,9 @@ class PlanarEngine(Engine):
     """The base of the planar adapters: settings and pickling, the impact law's hooks, the sample loop, the response.
 
     A subclass sets :attr:`DEFAULTS` (every setting, ``impact_energy_factor`` among them),
-    :attr:`LABEL`, :attr:`RANGES` and :attr:`STRICT` for :func:`checked_settings` (and :attr:`CHOICES`), and an optional
-    engine its :attr:`MODULE` and :attr:`INSTALL` (:meth:`require`); or its own ``__init__``. An
+    :attr:`RANGES` and :attr:`STRICT` for :func:`checked_settings` (and :attr:`CHOICES`), and an optional
+    engine its :attr:`MODULE` (:meth:`require`); or its own ``__init__``. Its :attr:`LABEL` and
+    :attr:`INSTALL` are its registry spec's (:class:`housner.engines.EngineSpec`). An
     instance pickles as its settings: models, contexts and clients are rebuilt in the receiving
     process. The ``restitution`` effect is realised through the impact law (:class:`ImpactLaw`). A
     subclass that keeps the rigid-body state (z, x, theta, z', x', theta') implements
@@ -427,8 +428,8 @@ class PlanarEngine(Engine):
     effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
     #: Every setting and its default.
     DEFAULTS: ClassVar[dict] = {}
-    #: The engine as messages name it ("DART", "OpenSees", "Drake").
-    LABEL: ClassVar[str] = ""
+    #: The engine as messages name it ("DART", "OpenSees", "Drake"), from its spec.
+    LABEL = SpecAttribute("label")
     #: Accepted closed range (low, high) of each numeric setting.
     RANGES: ClassVar[dict] = {}
     #: Settings whose low end is excluded.
@@ -437,8 +438,8 @@ class PlanarEngine(Engine):
     CHOICES: ClassVar[dict] = {}
     #: The optional engine's module, imported on first use (:meth:`require`); "" for none.
     MODULE: ClassVar[str] = ""
-    #: How to install the engine's package (named when it is missing).
-    INSTALL: ClassVar[str] = ""
+    #: How to install the engine's package (named when it is missing), from its spec.
+    INSTALL = SpecAttribute("install")
 
     def __init__(self, **settings: Any):
         self.require()  # a missing package is said before any long work

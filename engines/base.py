@@ -3,12 +3,19 @@
 An engine turns (specimen, motion, effects) into a :class:`housner.Response`,
 whole record in, whole response out. ``Engine.simulate`` validates its inputs
 and calls ``_simulate``; subclasses implement only ``_simulate``.
+
+The registry, :data:`ENGINES`, maps each engine's name to its :class:`EngineSpec`: the facts about
+the engine that are not its physics (where its class lives, the distribution it drives, how to
+install that, how messages name it), each declared once. An engine class reads them from its spec
+(:class:`SpecAttribute`), so that ``housner --version`` and the help can list the engines without
+importing any of them.
 """
 
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable, Sequence
+from collections.abc import Iterator, MutableMapping, Sequence
+from dataclasses import dataclass
 from importlib import metadata
 from typing import Any, ClassVar
 
@@ -19,58 +26,258 @@ from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen
 
-__all__ = ["ENGINES", "RECORD_ERRORS", "Engine", "check_response", "get_engine", "register_engine"]
-
-#: Registry: engine name -> class, or "module:Class" imported on first use
-#: (so that `import housner.engines` does not import MuJoCo or PyBullet).
-ENGINES: dict[str, Any] = {
-    "housner": "housner.engines.analytic:HousnerEngine",
-    "mujoco": "housner.engines.mujoco_engine:MujocoEngine",
-    "pybullet": "housner.engines.pybullet_engine:PybulletEngine",
-    "dart": "housner.engines.dart_engine:DartEngine",
-    "opensees": "housner.engines.opensees_engine:OpenSeesEngine",
-    "drake": "housner.engines.drake_engine:DrakeEngine",
-}
-
-#: The PyPI distribution each registered engine drives (read without importing the engine, for
-#: ``housner --version``); an engine absent here is taken to be its own distribution.
-ENGINE_PACKAGES: dict[str, str] = {
-    "housner": "housner",
-    "mujoco": "mujoco",
-    "pybullet": "pybullet",
-    "dart": "dartpy",
-    "opensees": "openseespy",
-    "drake": "drake",
-}
+__all__ = [
+    "ENGINES",
+    "RECORD_ERRORS",
+    "Engine",
+    "EngineRegistry",
+    "EngineSpec",
+    "SpecAttribute",
+    "check_response",
+    "engine_class",
+    "engine_spec",
+    "get_engine",
+    "register_engine",
+]
 
 
-def register_engine(name: str) -> Callable[[type], type]:
-    """Class decorator that adds an engine to :data:`ENGINES` under ``name``."""
+@dataclass(frozen=True)
+class EngineSpec:
+    """One engine as the registry knows it, without importing it.
+
+    Parameters
+    ----------
+    name : str
+        The registry name (``housner run --engines NAME``); the engine class's ``name``.
+    entry_point : str or type
+        The engine class, or ``"module:Class"`` naming it, imported on first use (:meth:`load`).
+    distribution : str
+        The PyPI distribution the engine drives ("" for none): :meth:`Engine.version` reports its
+        version, and ``housner --version`` reads it from the package metadata.
+    install : str
+        How to install that distribution, named when it is missing ("" when it ships with housner).
+    label : str
+        The engine as messages name it ("MuJoCo", "OpenSees"); its name when not given.
+    """
+
+    name: str
+    entry_point: str | type
+    distribution: str = ""
+    install: str = ""
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name):
+            raise ValueError(f"an engine's name must be a non-empty string, got {self.name!r}")
+        if isinstance(self.entry_point, str):
+            module, _, attr = self.entry_point.partition(":")
+            if not (module and attr):
+                raise ValueError(f"engine {self.name!r}: entry point {self.entry_point!r} is not 'module:Class'")
+        elif not isinstance(self.entry_point, type):
+            raise TypeError(f"engine {self.name!r}: the entry point must be a class or 'module:Class', "
+                            f"got {type(self.entry_point).__name__}")  # fmt: skip
+        if not self.label:
+            object.__setattr__(self, "label", self.name)
+
+    @property
+    def module(self) -> str:
+        """The module that defines the engine class (read from the entry point, nothing imported)."""
+        if isinstance(self.entry_point, str):
+            return self.entry_point.partition(":")[0]
+        return self.entry_point.__module__
+
+    @classmethod
+    def from_class(
+        cls,
+        name: str,
+        engine: type,
+        distribution: str | None = None,
+        install: str | None = None,
+        label: str | None = None,
+    ) -> EngineSpec:
+        """The spec of an engine class registered as ``name``: the facts not given are the class's own or
+        inherited ``package``, ``INSTALL`` and ``LABEL`` (so that a subclass of a registered engine keeps them)."""
+        return cls(
+            name,
+            engine,
+            distribution=getattr(engine, "package", "") if distribution is None else distribution,
+            install=getattr(engine, "INSTALL", "") if install is None else install,
+            label=getattr(engine, "LABEL", "") if label is None else label,
+        )
+
+    def load(self) -> type:
+        """The engine class, its module imported on first use."""
+        if not isinstance(self.entry_point, str):
+            return self.entry_point
+        module, _, attr = self.entry_point.partition(":")
+        return getattr(importlib.import_module(module), attr)
+
+    def make(self, **settings: Any) -> Engine:
+        """An instance of the engine with ``settings``."""
+        return self.load()(**settings)
+
+
+class EngineRegistry(MutableMapping):
+    """Engine name -> :class:`EngineSpec`, in the order of registration.
+
+    An engine class or a ``"module:Class"`` string stored under a name (``ENGINES[name] = cls``, the
+    registry's values before the specs) is registered as the spec of that entry point
+    (:meth:`EngineSpec.from_class` for a class).
+    """
+
+    def __init__(self, specs: Sequence[EngineSpec] = ()):
+        self._specs: dict[str, EngineSpec] = {}
+        for spec in specs:
+            self[spec.name] = spec
+
+    def __getitem__(self, name: str) -> EngineSpec:
+        return self._specs[name]
+
+    def __setitem__(self, name: str, value: EngineSpec | str | type) -> None:
+        if isinstance(value, type):
+            value = EngineSpec.from_class(name, value)
+        elif not isinstance(value, EngineSpec):
+            value = EngineSpec(name, value)
+        elif value.name != name:
+            raise ValueError(f"the spec of engine {value.name!r} cannot be registered as {name!r}")
+        self._specs[name] = value
+
+    def __delitem__(self, name: str) -> None:
+        del self._specs[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._specs)
+
+    def __len__(self) -> int:
+        return len(self._specs)
+
+    def __repr__(self) -> str:
+        return f"EngineRegistry({list(self._specs.values())!r})"
+
+
+#: The registry: engine name -> :class:`EngineSpec`. The shipped engines are named by
+#: ``"module:Class"``, so that ``import housner.engines`` imports neither MuJoCo nor PyBullet.
+ENGINES = EngineRegistry(
+    (
+        EngineSpec("housner", "housner.engines.analytic:HousnerEngine", distribution="housner", label="Housner"),
+        EngineSpec("mujoco", "housner.engines.mujoco_engine:MujocoEngine", distribution="mujoco", label="MuJoCo"),
+        EngineSpec(
+            "pybullet", "housner.engines.pybullet_engine:PybulletEngine", distribution="pybullet", label="PyBullet"
+        ),
+        EngineSpec(
+            "dart",
+            "housner.engines.dart_engine:DartEngine",
+            distribution="dartpy",
+            install="pip install -e '.[dart]'  (or: pip install dartpy)",
+            label="DART",
+        ),
+        EngineSpec(
+            "opensees",
+            "housner.engines.opensees_engine:OpenSeesEngine",
+            distribution="openseespy",
+            install="pip install -e '.[opensees]'  (or: pip install 'openseespy>=3.7.1.2,<3.8')",
+            label="OpenSees",
+        ),
+        EngineSpec(
+            "drake",
+            "housner.engines.drake_engine:DrakeEngine",
+            distribution="drake",
+            install="pip install -e '.[drake]'  (or: pip install drake)",
+            label="Drake",
+        ),
+    )
+)
+
+
+def register_engine(
+    name: str,
+    entry_point: str | type | None = None,
+    *,
+    distribution: str | None = None,
+    install: str | None = None,
+    label: str | None = None,
+) -> Any:
+    """Add an engine to :data:`ENGINES` under ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The registry name.
+    entry_point : str or type, optional
+        The engine class or ``"module:Class"`` (imported on first use). Without it,
+        ``register_engine(name)`` is a class decorator: it registers the class it decorates and
+        sets its ``name``.
+    distribution, install, label : str, optional
+        As :class:`EngineSpec`'s. Not given: for a class, its own or inherited ``package``,
+        ``INSTALL`` and ``LABEL`` (:meth:`EngineSpec.from_class`); for ``"module:Class"``, none.
+
+    Returns
+    -------
+    EngineSpec or callable
+        The registered spec; the class decorator when no ``entry_point`` is given.
+
+    Examples
+    --------
+    A plugin package registers its engine without importing it (or decorates the class:
+    ``@register_engine("mine")``):
+
+    >>> from housner.engines import ENGINES, register_engine
+    >>> spec = register_engine("mine", "mysolver.engine:MyEngine", distribution="mysolver")
+    >>> ENGINES["mine"].module
+    'mysolver.engine'
+    >>> del ENGINES["mine"]
+    """
+    if entry_point is not None:
+        if isinstance(entry_point, type):
+            spec = EngineSpec.from_class(name, entry_point, distribution, install, label)
+        else:
+            spec = EngineSpec(name, entry_point, distribution or "", install or "", label or "")
+        ENGINES[name] = spec
+        return spec
 
     def deco(cls: type) -> type:
+        spec = EngineSpec.from_class(name, cls, distribution, install, label)  # read before the class is renamed
         cls.name = name
-        ENGINES[name] = cls
+        ENGINES[name] = spec
         return cls
 
     return deco
 
 
-def engine_class(name: str) -> type:
-    """The engine class registered as ``name``; unknown names list the choices."""
+def engine_spec(name: str) -> EngineSpec:
+    """The spec registered as ``name``; unknown names list the choices."""
     try:
-        entry = ENGINES[name]
+        return ENGINES[name]
     except KeyError:
         raise unknown_choice("engine", name, ENGINES) from None
-    if isinstance(entry, str):
-        module, _, attr = entry.partition(":")
-        entry = getattr(importlib.import_module(module), attr)
-        ENGINES[name] = entry
-    return entry
+
+
+def engine_class(name: str) -> type:
+    """The engine class registered as ``name``, imported on first use; unknown names list the choices."""
+    return engine_spec(name).load()
 
 
 def get_engine(name: str, **settings: Any) -> Engine:
     """Instantiate the engine registered as ``name`` with ``settings``."""
-    return engine_class(name)(**settings)
+    return engine_spec(name).make(**settings)
+
+
+class SpecAttribute:
+    """A class attribute of an engine read from its registry entry (the spec under the class's ``name``).
+
+    Parameters
+    ----------
+    field : str
+        The :class:`EngineSpec` field it reads. An engine that is not registered reads "";
+        a class that sets the attribute itself keeps its own value.
+    """
+
+    def __init__(self, field: str):
+        self.field = field
+
+    def __get__(self, obj: Any, owner: type) -> str:
+        spec = ENGINES.get(getattr(owner, "name", ""))
+        return getattr(spec, self.field) if spec is not None else ""
 
 
 class Engine:
@@ -160,8 +367,8 @@ class Engine:
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
         raise NotImplementedError
 
-    #: The PyPI distribution the engine drives ("" for none): :meth:`version` reports its version.
-    package: ClassVar[str] = ""
+    #: The PyPI distribution the engine drives ("" for none), from its spec: :meth:`version` reports its version.
+    package = SpecAttribute("distribution")
 
     def settings(self) -> dict:
         """The engine's settings as plain data (for reports and the result cache): its ``_settings``, if any."""

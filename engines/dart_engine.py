@@ -47,10 +47,7 @@ from housner.motion import GroundMotion
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["DartEngine", "INSTALL"]
-
-#: How to install the package this engine needs (named in the error when it is missing).
-INSTALL = "pip install -e '.[dart]'  (or: pip install dartpy)"
+__all__ = ["DartEngine"]
 
 
 class DartEngine(PlanarEngine):
@@ -68,7 +65,6 @@ class DartEngine(PlanarEngine):
     """
 
     name = "dart"
-    package = "dartpy"
 
     #: Default settings, with no tuning (why a 0.1 ms step: docs/results.md#defaults-dart).
     DEFAULTS: ClassVar[dict] = {
@@ -94,9 +90,7 @@ class DartEngine(PlanarEngine):
         "collision_detector": ("dart", "fcl"),
     }
 
-    LABEL = "DART"
     MODULE = "dartpy"
-    INSTALL: ClassVar[str] = INSTALL
     RANGES: ClassVar[dict] = {
         **PIVOT_RANGES,
         "restitution": (0.0, 1.0),

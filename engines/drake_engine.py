@@ -82,10 +82,7 @@ from housner.motion import GroundMotion
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["DrakeEngine", "INSTALL"]
-
-#: How to install the package this engine needs (named in the error when it is missing).
-INSTALL = "pip install -e '.[drake]'  (or: pip install drake)"
+__all__ = ["DrakeEngine"]
 
 
 def _drake() -> Any:
@@ -118,7 +115,6 @@ class DrakeEngine(PlanarEngine):
     """
 
     name = "drake"
-    package = "drake"
 
     #: Default settings, with no tuning (what they measure: docs/results.md#defaults-drake).
     DEFAULTS: ClassVar[dict] = {
@@ -140,9 +136,7 @@ class DrakeEngine(PlanarEngine):
         "contact_approximation": ("tamsi", "sap"),
     }
 
-    LABEL = "Drake"
     MODULE = "pydrake.multibody.plant"
-    INSTALL: ClassVar[str] = INSTALL
     RANGES: ClassVar[dict] = {
         **PIVOT_RANGES,
         "stiffness": (1e3, 1e12),

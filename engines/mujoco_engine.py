@@ -257,7 +257,7 @@ class MujocoEngine(PlanarEngine):
             merged[key] = tuple(float(v) for v in merged[key])
         law = {"impact_energy_factor": merged["impact_energy_factor"]}
         law_range = {"impact_energy_factor": IMPACT_LAW_RANGE}
-        merged.update(checked_settings("MuJoCo", {"impact_energy_factor": 1.0}, law_range, law, strict=tuple(law)))
+        merged.update(checked_settings(self.LABEL, {"impact_energy_factor": 1.0}, law_range, law, strict=tuple(law)))
         self._settings = merged
         # validate now with the seed specimen's geometry (again per specimen when simulating)
         self.mjcf(Specimen.bachmann2017())
@@ -354,14 +354,7 @@ class MujocoEngine(PlanarEngine):
         t_mid = (np.arange(nstep) + 0.5) * h
         ctrl = (-specimen.mass * np.interp(t_mid, motion.t, motion.acc)).reshape(-1, 1)
 
-        mujoco.mj_resetData(model, data)
-        rho = self._settings["pivot_radius"]
-        data.qpos[:] = initial_qpos(specimen, motion.theta0, rho)
-        data.qvel[:] = initial_qvel(specimen, motion.theta0, motion.theta_dot0, rho)
-        mujoco.mj_forward(model, data)
-        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-        state = np.empty(mujoco.mj_stateSize(model, spec))
-        mujoco.mj_getState(model, data, state, spec)
+        state = self._release(model, data, specimen, motion)
         i_q = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_TIME)
         i_v = i_q + model.nq
 
@@ -398,24 +391,7 @@ class MujocoEngine(PlanarEngine):
             z[done + 1 : k1 + 1] = out[:, i_q + 1]
             th[done + 1 : k1 + 1] = out[:, i_q + 2]
             w[done + 1 : k1 + 1] = out[:, i_v + 2]
-            if not np.all(np.isfinite(out[:, i_q : i_v + model.nv])):
-                bad = done + 1 + int(np.flatnonzero(~np.all(np.isfinite(out[:, i_q : i_v + model.nv]), axis=1))[0])
-                raise EngineError(
-                    f"MuJoCo diverged on motion {motion.name!r}: non-finite state at t = {bad * h:.6g} s "
-                    f"(settings {self.settings()})"
-                )
-            bad_warn = [
-                mujoco.mjtWarning(i).name
-                for i in range(len(data.warning))
-                if data.warning[i].number
-                and mujoco.mjtWarning(i)
-                not in (mujoco.mjtWarning.mjWARN_CONTACTFULL, mujoco.mjtWarning.mjWARN_CNSTRFULL)
-            ]
-            if bad_warn:
-                raise EngineError(
-                    f"MuJoCo diverged on motion {motion.name!r} before t = {k1 * h:.6g} s: warnings {bad_warn} "
-                    f"(settings {self.settings()})"
-                )
+            self._check_chunk(out[:, i_q : i_v + model.nv], data, motion, done, k1, h)
             hit = np.flatnonzero(np.abs(th[done + 1 : k1 + 1]) >= math.pi / 2)
             state = out[-1].copy()
             warm = data.qacc_warmstart.copy()
@@ -429,6 +405,40 @@ class MujocoEngine(PlanarEngine):
         if moment is not None:
             res.info["terms"] = moment[1]  # as the analytic engine's Response.info lists them
         return res
+
+    def _release(self, model, data, specimen: Specimen, motion: GroundMotion) -> np.ndarray:
+        """Put ``data`` in the motion's initial state (its release: theta0 [rad], theta_dot0 [rad/s]) and
+        return that state as MuJoCo's full physics state vector."""
+        mujoco.mj_resetData(model, data)
+        rho = self._settings["pivot_radius"]
+        data.qpos[:] = initial_qpos(specimen, motion.theta0, rho)
+        data.qvel[:] = initial_qvel(specimen, motion.theta0, motion.theta_dot0, rho)
+        mujoco.mj_forward(model, data)
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        state = np.empty(mujoco.mj_stateSize(model, spec))
+        mujoco.mj_getState(model, data, state, spec)
+        return state
+
+    def _check_chunk(self, qv: np.ndarray, data, motion: GroundMotion, done: int, k1: int, h: float) -> None:
+        """EngineError if the chunk of steps ``done + 1`` to ``k1`` (their positions and velocities ``qv``, one row
+        a step of ``h`` [s]) diverged: a state that is not finite, or a warning other than a full contact buffer."""
+        if not np.all(np.isfinite(qv)):
+            bad = done + 1 + int(np.flatnonzero(~np.all(np.isfinite(qv), axis=1))[0])
+            raise EngineError(
+                f"MuJoCo diverged on motion {motion.name!r}: non-finite state at t = {bad * h:.6g} s "
+                f"(settings {self.settings()})"
+            )
+        bad_warn = [
+            mujoco.mjtWarning(i).name
+            for i in range(len(data.warning))
+            if data.warning[i].number
+            and mujoco.mjtWarning(i) not in (mujoco.mjtWarning.mjWARN_CONTACTFULL, mujoco.mjtWarning.mjWARN_CNSTRFULL)
+        ]
+        if bad_warn:
+            raise EngineError(
+                f"MuJoCo diverged on motion {motion.name!r} before t = {k1 * h:.6g} s: warnings {bad_warn} "
+                f"(settings {self.settings()})"
+            )
 
     def _response(self, specimen, motion, x, z, th, w, h, n_sub, overturn_step) -> Response:
         """Assemble the Response from per-step histories (index 0 = initial state, step i at t = i h)."""

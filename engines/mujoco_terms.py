@@ -109,7 +109,7 @@ def _realised_by_terms(cls: type) -> bool:
     if ok:
         seed = Specimen.bachmann2017()
         try:
-            effect = cls(**{k: _active_value(p, seed) for k, p in cls.params.items()})
+            effect = cls(**{k: _active_value(p, seed) for k, p in cls.param_specs.items()})
             terms = tuple(effect.terms(RockingParams.from_specimen(seed), seed))
             ok = bool(terms) and term_refusal("mujoco", effect, terms) is None
         except Exception:  # a user's effect that breaks here is not realised; it must not break the others

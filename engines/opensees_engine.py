@@ -94,10 +94,7 @@ from housner.response import Response
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["OpenSeesEngine", "INSTALL", "SYSTEM_LIBRARIES"]
-
-#: How to install the package this engine needs (named in the error when it is missing).
-INSTALL = "pip install -e '.[opensees]'  (or: pip install 'openseespy>=3.7.1.2,<3.8')"
+__all__ = ["OpenSeesEngine", "SYSTEM_LIBRARIES"]
 
 #: The system libraries openseespy's Linux build loads (named when it fails to load them).
 SYSTEM_LIBRARIES = "apt-get install libblas3 liblapack3"
@@ -148,12 +145,13 @@ def _opensees():
         import openseespy.opensees as ops  # optional engine
     except ImportError as e:
         raise EngineUnavailable(
-            f"engine 'opensees' needs the openseespy package ({e}); install it with: {INSTALL}"
+            f"engine {OpenSeesEngine.name!r} needs the {OpenSeesEngine.package} package ({e}); "
+            f"install it with: {OpenSeesEngine.INSTALL}"
         ) from None
     except RuntimeError as e:  # the package is there but its library is not loadable (libblas/liblapack)
         raise EngineUnavailable(
-            f"engine 'opensees' could not load openseespy ({e}); install the system libraries with: "
-            f"{SYSTEM_LIBRARIES} (and the package with: {INSTALL})"
+            f"engine {OpenSeesEngine.name!r} could not load {OpenSeesEngine.package} ({e}); install the system "
+            f"libraries with: {SYSTEM_LIBRARIES} (and the package with: {OpenSeesEngine.INSTALL})"
         ) from None
     return ops
 
@@ -191,7 +189,6 @@ class OpenSeesEngine(PlanarEngine):
     """
 
     name = "opensees"
-    package = "openseespy"
 
     #: Default settings, seed specimen (what they measure: docs/results.md#defaults-opensees).
     DEFAULTS: ClassVar[dict] = {
@@ -214,7 +211,6 @@ class OpenSeesEngine(PlanarEngine):
     }
     CHOICES: ClassVar[dict] = {"algorithm": _ALGORITHMS, "contact_element": _CONTACT_ELEMENTS}
 
-    LABEL = "OpenSees"
     RANGES: ClassVar[dict] = {
         **PIVOT_RANGES,
         "contact_stiffness": (1e4, 1e10),

@@ -184,8 +184,6 @@ class PybulletEngine(PlanarEngine):
     """
 
     name = "pybullet"
-    package = "pybullet"
-    LABEL = "PyBullet"
 
     #: Default settings: the choice of ``housner tune pybullet`` (housner.engines.tuning.tune) for
     #: Specimen.bachmann2017() and Housner's r (what they measure: docs/results.md#defaults-pybullet).

@@ -132,23 +132,8 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
     p2_n = prm[I_P_NEG] * prm[I_P_NEG]
     c = prm[I_DAMPING]
     tan_p, tan_n, wrest2_p, wrest2_n = pivot_constants(alpha_p, alpha_n, p2_p, p2_n, rest_tol)
-    at_rest, s, phi, w, t_uplift = initial_state(theta0, theta_dot0)
-    mode = REST if at_rest else ROCKING
-    sig = 0.0
-    if HAS_DRY and not at_rest:
-        if w != 0.0:
-            sig = 1.0 if w > 0.0 else -1.0
-        else:
-            k1 = 1 if acc_g.size > 1 else 0
-            fr = frame(s, acc_g[0], acc_g[k1], v_g[0], v_g[k1], dt, 0.0, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
-            if hold_margin(phi, True, 0.0, fr, q) <= 0.0:
-                mode = STUCK
-            else:
-                sig = 1.0 if accel(phi, 0.0, 0.0, fr, q) > 0.0 else -1.0
-    theta_max = abs(theta0)
-    t_over = math.nan
-    n_imp = 0
-    guard = 0
+    mode, s, phi, w, t_uplift, sig = _start(acc_g, v_g, dt, theta0, theta_dot0, alpha_p, alpha_n, p2_p, p2_n, c, q)
+    theta_max, t_over, n_imp, guard = abs(theta0), math.nan, 0, 0
     if record:
         theta_out[0] = theta0
         theta_dot_out[0] = theta_dot0
@@ -161,30 +146,12 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
         tau, j, n_ev = 0.0, 0, 0
         while mode != OVERTURNED:
             if mode == REST or mode == STUCK:
-                if AT_REST:
-                    tl, sd, sg = leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n,
-                                        p2_p, p2_n, c, q)  # fmt: skip
-                    if tl == math.inf:
-                        break
-                    if mode == REST:
-                        s = sd
-                        phi = 0.0
-                        if math.isnan(t_uplift):
-                            t_uplift = t_k + tl
-                    tau = tl
-                    sig = sg
-                else:
-                    tu_p, tu_n = uplift(g0, g1, tau, dt, tan_p, tan_n)
-                    if tu_p == math.inf and tu_n == math.inf:
-                        break
-                    s = 1.0 if tu_p < tu_n else -1.0
-                    tau = tu_p if tu_p < tu_n else tu_n
-                    if math.isnan(t_uplift):
-                        t_uplift = t_k + tau
-                    phi = 0.0
-                    sig = 1.0
-                mode = ROCKING
-                w = 0.0
+                tl, s, phi, sig, t_uplift = _depart(mode, phi, s, sig, tau, m, dt, g0, g1, u0, u1, t_k, t_uplift,
+                                                    alpha_p, alpha_n, p2_p, p2_n, c, tan_p, tan_n, q)  # fmt: skip
+                if tl == math.inf:
+                    break
+                tau = tl
+                mode, w = ROCKING, 0.0
                 j = substep_of(tau, m, dt)
             tgt = grid(j + 1, m, dt)
             if tgt > tau:
@@ -206,30 +173,13 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
                             impacts[n_imp] = t_k + tau + h
                         n_imp += 1
                         tau = tau + h
-                        r_imp = prm[I_R_NEG] if s > 0.0 else prm[I_R_POS]
-                        if HAS_IMPACT:
-                            r_imp = impact_ratio(-w_h, r_imp, s, fr[6], fr[7], q)
-                        w = restitution(-w_h, r_imp, prm[I_R_EXP], fr[7], fr[6])
-                        phi = 0.0
-                        s = -s
-                        sig = 1.0
-                        if w * w < (wrest2_p if s > 0.0 else wrest2_n):
-                            mode = REST
-                            w = 0.0
+                        mode, s, phi, w, sig = _land(s, w_h, prm, fr, q, wrest2_p, wrest2_n)
                     else:  # the velocity reached zero at phi = ph_h (dry terms)
                         tau = tau + h
-                        phi = ph_h
-                        w = 0.0
-                        sig = after_reversal(phi, tau, fr, q, sig) if phi > 0.0 else 0.0
-                        if sig == 0.0:
-                            mode = STUCK if phi > 0.0 else REST
-                            if mode == REST:
-                                phi = 0.0
+                        mode, phi, w, sig = _turn(ph_h, tau, fr, q, sig)
                     n_ev += 1
                     if n_ev > MAX_EVENTS_PER_SAMPLE:
-                        mode = REST
-                        phi = 0.0
-                        w = 0.0
+                        mode, phi, w = REST, 0.0, 0.0
                         guard += 1
                         break
                     continue
@@ -252,6 +202,89 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
         if record:
             store(theta_out, theta_dot_out, k + 1, s, phi, w, mode == ROCKING or mode == STUCK, mode == OVERTURNED)
     return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard
+
+
+@njit(cache=True, inline="always")
+def _start(acc_g, v_g, dt, theta0, theta_dot0, alpha_p, alpha_n, p2_p, p2_n, c, q):
+    """The state of a block released at theta0 [rad], theta_dot0 [rad/s]: (mode, s, phi, w, t_uplift, sig).
+
+    With a dry term, a block released at w = 0 is STUCK while the moments stay within the dry capacity,
+    else it starts to turn the way the net moment drives it (sig, the sign of w's motion).
+    """
+    at_rest, s, phi, w, t_uplift = initial_state(theta0, theta_dot0)
+    mode = REST if at_rest else ROCKING
+    sig = 0.0
+    if HAS_DRY and not at_rest:
+        if w != 0.0:
+            sig = 1.0 if w > 0.0 else -1.0
+        else:
+            k1 = 1 if acc_g.size > 1 else 0
+            fr = frame(s, acc_g[0], acc_g[k1], v_g[0], v_g[k1], dt, 0.0, alpha_p, alpha_n, p2_p, p2_n, c, 0.0)
+            if hold_margin(phi, True, 0.0, fr, q) <= 0.0:
+                mode = STUCK
+            else:
+                sig = 1.0 if accel(phi, 0.0, 0.0, fr, q) > 0.0 else -1.0
+    return mode, s, phi, w, t_uplift, sig
+
+
+@njit(cache=True, inline="always")
+def _depart(mode, phi, s, sig, tau, m, dt, g0, g1, u0, u1, t_k, t_uplift, alpha_p, alpha_n, p2_p, p2_n, c, tan_p,
+            tan_n, q):  # fmt: skip
+    """When a block at REST (or STUCK) starts to rock, at or after local time tau [s] of the sample from t_k [s].
+
+    Returns (tau, s, phi, sig, t_uplift): the local time it starts (inf when it stays through the sample,
+    the rest unchanged then), its pivot, angle, direction, and the first uplift time [s].
+    """
+    if AT_REST:
+        tl, sd, sg = leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n,
+                           p2_p, p2_n, c, q)  # fmt: skip
+        if tl == math.inf:
+            return tl, s, phi, sig, t_uplift
+        if mode == REST:
+            s = sd
+            phi = 0.0
+            if math.isnan(t_uplift):
+                t_uplift = t_k + tl
+        return tl, s, phi, sg, t_uplift
+    tu_p, tu_n = uplift(g0, g1, tau, dt, tan_p, tan_n)
+    if tu_p == math.inf and tu_n == math.inf:
+        return math.inf, s, phi, sig, t_uplift
+    s = 1.0 if tu_p < tu_n else -1.0
+    tau = tu_p if tu_p < tu_n else tu_n
+    if math.isnan(t_uplift):
+        t_uplift = t_k + tau
+    return tau, s, 0.0, 1.0, t_uplift
+
+
+@njit(cache=True, inline="always")
+def _land(s, w_h, prm, fr, q, wrest2_p, wrest2_n):
+    """An impact on pivot s at speed -w_h [rad/s]: the block rocks on -s, or rests if it is too slow.
+
+    Returns (mode, s, phi, w, sig) after the impact.
+    """
+    r_imp = prm[I_R_NEG] if s > 0.0 else prm[I_R_POS]
+    if HAS_IMPACT:
+        r_imp = impact_ratio(-w_h, r_imp, s, fr[6], fr[7], q)
+    w = restitution(-w_h, r_imp, prm[I_R_EXP], fr[7], fr[6])
+    s = -s
+    if w * w < (wrest2_p if s > 0.0 else wrest2_n):
+        return REST, s, 0.0, 0.0, 1.0
+    return ROCKING, s, 0.0, w, 1.0
+
+
+@njit(cache=True, inline="always")
+def _turn(ph_h, tau, fr, q, sig):
+    """The velocity reached zero at phi = ph_h [rad] (dry terms): the block turns back, sticks or rests.
+
+    Returns (mode, phi, w, sig).
+    """
+    phi = ph_h
+    sig = after_reversal(phi, tau, fr, q, sig) if phi > 0.0 else 0.0
+    if sig == 0.0:
+        if phi > 0.0:
+            return STUCK, phi, 0.0, sig
+        return REST, 0.0, 0.0, sig
+    return ROCKING, phi, 0.0, sig
 
 
 @njit(cache=True)

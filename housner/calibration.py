@@ -199,80 +199,17 @@ def free_vibration_peaks(
     t, theta = _check_record(t, theta)
     if alpha is not None:
         alpha = check_alpha(alpha)
-    if noise is None:
-        sigma = estimate_noise(theta)
-    else:
-        if not (math.isfinite(noise) and noise >= 0):
-            raise ValueError(f"`noise` must be non-negative and finite, got {noise!r}")
-        sigma = float(noise)
-    scale = float(np.max(np.abs(theta)))
-    if scale == 0.0:
-        raise ValueError("`theta` is identically zero: the block never rocked")
-    sigma_eff = max(sigma, 1e-9 * scale)  # a noise-free record still needs a non-zero band
-    floor = _FLOOR_SIGMAS * sigma_eff if min_amplitude is None else float(min_amplitude)
-    if not (math.isfinite(floor) and floor >= 0):
-        raise ValueError(f"`min_amplitude` must be non-negative and finite, got {min_amplitude!r}")
-
+    sigma, sigma_eff, floor = _noise_floor(theta, noise, min_amplitude)
     h = HYSTERESIS_SIGMAS * sigma_eff
     kx, first_sign = hysteresis_crossings(theta, h)
     if first_sign == 0:
         raise ValueError("`theta` never leaves the noise band: no rocking to analyse")
-    n = theta.size
     # segments between detected crossings: [b_j, b_{j+1})
-    bounds = np.concatenate(([0], kx, [n]))
+    bounds = np.concatenate(([0], kx, [theta.size]))
     signs = first_sign * (-1) ** np.arange(bounds.size - 1)
     rough = np.array([np.max(signs[j] * theta[bounds[j] : bounds[j + 1]]) for j in range(bounds.size - 1)])
-
-    # refine the impact times
-    tc = np.full(kx.size, np.nan)
-    tc_std = np.full(kx.size, np.nan)
-    for j, k in enumerate(kx):
-        if min(rough[j], rough[j + 1]) < floor:
-            break
-        band = max(_CROSSING_BAND * min(rough[j], rough[j + 1]), 2.0 * h)
-        lo = k - 1
-        while lo > 0 and abs(theta[lo - 1]) < band:
-            lo -= 1
-        hi = k + 1
-        while hi < n and abs(theta[hi]) < band:
-            hi += 1
-        if (k - lo) < MIN_SAMPLES // 2 + 1 or (hi - k) < MIN_SAMPLES // 2 + 1:
-            break
-        tc[j], tc_std[j] = fit_crossing(t, theta, lo, hi, k, h, sigma_eff)
-
-    rows = []
-    for j in range(bounds.size - 1):
-        s = signs[j]
-        if rough[j] < floor:
-            break
-        y = s * theta
-        t0 = tc[j - 1] if j >= 1 else math.nan
-        t1 = tc[j] if j < tc.size else math.nan
-        if j >= 1 and not math.isfinite(t0):
-            break  # the impact before this half-cycle could not be located: past the floor
-        if math.isfinite(t0) and math.isfinite(t1):
-            w = 0.5 * _PEAK_WINDOW * (t1 - t0)
-            mid = 0.5 * (t0 + t1)
-            tp, amp, std = fit_peak(t, y, mid - w, mid + w, sigma_eff)
-        elif j == 0 and math.isfinite(t1):
-            tp, amp, std = _fit_release(t, y, t1, sigma_eff)
-        else:
-            # segment cut by the end of the record: use it only if its peak is well inside
-            kk = bounds[j] + int(np.argmax(y[bounds[j] : bounds[j + 1]]))
-            half = max(MIN_SAMPLES, (bounds[j + 1] - bounds[j]) // 8)
-            if kk - half < bounds[j] or kk + half >= bounds[j + 1]:
-                break
-            tp, amp, std = fit_peak(t, y, t[kk - half], t[kk + half], sigma_eff)
-        if not math.isfinite(amp):
-            if j == 0:
-                continue  # no usable release peak; the first full half-cycle follows
-            break
-        if amp < floor:
-            break
-        s0 = tc_std[j - 1] if j >= 1 else math.nan
-        s1 = tc_std[j] if j < tc.size else math.nan
-        rows.append((tp, amp, std, s, t0, t1, s0, s1))
-
+    tc, tc_std = _impact_times(t, theta, kx, rough, floor, h, sigma_eff)
+    rows = _half_cycle_rows(t, theta, bounds, signs, rough, tc, tc_std, floor, sigma_eff)
     if not rows:
         raise ValueError("no half-cycle above the noise floor could be analysed")
     arr = np.array(rows, dtype=float)
@@ -289,6 +226,114 @@ def free_vibration_peaks(
         t_end_std=arr[:, 7],
         noise=sigma,
     )
+
+
+def _noise_floor(theta: np.ndarray, noise: float | None, min_amplitude: float | None) -> tuple[float, float, float]:
+    """The noise of a record and the floor of the analysis: (sigma, sigma_eff, floor) [rad].
+
+    ``sigma`` is ``noise`` when given, else estimated (:func:`estimate_noise`); ``sigma_eff`` is at least
+    1e-9 of the record's peak, so that a noise-free record still gets a non-zero band; ``floor`` is
+    ``min_amplitude``, by default :data:`_FLOOR_SIGMAS` times ``sigma_eff``.
+    """
+    if noise is None:
+        sigma = estimate_noise(theta)
+    else:
+        if not (math.isfinite(noise) and noise >= 0):
+            raise ValueError(f"`noise` must be non-negative and finite, got {noise!r}")
+        sigma = float(noise)
+    scale = float(np.max(np.abs(theta)))
+    if scale == 0.0:
+        raise ValueError("`theta` is identically zero: the block never rocked")
+    sigma_eff = max(sigma, 1e-9 * scale)  # a noise-free record still needs a non-zero band
+    floor = _FLOOR_SIGMAS * sigma_eff if min_amplitude is None else float(min_amplitude)
+    if not (math.isfinite(floor) and floor >= 0):
+        raise ValueError(f"`min_amplitude` must be non-negative and finite, got {min_amplitude!r}")
+    return sigma, sigma_eff, floor
+
+
+def _impact_times(
+    t: np.ndarray, theta: np.ndarray, kx: np.ndarray, rough: np.ndarray, floor: float, h: float, sigma: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Impact times refined between samples and their standard errors [s], one per detected crossing.
+
+    Crossing j (sample ``kx[j]``) is fitted over the samples around it with |theta| below
+    :data:`_CROSSING_BAND` of the smaller neighbouring rough amplitude (``rough``); the refinement stops,
+    leaving NaN, at the first crossing next to a segment below ``floor`` or with too few samples in its band.
+    """
+    n = theta.size
+    tc = np.full(kx.size, np.nan)
+    tc_std = np.full(kx.size, np.nan)
+    for j, k in enumerate(kx):
+        if min(rough[j], rough[j + 1]) < floor:
+            break
+        band = max(_CROSSING_BAND * min(rough[j], rough[j + 1]), 2.0 * h)
+        lo = k - 1
+        while lo > 0 and abs(theta[lo - 1]) < band:
+            lo -= 1
+        hi = k + 1
+        while hi < n and abs(theta[hi]) < band:
+            hi += 1
+        if (k - lo) < MIN_SAMPLES // 2 + 1 or (hi - k) < MIN_SAMPLES // 2 + 1:
+            break
+        tc[j], tc_std[j] = fit_crossing(t, theta, lo, hi, k, h, sigma)
+    return tc, tc_std
+
+
+def _half_cycle_rows(t, theta, bounds, signs, rough, tc, tc_std, floor: float, sigma: float) -> list[tuple]:
+    """One row (t_peak, amplitude, amplitude_std, sign, t_start, t_end, t_start_std, t_end_std) per half-cycle.
+
+    Segment j runs between samples ``bounds[j]`` and ``bounds[j + 1]`` with sign ``signs[j]``, between impacts
+    ``tc[j - 1]`` and ``tc[j]``. The rows stop at the first half-cycle below ``floor``, after an impact that
+    could not be located, or at a peak that cannot be fitted (a release segment without one is skipped).
+    """
+    rows = []
+    for j in range(bounds.size - 1):
+        s = signs[j]
+        if rough[j] < floor:
+            break
+        y = s * theta
+        t0 = tc[j - 1] if j >= 1 else math.nan
+        t1 = tc[j] if j < tc.size else math.nan
+        if j >= 1 and not math.isfinite(t0):
+            break  # the impact before this half-cycle could not be located: past the floor
+        peak = _segment_peak(t, y, bounds[j], bounds[j + 1], t0, t1, j == 0, sigma)
+        if peak is None:
+            break
+        tp, amp, std = peak
+        if not math.isfinite(amp):
+            if j == 0:
+                continue  # no usable release peak; the first full half-cycle follows
+            break
+        if amp < floor:
+            break
+        s0 = tc_std[j - 1] if j >= 1 else math.nan
+        s1 = tc_std[j] if j < tc.size else math.nan
+        rows.append((tp, amp, std, s, t0, t1, s0, s1))
+    return rows
+
+
+def _segment_peak(
+    t: np.ndarray, y: np.ndarray, b0: int, b1: int, t0: float, t1: float, first: bool, sigma: float
+) -> tuple[float, float, float] | None:
+    """Peak (time [s], amplitude [rad], its standard error [rad]) of the segment of samples ``b0:b1`` of
+    ``y`` = sign x theta, between the impacts at ``t0`` and ``t1`` (NaN where not located).
+
+    A half-cycle between two impacts: quartic over the central :data:`_PEAK_WINDOW` of it. The ``first``
+    segment, before the first impact: :func:`_fit_release`. A segment cut by the end of the record: a
+    quartic around its maximum, or None (no peak) when the maximum is not well inside it.
+    """
+    if math.isfinite(t0) and math.isfinite(t1):
+        w = 0.5 * _PEAK_WINDOW * (t1 - t0)
+        mid = 0.5 * (t0 + t1)
+        return fit_peak(t, y, mid - w, mid + w, sigma)
+    if first and math.isfinite(t1):
+        return _fit_release(t, y, t1, sigma)
+    # segment cut by the end of the record: use it only if its peak is well inside
+    kk = b0 + int(np.argmax(y[b0:b1]))
+    half = max(MIN_SAMPLES, (b1 - b0) // 8)
+    if kk - half < b0 or kk + half >= b1:
+        return None
+    return fit_peak(t, y, t[kk - half], t[kk + half], sigma)
 
 
 def _fit_release(t: np.ndarray, y: np.ndarray, t1: float, sigma: float) -> tuple[float, float, float]:
@@ -489,11 +534,25 @@ def calibrate_free_vibration(
     pk = free_vibration_peaks(t, theta, alpha, noise=noise, min_amplitude=min_amplitude)
     if len(pk) < 2:
         raise ValueError("fewer than two half-cycles above the noise floor: cannot calibrate r")
-
-    # --- r: energy-decay line over all impacts
     amp = pk.amplitude
-    E = potential(amp, alpha)
     s_amp = np.maximum(pk.amplitude_std, 1e-12 * amp)
+    r, r_std = _energy_decay_r(amp, s_amp, alpha)
+    T, a_c, p_exact, p_lin, var_lnp = _half_cycle_p(pk, s_amp, alpha)
+    k = min(n_p, p_exact.size)
+    p, p_std = _weighted_mean(p_exact[:k], var_lnp[:k] * p_exact[:k] ** 2)
+    p_l, _ = _weighted_mean(p_lin[:k], var_lnp[:k] * p_lin[:k] ** 2)
+    return FreeVibrationCalibration(
+        p=p, p_std=p_std, p_linearised=p_l, r=r, r_std=r_std,
+        n_half_cycles=len(pk), n_p=k, alpha=alpha, noise=pk.noise, peaks=pk,
+        p_half_cycle=p_exact, p_half_cycle_linearised=p_lin, half_cycle_amplitude=a_c, half_cycle_duration=T,
+        c=energy_ratios(amp, alpha), c_amplitude=amp[:-1],
+    )  # fmt: skip
+
+
+def _energy_decay_r(amp: np.ndarray, s_amp: np.ndarray, alpha: float) -> tuple[float, float]:
+    """r and its standard error [-]: the weighted energy-decay line through the peak amplitudes ``amp`` [rad]
+    with standard errors ``s_amp`` [rad] (see :func:`calibrate_free_vibration`, Notes)."""
+    E = potential(amp, alpha)
     var_lnE = (np.sin(alpha - amp) * s_amp / E) ** 2
     i = np.arange(amp.size, dtype=float)
     w = 1.0 / var_lnE
@@ -506,45 +565,27 @@ def calibrate_free_vibration(
     chi2 = float(np.sum(w * resid**2)) / dof if dof > 0 else 1.0
     slope_std = math.sqrt(cov[1, 1] * max(chi2, 1.0))
     r = math.exp(coef[1])
-    r_std = r * slope_std
-    c = energy_ratios(amp, alpha)
+    return r, r * slope_std
 
-    # --- p: exact and linearised values per complete half-cycle
+
+def _half_cycle_p(pk: FreeVibrationPeaks, s_amp: np.ndarray, alpha: float):
+    """Durations [s], amplitudes [rad], exact and linearised p [1/s] and var(ln p) [-] of the complete
+    half-cycles (see :func:`calibrate_free_vibration`, Notes); the largest positive variance stands in
+    where one is not a positive finite number."""
     m = pk.complete
     T = pk.durations[m]
-    a_c = amp[m]
+    a_c = pk.amplitude[m]
     sa_c = s_amp[m]
     sT = np.hypot(pk.t_start_std[m], pk.t_end_std[m])
     if a_c.size == 0:
         raise ValueError("no complete half-cycle (two located impacts) above the noise floor: cannot calibrate p")
     p_exact = np.atleast_1d(p_from_half_cycle(T, a_c, alpha, method="exact"))
     p_lin = np.atleast_1d(p_from_half_cycle(T, a_c, alpha, method="linearised"))
-    # logarithmic sensitivity of F to the amplitude, by a central difference
+    # logarithmic sensitivity of F to the amplitude, by a forward difference
     eps = 1e-4
     F = np.atleast_1d(half_cycle_integral(a_c, alpha))
     Fp = np.atleast_1d(half_cycle_integral(np.minimum(a_c * (1 + eps), 0.5 * (a_c + alpha)), alpha))
     dlnF = np.log(Fp / F) / np.log1p(eps)
     var_lnp = (dlnF * sa_c / a_c) ** 2 + (sT / T) ** 2
     var_lnp = np.where(np.isfinite(var_lnp) & (var_lnp > 0), var_lnp, np.nanmax(var_lnp[var_lnp > 0], initial=1e-12))
-    k = min(n_p, p_exact.size)
-    p, p_std = _weighted_mean(p_exact[:k], var_lnp[:k] * p_exact[:k] ** 2)
-    p_l, _ = _weighted_mean(p_lin[:k], var_lnp[:k] * p_lin[:k] ** 2)
-
-    return FreeVibrationCalibration(
-        p=p,
-        p_std=p_std,
-        p_linearised=p_l,
-        r=r,
-        r_std=r_std,
-        n_half_cycles=len(pk),
-        n_p=k,
-        alpha=alpha,
-        noise=pk.noise,
-        peaks=pk,
-        p_half_cycle=p_exact,
-        p_half_cycle_linearised=p_lin,
-        half_cycle_amplitude=a_c,
-        half_cycle_duration=T,
-        c=c,
-        c_amplitude=amp[:-1],
-    )
+    return T, a_c, p_exact, p_lin, var_lnp

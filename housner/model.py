@@ -405,21 +405,8 @@ def theta_max_many(
     overturned : ndarray of bool
     n_impacts : ndarray of int
     """
-    if isinstance(acc, np.ndarray) and acc.ndim == 2:
-        rows = [np.asarray(a, dtype=np.float64) for a in acc]
-    elif isinstance(acc, np.ndarray) and acc.ndim == 1 and acc.dtype != object:
-        raise ValueError("`acc` must be a 2-D array (one record per row) or a list of 1-D arrays, got a 1-D array")
-    else:
-        try:
-            rows = [np.asarray(a, dtype=np.float64) for a in acc]
-        except (TypeError, ValueError):
-            raise ValueError("`acc` must be a 2-D array or a list of 1-D numeric arrays") from None
+    rows = _acc_rows(acc)
     n_rec = len(rows)
-    for i, a in enumerate(rows):
-        if a.ndim != 1 or a.size == 0:
-            raise ValueError(f"`acc[{i}]` must be a non-empty 1-D array, got shape {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"`acc[{i}]` is not finite at sample {int(np.flatnonzero(~np.isfinite(a))[0])}")
     if n_rec == 0:
         return np.empty(0), np.empty(0, dtype=bool), np.empty(0, dtype=np.int64)
     dts = _per_record("dt", dt, n_rec)
@@ -430,13 +417,7 @@ def theta_max_many(
         raise ValueError("`theta0` must lie within (-pi/2, pi/2) rad")
     thd0 = _per_record("theta_dot0", theta_dot0, n_rec)
     tol = _check_rest_tol(rest_tol)
-    if params is None or isinstance(params, RockingParams):
-        prms = [_resolve_params(specimen, r, params)] * n_rec
-    else:
-        params = list(params)
-        if len(params) != n_rec:
-            raise ValueError(f"`params` must be one RockingParams or {n_rec} of them, got {len(params)}")
-        prms = [_resolve_params(specimen, r, p) for p in params]
+    prms = _params_per_record(specimen, r, params, n_rec)
     prm_a = np.array([p.as_array() for p in prms])
     ms = np.array([_check_substeps(substeps, p.p_max, d) for p, d in zip(prms, dts, strict=True)], dtype=np.int64)
     offsets = np.zeros(n_rec + 1, dtype=np.int64)
@@ -452,7 +433,37 @@ def theta_max_many(
     return ratio, overturned, out[:, 4].astype(np.int64)
 
 
+def _acc_rows(acc) -> list[np.ndarray]:
+    """The records of :func:`theta_max_many`'s ``acc`` as a list of non-empty, finite 1-D float arrays [m/s^2]."""
+    if isinstance(acc, np.ndarray) and acc.ndim == 2:
+        rows = [np.asarray(a, dtype=np.float64) for a in acc]
+    elif isinstance(acc, np.ndarray) and acc.ndim == 1 and acc.dtype != object:
+        raise ValueError("`acc` must be a 2-D array (one record per row) or a list of 1-D arrays, got a 1-D array")
+    else:
+        try:
+            rows = [np.asarray(a, dtype=np.float64) for a in acc]
+        except (TypeError, ValueError):
+            raise ValueError("`acc` must be a 2-D array or a list of 1-D numeric arrays") from None
+    for i, a in enumerate(rows):
+        if a.ndim != 1 or a.size == 0:
+            raise ValueError(f"`acc[{i}]` must be a non-empty 1-D array, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"`acc[{i}]` is not finite at sample {int(np.flatnonzero(~np.isfinite(a))[0])}")
+    return rows
+
+
+def _params_per_record(specimen: Specimen, r, params, n_rec: int) -> list[RockingParams]:
+    """One RockingParams per record: ``params`` given once or per record, or the specimen's with ``r``."""
+    if params is None or isinstance(params, RockingParams):
+        return [_resolve_params(specimen, r, params)] * n_rec
+    params = list(params)
+    if len(params) != n_rec:
+        raise ValueError(f"`params` must be one RockingParams or {n_rec} of them, got {len(params)}")
+    return [_resolve_params(specimen, r, p) for p in params]
+
+
 def _per_record(name: str, value, n: int) -> np.ndarray:
+    """A number or one value per record, as a contiguous float array of ``n`` finite values."""
     try:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):

@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from housner.readers import CHANNEL_PREFIX, read_at2, read_csv_motion
+from housner.motion_readers import read_at2, read_csv_motion
+from housner.readers import CHANNEL_PREFIX
 
 __all__ = ["VERTICAL", "GroundMotion"]
 
@@ -262,7 +263,7 @@ class GroundMotion:
 
     @classmethod
     def from_at2(cls, path: str | Path, name: str | None = None, *, units: str | None = None) -> GroundMotion:
-        """Read a PEER AT2 record in the units its header names (:func:`housner.readers.read_at2`).
+        """Read a PEER AT2 record in the units its header names (:func:`housner.motion_readers.read_at2`).
 
         ``units``: the acceleration unit when the header names none (e.g. ``"g"``); if the header
         names one, it must agree. ``name`` defaults to the file's stem.
@@ -281,7 +282,7 @@ class GroundMotion:
         name: str | None = None,
     ) -> GroundMotion:
         """Read a CSV record: time and acceleration columns, units in the header, extra ``ground_acc_<what>``
-        columns as channels (:func:`housner.readers.read_csv_motion`). ``name`` defaults to the file's stem."""
+        columns as channels (:func:`housner.motion_readers.read_csv_motion`). ``name`` defaults to the file's stem."""
         acc, dt, provenance, channels = read_csv_motion(path, time_column=time_column, acc_column=acc_column,
                                                         units=units)  # fmt: skip
         return cls(acc=acc, dt=dt, name=name or Path(path).stem, provenance=provenance, channels=channels)

@@ -1,12 +1,13 @@
-"""Readers of measured data: units in headers, PEER AT2 and CSV files, converted once to SI here.
+"""Readers of measured data: units in headers and CSV columns, converted once to SI here, and the input rules
+every reader of a record applies.
 
-Every file the suite reads (records, campaigns) goes through these functions; SI inside after them.
+Every file the suite reads (records, campaigns) goes through these functions, or through the readers of
+ground-motion record files built on them (:mod:`housner.motion_readers`: PEER AT2, motion CSV); SI inside
+after them.
 
-Accelerations are stored in m/s^2 (SI inside). The readers convert once: a PEER
-AT2 file in the units its header names (g, cm/s^2, m/s^2, in/s^2, ...), a CSV
-column in the unit written in its header (``time [ms]``, ``ground_acc [g]``,
-``theta [deg]``; SI when none is written). Between samples the acceleration is
-taken as linear in time.
+Accelerations are stored in m/s^2 (SI inside). A CSV column is converted once, from the unit written
+in its header (``time [ms]``, ``ground_acc [g]``, ``theta [deg]``; SI when none is written). Between
+samples the acceleration is taken as linear in time.
 
 Units understood (:func:`parse_unit`), with the factor to SI:
 
@@ -45,12 +46,13 @@ __all__ = [
     "PLAUSIBLE_ACC",
     "QUANTITIES",
     "SI_UNITS",
+    "UNIT_CHOICES",
     "CsvColumns",
+    "check_declared_acceleration",
+    "excerpt",
     "parse_unit",
-    "read_at2",
     "read_csv_columns",
     "read_csv_header",
-    "read_csv_motion",
     "read_csv_si",
     "require_samples",
     "uniform_step",
@@ -98,7 +100,8 @@ for _q, _names, _label, _f in (
 ):
     for _n in _names:
         _NAMED_UNITS[_n] = (_q, _label, _f)
-_UNIT_CHOICES = {
+#: The units understood for each quantity, as listed in messages.
+UNIT_CHOICES = {
     "time": "s, ms, us",
     "acceleration": "m/s^2, g, cm/s^2 (gal), mm/s^2, in/s^2, ft/s^2",
     "angle": "rad, mrad, urad, deg",
@@ -139,198 +142,6 @@ def require_samples(path: str | Path, n: int, line: int | None = None) -> None:
         raise DataFileError(path, f"only {n} samples; a record needs at least {MIN_RECORD_SAMPLES}", line=line)
 
 
-_NPTS_DT = re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([0-9.EeDd+-]+)", re.IGNORECASE)
-
-
-def read_at2(path: str | Path, *, units: str | None = None) -> tuple[np.ndarray, float, str]:
-    """Read a PEER AT2 record: its acceleration [m/s^2] (converted from the units its header names), DT [s]
-    and provenance.
-
-    Accepts the 1999 PEER layout and the NGA-West2 layout (4 header lines,
-    the fourth with ``NPTS= n, DT= dt``), CRLF line endings, and files
-    with more free-text header lines before the NPTS line or a trailing
-    ``***`` end marker.
-
-    The acceleration unit is read from the header lines up to the NPTS
-    line: a phrase ``UNITS OF <unit>`` / ``units are (<unit>)`` /
-    ``UNITS: <unit>``, or an acceleration unit written out (``CM/SEC/SEC``,
-    ``GAL``, ...); g, cm/s^2, m/s^2, mm/s^2, in/s^2 and ft/s^2 are understood
-    (:func:`parse_unit`). A header that names no unit, names one that is not
-    an acceleration (a velocity file in ``CM/SEC``), or names two different
-    ones is refused with an error naming the file and the line.
-
-    Parameters
-    ----------
-    path : path
-        The file.
-    units : str, optional
-        Acceleration unit to use when the header names none (e.g. ``"g"``);
-        if the header names one, it must agree.
-    """
-    path = Path(path)
-    given = _acc_unit_arg(units)
-    try:
-        text = path.read_bytes().decode("utf-8", errors="replace")
-    except OSError as e:
-        raise DataFileError(path, f"cannot read: {e.strerror or e}") from None
-    lines = text.splitlines()
-    header_line = None
-    for i, line in enumerate(lines[:50]):
-        m = _NPTS_DT.search(line)
-        if m:
-            header_line = i
-            break
-    if header_line is None:
-        raise DataFileError(
-            path, "no 'NPTS= n, DT= dt' header line in the first 50 lines; is this a PEER AT2 file?"
-        )
-    npts = int(m.group(1))
-    try:
-        dt = float(m.group(2).replace("D", "E").replace("d", "e"))
-    except ValueError:
-        raise DataFileError(path, f"cannot read DT from {m.group(0)!r}", line=header_line + 1) from None
-    unit_label, factor, unit_where = _at2_units(path, lines[: header_line + 1], given)
-    values: list[float] = []
-    starts: list[tuple[int, int]] = []  # (index of the line's first value, 1-based line): a sample's line
-    for i in range(header_line + 1, len(lines)):
-        line = lines[i].strip()
-        if not line:
-            continue
-        if line.startswith("*"):
-            break
-        starts.append((len(values), i + 1))
-        for tok in line.split():
-            try:
-                v = float(tok.replace("D", "E"))
-            except ValueError:
-                raise DataFileError(path, f"not a number: {_shown(tok)}", line=i + 1) from None
-            if not math.isfinite(v):
-                raise DataFileError(path, f"acceleration is not finite: {_shown(tok)}", line=i + 1)
-            values.append(v)
-    if not values:
-        raise DataFileError(path, "no acceleration samples after the header", line=header_line + 1)
-    if len(values) != npts:
-        raise DataFileError(path, f"header says NPTS={npts} but {len(values)} samples follow", line=header_line + 1)
-    if not (dt > 0 and math.isfinite(dt)):
-        raise DataFileError(path, f"DT must be positive, got {dt}", line=header_line + 1)
-    title = " / ".join(s.strip() for s in lines[1:header_line] if s.strip())[:200]
-    conv = f"g -> m/s^2 with g = {G}" if unit_label == "g" else f"{unit_label} -> m/s^2 x {factor:g}"
-    acc = np.asarray(values) * factor
-    first, line_of = zip(*starts, strict=True)
-    sample_lines = np.repeat(np.asarray(line_of), np.diff(np.append(first, len(values))))
-    _check_declared_acceleration(path, None, acc, sample_lines, unit_label)
-    return acc, dt, f"{path.name} (PEER AT2, {conv}; units {unit_where}); {title}"
-
-
-def read_csv_motion(
-    path: str | Path,
-    *,
-    time_column: str = "time",
-    acc_column: str = "ground_acc",
-    units: str | None = None,
-) -> tuple[np.ndarray, float, str, dict[str, np.ndarray]]:
-    """Read a CSV with a header line, a time column and an acceleration column: acceleration [m/s^2], step [s],
-    provenance and extra channels [m/s^2].
-
-    The header may give each column's unit in brackets: ``time [ms]``,
-    ``ground_acc [g]`` (see :func:`parse_unit` for the units understood);
-    the values are converted once, here, to s and m/s^2. Without a unit the
-    time column is read in seconds (a step outside 1e-5 .. 0.1 s is then
-    refused as implausible) and the acceleration in ``units``.
-
-    Parameters
-    ----------
-    path : path
-        The file (UTF-8, with or without a byte-order mark).
-    time_column, acc_column : str
-        Column names (without the bracketed unit). Every other column named
-        ``ground_acc_<what>`` (e.g. ``ground_acc_vertical [m/s^2]``) is read as
-        an extra channel of the motion, for effects that read it.
-    units : str, optional
-        Unit of the acceleration column when the header gives none
-        (default m/s^2); if the header gives one, it must agree.
-
-    Sampling must be uniform to a relative 1e-6 of the step; errors name the
-    file, line and column.
-    """
-    path = Path(path)
-    default = _acc_unit_arg(units)
-    # extra measured channels: every column named ground_acc_<what> [m/s^2 unless its header says]
-    extra = [c for c in dict.fromkeys(read_csv_header(path)) if c.startswith(CHANNEL_PREFIX) and c != acc_column]
-    quantities = {time_column: "time", acc_column: "acceleration", **{c: "acceleration" for c in extra}}
-    table = read_csv_si(path, quantities, default_units={acc_column: units} if units else None)
-    t, a = table.values[:2]
-    dt = uniform_step(path, t, table.lines, time_column, assumed_seconds=table.units[0] is None)
-    unit = table.units[1] or (default[1] if default else "m/s^2")
-    provenance = f"{path.name} (CSV, {unit} -> m/s^2" + (f"; channels {', '.join(extra)})" if extra else ")")
-    channels = dict(zip(extra, table.values[2:], strict=True))
-    return a, dt, provenance, channels
-
-
-def _acc_unit_arg(units: str | None) -> tuple[str, str, float] | None:
-    """Check a ``units`` argument of the readers: None or an acceleration unit."""
-    if units is None:
-        return None
-    u = parse_unit(units)
-    if u is None or u[0] != "acceleration":
-        raise ValueError(f"`units` must be an acceleration unit ({_UNIT_CHOICES['acceleration']}), got {units!r}")
-    return u
-
-
-_UNITS_PHRASE = re.compile(r"\bUNITS?\b\s*(?:(?:OF|ARE|IS|IN|=|:)\s*)*\(?\s*([^\s,;()]+)", re.IGNORECASE)
-_ACC_WRITTEN = re.compile(
-    r"(?<![A-Za-z])(?:cm|mm|m|in|ft)\s*/\s*(?:s|sec)\s*(?:/\s*(?:s|sec)|\^\s*2|\*\*\s*2|2|\u00b2)(?![A-Za-z0-9])"
-    r"|(?<![A-Za-z])gals?(?![A-Za-z])",
-    re.IGNORECASE,
-)
-
-
-def _at2_units(path: Path, header: list[str], given: tuple[str, str, float] | None) -> tuple[str, float, str]:
-    """Acceleration unit of an AT2 header: (label, factor to m/s^2, where it was found)."""
-    found: dict[str, tuple[float, int]] = {}
-    unread: list[tuple[str, int]] = []
-    for i, line in enumerate(header):
-        for m in _UNITS_PHRASE.finditer(line):
-            tok = m.group(1).rstrip(".:")
-            u = parse_unit(tok)
-            if u is not None and u[0] == "acceleration":
-                found.setdefault(u[1], (u[2], i + 1))
-            else:
-                unread.append((tok, i + 1))
-        for m in _ACC_WRITTEN.finditer(line):
-            u = parse_unit(m.group(0))
-            if u is not None:
-                found.setdefault(u[1], (u[2], i + 1))
-    if len(found) > 1:
-        (a, (_, la)), (b, (_, lb)) = list(found.items())[:2]
-        raise DataFileError(
-            path, f"the header names two acceleration units, {a} (line {la}) and {b} (line {lb})", line=lb
-        )
-    if found:
-        label, (factor, line) = next(iter(found.items()))
-        if given is not None and given[1] != label:
-            raise DataFileError(path, f"the header says {label} but units={given[1]!r} was given", line=line)
-        return label, factor, f"from header line {line}"
-    if given is not None:
-        return given[1], given[2], "given by the caller"
-    if unread:
-        tok, line = unread[0]
-        raise DataFileError(
-            path,
-            f"cannot read the acceleration units {_shown(tok)} in the header (understood: "
-            f"{_UNIT_CHOICES['acceleration']}); declare the unit: `units = \"g\"` in the scenario's "
-            "[motions] table, units=\"g\" in Python",
-            line=line,
-        )
-    raise DataFileError(
-        path,
-        f"the header (lines 1-{len(header)}) names no acceleration units (expected e.g. 'UNITS OF G' or "
-        "'CM/SEC/SEC'); declare the unit: `units = \"g\"` (or \"cm/s^2\", ...) in the scenario's [motions] "
-        "table, units=\"g\" in Python",
-        line=len(header),
-    )
-
-
 class CsvColumns(NamedTuple):
     """Columns read by :func:`read_csv_si`, converted to SI."""
 
@@ -367,6 +178,15 @@ def _read_text(path: Path) -> str:
         ) from None
 
 
+def _header_cells(path: Path, reader) -> list[tuple[str, str | None]]:
+    """The header line of a CSV as (name, unit written in brackets or None) per cell."""
+    try:
+        raw_header = next(reader)
+    except StopIteration:
+        raise DataFileError(path, "file is empty (expected a header line)", line=1) from None
+    return [_split_header_cell(h) for h in raw_header]
+
+
 def read_csv_header(path: str | Path) -> list[str]:
     """The column names of a CSV's header line, without their bracketed units.
 
@@ -374,11 +194,7 @@ def read_csv_header(path: str | Path) -> list[str]:
     """
     path = Path(path)
     reader = csv.reader(io.StringIO(_read_text(path), newline=""))
-    try:
-        raw_header = next(reader)
-    except StopIteration:
-        raise DataFileError(path, "file is empty (expected a header line)", line=1) from None
-    return [_split_header_cell(h)[0] for h in raw_header]
+    return [name for name, _unit in _header_cells(path, reader)]
 
 
 def read_csv_si(
@@ -417,11 +233,7 @@ def read_csv_si(
     path = Path(path)
     text = _read_text(path)
     reader = csv.reader(io.StringIO(text, newline=""))
-    try:
-        raw_header = next(reader)
-    except StopIteration:
-        raise DataFileError(path, "file is empty (expected a header line)", line=1) from None
-    cells = [_split_header_cell(h) for h in raw_header]
+    cells = _header_cells(path, reader)
     names = [n for n, _u in cells]
     idx: list[int] = []
     factors: list[float] = []
@@ -430,62 +242,84 @@ def read_csv_si(
         if c not in names:
             raise _missing_column(path, c, columns, names, text.partition("\n")[0].rstrip("\r"))
         j = names.index(c)
-        written = cells[j][1]
-        default = (default_units or {}).get(c)
-        factor, label = 1.0, None
-        for source, u_text in (("header", written), ("default", default)):
-            if u_text is None:
-                continue
-            u = parse_unit(u_text)
-            if quantity is None:
-                raise DataFileError(path, f"column `{c}` takes no unit, got [{_shown(u_text, quote=False)}]", line=1,
-                                    column=c)  # fmt: skip
-            if u is None or u[0] != quantity:
-                what = "unknown unit" if u is None else f"{u[0]} unit"
-                raise DataFileError(
-                    path,
-                    f"{what} [{_shown(u_text, quote=False)}] for {quantity} (use {_UNIT_CHOICES[quantity]}; "
-                    f"SI {SI_UNITS[quantity]})",
-                    line=1,
-                    column=c,
-                )
-            if source == "default" and label is not None and label != u[1]:
-                raise DataFileError(
-                    path, f"the header says [{_shown(written, quote=False)}] but units={default!r} was given", line=1,
-                    column=c,
-                )
-            if label is None:
-                factor, label = u[2], u[1]
+        factor, label = _column_unit(path, c, quantity, cells[j][1], (default_units or {}).get(c))
         idx.append(j)
         factors.append(factor)
         units.append(label)
-    out: list[list[float]] = [[] for _ in idx]
-    lines: list[int] = []
-    for row in reader:
-        lineno = reader.line_num
-        if not row or all(not x.strip() for x in row):
-            continue
-        for k, (c, j) in enumerate(zip(columns, idx, strict=True)):
-            if j >= len(row):
-                raise DataFileError(path, f"row has {len(row)} fields, expected {len(names)}", line=lineno, column=c)
-            tok = row[j].strip()
-            try:
-                v = float(tok)
-            except ValueError:
-                raise DataFileError(path, f"not a number: {_shown(tok)}", line=lineno, column=c) from None
-            if not math.isfinite(v):
-                raise DataFileError(path, f"value is not finite: {_shown(tok)}", line=lineno, column=c)
-            out[k].append(v)
-        lines.append(lineno)
-    if not lines:
-        raise DataFileError(path, "no data rows after the header", line=2)
+    out, lines = _read_rows(path, reader, list(zip(columns, idx, strict=True)), len(names))
     values = [np.asarray(v) * f if f != 1.0 else np.asarray(v) for v, f in zip(out, factors, strict=True)]
     for (c, quantity), v, u in zip(columns.items(), values, units, strict=True):
         if quantity == "acceleration" and u is None:  # read in m/s^2 because nothing said otherwise
             _check_plausible_acceleration(path, c, v, np.asarray(lines))
         elif quantity == "acceleration":  # a declared unit is checked too, after conversion
-            _check_declared_acceleration(path, c, v, np.asarray(lines), u)
+            check_declared_acceleration(path, c, v, np.asarray(lines), u)
     return CsvColumns(values, np.asarray(lines), units)
+
+
+def _column_unit(
+    path: Path, column: str, quantity: str | None, written: str | None, default: str | None
+) -> tuple[float, str | None]:
+    """The unit a CSV column is read in: (factor to SI, canonical label or None where SI is assumed).
+
+    ``written`` is the unit in the column's header cell, ``default`` the caller's ``default_units`` entry;
+    the header's unit wins and the default must agree with it. Refuses (naming the file, line 1 and the
+    column) a unit on a dimensionless column, a unit that is unknown or of another quantity, and a default
+    that contradicts the header.
+    """
+    factor, label = 1.0, None
+    for source, u_text in (("header", written), ("default", default)):
+        if u_text is None:
+            continue
+        u = parse_unit(u_text)
+        if quantity is None:
+            raise DataFileError(path, f"column `{column}` takes no unit, got [{excerpt(u_text, quote=False)}]",
+                                line=1, column=column)  # fmt: skip
+        if u is None or u[0] != quantity:
+            what = "unknown unit" if u is None else f"{u[0]} unit"
+            raise DataFileError(
+                path,
+                f"{what} [{excerpt(u_text, quote=False)}] for {quantity} (use {UNIT_CHOICES[quantity]}; "
+                f"SI {SI_UNITS[quantity]})",
+                line=1,
+                column=column,
+            )
+        if source == "default" and label is not None and label != u[1]:
+            raise DataFileError(
+                path, f"the header says [{excerpt(written, quote=False)}] but units={default!r} was given", line=1,
+                column=column,
+            )
+        if label is None:
+            factor, label = u[2], u[1]
+    return factor, label
+
+
+def _read_rows(path: Path, reader, wanted: list[tuple[str, int]], n_fields: int) -> tuple[list[list[float]], list[int]]:
+    """The values of the wanted columns, as written (before any unit conversion), and the file line of each row.
+
+    ``wanted`` holds (column name, field index) pairs; blank rows are skipped. Refuses (naming the file, line
+    and column) a short row, a value that is not a number or not finite, and a file with no data rows.
+    """
+    out: list[list[float]] = [[] for _ in wanted]
+    lines: list[int] = []
+    for row in reader:
+        lineno = reader.line_num
+        if not row or all(not x.strip() for x in row):
+            continue
+        for k, (c, j) in enumerate(wanted):
+            if j >= len(row):
+                raise DataFileError(path, f"row has {len(row)} fields, expected {n_fields}", line=lineno, column=c)
+            tok = row[j].strip()
+            try:
+                v = float(tok)
+            except ValueError:
+                raise DataFileError(path, f"not a number: {excerpt(tok)}", line=lineno, column=c) from None
+            if not math.isfinite(v):
+                raise DataFileError(path, f"value is not finite: {excerpt(tok)}", line=lineno, column=c)
+            out[k].append(v)
+        lines.append(lineno)
+    if not lines:
+        raise DataFileError(path, "no data rows after the header", line=2)
+    return out, lines
 
 
 #: A header cell longer than this is shown cut to it in messages [characters].
@@ -496,8 +330,16 @@ _SHOWN_NAMES = 10
 _HEADER_MAX = 2000
 
 
-def _shown(text: str, *, quote: bool = True) -> str:
-    """A piece of a file for a message: cut to :data:`_SHOWN_NAME` characters, control characters escaped."""
+def excerpt(text: str, *, quote: bool = True) -> str:
+    """A piece of a file for a message: cut to :data:`_SHOWN_NAME` characters, control characters escaped.
+
+    Parameters
+    ----------
+    text : str
+        The piece of the file (a value, a unit, a header cell).
+    quote : bool
+        Show it as a quoted Python string literal; otherwise bare, for text set in brackets or backticks.
+    """
     cut = text if len(text) <= _SHOWN_NAME else text[:_SHOWN_NAME] + "..."
     return repr(cut) if quote else "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in cut)
 
@@ -525,8 +367,8 @@ def _missing_column(path: Path, column: str, wanted, names: list[str], first: st
             line=1,
         )
     close = difflib.get_close_matches(column, names, n=1)
-    hint = f"; did you mean `{_shown(close[0], quote=False)}`?" if close else ""
-    listed = ", ".join(_shown(n, quote=False) for n in names[:_SHOWN_NAMES])
+    hint = f"; did you mean `{excerpt(close[0], quote=False)}`?" if close else ""
+    listed = ", ".join(excerpt(n, quote=False) for n in names[:_SHOWN_NAMES])
     more = f", ... ({len(names)} columns)" if len(names) > _SHOWN_NAMES else ""
     return DataFileError(path, f"missing column `{column}`{hint} (header has: {listed}{more})", line=1)
 
@@ -543,7 +385,7 @@ PLAUSIBLE_ACC = 5.0 * G
 DECLARED_ACC_CEILING = 50.0 * G
 
 
-def _check_declared_acceleration(
+def check_declared_acceleration(
     path: Path, column: str | None, values: np.ndarray, lines: np.ndarray, unit: str
 ) -> None:
     """Refuse an acceleration read in a declared unit whose peak, converted to m/s^2, exceeds 50 g."""

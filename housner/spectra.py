@@ -388,6 +388,24 @@ def rocking_spectrum(
     ----------
     Makris & Konstantinidis (2003); Bachmann et al. (2017), eq. 6 and Figure 2.
     """
+    W, A, r_used = _spectrum_args(specimen, pulse, omega_ratio, accel_ratio, r, n_jobs)
+    ratio, over = _grid_response(specimen, pulse, W, A, r_used, n_jobs)
+    shape2 = (W.size, A.size)
+    return RockingSpectrum(
+        pulse=pulse,
+        omega_ratio=W,
+        accel_ratio=A,
+        theta_max_over_alpha=ratio.reshape(shape2).T.copy(),
+        overturned=over.reshape(shape2).T.copy(),
+        alpha=specimen.alpha,
+        p=specimen.p,
+        r=r_used,
+        name=specimen.name,
+    )
+
+
+def _spectrum_args(specimen, pulse, omega_ratio, accel_ratio, r, n_jobs) -> tuple[np.ndarray, np.ndarray, float]:
+    """The checked grid and r of :func:`rocking_spectrum`: (omega_p/p [-], a_p/(g tan alpha) [-], r [-])."""
     if not isinstance(specimen, Specimen):
         raise TypeError(f"`specimen` must be a housner.Specimen, got {type(specimen).__name__}")
     if pulse not in PULSES:
@@ -401,7 +419,17 @@ def rocking_spectrum(
     r_used = specimen.r_housner if r is None else float(r)
     if not (math.isfinite(r_used) and 0.0 <= r_used <= 1.0):
         raise ValueError(f"`r` must lie in [0, 1], got {r!r}")
+    return W, A, r_used
 
+
+def _grid_response(
+    specimen: Specimen, pulse: str, W: np.ndarray, A: np.ndarray, r: float, n_jobs: int | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """theta_max/alpha [-] (+inf where overturned) and the overturn flags, one per grid point, omega-major.
+
+    Each point simulates the pulse's forcing window; the free rocking after it is closed-form
+    (:func:`free_rocking_peak`).
+    """
     alpha, p = specimen.alpha, specimen.p
     a_up = G * specimen.tan_alpha
     motions = []
@@ -410,24 +438,13 @@ def rocking_spectrum(
         for a in A:
             motions.append(shape.scaled(amplitude=a * a_up))
     with _numba_threads(n_jobs):
-        res = simulate_many(specimen, motions, r=r_used, parallel=n_jobs != 1)
+        res = simulate_many(specimen, motions, r=r, parallel=n_jobs != 1)
 
     theta_max = np.array([x.theta_max for x in res])
     over = np.array([x.overturned for x in res])
     th_end = np.array([x.theta[-1] for x in res])
     thd_end = np.array([x.theta_dot[-1] for x in res])
-    after, over_after = free_rocking_peak(th_end, thd_end, alpha, p, r_used)
+    after, over_after = free_rocking_peak(th_end, thd_end, alpha, p, r)
     over = over | over_after
     ratio = np.where(over, np.inf, np.maximum(theta_max, np.where(over, 0.0, after)) / alpha)
-    shape2 = (W.size, A.size)
-    return RockingSpectrum(
-        pulse=pulse,
-        omega_ratio=W,
-        accel_ratio=A,
-        theta_max_over_alpha=ratio.reshape(shape2).T.copy(),
-        overturned=over.reshape(shape2).T.copy(),
-        alpha=alpha,
-        p=p,
-        r=r_used,
-        name=specimen.name,
-    )
+    return ratio, over

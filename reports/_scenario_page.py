@@ -26,9 +26,9 @@ def scenario_page(
 
     Parameters
     ----------
-    view : housner.reports.run.view.Run or housner.reports.study.view.StudyView
-        The directory loaded: anything with ``meta`` (its JSON: ``scenario``, ``provenance``),
-        ``path``, ``engines``, ``reference`` and ``colors``.
+    view : housner.scenarios.runs.view.Run or housner.reports.study.view.StudyView
+        The directory loaded: anything with ``meta`` (its metadata, with ``scenario`` and ``provenance``
+        tables), ``path``, ``engines`` and ``reference``.
     sections : list of Section
         The page's sections, in order.
     seconds : float
@@ -47,12 +47,12 @@ def scenario_page(
     Returns
     -------
     str
-        A complete HTML5 document; the scenario is named by ``meta["scenario"]["name"]``, or else by
+        A complete HTML5 document; the scenario is named by ``meta.scenario["name"]``, or else by
         the directory's name.
     """
-    scen = view.meta.get("scenario") or {}
+    scen = view.meta.scenario
     name = scen.get("name") or view.path.name
-    created = (view.meta.get("provenance") or {}).get("created", "")
+    created = view.meta.provenance.get("created", "")
     motions = "" if n_motions is None else f"{esc(n_motions)} motions &middot; "
     tags = ", ".join(engine_tag(e, view) for e in view.engines)
     subtitle = (

@@ -150,30 +150,10 @@ def plot_cdfs(
     # Each engine's overturn bar gets its own slot inside the edge strip, so bars and markers do not overlap.
     slot = 0.035 * edge / max(len(names), 1)
     for k, name in enumerate(names):
-        v = np.asarray(samples[name], dtype=np.float64)
-        e = stats.ecdf(v)
-        lo, hi = e.band(ci)
-        last = e.F[-1] if e.F.size else 0.0
-        x = np.concatenate(([0.0], e.x, [edge]))
-        F = np.concatenate(([0.0], e.F, [last]))
-        eps = float(hi[0] - e.F[0]) if e.F.size else 0.0
-        lo = np.concatenate(([0.0], lo, [lo[-1] if lo.size else 0.0]))
-        hi = np.concatenate(([min(eps, 1.0)], hi, [hi[-1] if hi.size else 0.0]))
         c = colors.get(name, _PALETTE[k % len(_PALETTE)])
-        is_ref = name == reference
-        label = f"{name} (n={e.n}, P[overturn]={e.p_overturn:.2f})" + (" - reference" if is_ref else "")
-        if is_ref or reference not in names:
-            # One filled band (the reference's) keeps the plot readable; the others get band edges.
-            ax.fill_between(x, lo, hi, step="post", color=c, alpha=0.10, linewidth=0)
-        else:
-            for b in (lo, hi):
-                ax.step(x, b, where="post", color=c, lw=0.7, ls=(0, (2, 2)), alpha=0.7)
-        ax.step(x, F, where="post", color=c, lw=2.2 if is_ref else 1.6, label=label)
-        # The overturn atom: the CDF's gap to 1, drawn at the right edge with a marker at its foot.
-        xe = edge + (k + 0.5) * slot
-        if e.p_overturn > 0:
-            ax.plot([xe, xe], [last, 1.0], color=c, lw=3.0, solid_capstyle="butt", zorder=4)
-        ax.plot([xe], [last], marker="o" if is_ref else "D", color=c, ms=6, mec="white", clip_on=False, zorder=5)
+        filled = name == reference or reference not in names
+        _draw_cdf(ax, samples[name], name, c, ci, edge, edge + (k + 0.5) * slot, reference=name == reference,
+                  filled=filled)  # fmt: skip
     if paper:
         pts = [(float(v), float(q) / 100.0) for q, v in paper.items() if _finite_number(v)]
         if pts:
@@ -199,6 +179,33 @@ def plot_cdfs(
     ax.legend(loc="lower right", bbox_to_anchor=(0.99 * edge / right - 0.01, 0.0), fontsize=8, framealpha=0.9)
     fig.tight_layout()
     return fig
+
+
+def _draw_cdf(ax, values, name: str, c: str, ci: float, edge: float, xe: float, *, reference: bool,
+              filled: bool) -> None:  # fmt: skip
+    """One engine's empirical CDF of theta_max/alpha, run on to ``edge``, with its DKW band (``filled``, or
+    its two edges dashed) and its overturn atom: a bar from the CDF's end to 1 at ``xe``, a marker at its foot."""
+    v = np.asarray(values, dtype=np.float64)
+    e = stats.ecdf(v)
+    lo, hi = e.band(ci)
+    last = e.F[-1] if e.F.size else 0.0
+    x = np.concatenate(([0.0], e.x, [edge]))
+    F = np.concatenate(([0.0], e.F, [last]))
+    eps = float(hi[0] - e.F[0]) if e.F.size else 0.0
+    lo = np.concatenate(([0.0], lo, [lo[-1] if lo.size else 0.0]))
+    hi = np.concatenate(([min(eps, 1.0)], hi, [hi[-1] if hi.size else 0.0]))
+    label = f"{name} (n={e.n}, P[overturn]={e.p_overturn:.2f})" + (" - reference" if reference else "")
+    if filled:
+        # One filled band (the reference's) keeps the plot readable; the others get band edges.
+        ax.fill_between(x, lo, hi, step="post", color=c, alpha=0.10, linewidth=0)
+    else:
+        for b in (lo, hi):
+            ax.step(x, b, where="post", color=c, lw=0.7, ls=(0, (2, 2)), alpha=0.7)
+    ax.step(x, F, where="post", color=c, lw=2.2 if reference else 1.6, label=label)
+    # The overturn atom: the CDF's gap to 1, drawn at the right edge with a marker at its foot.
+    if e.p_overturn > 0:
+        ax.plot([xe, xe], [last, 1.0], color=c, lw=3.0, solid_capstyle="butt", zorder=4)
+    ax.plot([xe], [last], marker="o" if reference else "D", color=c, ms=6, mec="white", clip_on=False, zorder=5)
 
 
 def _finite_number(v) -> bool:
@@ -454,10 +461,7 @@ def plot_tuning(
         ax, axd = fig.add_subplot(), None
     handles: dict[str, object] = {}
     if target_r is not None:
-        for lo, hi, tol in bands:
-            h = ax.fill_between([lo, hi], target_r * (1 - tol), target_r * (1 + tol), color="#999999", alpha=0.18, lw=0)
-            handles.setdefault(f"accepted: $\\pm${tol:.1%} of the target at {lo:g}-{hi:g} $\\alpha$", h)
-        handles[f"target r = {target_r:.4f}"] = ax.axhline(target_r, color="#555555", ls="--", lw=1)
+        _draw_target_r(ax, target_r, bands, handles)
 
     def line(axis, x, y, name, lab, ms):
         ls, marker = style.get(lab, ("-", "o"))
@@ -476,23 +480,39 @@ def plot_tuning(
     ax.set_title("Tuned contact: r against amplitude", fontsize=11)
     ax.grid(True, alpha=0.3)
     if axd is not None:
-        if decay_rtol is not None:
-            h = axd.axhspan(-100 * decay_rtol, 100 * decay_rtol, color="#999999", alpha=0.18, lw=0, ec="none")
-            handles[f"free decay accepted: $\\pm${decay_rtol:.0%}"] = h
-        axd.axhline(0.0, color="#555555", ls="--", lw=1)
-        for name, series in decay.items():
-            for lab, (k, e) in series.items():
-                k, e = np.asarray(k, dtype=float), np.asarray(e, dtype=float)
-                order = np.argsort(k, kind="stable")
-                line(axd, k[order], 100 * e[order], name, lab, 4.0)
-        axd.set_xlabel("impacts after the release")
-        axd.set_ylabel("peak: engine / analytic - 1 [%]")
-        start = rf" from {decay_start:g} $\alpha$" if decay_start is not None else ""
-        axd.set_title(f"Free decay{start}", fontsize=11)
-        axd.grid(True, alpha=0.3)
+        _draw_decay_panel(axd, decay, decay_rtol, decay_start, handles, line)
     # One legend for both panels, below them: the series are the same in each, and inside they hide points.
     fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     return fig
+
+
+def _draw_target_r(ax, target_r: float, bands: Sequence[tuple[float, float, float]], handles: dict) -> None:
+    """The accepted bands about the target r (grey) and the target itself (dashed), their legend entries
+    added to ``handles``."""
+    for lo, hi, tol in bands:
+        h = ax.fill_between([lo, hi], target_r * (1 - tol), target_r * (1 + tol), color="#999999", alpha=0.18, lw=0)
+        handles.setdefault(f"accepted: $\\pm${tol:.1%} of the target at {lo:g}-{hi:g} $\\alpha$", h)
+    handles[f"target r = {target_r:.4f}"] = ax.axhline(target_r, color="#555555", ls="--", lw=1)
+
+
+def _draw_decay_panel(axd, decay: Mapping, decay_rtol: float | None, decay_start: float | None, handles: dict,
+                      line) -> None:  # fmt: skip
+    """The free-decay panel of :func:`plot_tuning`: each series' peak error [%] against the impact, sorted by
+    impact and drawn by ``line`` (as the r panel's), with the accepted band."""
+    if decay_rtol is not None:
+        h = axd.axhspan(-100 * decay_rtol, 100 * decay_rtol, color="#999999", alpha=0.18, lw=0, ec="none")
+        handles[f"free decay accepted: $\\pm${decay_rtol:.0%}"] = h
+    axd.axhline(0.0, color="#555555", ls="--", lw=1)
+    for name, series in decay.items():
+        for lab, (k, e) in series.items():
+            k, e = np.asarray(k, dtype=float), np.asarray(e, dtype=float)
+            order = np.argsort(k, kind="stable")
+            line(axd, k[order], 100 * e[order], name, lab, 4.0)
+    axd.set_xlabel("impacts after the release")
+    axd.set_ylabel("peak: engine / analytic - 1 [%]")
+    start = rf" from {decay_start:g} $\alpha$" if decay_start is not None else ""
+    axd.set_title(f"Free decay{start}", fontsize=11)
+    axd.grid(True, alpha=0.3)
 
 
 # ----------------------------------------------------------------------------

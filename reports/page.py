@@ -137,9 +137,15 @@ def status_badge(ok: bool | None, yes: str = "PASS", no: str = "FAIL") -> str:
     return f'<span class="badge {"pass" if ok else "fail"}">{yes if ok else no}</span>'
 
 
-def engine_tag(name: str, run: Any) -> str:
-    """An engine's name with its colour swatch; ``run`` is anything with ``colors`` (engine -> colour)."""
-    c = run.colors.get(name, "#000")
+def view_colors(view: Any) -> dict[str, str]:
+    """Engine -> its colour on a page of ``view``, anything with ``engines`` and ``reference`` (a run or a study):
+    :func:`housner.reports.figures.engine_colors` in the view's engine order."""
+    return figures.engine_colors(view.engines, view.reference)
+
+
+def engine_tag(name: str, view: Any) -> str:
+    """An engine's name with its colour swatch (:func:`view_colors`)."""
+    c = view_colors(view).get(name, "#000")
     return f'<span class="eng"><span class="swatch" style="background:{c}"></span>{esc(name)}</span>'
 
 

@@ -92,7 +92,7 @@ class _Loader:
             if self.default is None:
                 _skip_no_path()
             path = self.default
-        from housner.reports.assertions.runs import load_results  # lazy: this plugin loads in every pytest session
+        from housner.scenarios.execution.rundir import load_results  # lazy: this plugin loads in every pytest session
 
         key = Path(path).expanduser().resolve()
         if key not in self._cache:

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from housner.cli import main
-from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
+from housner.scenarios.catalogue import ScenarioError
+from housner.scenarios.catalogue.scenario import load_scenario
 from housner.scenarios.motions import build as motion_build
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.motions.records import ELCENTRO_VARIANTS, elcentro

@@ -11,9 +11,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from housner import stats
+from housner import proportions, stats
 from housner.errors import DataFileError
-from housner.reports.assertions.runs import (
+from housner.reports.assertions import (
     AgreementReport,
     CDFAgreementError,
     RecordAgreementError,
@@ -293,7 +293,7 @@ def _heavy_modules_imported(tmp_path_factory):
     df = table({"housner": np.linspace(0.1, 1.0, 30), "mujoco": np.linspace(0.1, 1.0, 30)})
     df.to_parquet(path)
     assert_cdf_agreement(load_results(path), percentiles={50: 0.1})  # imports scipy.stats on the way
-    stats.overturn_probability([True, False], method="clopper-pearson")
+    proportions.overturn_probability([True, False], method="clopper-pearson")
 
 
 def write_run(directory, df):

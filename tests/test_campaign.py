@@ -17,7 +17,7 @@ from housner.errors import DataFileError
 from housner.free_rocking import half_cycle_integral
 from housner.model import simulate
 from housner.readers import uniform_step
-from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, estimate_release, load_campaign
+from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.compare import compare
 from housner.scenarios.campaigns.history_error import (
     ERROR_CLIP,
@@ -27,6 +27,7 @@ from housner.scenarios.campaigns.history_error import (
     record_error,
 )
 from housner.scenarios.campaigns.localise import features
+from housner.scenarios.campaigns.records import OVERTURN_ANGLE, estimate_release
 
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha

@@ -3,7 +3,8 @@
 import pytest
 
 from housner.cli import main
-from housner.scenarios.catalogue.scenario import SCENARIOS, ScenarioError, load_scenario
+from housner.scenarios.catalogue import ScenarioError
+from housner.scenarios.catalogue.scenario import SCENARIOS, load_scenario
 
 
 @pytest.mark.parametrize("name", sorted(SCENARIOS))

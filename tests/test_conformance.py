@@ -20,7 +20,7 @@ SEED = Specimen.bachmann2017()
 
 def _importable(name: str) -> str | None:
     """None if the engine's class imports, else the reason it does not (for a skip)."""
-    entry = ENGINES[name]
+    entry = ENGINES[name].entry_point
     if isinstance(entry, str):
         module = entry.partition(":")[0]
         try:

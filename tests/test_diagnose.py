@@ -10,6 +10,7 @@ checks the none-case and two effects; the full confusion table is slow.
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import os
@@ -218,6 +219,18 @@ def test_split_is_seeded_and_keeps_free_vibration_in_training(base):
         split_records(camp, 1.0)
 
 
+def test_the_older_train_fraction_is_the_command_line_s_alone():
+    import argparse
+
+    from housner.cli.diagnose import _folds
+
+    # the library takes folds; the command line turns --train-fraction f into K = round(1 / (1 - f)), at least 2
+    assert "train_fraction" not in inspect.signature(diagnose).parameters
+    assert _folds(argparse.Namespace(folds=5, train_fraction=None)) == 5
+    assert _folds(argparse.Namespace(folds=5, train_fraction=0.75)) == 4
+    assert _folds(argparse.Namespace(folds=5, train_fraction=0.3)) == 2
+
+
 def test_fit_finds_the_minimum_of_a_known_objective():
     spec = Specimen.bachmann2017()
 
@@ -242,13 +255,13 @@ def test_a_small_fall_that_many_records_prove_is_significant_a_negligible_one_is
     floor = 0.0054
     cur = floor + rng.normal(0, 1e-4, 200)
     # every record better by 0.05 sigma: overwhelming statistics, but below the practical margin
-    sig, d, se, _z, p, why = judge(cur, cur - 0.5 * PRACTICAL * floor, 0.005, floor)
-    assert p < 1e-10 and not sig and "tenth of the sensor noise" in why
+    j = judge(cur, cur - 0.5 * PRACTICAL * floor, 0.005, floor)
+    assert j.pvalue < 1e-10 and not j.significant and "tenth of the sensor noise" in j.reason
     # a 12 ms sensor lag's fall (0.0046 alpha, less than one sigma per record) over 100 records that
     # scatter by 0.01 alpha: z ~ 4.6, significant (the old one-sigma gate dropped it)
     cur100 = floor + np.abs(rng.normal(0, 0.01, 100))
     new100 = cur100 - 0.0046 + rng.normal(0, 0.002, 100)
-    assert judge(cur100, new100, 0.05 / 9, floor)[0]
+    assert judge(cur100, new100, 0.05 / 9, floor).significant
     # a large but inconsistent change is not significant either
     noisy = cur + rng.normal(0, 0.05, 200)
-    assert not judge(cur, noisy, 0.005, floor)[0]
+    assert not judge(cur, noisy, 0.005, floor).significant

@@ -25,6 +25,7 @@ from housner.effects import (
     discover_effects,
     make_effect,
     make_effects,
+    param,
     register_effect,
     simulate_flexible,
     simulate_with_effects,
@@ -81,15 +82,15 @@ def test_builtin_registry_and_metadata():
     for name in BUILTIN:
         cls = EFFECTS[name]
         assert cls.name == name and cls.__doc__ and "References" in cls.__doc__
-        assert set(cls.params) == set(cls.__dataclass_fields__)
-        for key, spec in cls.params.items():
+        assert list(cls.param_specs) == list(cls.__dataclass_fields__)
+        for key, spec in cls.param_specs.items():
             assert isinstance(spec, ParamSpec) and spec.unit and spec.doc
             lo, hi = spec.bounds_for(SPEC)
             assert lo < hi
             default = cls.__dataclass_fields__[key].default
             assert spec.default == (None if default is dataclasses.MISSING else default)
-    assert EFFECTS["restitution"].params["r"].neutral_for(SPEC) == R_H
-    assert EFFECTS["asymmetric_pivots"].params["e"].bounds_for(SPEC) == (-0.5 * SPEC.B, 0.5 * SPEC.B)
+    assert EFFECTS["restitution"].param_specs["r"].neutral_for(SPEC) == R_H
+    assert EFFECTS["asymmetric_pivots"].param_specs["e"].bounds_for(SPEC) == (-0.5 * SPEC.B, 0.5 * SPEC.B)
 
 
 def test_unknown_name_lists_choices_and_suggests_closest():
@@ -636,6 +637,47 @@ def test_user_effect_registered_by_decorator_is_accepted_and_acts():
         assert TableGain.name == "test_table_gain"
     finally:
         EFFECTS.pop("test_table_gain", None)
+
+
+def test_a_parameter_is_declared_once_on_its_field():
+    """param() puts the spec on the field: the table is read off the fields; a second table is refused."""
+
+    @dataclass(frozen=True)
+    class Gain(Effect):
+        name = "test_param_gain"
+        lag: float = param("s", (0.0, 0.1), neutral=0.0, doc="lag")
+        gain: float = param("-", (0.5, 2.0), neutral=1.0, default=1.0, doc="gain of the table")
+
+    try:
+        register_effect(Gain)
+        assert list(Gain.param_specs) == ["lag", "gain"]
+        assert Gain.param_specs["gain"] == ParamSpec("-", (0.5, 2.0), 1.0, 1.0, "gain of the table")
+        assert Gain.param_specs["lag"].default is None
+        with pytest.raises(ValueError, match="needs `lag`"):
+            make_effect("test_param_gain", gain=1.5)
+        assert make_effect("test_param_gain", lag=0.01).describe() == {"name": "test_param_gain", "lag": 0.01,
+                                                                       "gain": 1.0}  # fmt: skip
+        with pytest.raises(ValueError, match="`gain`"):
+            Gain(lag=0.0, gain=5.0)
+    finally:
+        EFFECTS.pop("test_param_gain", None)
+
+    @dataclass(frozen=True)
+    class Twice(Effect):
+        name = "test_param_twice"
+        params = {"gain": ParamSpec("-", (0.5, 2.0), 1.0, 1.0, "gain")}
+        gain: float = param("-", (0.5, 2.0), neutral=1.0, default=1.0, doc="gain")
+
+    with pytest.raises(ValueError, match="declared twice"):
+        register_effect(Twice)
+
+    @dataclass(frozen=True)
+    class Bare(Effect):
+        name = "test_param_bare"
+        gain: float = 1.0
+
+    with pytest.raises(ValueError, match="declare each field with param"):
+        register_effect(Bare)
 
 
 def test_user_effect_from_an_entry_point(tmp_path, monkeypatch):

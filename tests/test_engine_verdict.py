@@ -1,7 +1,7 @@
 """An engine's verdict against the reference: PASS/FAIL on enough records, inconclusive on tiny sets,
 with the record-by-record verdict against the chaos floor beside it; `housner run` prints it.
 
-The rule (housner.reports.run.view.MIN_RECORDS): one record moves the KS distance by 1/n, so a distribution
+The rule (housner.scenarios.runs.verdicts.MIN_RECORDS): one record moves the KS distance by 1/n, so a distribution
 verdict against the 0.15 tolerance needs n >= 3 / 0.15 = 20 records; a failed record fails at any size.
 """
 
@@ -13,8 +13,8 @@ import sys
 import pandas as pd
 import pytest
 
-from housner.reports.run.view import MIN_RECORDS, engine_verdict
 from housner.scenarios.runs.chaos import ChaosFloor
+from housner.scenarios.runs.verdicts import MIN_RECORDS, engine_verdict
 from housner.stats import KS_MAX
 
 

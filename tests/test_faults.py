@@ -174,7 +174,10 @@ def test_ctrl_c_exits_fast_with_130_and_keeps_the_cache(tmp_path):
     last = err.strip().splitlines()[-1]
     assert last.startswith("housner: interrupted:") and "cached" in last
     done = int(last.split("interrupted:")[1].split()[0])
-    assert done >= 2 and len(list(cache.rglob("*.npz"))) >= done  # the finished records are in the cache
+    # The finished records are in the cache. Two were stored before the signal, but the workers get SIGINT too: one
+    # may store its record and die before reporting it, and that record is then not counted (under a loaded
+    # machine, 1 of the 2); the count never claims a record the cache lacks.
+    assert done >= 1 and len(list(cache.rglob("*.npz"))) >= done
 
 
 def test_sigterm_is_handled_like_ctrl_c_with_143(tmp_path):

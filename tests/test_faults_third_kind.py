@@ -29,6 +29,7 @@ from housner.scenarios.campaigns.diagnose import diagnose
 from housner.scenarios.campaigns.scoring import NonFiniteHistory, NonFiniteScore, Scorer, check_finite
 from housner.scenarios.execution.rundir import (
     IncompleteRunError,
+    RunMeta,
     UnverifiedRunWarning,
     load_results,
     provenance,
@@ -141,7 +142,7 @@ SIMULATE = textwrap.dedent(
     from pathlib import Path
     from housner import GroundMotion, Specimen
     from housner.effects import apply_effects, make_effect, simulate_with_effects
-    from housner.effects.terms import kernel_cache_repairs, kernel_module
+    from housner.effects.codegen import kernel_cache_repairs, kernel_module
 
     spec = Specimen.bachmann2017()
     mo = GroundMotion.free_vibration(0.5 * spec.alpha, 2.0)
@@ -237,7 +238,7 @@ def _run(out: Path, n: int, scale: float = 1.0, histories: bool = True) -> Path:
         "wall_s": {"total": 1.0},
         "provenance": provenance(),
     }
-    write_run(out, df, hist if histories else {}, motions, meta)
+    write_run(out, df, hist if histories else {}, motions, RunMeta.from_json(meta))
     return out
 
 

@@ -14,7 +14,6 @@ from housner.cli import main
 from housner.engines.base import engine_class
 from housner.reports.run.sections import tuning as tuning_section
 from housner.reports.run.sections.engines_explained import engines_explained
-from housner.reports.run.view import Run
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.runs.frontier import (
     KNEE_Z,
@@ -27,6 +26,7 @@ from housner.scenarios.runs.frontier import (
     knee_reason,
     unmet_everywhere,
 )
+from housner.scenarios.runs.view import Run
 
 ENGINES = ("mujoco", "pybullet", "dart", "opensees", "drake")
 

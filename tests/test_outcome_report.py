@@ -24,9 +24,10 @@ from housner.motion import GroundMotion
 from housner.reports.diagnosis import render_outcome_report, write_outcome_report
 from housner.reports.diagnosis.outcome_figures import GRID, baseline_label, fit_soft_logistic, level_lines
 from housner.reports.diagnosis.outcomes import MISSES_SHOWN, STATUS, step_label
-from housner.scenarios.campaigns.campaign import Campaign, OutcomeRecord
+from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS
 from housner.scenarios.campaigns.outcomes import diagnose_outcomes
+from housner.scenarios.campaigns.records import OutcomeRecord
 from housner.specimen import Specimen
 
 #: Records of the synthetic campaign [-], their duration [s] and sample step [s].

@@ -12,8 +12,16 @@ from scipy.integrate import cumulative_trapezoid
 
 from housner.scenarios.motions import rdk
 from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
-from housner.scenarios.motions.rdk import RDKParams, fit, pmnm_count, settle_time, simulate, upcrossing_count
-from housner.scenarios.motions.records import arias_intensity, elcentro, husid_time, significant_duration
+from housner.scenarios.motions.rdk import fit, simulate
+from housner.scenarios.motions.rdk_params import RDKParams, settle_time
+from housner.scenarios.motions.records import (
+    arias_intensity,
+    elcentro,
+    husid_time,
+    pmnm_count,
+    significant_duration,
+    upcrossing_count,
+)
 from housner.units import G
 
 # A mid-size, mid-frequency motion used where El Centro's own fit is not needed.
@@ -98,7 +106,7 @@ def test_envelope_rejects_what_a_gamma_shape_cannot_reach():
 def raw_process():
     """400 motions before and after the high-pass filter, with their parameters."""
     p = RDKParams(**KNOWN)
-    u = rdk._white_noise(rdk._seed_sequence(11).spawn(400), p.n_warm + p.n_noise)
+    u = rdk.white_noise(rdk.seed_sequence(11).spawn(400), p.n_warm + p.n_noise)
     acc, x = rdk._simulate_array(p, u)
     return p, acc, x
 

@@ -6,17 +6,10 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-from housner.scenarios.motions import rdk, rdk_match
+from housner.scenarios.motions import bands, rdk, rdk_match
+from housner.scenarios.motions.bands import BAND_BOUNDS, band_centres, band_check, band_periods
 from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
-from housner.scenarios.motions.rdk_match import (
-    BAND_BOUNDS,
-    MatchedRDK,
-    band_centres,
-    band_check,
-    band_periods,
-    fit_matched,
-    simulate_matched,
-)
+from housner.scenarios.motions.rdk_match import MatchedRDK, fit_matched, simulate_matched
 from housner.scenarios.motions.records import elcentro
 
 VARIANTS = ("peer1999", "ngawest2")
@@ -134,7 +127,7 @@ def test_band_ratios_agree_with_pyrotd(variant, records, ensembles):
         return pyrotd.calc_spec_accels(m.dt, padded, 1 / T, 0.05).spec_accel * g
 
     for table in (check.psa, check.sd):
-        T = band_periods(np.array(table.centre), rdk_match.CHECK_PER_BAND)
+        T = band_periods(np.array(table.centre), bands.CHECK_PER_BAND)
         mean = np.mean([spectrum(m, T) for m in ms], axis=0)
         ref = spectrum(rec, T)  # Sd = PSa / omega^2 on both sides: the same ratio
         ratio = np.exp(np.log(mean / ref).reshape(len(table.centre), -1).mean(axis=1))
@@ -250,7 +243,7 @@ def test_simulated_motions_end_at_rest(variant, ensembles):
 # ----------------------------------------------------------------------
 def test_published_fit_and_simulate_are_unchanged(records, models):
     # Values recorded from rdk.fit / rdk.simulate before housner.scenarios.motions.rdk gained
-    # the _modulated_noise / _highpass hook (commit e88a637); they matched bit
+    # the modulated_noise / highpass hook (commit e88a637); they matched bit
     # for bit after it. rtol 1e-12 leaves room only for libm differences.
     p = rdk.fit(records["peer1999"])
     assert p == models["peer1999"].params  # fit_matched starts from the published fit

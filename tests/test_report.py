@@ -21,13 +21,12 @@ from housner.engines.base import ENGINES, register_engine
 from housner.errors import DataFileError
 from housner.reports import figures
 from housner.reports.run import page as html
-from housner.reports.run import view as run_view
 from housner.reports.run.sections import distribution as distribution_section
 from housner.reports.run.sections import tuning as tuning_section
-from housner.reports.run.view import RECORD_RTOL
-from housner.scenarios.execution.rundir import provenance, write_run
+from housner.scenarios.execution.rundir import RunMeta, provenance, write_run
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.runs.chaos import chaos_floor, errors_from_dict, run_engine_errors
+from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, run_engine_errors
+from housner.scenarios.runs.view import BOOT_SEED
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = Specimen.bachmann2017()
@@ -90,7 +89,7 @@ def make_run(out: Path, motions, engines, *, motions_meta=None, analysis=None, e
         "provenance": provenance(),
         **(extra or {}),
     }
-    write_run(out, df, hist, motions, meta)
+    write_run(out, df, hist, motions, RunMeta.from_json(meta))
     return out
 
 
@@ -714,7 +713,7 @@ def test_table2_gives_the_factors_that_reach_the_papers_percentiles(rdk_run):
 
     out, model, S = rdk_run
     gap = html.render_report(out).split('id="table2-gap"')[1].split("</section>")[0]
-    f = equivalent_amplitude(SPEC, model, {25: 0.37, 50: 0.77, 75: float("inf")}, seed=run_view.BOOT_SEED)
+    f = equivalent_amplitude(SPEC, model, {25: 0.37, 50: 0.77, 75: float("inf")}, seed=BOOT_SEED)
     assert "How much stronger, in effect, the paper's motions were" in gap
     for q, d in f["factors"].items():
         label = f"for the {stats.percentile_label(q)}"

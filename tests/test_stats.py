@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 from scipy import stats as sps
 
-from housner import stats
+from housner import proportions, stats
 from housner.scenarios.execution import tables
 
 INF = np.inf
@@ -180,7 +180,7 @@ def test_percentiles_argument_errors():
 def test_overturn_probability_matches_scipy(k, n, method, scipy_method, ci):
     o = np.zeros(n, dtype=bool)
     o[:k] = True
-    got = stats.overturn_probability(o, ci=ci, method=method)
+    got = proportions.overturn_probability(o, ci=ci, method=method)
     ref = sps.binomtest(k, n).proportion_ci(confidence_level=ci, method=scipy_method)
     assert got.estimate == k / n
     assert got.low == pytest.approx(ref.low, abs=1e-10)
@@ -190,24 +190,24 @@ def test_overturn_probability_matches_scipy(k, n, method, scipy_method, ci):
 def test_overturn_probability_closed_forms():
     n, ci = 20, 0.95
     a = 1 - ci
-    none = stats.overturn_probability(np.zeros(n, bool), ci=ci, method="clopper-pearson")
+    none = proportions.overturn_probability(np.zeros(n, bool), ci=ci, method="clopper-pearson")
     assert none.low == 0.0 and none.high == pytest.approx(1 - (a / 2) ** (1 / n), rel=1e-12)
-    every = stats.overturn_probability(np.ones(n, bool), ci=ci, method="clopper-pearson")
+    every = proportions.overturn_probability(np.ones(n, bool), ci=ci, method="clopper-pearson")
     assert every.high == 1.0 and every.low == pytest.approx((a / 2) ** (1 / n), rel=1e-12)
     z2 = NormalDist().inv_cdf(1 - a / 2) ** 2
-    w = stats.overturn_probability(np.zeros(n, bool), ci=ci)
+    w = proportions.overturn_probability(np.zeros(n, bool), ci=ci)
     assert w.low == 0.0 and w.high == pytest.approx(z2 / (n + z2), rel=1e-12)
-    est, low, high = stats.overturn_probability([1, 0, 0, 1])  # 0/1 accepted; unpacks as a triple
+    est, low, high = proportions.overturn_probability([1, 0, 0, 1])  # 0/1 accepted; unpacks as a triple
     assert est == 0.5 and low < 0.5 < high
 
 
 def test_overturn_probability_errors():
     with pytest.raises(ValueError, match="`overturned` is empty"):
-        stats.overturn_probability([])
+        proportions.overturn_probability([])
     with pytest.raises(ValueError, match="booleans"):
-        stats.overturn_probability([0.3, 0.5])
+        proportions.overturn_probability([0.3, 0.5])
     with pytest.raises(ValueError, match="did you mean 'clopper-pearson'"):
-        stats.overturn_probability([True], method="clopper_pearson")
+        proportions.overturn_probability([True], method="clopper_pearson")
 
 
 # ----------------------------------------------------------------------------
@@ -333,7 +333,7 @@ def test_compare_engines_matches_the_array_functions():
     pe = stats.percentiles(pyb, (25, 50, 75), n_boot=200, seed=3)
     assert table.loc["pybullet", "q50"] == pe.value[1]
     assert table.loc["pybullet", "q50_low"] == pe.low[1] and table.loc["pybullet", "q75_high"] == pe.high[2]
-    po = stats.overturn_probability(np.isinf(pyb))
+    po = proportions.overturn_probability(np.isinf(pyb))
     assert tuple(table.loc["pybullet", ["p_overturn", "p_overturn_low", "p_overturn_high"]]) == tuple(po)
     ks = stats.ks_2samp(pyb, ref)
     assert table.loc["pybullet", "ks_distance"] == ks.distance and table.loc["pybullet", "ks_pvalue"] == ks.pvalue

@@ -12,7 +12,8 @@ from scipy.integrate import cumulative_trapezoid
 from housner import G, simulate
 from housner.reports.assertions import assert_fragility_agreement
 from housner.reports.assertions.studies import FragilityAgreementError
-from housner.scenarios.catalogue.scenario import ScenarioError, load_scenario
+from housner.scenarios.catalogue import ScenarioError
+from housner.scenarios.catalogue.scenario import load_scenario
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.motions.elastic import response_spectrum
 from housner.scenarios.studies.study import StudyResult, intensity_measure, load_study, run_study, study_motions

@@ -33,8 +33,8 @@ from housner.effects import (
     make_effect,
     simulate_with_effects,
 )
+from housner.effects.codegen import kernel_dir, kernel_module
 from housner.effects.parameters import damping_moment, restitution_law
-from housner.effects.terms import kernel_dir, kernel_module
 from housner.model import simulate
 from housner.rocking_params import RockingParams
 from housner.scenarios.campaigns.campaign import load_campaign
@@ -428,7 +428,7 @@ def test_example_fitted_on_its_campaign(plugins, base, example):
     params, _err, _n = fit_effect(example, lambda e: float(errors(e).mean()), camp.specimen)
     assert params[key] == pytest.approx(truth, rel=rel)
     fitted = errors(make_effect(example, **params)) / noise
-    neutral = errors(make_effect(example, **{key: EFFECTS[example].params[key].neutral})) / noise
+    neutral = errors(make_effect(example, **{key: EFFECTS[example].param_specs[key].neutral})) / noise
     fv = np.array([r.kind == "free_vibration" for r in camp.records])
     judged = fv if example == "pivot_friction" else ~fv
     assert np.all(fitted[fv] < 1.4)  # the free vibrations at their noise (the plain model's own: 1.0-1.34)

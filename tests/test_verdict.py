@@ -11,6 +11,7 @@ two split seeds and that the answer does not change with the split.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -23,7 +24,7 @@ from housner.scenarios.campaigns.diagnose import diagnose
 from housner.scenarios.campaigns.floor import Floor, _perturbed
 from housner.scenarios.campaigns.residual import RATIO_MISFIT, residual_test
 from housner.scenarios.campaigns.scoring import cv_folds
-from housner.scenarios.campaigns.verdict import STATUSES, decide
+from housner.scenarios.campaigns.verdict import STATUSES, VerdictFacts, decide, status_rule, verdict_text
 from housner.specimen import Specimen
 
 _CACHE: dict = {}
@@ -116,6 +117,22 @@ def test_too_few_records_is_inconclusive():
     v = decide(n_records=5, baseline=r, final=r, selected=[], params={}, baseline_cmp=None, final_cmp=None,
                library=["restitution"])  # fmt: skip
     assert v.status == "inconclusive" and "too few" in v.text
+
+
+def test_the_status_is_the_truth_table_and_the_text_is_drawn_from_it():
+    r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
+    facts = VerdictFacts(n_records=5, baseline=r, final=r, selected=[], added=[], model=[], params={},
+                         library=["restitution"], drift=None, family="", classes=[], final_classes=[], local_plain=[],
+                         local_final=[], dist_plain=[], dist_final=[], plain_misfit=False, final_misfit=False,
+                         powered=True, probed=False)  # fmt: skip
+    status = status_rule(False, False, False, False, True)
+    v = decide(n_records=5, baseline=r, final=r, selected=[], params={}, baseline_cmp=None, final_cmp=None,
+               library=["restitution"])  # fmt: skip
+    assert v.status == status == "inconclusive"
+    assert v.text == verdict_text(facts, status) and v.text.startswith("Inconclusive: 5 usable records are too few")
+    # with enough records and the plain model at its floor, the same residual reads "no misfit"
+    enough = dataclasses.replace(facts, n_records=60)
+    assert verdict_text(enough, status_rule(True, False, False, False, True)).startswith("No misfit: ")
 
 
 def test_a_small_campaign_with_a_wrong_p_is_not_called_fine(base):

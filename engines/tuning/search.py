@@ -56,7 +56,7 @@ def tune(
     Parameters
     ----------
     engine_name : str
-        A name in :data:`engines.ENGINES`.
+        A name in :data:`housner.engines.ENGINES`.
     specimen : Specimen
         The block to tune for.
     target_r : float, optional
@@ -103,6 +103,19 @@ def tune(
     """
     cls = engine_class(engine_name)
     target, amps, small_amps, steps = _checked(specimen, target_r, amplitudes, small_amplitudes, rtol, sample_steps)
+    candidates = _candidate_list(cls, engine_name, specimen, target, candidates)
+    suites = [check_suite(specimen, target, amps, small_amps, check_decay, check_pulses, d) for d in steps]
+    it = tqdm(candidates, desc=f"tuning {engine_name}", unit="candidate") if progress else candidates
+    table, errs, version = _try_all(cls, it, specimen, suites, target, rtol)
+    best = _best(table)
+    tables = result_tables(suites, errs[best], specimen.alpha, target, amps, small_amps, rtol)
+    settings = cls(**candidates[best]).settings() if hasattr(cls, "settings") else candidates[best]
+    return _result(engine_name, specimen, target, settings, table, best, tables, rtol, version)
+
+
+def _candidate_list(cls, engine_name: str, specimen: Specimen, target: float, candidates) -> list[dict]:
+    """The settings to try, each a new dict: ``candidates``, else the engine's ``tuning_candidates`` for the
+    target r [-] and then :func:`impact_law_candidates`."""
     if candidates is None:
         if not hasattr(cls, "tuning_candidates"):
             raise ValueError(f"engine {engine_name!r} has no tuning_candidates(); pass `candidates`")
@@ -110,18 +123,20 @@ def tune(
     candidates = [dict(c) for c in candidates]
     if not candidates:
         raise ValueError("`candidates` is empty")
-    suites = [check_suite(specimen, target, amps, small_amps, check_decay, check_pulses, d) for d in steps]
-    it = candidates
-    if progress:
-        it = tqdm(candidates, desc=f"tuning {engine_name}", unit="candidate")
-    table, errs, version = _try_all(cls, it, specimen, suites, target, rtol)
-    best = _best(table)
-    tables = result_tables(suites, errs[best], specimen.alpha, target, amps, small_amps, rtol)
+    return candidates
+
+
+def _result(
+    engine_name: str, specimen: Specimen, target: float, settings: dict, table: pd.DataFrame, best: int, tables: dict,
+    rtol: float, version: str,
+) -> TuningResult:  # fmt: skip
+    """The :class:`TuningResult` of the candidate ``best`` (its row of ``table``, its ``settings`` as the engine
+    states them, its check ``tables``) for the target r [-]."""
     return TuningResult(
         engine=engine_name,
         specimen=specimen.name,
         target_r=target,
-        settings=cls(**candidates[best]).settings() if hasattr(cls, "settings") else candidates[best],
+        settings=settings,
         table=tables["table"],
         cost_per_sim_second=float(table["cost_per_sim_second"].iloc[best]),
         met=bool(table["met"].iloc[best]),

@@ -8,16 +8,15 @@ and other channels are left as recorded. Load with
 
 from dataclasses import dataclass, replace
 
-from housner.effects import STAGE_GEOMETRY, Effect, ParamSpec, register_effect
+from housner.effects import STAGE_GEOMETRY, Effect, param, register_effect
 
 
 @register_effect
 @dataclass(frozen=True)
 class AccelerometerGain(Effect):
     name = "accelerometer_gain"
-    params = {"gain": ParamSpec("-", (0.8, 1.25), 1.0, 1.0, "recorded over felt table acceleration")}
     stage = STAGE_GEOMETRY  # before any effect that reads the input
-    gain: float = 1.0
+    gain: float = param("-", (0.8, 1.25), neutral=1.0, default=1.0, doc="recorded over felt table acceleration")
 
     def transform_input(self, motion):
         if self.gain == 1.0:

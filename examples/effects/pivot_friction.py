@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from numba import njit
 
-from housner.effects import CoulombTerm, Effect, ParamSpec, register_effect
+from housner.effects import CoulombTerm, Effect, param, register_effect
 from housner.units import G
 
 
@@ -26,8 +26,7 @@ def capacity(phi, t, a, v, s, alpha, p2, q):
 @dataclass(frozen=True)
 class PivotFriction(Effect):
     name = "pivot_friction"
-    params = {"moment": ParamSpec("N m", (0.0, 0.5), 0.0, 0.0, "Coulomb moment M_f at the pivot")}
-    moment: float = 0.0
+    moment: float = param("N m", (0.0, 0.5), neutral=0.0, default=0.0, doc="Coulomb moment M_f at the pivot")
 
     def terms(self, params, specimen):
         sides = ((params.alpha_pos, params.p_pos), (params.alpha_neg, params.p_neg))

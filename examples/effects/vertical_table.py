@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from numba import njit
 
-from housner.effects import Effect, MomentTerm, ParamSpec, register_effect
+from housner.effects import Effect, MomentTerm, param, register_effect
 
 
 @njit(cache=True)
@@ -25,8 +25,9 @@ def vertical_moment(phi, w, t, a, v, s, alpha, p2, q):
 class VerticalTable(Effect):
     name = "vertical_table"
     channels = ("ground_acc_vertical",)
-    params = {"gain": ParamSpec("-", (0.0, 2.0), 0.0, 1.0, "share of the recorded vertical acceleration felt")}
-    gain: float = 1.0
+    gain: float = param(
+        "-", (0.0, 2.0), neutral=0.0, default=1.0, doc="share of the recorded vertical acceleration felt"
+    )
 
     def terms(self, params, specimen):
         return (MomentTerm(vertical_moment, (self.gain,)),) if self.gain else ()

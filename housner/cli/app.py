@@ -19,7 +19,8 @@ from housner.cli.args import (
 from housner.cli.parser import build_parser
 from housner.effects import load_plugin
 from housner.errors import DataFileError, EngineUnavailable, one_line
-from housner.scenarios.execution.workers import RunInterrupted, SchedulerError
+from housner.scenarios.execution.cluster import SchedulerError
+from housner.scenarios.execution.workers import RunInterrupted
 
 __all__ = ["main"]
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import housner
 from housner.effects import available_effects
-from housner.engines.base import ENGINE_PACKAGES, ENGINES
+from housner.engines.base import ENGINES
 from housner.errors import unknown_choice
 
 #: Exit statuses of the command (see the module docstring).
@@ -102,18 +102,19 @@ def engines_arg(value: str) -> list[str]:
 
 
 def _versions() -> str:
-    """``housner X (python Y; engines: ...)``, from package metadata (imports no engine)."""
+    """``housner X (python Y; engines: ...)``: each registered engine's distribution (its spec's, else one of
+    the engine's name), from package metadata (imports no engine)."""
     import platform
     from importlib.metadata import PackageNotFoundError, version
 
     parts = []
-    for name in ENGINES:
-        pkg = ENGINE_PACKAGES.get(name, name)
+    for spec in ENGINES.values():
+        pkg = spec.distribution or spec.name
         try:
             v = housner.__version__ if pkg == "housner" else version(pkg)
         except PackageNotFoundError:
             v = "not installed"
-        parts.append(f"{name} {v}")
+        parts.append(f"{spec.name} {v}")
     return f"housner {housner.__version__} (python {platform.python_version()}; engines: {', '.join(parts)})"
 
 

@@ -74,8 +74,7 @@ def run(args: argparse.Namespace) -> int:
         campaign,
         effects=args.effects,
         add=tuple(args.add or ()),
-        folds=args.folds,
-        train_fraction=args.train_fraction,
+        folds=_folds(args),
         seed=args.seed,
         max_effects=args.max_effects,
         compare_steps=want_report,
@@ -105,6 +104,14 @@ def run(args: argparse.Namespace) -> int:
     if want_report:
         print(f"report: {write_diagnosis_report(diag, args.report)}")
     return 0
+
+
+def _folds(args: argparse.Namespace) -> int:
+    """The cross-validation folds asked for: ``--folds``, or K = round(1 / (1 - f)) (at least 2) from the older
+    ``--train-fraction f``, the share of records each fold's model is fitted on."""
+    if args.train_fraction is None:
+        return args.folds
+    return max(2, int(round(1.0 / (1.0 - args.train_fraction))))
 
 
 def _diagnose_outcomes(args: argparse.Namespace, campaign):

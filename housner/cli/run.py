@@ -19,14 +19,14 @@ from housner.cli.args import (
 )
 from housner.cli.command import EXIT_HELP, add_command, plugin_option
 from housner.reports.run.page import write_report
-from housner.reports.run.view import Run, engine_verdict
 from housner.reports.study.page import write_study_report
 from housner.scenarios.catalogue.scenario import load_scenario
+from housner.scenarios.execution.cluster import connect_scheduler
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES
-from housner.scenarios.execution.workers import connect_scheduler
 from housner.scenarios.runs.run import run_scenario
+from housner.scenarios.runs.view import Run
 from housner.scenarios.studies.study import STUDY_FILES, run_study
 
 SUMMARY = "run a scenario on its engines and write results and an HTML report"
@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     for name in dict.fromkeys(res.engine):  # the engines, then the series with the scenario's [[effects]]
         sub = res[res.engine == name]
         ok = sub[sub.status == "ok"]
-        info = done.meta["engines"][name]
+        info = done.meta.engines[name]
         rejected = f", {info['cache_rejected']} cache entries rejected" if info.get("cache_rejected") else ""
         if info.get("kernel_cache_repairs"):
             rejected += f", {info['kernel_cache_repairs']} damaged kernel-cache entries rebuilt"
@@ -132,14 +132,10 @@ def _print_verdicts(view: Run) -> list[str]:
     """Print each engine's verdict against the reference (as the report's headline gives it); the failed ones."""
     if not view.others:
         return []
-    floors = view.chaos_floors
-    effects = {n for n, v in (view.meta.get("engines") or {}).items() if isinstance(v, dict) and v.get("effects")}
+    verdicts = view.verdicts()  # an engine with the scenario's effects is meant to differ: it has none
     print(f"verdict against {view.reference} (the report's headline):")
     failed = []
-    for name in view.others:
-        if name in effects:
-            continue  # an engine with the scenario's effects is meant to differ: no verdict
-        v = engine_verdict(view.comparison.loc[name], floors.get(name))
+    for name, v in verdicts.items():
         print(f"  {name:9s} {v.line()}")
         if v.status == "FAIL":
             failed.append(name)

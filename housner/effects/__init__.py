@@ -1,9 +1,10 @@
 """Physical effects: small pluggable additions to the analytic rocking model.
 
-An *effect* is a frozen dataclass whose fields are its parameters. The class
-says, once, what each parameter means (:class:`ParamSpec`: unit, bounds for
-fitting, the neutral value at which the effect does nothing) and overrides
-only the hooks it needs; the others are no-ops:
+An *effect* is a frozen dataclass whose fields are its parameters. Each field
+says, once, what its parameter means (:func:`param`, a field carrying a
+:class:`ParamSpec`: unit, bounds for fitting, the neutral value at which the
+effect does nothing, its default) and the class overrides only the hooks it
+needs; the others are no-ops:
 
 ``modify_params(params, specimen)``
     returns a changed :class:`housner.rocking_params.RockingParams` (restitution,
@@ -38,11 +39,14 @@ through the entry-point group ``housner.effects`` (each entry point names an
     @dataclass(frozen=True)
     class TableFilter(Effect):
         name = "table_filter"
-        params = {"gain": ParamSpec("-", (0.5, 1.5), 1.0, doc="table gain")}
-        gain: float = 1.0
+        gain: float = param("-", (0.5, 1.5), neutral=1.0, default=1.0, doc="table gain")
 
         def transform_input(self, motion):
             return motion.scaled(amplitude=self.gain)
+
+An effect whose fields carry no :func:`param` may give its table instead, as a class
+attribute ``params = {"gain": ParamSpec("-", (0.5, 1.5), 1.0, 1.0, "table gain")}``
+(one :class:`ParamSpec` per field); :attr:`Effect.param_specs` reads either.
 
 Composition (:func:`apply_effects`): effects are applied in the order of
 their ``stage`` (geometry, inertia, dissipation, mechanics, sensor) and,
@@ -77,6 +81,7 @@ from __future__ import annotations
 
 from housner.effects.composition import EffectPlan, apply_effects, simulate_with_effects
 from housner.effects.flexible import FlexibleFoundation, simulate_flexible
+from housner.effects.lookup import available_effects, effect_class, make_effect, make_effects
 from housner.effects.parameters import (
     AmplitudeDependentRestitution,
     AsymmetricPivots,
@@ -85,9 +90,9 @@ from housner.effects.parameters import (
     RotationalDamping,
     asymmetric_impact_ratios,
 )
+from housner.effects.plugins import ENTRY_POINT_GROUP, discover_effects, load_plugin
 from housner.effects.registry import (
     EFFECTS,
-    ENTRY_POINT_GROUP,
     STAGE_DISSIPATION,  # noqa: F401 - the stages, for users' effects
     STAGE_GEOMETRY,  # noqa: F401
     STAGE_INERTIA,  # noqa: F401
@@ -95,12 +100,7 @@ from housner.effects.registry import (
     STAGE_SENSOR,  # noqa: F401
     Effect,
     ParamSpec,
-    available_effects,
-    discover_effects,
-    effect_class,
-    load_plugin,
-    make_effect,
-    make_effects,
+    param,
     register_effect,
 )
 from housner.effects.sensor import SensorOffset, TimeLag
@@ -134,6 +134,7 @@ __all__ = [
     "load_plugin",
     "make_effect",
     "make_effects",
+    "param",
     "register_effect",
     "simulate_flexible",
     "simulate_sliding",

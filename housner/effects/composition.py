@@ -108,6 +108,23 @@ def apply_effects(
     if not isinstance(motion, GroundMotion):
         raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
     effects = tuple(effects)
+    _check_effects(specimen, motion, effects)
+    ordered = tuple(sorted(effects, key=lambda e: e.stage))
+    by_terms = [prefer_terms and type(e).fast_path for e in ordered]
+    prm = _rocking_params(specimen, ordered, by_terms, params)
+    mo = motion
+    for e in ordered:
+        mo = e.transform_input(mo)
+        if not isinstance(mo, GroundMotion):
+            raise TypeError(f"effect {e.name!r}: transform_input() must return a GroundMotion, got {type(mo).__name__}")
+    solver, mechanics = _solver(ordered)
+    terms = _terms(specimen, ordered, by_terms, prm, mechanics)
+    return EffectPlan(specimen, ordered, prm, mo, solver, mechanics, terms)
+
+
+def _check_effects(specimen: Specimen, motion: GroundMotion, effects: tuple) -> None:
+    """Refuse effects that are not Effects, given twice, out of bounds for ``specimen``, reading a channel
+    ``motion`` lacks (and no effect makes), or two that each replace the equation of motion."""
     seen: dict[str, int] = {}
     made = {c for x in effects if isinstance(x, Effect) for c in type(x).makes_channels}
     for i, e in enumerate(effects):
@@ -131,20 +148,23 @@ def apply_effects(
             f"effects {' and '.join(repr(m) for m in mech)} each replace the equation of motion and cannot be "
             "combined: give at most one mechanics-changing effect per simulation"
         )
-    ordered = tuple(sorted(effects, key=lambda e: e.stage))
+
+
+def _rocking_params(specimen: Specimen, ordered: tuple, by_terms: list, params) -> RockingParams:
+    """The rocking parameters after every ``modify_params`` but those of the effects realised by their terms."""
     prm = RockingParams.from_specimen(specimen) if params is None else params
-    by_terms = [prefer_terms and type(e).fast_path for e in ordered]
     for e, skip in zip(ordered, by_terms, strict=True):
         if skip:
             continue
         prm = e.modify_params(prm, specimen)
         if not isinstance(prm, RockingParams):
             raise TypeError(f"effect {e.name!r}: modify_params() must return a RockingParams, got {type(prm).__name__}")
-    mo = motion
-    for e in ordered:
-        mo = e.transform_input(mo)
-        if not isinstance(mo, GroundMotion):
-            raise TypeError(f"effect {e.name!r}: transform_input() must return a GroundMotion, got {type(mo).__name__}")
+    return prm
+
+
+def _solver(ordered: tuple) -> tuple[Callable[..., Response] | None, Effect | None]:
+    """The mechanics effect's equation of motion and that effect (None, None for Housner's); ValueError
+    when it conflicts with another effect given."""
     solver = None
     mechanics = None
     for e in ordered:
@@ -158,6 +178,12 @@ def apply_effects(
                 f"effect {mechanics.name!r} cannot be combined with {', '.join(repr(c) for c in clash)}: "
                 f"{mechanics.conflict_reason}"
             )
+    return solver, mechanics
+
+
+def _terms(specimen: Specimen, ordered: tuple, by_terms: list, prm: RockingParams, mechanics: Effect | None):
+    """The effects' kernel terms from the final rocking parameters (a TermSet, or None for none); ValueError
+    when a mechanics effect would take them."""
     terms, with_terms = [], []
     for e, by in zip(ordered, by_terms, strict=True):
         if type(e).fast_path and not by:
@@ -174,7 +200,7 @@ def apply_effects(
             f"{', '.join(repr(n) for n in with_terms)}: give it alone or drop those"
         )
     vertical = any(VERTICAL in type(e).channels or VERTICAL in type(e).makes_channels for e in ordered)
-    return EffectPlan(specimen, ordered, prm, mo, solver, mechanics, TermSet(tuple(terms), vertical) if terms else None)
+    return TermSet(tuple(terms), vertical) if terms else None
 
 
 def simulate_with_effects(

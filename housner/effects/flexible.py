@@ -11,7 +11,7 @@ from numba import njit
 
 from housner._kernel_parts import EPS, HALF_PI, grid, rk4_update, secant
 from housner.effects._mechanics import MAX_EVENTS_PER_SAMPLE, corner_geometry, illinois, pos_int_or_none, run_kernel
-from housner.effects.registry import STAGE_MECHANICS, Effect, ParamSpec, register_effect
+from housner.effects.registry import STAGE_MECHANICS, Effect, param, register_effect
 from housner.model import PH_MAX
 from housner.motion import GroundMotion
 from housner.response import Response
@@ -189,6 +189,43 @@ def _ff_store(th_out, thd_out, w_out, wd_out, i, th, thd, w, wd):
     wd_out[i] = wd
 
 
+@njit(cache=True, inline="always")
+def _ff_contact_event(t, th, thd, w, wd, s, ap, an, lifted, t_uplift, t_both, imp_both, n_imp, impacts, durations, q):
+    """The block's state after a step of :func:`run_flexible` cut at time ``t`` [s] by an event (not an overturn).
+
+    A crossing of theta = 0 switches the pivot side s and, after a corner had lost contact, is an impact
+    (its time stored in ``impacts``, its duration in ``durations`` once a corner lets go again); the
+    contacts (ap, an) are updated, and the first loss of double contact is the uplift.
+
+    Returns (s, ap, an, lifted, t_uplift, t_both, imp_both, n_imp): t_both [s] the time both corners began
+    to push, imp_both the impact whose double contact lasts (-1 when none).
+    """
+    cap = impacts.size
+    if s * th < 0.0:
+        s = -s
+        if lifted:
+            if n_imp < cap:
+                impacts[n_imp] = t
+                durations[n_imp] = math.nan
+            if ap and an:
+                imp_both = n_imp
+            n_imp += 1
+            lifted = False
+    both_before = ap and an
+    ap, an = _ff_contacts(th, thd, w, wd, ap, an, q)
+    if both_before and not (ap and an):
+        lifted = True
+        if math.isnan(t_uplift):
+            t_uplift = t
+        if imp_both >= 0:
+            if imp_both < cap:
+                durations[imp_both] = t - t_both
+            imp_both = -1
+    if ap and an and not both_before:
+        t_both = t
+    return s, ap, an, lifted, t_uplift, t_both, imp_both, n_imp
+
+
 @njit(cache=True, nogil=True)
 def run_flexible(
     acc, dt, msub, q, theta0, theta_dot0, w0, w_dot0, record, th_out, thd_out, w_out, wd_out, impacts, durations
@@ -220,12 +257,11 @@ def run_flexible(
     th, thd, w, wd = theta0, theta_dot0, w0, w_dot0
     s = 1.0 if th > 0.0 or (th == 0.0 and thd >= 0.0) else -1.0
     gp, gn = _ff_gap(th, thd, w, wd, q)
-    ap = gp > 0.0
-    an = gn > 0.0
+    ap, an = gp > 0.0, gn > 0.0
     lifted = not (ap and an)
     t_uplift = 0.0 if lifted else math.nan
     t_both, imp_both, theta_max, w_min = 0.0, -1, abs(th), w
-    over, t_over, n_imp, cap, guard = False, math.nan, 0, impacts.size, 0
+    over, t_over, n_imp, guard = False, math.nan, 0, 0
     if record:
         _ff_store(th_out, thd_out, w_out, wd_out, 0, th, thd, w, wd)
     for k in range(acc.size - 1):
@@ -237,8 +273,7 @@ def run_flexible(
         t_k = k * dt
         a0 = acc[k]
         slope = (acc[k + 1] - a0) / dt
-        tau = 0.0
-        n_ev = 0
+        tau, n_ev = 0.0, 0
         for j in range(msub):
             tend = grid(j + 1, msub, dt)
             while tau < tend and not over:
@@ -261,31 +296,11 @@ def run_flexible(
                     over = True
                     t_over = t
                     theta_max = HALF_PI
-                    th = s * HALF_PI
-                    thd = 0.0
+                    th, thd = s * HALF_PI, 0.0
                     break
-                if s * th < 0.0:
-                    s = -s
-                    if lifted:
-                        if n_imp < cap:
-                            impacts[n_imp] = t
-                            durations[n_imp] = math.nan
-                        if ap and an:
-                            imp_both = n_imp
-                        n_imp += 1
-                        lifted = False
-                both_before = ap and an
-                ap, an = _ff_contacts(th, thd, w, wd, ap, an, q)
-                if both_before and not (ap and an):
-                    lifted = True
-                    if math.isnan(t_uplift):
-                        t_uplift = t
-                    if imp_both >= 0:
-                        if imp_both < cap:
-                            durations[imp_both] = t - t_both
-                        imp_both = -1
-                if ap and an and not both_before:
-                    t_both = t
+                s, ap, an, lifted, t_uplift, t_both, imp_both, n_imp = _ff_contact_event(
+                    t, th, thd, w, wd, s, ap, an, lifted, t_uplift, t_both, imp_both, n_imp, impacts, durations, q
+                )
             if over:
                 break
         if record:
@@ -345,12 +360,49 @@ def simulate_flexible(
         rocking of a block that sits on both springs).
     """
     prm = RockingParams.from_specimen(specimen) if params is None else params
+    f, zeta = _checked_foundation(frequency, damping_ratio)
+    q, mismatch = _foundation_constants(specimen, prm, f, zeta)
+    m = pos_int_or_none("substeps", substeps) or _default_substeps(q, zeta, prm.p_max, motion.dt)
+    th0, thd0 = motion.theta0, motion.theta_dot0
+    w0 = _settled_w(q, th0)
+    th, thd, w, wd = (np.empty(motion.n) for _ in range(4))
+    acc = np.ascontiguousarray(motion.acc, dtype=np.float64)
+    chatter = (
+        f"flexible_foundation: contact chattering on motion {motion.name!r} (more than "
+        f"{MAX_EVENTS_PER_SAMPLE} contact changes in one sample); raise the damping ratio"
+    )
+    out, (imp, dur) = run_kernel(run_flexible, (acc, motion.dt, m, q, th0, thd0, w0, 0.0), (th, thd, w, wd), 2, chatter)
+    info = {
+        "kernel": "flexible_foundation",
+        "substeps": m,
+        "params": asdict(prm),
+        "frequency_hz": f,
+        "damping_ratio": zeta,
+        "k": float(q[F_KAPPA]) * specimen.mass,
+        "c": float(q[F_ETA]) * specimen.mass,
+        "w": w,
+        "w_dot": wd,
+        "w_min": float(out[6]),
+        "impact_durations": dur,
+        "inertia_mismatch": mismatch,
+    }
+    return Response.from_kernel(motion.t, th, thd, imp, out, specimen.alpha, info)
+
+
+def _checked_foundation(frequency, damping_ratio) -> tuple[float, float]:
+    """The vertical frequency [Hz] and damping ratio [-] as floats; ValueError naming the one out of range."""
     f = float(frequency)
     zeta = float(damping_ratio)
     if not (math.isfinite(f) and f > 0):
         raise ValueError(f"`frequency` must be positive and finite [Hz], got {frequency!r}")
     if not (math.isfinite(zeta) and zeta >= 0):
         raise ValueError(f"`damping_ratio` must be >= 0, got {damping_ratio!r}")
+    return f, zeta
+
+
+def _foundation_constants(specimen: Specimen, prm: RockingParams, f: float, zeta: float) -> tuple[np.ndarray, float]:
+    """The constants vector of :func:`run_flexible` (layout ``F_*``) for a foundation of vertical frequency ``f``
+    [Hz] and damping ratio ``zeta`` [-], and the relative difference of the two corners' centroidal inertias."""
     geo = corner_geometry(specimen, prm)
     bp, _rp, i0p, icp = geo["pos"]
     bn, _rn, i0n, icn = geo["neg"]
@@ -363,42 +415,26 @@ def simulate_flexible(
     q[F_G], q[F_H], q[F_BP], q[F_BN] = G, specimen.H, bp, bn
     q[F_IC], q[F_I0P], q[F_I0N] = ic, i0p, i0n
     q[F_C], q[F_KAPPA], q[F_ETA] = prm.damping, kappa, eta
+    return q, abs(icp - icn) / ic
+
+
+def _default_substeps(q: np.ndarray, zeta: float, p_max: float, dt: float) -> int:
+    """RK4 substeps per sample of ``dt`` [s]: :data:`_FLEX_STEP` of the fastest contact mode and p h <= PH_MAX."""
     # fastest mode: vertical (2 kappa) or one corner against the rotational inertia
-    bmax = max(bp, bn)
+    bmax, kappa, ic = max(float(q[F_BP]), float(q[F_BN])), float(q[F_KAPPA]), float(q[F_IC])
     lam = math.sqrt(kappa * max(2.0, 1.0 + bmax * bmax / ic)) * (zeta + math.sqrt(1.0 + zeta * zeta))
-    dt = motion.dt
-    m = pos_int_or_none("substeps", substeps)
-    if m is None:
-        m = max(math.ceil(dt * lam / _FLEX_STEP - 1e-9), math.ceil(prm.p_max * dt / PH_MAX - 1e-9), 1)
-    th0, thd0 = motion.theta0, motion.theta_dot0
-    # vertical equilibrium at theta0: both corners pushing, or the lower one alone
+    return max(math.ceil(dt * lam / _FLEX_STEP - 1e-9), math.ceil(p_max * dt / PH_MAX - 1e-9), 1)
+
+
+def _settled_w(q: np.ndarray, th0: float) -> float:
+    """The vertical displacement w [m] of equilibrium at rotation ``th0`` [rad]: both corners pushing, or the
+    lower one alone."""
+    bp, bn, kappa = float(q[F_BP]), float(q[F_BN]), float(q[F_KAPPA])
     sn = math.sin(th0)
     w0 = 0.5 * ((bp - bn) * sn - G / kappa)
     if bp * sn - w0 <= 0.0 or -w0 - bn * sn <= 0.0:
         w0 = (bp * sn if th0 > 0 else -bn * sn) - G / kappa
-    n = motion.n
-    th, thd, w, wd = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    acc = np.ascontiguousarray(motion.acc, dtype=np.float64)
-    chatter = (
-        f"flexible_foundation: contact chattering on motion {motion.name!r} (more than "
-        f"{MAX_EVENTS_PER_SAMPLE} contact changes in one sample); raise the damping ratio"
-    )
-    out, (imp, dur) = run_kernel(run_flexible, (acc, dt, m, q, th0, thd0, w0, 0.0), (th, thd, w, wd), 2, chatter)
-    info = {
-        "kernel": "flexible_foundation",
-        "substeps": m,
-        "params": asdict(prm),
-        "frequency_hz": f,
-        "damping_ratio": zeta,
-        "k": kappa * specimen.mass,
-        "c": eta * specimen.mass,
-        "w": w,
-        "w_dot": wd,
-        "w_min": float(out[6]),
-        "impact_durations": dur,
-        "inertia_mismatch": abs(icp - icn) / ic,
-    }
-    return Response.from_kernel(motion.t, th, thd, imp, out, specimen.alpha, info)
+    return w0
 
 
 #: Flexible foundation: RK4 step as a fraction of the fastest contact period / (2 pi) [rad].
@@ -461,16 +497,12 @@ class FlexibleFoundation(Effect):
     """
 
     name = "flexible_foundation"
-    params = {
-        "frequency": ParamSpec("Hz", (2.0, 2000.0), math.inf, None, "vertical natural frequency on the foundation"),
-        "damping_ratio": ParamSpec("-", (0.0, 2.0), 0.0, 0.5, "damping ratio of the vertical mode"),
-    }
     stage = STAGE_MECHANICS
     changes_mechanics = True
     conflicts = frozenset({"restitution", "amplitude_dependent_restitution"})
     conflict_reason = "its springs and dashpots replace the instantaneous impact law (there is no r to set)"
-    frequency: float
-    damping_ratio: float = 0.5
+    frequency: float = param("Hz", (2.0, 2000.0), neutral=math.inf, doc="vertical natural frequency on the foundation")
+    damping_ratio: float = param("-", (0.0, 2.0), neutral=0.0, default=0.5, doc="damping ratio of the vertical mode")
 
     @classmethod
     def from_stiffness(cls, specimen: Specimen, k: float, c: float = 0.0) -> FlexibleFoundation:

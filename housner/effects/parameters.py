@@ -13,7 +13,7 @@ from housner.effects.registry import (
     STAGE_GEOMETRY,
     STAGE_INERTIA,
     Effect,
-    ParamSpec,
+    param,
     register_effect,
 )
 from housner.effects.terms import ImpactTerm, MomentTerm
@@ -62,7 +62,7 @@ class _NeutralAtZero(Effect):
     fast_path = True
 
     def _value(self) -> float:
-        (key,) = type(self).params
+        (key,) = type(self).param_specs
         return getattr(self, key)
 
     def _realise(self, params, v: float):
@@ -104,10 +104,9 @@ class Restitution(Effect):
     """
 
     name = "restitution"
-    params = {"r": ParamSpec("-", (0.0, 1.0), lambda s: s.r_housner, doc="kinetic-energy ratio at impact")}
     stage = STAGE_DISSIPATION
     fast_path = True
-    r: float
+    r: float = param("-", (0.0, 1.0), neutral=lambda s: s.r_housner, doc="kinetic-energy ratio at impact")
 
     def modify_params(self, params, specimen):
         # with_r keeps the split of an asymmetric block's two impacts (r_pos / r_neg)
@@ -147,8 +146,7 @@ class AmplitudeDependentRestitution(_NeutralAtZero):
     """
 
     name = "amplitude_dependent_restitution"
-    params = {"exponent": ParamSpec("-", (-2.0, 2.0), 0.0, 0.0, "exponent n of r (|theta'|/(p alpha))^n")}
-    exponent: float = 0.0
+    exponent: float = param("-", (-2.0, 2.0), neutral=0.0, default=0.0, doc="exponent n of r (|theta'|/(p alpha))^n")
 
     def _realise(self, params, n: float):
         return replace(params, r_amp_exponent=n)
@@ -181,8 +179,7 @@ class RotationalDamping(_NeutralAtZero):
     """
 
     name = "rotational_damping"
-    params = {"c": ParamSpec("1/s", (0.0, 5.0), 0.0, 0.0, "viscous damping rate of the rotation")}
-    c: float = 0.0
+    c: float = param("1/s", (0.0, 5.0), neutral=0.0, default=0.0, doc="viscous damping rate of the rotation")
 
     def _realise(self, params, c: float):
         return replace(params, damping=params.damping + c)
@@ -261,11 +258,10 @@ class AsymmetricPivots(Effect):
     """
 
     name = "asymmetric_pivots"
-    params = {
-        "e": ParamSpec("m", lambda s: (-0.5 * s.B, 0.5 * s.B), 0.0, 0.0, "offset of the centre of mass toward +x")
-    }
     stage = STAGE_GEOMETRY
-    e: float = 0.0
+    e: float = param(
+        "m", lambda s: (-0.5 * s.B, 0.5 * s.B), neutral=0.0, default=0.0, doc="offset of the centre of mass toward +x"
+    )
 
     def modify_params(self, params, specimen):
         if self.e == 0.0:
@@ -306,9 +302,8 @@ class FrequencyParameter(Effect):
     """
 
     name = "frequency_parameter"
-    params = {"factor": ParamSpec("-", (0.5, 2.0), 1.0, 1.0, "ratio of the p used to the specimen's p")}
     stage = STAGE_INERTIA
-    factor: float = 1.0
+    factor: float = param("-", (0.5, 2.0), neutral=1.0, default=1.0, doc="ratio of the p used to the specimen's p")
 
     @classmethod
     def from_p(cls, specimen: Specimen, p: float) -> FrequencyParameter:

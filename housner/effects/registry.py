@@ -1,45 +1,50 @@
-"""The effects' vocabulary and registry: ParamSpec, Effect, register / discover / make.
+"""The effects' vocabulary: ParamSpec and :func:`param`, Effect, the stages, and the registry EFFECTS.
 
-Their composition for one simulation is :mod:`housner.effects.composition` (``apply_effects``).
+An effect's parameter is declared once, on its dataclass field (:func:`param`); the table of its
+parameters (:attr:`Effect.param_specs`) is read off the fields. Where effects come from (installed
+packages' entry points, plugin files) is :mod:`housner.effects.plugins`; an effect by name is
+:mod:`housner.effects.lookup`; their composition for one simulation is
+:mod:`housner.effects.composition` (``apply_effects``).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import importlib
 import math
-import sys
-import traceback
-import warnings
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from importlib.metadata import entry_points
-from pathlib import Path
+from types import MappingProxyType
 from typing import Any, ClassVar
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
-from housner.effects.terms import import_file
-from housner.errors import unknown_choice
 from housner.motion import GroundMotion
 from housner.readers import CHANNEL_PREFIX
 from housner.response import Response
 from housner.specimen import Specimen
 
-ENTRY_POINT_GROUP = "housner.effects"
+__all__ = [
+    "EFFECTS",
+    "STAGE_DISSIPATION",
+    "STAGE_GEOMETRY",
+    "STAGE_INERTIA",
+    "STAGE_MECHANICS",
+    "STAGE_SENSOR",
+    "Effect",
+    "ParamSpec",
+    "param",
+    "register_effect",
+]
 
-#: Stages, in order of application (see the module docstring).
+#: Stages, in order of application (see :mod:`housner.effects`).
 STAGE_GEOMETRY, STAGE_INERTIA, STAGE_DISSIPATION, STAGE_MECHANICS, STAGE_SENSOR = 10, 20, 30, 40, 50
 
 #: Registry: effect name -> Effect subclass.
 EFFECTS: dict[str, type[Effect]] = {}
-#: Module name -> the file of every effect plugin loaded (:func:`load_plugin`).
-PLUGIN_FILES: dict[str, str] = {}
-#: Plugin module -> SHA-256 (16 hex digits) of the file it was loaded from.
-_PLUGIN_CODE: dict[str, str] = {}
 
-_discovered = False
+#: The key of a dataclass field's metadata that holds its :class:`ParamSpec` (:func:`param`).
+_SPEC_KEY = "housner.effects.param"
 
 
 # ----------------------------------------------------------------------
@@ -61,8 +66,8 @@ class ParamSpec:
         ``bounds``, e.g. ``inf`` for an infinitely stiff foundation), or a
         callable ``neutral(specimen) -> float``.
     default : float, optional
-        The dataclass field's default, repeated here for tables and as the
-        start value of a fit; None when the parameter is required.
+        The dataclass field's default (the start value of a fit); None when
+        the parameter is required. :func:`param` sets it from the field.
     doc : str
         One line for tables and error messages.
     """
@@ -86,6 +91,58 @@ class ParamSpec:
         return float(self.neutral)
 
 
+def param(
+    unit: str,
+    bounds: tuple[float, float] | Callable[[Specimen], tuple[float, float]],
+    *,
+    neutral: float | Callable[[Specimen], float],
+    default: float = dataclasses.MISSING,
+    doc: str = "",
+) -> Any:
+    """A parameter of an effect: its dataclass field, carrying its :class:`ParamSpec`.
+
+    Use as the field's value in the effect's dataclass::
+
+        gain: float = param("-", (0.5, 1.5), neutral=1.0, default=1.0, doc="table gain")
+
+    Parameters
+    ----------
+    unit, bounds, neutral, doc
+        Those of :class:`ParamSpec`.
+    default : float, optional
+        The field's default; without one the parameter is required.
+
+    Returns
+    -------
+    dataclasses.Field
+        The field, with the spec in its metadata (read back by :attr:`Effect.param_specs`).
+    """
+    spec = ParamSpec(unit, bounds, neutral, None if default is dataclasses.MISSING else default, doc)
+    return dataclasses.field(default=default, metadata={_SPEC_KEY: spec})
+
+
+class _ParamSpecTable:
+    """The class attribute :attr:`Effect.param_specs`: parameter name -> :class:`ParamSpec`, in field order.
+
+    Read off the dataclass fields declared with :func:`param`; an effect whose fields carry no spec may
+    give the table itself as a class attribute ``params`` (one :class:`ParamSpec` per field).
+    """
+
+    def __init__(self) -> None:
+        self._tables: WeakKeyDictionary = WeakKeyDictionary()
+
+    def __get__(self, obj: Any, owner: type) -> Mapping[str, ParamSpec]:
+        table = self._tables.get(owner)
+        if table is None:
+            if not dataclasses.is_dataclass(owner):
+                return MappingProxyType(dict(getattr(owner, "params", {})))
+            fields = dataclasses.fields(owner)
+            declared = {f.name: f.metadata[_SPEC_KEY] for f in fields if _SPEC_KEY in f.metadata}
+            table = MappingProxyType(declared or dict(getattr(owner, "params", {})))
+            self._tables[owner] = table
+        return table
+
+
 class Effect:
     """Base class of the physical effects (subclasses are frozen dataclasses).
 
@@ -93,8 +150,10 @@ class Effect:
     ----------
     name : str
         Registry key.
-    params : mapping of str to ParamSpec
-        One entry per dataclass field.
+    param_specs : mapping of str to ParamSpec
+        One entry per dataclass field, in field order: read off the fields declared with
+        :func:`param` (or, for an effect whose fields carry no spec, the class attribute
+        ``params``, a table of one :class:`ParamSpec` per field).
     stage : int
         Order of application (``STAGE_*``); ties keep the order given.
     changes_mechanics : bool
@@ -130,7 +189,7 @@ class Effect:
     """
 
     name: ClassVar[str] = ""
-    params: ClassVar[Mapping[str, ParamSpec]] = {}
+    param_specs: ClassVar[Mapping[str, ParamSpec]] = _ParamSpecTable()
     stage: ClassVar[int] = STAGE_DISSIPATION
     changes_mechanics: ClassVar[bool] = False
     conflicts: ClassVar[frozenset[str]] = frozenset()
@@ -142,7 +201,7 @@ class Effect:
     fast_path: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
-        for key, spec in self.params.items():
+        for key, spec in self.param_specs.items():
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
                 raise ValueError(f"`{key}` of effect {self.name!r} must be a number [{spec.unit}], got {value!r}")
@@ -168,7 +227,7 @@ class Effect:
     # -- validation and description ---------------------------------
     def check(self, specimen: Specimen) -> None:
         """Validate the specimen-dependent bounds (ValueError naming the parameter)."""
-        for key, spec in self.params.items():
+        for key, spec in self.param_specs.items():
             if not callable(spec.bounds):
                 continue
             lo, hi = spec.bounds_for(specimen)
@@ -186,7 +245,7 @@ class Effect:
         ``specimen`` is needed when a neutral value depends on it (``restitution``).
         """
         kwargs = {}
-        for key, spec in cls.params.items():
+        for key, spec in cls.param_specs.items():
             v = spec.neutral_for(specimen)
             if v is None and callable(spec.neutral):
                 raise ValueError(f"the neutral `{key}` of effect {cls.name!r} depends on the specimen; pass it")
@@ -205,16 +264,9 @@ class Effect:
         """
         return None
 
-    def __reduce__(self):
-        # An effect travels to worker processes (spawned, or on a Dask cluster) by its class's module and
-        # name and its fields; a plugin's class by its file, which the worker loads first.
-        cls = type(self)
-        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.init}
-        return _rebuild_effect, (cls.__module__, cls.__qualname__, PLUGIN_FILES.get(cls.__module__), values)
-
     def describe(self) -> dict:
         """Plain data: ``{"name": ..., <param>: value, ...}`` (for results tables and the cache)."""
-        return {"name": self.name, **{k: getattr(self, k) for k in self.params}}
+        return {"name": self.name, **{k: getattr(self, k) for k in self.param_specs}}
 
     # -- hooks (no-op defaults) ---------------------------------------
     def modify_params(self, params, specimen: Specimen):
@@ -244,6 +296,7 @@ class Effect:
         return ()
 
 
+
 # ----------------------------------------------------------------------
 # registry
 def register_effect(arg: type | str | None = None) -> Any:
@@ -264,6 +317,7 @@ def register_effect(arg: type | str | None = None) -> Any:
 
 
 def _register(cls: type, name: str | None = None) -> type:
+    """Add ``cls`` to :data:`EFFECTS` as ``name`` (default its ``name``), once its declaration is checked."""
     if not (isinstance(cls, type) and issubclass(cls, Effect)):
         raise TypeError(f"only housner.effects.Effect subclasses can be registered, got {cls!r}")
     if not dataclasses.is_dataclass(cls):
@@ -271,15 +325,7 @@ def _register(cls: type, name: str | None = None) -> type:
     name = cls.name if name is None else name
     if not isinstance(name, str) or not name.isidentifier():
         raise ValueError(f"effect class {cls.__qualname__} needs a `name` that is an identifier, got {name!r}")
-    fields = [f.name for f in dataclasses.fields(cls)]
-    if sorted(fields) != sorted(cls.params):
-        raise ValueError(
-            f"effect {name!r}: the `params` specs ({', '.join(cls.params) or 'none'}) must match the dataclass "
-            f"fields ({', '.join(fields) or 'none'})"
-        )
-    for key, spec in cls.params.items():
-        if not isinstance(spec, ParamSpec):
-            raise TypeError(f"effect {name!r}: params[{key!r}] must be a ParamSpec, got {spec!r}")
+    _check_param_specs(cls, name)
     chans = cls.channels
     if not isinstance(chans, tuple) or not all(isinstance(c, str) and c.startswith(CHANNEL_PREFIX) for c in chans):
         raise ValueError(
@@ -293,202 +339,21 @@ def _register(cls: type, name: str | None = None) -> type:
     return cls
 
 
-def discover_effects(*, force: bool = False) -> tuple[str, ...]:
-    """Load the effects that installed packages declare in the ``housner.effects`` entry-point group.
-
-    Each entry point names an :class:`Effect` subclass (registered under its
-    ``name``) or a module (imported, so that its ``@register_effect``
-    decorators run). A broken entry point is reported with a warning and
-    skipped. Runs once per process unless ``force``; returns the names known.
-    """
-    global _discovered
-    if _discovered and not force:
-        return tuple(EFFECTS)
-    _discovered = True
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
-        try:
-            obj = ep.load()
-        except Exception as e:  # a plugin must not break the suite
-            warnings.warn(f"cannot load effect entry point {ep.name!r} ({ep.value}): {e}", stacklevel=2)
-            continue
-        if isinstance(obj, type) and issubclass(obj, Effect):
-            if EFFECTS.get(obj.name) is obj:
-                continue
-            try:
-                _register(obj)
-            except (TypeError, ValueError) as e:
-                warnings.warn(f"effect entry point {ep.name!r} ({ep.value}) not registered: {e}", stacklevel=2)
-        elif not hasattr(obj, "__path__") and not hasattr(obj, "__file__"):
-            warnings.warn(
-                f"effect entry point {ep.name!r} ({ep.value}) is neither an Effect subclass nor a module", stacklevel=2
-            )
-    return tuple(EFFECTS)
-
-
-def load_plugin(path) -> tuple[str, ...]:
-    """Import a Python file as a module so that its ``@register_effect`` classes join :data:`EFFECTS`.
-
-    The module is named ``housner_plugin_<stem>_<hash of the resolved path>`` and kept in
-    ``sys.modules`` (so that its ``@njit`` term functions can be found by the generated kernels
-    and numba can cache them); loading the same file again re-executes it.
-
-    Parameters
-    ----------
-    path : str or path
-        A ``.py`` file.
-
-    Returns
-    -------
-    tuple of str
-        The names of the effects it registers.
-
-    Raises
-    ------
-    ValueError
-        One line naming the file: it does not exist, is not a ``.py`` file, registers no effect, has a
-        syntax error (with its line), or raises while it is imported (the exception's type, text and the
-        file's line; the exception is the error's ``__cause__``). A bad plugin is bad input, as a bad
-        record is: ``housner`` exits 2 on it.
-    """
-    p = Path(path).expanduser()
-    if not p.is_file():
-        raise ValueError(f"effect plugin {str(p)!r}: no such file")
-    if p.suffix != ".py":
-        raise ValueError(f"effect plugin {str(p)!r}: not a Python file (.py)")
-    p = p.resolve()
-    digest = hashlib.sha256(str(p).encode()).hexdigest()[:12]
-    stem = "".join(ch if ch.isalnum() else "_" for ch in p.stem)
-    modname = f"housner_plugin_{stem}_{digest}"
-    code_hash = hashlib.sha256(p.read_bytes()).hexdigest()[:16]
-    # The same file again, or a byte-identical copy of it elsewhere (a scenario's folder, a notebook's),
-    # replaces the effects it registered before; another file may not take a registered name.
-    same = {m for m, f in PLUGIN_FILES.items() if f == str(p) or _PLUGIN_CODE.get(m) == code_hash}
-    before = dict(EFFECTS)
-    for n in [n for n, cls in EFFECTS.items() if cls.__module__ in same]:
-        del EFFECTS[n]
-    try:
-        _import_plugin(modname, p)
-        names = tuple(n for n, cls in EFFECTS.items() if cls.__module__ == modname)
-        if not names:
-            sys.modules.pop(modname, None)
-            raise ValueError(
-                f"effect plugin {str(p)!r} registers no effect (decorate an Effect subclass with @register_effect)"
-            )
-    except BaseException:  # the registry is left as it was
-        EFFECTS.clear()
-        EFFECTS.update(before)
-        raise
-    PLUGIN_FILES[modname] = str(p)
-    _PLUGIN_CODE[modname] = code_hash
-    for n in names:
-        # the code each class was loaded from, kept even once the file is reloaded: a result cache keys
-        # on it (housner.scenarios.execution.cache.effect_code_hash)
-        EFFECTS[n]._housner_code_hash = code_hash
-    return names
-
-
-def _import_plugin(modname: str, p: Path) -> None:
-    """Import the plugin file; its syntax error, or an exception it raises, becomes one ValueError naming it."""
-    try:
-        import_file(modname, p)
-    except SyntaxError as e:  # IndentationError too
-        where = f" line {e.lineno}" if e.filename == str(p) and e.lineno else ""
-        elsewhere = f" in {e.filename} line {e.lineno}" if e.filename != str(p) else ""
-        raise ValueError(f"effect plugin {str(p)!r}{where}: syntax error{elsewhere} ({e.msg})") from e
-    except (Exception, SystemExit) as e:  # the file's own code failed; Ctrl-C still propagates
-        lines = [f.lineno for f in traceback.extract_tb(e.__traceback__) if f.filename == str(p)]
-        where = f" line {lines[-1]}" if lines else ""
-        text = " ".join(str(e).split())
+def _check_param_specs(cls: type[Effect], name: str) -> None:
+    """ValueError or TypeError unless every dataclass field of ``cls`` has one :class:`ParamSpec`, declared once."""
+    fields = dataclasses.fields(cls)
+    declared = [f.name for f in fields if _SPEC_KEY in f.metadata]
+    if declared and "params" in vars(cls):
         raise ValueError(
-            f"effect plugin {str(p)!r}{where}: raises {type(e).__name__} when imported" + (f": {text}" if text else "")
-        ) from e
-
-
-def _rebuild_effect(module: str, qualname: str, plugin: str | None, values: dict) -> Effect:
-    """The effect of :meth:`Effect.__reduce__`: its class imported (a plugin loaded from its file), then built."""
-    if module not in sys.modules:
-        if plugin is not None:
-            load_plugin(plugin)
-        else:
-            importlib.import_module(module)
-    obj: Any = sys.modules[module]
-    for part in qualname.split("."):
-        obj = getattr(obj, part)
-    return obj(**values)
-
-
-def available_effects() -> tuple[str, ...]:
-    """Names of every registered effect (built-in, decorated and installed), sorted; probes left out."""
-    return tuple(sorted(n for n in discover_effects() if not EFFECTS[n].probe))
-
-
-def effect_class(name: str) -> type[Effect]:
-    """The effect class registered as ``name``; unknown names list the choices and suggest the closest."""
-    cls = EFFECTS.get(name)
-    if cls is None:
-        discover_effects()
-        cls = EFFECTS.get(name)
-    if cls is None:
-        raise unknown_choice("effect", name, EFFECTS)
-    return cls
-
-
-def make_effect(name: str, specimen: Specimen | None = None, **params: float) -> Effect:
-    """Build the effect registered as ``name`` with ``params``, validating every value.
-
-    Parameters
-    ----------
-    name : str
-        Registry key (see :func:`available_effects`).
-    specimen : Specimen, optional
-        Also check the bounds that depend on the specimen.
-    **params : float
-        Parameter values in the units of the effect's :class:`ParamSpec`.
-
-    Raises
-    ------
-    ValueError
-        Unknown name or parameter (listing the choices), a missing required
-        parameter, or a value out of bounds (naming the parameter).
-    """
-    cls = effect_class(name)
-    for key in params:
-        if key not in cls.params:
-            raise unknown_choice(f"parameter of effect {name!r}:", key, cls.params)
-    missing = [k for k, s in cls.params.items() if k not in params and _field_default(cls, k) is None]
-    if missing:
-        spec = cls.params[missing[0]]
-        raise ValueError(f"effect {name!r} needs `{missing[0]}` [{spec.unit}] ({spec.doc})")
-    effect = cls(**params)
-    if specimen is not None:
-        effect.check(specimen)
-    return effect
-
-
-def _field_default(cls: type, key: str) -> Any:
-    for f in dataclasses.fields(cls):
-        if f.name == key:
-            if f.default is not dataclasses.MISSING:
-                return f.default
-            if f.default_factory is not dataclasses.MISSING:
-                return f.default_factory()
-    return None
-
-
-def make_effects(specs: Iterable[Any]) -> tuple[Effect, ...]:
-    """Effects from plain data: Effect instances, names, or ``{"name": ..., <param>: value}`` dicts."""
-    out = []
-    for i, spec in enumerate(specs):
-        if isinstance(spec, Effect):
-            out.append(spec)
-        elif isinstance(spec, str):
-            out.append(make_effect(spec))
-        elif isinstance(spec, Mapping):
-            spec = dict(spec)
-            name = spec.pop("name", None)
-            if name is None:
-                raise ValueError(f"`effects[{i}]` needs a 'name' key, got {spec!r}")
-            out.append(make_effect(name, **spec))
-        else:
-            raise TypeError(f"`effects[{i}]` must be an Effect, a name or a dict with 'name', got {spec!r}")
-    return tuple(out)
+            f"effect {name!r}: its parameters are declared twice, with param() on the fields and in a `params` "
+            "table; keep the fields' param()"
+        )
+    specs = cls.param_specs
+    if sorted(f.name for f in fields) != sorted(specs):
+        raise ValueError(
+            f"effect {name!r}: the parameter specs ({', '.join(specs) or 'none'}) must match the dataclass "
+            f"fields ({', '.join(f.name for f in fields) or 'none'}); declare each field with param(...)"
+        )
+    for key, spec in specs.items():
+        if not isinstance(spec, ParamSpec):
+            raise TypeError(f"effect {name!r}: params[{key!r}] must be a ParamSpec, got {spec!r}")

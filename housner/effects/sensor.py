@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from housner.effects.registry import STAGE_SENSOR, Effect, ParamSpec, register_effect
+from housner.effects.registry import STAGE_SENSOR, Effect, param, register_effect
 
 
 # ----------------------------------------------------------------------
@@ -37,9 +37,8 @@ class SensorOffset(Effect):
     """
 
     name = "sensor_offset"
-    params = {"offset": ParamSpec("rad", (-0.05, 0.05), 0.0, 0.0, "constant offset of the measured angle")}
     stage = STAGE_SENSOR
-    offset: float = 0.0
+    offset: float = param("rad", (-0.05, 0.05), neutral=0.0, default=0.0, doc="constant offset of the measured angle")
 
     @classmethod
     def measured_params(cls, metrics, specimen):
@@ -100,12 +99,11 @@ class TimeLag(Effect):
     """
 
     name = "time_lag"
-    params = {"tau": ParamSpec("s", (-0.1, 0.1), 0.0, 0.0, "lag of the theta channel behind ground_acc")}
     stage = STAGE_SENSOR
     # a free vibration has no ground channel to lag behind, and a measured one starts at the release
-    # its theta channel shows (housner.scenarios.campaigns.campaign.estimate_release), which already carries the lag
+    # its theta channel shows (housner.scenarios.campaigns.records.estimate_release), which already carries the lag
     seen_in_free_vibration = False
-    tau: float = 0.0
+    tau: float = param("s", (-0.1, 0.1), neutral=0.0, default=0.0, doc="lag of the theta channel behind ground_acc")
 
     def observe(self, response):
         if self.tau == 0.0:

@@ -34,73 +34,27 @@ OVERTURNED, and it locates every event (impact, overturn, the zero of w under a 
 and release from a stick) to the precision of the plain kernel (see those modules' docstrings).
 The plain kernel is that very code with its no-op hooks.
 
-Route: generated code, cached on disk
--------------------------------------
-For each *structure* (which functions, of which kind) this module writes two Python modules, the
-plain kernel's :mod:`housner._kernel_steps` with its hook section replaced by calls to the terms'
-functions (their parameters are run-time data, so a new value of M_f recompiles nothing) and
-:mod:`housner._kernel` importing that one instead, into ``$HOUSNER_CACHE_DIR/kernels`` (default
-``~/.cache/housner/kernels``; ``HOUSNER_KERNEL_DIR`` overrides), named by a SHA-256 of the hook
-section, of the kernel's sources and of every term's module source, and imports them. Numba
-compiles them with ``cache=True`` next to the files, so the machine code is reused by every later
-process, and a changed term (or kernel) gets new files instead of a stale cache. Why generated
-code and not a dispatcher argument or first-class functions (the routes measured):
-docs/results.md#defaults-terms.
-
-The cache heals itself. Every generated file is written atomically (a temporary file, then
-``os.replace``) and checked on load against its key: its content must be the text generated for
-the structure whose hash names it. A truncated or garbled file is removed and written again, and
-numba's cache files of a kernel (its ``.nbi`` index and ``.nbc`` data, read with ``pickle``) are
-read before numba reads them: one that does not load is removed, with the rest of that
-function's cache, and numba compiles again. A kernel whose cached machine code still fails to load
-at its first call is run again once without its cache files. Each repair is counted
-(:func:`kernel_cache_repairs`) and logged to ``housner.effects.terms``.
-
-A term's function must be importable by its module and qualified name (a module-level
-``@njit`` function of an installed module or of a plugin loaded with
-:func:`housner.effects.load_plugin`), and should be written ``@njit(cache=True)``. Only the term
-function's own module source enters the file name: a helper it calls from another module that
-changes needs the kernel directory cleared (numba's own rule for cached callers).
+The kernel of a set of terms is generated from the plain kernel's source and cached on disk by
+:mod:`housner.effects.codegen` (:meth:`TermSet.kernel`). A term's function must be importable by its
+module and qualified name (a module-level ``@njit`` function of an installed module or of a plugin
+loaded with :func:`housner.effects.load_plugin`), and should be written ``@njit(cache=True)``.
 """
 
 from __future__ import annotations
 
-import hashlib
 import importlib
-import importlib.util
 import inspect
-import logging
 import math
-import os
-import pickle
 import sys
-import tempfile
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 
-__all__ = [
-    "CoulombTerm",
-    "ImpactTerm",
-    "MomentTerm",
-    "TermSet",
-    "kernel_cache_repairs",
-    "kernel_dir",
-    "kernel_module",
-]
+from housner.effects.codegen import compiled_kernel
 
-_LOG = logging.getLogger(__name__)
-
-#: The plain kernel's modules: the steps (with the hooks), the record loop (importing the steps), the parts.
-_CORE = Path(__file__).resolve().parent.parent
-_STEPS, _RUN, _PARTS = _CORE / "_kernel_steps.py", _CORE / "_kernel.py", _CORE / "_kernel_parts.py"
-_BEGIN, _END = "# <hooks>\n", "# </hooks>\n"
-_STEPS_IMPORT = "from housner._kernel_steps import (\n"
+__all__ = ["CoulombTerm", "ImpactTerm", "MomentTerm", "TermSet"]
 
 
 def _check_fn(kind: str, fn: Any, n_args: int) -> tuple[str, str]:
@@ -123,7 +77,8 @@ def _check_fn(kind: str, fn: Any, n_args: int) -> tuple[str, str]:
     return mod, qual
 
 
-def _params(kind: str, q) -> tuple[float, ...]:
+def _q_values(kind: str, q) -> tuple[float, ...]:
+    """The parameters ``q`` of a term as floats; ValueError unless each is a finite number."""
     out = []
     for x in tuple(q):
         if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) or not math.isfinite(x):
@@ -153,7 +108,7 @@ class MomentTerm:
 
     def __post_init__(self) -> None:
         _check_fn("moment", self.fn, 9)
-        object.__setattr__(self, "q", _params("moment", self.q))
+        object.__setattr__(self, "q", _q_values("moment", self.q))
         object.__setattr__(self, "at_rest", bool(self.at_rest))
 
 
@@ -173,7 +128,7 @@ class CoulombTerm:
 
     def __post_init__(self) -> None:
         _check_fn("Coulomb", self.fn, 8)
-        object.__setattr__(self, "q", _params("Coulomb", self.q))
+        object.__setattr__(self, "q", _q_values("Coulomb", self.q))
 
 
 @dataclass(frozen=True)
@@ -196,7 +151,7 @@ class ImpactTerm:
 
     def __post_init__(self) -> None:
         _check_fn("impact", self.fn, 6)
-        object.__setattr__(self, "q", _params("impact", self.q))
+        object.__setattr__(self, "q", _q_values("impact", self.q))
         object.__setattr__(self, "replaces", bool(self.replaces))
 
 
@@ -250,7 +205,7 @@ class TermSet:
         """The compiled kernel of this structure (generated, imported and cached once): its module, whose
         entry points (``run_one``, ``run_batch``, ``run_batch_parallel``) run again once without numba's
         cache files when loading those raises."""
-        return _HealingKernel(kernel_module(self.structure))
+        return compiled_kernel(self.structure)
 
     def describe(self) -> list[dict]:
         """Plain data for ``Response.info``: each term's kind, function and parameters."""
@@ -258,10 +213,12 @@ class TermSet:
                 zip(self.structure, self.terms, strict=True)]  # fmt: skip
 
 
-# ----------------------------------------------------------------------
-# the generated kernels
 def _import_term(module: str, qualname: str, missing: Any = ...) -> Any:
-    """The object ``qualname`` of ``module`` (imported if need be); ``missing`` when absent, if given."""
+    """The object ``qualname`` of ``module`` (imported if need be); ``missing`` when absent, if given.
+
+    The kernels generated by :mod:`housner.effects.codegen` import their term functions with it, by
+    this module's name (the text of a generated kernel is part of its cache key).
+    """
     try:
         obj = sys.modules.get(module) or importlib.import_module(module)
         for part in qualname.split("."):
@@ -271,301 +228,6 @@ def _import_term(module: str, qualname: str, missing: Any = ...) -> Any:
             return missing
         raise
     return obj
-
-
-def kernel_dir() -> Path:
-    """Where generated kernels (and numba's cache of them) are written.
-
-    ``HOUSNER_KERNEL_DIR``, else ``$HOUSNER_CACHE_DIR/kernels``, else ``~/.cache/housner/kernels``;
-    a private temporary folder when that cannot be written (then nothing is kept across processes).
-    """
-    global _FALLBACK
-    env = os.environ.get("HOUSNER_KERNEL_DIR")
-    if env:
-        d = Path(env).expanduser()
-    else:
-        base = os.environ.get("HOUSNER_CACHE_DIR")
-        d = (Path(base).expanduser() if base else Path.home() / ".cache" / "housner") / "kernels"
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-        if os.access(d, os.W_OK):
-            return d
-    except OSError:
-        pass
-    if _FALLBACK is None:
-        _FALLBACK = Path(tempfile.mkdtemp(prefix="housner-kernels-"))
-    return _FALLBACK
-
-
-_FALLBACK: Path | None = None
-_MODULES: dict[tuple, ModuleType] = {}
-_LOCK = threading.Lock()
-
-
-def _source_bytes(module: str) -> bytes:
-    """The source file of ``module`` (empty when it has none, e.g. an interactive session)."""
-    try:
-        path = inspect.getsourcefile(sys.modules.get(module) or importlib.import_module(module))
-        return Path(path).read_bytes() if path else b""
-    except (TypeError, OSError, ImportError):
-        return b""
-
-
-def _hooks(structure: tuple) -> str:
-    """The hook section of the kernel template for ``structure`` (see :attr:`TermSet.structure`)."""
-    lo = 0
-    calls: dict[str, list[str]] = {"moment": [], "coulomb": [], "impact": []}
-    imports = []
-    for i, (kind, mod, qual, nq, _flag) in enumerate(structure):
-        imports.append(f"_term{i} = _import_term({mod!r}, {qual!r})")
-        sl = f"q[{lo}:{lo + nq}]"
-        lo += nq
-        if kind == "moment":
-            calls[kind].append(f"_term{i}(phi, w, t, a, v, s, alpha, p2, {sl})")
-        elif kind == "coulomb":
-            calls[kind].append(f"_term{i}(phi, t, a, v, s, alpha, p2, {sl})")
-        else:
-            calls[kind].append(f"    r = _term{i}(w, r, s, alpha, p2, {sl})")
-    at_rest = any(k == "coulomb" or (k == "moment" and flag) for k, _m, _q, _n, flag in structure)
-    return "\n".join([
-        _BEGIN.rstrip("\n"),
-        f"HAS_MOMENT = {bool(calls['moment'])}",
-        f"HAS_DRY = {bool(calls['coulomb'])}",
-        f"HAS_IMPACT = {bool(calls['impact'])}",
-        f"AT_REST = {at_rest}",
-        "",
-        "from housner.effects.terms import _import_term  # noqa: E402",
-        "",
-        *imports,
-        "",
-        "",
-        "@njit(cache=True)",
-        "def _moment(phi, w, t, a, v, s, alpha, p2, q):",
-        "    return " + (" + ".join(calls["moment"]) or "0.0"),
-        "",
-        "",
-        "@njit(cache=True)",
-        "def _dry(phi, t, a, v, s, alpha, p2, q):",
-        "    return " + (" + ".join(calls["coulomb"]) or "0.0"),
-        "",
-        "",
-        "@njit(cache=True)",
-        "def impact_ratio(w, r, s, alpha, p2, q):",
-        *calls["impact"],
-        "    return r",
-        "",
-        "",
-        _END,
-    ])  # fmt: skip
-
-
-def generated_source(structure: tuple, steps_module: str = "housner._kernel_steps") -> tuple[str, str]:
-    """The texts of the kernel's two modules for ``structure``: :mod:`housner._kernel_steps` with its
-    hooks replaced, and :mod:`housner._kernel` importing it as ``steps_module``."""
-    head = (
-        "# Generated by housner.effects.terms from housner/{}; do not edit.\n"
-        f"# Terms: {', '.join(f'{k} {m}.{q}' for k, m, q, _n, _f in structure) or 'none'}\n"
-    )
-    text = _STEPS.read_text()
-    i, j = text.index(_BEGIN), text.index(_END) + len(_END)
-    steps = head.format(_STEPS.name) + text[:i] + _hooks(structure) + text[j:]
-    run = _RUN.read_text()
-    if run.count(_STEPS_IMPORT) != 1:
-        raise RuntimeError(f"{_RUN} must import the steps once as {_STEPS_IMPORT.strip()!r}")
-    return steps, head.format(_RUN.name) + run.replace(_STEPS_IMPORT, f"from {steps_module} import (\n")
-
-
-def import_file(name: str, path: Path) -> ModuleType:
-    """Import the Python file ``path`` as module ``name``, kept in ``sys.modules`` (so that numba finds
-    its functions by module and qualified name); a file that raises leaves nothing behind."""
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    try:
-        spec.loader.exec_module(mod)
-    except BaseException:
-        sys.modules.pop(name, None)
-        raise
-    return mod
-
-
-def kernel_module(structure: tuple) -> ModuleType:
-    """The compiled kernel for ``structure`` (its record loop's module): written to :func:`kernel_dir` once,
-    imported once per process; a damaged file or numba cache file of it is removed and rebuilt first."""
-    with _LOCK:
-        mod = _MODULES.get(structure)
-        if mod is not None:
-            return mod
-        h = hashlib.sha256(_hooks(structure).encode())
-        for f in (_STEPS, _RUN, _PARTS):
-            h.update(f.read_bytes())
-        for m in sorted({s[1] for s in structure}):
-            h.update(m.encode() + b"\0" + _source_bytes(m))
-        name = f"housner_terms_{h.hexdigest()[:24]}"
-        d = kernel_dir()
-        steps, run = generated_source(structure, f"{name}_steps")
-        rebuilt = [stem for stem, src in ((f"{name}_steps", steps), (name, run)) if _ensure_file(d / f"{stem}.py", src)]
-        steps_mod = import_file(f"{name}_steps", d / f"{name}_steps.py")  # first: the loop's module imports it by name
-        mod = import_file(name, d / f"{name}.py")
-        for m in (steps_mod, mod):
-            _check_numba_cache(m, drop=m.__name__ in rebuilt)
-        _MODULES[structure] = mod
-        return mod
-
-
-# ----------------------------------------------------------------------
-# the cache's repairs
-_REPAIRS = {"kernel_files": 0, "numba_caches": 0, "numba_retries": 0}
-
-
-def kernel_cache_repairs() -> dict[str, int]:
-    """The damaged kernel-cache entries this process found, removed and rebuilt.
-
-    Returns
-    -------
-    dict
-        ``kernel_files``: generated kernel files whose content did not match their key (truncated,
-        garbled); ``numba_caches``: functions whose numba cache files (index or data) did not load;
-        ``numba_retries``: kernel calls run again without the cache files after numba failed to load
-        them. All zero in a healthy cache.
-    """
-    return dict(_REPAIRS)
-
-
-def _ensure_file(path: Path, src: str) -> bool:
-    """Write ``src`` to ``path`` unless it already holds exactly that; True when a damaged file was replaced.
-
-    The name hashes everything the text is made from, so the text itself is the file's content key.
-    A file that holds it is left alone (rewriting would change its stamp and void numba's cache); one
-    that does not is damaged and written again, atomically, as is a missing one.
-    """
-    want = src.encode()
-    try:
-        have = path.read_bytes()
-    except FileNotFoundError:
-        have = None
-    if have == want:
-        return False
-    # write once, atomically (a temporary file in the same folder, then os.replace): a process killed
-    # mid-write leaves a stray temporary file, never a half-written kernel
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(want)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    if have is None:
-        return False
-    _REPAIRS["kernel_files"] += 1
-    _LOG.warning("kernel cache: %s did not match its key (%d bytes, %d expected); rebuilt", path, len(have), len(want))
-    return True
-
-
-def _cache_dir(mod: ModuleType) -> Path | None:
-    """Where numba keeps the cache of ``mod``'s functions (None when it holds no cached function)."""
-    for obj in vars(mod).values():
-        cache = getattr(obj, "_cache", None)
-        py = getattr(obj, "py_func", None)
-        if py is not None and py.__module__ == mod.__name__ and getattr(cache, "cache_path", None):
-            return Path(cache.cache_path)
-    return None
-
-
-def _numba_files(mod: ModuleType) -> list[Path]:
-    """numba's cache files (``<file stem>.<function>-<line>.pyXY[.n].nbi/.nbc``) of ``mod``'s functions."""
-    d = _cache_dir(mod)
-    if d is None or not d.is_dir():
-        return []
-    stem = Path(mod.__file__).stem
-    return [p for p in d.glob(f"{stem}.*") if p.suffix in (".nbi", ".nbc")]
-
-
-def _unloadable(index: Path) -> tuple[Path, Exception] | None:
-    """The file of numba's cache index ``index`` (it, or a data file it lists) that would not load as numba
-    reads it, with the error; None when all load."""
-    import numba
-
-    path = index
-    try:
-        with open(index, "rb") as f:
-            version = pickle.load(f)
-            rest = f.read()
-        if version != numba.__version__:
-            return None  # numba skips an index of another version without reading the rest
-        _stamp, overloads = pickle.loads(rest)
-        for data_name in dict(overloads).values():
-            path = index.parent / data_name
-            if path.exists():
-                pickle.loads(path.read_bytes())
-    except FileNotFoundError:
-        return None  # removed meanwhile by another process
-    except Exception as e:  # anything pickle raises on garbage: UnpicklingError, EOFError, MemoryError, ...
-        return path, e
-    return None
-
-
-def _check_numba_cache(mod: ModuleType, drop: bool = False) -> None:
-    """Remove the numba cache files of ``mod``'s functions that would not load (all of them if ``drop``)."""
-    files = _numba_files(mod)
-    if drop:
-        for p in files:
-            p.unlink(missing_ok=True)
-        return
-    for index in (p for p in files if p.suffix == ".nbi"):
-        bad = _unloadable(index)
-        if bad is None:
-            continue
-        base = index.name[: -len(".nbi")]
-        for p in [index, *index.parent.glob(f"{base}.*.nbc")]:
-            p.unlink(missing_ok=True)
-        _REPAIRS["numba_caches"] += 1
-        _LOG.warning("kernel cache: numba's %s does not load (%s: %s); its cache removed, recompiling",
-                     bad[0], type(bad[1]).__name__, bad[1])  # fmt: skip
-
-
-def _raised_by_numba_cache(e: BaseException) -> bool:
-    """Whether ``e`` was raised while numba loaded a cached function (its traceback passes numba's caching)."""
-    tb = e.__traceback__
-    while tb is not None:
-        if tb.tb_frame.f_code.co_filename.replace(os.sep, "/").endswith("numba/core/caching.py"):
-            return True
-        tb = tb.tb_next
-    return False
-
-
-class _HealingKernel:
-    """A generated kernel module whose entry points run again once without numba's cache files when
-    numba fails to load those (damaged after :func:`kernel_module` checked them); every other name is
-    the module's."""
-
-    _ENTRIES = ("run_one", "run_batch", "run_batch_parallel")
-
-    def __init__(self, mod: ModuleType):
-        self._mod = mod
-
-    def __getattr__(self, name: str) -> Any:
-        fn = getattr(self._mod, name)
-        if name not in self._ENTRIES:
-            return fn
-        mod = self._mod
-
-        def call(*args, **kwargs):
-            try:
-                return fn(*args, **kwargs)
-            except Exception as e:
-                if not _raised_by_numba_cache(e):
-                    raise
-                _REPAIRS["numba_retries"] += 1
-                _LOG.warning("kernel cache: numba failed to load %s.%s (%s: %s); its cache removed, recompiling",
-                             mod.__name__, name, type(e).__name__, e)  # fmt: skip
-                for m in {mod, sys.modules.get(f"{mod.__name__}_steps")} - {None}:
-                    _check_numba_cache(m, drop=True)
-                return fn(*args, **kwargs)
-
-        call.__name__ = call.__qualname__ = name
-        return call
 
 
 def term_set(terms: Sequence, vertical: bool = False) -> TermSet | None:

@@ -1,14 +1,13 @@
-"""Tolerance assertions for users' pytest: CDF, record-by-record and fragility agreement."""
+"""Tolerance assertions for users' pytest: CDF, record-by-record and fragility agreement.
 
-from housner.reports.assertions.runs import (
-    AgreementReport,
-    CDFAgreementError,
-    Criterion,
-    RecordAgreementError,
-    assert_cdf_agreement,
-    assert_record_agreement,
-)
+The criteria and the report of them are :mod:`housner.reports.assertions.criteria`'s; ``load_results``
+(a run directory's results table) is :func:`housner.scenarios.execution.rundir.load_results`.
+"""
+
+from housner.reports.assertions.criteria import AgreementReport, CDFAgreementError, Criterion, RecordAgreementError
+from housner.reports.assertions.runs import assert_cdf_agreement, assert_record_agreement
 from housner.reports.assertions.studies import FragilityAgreementError, assert_fragility_agreement
+from housner.scenarios.execution.rundir import load_results
 
 __all__ = [
     "AgreementReport",
@@ -19,4 +18,5 @@ __all__ = [
     "assert_cdf_agreement",
     "assert_fragility_agreement",
     "assert_record_agreement",
+    "load_results",
 ]

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from housner import stats
+from housner import proportions, stats
 from housner.errors import unknown_choice
 from housner.reports.assertions.criteria import (
     SHOW_FAILED,
@@ -45,15 +45,7 @@ from housner.scenarios.execution.rundir import REPORT_FILE, RESULTS_FILE, load_r
 from housner.scenarios.execution.tables import split_failed
 from housner.stats import KS_MAX, OVERTURN_TOL
 
-__all__ = [
-    "AgreementReport",
-    "CDFAgreementError",
-    "Criterion",
-    "RecordAgreementError",
-    "assert_cdf_agreement",
-    "assert_record_agreement",
-    "load_results",
-]
+__all__ = ["assert_cdf_agreement", "assert_record_agreement"]
 
 
 
@@ -259,31 +251,12 @@ def assert_cdf_agreement(
     the response to an ensemble, not record by record.
     """
     __tracebackhide__ = True
-    for name, tol in (("ks_max", ks_max), ("overturn_tol", overturn_tol), ("wasserstein_max", wasserstein_max)):
-        check_tol(name, tol)
-    check_count("min_records", min_records)
-    check_count("max_failed", max_failed)
-    levels = check_percentiles(percentiles)
+    levels = _check_cdf_arguments(ks_max, overturn_tol, wasserstein_max, min_records, max_failed, percentiles)
     s = _prepare(results, engine, reference, report)
     criteria = _record_criteria(s, min_records, max_failed)
-    have = s.a.size > 0 and s.b.size > 0
-    if ks_max is not None:
-        criteria.append(_ks_criterion(s, ks_max) if have else _not_evaluated("KS distance", s, ks_max))
-    if overturn_tol is not None:
-        criteria.append(
-            _overturn_criterion(s, overturn_tol) if have else _not_evaluated("P[overturn]", s, overturn_tol)
-        )
-    for q, tol in levels:
-        name = f"{stats.percentile_label(q)} percentile of theta_max/alpha"
-        criteria.append(_percentile_criterion(s, q, tol, name) if have else _not_evaluated(name, s, tol))
-    if wasserstein_max is not None:
-        name = "Wasserstein W1 (non-overturned)"
-        criteria.append(
-            _wasserstein_criterion(s, wasserstein_max, name) if have else _not_evaluated(name, s, wasserstein_max)
-        )
-    result = AgreementReport(
-        f"CDF agreement of {engine!r} with {reference!r}", tuple(criteria), s.source, s.report, _notes(s)
-    )
+    criteria += _distribution_criteria(s, ks_max, overturn_tol, levels, wasserstein_max)
+    title = f"CDF agreement of {engine!r} with {reference!r}"
+    result = AgreementReport(title, tuple(criteria), s.source, s.report, _notes(s))
     if not result.passed:
         raise CDFAgreementError(result)
     return result
@@ -359,36 +332,10 @@ def assert_record_agreement(
     if criteria and criteria[0].name == "usable records":
         criteria[0] = Criterion("paired records", *criterion_fields(criteria[0]))
     agreement = stats.per_record_agreement(a, b, rtol=rtol, atol=atol)
-    for name, share, k, limit in (
-        (f"records within atol={atol:g} + rtol={rtol:g}", agreement.share, agreement.n_agree, min_share),
-        ("same overturn verdict", agreement.verdict_share, agreement.n_same_verdict, min_verdict_share),
-    ):
-        if limit is None:
-            continue
-        if agreement.n == 0:
-            criteria.append(Criterion(name, False, "not evaluated: no paired records", math.nan, limit, math.inf))
-            continue
-        words, excess = limit_text("minimum share", share, limit, upper=False)
-        criteria.append(
-            Criterion(name, excess <= 0, f"{k} of {agreement.n} ({share:.1%}); {words}", share, limit, excess)
-        )
-    notes = []
-    bad = np.flatnonzero(~agreement.agree)
-    if bad.size and show:
-        # Worst first: verdict differences, then by |difference| relative to the tolerance.
-        with np.errstate(invalid="ignore"):
-            gap = np.where(agreement.same_verdict, np.abs(a - b) / (atol + rtol * np.abs(b)), np.inf)
-        order = bad[np.argsort(-gap[bad], kind="stable")][:show]
-        names = _motion_names(s.ok, wide.index.to_numpy())
-        notes.append(f"  Worst disagreeing records ({engine} vs {reference}, theta_max/alpha):")
-        for i in order:
-            notes.append(f"    {names[i]}: {fmt_value(a[i])} vs {fmt_value(b[i])}")
+    criteria += _share_criteria(agreement, atol, rtol, min_share, min_verdict_share)
+    notes = _worst_records(paired, wide, agreement, atol, rtol, show)
     result = AgreementReport(
-        f"Record-by-record agreement of {engine!r} with {reference!r}",
-        tuple(criteria),
-        s.source,
-        s.report,
-        tuple(notes),
+        f"Record-by-record agreement of {engine!r} with {reference!r}", tuple(criteria), s.source, s.report, notes
     )
     if not result.passed:
         raise RecordAgreementError(result)
@@ -396,7 +343,69 @@ def assert_record_agreement(
 
 
 # ----------------------------------------------------------------------------
-# single criteria
+# criteria
+def _check_cdf_arguments(ks_max, overturn_tol, wasserstein_max, min_records, max_failed, percentiles) -> list:
+    """Refuse a bad tolerance or count of :func:`assert_cdf_agreement` (ValueError); the percentile levels checked."""
+    for name, tol in (("ks_max", ks_max), ("overturn_tol", overturn_tol), ("wasserstein_max", wasserstein_max)):
+        check_tol(name, tol)
+    check_count("min_records", min_records)
+    check_count("max_failed", max_failed)
+    return check_percentiles(percentiles)
+
+
+def _distribution_criteria(s: _Sides, ks_max, overturn_tol, levels, wasserstein_max) -> list[Criterion]:
+    """The criteria of :func:`assert_cdf_agreement` on the two distributions (those given a tolerance), each
+    "not evaluated" where a side has no usable record."""
+    have = s.a.size > 0 and s.b.size > 0
+    out = []
+    if ks_max is not None:
+        out.append(_ks_criterion(s, ks_max) if have else _not_evaluated("KS distance", s, ks_max))
+    if overturn_tol is not None:
+        out.append(_overturn_criterion(s, overturn_tol) if have else _not_evaluated("P[overturn]", s, overturn_tol))
+    for q, tol in levels:
+        name = f"{stats.percentile_label(q)} percentile of theta_max/alpha"
+        out.append(_percentile_criterion(s, q, tol, name) if have else _not_evaluated(name, s, tol))
+    if wasserstein_max is not None:
+        name = "Wasserstein W1 (non-overturned)"
+        out.append(
+            _wasserstein_criterion(s, wasserstein_max, name) if have else _not_evaluated(name, s, wasserstein_max)
+        )
+    return out
+
+
+def _share_criteria(agreement, atol: float, rtol: float, min_share, min_verdict_share) -> list[Criterion]:
+    """The criteria of :func:`assert_record_agreement` on the shares of paired records (those given a limit)."""
+    out = []
+    for name, share, k, limit in (
+        (f"records within atol={atol:g} + rtol={rtol:g}", agreement.share, agreement.n_agree, min_share),
+        ("same overturn verdict", agreement.verdict_share, agreement.n_same_verdict, min_verdict_share),
+    ):
+        if limit is None:
+            continue
+        if agreement.n == 0:
+            out.append(Criterion(name, False, "not evaluated: no paired records", math.nan, limit, math.inf))
+            continue
+        words, excess = limit_text("minimum share", share, limit, upper=False)
+        out.append(Criterion(name, excess <= 0, f"{k} of {agreement.n} ({share:.1%}); {words}", share, limit, excess))
+    return out
+
+
+def _worst_records(s: _Sides, wide: pd.DataFrame, agreement, atol: float, rtol: float, show: int) -> tuple[str, ...]:
+    """Lines naming the ``show`` worst disagreeing records of a record-by-record check, worst first: verdict
+    differences, then by |difference| relative to the tolerance."""
+    bad = np.flatnonzero(~agreement.agree)
+    if not (bad.size and show):
+        return ()
+    a, b = s.a, s.b
+    with np.errstate(invalid="ignore"):
+        gap = np.where(agreement.same_verdict, np.abs(a - b) / (atol + rtol * np.abs(b)), np.inf)
+    order = bad[np.argsort(-gap[bad], kind="stable")][:show]
+    names = _motion_names(s.ok, wide.index.to_numpy())
+    lines = [f"  Worst disagreeing records ({s.engine} vs {s.reference}, theta_max/alpha):"]
+    lines += [f"    {names[i]}: {fmt_value(a[i])} vs {fmt_value(b[i])}" for i in order]
+    return tuple(lines)
+
+
 def _ks_criterion(s: _Sides, ks_max: float) -> Criterion:
     ks = stats.ks_2samp(s.a, s.b)
     fa, fb = stats.ecdf(s.a), stats.ecdf(s.b)
@@ -418,7 +427,7 @@ def _ks_criterion(s: _Sides, ks_max: float) -> Criterion:
 def _overturn_criterion(s: _Sides, tol: float) -> Criterion:
     sides = []
     for name, v in ((s.engine, s.a), (s.reference, s.b)):
-        p = stats.overturn_probability(np.isposinf(v), ci=0.95)
+        p = proportions.overturn_probability(np.isposinf(v), ci=0.95)
         k = int(np.isposinf(v).sum())
         sides.append((p.estimate, f"{name} {p.estimate:.3f} ({k}/{v.size}, 95% CI {p.low:.3f}-{p.high:.3f})"))
     diff = abs(sides[0][0] - sides[1][0])

@@ -67,6 +67,27 @@ def _criterion(name: str, value: float, low: float, high: float, centre: float, 
     return Criterion(name, excess <= 0, detail, off, tol, excess)
 
 
+def _size_criteria(st: StudyResult, engine: str, reference: str, h: float, tols: tuple[float, float],
+                   require_interval: bool, level: str) -> list[Criterion]:  # fmt: skip
+    """The criteria at prototype height ``h`` [m]: both fits there, or the median ratio and the beta difference
+    within ``tols`` (median_rtol, beta_atol)."""
+    fe, fr = st.fit(engine, h), st.fit(reference, h)
+    tag = f"H = {h:g} m"
+    if fe["status"] != "ok" or fr["status"] != "ok":
+        detail = f"{engine}: {_fit_words(fe)}; {reference}: {_fit_words(fr)}"
+        return [Criterion(f"fragility fits at {tag}", False, detail, math.nan, math.nan, math.inf)]
+    c = st.comparison(engine, h)
+    median_rtol, beta_atol = tols
+    return [
+        _criterion(f"median ratio at {tag} ({engine} {fe['median']:.4g} / {reference} {fr['median']:.4g})",
+                   c["median_ratio"], c["ratio_low"], c["ratio_high"], 1.0, median_rtol, require_interval,
+                   level),  # fmt: skip
+        _criterion(f"beta difference at {tag} ({engine} {fe['beta']:.3f} - {reference} {fr['beta']:.3f})",
+                   c["beta_diff"], c["diff_low"], c["diff_high"], 0.0, beta_atol, require_interval,
+                   level),  # fmt: skip
+    ]
+
+
 def assert_fragility_agreement(
     results,
     engine: str = "mujoco",
@@ -118,7 +139,7 @@ def assert_fragility_agreement(
     check_tol("beta_atol", beta_atol, allow_none=False)
     check_count("max_failed", max_failed)
     st = _study(results)
-    meta_ref = st.meta.get("study", {}).get("reference")
+    meta_ref = st.meta.reference
     if meta_ref is not None and reference != meta_ref:
         raise ValueError(f"the study's comparisons are against {meta_ref!r}, not {reference!r}")
     sizes = sorted({f["size"] for f in st.fits if f["engine"] == engine})
@@ -127,8 +148,8 @@ def assert_fragility_agreement(
         raise ValueError(f"engine {engine!r} is not in the study (engines: {', '.join(have)})")
     if size is not None:
         sizes = [st.fit(engine, size)["size"]]
-    meta = st.meta.get("study", {})
-    level = f"{meta.get('compare_ci', meta.get('ci', 0.95)):.1%}"
+    settings = st.meta.study
+    level = f"{settings.get('compare_ci', settings.get('ci', 0.95)):.1%}"
     criteria = []
     if max_failed is not None:
         for name in (engine, reference):
@@ -136,19 +157,7 @@ def assert_fragility_agreement(
             criteria.append(Criterion(f"failed records of {name}", bad <= max_failed,
                                       f"{bad} (limit {max_failed})", bad, max_failed, bad - max_failed))  # fmt: skip
     for h in sizes:
-        fe, fr = st.fit(engine, h), st.fit(reference, h)
-        tag = f"H = {h:g} m"
-        if fe["status"] != "ok" or fr["status"] != "ok":
-            detail = f"{engine}: {_fit_words(fe)}; {reference}: {_fit_words(fr)}"
-            criteria.append(Criterion(f"fragility fits at {tag}", False, detail, math.nan, math.nan, math.inf))
-            continue
-        c = st.comparison(engine, h)
-        criteria.append(_criterion(f"median ratio at {tag} ({engine} {fe['median']:.4g} / {reference} "
-                                   f"{fr['median']:.4g})", c["median_ratio"], c["ratio_low"], c["ratio_high"],
-                                   1.0, median_rtol, require_interval, level))  # fmt: skip
-        criteria.append(_criterion(f"beta difference at {tag} ({engine} {fe['beta']:.3f} - {reference} "
-                                   f"{fr['beta']:.3f})", c["beta_diff"], c["diff_low"], c["diff_high"], 0.0,
-                                   beta_atol, require_interval, level))  # fmt: skip
+        criteria += _size_criteria(st, engine, reference, h, (median_rtol, beta_atol), require_interval, level)
     report = st.out / "report.html" if st.out is not None and (st.out / "report.html").exists() else None
     source = str(st.out / "fragility.json") if st.out is not None else None
     result = AgreementReport(f"fragility agreement of {engine!r} with {reference!r}", tuple(criteria), source, report)

@@ -34,8 +34,8 @@ from housner.reports.run.sections.engines_explained import engines_explained, ha
 from housner.reports.run.sections.ensemble import ensemble_section
 from housner.reports.run.sections.headline import headline_section, specimen_section
 from housner.reports.run.sections.run_info import failures_section, provenance_section
-from housner.reports.run.view import Run
 from housner.scenarios.execution.rundir import REPORT_FILE
+from housner.scenarios.runs.view import Run
 
 __all__ = [
     "render_report",
@@ -119,7 +119,7 @@ def _build_sections(run: Run) -> list[Section]:
 
 
 def _page(run: Run, sections: list[Section], seconds: float) -> str:
-    n_motions = run.meta.get("n_motions", run.results["motion_id"].nunique())
+    n_motions = run.meta.n_motions if run.meta.n_motions is not None else run.results["motion_id"].nunique()
     return scenario_page(
         run,
         sections,

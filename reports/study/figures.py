@@ -186,48 +186,17 @@ def plot_fragility(
     """
     fitted = [str(f.get("engine")) for f in fits if _same([json_number(f.get("size"))], size)[0]]
     sub, names, colors, levels, log, shift = _at_size(fr, size, fitted, reference, colors)
-    if log:
-        grid = np.geomspace(levels.min() / 1.4, levels.max() * 1.4, 400)
-    else:
-        pad = 0.12 * (levels.max() - levels.min() or max(levels.max(), 1.0))
-        grid = np.linspace(max(levels.min() - pad, 0.0), levels.max() + pad, 400)
-
+    grid = _curve_grid(levels, log)
     fig = Figure(figsize=(7.8, 4.8), layout="constrained")
     ax = fig.add_subplot()
     handles, labels = [], []
     for k, name in enumerate(names):
-        c = colors.get(name, "#444444")
         d = sub[sub["engine"] == name].sort_values("intensity")
-        d = d[d["n"].astype(float) > 0]
-        parts = []
-        if len(d):
-            parts.append(_stripe_points(ax, d, shift[k], name, fmt="o", ms=5 if name == reference else 4, lw=1.0,
-                                        color=c))  # fmt: skip
-        fit = _fit_of(fits, name, size)
-        med = json_number(fit.get("median")) if fit else math.nan
-        beta = json_number(fit.get("beta")) if fit else math.nan
-        status = str(fit.get("status", "")) if fit else "missing"
-        if math.isfinite(med) and med > 0 and math.isfinite(beta) and beta >= 0:
-            (ln,) = ax.plot(
-                grid,
-                fragility_curve(grid, med, beta),
-                ls="-" if status == "ok" else "--",
-                lw=1.8 if name == reference else 1.3,
-                color=c,
-                zorder=2,
-            )
-            ln.set_gid(f"curve:{name}")
-            parts.append(ln)
-        if not parts:
-            continue
-        if status == "ok":
-            text = f"{name}: median {med:.3g}, \N{GREEK SMALL LETTER BETA} = {beta:.2f}"
-        elif status == "missing":
-            text = f"{name}: no fit in fragility.json"
-        else:
-            text = f"{name}: no lognormal fit ({status.replace('_', ' ')})"
-        handles.append(tuple(parts))
-        labels.append(text)
+        drawn = _fragility_series(ax, d[d["n"].astype(float) > 0], name, _fit_of(fits, name, size), grid, shift[k],
+                                  colors.get(name, "#444444"), name == reference)  # fmt: skip
+        if drawn is not None:
+            handles.append(drawn[0])
+            labels.append(drawn[1])
     ax.set_ylim(-0.02, 1.02)
     _set_intensity_axis(ax, levels, label)
     ax.set_ylabel("P[overturn] [-]")
@@ -244,6 +213,47 @@ def plot_fragility(
             framealpha=0.9,
         )
     return fig
+
+
+def _curve_grid(levels: np.ndarray, log: bool) -> np.ndarray:
+    """400 intensities the fitted curves are drawn at: a little beyond the stripes on each side."""
+    if log:
+        return np.geomspace(levels.min() / 1.4, levels.max() * 1.4, 400)
+    pad = 0.12 * (levels.max() - levels.min() or max(levels.max(), 1.0))
+    return np.linspace(max(levels.min() - pad, 0.0), levels.max() + pad, 400)
+
+
+def _fragility_series(ax, d: pd.DataFrame, name: str, fit: Mapping | None, grid: np.ndarray, shift, c: str,
+                      is_reference: bool) -> tuple[tuple, str] | None:  # fmt: skip
+    """One engine of :func:`plot_fragility`: its stripes ``d`` (those with a valid record) as points with
+    Wilson bars, and its fitted curve over ``grid`` where the fit has a median. Returns the legend's handle
+    (the drawn artists) and text, or None when nothing was drawn."""
+    parts = []
+    if len(d):
+        parts.append(_stripe_points(ax, d, shift, name, fmt="o", ms=5 if is_reference else 4, lw=1.0, color=c))
+    med = json_number(fit.get("median")) if fit else math.nan
+    beta = json_number(fit.get("beta")) if fit else math.nan
+    status = str(fit.get("status", "")) if fit else "missing"
+    if math.isfinite(med) and med > 0 and math.isfinite(beta) and beta >= 0:
+        (ln,) = ax.plot(
+            grid,
+            fragility_curve(grid, med, beta),
+            ls="-" if status == "ok" else "--",
+            lw=1.8 if is_reference else 1.3,
+            color=c,
+            zorder=2,
+        )
+        ln.set_gid(f"curve:{name}")
+        parts.append(ln)
+    if not parts:
+        return None
+    if status == "ok":
+        text = f"{name}: median {med:.3g}, \N{GREEK SMALL LETTER BETA} = {beta:.2f}"
+    elif status == "missing":
+        text = f"{name}: no fit in fragility.json"
+    else:
+        text = f"{name}: no lognormal fit ({status.replace('_', ' ')})"
+    return tuple(parts), text
 
 
 # ----------------------------------------------------------------------------
@@ -289,52 +299,9 @@ def plot_size_effect(
     medians = []
     open_drawn = False
     for k, name in enumerate(names):
-        c = colors.get(name, "#444444")
-        rows = sorted((f for f in fits if str(f.get("engine")) == name), key=lambda f: json_number(f.get("size")))
-        x, m, lo, hi, xo, mo = [], [], [], [], [], []
-        for f in rows:
-            s, med = json_number(f.get("size")), json_number(f.get("median"))
-            if not (math.isfinite(s) and math.isfinite(med) and med > 0):
-                continue
-            if str(f.get("status")) == "ok":
-                x.append(s)
-                m.append(med)
-                lo.append(json_number(f.get("median_low")))
-                hi.append(json_number(f.get("median_high")))
-            else:
-                xo.append(s)
-                mo.append(med)
-        if x:
-            m_, lo_, hi_ = np.array(m), np.array(lo), np.array(hi)
-            eb = ax.errorbar(
-                shift[k](np.array(x)),
-                m_,
-                yerr=_yerr(m_, lo_, hi_),
-                fmt="-o",
-                ms=5,
-                lw=1.8 if name == reference else 1.2,
-                capsize=3,
-                color=c,
-                label=name,
-                zorder=3,
-            )
-            eb.lines[0].set_gid(f"median:{name}")
-            medians.extend(m_.tolist() + lo_[np.isfinite(lo_)].tolist() + hi_[np.isfinite(hi_)].tolist())
-        if xo:
-            (ln,) = ax.plot(
-                shift[k](np.array(xo)),
-                mo,
-                ls="none",
-                marker="o",
-                ms=6,
-                mfc="none",
-                color=c,
-                label=None if x else name,
-                zorder=3,
-            )
-            ln.set_gid(f"not-a-fit:{name}")
-            medians.extend(mo)
-            open_drawn = True
+        drawn, has_open = _size_series(ax, fits, name, shift[k], colors.get(name, "#444444"), name == reference)
+        medians.extend(drawn)
+        open_drawn = open_drawn or has_open
     if log_x:
         ax.set_xscale("log")
         if sizes.size <= 12:
@@ -356,6 +323,58 @@ def plot_size_effect(
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8, framealpha=0.9)
     return fig
+
+
+def _size_series(ax, fits: Sequence[Mapping], name: str, shift, c: str, is_reference: bool) -> tuple[list, bool]:
+    """One engine of :func:`plot_size_effect`: the medians of its "ok" fits with their intervals, and those of
+    its other fits that report one as open markers. Returns the values drawn (for the y scale) and whether
+    open markers were drawn."""
+    rows = sorted((f for f in fits if str(f.get("engine")) == name), key=lambda f: json_number(f.get("size")))
+    x, m, lo, hi, xo, mo = [], [], [], [], [], []
+    for f in rows:
+        s, med = json_number(f.get("size")), json_number(f.get("median"))
+        if not (math.isfinite(s) and math.isfinite(med) and med > 0):
+            continue
+        if str(f.get("status")) == "ok":
+            x.append(s)
+            m.append(med)
+            lo.append(json_number(f.get("median_low")))
+            hi.append(json_number(f.get("median_high")))
+        else:
+            xo.append(s)
+            mo.append(med)
+    drawn = []
+    if x:
+        m_, lo_, hi_ = np.array(m), np.array(lo), np.array(hi)
+        eb = ax.errorbar(
+            shift(np.array(x)),
+            m_,
+            yerr=_yerr(m_, lo_, hi_),
+            fmt="-o",
+            ms=5,
+            lw=1.8 if is_reference else 1.2,
+            capsize=3,
+            color=c,
+            label=name,
+            zorder=3,
+        )
+        eb.lines[0].set_gid(f"median:{name}")
+        drawn.extend(m_.tolist() + lo_[np.isfinite(lo_)].tolist() + hi_[np.isfinite(hi_)].tolist())
+    if xo:
+        (ln,) = ax.plot(
+            shift(np.array(xo)),
+            mo,
+            ls="none",
+            marker="o",
+            ms=6,
+            mfc="none",
+            color=c,
+            label=None if x else name,
+            zorder=3,
+        )
+        ln.set_gid(f"not-a-fit:{name}")
+        drawn.extend(mo)
+    return drawn, bool(xo)
 
 
 # ----------------------------------------------------------------------------

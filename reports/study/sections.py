@@ -167,22 +167,22 @@ def _kv_value(v: Any) -> str:
 def provenance(study: StudyView) -> str:
     meta = study.meta
     parts = []
-    scen = meta.get("scenario") or {}
+    scen = meta.scenario
     rows = [[esc(k), _kv_value(v)] for k, v in scen.items() if v not in (None, "")]
     rows += [[f"study: {esc(k)}", _kv_value(v)] for k, v in study.settings.items()]
-    motions = meta.get("motions") or {}
+    motions = meta.motions
     if isinstance(motions, dict):
         rows += [[f"motions: {esc(k)}", _kv_value(v)] for k, v in motions.items() if isinstance(v, (str, int, float))]
-    for k in ("n_records", "n_failed", "wall_s"):
-        if k in meta:
-            rows.append([esc(k), _kv_value(meta[k])])
+    for k, v in (("n_records", meta.n_records), ("n_failed", meta.n_failed), ("wall_s", meta.wall_s)):
+        if v is not None:
+            rows.append([esc(k), _kv_value(v)])
     parts.append(html_table(["", ""], rows, cls="kv"))
-    spec = meta.get("specimen") or {}
+    spec = meta.specimen
     if spec:
         parts.append("<h3>Specimen</h3>")
         parts.append(html_table(["", ""], [[esc(k), _kv_value(v)] for k, v in spec.items()], cls="kv"))
     parts.append("<h3>Engines</h3>")
-    info = meta.get("engines") or {}
+    info = meta.engines
     rows = []
     for name in study.engines:
         i = info.get(name) or {}
@@ -203,7 +203,7 @@ def provenance(study: StudyView) -> str:
             caption="Engine time is summed over the records computed in this study (cached ones cost none).",
         )
     )
-    prov = meta.get("provenance") or {}
+    prov = meta.provenance
     if prov:
         parts.append("<h3>Software and machine</h3>")
         rows = [[esc(k), esc(v)] for k, v in (prov.get("versions") or {}).items()]

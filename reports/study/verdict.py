@@ -128,11 +128,11 @@ def _overview(study: StudyView) -> str:
     meta = study.meta
     levels = [json_number(v) for v in s.get("levels") or []]
     sizes = study.sizes
-    n_failed = count(meta.get("n_failed"), len(study.failed))
-    n_records = meta.get("n_records")
+    n_failed = count(meta.n_failed, len(study.failed))
+    n_records = meta.n_records
     if n_records is None:
         n_records = len(study.results)
-    wall = json_number(meta.get("wall_s"))
+    wall = json_number(meta.wall_s)
     engines = ", ".join(engine_tag(e, study) for e in study.engines)
     failed = f'<span class="bad">{n_failed} failed</span>' if n_failed else "none failed"
     return (

@@ -21,7 +21,7 @@ import pandas as pd
 from housner.reports.figures import engine_colors
 from housner.reports.page import esc
 from housner.scenarios.execution.rundir import json_number
-from housner.scenarios.studies.study import StudyResult, load_study
+from housner.scenarios.studies.study import StudyMeta, StudyResult, load_study
 
 __all__ = ["StudyView", "count", "is_ok", "key", "status_words"]
 
@@ -62,7 +62,8 @@ class StudyView:
 
     # --- the study's tables
     @property
-    def meta(self) -> dict:
+    def meta(self) -> StudyMeta:
+        """study.json."""
         return self.result.meta
 
     @property
@@ -88,7 +89,7 @@ class StudyView:
     # --- the study's settings
     @property
     def settings(self) -> dict:
-        return self.meta.get("study") or {}
+        return self.meta.study
 
     @property
     def reference(self) -> str:
@@ -106,7 +107,7 @@ class StudyView:
     @cached_property
     def engines(self) -> list[str]:
         """Engines of study.json in order, then any found only in the tables; the reference first."""
-        names = list(self.meta.get("engines") or {})
+        names = list(self.meta.engines)
         for frame in (self.fragility, self.results):
             if "engine" in frame:
                 names.extend(str(e) for e in frame["engine"].unique())

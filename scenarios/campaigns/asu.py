@@ -53,6 +53,7 @@ import sys
 import time
 import zipfile
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -204,57 +205,84 @@ def import_asu(
     mesh_path, contact = _check_mesh(data, specimen, mesh, azimuth, contact)
     replace = _check_out(out)
 
-    say = progress or (lambda line: None)
-    left_out: list[tuple[str, str]] = []
-
-    def leave_out(test: _Test, reason: str) -> None:
-        left_out.append((test.id, reason))
-        say(f"{test.id}: {reason}: left out")
-
+    omitted = _Omissions(progress or (lambda line: None))
     source = _NpzSource(npz) if npz is not None else _TxtSource(data, folders)
+    chosen = _choose_tests(tests, source, flags, omitted)
+    with _staging(out) as tmp:
+        written = _write_records(tmp / "records", chosen, source, omitted, data / "index.csv")
+        shutil.copyfile(mesh_path, tmp / mesh_path.name)
+        spec = {"mesh": mesh_path.name, "azimuth": azimuth, "contact": contact}
+        (tmp / "campaign.toml").write_text(_campaign_toml(data, specimen, flags, spec, written), encoding="utf-8")
+        _move_into_place(tmp, out, replace)
+    return ImportResult(out=out, n_records=len(written), n_overturned=sum(over for _, over, _ in written),
+                        left_out=omitted.in_test_order(), n_absent=sum(not t.present for t in tests),
+                        elapsed=time.perf_counter() - start)  # fmt: skip
+
+
+class _Omissions:
+    """The tests left out of an import, each with its reason; each is said (one line) as it is found."""
+
+    def __init__(self, say: Callable[[str], None]):
+        self.items: list[tuple[str, str]] = []
+        self.say = say
+
+    def add(self, test: _Test, reason: str) -> None:
+        """Leave ``test`` out for ``reason``."""
+        self.items.append((test.id, reason))
+        self.say(f"{test.id}: {reason}: left out")
+
+    def in_test_order(self) -> tuple[tuple[str, str], ...]:
+        """(test id, reason) of each test left out, by test number."""
+        return tuple(sorted(self.items, key=lambda item: int(item[0][4:])))
+
+
+def _choose_tests(tests: list[_Test], source, flags: str, omitted: _Omissions) -> list[_Test]:
+    """The listed tests with a file and an outcome of 0 or 1 in column ``flags``, by test number. The others
+    with a file are left out, and so is every motion of the source that ``index.csv`` does not list."""
     for number, where in sorted(source.held().items()):  # motions without a row in index.csv: no outcome
         if number not in {t.number for t in tests}:
-            leave_out(_Test(number, 0, False, "", ""), f"in {where} but not listed in index.csv (no outcome)")
+            omitted.add(_Test(number, 0, False, "", ""), f"in {where} but not listed in index.csv (no outcome)")
 
     chosen = []
     for t in sorted((t for t in tests if t.present), key=lambda t: t.number):
         if t.outcome.strip() in ("0", "1", "0.0", "1.0"):
             chosen.append(t)
         elif t.outcome.strip() == "":
-            leave_out(t, f"no outcome in column {flags} (index.csv line {t.line})")
+            omitted.add(t, f"no outcome in column {flags} (index.csv line {t.line})")
         else:
-            leave_out(t, f"outcome {t.outcome!r} in column {flags} is not 0 or 1 (index.csv line {t.line})")
+            omitted.add(t, f"outcome {t.outcome!r} in column {flags} is not 0 or 1 (index.csv line {t.line})")
+    return chosen
 
+
+@contextmanager
+def _staging(out: Path):
+    """A fresh hidden folder beside ``out`` to write the campaign into; removed on leaving, whether the campaign
+    was moved into place or an error stopped the import (which then leaves no half campaign)."""
     tmp = out.parent / f".{out.name}.from-asu-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
     try:
-        (tmp / "records").mkdir(parents=True)
-        written = []
-        for t in chosen:
-            try:
-                acc, disp = source.motion(t)
-            except _LeftOut as e:
-                leave_out(t, str(e))
-                continue
-            _write_record(tmp / "records" / f"{t.id}.csv", acc)
-            written.append((t, float(t.outcome) == 1.0, _table_pgv(disp, 1.0 / RATE)))
-        if not written:
-            raise DataFileError(data / "index.csv", f"no test could be imported ({len(left_out)} left out)")
-        shutil.copyfile(mesh_path, tmp / mesh_path.name)
-        spec = {"mesh": mesh_path.name, "azimuth": azimuth, "contact": contact}
-        (tmp / "campaign.toml").write_text(_campaign_toml(data, specimen, flags, spec, written), encoding="utf-8")
-        _move_into_place(tmp, out, replace)
+        yield tmp
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    left_out.sort(key=lambda item: int(item[0][4:]))
-    return ImportResult(
-        out=out,
-        n_records=len(written),
-        n_overturned=sum(over for _, over, _ in written),
-        left_out=tuple(left_out),
-        n_absent=sum(not t.present for t in tests),
-        elapsed=time.perf_counter() - start,
-    )
+
+
+def _write_records(folder: Path, chosen: list[_Test], source, omitted: _Omissions, index: Path) -> list:
+    """Write each chosen test's table acceleration to ``folder/<id>.csv``; a test whose motion cannot be read is
+    left out. Returns (test, overturned, measured PGV [m/s]) of each written; DataFileError naming ``index`` when
+    none could be."""
+    folder.mkdir(parents=True)
+    written = []
+    for t in chosen:
+        try:
+            acc, disp = source.motion(t)
+        except _LeftOut as e:
+            omitted.add(t, str(e))
+            continue
+        _write_record(folder / f"{t.id}.csv", acc)
+        written.append((t, float(t.outcome) == 1.0, _table_pgv(disp, 1.0 / RATE)))
+    if not written:
+        raise DataFileError(index, f"no test could be imported ({len(omitted.items)} left out)")
+    return written
 
 
 # ---------------------------------------------------------------- checks before any work

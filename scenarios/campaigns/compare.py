@@ -35,7 +35,7 @@ follows the measurement.
 
 *Peak and verdict.* theta_max/alpha of model and measurement (+inf when
 overturned; the measured block has overturned when |theta| reached
-:data:`housner.scenarios.campaigns.campaign.OVERTURN_ANGLE` or the campaign says so).
+:data:`housner.scenarios.campaigns.records.OVERTURN_ANGLE` or the campaign says so).
 
 *The model seen through the sensor.* A measured peak carries the noise (the
 largest of many noisy samples lies ~2-3 sigma above the true peak, which
@@ -81,11 +81,11 @@ from typing import Any
 
 import numpy as np
 
-from housner import stats
+from housner import proportions, stats
 from housner.effects import make_effects
 from housner.engines.base import Engine, get_engine
 from housner.response import Response
-from housner.scenarios.campaigns.campaign import OVERTURN_ANGLE, Campaign, MeasuredRecord
+from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.history_error import (
     RELEASE_DTHETA0_SIGMAS,
     divergence_time,
@@ -93,6 +93,7 @@ from housner.scenarios.campaigns.history_error import (
     scored_error,
 )
 from housner.scenarios.campaigns.localise import METRICS, Features, Metric, features, mean_se, measured_features
+from housner.scenarios.campaigns.records import OVERTURN_ANGLE, MeasuredRecord
 
 __all__ = [
     "OBSERVATION_SEED",
@@ -266,7 +267,7 @@ class DistributionComparison:
     ks : housner.stats.KSResult
     wasserstein : float
         [alpha], rocking records only.
-    overturn_measured, overturn_model : housner.stats.ProportionCI
+    overturn_measured, overturn_model : housner.proportions.ProportionCI
         Wilson 95 % intervals.
     percentiles_measured, percentiles_model : housner.stats.PercentileEstimate
         25/50/75 % with 90 % bootstrap intervals.
@@ -306,8 +307,8 @@ def _distribution(measured: np.ndarray, model: np.ndarray, seed: int = 0) -> Dis
         model=model,
         ks=stats.ks_2samp(measured, model),
         wasserstein=stats.wasserstein(measured, model),
-        overturn_measured=stats.overturn_probability(np.isinf(measured)),
-        overturn_model=stats.overturn_probability(np.isinf(model)),
+        overturn_measured=proportions.overturn_probability(np.isinf(measured)),
+        overturn_model=proportions.overturn_probability(np.isinf(model)),
         percentiles_measured=stats.percentiles(measured, n_boot=500, seed=seed),
         percentiles_model=stats.percentiles(model, n_boot=500, seed=seed),
         agreement=stats.per_record_agreement(model, measured),

@@ -4,9 +4,10 @@ The question a campaign asks of a model is not only "does it match?" but,
 when it does not, "what is missing?". :func:`diagnose` answers it with the
 effect library (:data:`housner.effects.EFFECTS`) and the analytic engine:
 
-1. **Split.** The ground-motion records are split at random (seeded) into a
-   training share and a held-out share; the free-vibration records always
-   train (they pin p and r, seed section 3.2).
+1. **Split.** Every record is dealt at random (seeded) into one of K folds
+   (:mod:`housner.scenarios.campaigns.crossval`), the free vibrations first so that
+   they spread over the folds (they pin p and r, seed section 3.2); each model is
+   fitted without each fold in turn and scored on it.
 2. **Fit.** Each candidate effect's parameters are fitted to the training
    records by minimising the mean time-history error of
    :mod:`housner.scenarios.campaigns.compare` (the error over the measured window, in units of
@@ -65,13 +66,13 @@ The cross-validation (folds, scorers, out-of-fold errors) is
 :mod:`housner.scenarios.campaigns.crossval`'s, a candidate's trial (fit,
 screen, fold refits, judgement, pairs) :mod:`housner.scenarios.campaigns.trial`'s
 with the free-vibration check of :mod:`housner.scenarios.campaigns.fv_check`,
+the greedy search and its ladder :mod:`housner.scenarios.campaigns.search`'s,
 the fitting :mod:`housner.scenarios.campaigns.fitting`'s, the folds and the
 per-record errors :mod:`housner.scenarios.campaigns.scoring`'s, the result
 classes :mod:`housner.scenarios.campaigns.results`' and the verdict
 :mod:`housner.scenarios.campaigns.verdict`'s (its floor
-:mod:`housner.scenarios.campaigns.floor`'s); this module is the greedy search
-and its conclusion (the public names of the others it uses are importable from
-here too).
+:mod:`housner.scenarios.campaigns.floor`'s); this module runs them in turn and
+draws the conclusion: the floors, the probes and the verdict.
 
 Cost, and where it is saved
 ---------------------------
@@ -83,28 +84,23 @@ The time goes into simulations of the records, each cut to its error window::
 An evaluation is one model on the fitting records: per candidate a grid (18 + 9 points for one
 parameter, 82 + 25 for two), a local search (up to 14 and 20 points), and when it is held out K
 fold refits of up to 9-10 points each on (K - 1)/K of the records; pairs, probes and the joint
-refits add their own. Measured on 2 cores (the benchmark, ``benchmarks/bench_diagnose.py``):
-c_rec ~ 0.3 ms per record (the engine's and the score's overhead), c_smp ~ 20-50 ns per window
-sample for Housner's kernel, a free vibration ~ 3-5 ms more at 500 Hz (its release search grows
-as its samples squared), and a mechanics kernel (a 50 Hz flexible foundation) ~ 2.5 ms per second of
-record whatever the rate; one floor family ~ 0.6 s for 103 records of 6 s at 500 Hz, ~ 3 s for 103
-records of 20-30 s at 2000 Hz. So records x length x rate x candidates: 103 records at 500 Hz
-take ~ 25 s, most of it the flexible foundation's grid; at 2000 Hz and 20-30 s the plain search
-took ~ 210 s before the economies below, ~ 60 s with them.
+refits add their own. The measured constants, and what a search costs at 500 and 2000 Hz: see
+docs/explanation/diagnosis.md#what-a-diagnosis-costs.
 
 The economies, each said in ``Diagnosis.settings["economies"]`` when it applies:
 
-* a campaign sampled at q >= 2 times :data:`SEARCH_RATE` is searched on every q-th sample
-  (:func:`housner.scenarios.campaigns.scoring.decimated`: theta as sampled, the table acceleration
-  through an anti-alias filter); the ladder is scored again on every sample (:meth:`_Search.full_rate`),
-  and the floors and the verdict are on every sample;
+* a campaign sampled at q >= 2 times :data:`housner.scenarios.campaigns.scoring.SEARCH_RATE` is
+  searched on every q-th sample (:func:`housner.scenarios.campaigns.scoring.decimated`: theta as
+  sampled, the table acceleration through an anti-alias filter); the ladder is scored again on every
+  sample (:func:`housner.scenarios.campaigns.search.at_full_rate`), and the floors and the verdict are
+  on every sample;
 * on a campaign whose ground motions' windows last more than
   :data:`housner.scenarios.campaigns.crossval.FIT_SECONDS`, models with an effect that replaces the
   equation of motion are fitted on the free vibrations and a spread subset of the ground motions
   (their screens, held-out errors and tests on all records);
 * the floor's family loop measures the widest family second when the narrowest puts the final
   model far from its floor, and stops there when it is not at the widest's either
-  (:meth:`_Search.floor_family`).
+  (:func:`floor_family`).
 
 Two more save time without changing any number: a grid point whose records scored first (the free
 vibrations, then the shortest windows) already put its loss above the grid's best so far is not
@@ -121,14 +117,12 @@ Hastie, T., Tibshirani, R., Friedman, J. (2009). The Elements of Statistical
 Learning, 2nd ed., ch. 7 (held-out assessment) and sec. 3.3 (forward
 stepwise selection).
 """
-
 from __future__ import annotations
 
 import math
 import time
 from collections.abc import Callable, Iterable, Sequence
-from contextlib import contextmanager
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from scipy import stats as sps
@@ -137,373 +131,189 @@ from housner.effects import available_effects
 from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
 from housner.scenarios.campaigns.compare import compare
-from housner.scenarios.campaigns.crossval import CVModel
-from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit
-from housner.scenarios.campaigns.floor import N_REPLICAS, measure_floor
+from housner.scenarios.campaigns.crossval import Folds, cross_validation
+from housner.scenarios.campaigns.fitting import build_model
+from housner.scenarios.campaigns.floor import N_REPLICAS, Floor, measure_floor
+from housner.scenarios.campaigns.fv_check import FreeVibrationCheck
 from housner.scenarios.campaigns.localise import measured_features
 from housner.scenarios.campaigns.model_form import FAMILIES
 from housner.scenarios.campaigns.pointers import order_drift
 from housner.scenarios.campaigns.probes import PROBES
 from housner.scenarios.campaigns.residual import RATIO_MISFIT, Z_MISFIT, residual_test
 from housner.scenarios.campaigns.results import Candidate, Diagnosis, Step
-from housner.scenarios.campaigns.scoring import (
-    DEFAULT_FOLDS,
-    SEARCH_RATE,
-    NonFiniteHistory,
-    check_finite,
-    check_train_fraction,
-)
+from housner.scenarios.campaigns.scoring import DEFAULT_FOLDS, check_finite
+from housner.scenarios.campaigns.search import GreedyRounds, SearchState, add_by_hand, at_full_rate, greedy, start
 from housner.scenarios.campaigns.sensor import assess_sensor
-from housner.scenarios.campaigns.trial import (
-    PRACTICAL,
-    Trials,
-    compatible,
-    fmt_params,
-    held_text,
-    judge,
-    rank_key,
-    sem,
-)
-from housner.scenarios.campaigns.verdict import decide
+from housner.scenarios.campaigns.trial import PRACTICAL, TrialSetup, fmt_params, held_text, try_candidate
+from housner.scenarios.campaigns.verdict import Verdict, decide
 
-__all__ = ["FAMILY_JUMP", "LEVEL", "MAX_EFFECTS", "diagnose"]
+__all__ = ["FAMILY_JUMP", "LEVEL", "MAX_EFFECTS", "Conclusion", "conclude", "diagnose", "floor_family", "probe",
+           "selection_frequency"]  # fmt: skip
 
 #: Family-wise significance level of a round of candidates (one-sided, Bonferroni) [-].
 LEVEL = 0.05
 #: Most effects the greedy search adds [-].
 MAX_EFFECTS = 3
 #: The floor's family loop measures the widest family second when the narrowest puts the final model's
-#: ground motions more than this many times RATIO_MISFIT above their floor [-] (:meth:`_Search.floor_family`).
+#: ground motions more than this many times RATIO_MISFIT above their floor [-] (:func:`floor_family`).
 FAMILY_JUMP = 2.0
 
 
-class _Search(Trials):
-    """One diagnosis under way: the ladder so far and the current model, on :class:`Trials`' folds and candidates.
+@dataclass(frozen=True)
+class Conclusion:
+    """What :func:`conclude` draws from the ladder.
 
-    Parameters as :class:`housner.scenarios.campaigns.trial.Trials`.
+    Attributes
+    ----------
+    verdict : Verdict
+    floors : (Floor, Floor)
+        The measured correct-model floor of the plain and of the final model.
+    steps : tuple of Step
+        The ladder, each step with its comparison where it was run.
+    family : str
+        The family of correct integrators the floors were measured over.
     """
 
-    def __init__(self, campaign: Campaign, folds: int, seed, level: float, engine_settings, say: Callable):
-        super().__init__(campaign, folds, seed, level, engine_settings, say)
-        self._start()
+    verdict: Verdict
+    floors: tuple[Floor, Floor]
+    steps: tuple[Step, ...]
+    family: str
 
-    def _start(self) -> None:
-        """The plain model: the baseline step, and the current model."""
-        self.base = CVModel([], [[] for _ in range(self.k_folds)])
-        base_train_errors = self.allsc.errors([])
-        self.base_train = self.allsc.weigh(base_train_errors)  # the loss of these errors: not simulated again
-        self.noise_loss = self.allsc.noise_loss()
-        self.base_held = base_train_errors.copy()  # no fitted parameter: out-of-fold errors are the plain errors
-        h = self.base_held
-        baseline = Step((), None, False, self.base_train, float(h.mean()), sem(h), math.nan, math.nan, False, h)
-        self.say(f"baseline: held-out error {baseline.heldout_error:.4f} +- {baseline.heldout_se:.4f} alpha "
-                 f"(sigma/alpha {self.floor:.4f}); {self.k_folds}-fold cross-validation")  # fmt: skip
-        self.steps = [baseline]
-        self.cur, self.cur_held, self.cur_train = self.base, self.base_held, self.base_train
-        #: each step's cross-validated fit and the level it was judged at (full_rate rescores them)
-        self.step_cvs: list[CVModel] = [self.base]
-        self.step_levels: list[float] = [math.nan]
-        self._search_state: tuple | None = None
 
-    # -- the ladder
-    def add_by_hand(self, name: str) -> None:
-        """Add effect ``name`` whatever its significance (``add`` of :func:`diagnose`).
+def conclude(setup: TrialSetup, state: SearchState, search: tuple[TrialSetup, SearchState], *, library: list[str],
+             selected: list[str], compare_steps: bool, n_replicas: int, seed,
+             added: Sequence[str] = ()) -> Conclusion:  # fmt: skip
+    """Both ends of the ladder against their measured floors: the verdict and the two floors.
 
-        Raises :class:`NonFiniteHistory` naming ``name`` and the first record when the model with it
-        gives a non-finite theta history (anywhere in its fit).
-        """
-        reason = compatible(self.campaign, build_model(self.cur.full), name)
-        if reason:
-            raise ValueError(f"cannot add {name!r} to {[n for n, _ in self.cur.full] or 'the plain model'}: {reason}")
-        try:
-            self._add_by_hand(name)
-        except NonFiniteHistory as e:
-            on = f" on top of {', '.join(n for n, _p in self.cur.full)}" if self.cur.full else ""
-            raise NonFiniteHistory(
-                f"effect {name!r}, added by hand{on}, gives a non-finite theta history on record {e.record!r}: "
-                "the model is refused before any score",
-                e.effects, e.record,
-            ) from e  # fmt: skip
+    ``setup`` and ``state`` are on the records as measured, ``search`` the same on the search's (the
+    probes run there, as the candidates did). The baseline's and the final model's comparisons always
+    run (the verdict's localisation), the other steps' on request; the steps get their comparisons.
+    """
+    cv, plain, final = setup.cv, state.plain, state.current
+    last = len(state.steps) - 1
+    comparisons = {i: compare(cv.campaign, "housner", build_model(list(state.steps[i].effects)), cv.engine_settings)
+                   for i in range(len(state.steps)) if compare_steps or i in (0, last)}  # fmt: skip
+    steps = tuple(replace(s, comparison=comparisons[i]) if i in comparisons else s for i, s in enumerate(state.steps))
+    seed_int = seed if isinstance(seed, int) else 0
+    # One family of correct integrators per campaign (housner.scenarios.campaigns.model_form): the closest to the
+    # library's conventions at which the final model's ground motions are at the floor (not a
+    # misfit, and within RATIO_MISFIT of it both on the mean, which counts the records chaos carries
+    # off, and on the 10 %-trimmed mean, the typical record), the widest when none is; the baseline is judged
+    # against the same family. (Its floor is another: a correct model of other physics leaves
+    # another error, as chaos carries its records elsewhere.)
+    kinds = [r.kind for r in cv.campaign.records]
+    setup.progress("measuring the correct-model floor (parametric bootstrap over correct integrators)")
+    family, floor_final = floor_family(setup, state, n_replicas, seed_int, kinds)
+    floor_plain = floor_final if not final.model.full else measure_floor(
+        setup.scorers.every_record, [], plain.model.folds, cv.folds.fold_of, n_replicas=n_replicas, seed=seed_int,
+        family=family)  # fmt: skip
+    for what, v in (("the plain model's held-out error", plain.heldout_errors),
+                    ("the final model's held-out error", final.heldout_errors),
+                    ("the plain model's correct-model floor", floor_plain.mean),
+                    ("the final model's correct-model floor", floor_final.mean)):  # fmt: skip
+        check_finite(what, v, cv.folds.ids)
+    setup.progress(f"floor: correct integrators of the family {family!r}")
+    probes = probe(*search)
+    mf = measured_features(cv.campaign)
+    drift = order_drift([plain.heldout_errors - floor_plain.mean, final.heldout_errors - floor_final.mean],
+                        (mf.energy_record, mf.energy_amplitude, mf.energy_ratio))  # fmt: skip
+    verdict = decide(
+        n_records=len(cv.folds.ids), baseline=residual_test(plain.heldout_errors, floor_plain, kinds),
+        final=residual_test(final.heldout_errors, floor_final, kinds), selected=selected,
+        params=dict(final.model.full), baseline_cmp=steps[0].comparison, final_cmp=steps[-1].comparison,
+        library=library, added=added, drift=drift, family=family, probes=probes,
+    )  # fmt: skip
+    return Conclusion(verdict, (floor_plain, floor_final), steps, family)
 
-    def _add_by_hand(self, name: str) -> None:
-        fit_sc, fit_train = self.fit_sets([*(n for n, _p in self.cur.full), name])
-        params, _tr, _n = fit_effect(name, effect_objective(fit_sc, build_model(self.cur.full), []), self.spec,
-                                     pinned=self.pinned)  # fmt: skip
-        cv_new = self.add_cv(self.cur, name, params, fit_train)
-        full, tr = joint_refit(cv_new.full, fit_sc, self.spec, pinned=self.pinned)
-        if fit_sc is not self.allsc:
-            tr = self.allsc.loss(build_model(full))  # the training error on every record
-        cv_new = self.refit_folds(CVModel(full, cv_new.folds), train=fit_train)
-        he = self.oof(cv_new)
-        sig, d, se, _z, _p, _why = judge(self.cur_held, he, self.level_for(1), self.floor)
-        self.steps.append(Step(tuple(cv_new.full), name, True, tr, float(he.mean()), sem(he), d, se, sig, he))
-        self.step_cvs.append(cv_new)
-        self.step_levels.append(self.level_for(1))
-        self.cur, self.cur_held, self.cur_train = cv_new, he, tr
-        self.say(f"+ {name} (by hand) {fmt_params(params)}: held-out error {he.mean():.4f}")
 
-    def greedy(self, cands: list[str], max_effects: int, pairs: bool) -> tuple[list[list[Candidate]], list[str], float]:
-        """The greedy rounds (module docstring, step 5): every round, the selected effects, the first round's level."""
-        rounds: list[list[Candidate]] = []
-        selected: list[str] = []
-        first_level = self.level_for(len(cands))
-        for rnd in range(1, max_effects + 1):
-            in_model = {n for n, _ in self.cur.full}
-            pool = [n for n in cands
-                    if n not in in_model and not compatible(self.campaign, build_model(self.cur.full), n)]  # fmt: skip
-            if not pool:
-                break
-            zc = self.level_for(len(pool))
-            if rnd == 1:
-                first_level = zc
-            if self.cur_train - self.noise_loss <= PRACTICAL * self.floor:
-                why = (f"the training error {self.cur_train:.4f} alpha is within {PRACTICAL * self.floor:.4f} of "
-                       f"the sensor noise ({self.noise_loss:.4f}): nothing is left for an effect to lower by a "
-                       "tenth of the noise; not searched")  # fmt: skip
-                rounds.append([self.candidate(n, {}, rnd, math.nan, zc, reason=why) for n in pool])
-                self.say(f"round {rnd}: {why}")
-                break
-            results, chosen = self.round(rnd, pool, zc, pairs)
-            rounds.append(results)
-            if chosen is None:
-                break
-            self.accept(*chosen, zc)
-            selected.extend(chosen[0].effect.split(" + "))
-        return rounds, selected, first_level
+def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: int,
+                 kinds: list[str]) -> tuple[str, Floor]:  # fmt: skip
+    """The family of correct integrators of the verdict, and the final model's floor under it.
 
-    def round(self, rnd: int, pool: list[str], zc: float, pairs: bool) -> tuple[list[Candidate], tuple | None]:
-        """Every candidate of ``pool`` tried (then pairs, when none passes): the round, best first, and its choice."""
-        results, models = [], {}
-        for name in pool:
-            t0 = time.perf_counter()
-            c, cv_new = self.try_candidate(name, rnd, zc)
-            results.append(c)
-            models[name] = cv_new
-            held = held_text(c, cv_new is not None)
-            self.say(f"round {rnd}: {name:32s} {fmt_params(c.params):40s} {held} ({time.perf_counter() - t0:.1f} s)")
-        results.sort(key=rank_key)
-        best = results[0]
-        if best.significant:
-            return results, (best, models[best.effect])
-        chosen = None
-        if pairs:
-            tried = self.try_pairs(results, self.level_for(len(pool) + 3))
-            results.extend(p[0] for p in tried)
-            results.sort(key=rank_key)
-            good = sorted((p for p in tried if p[0].significant), key=lambda p: -p[0].improvement)
-            if good:
-                chosen = (good[0][0], good[0][1])
-        return results, chosen
+    The families of :data:`FAMILIES` narrowest first, until the final model's ground motions are
+    at their floor (not a misfit, and within RATIO_MISFIT of it on the mean and on the trimmed
+    mean); the widest when at none. Stopped early: when the narrowest family puts them more than
+    :data:`FAMILY_JUMP` x RATIO_MISFIT above their floor, the widest is measured next, and when
+    they are not at its floor either, the families between are not measured (they are nested:
+    each spans the conventions of the narrower ones, so their floors lie below the widest's, and
+    the answer, the widest, is the one the whole loop gives); ``economies`` says so.
+    """
+    families = list(FAMILIES)
+    final = state.current
+    measured: dict[str, tuple[Floor, bool, float]] = {}
 
-    def accept(self, cand: Candidate, cv_new: CVModel, zc: float) -> None:
-        """Add the chosen candidate: all parameters refitted jointly, a new step of the ladder."""
-        fit_sc, fit_train = self.fit_sets([n for n, _p in cv_new.full])
-        full, tr = joint_refit(cv_new.full, fit_sc, self.spec, pinned=self.pinned)
-        if fit_sc is not self.allsc:
-            tr = self.allsc.loss(build_model(full))  # the training error on every record
-        cv_new = self.refit_folds(CVModel(full, cv_new.folds), train=fit_train)
-        he = self.oof(cv_new)
-        _sig, d, se, _z, _p, _why = judge(self.cur_held, he, zc, self.floor)
-        self.steps.append(Step(tuple(cv_new.full), cand.effect, False, tr, float(he.mean()), sem(he), d, se, True, he))
-        self.step_cvs.append(cv_new)
-        self.step_levels.append(zc)
-        self.cur, self.cur_held, self.cur_train = cv_new, he, tr
-        self.say(f"+ {cand.effect}: held-out error {he.mean():.4f} +- {sem(he):.4f} alpha")
+    def measure(family: str) -> tuple[Floor, bool, float]:
+        """The final model's floor under ``family``, whether its ground motions are at it, and their ratio."""
+        if family not in measured:
+            floor = measure_floor(setup.scorers.every_record, final.model.full, final.model.folds,
+                                  setup.cv.folds.fold_of, n_replicas=n_replicas, seed=seed, family=family)  # fmt: skip
+            gm = residual_test(final.heldout_errors, floor, kinds).groups.get("ground_motion")
+            ratio = math.nan if gm is None else max(gm["ratio"], gm["ratio_trimmed"])
+            measured[family] = (floor, gm is None or not gm["misfit"] and ratio <= RATIO_MISFIT, ratio)
+        return measured[family]
 
-    # -- the records as measured
-    def full_rate(self) -> None:
-        """The ladder on the records as measured, when the search ran on decimated ones.
+    for i, family in enumerate(families):
+        floor, at_floor, ratio = measure(family)
+        if at_floor:
+            return family, floor
+        if i == 0 and len(families) > 2 and ratio > FAMILY_JUMP * RATIO_MISFIT:
+            widest, widest_at_floor, widest_ratio = measure(families[-1])
+            if not widest_at_floor:
+                skipped = ", ".join(repr(f) for f in families[1:-1])
+                setup.economies.append(
+                    f"The floor's family loop stopped early: the final model's ground motions are {ratio:.2f}x "
+                    f"their floor under the narrowest family ({families[0]!r}, more than {FAMILY_JUMP:g} x "
+                    f"{RATIO_MISFIT:g}) and {widest_ratio:.2f}x it under the widest ({families[-1]!r}, not at it "
+                    f"either), so the families between ({skipped}) were not measured: nested, their floors "
+                    f"lie below the widest's."
+                )  # fmt: skip
+                setup.progress(f"floor: not at it under {families[0]!r} ({ratio:.2f}x) nor under {families[-1]!r} "
+                               f"({widest_ratio:.2f}x); the families between not measured")  # fmt: skip
+                return families[-1], widest
+    return families[-1], measured[families[-1]][0]
 
-        Each step keeps the search's fits; its training error, its out-of-fold errors and its paired
-        fall from the step before are taken again on every sample and judged again at its round's
-        level (a step the search took whose fall is not significant on every sample is said so in
-        ``economies``; it stays in the ladder). The search's own figures are kept for :meth:`probe`.
-        """
-        if self.decimation == 1 or self.rate == "full":
-            return
-        self._search_state = (self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train)
-        rates = sorted({round(1.0 / r.dt, 3) for r in self.campaign.records})
-        rate = f"{rates[0]:g} Hz" if len(rates) == 1 else f"{rates[0]:g}-{rates[-1]:g} Hz"
-        q = self.decimation
-        self.use_rate("full")
-        self.noise_loss = self.allsc.noise_loss()
-        base_errors = self.allsc.errors([])
-        steps: list[Step] = []
-        prev = base_errors
-        for i, (st, cv, lev) in enumerate(zip(self.steps, self.step_cvs, self.step_levels, strict=True)):
-            if i == 0:
-                he, tr = base_errors.copy(), self.allsc.weigh(base_errors)
-                steps.append(replace(st, train_error=tr, heldout_error=float(he.mean()), heldout_se=sem(he),
-                                     heldout_errors=he))  # fmt: skip
-            else:
-                he, tr = self.oof(cv), self.allsc.loss(build_model(cv.full))
-                sig, d, se, _z, pval, _why = judge(prev, he, lev, self.floor)
-                if st.significant and not sig and not st.by_hand:
-                    self.economies.append(
-                        f"On every sample the fall of step {i} (+ {st.added}) is {d:+.4f} +- {se:.4f} alpha, "
-                        f"p = {pval:.2g}: not significant at its round's level {lev:.2g}, as it was on every "
-                        f"{q}th sample; it stays in the ladder."
-                    )  # fmt: skip
-                steps.append(replace(st, train_error=tr, heldout_error=float(he.mean()), heldout_se=sem(he),
-                                     improvement=d, improvement_se=se,
-                                     significant=sig if st.by_hand else st.significant, heldout_errors=he))  # fmt: skip
-            prev = he
-        self.steps = steps
-        self.base_held, self.base_train = steps[0].heldout_errors, steps[0].train_error
-        self.cur_held, self.cur_train = steps[-1].heldout_errors, steps[-1].train_error
-        self.economies.insert(0, (
-            f"The search ran on every {q}th sample ({rate} thinned to {rates[0] / q:g} Hz; {SEARCH_RATE:g} Hz is "
-            "what the physics needs: the fits' ranges are set for it, the fastest, a 100 Hz foundation, has 5 samples "
-            "a period): theta as sampled (its noise stays white of the same sigma, so a record's error is the same "
-            "mean over fewer samples), the table acceleration through an anti-alias filter (zero-phase, below the "
-            "new Nyquist frequency). The candidates' fits, held-out errors and tests, the pairs and the probes are "
-            "on those samples; the ladder's errors, the floors and the verdict on every sample."
-        ))  # fmt: skip
-        self.say(f"the ladder on every sample ({rate}): held-out error {steps[0].heldout_error:.4f} -> "
-                 f"{steps[-1].heldout_error:.4f} alpha")  # fmt: skip
 
-    @contextmanager
-    def _at_search_rate(self):
-        """The search's records and figures for a while (:meth:`probe`), when :meth:`full_rate` left them."""
-        if self._search_state is None or self.rate != "full":
-            yield
-            return
-        full = (self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train)
-        self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train = self._search_state
-        self.use_rate("search")
-        try:
-            yield
-        finally:
-            self.use_rate("full")
-            self.cur_held, self.cur_train, self.noise_loss, self.base_held, self.base_train = full
+def probe(setup: TrialSetup, state: SearchState) -> list[dict]:
+    """Physics outside the library tried on top of the final model (:mod:`housner.scenarios.campaigns.probes`).
 
-    # -- the verdict
-    def conclude(self, library: list[str], selected: list[str], compare_steps: bool, n_rep: int, seed,
-                 added: Sequence[str] = ()):
-        """Both ends of the ladder against their measured floors: the verdict and the two floors.
+    Each probe is fitted on top of the final model and judged on its out-of-fold errors like a
+    candidate, at the verdict's level (Bonferroni over the probes), and against its kernel with
+    its physics faded out; on the search's records (``setup`` and ``state`` at its rate). Returns,
+    for each that lowers the error significantly: {probe, class, params, error, error_with,
+    improvement, se, z, p}.
+    """
+    final = state.current
+    if final.train_loss - state.noise_loss <= PRACTICAL * setup.cv.noise_floor:
+        return []  # nothing above the sensor noise for a probe to take (as a round of the search)
+    out = []
+    # a significant probe turns the verdict into a misfit: it is held to the verdict's own level,
+    # z > Z_MISFIT one-sided (1.3e-3), over the probes (Bonferroni); at the search's 5 % one correct
+    # campaign in twenty would be called a misfit
+    level = float(sps.norm.sf(Z_MISFIT)) / len(PROBES)
+    for name, class_name in PROBES.items():
+        trial = try_candidate(setup, final, name, 0, level)  # fitted, screened and judged as a candidate is
+        c = trial.candidate
+        setup.progress(f"probe {name} {fmt_params(c.params)}: {held_text(c, trial.model is not None)}")
+        if c.significant:
+            out.append({"probe": name, "class": class_name, "params": c.params,
+                        "error": float(final.heldout_errors.mean()), "error_with": c.heldout_error,
+                        "improvement": c.improvement, "se": c.improvement_se, "z": c.z, "p": c.pvalue})  # fmt: skip
+    return out
 
-        The baseline's and the final model's comparisons always run (the verdict's localisation), the
-        other steps' on request; the steps get their comparisons.
-        """
-        last = len(self.steps) - 1
-        cmps = {i: compare(self.campaign, "housner", build_model(list(self.steps[i].effects)), self.engine_settings)
-                for i in range(len(self.steps)) if compare_steps or i in (0, last)}  # fmt: skip
-        self.steps = [replace(s, comparison=cmps[i]) if i in cmps else s for i, s in enumerate(self.steps)]
-        seed_int = seed if isinstance(seed, int) else 0
-        # One family of correct integrators per campaign (housner.scenarios.campaigns.model_form): the closest to the
-        # library's conventions at which the final model's ground motions are at the floor (not a
-        # misfit, and within RATIO_MISFIT of it both on the mean, which counts the records chaos carries
-        # off, and on the 10 %-trimmed mean, the typical record), the widest when none is; the baseline is judged
-        # against the same family. (Its floor is another: a correct model of other physics leaves
-        # another error, as chaos carries its records elsewhere.)
-        kinds = [r.kind for r in self.campaign.records]
-        self.say("measuring the correct-model floor (parametric bootstrap over correct integrators)")
-        family, floor_fin = self.floor_family(n_rep, seed_int, kinds)
-        self.family = family
-        floor_base = floor_fin if not self.cur.full else measure_floor(
-            self.allsc, [], self.base.folds, self.fold_of, n_replicas=n_rep, seed=seed_int, family=family)  # fmt: skip
-        for what, v in (("the plain model's held-out error", self.base_held),
-                        ("the final model's held-out error", self.cur_held),
-                        ("the plain model's correct-model floor", floor_base.mean),
-                        ("the final model's correct-model floor", floor_fin.mean)):  # fmt: skip
-            check_finite(what, v, self.ids)
-        self.say(f"floor: correct integrators of the family {family!r}")
-        probes = self.probe()
-        mf = measured_features(self.campaign)
-        drift = order_drift([self.base_held - floor_base.mean, self.cur_held - floor_fin.mean],
-                            (mf.energy_record, mf.energy_amplitude, mf.energy_ratio))  # fmt: skip
-        verdict = decide(
-            n_records=len(self.ids), baseline=residual_test(self.base_held, floor_base, kinds),
-            final=residual_test(self.cur_held, floor_fin, kinds), selected=selected, params=dict(self.cur.full),
-            baseline_cmp=self.steps[0].comparison, final_cmp=self.steps[-1].comparison, library=library,
-            added=added, drift=drift, family=family, probes=probes,
-        )  # fmt: skip
-        return verdict, (floor_base, floor_fin)
 
-    def floor_family(self, n_rep: int, seed_int: int, kinds: list[str]) -> tuple[str, object]:
-        """The family of correct integrators of the verdict, and the final model's floor under it.
-
-        The families of :data:`FAMILIES` narrowest first, until the final model's ground motions are
-        at their floor (not a misfit, and within RATIO_MISFIT of it on the mean and on the trimmed
-        mean); the widest when at none. Stopped early: when the narrowest family puts them more than
-        :data:`FAMILY_JUMP` x RATIO_MISFIT above their floor, the widest is measured next, and when
-        they are not at its floor either, the families between are not measured (they are nested:
-        each spans the conventions of the narrower ones, so their floors lie below the widest's, and
-        the answer, the widest, is the one the whole loop gives); ``economies`` says so.
-        """
-        fams = list(FAMILIES)
-        done: dict[str, tuple] = {}
-
-        def measure(family: str) -> tuple:
-            if family not in done:
-                fl = measure_floor(self.allsc, self.cur.full, self.cur.folds, self.fold_of, n_replicas=n_rep,
-                                   seed=seed_int, family=family)  # fmt: skip
-                gm = residual_test(self.cur_held, fl, kinds).groups.get("ground_motion")
-                ratio = math.nan if gm is None else max(gm["ratio"], gm["ratio_trimmed"])
-                done[family] = (fl, gm is None or not gm["misfit"] and ratio <= RATIO_MISFIT, ratio)
-            return done[family]
-
-        for i, family in enumerate(fams):
-            fl, at_floor, ratio = measure(family)
-            if at_floor:
-                return family, fl
-            if i == 0 and len(fams) > 2 and ratio > FAMILY_JUMP * RATIO_MISFIT:
-                wide, wide_at_floor, wide_ratio = measure(fams[-1])
-                if not wide_at_floor:
-                    skipped = ", ".join(repr(f) for f in fams[1:-1])
-                    self.economies.append(
-                        f"The floor's family loop stopped early: the final model's ground motions are {ratio:.2f}x "
-                        f"their floor under the narrowest family ({fams[0]!r}, more than {FAMILY_JUMP:g} x "
-                        f"{RATIO_MISFIT:g}) and {wide_ratio:.2f}x it under the widest ({fams[-1]!r}, not at it "
-                        f"either), so the families between ({skipped}) were not measured: nested, their floors "
-                        f"lie below the widest's."
-                    )  # fmt: skip
-                    self.say(f"floor: not at it under {fams[0]!r} ({ratio:.2f}x) nor under {fams[-1]!r} "
-                             f"({wide_ratio:.2f}x); the families between not measured")  # fmt: skip
-                    return fams[-1], wide
-        return fams[-1], done[fams[-1]][0]
-
-    def probe(self) -> list[dict]:
-        """Physics outside the library tried on top of the final model (:mod:`housner.scenarios.campaigns.probes`).
-
-        Each probe is fitted on top of the final model and judged on its out-of-fold errors like a
-        candidate, at the verdict's level (Bonferroni over the probes), and against its kernel with
-        its physics faded out. Returns, for each that lowers the error
-        significantly: {probe, class, params, error, error_with, improvement, se, z, p}.
-        """
-        with self._at_search_rate():
-            return self._probe()
-
-    def _probe(self) -> list[dict]:
-        if self.cur_train - self.noise_loss <= PRACTICAL * self.floor:
-            return []  # nothing above the sensor noise for a probe to take (as a round of the search)
-        out = []
-        # a significant probe turns the verdict into a misfit: it is held to the verdict's own level,
-        # z > Z_MISFIT one-sided (1.3e-3), over the probes (Bonferroni); at the search's 5 % one correct
-        # campaign in twenty would be called a misfit
-        level = float(sps.norm.sf(Z_MISFIT)) / len(PROBES)
-        for name, cls_name in PROBES.items():
-            c, _cv = self.try_candidate(name, 0, level)  # fitted, screened and judged as a candidate is
-            self.say(f"probe {name} {fmt_params(c.params)}: {held_text(c, _cv is not None)}")
-            if c.significant:
-                out.append({"probe": name, "class": cls_name, "params": c.params, "error": float(self.cur_held.mean()),
-                            "error_with": c.heldout_error, "improvement": c.improvement, "se": c.improvement_se,
-                            "z": c.z, "p": c.pvalue})  # fmt: skip
-        return out
-
-    def selection_frequency(self, rounds: list[list[Candidate]]) -> dict[str, float]:
-        """Effect -> share of the folds in which it was the best candidate of its round [-]."""
-        sel_freq: dict[str, float] = {}
-        for r in rounds:
-            cv_c = [c for c in r if c.fold_wins is not None]
-            wins: dict[str, int] = {}
-            for k in range(self.k_folds):
-                best_k = max(cv_c, key=lambda c, k=k: c.fold_wins[k], default=None)
-                if best_k is not None and best_k.fold_wins[k] > 0:
-                    wins[best_k.effect] = wins.get(best_k.effect, 0) + 1
-            for c in cv_c:
-                sel_freq[c.effect] = max(sel_freq.get(c.effect, 0.0), wins.get(c.effect, 0) / self.k_folds)
-        return sel_freq
+def selection_frequency(folds: Folds, rounds: list[list[Candidate]]) -> dict[str, float]:
+    """Effect -> share of the folds in which it was the best candidate of its round [-]."""
+    frequency: dict[str, float] = {}
+    for r in rounds:
+        held_out = [c for c in r if c.fold_wins is not None]
+        wins: dict[str, int] = {}
+        for k in range(folds.count):
+            best = max(held_out, key=lambda c, k=k: c.fold_wins[k], default=None)
+            if best is not None and best.fold_wins[k] > 0:
+                wins[best.effect] = wins.get(best.effect, 0) + 1
+        for c in held_out:
+            frequency[c.effect] = max(frequency.get(c.effect, 0.0), wins.get(c.effect, 0) / folds.count)
+    return frequency
 
 
 def diagnose(
@@ -512,7 +322,6 @@ def diagnose(
     effects: Iterable[str] | None = None,
     add: Sequence[str] = (),
     folds: int = DEFAULT_FOLDS,
-    train_fraction: float | None = None,
     seed=0,
     max_effects: int = MAX_EFFECTS,
     level: float = LEVEL,
@@ -534,8 +343,6 @@ def diagnose(
         Effects to add by hand first, in order (fitted, whatever their significance).
     folds : int
         Cross-validation folds K [-]: every record is held out once.
-    train_fraction : float, optional
-        Older interface: the share of records to fit on; sets K = round(1 / (1 - train_fraction)).
     seed : int
         Seed of the fold assignment (and of the floor's bootstrap).
     max_effects : int
@@ -566,63 +373,54 @@ def diagnose(
         campaign = load_campaign(campaign)
     # the sensor first: its noise as measured, its faults masked or corrected (housner.scenarios.campaigns.sensor)
     campaign = assess_sensor(campaign, engine_settings)
-    cands, folds = _checked(campaign, effects, add, folds, train_fraction, max_effects, level)
-    n_rep = N_REPLICAS if n_replicas is None else int(n_replicas)
-    search = _Search(campaign, folds, seed, level, engine_settings, progress or (lambda s: None))
+    candidates = _checked(campaign, effects, add, folds, max_effects, level)
+    n_replicas = N_REPLICAS if n_replicas is None else int(n_replicas)
+    cv = cross_validation(campaign, folds, seed, engine_settings)
+    setup = TrialSetup(cv, cv.search, FreeVibrationCheck(campaign, engine_settings, cv.measured), level, [],
+                       progress or (lambda s: None))  # fmt: skip
+    state = start(setup)
     for name in add:
-        search.add_by_hand(name)
-    rounds, selected, first_level = search.greedy(cands, max_effects, pairs)
-    search.full_rate()
+        state = add_by_hand(setup, state, name)
+    state, found = greedy(setup, state, candidates, max_effects, pairs)
+    full_setup, full_state = at_full_rate(setup, state)
     # the library is claimed only where the search tried it: a first round skipped (the training error already at
     # the sensor noise) tried no effect
-    tried = [] if rounds and all("not searched" in c.reason for c in rounds[0]) else cands
-    verdict, floors = search.conclude(tried, selected, compare_steps, n_rep, seed, added=list(add))
-    if campaign.sensor is not None:
-        verdict = replace(verdict, text=verdict.text + campaign.sensor.verdict_sentence())
-    if search.economies:
-        # what ran on fewer samples or stopped early: said where the verdict is read
-        verdict = replace(verdict, text=verdict.text + " How it was computed: " + " ".join(search.economies))
-    diag = Diagnosis(
-        campaign=campaign,
-        baseline=search.steps[0],
-        steps=search.steps,
-        candidates=rounds[0] if rounds else [],
-        rounds=rounds,
-        selected=selected,
-        added=list(add),
-        noise_floor=search.floor,
-        test_level=first_level,
-        train_ids=search.ids,
-        heldout_ids=search.ids,
-        settings={
-            "effects": cands,
-            "add": list(add),
-            "folds": search.k_folds,
-            "seed": seed if isinstance(seed, (int, type(None))) else str(seed),
-            "max_effects": max_effects,
-            "level": level,
-            "practical": PRACTICAL,
-            "pairs": pairs,
-            "replicas": n_rep,
-            "engine_settings": dict(engine_settings or {}),
-            "floor_family": search.family,
-            "decimation": search.decimation,
-            "economies": list(search.economies),
-        },
-        folds=search.fold_ids,
-        verdict=verdict,
-        floors=floors,
-        selection_frequency=search.selection_frequency(rounds),
-    )
+    tried = [] if found.rounds and all("not searched" in c.reason for c in found.rounds[0]) else candidates
+    end = conclude(full_setup, full_state, (setup, state), library=tried, selected=found.selected,
+                   compare_steps=compare_steps, n_replicas=n_replicas, seed=seed, added=list(add))  # fmt: skip
+    settings = {"effects": candidates, "add": list(add), "folds": cv.folds.count,
+                "seed": seed if isinstance(seed, (int, type(None))) else str(seed), "max_effects": max_effects,
+                "level": level, "practical": PRACTICAL, "pairs": pairs, "replicas": n_replicas,
+                "engine_settings": dict(engine_settings or {}), "floor_family": end.family,
+                "decimation": cv.decimation, "economies": list(setup.economies)}  # fmt: skip
+    diag = _diagnosis(campaign, cv.folds, found, end, list(add), cv.noise_floor, settings)
     diag.elapsed = time.perf_counter() - t_start
     return diag
 
 
-def _checked(campaign: Campaign, effects, add, folds, train_fraction, max_effects, level) -> tuple[list[str], int]:
-    """The candidate effects and the folds asked for, after checking :func:`diagnose`'s arguments."""
+def _diagnosis(campaign: Campaign, folds: Folds, found: GreedyRounds, end: Conclusion, added: list[str],
+               noise_floor: float, settings: dict) -> Diagnosis:  # fmt: skip
+    """The :class:`Diagnosis` of the search and its conclusion, the verdict's text ending with how it was computed."""
+    verdict = end.verdict
+    if campaign.sensor is not None:
+        verdict = replace(verdict, text=verdict.text + campaign.sensor.verdict_sentence())
+    if settings["economies"]:
+        # what ran on fewer samples or stopped early: said where the verdict is read
+        verdict = replace(verdict, text=verdict.text + " How it was computed: " + " ".join(settings["economies"]))
+    return Diagnosis(
+        campaign=campaign, baseline=end.steps[0], steps=list(end.steps),
+        candidates=found.rounds[0] if found.rounds else [], rounds=found.rounds, selected=found.selected,
+        added=added, noise_floor=noise_floor, test_level=found.first_level, train_ids=folds.ids,
+        heldout_ids=folds.ids, settings=settings, folds=folds.members, verdict=verdict, floors=end.floors,
+        selection_frequency=selection_frequency(folds, found.rounds),
+    )  # fmt: skip
+
+
+def _checked(campaign: Campaign, effects, add, folds, max_effects, level) -> list[str]:
+    """The candidate effects, after checking :func:`diagnose`'s arguments."""
     names_all = available_effects()
-    cands = list(names_all if effects is None else effects)
-    for n in [*cands, *add]:
+    candidates = list(names_all if effects is None else effects)
+    for n in [*candidates, *add]:
         if n not in names_all:
             raise unknown_choice("effect", n, names_all)
     if len(set(add)) != len(add):
@@ -631,8 +429,6 @@ def _checked(campaign: Campaign, effects, add, folds, train_fraction, max_effect
         raise ValueError(f"`max_effects` must be a non-negative integer, got {max_effects!r}")
     if not 0.0 < level < 1.0:
         raise ValueError(f"`level` must lie in (0, 1), got {level!r}")
-    if train_fraction is not None:
-        folds = max(2, int(round(1.0 / (1.0 - check_train_fraction(train_fraction)))))
     if not (isinstance(folds, int) and folds >= 2):
         raise ValueError(f"`folds` must be an integer of at least 2, got {folds!r}")
     n = len(campaign.records)
@@ -641,4 +437,4 @@ def _checked(campaign: Campaign, effects, add, folds, train_fraction, max_effect
             f"campaign {campaign.name!r} has {n} usable record(s); the diagnosis needs at least 4 "
             "(some to fit on, some to judge on)"
         )
-    return cands, folds
+    return candidates

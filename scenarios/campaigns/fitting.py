@@ -60,7 +60,6 @@ FIT_BOUNDS: dict[tuple[str, str], tuple[float, float]] = {
     ("flexible_foundation", "frequency"): (10.0, 100.0),
     ("flexible_foundation", "damping_ratio"): (0.0, 1.0),
 }
-#: Effects that replace the equation of motion run their own (slower, 10-100x) kernels: their grid
 
 
 @dataclass(frozen=True)
@@ -91,7 +90,7 @@ def param_dims(name: str, specimen) -> list[ParamDim]:
     """The fitted parameters of effect ``name`` on ``specimen``: :data:`FIT_BOUNDS` or the effect's own bounds."""
     cls = effect_class(name)
     dims = []
-    for key, spec in cls.params.items():
+    for key, spec in cls.param_specs.items():
         b = FIT_BOUNDS.get((name, key)) or spec.bounds_for(specimen)
         if b is None:
             raise ValueError(f"effect {name!r}: parameter `{key}` has no bounds to fit within")
@@ -152,31 +151,9 @@ def fit_effect(
     """
     fixed = dict((pinned or {}).get(name, {}))
     dims = [d for d in param_dims(name, specimen) if d.key not in fixed]
-    cache: dict[tuple, float] = {}
-    below = getattr(objective, "below", None)
-
-    def f_u(u, bound: float = math.inf) -> float:
-        """The objective at ``u``; with a finite ``bound`` (a grid's best so far), a value above it may
-        be a lower bound only (the objective's ``below``), and is not kept."""
-        params = {**fixed, **{d.key: d.from_u(float(x)) for d, x in zip(dims, np.atleast_1d(u), strict=True)}}
-        key = tuple(round(v, 12) for v in params.values())
-        if key not in cache:
-            try:
-                if below is not None and math.isfinite(bound):
-                    v = float(below(make_effect(name, **params), bound))
-                    if v > bound:
-                        return v  # abandoned above the bound: not the objective, not kept
-                    cache[key] = v
-                else:
-                    cache[key] = float(objective(make_effect(name, **params)))
-            except NonFiniteScore:
-                raise  # a non-finite model is refused, not avoided
-            except ValueError:
-                cache[key] = math.inf  # a combination the effect refuses (e.g. an impossible inertia)
-        return cache[key]
-
     if not dims:
         return fixed, float(objective(make_effect(name, **fixed))), 1
+    f_u = _SearchObjective(name, objective, dims, fixed)
     lo = np.array([d.u_bounds[0] for d in dims])
     hi = np.array([d.u_bounds[1] for d in dims])
     if start is not None:
@@ -188,8 +165,44 @@ def fit_effect(
     else:
         step = (hi - lo) / (N_GRID - 1)
     best_u = _local_search(f_u, best_u, lo, hi, step, local_iterations)
-    params = {**fixed, **{d.key: d.from_u(float(x)) for d, x in zip(dims, best_u, strict=True)}}
-    return params, f_u(best_u), len(cache)
+    return f_u.params(best_u), f_u(best_u), len(f_u.cache)
+
+
+class _SearchObjective:
+    """The objective of one effect's fit as a function of the search coordinates, memoised by the parameter
+    values (rounded to 12 decimals); ``fixed`` parameters are passed as they are."""
+
+    def __init__(self, name: str, objective: Callable[[Any], float], dims: list[ParamDim], fixed: dict):
+        self.name = name
+        self.objective = objective
+        self.below = getattr(objective, "below", None)
+        self.dims = dims
+        self.fixed = fixed
+        self.cache: dict[tuple, float] = {}
+
+    def params(self, u) -> dict[str, float]:
+        """The effect's parameters at search coordinates ``u`` (the fixed ones included), in their units."""
+        return {**self.fixed, **{d.key: d.from_u(float(x)) for d, x in zip(self.dims, np.atleast_1d(u), strict=True)}}
+
+    def __call__(self, u, bound: float = math.inf) -> float:
+        """The objective at ``u``; with a finite ``bound`` (a grid's best so far), a value above it may
+        be a lower bound only (the objective's ``below``), and is not kept."""
+        params = self.params(u)
+        key = tuple(round(v, 12) for v in params.values())
+        if key not in self.cache:
+            try:
+                if self.below is not None and math.isfinite(bound):
+                    v = float(self.below(make_effect(self.name, **params), bound))
+                    if v > bound:
+                        return v  # abandoned above the bound: not the objective, not kept
+                    self.cache[key] = v
+                else:
+                    self.cache[key] = float(self.objective(make_effect(self.name, **params)))
+            except NonFiniteScore:
+                raise  # a non-finite model is refused, not avoided
+            except ValueError:
+                self.cache[key] = math.inf  # a combination the effect refuses (e.g. an impossible inertia)
+        return self.cache[key]
 
 
 def _grid_search(f_u: Callable, dims: list[ParamDim], lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -49,11 +49,11 @@ import numpy as np
 
 from housner.effects import make_effect
 from housner.model import default_substeps
-from housner.scenarios.campaigns.campaign import estimate_release
 from housner.scenarios.campaigns.compare import release_sensitivities, sensor_reading, simulate_records
 from housner.scenarios.campaigns.fitting import param_dims
 from housner.scenarios.campaigns.history_error import RELEASE_DTHETA0_SIGMAS, record_error, release_shift_samples
 from housner.scenarios.campaigns.model_form import ModelForm, acc_channel_noise
+from housner.scenarios.campaigns.records import estimate_release
 from housner.scenarios.campaigns.scoring import NonFiniteHistory, check_finite, model_text, non_finite
 
 __all__ = ["N_REPLICAS", "Floor", "measure_floor"]
@@ -82,8 +82,9 @@ class Floor:
     perturbation: dict
 
 
-
 def _perturbed(name: str, params: dict, sd: dict, rng, specimen, hull: dict | None = None) -> dict:
+    """Effect ``name``'s ``params`` each moved by a Gaussian draw of its standard deviation in ``sd``, kept within
+    its bounds and within the range ``hull`` (the values the fits chose)."""
     out = dict(params)
     for d in param_dims(name, specimen):
         key = f"{name}.{d.key}"
@@ -129,19 +130,8 @@ def measure_floor(
 
     camp = scorer.campaign
     spec = camp.specimen
-    alpha = spec.alpha
     recs = scorer.records
-    k_folds = len(model_folds)
-    sd: dict[str, float] = {}
-    hull: dict[str, tuple[float, float]] = {}
-    for i, (name, p) in enumerate(model_full):
-        for key in p:
-            vals = np.array([mf[i][1][key] for mf in model_folds], dtype=float)
-            # the grouped-jackknife standard error of the full fit: how far the bootstrap's truth may be
-            # from the real one
-            ss = float(np.sum((vals - vals.mean()) ** 2))
-            sd[f"{name}.{key}"] = math.sqrt((k_folds - 1) / k_folds * ss) if k_folds > 1 else 0.0
-            hull[f"{name}.{key}"] = (min(float(vals.min()), p[key]), max(float(vals.max()), p[key]))
+    sd, hull = _fold_spread(model_full, model_folds)
     settings = dict(scorer.engine_settings)
     truth_eff = [make_effect(n, **p) for n, p in model_full]
     acc_noise = acc_channel_noise(camp)
@@ -157,54 +147,99 @@ def measure_floor(
         form = ModelForm.draw(np.random.default_rng(np.random.SeedSequence([seed, 4242, b])), acc_noise, family)
         forms.append(form)
         truth = form.simulate(spec, recs, truth_eff, settings)
-        model = [None] * len(recs)
-        model_sens: list = [None] * len(recs)
-        eff_of: dict[int, list] = {}
-        for k in range(k_folds):
-            idx = np.flatnonzero(fold_of == k)
-            if idx.size == 0:
-                continue
-            # the model that scores fold k's records is the one fitted without them, as in the real
-            # held-out errors, moved by the uncertainty of the truth
-            eff = [make_effect(n, **_perturbed(n, model_folds[k][j][1], sd, rng, spec, hull))
-                   for j, (n, _p) in enumerate(model_full)]  # fmt: skip
-            eff_of[k] = eff
-            sub = [recs[i] for i in idx]
-            res = simulate_records(spec, sub, "housner", eff, model_settings)
-            sens = release_sensitivities(spec, sub, res, "housner", eff, model_settings)
-            for i, r, g in zip(idx, res, sens, strict=True):
-                model[i] = r
-                model_sens[i] = g
-        for i, rec in enumerate(recs):
-            tr, mo = truth[i], model[i]
-            for what, res, eff in (("truth", tr, truth_eff), ("scoring model", mo, eff_of.get(int(fold_of[i]), []))):
-                if non_finite(res):
-                    raise NonFiniteHistory(
-                        f"the correct-model floor: replica {b + 1}'s {what}, {model_text(eff)}, gives a non-finite "
-                        f"theta history on record {rec.id!r}",
-                        [getattr(e, "name", str(e)) for e in eff], rec.id,
-                    )  # fmt: skip
-            if isinstance(tr, str) or isinstance(mo, str) or mo is None:
-                errs[b, i] = 1.0
-                continue
-            th_true = tr
-            # the record's sensor: its noise (sigma and correlation in time) and its range
-            meas = sensor_reading(th_true, rec, rng)
-            g = model_sens[i]
-            if rec.kind == "free_vibration":
-                # the model of a free vibration starts from the release angle read off the noisy record
-                # (campaign.estimate_release), off the true one by its standard error: so here
-                mo, g = _from_estimated_release(spec, rec, meas, mo, g, eff_of[int(fold_of[i])], model_settings)
-            th_mod = np.asarray(mo.theta, dtype=float)[: rec.theta.size]
-            errs[b, i] = record_error(th_mod, meas, scorer.ends[i], alpha, align=release_shift_samples(rec),
-                                      sensitivity=None if g is None else g[: rec.theta.size],
-                                      max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise, valid=rec.valid)  # fmt: skip
+        scoring = _FoldModels.run(spec, recs, model_full, model_folds, fold_of, (sd, hull), rng, model_settings)
+        errs[b] = _replica_errors(scorer, b, truth, truth_eff, scoring, fold_of, rng, model_settings)
     check_finite("the correct-model floor", errs.mean(axis=0), [r.id for r in recs])
     pert = {k: v for k, v in sd.items() if v > 0}
     pert["substeps"] = model_settings["substeps"]
     pert["model_form"] = {"family": family, "replicas": [f.describe() for f in forms], "acc_noise": acc_noise}
     return Floor(errs.mean(axis=0), errs.std(axis=0, ddof=1) if n_replicas > 1 else np.zeros(len(recs)), n_replicas,
                  pert)  # fmt: skip
+
+
+def _fold_spread(model_full, model_folds) -> tuple[dict[str, float], dict[str, tuple[float, float]]]:
+    """Per parameter (``effect.key``): the grouped-jackknife standard error of the full fit over the fold fits
+    (how far the bootstrap's truth may be from the real one; 0 with one fold), and the range that the fold fits
+    and the full fit span, in the parameter's units."""
+    k_folds = len(model_folds)
+    sd: dict[str, float] = {}
+    hull: dict[str, tuple[float, float]] = {}
+    for i, (name, p) in enumerate(model_full):
+        for key in p:
+            vals = np.array([mf[i][1][key] for mf in model_folds], dtype=float)
+            ss = float(np.sum((vals - vals.mean()) ** 2))
+            sd[f"{name}.{key}"] = math.sqrt((k_folds - 1) / k_folds * ss) if k_folds > 1 else 0.0
+            hull[f"{name}.{key}"] = (min(float(vals.min()), p[key]), max(float(vals.max()), p[key]))
+    return sd, hull
+
+
+@dataclass(frozen=True)
+class _FoldModels:
+    """One replica's scoring models: per record, the response and release sensitivity of the model fitted
+    without its fold; per fold, that model's effects."""
+
+    response: list
+    sensitivity: list
+    effects: dict[int, list]
+
+    @classmethod
+    def run(cls, spec, recs, model_full, model_folds, fold_of, spread, rng, settings) -> _FoldModels:
+        """Simulate each fold's records with the model fitted without them, as in the real held-out errors,
+        its parameters moved by the uncertainty of the truth (``spread``: :func:`_fold_spread`)."""
+        sd, hull = spread
+        response: list = [None] * len(recs)
+        sensitivity: list = [None] * len(recs)
+        effects: dict[int, list] = {}
+        for k in range(len(model_folds)):
+            idx = np.flatnonzero(fold_of == k)
+            if idx.size == 0:
+                continue
+            eff = [make_effect(n, **_perturbed(n, model_folds[k][j][1], sd, rng, spec, hull))
+                   for j, (n, _p) in enumerate(model_full)]  # fmt: skip
+            effects[k] = eff
+            sub = [recs[i] for i in idx]
+            res = simulate_records(spec, sub, "housner", eff, settings)
+            sens = release_sensitivities(spec, sub, res, "housner", eff, settings)
+            for i, r, g in zip(idx, res, sens, strict=True):
+                response[i] = r
+                sensitivity[i] = g
+        return cls(response, sensitivity, effects)
+
+
+def _replica_errors(scorer, b: int, truth: list, truth_eff: list, scoring: _FoldModels, fold_of, rng,
+                    settings: dict) -> np.ndarray:  # fmt: skip
+    """The error of each record [alpha] in replica ``b``: the truth read through the record's sensor, scored by
+    its fold's model with the real error and window (1 where either run failed). NonFiniteHistory when the
+    truth or the scoring model gives a non-finite theta history."""
+    spec = scorer.campaign.specimen
+    alpha = spec.alpha
+    recs = scorer.records
+    errs = np.empty(len(recs))
+    for i, rec in enumerate(recs):
+        tr, mo = truth[i], scoring.response[i]
+        for what, res, eff in (("truth", tr, truth_eff),
+                               ("scoring model", mo, scoring.effects.get(int(fold_of[i]), []))):  # fmt: skip
+            if non_finite(res):
+                raise NonFiniteHistory(
+                    f"the correct-model floor: replica {b + 1}'s {what}, {model_text(eff)}, gives a non-finite "
+                    f"theta history on record {rec.id!r}",
+                    [getattr(e, "name", str(e)) for e in eff], rec.id,
+                )  # fmt: skip
+        if isinstance(tr, str) or isinstance(mo, str) or mo is None:
+            errs[i] = 1.0
+            continue
+        # the record's sensor: its noise (sigma and correlation in time) and its range
+        meas = sensor_reading(tr, rec, rng)
+        g = scoring.sensitivity[i]
+        if rec.kind == "free_vibration":
+            # the model of a free vibration starts from the release angle read off the noisy record
+            # (records.estimate_release), off the true one by its standard error: so here
+            mo, g = _from_estimated_release(spec, rec, meas, mo, g, scoring.effects[int(fold_of[i])], settings)
+        th_mod = np.asarray(mo.theta, dtype=float)[: rec.theta.size]
+        errs[i] = record_error(th_mod, meas, scorer.ends[i], alpha, align=release_shift_samples(rec),
+                               sensitivity=None if g is None else g[: rec.theta.size],
+                               max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise, valid=rec.valid)  # fmt: skip
+    return errs
 
 
 def _from_estimated_release(spec, rec, meas, mo, g, eff, settings):

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from housner.impacts import HYSTERESIS_SIGMAS, noise_crossings
-from housner.scenarios.campaigns.campaign import MeasuredRecord
+from housner.scenarios.campaigns.records import MeasuredRecord
 
 __all__ = [
     "DIVERGENCE_SUSTAIN",
@@ -86,7 +86,7 @@ def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | Non
     impact, the measured block passing alpha, or the end (ground motion); up
     to the ``window_impacts``-th impact or the last one above 10 noise sigmas
     (free vibration). The impacts are the record's own (:attr:`MeasuredRecord.impacts
-    <housner.scenarios.campaigns.campaign.MeasuredRecord.impacts>`, :func:`measured_impacts` derived once).
+    <housner.scenarios.campaigns.records.MeasuredRecord.impacts>`, :func:`measured_impacts` derived once).
     """
     th = record.theta
     n = th.size
@@ -139,7 +139,7 @@ def release_error(theta_model, theta_measured, end: int, alpha: float, max_shift
     """:func:`record_error` of a free vibration, minimised over its release instant and angle [-].
 
     A free-vibration record's time axis starts at the release its own theta channel shows and its
-    initial angle is fitted there (:func:`housner.scenarios.campaigns.campaign.estimate_release`). Near the release
+    initial angle is fitted there (:func:`housner.scenarios.campaigns.records.estimate_release`). Near the release
     theta falls only as c (t - t_r)^2, so with 0.8 mrad noise the instant is known to about +-20 ms,
     and a hold too short to be told from the fall (measured on the seed specimen: 10 samples, half of
     the time) biases the angle by 0.3-0.45 noise sigmas; either alone costs 2-5 noise sigmas of error

@@ -19,8 +19,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from housner.calibration import FreeVibrationCalibration, calibrate_free_vibration
-from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
+from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.history_error import FV_FLOOR_SIGMAS, measured_impacts
+from housner.scenarios.campaigns.records import MeasuredRecord
 from housner.units import G
 
 __all__ = ["METRICS", "Features", "Metric", "features", "line_fit", "mean_se", "measured_features"]

@@ -67,7 +67,7 @@ from scipy import stats as sps
 
 from housner.model import theta_max_many
 from housner.rocking_params import RockingParams
-from housner.scenarios.campaigns.campaign import Campaign, OutcomeRecord
+from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.outcome_results import OutcomeDiagnosis, OutcomeStep, params_text
 from housner.scenarios.campaigns.outcome_scores import (
     calibration_table,
@@ -77,6 +77,7 @@ from housner.scenarios.campaigns.outcome_scores import (
     per_record_log_loss,
     stratified_folds,
 )
+from housner.scenarios.campaigns.records import OutcomeRecord
 from housner.units import G
 
 __all__ = [
@@ -388,6 +389,42 @@ def diagnose_outcomes(
     """
     say = progress or (lambda line: None)
     t_start = time.perf_counter()
+    recs, y, folds = _checked_outcomes(campaign, folds)
+    ids = [r.id for r in recs]
+    pga = np.array([r.pga for r in recs])
+    pgv = np.array([r.pgv for r in recs])
+    accs = [np.asarray(r.motion.acc, dtype=np.float64) for r in recs]
+    dts = np.array([r.dt for r in recs])
+    geo = Geometry.of(campaign)
+    fold = stratified_folds(y, folds, seed)
+    say(f"{len(recs)} outcome records ({int(y.sum())} overturned), {folds} stratified folds; block h "
+        f"{geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad")  # fmt: skip
+    tables = _tables(accs, dts, geo, campaign.specimen, say)
+    plain = _step("plain", None, tables, y, fold, seed)
+    say(f"plain model: held-out log loss {plain.scores['log_loss']:.3f}, accuracy {plain.scores['accuracy']:.3f}")
+    pointer = _pointer(plain, y, pga, pgv)
+    say(f"where it fails: {pointer}")
+    steps, candidates = _add_effects(plain, tables, y, fold, seed, say)
+    final = steps[-1]
+    baselines, baseline_p = _baselines(pga, pgv, y, fold, seed)
+    floor = outcome_floor(final.p, y, seed=seed)
+    if floor.at_floor:
+        status = "explained" if len(steps) > 1 else "no_effect_needed"
+    else:
+        status = "partly_explained" if len(steps) > 1 else "unexplained"
+    misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
+    diag = OutcomeDiagnosis(
+        campaign=campaign.name, ids=ids, observed=y, pga=pga, pgv=pgv, steps=steps, candidates=candidates,
+        baselines=baselines, baseline_p=baseline_p, floor=floor, pointer=pointer, misses=misses, status=status,
+        geometry=_geometry_summary(geo), folds=folds, seed=seed, calibration=calibration_table(final.p, y),
+    )  # fmt: skip
+    diag.elapsed = time.perf_counter() - t_start
+    return diag
+
+
+def _checked_outcomes(campaign: Campaign, folds: int) -> tuple[list[OutcomeRecord], np.ndarray, int]:
+    """The campaign's outcome records, their outcomes (True: overturned) and the number of folds [-], checked:
+    ValueError for fewer than 10 records, one outcome only, or folds outside 2 .. records of the smaller outcome."""
     recs: list[OutcomeRecord] = list(campaign.outcomes)
     y = np.array([r.overturned for r in recs], dtype=bool)
     if len(recs) < 10:
@@ -399,35 +436,30 @@ def diagnose_outcomes(
     if folds < 2 or folds > min(int(y.sum()), int((~y).sum())):
         raise ValueError(f"`folds` must lie in 2 .. {min(int(y.sum()), int((~y).sum()))} (records of the smaller "
                          f"outcome), got {folds}")  # fmt: skip
-    ids = [r.id for r in recs]
-    pga = np.array([r.pga for r in recs])
-    pgv = np.array([r.pgv for r in recs])
-    accs = [np.asarray(r.motion.acc, dtype=np.float64) for r in recs]
-    dts = np.array([r.dt for r in recs])
-    geo = Geometry.of(campaign)
-    fold = stratified_folds(y, folds, seed)
-    say(f"{len(recs)} outcome records ({int(y.sum())} overturned), {folds} stratified folds; block h "
-        f"{geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad")  # fmt: skip
-    tables = _tables(accs, dts, geo, campaign.specimen, say)
+    return recs, y, folds
 
-    def step(name: str, prev: OutcomeStep | None) -> OutcomeStep:
-        p, params, fold_params = _cross_validate(name, tables, y, fold)
-        if not np.all(np.isfinite(p)):
-            raise RuntimeError(f"model {name} gave no probability for {int(np.sum(~np.isfinite(p)))} records")
-        fall = _paired_fall(prev.p, p, y) if prev is not None else (0.0, 0.0, math.nan)
-        return OutcomeStep(name, params, fold_params, p, outcome_scores(p, y, seed=seed), *fall)
 
-    plain = step("plain", None)
+def _step(name: str, prev: OutcomeStep | None, tables, y, fold, seed: int) -> OutcomeStep:
+    """Model ``name`` cross-validated on the folds: its held-out probabilities and scores, and the paired fall of
+    the held-out log loss from ``prev`` (none for the first model)."""
+    p, params, fold_params = _cross_validate(name, tables, y, fold)
+    if not np.all(np.isfinite(p)):
+        raise RuntimeError(f"model {name} gave no probability for {int(np.sum(~np.isfinite(p)))} records")
+    fall = _paired_fall(prev.p, p, y) if prev is not None else (0.0, 0.0, math.nan)
+    return OutcomeStep(name, params, fold_params, p, outcome_scores(p, y, seed=seed), *fall)
+
+
+def _add_effects(plain: OutcomeStep, tables, y, fold, seed: int, say) -> tuple[list[OutcomeStep], list[dict]]:
+    """Forward selection from the plain model: each round tries the effects that extend the current model and adds
+    the one of lowest held-out log loss among those whose fall is significant (at :data:`LEVEL` over the number
+    tried); stops when none is. Returns the models kept (the plain one first) and every candidate tried."""
     steps = [plain]
-    say(f"plain model: held-out log loss {plain.scores['log_loss']:.3f}, accuracy {plain.scores['accuracy']:.3f}")
-    pointer = _pointer(plain, y, pga, pgv)
-    say(f"where it fails: {pointer}")
     candidates = []
     rounds = (("contact_inside", "restitution"), ("contact_inside+restitution",))
     for pool in rounds:
         cur = steps[-1]
         pool = [n for n in pool if _extends(n, cur.name)]
-        tried = [step(n, cur) for n in pool]
+        tried = [_step(n, cur, tables, y, fold, seed) for n in pool]
         level = LEVEL / max(len(tried), 1)
         for c in tried:
             candidates.append({"name": c.name, "log_loss": c.scores["log_loss"], "improvement": c.improvement,
@@ -441,28 +473,25 @@ def diagnose_outcomes(
         best = min(good, key=lambda c: c.scores["log_loss"])
         next(d for d in candidates if d["name"] == best.name)["added"] = True
         steps.append(best)
-    final = steps[-1]
+    return steps, candidates
+
+
+def _baselines(pga, pgv, y, fold, seed: int) -> tuple[dict, dict]:
+    """The logistic baselines on log PGA, log PGV and both, cross-validated on the same folds: their scores and
+    their held-out probabilities, by name."""
     baselines, baseline_p = {}, {}
     for name, X in (("logistic_pga", np.log(pga)), ("logistic_pgv", np.log(pgv)),
                     ("logistic_pga_pgv", np.column_stack((np.log(pga), np.log(pgv))))):  # fmt: skip
         baseline_p[name] = logistic_oof(X, y, fold)
         baselines[name] = outcome_scores(baseline_p[name], y, seed=seed)
-    floor = outcome_floor(final.p, y, seed=seed)
-    if floor.at_floor:
-        status = "explained" if len(steps) > 1 else "no_effect_needed"
-    else:
-        status = "partly_explained" if len(steps) > 1 else "unexplained"
-    misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
-    geometry = {"h_m": geo.h, "b_pos_m": geo.b_pos, "b_neg_m": geo.b_neg, "alpha_pos_rad": geo.alpha_pos,
-                "alpha_neg_rad": geo.alpha_neg, "centroidal_inertia_kgm2": geo.ic, "mass_kg": geo.mass,
-                "b_bracket_m": {k: list(v) for k, v in geo.bracket.items()}}  # fmt: skip
-    diag = OutcomeDiagnosis(
-        campaign=campaign.name, ids=ids, observed=y, pga=pga, pgv=pgv, steps=steps, candidates=candidates,
-        baselines=baselines, baseline_p=baseline_p, floor=floor, pointer=pointer, misses=misses, status=status,
-        geometry=geometry, folds=folds, seed=seed, calibration=calibration_table(final.p, y),
-    )  # fmt: skip
-    diag.elapsed = time.perf_counter() - t_start
-    return diag
+    return baselines, baseline_p
+
+
+def _geometry_summary(geo: Geometry) -> dict:
+    """The block's geometry as the diagnosis reports it, in SI (m, rad, kg m^2, kg)."""
+    return {"h_m": geo.h, "b_pos_m": geo.b_pos, "b_neg_m": geo.b_neg, "alpha_pos_rad": geo.alpha_pos,
+            "alpha_neg_rad": geo.alpha_neg, "centroidal_inertia_kgm2": geo.ic, "mass_kg": geo.mass,
+            "b_bracket_m": {k: list(v) for k, v in geo.bracket.items()}}  # fmt: skip
 
 
 def _extends(name: str, current: str) -> bool:

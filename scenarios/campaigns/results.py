@@ -413,7 +413,7 @@ def signed_words(text: str) -> str:
 def param_unit(name: str, key: str) -> str:
     """The unit of parameter ``key`` of effect ``name`` (its ParamSpec's), "" when unknown."""
     try:
-        return effect_class(name).params[key].unit
+        return effect_class(name).param_specs[key].unit
     except (KeyError, ValueError, AttributeError):
         return ""
 

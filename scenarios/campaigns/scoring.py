@@ -28,9 +28,10 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
+from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.compare import release_sensitivities, simulate_records
 from housner.scenarios.campaigns.history_error import ERROR_CLIP, error_window, scored_error
+from housner.scenarios.campaigns.records import MeasuredRecord
 
 __all__ = [
     "DEFAULT_FOLDS",

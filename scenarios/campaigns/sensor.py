@@ -49,9 +49,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from housner.calibration import estimate_noise
-from housner.scenarios.campaigns.campaign import Campaign, MeasuredRecord
+from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.compare import on_grid, simulate_records
 from housner.scenarios.campaigns.localise import line_fit
+from housner.scenarios.campaigns.records import MeasuredRecord
 from housner.scenarios.campaigns.sensor_noise import WHITE, SensorNoise, estimate_sensor_noise
 
 __all__ = [

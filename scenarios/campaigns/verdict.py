@@ -43,10 +43,13 @@ __all__ = [
     "STATUS_RULE",
     "Z_LOCAL",
     "Verdict",
+    "VerdictFacts",
     "decide",
     "distribution_checks",
+    "pointer_classes",
     "pointer_text",
     "status_rule",
+    "verdict_text",
 ]
 
 STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconclusive")
@@ -166,6 +169,70 @@ class Verdict:
         }
 
 
+@dataclass(frozen=True)
+class VerdictFacts:
+    """What the verdict is drawn from (:func:`decide`): the residuals, the model judged, the pointers.
+
+    Attributes
+    ----------
+    n_records : int
+    baseline, final : Residual
+        The plain and the final model's held-out errors against their floors.
+    selected, added : sequence of str
+        The effects the search added and those added by hand.
+    model : list of str
+        The effects of the final model (by hand first).
+    params : dict
+        Effect -> its fitted parameters in the final model.
+    library : sequence of str
+        The effects the search tried.
+    drift : dict or None
+        :func:`order_drift`'s class, if any.
+    family : str
+        The correct integrators the floors were measured over.
+    classes : list of dict
+        The physical classes to look at, strongest first (drift and probes first).
+    final_classes : list of dict
+        Those the final model's localisation points to.
+    local_plain, local_final : list of dict
+        The plain and final model's classes with only their evidence beyond :data:`Z_LOCAL`.
+    dist_plain, dist_final : list of str
+        Their distribution misfits (:func:`distribution_checks`).
+    plain_misfit, final_misfit : bool
+        Whether each residual is a misfit (:func:`status_rule`).
+    powered : bool
+        Whether the records would show a misfit of :data:`DETECTABLE_RATIO` x the floor.
+    probed : bool
+        Whether a probe of physics outside the library lowered the error significantly.
+    """
+
+    n_records: int
+    baseline: Residual
+    final: Residual
+    selected: Sequence[str]
+    added: Sequence[str]
+    model: list[str]
+    params: dict
+    library: Sequence[str]
+    drift: dict | None
+    family: str
+    classes: list[dict]
+    final_classes: list[dict]
+    local_plain: list[dict]
+    local_final: list[dict]
+    dist_plain: list[str]
+    dist_final: list[str]
+    plain_misfit: bool
+    final_misfit: bool
+    powered: bool
+    probed: bool
+
+    @property
+    def records_needed(self) -> int:
+        """Ground-motion records to add for the power the verdict promises."""
+        return self.final.records_needed if self.model else self.baseline.records_needed
+
+
 def decide(
     *,
     n_records: int,
@@ -181,142 +248,193 @@ def decide(
     family: str = "",
     probes: Sequence[dict] = (),
 ) -> Verdict:
-    """The status and its paragraph from the residuals, the effects in the final model and the localisation.
+    """The status (:func:`status_rule`) and its paragraph (:func:`verdict_text`) from the residuals, the effects
+    in the final model and the localisation.
 
     ``selected`` are the effects the search added, ``added`` those added by hand (both in the final
     model, which is the one judged); ``drift`` is :func:`order_drift`'s class, if any; ``family`` the
     correct integrators the floor was measured over (:data:`housner.scenarios.campaigns.model_form.FAMILIES`).
     """
-    dist_final = distribution_checks(final_cmp)
-    dist_base = distribution_checks(baseline_cmp)
-    # what differs from Housner's physics (the plain model) names the family; what the final model still
-    # misses follows
     base_classes = physical_classes(baseline_cmp)
     final_classes = physical_classes(final_cmp)
-    have = {c["class"] for c in base_classes}
-    classes = base_classes + [c for c in final_classes if c["class"] not in have]
-    # a probe of physics outside the library that lowers the error significantly is the most direct
-    # pointer there is: its class first (housner.scenarios.campaigns.probes)
-    for pr in sorted(probes, key=lambda p: p["z"]):
-        pr_ev = {
-            "metric": f"probe:{pr['probe']}",
-            "label": f"held-out error with the probe {pr['probe']} ("
-                     + ", ".join(f"{k} = {v:.3g}" for k, v in pr["params"].items())
-                     + f"), against {pr['error']:.4g} without it",
-            "measured": pr["error_with"], "measured_se": pr["se"], "model": pr["error"], "model_se": 0.0, "z": pr["z"],
-        }  # fmt: skip
-        entry = {"class": pr["class"], "meaning": CLASSES[pr["class"]], "z": abs(pr["z"]), "evidence": [pr_ev]}
-        old = [c for c in classes if c["class"] == pr["class"]]
-        if old:
-            entry["evidence"] += old[0]["evidence"]
-        classes = [entry, *[c for c in classes if c["class"] != pr["class"]]]
-    if drift is not None:
-        # a physics that changes along the campaign is what no constant effect explains: named first
-        classes = [drift, *[c for c in classes if c["class"] != "drift"]]
+    classes = pointer_classes(base_classes, final_classes, probes, drift)
     where = [_evidence_text(ev) for c in final_classes for ev in c["evidence"]]
     if drift is not None:
         where = [_evidence_text(ev) for ev in drift["evidence"]] + where
     # a localisation quantity beyond Z_LOCAL standard errors points to where to look; it is no misfit by
     # itself (the status follows from the residual's tests alone: status_rule)
-    loc_base = evidence_beyond(base_classes, Z_LOCAL)
-    loc_final = evidence_beyond(final_classes, Z_LOCAL)
+    local_plain = evidence_beyond(base_classes, Z_LOCAL)
+    local_final = evidence_beyond(final_classes, Z_LOCAL)
     # the residual's tests: against the floor, along the recording order, and against a probe of physics
     # outside the library (held-out errors, each at the verdict's level); a localisation quantity beyond Z_LOCAL
     # counts only for a residual above the floor's band (ratio > RATIO_MISFIT) that its own test cannot call
     # significant: it never turns a residual at the floor into a misfit
     residual_tests = drift is not None or bool(probes)
-    base_mis = baseline.misfit or residual_tests or (bool(loc_base) and baseline.ratio > RATIO_MISFIT)
-    fin_mis = final.misfit or residual_tests or (bool(loc_final) and final.ratio > RATIO_MISFIT)
-    powered = final.detectable_ratio <= DETECTABLE_RATIO
-    model = [*added, *[n for n in selected if n not in added]]
-    status = status_rule(n_records >= MIN_RECORDS, bool(model), base_mis, fin_mis, powered)
-    unusual = ""
+    facts = VerdictFacts(
+        n_records=n_records, baseline=baseline, final=final, selected=selected, added=added,
+        model=[*added, *[n for n in selected if n not in added]], params=params, library=library, drift=drift,
+        family=family, classes=classes, final_classes=final_classes, local_plain=local_plain,
+        local_final=local_final, dist_plain=distribution_checks(baseline_cmp),
+        dist_final=distribution_checks(final_cmp),
+        plain_misfit=baseline.misfit or residual_tests or (bool(local_plain) and baseline.ratio > RATIO_MISFIT),
+        final_misfit=final.misfit or residual_tests or (bool(local_final) and final.ratio > RATIO_MISFIT),
+        powered=final.detectable_ratio <= DETECTABLE_RATIO, probed=bool(probes),
+    )  # fmt: skip
+    status = status_rule(n_records >= MIN_RECORDS, bool(facts.model), facts.plain_misfit, facts.final_misfit,
+                         facts.powered)  # fmt: skip
+    return Verdict(status, final, baseline, verdict_text(facts, status), where, classes, facts.dist_final,
+                   facts.records_needed if status == "inconclusive" else 0)  # fmt: skip
+
+
+def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes: Sequence[dict],
+                    drift: dict | None) -> list[dict]:  # fmt: skip
+    """The physical classes to look at, strongest first: a drift along the recording order, then the probes'
+    classes, then what the localisation of the plain model and of the final model points to."""
+    # what differs from Housner's physics (the plain model) names the family; what the final model still
+    # misses follows
+    have = {c["class"] for c in base_classes}
+    classes = base_classes + [c for c in final_classes if c["class"] not in have]
+    # a probe of physics outside the library that lowers the error significantly is the most direct
+    # pointer there is: its class first (housner.scenarios.campaigns.probes)
+    for found in sorted(probes, key=lambda p: p["z"]):
+        evidence = {
+            "metric": f"probe:{found['probe']}",
+            "label": f"held-out error with the probe {found['probe']} ("
+                     + ", ".join(f"{k} = {v:.3g}" for k, v in found["params"].items())
+                     + f"), against {found['error']:.4g} without it",
+            "measured": found["error_with"], "measured_se": found["se"], "model": found["error"], "model_se": 0.0,
+            "z": found["z"],
+        }  # fmt: skip
+        entry = {"class": found["class"], "meaning": CLASSES[found["class"]], "z": abs(found["z"]),
+                 "evidence": [evidence]}  # fmt: skip
+        old = [c for c in classes if c["class"] == found["class"]]
+        if old:
+            entry["evidence"] += old[0]["evidence"]
+        classes = [entry, *[c for c in classes if c["class"] != found["class"]]]
+    if drift is not None:
+        # a physics that changes along the recording order is what no constant effect explains: named first
+        classes = [drift, *[c for c in classes if c["class"] != "drift"]]
+    return classes
+
+
+# ----------------------------------------------------------------------------
+# the verdict in words
+def verdict_text(facts: VerdictFacts, status: str) -> str:
+    """The verdict's paragraph: the status in words with its figures, what is unusual, the legend of the
+    figures and, for a misfit, where to look next."""
+    text = _status_sentence(facts, status)
     if status in ("no_misfit", "explained"):
-        loc = loc_final if model else loc_base
-        dist = dist_final if model else dist_base
-        bits = [_evidence_text(e) for c in loc for e in c["evidence"][:1]] + dist
+        local = facts.local_final if facts.model else facts.local_plain
+        dist = facts.dist_final if facts.model else facts.dist_plain
+        bits = [_evidence_text(e) for c in local for e in c["evidence"][:1]] + dist
         if bits:
-            unusual = (f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
-                       ". It says where a model with more physics would differ first, not that this one fails.")
-    need = final.records_needed if model else baseline.records_needed
-    eff = "; ".join(f"{n} ({', '.join(f'{k} = {v:.4g}' for k, v in params.get(n, {}).items())})" for n in model)
-    fam = f" (correct integrators of the family '{family}')" if family else ""
+            text += (f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
+                     ". It says where a model with more physics would differ first, not that this one fails.")
+    if status != "inconclusive" or facts.n_records >= MIN_RECORDS:
+        text += (" (Residual ratio: the held-out error over the correct-model floor, the error a correct model "
+                 f"shows on these records; z: its excess over the floor in standard errors, significant above "
+                 f"{Z_MISFIT:g}.)")  # fmt: skip
+    if status in ("partly_explained", "unexplained"):
+        if facts.dist_final:
+            text += " The distributions disagree too: " + "; ".join(facts.dist_final) + "."
+        if facts.classes:
+            text += " " + pointer_text(facts.classes)
+        else:
+            text += f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is " \
+                    "in the time histories only."  # fmt: skip
+    return text
+
+
+def _figures(facts: VerdictFacts) -> tuple[str, str]:
+    """The final and the plain model's figures: held-out error, floor, residual ratio, by group."""
+    final, baseline = facts.final, facts.baseline
+    fam = f" (correct integrators of the family '{facts.family}')" if facts.family else ""
     figs = f"held-out error {final.error:.4f} alpha against a correct-model floor of {final.floor:.4f}{fam}, " \
            f"residual ratio {final.ratio:.2f} ({_groups_text(final)})"  # fmt: skip
     base_figs = f"the plain Housner model's held-out error is {baseline.error:.4f} alpha against a correct-model " \
                 f"floor of {baseline.floor:.4f}{fam}, residual ratio {baseline.ratio:.2f} " \
                 f"({_groups_text(baseline)})"  # fmt: skip
-    if model and abs(final.floor - baseline.floor) > 1e-12:
+    if facts.model and abs(final.floor - baseline.floor) > 1e-12:
         # one floor per model: say once why the two differ
         figs += (" (each model has its own floor: a correct model of other physics leaves another error, as chaos "
                  "carries its records elsewhere)")  # fmt: skip
-    fall = ""
-    if model:
-        change = "falls" if final.error < baseline.error else "rises"
-        how = "added by hand" if not selected else "found by the search" if not added else "added by hand and found"
-        fall = f"with {eff} ({how}) the held-out error {change} from {baseline.error:.4f} to {final.error:.4f} alpha"
-    if status == "inconclusive" and n_records < MIN_RECORDS:
-        text = (f"Inconclusive: {n_records} usable records are too few to tell a misfit from chance (at least "
+    return figs, base_figs
+
+
+def _fall_text(facts: VerdictFacts) -> str:
+    """What the effects of the final model did to the held-out error ('' for the plain model)."""
+    if not facts.model:
+        return ""
+    params = facts.params
+    eff = "; ".join(f"{n} ({', '.join(f'{k} = {v:.4g}' for k, v in params.get(n, {}).items())})" for n in facts.model)
+    before, after = facts.baseline.error, facts.final.error
+    change = "falls" if after < before else "rises"
+    how = "added by hand" if not facts.selected else "found by the search" if not facts.added else \
+        "added by hand and found"  # fmt: skip
+    return f"with {eff} ({how}) the held-out error {change} from {before:.4f} to {after:.4f} alpha"
+
+
+def _status_sentence(facts: VerdictFacts, status: str) -> str:
+    """The status in words, with the figures it rests on."""
+    figs, base_figs = _figures(facts)
+    if status == "inconclusive" and facts.n_records < MIN_RECORDS:
+        return (f"Inconclusive: {facts.n_records} usable records are too few to tell a misfit from chance (at least "
                 f"{MIN_RECORDS} are needed, with free vibrations among them); {base_figs}.")  # fmt: skip
-    elif not model and not base_mis:
-        _status, text = _unless_underpowered(
-            powered, "no_misfit",
+    if not facts.model and not facts.plain_misfit:
+        return _unless_underpowered(
+            facts.powered,
             f"No misfit: {base_figs}; no group is more than {RATIO_MISFIT}x above it with significance, which is "
             f"what a correct model shows on these records. No effect is needed. This campaign would have detected "
-            f"a misfit of {final.detectable_ratio:.2f}x the floor or more.",
+            f"a misfit of {facts.final.detectable_ratio:.2f}x the floor or more.",
             f"Inconclusive: {base_figs}, not significantly above it, but with these records only a misfit of "
-            f"{final.detectable_ratio:.2f}x the floor or more would show; about {need} more ground-motion records "
-            f"are needed to see one of {DETECTABLE_RATIO}x.",
+            f"{facts.final.detectable_ratio:.2f}x the floor or more would show; about {facts.records_needed} more "
+            f"ground-motion records are needed to see one of {DETECTABLE_RATIO}x.",
         )  # fmt: skip
-    elif not model:
-        if library:
-            text = (f"Unexplained: {base_figs}, a misfit that no effect in the library "
-                    f"({', '.join(library)}) reduces significantly.")  # fmt: skip
-        else:  # the search was switched off (effects=[] / --effects none) and nothing was added
-            text = (f"Unexplained: {base_figs}, a misfit; no effect was tried (the search was switched off, or "
-                    "it found the training error already at the sensor noise, and none was added by "
-                    "hand).")  # fmt: skip
-    elif not fin_mis:
-        small = "" if base_mis else (" The plain model was already within the floor's band, yet the fall is "
-                                     "significant on the held-out records: a small effect that many records prove.")
-        doubt = "" if final.ratio <= RATIO_MISFIT else (
-            f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
-            f"(z = {final.z:+.1f} <= {Z_MISFIT:g}): these records cannot tell it from the floor.")  # fmt: skip
-        _status, text = _unless_underpowered(
-            powered, "explained",
-            f"Explained: {base_figs}; {fall}, residual ratio {final.ratio:.2f} ({_groups_text(final)}), no group "
-            f"more than {RATIO_MISFIT}x above it with significance: what a correct model shows. "
-            f"{' + '.join(model)} explains it.{small}{doubt}",
-            f"Inconclusive: {base_figs}; {fall}, to a {figs}, but these records would only show a remaining misfit "
-            f"of {final.detectable_ratio:.2f}x or more; about {need} more ground-motion records are needed.",
-        )  # fmt: skip
-    else:
-        searched = "that no effect in the library explains" if library else "(no library search ran)"
-        if final.misfit or not (drift or probes or loc_final):
-            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}. A misfit of {final.ratio:.2f}x the floor "
-                    f"(the typical record) remains {searched}.")  # fmt: skip
-        else:
-            probed = [c for c in classes if any(e["metric"].startswith("probe:") for e in c["evidence"])]
-            ev = "; ".join(_evidence_text(e) for c in ([drift] if drift else []) + probed + loc_final
-                           for e in c["evidence"][:2])  # fmt: skip
-            text = (f"Partly explained: {base_figs}; {fall}, to a {figs}: above the floor's {RATIO_MISFIT}x band, "
-                    f"and the recording order, a probe of physics outside the library or the localisation (beyond "
-                    f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}) {searched}.")  # fmt: skip
-    text += unusual
-    if status != "inconclusive" or n_records >= MIN_RECORDS:
-        text += (" (Residual ratio: the held-out error over the correct-model floor, the error a correct model "
-                 f"shows on these records; z: its excess over the floor in standard errors, significant above "
-                 f"{Z_MISFIT:g}.)")  # fmt: skip
-    if status in ("partly_explained", "unexplained"):
-        if dist_final:
-            text += " The distributions disagree too: " + "; ".join(dist_final) + "."
-        if classes:
-            text += " " + pointer_text(classes)
-        else:
-            text += f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is " \
-                    "in the time histories only."  # fmt: skip
-    return Verdict(status, final, baseline, text, where, classes, dist_final,
-                   need if status == "inconclusive" else 0)  # fmt: skip
+    if not facts.model:
+        if facts.library:
+            return (f"Unexplained: {base_figs}, a misfit that no effect in the library "
+                    f"({', '.join(facts.library)}) reduces significantly.")  # fmt: skip
+        # the search was switched off (effects=[] / --effects none) and nothing was added
+        return (f"Unexplained: {base_figs}, a misfit; no effect was tried (the search was switched off, or "
+                "it found the training error already at the sensor noise, and none was added by "
+                "hand).")  # fmt: skip
+    if not facts.final_misfit:
+        return _explained_sentence(facts, figs, base_figs)
+    return _partly_explained_sentence(facts, figs, base_figs)
+
+
+def _explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
+    """The verdict of a final model at its floor (``explained``, or ``inconclusive`` when underpowered)."""
+    final, fall = facts.final, _fall_text(facts)
+    small = "" if facts.plain_misfit else (" The plain model was already within the floor's band, yet the fall is "
+                                       "significant on the held-out records: a small effect that many records prove.")
+    doubt = "" if final.ratio <= RATIO_MISFIT else (
+        f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
+        f"(z = {final.z:+.1f} <= {Z_MISFIT:g}): these records cannot tell it from the floor.")  # fmt: skip
+    return _unless_underpowered(
+        facts.powered,
+        f"Explained: {base_figs}; {fall}, residual ratio {final.ratio:.2f} ({_groups_text(final)}), no group "
+        f"more than {RATIO_MISFIT}x above it with significance: what a correct model shows. "
+        f"{' + '.join(facts.model)} explains it.{small}{doubt}",
+        f"Inconclusive: {base_figs}; {fall}, to a {figs}, but these records would only show a remaining misfit "
+        f"of {final.detectable_ratio:.2f}x or more; about {facts.records_needed} more ground-motion records are "
+        "needed.",
+    )  # fmt: skip
+
+
+def _partly_explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
+    """The verdict of a final model still above its floor."""
+    fall = _fall_text(facts)
+    searched = "that no effect in the library explains" if facts.library else "(no library search ran)"
+    if facts.final.misfit or not (facts.drift or facts.probed or facts.local_final):
+        return (f"Partly explained: {base_figs}; {fall}, to a {figs}. A misfit of {facts.final.ratio:.2f}x the floor "
+                f"(the typical record) remains {searched}.")  # fmt: skip
+    probed = [c for c in facts.classes if any(e["metric"].startswith("probe:") for e in c["evidence"])]
+    ev = "; ".join(_evidence_text(e) for c in ([facts.drift] if facts.drift else []) + probed + facts.local_final
+                   for e in c["evidence"][:2])  # fmt: skip
+    return (f"Partly explained: {base_figs}; {fall}, to a {figs}: above the floor's {RATIO_MISFIT}x band, "
+            f"and the recording order, a probe of physics outside the library or the localisation (beyond "
+            f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}) {searched}.")  # fmt: skip
 
 
 #: The status rule (docs/explanation/verdict.md): (enough records, an effect in the final model, the plain
@@ -352,7 +470,7 @@ def status_rule(enough_records: bool, has_effects: bool, plain_misfit: bool, fin
     raise AssertionError(f"the status rule has no row for {got}")  # the table covers every case
 
 
-def _unless_underpowered(powered: bool, status: str, text: str, weak: str) -> tuple[str, str]:
-    """``status`` and its ``text`` when the records have the power the verdict promises (a misfit of
-    :data:`DETECTABLE_RATIO` x the floor would show), else ``inconclusive`` and ``weak``, which says so."""
-    return (status, text) if powered else ("inconclusive", weak)
+def _unless_underpowered(powered: bool, text: str, weak: str) -> str:
+    """``text`` when the records have the power the verdict promises (a misfit of :data:`DETECTABLE_RATIO` x the
+    floor would show), else ``weak``, which says so (the status is then ``inconclusive``: :func:`status_rule`)."""
+    return text if powered else weak

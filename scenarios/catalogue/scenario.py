@@ -54,7 +54,7 @@ from housner.scenarios.catalogue.schema import (
 from housner.scenarios.catalogue.study_table import read_study
 from housner.scenarios.motions.records import RECORD_SUFFIXES, RECORDS, file_sha256, read_record_file
 
-__all__ = ["SCENARIOS", "Scenario", "ScenarioError", "list_scenarios", "load_scenario"]
+__all__ = ["SCENARIOS", "Scenario", "list_scenarios", "load_scenario"]
 
 HERE = Path(__file__).resolve().parent
 

@@ -385,6 +385,6 @@ def effects_label(effects) -> str:
     """A short text naming effects and their parameters, e.g. ``restitution(r=0.9532)``; "" for none."""
     parts = []
     for e in effects:
-        vals = ", ".join(f"{k}={getattr(e, k):.4g}" for k in type(e).params)
+        vals = ", ".join(f"{k}={getattr(e, k):.4g}" for k in type(e).param_specs)
         parts.append(f"{e.name}({vals})")
     return " + ".join(parts)

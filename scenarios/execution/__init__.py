@@ -18,8 +18,8 @@ _EXPORTS = {
     "percentile_table": "tables",
     "CRASH_ENV": "chunks",
     "RunInterrupted": "workers",
-    "SchedulerError": "workers",
-    "connect_scheduler": "workers",
+    "SchedulerError": "cluster",
+    "connect_scheduler": "cluster",
 }
 
 

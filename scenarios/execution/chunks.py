@@ -385,8 +385,8 @@ def iter_chunk(
 
 
 def repairs_so_far() -> int:
-    """Damaged kernel-cache entries repaired so far in this process (see housner.effects.terms.kernel_cache_repairs)."""
-    from housner.effects.terms import kernel_cache_repairs
+    """Damaged kernel-cache entries repaired so far in this process (housner.effects.codegen.kernel_cache_repairs)."""
+    from housner.effects.codegen import kernel_cache_repairs
 
     return sum(kernel_cache_repairs().values())
 

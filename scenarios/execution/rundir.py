@@ -12,8 +12,9 @@ and :mod:`housner.reports.assertions.runs`):
   ``cached``, ``effects`` ("" for none);
 - ``histories.parquet``: ``engine``, ``motion_id``, ``t`` [s], ``theta`` [rad];
 - ``motions.npz``: the ensemble's accelerations [m/s^2] and steps [s];
-- ``run.json``: scenario, specimen, engine settings and versions, seed,
-  metadata, failures, wall times, provenance; non-finite floats are written
+- ``run.json``: the run's :class:`RunMeta` (scenario, specimen, motions' facts,
+  engine settings and versions, analysis, failures, the engines' free-rocking
+  errors, wall times, provenance); non-finite floats are written
   as the strings "inf", "-inf", "nan" (:func:`jsonable`). It is the run's
   manifest: ``"complete": true`` and ``"content"``, the size [bytes] and SHA-256
   of each of the other files (:data:`DATA_FILES`) it was written with.
@@ -43,6 +44,7 @@ import subprocess
 import tempfile
 import time
 import warnings
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -98,6 +100,120 @@ class UnverifiedRunWarning(UserWarning):
     """A run directory written before run.json carried its completion marker: read, but not checked."""
 
 
+@dataclass(frozen=True)
+class RunMeta:
+    """A run's metadata: what run.json holds besides its completion marker, one field per key.
+
+    :func:`write_run` writes it (:meth:`to_json`, the keys in the order of the fields) and
+    :meth:`from_json` reads it back from run.json, that of an earlier version too: a key it
+    lacks takes its field's default (an empty table, or None), a key this version does not
+    know is kept in ``extra``. The values are run.json's own, so a non-finite number read
+    back is the string "inf", "-inf" or "nan" (:func:`json_number` reads it).
+
+    Attributes
+    ----------
+    scenario : dict
+        The scenario as run (``Scenario.describe()``): ``name``, ``description``, ``file``,
+        ``motions`` (its [motions] table), ...
+    specimen : dict
+        The specimen's geometry and derived figures (``Specimen.describe()``), SI units
+        named in the keys (``height_m``, ``alpha_rad``, ``p_1_s``, ...).
+    motions : dict
+        Facts of the ground motions (``build_motions``): ``source``, the size ratio ``S``,
+        ``seed``, the record's facts, the fitted model, the band check, ...
+    n_motions : int or None
+        Motions of the run (None: not stated, as in a table written by another tool).
+    engines : dict
+        Series name -> its engine's facts: ``settings``, ``version``, ``wall_s`` [s],
+        ``cached``, and for a series with the scenario's [[effects]] ``engine`` and ``effects``.
+    analysis : dict
+        The scenario's [analysis] table (``reference``, ``paper_percentiles``, ...).
+    failures : list of dict
+        The failed records: ``engine``, ``motion_id``, ``motion_name``, ``error``.
+    engine_errors : dict
+        Engine -> its measured free-rocking r and p errors (:mod:`housner.scenarios.runs.chaos`).
+    wall_s : dict
+        Wall times [s] of the run's parts (``motions``, ``total``).
+    provenance : dict
+        Versions, git commit, platform, CPUs and the creation time (:func:`provenance`).
+    table2_spread : dict or None
+        The spread of Table 2 over independent ensembles (``seed_spread``), when measured.
+    effects : dict or None
+        The scenario's [[effects]]: ``label`` and each effect's data, when it lists any.
+    complete : bool or None
+        run.json's completion marker as read (None: not read from a file, or an earlier
+        version's run.json without one); :func:`write_run` writes its own.
+    content : dict or None
+        run.json's content key as read (size and SHA-256 of each data file).
+    extra : dict
+        Keys of run.json this version does not know, as read.
+    """
+
+    scenario: dict = field(default_factory=dict)
+    specimen: dict = field(default_factory=dict)
+    motions: dict = field(default_factory=dict)
+    n_motions: int | None = None
+    engines: dict = field(default_factory=dict)
+    analysis: dict = field(default_factory=dict)
+    failures: list = field(default_factory=list)
+    engine_errors: dict = field(default_factory=dict)
+    wall_s: dict = field(default_factory=dict)
+    provenance: dict = field(default_factory=dict)
+    table2_spread: dict | None = None
+    effects: dict | None = None
+    complete: bool | None = None
+    content: dict | None = None
+    extra: dict = field(default_factory=dict)
+
+    #: Keys written whatever their value, in this order; then the optional ones, when set.
+    _ALWAYS = ("scenario", "specimen", "motions", "n_motions", "engines", "analysis", "failures", "engine_errors",
+               "wall_s", "provenance")  # fmt: skip
+    _OPTIONAL = ("table2_spread", "effects", "complete", "content")
+
+    @classmethod
+    def from_json(cls, data: dict) -> RunMeta:
+        """The metadata of a run.json's contents (a missing or null table becomes an empty one)."""
+        data = data if isinstance(data, dict) else {}
+        empty = {"failures": []}
+        known = {**{k: data.get(k) or empty.get(k, {}) for k in cls._ALWAYS if k != "n_motions"},
+                 **{k: data.get(k) for k in (*cls._OPTIONAL, "n_motions")}}  # fmt: skip
+        extra = {k: v for k, v in data.items() if k not in cls._ALWAYS and k not in cls._OPTIONAL}
+        return cls(**known, extra=extra)
+
+    def to_json(self) -> dict:
+        """run.json's keys and values, in its order: the fields, then ``extra`` (n_motions and the optional ones only
+        when set)."""
+        out = {k: getattr(self, k) for k in self._ALWAYS if not (k == "n_motions" and self.n_motions is None)}
+        out.update({k: getattr(self, k) for k in self._OPTIONAL[:2] if getattr(self, k) is not None})
+        out.update(self.extra)
+        out.update({k: getattr(self, k) for k in self._OPTIONAL[2:] if getattr(self, k) is not None})
+        return out
+
+    @property
+    def reference(self) -> str:
+        """The reference engine the scenario asks for (``[analysis] reference``, default the analytic model)."""
+        return self.analysis.get("reference") or "housner"
+
+    def engine(self, name: str) -> dict:
+        """The facts of series ``name`` (empty when the run has none)."""
+        return self.engines.get(name) or {}
+
+    def engine_settings(self, name: str) -> dict:
+        """The settings series ``name`` ran with (empty when not recorded)."""
+        return self.engine(name).get("settings") or {}
+
+    @property
+    def effect_series(self) -> dict[str, str]:
+        """Series that are an engine with the scenario's [[effects]]: series -> the engine without them."""
+        return {n: str(v["engine"]) for n, v in self.engines.items()
+                if isinstance(v, dict) and v.get("effects") and "engine" in v}  # fmt: skip
+
+    @property
+    def effects_label(self) -> str:
+        """The scenario's [[effects]] in one label, e.g. ``restitution(r=0.95)`` ("" without effects)."""
+        return (self.effects or {}).get("label", "")
+
+
 def jsonable(x: Any, *, nonfinite: str = "string") -> Any:
     """``x`` as plain JSON data, recursively: numpy scalars and arrays, paths, tuples made plain.
 
@@ -135,7 +251,7 @@ def json_number(x: Any) -> float:
 
 def effect_data(effect: Any) -> dict:
     """An effect as plain data: its registry name and parameter values (for cache keys and run.json)."""
-    return {"name": effect.name, **{k: getattr(effect, k) for k in type(effect).params}}
+    return {"name": effect.name, **{k: getattr(effect, k) for k in type(effect).param_specs}}
 
 
 def _git_commit() -> str:
@@ -175,7 +291,7 @@ def write_run(
     results: pd.DataFrame,
     histories: dict[tuple[str, int], np.ndarray],
     motions: list[GroundMotion],
-    meta: dict,
+    meta: RunMeta,
 ) -> None:
     """Write results.parquet, histories.parquet, motions.npz and run.json into ``out``, as one run.
 
@@ -184,7 +300,8 @@ def write_run(
     says the directory is incomplete. A previous run's files that this run does not write
     (histories.parquet when there are none, the previous report.html) are removed with it, when
     the run.json there is housner's; files of those names that no run wrote are left, and the
-    readers refuse the directory while they lie there.
+    readers refuse the directory while they lie there. ``meta`` is the run's :class:`RunMeta`
+    (its own ``complete`` and ``content`` are not written: these are the write's).
     """
     out.mkdir(parents=True, exist_ok=True)
     _remove_stale_temporaries(out)
@@ -192,7 +309,7 @@ def write_run(
     try:
         _write_files(tmp, results, histories, motions)
         content = {name: _digest(tmp / name) for name in DATA_FILES if (tmp / name).is_file()}
-        manifest = jsonable(meta)
+        manifest = jsonable(replace(meta, complete=None, content=None).to_json())
         (tmp / RUN_FILE).write_text(json.dumps({**manifest, "complete": True, "content": content}, indent=2))
         previous_ours = _is_ours(out / RUN_FILE)
         # from here on the directory says it is incomplete until run.json is moved in, last

@@ -2,9 +2,10 @@
 
 :func:`run_engines` plans the work (for each engine: its settings and version,
 the cache key of every record, the records the cache already holds, chunks of
-the others), executes the chunks (:mod:`housner.scenarios.execution.workers`: in
-this process, in a fault-tolerant process pool by default, or on a Dask cluster;
-an engine that batches runs each chunk in one call; every record reported as it
+the others), executes the chunks (in this process, in a fault-tolerant process pool
+by default, :mod:`housner.scenarios.execution.workers`, or on a Dask cluster,
+:mod:`housner.scenarios.execution.cluster`; an engine that batches runs each chunk
+in one call; every record reported as it
 finishes and stored in the cache, :mod:`housner.scenarios.execution.cache`) and
 returns the table: one row per (engine, motion), always all of them, a record that
 failed a row with ``status = "failed"`` and its error. It never sees a scenario.
@@ -35,9 +36,10 @@ from housner.scenarios.execution.chunks import (
     repairs_so_far,
     store_entry,
 )
+from housner.scenarios.execution.cluster import run_dask
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.rundir import RESULT_COLUMNS
-from housner.scenarios.execution.workers import Chunk, Progress, RunInterrupted, failed_record, run_dask, run_pool
+from housner.scenarios.execution.workers import Chunk, Progress, RunInterrupted, failed_record, run_pool
 from housner.specimen import Specimen
 
 #: Most records per chunk (without ``chunk_size``): for an engine that runs record by record, and one that batches.
@@ -114,13 +116,7 @@ def run_engines(
     """
     opts = RunOptions.merged(options, execution, "run_engines")
     jobs, scheduler = opts.local_jobs(), opts.scheduler
-    n_workers = 1 if scheduler is None and jobs == 1 else jobs
-    per_worker = 4
-    if scheduler is not None:
-        # Dask: as many chunks per worker thread as make the last ones short (records differ 10-fold in
-        # length: an overturn ends one early); a task costs milliseconds. With 4 per worker, 2 workers ran
-        # an engine-bound study 1.74 x faster than one, the last chunk keeping one worker alone.
-        n_workers, per_worker = _cluster_threads(scheduler, jobs), 16
+    n_workers, per_worker = _workers_and_chunks(scheduler, jobs)
     plan = _plan(specimen, motions, engines, effects, opts.cache_folder(), n_workers,
                  opts.chunk_size, per_worker, histories)  # fmt: skip
     elapsed = _execute(plan, specimen, jobs, scheduler, opts.progress)
@@ -157,6 +153,17 @@ class _Plan:
                 pass  # a read-only cache must not fail the run
         if not self.histories:
             r.pop("theta", None)
+
+
+def _workers_and_chunks(scheduler, jobs: int) -> tuple[int, int]:
+    """Workers the chunks are sized for, and chunks per worker: the ``jobs`` processes (1: this process),
+    4 chunks each; on Dask, the cluster's worker threads, 16 chunks each."""
+    if scheduler is None:
+        return jobs, 4
+    # Dask: as many chunks per worker thread as make the last ones short (records differ 10-fold in
+    # length: an overturn ends one early); a task costs milliseconds. With 4 per worker, 2 workers ran
+    # an engine-bound study 1.74 x faster than one, the last chunk keeping one worker alone.
+    return _cluster_threads(scheduler, jobs), 16
 
 
 def _cluster_threads(scheduler, default: int) -> int:

@@ -22,11 +22,10 @@ import numpy as np
 import pandas as pd
 
 from housner.errors import unknown_choice
+from housner.proportions import ProportionCI, overturn_probability
 from housner.stats import (
     PercentileEstimate,
-    ProportionCI,
     ks_2samp,
-    overturn_probability,
     per_record_agreement,
     percentile_label,
     percentiles,
@@ -158,7 +157,6 @@ def compare_engines(
     ok, failed = split_failed(results)
     names = _engines(results, reference)
     qa = np.atleast_1d(np.asarray(q, dtype=np.float64))
-    qnames = [f"q{x:g}" for x in qa]
     ref_ok = ok.loc[ok["engine"].astype(str) == reference, "theta_max_over_alpha"].to_numpy(np.float64)
     rows = []
     for name in names:
@@ -166,26 +164,10 @@ def compare_engines(
         v = ok.loc[mine, "theta_max_over_alpha"].to_numpy(np.float64)
         n_failed = int((failed["engine"].astype(str) == name).sum())
         row: dict[str, float] = {"engine": name, "n": v.size + n_failed, "n_failed": n_failed, "n_ok": v.size}
-        if v.size:
-            pe = percentiles(v, qa, ci=ci, n_boot=n_boot, seed=seed)
-            po = overturn_probability(np.isposinf(v), ci=p_ci, method=p_method)
-        else:
-            nan = np.full(qa.shape, np.nan)
-            pe = PercentileEstimate(qa, nan, nan, nan)
-            po = ProportionCI(math.nan, math.nan, math.nan)
-        for k, qn in enumerate(qnames):
-            row[qn], row[f"{qn}_low"], row[f"{qn}_high"] = pe.value[k], pe.low[k], pe.high[k]
-        row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"] = po
+        row.update(_distribution_columns(v, qa, ci, p_ci, p_method, n_boot, seed))
         cmp = dict.fromkeys(_VERSUS_COLUMNS, math.nan)
         if name != reference and v.size and ref_ok.size:
-            cmp["ks_distance"], cmp["ks_pvalue"] = ks_2samp(v, ref_ok)
-            cmp["wasserstein"] = wasserstein(v, ref_ok)
-            cmp["overturn_diff"] = float(np.isposinf(v).mean() - np.isposinf(ref_ok).mean())
-            a, b = _paired(ok, name, reference)
-            agreement = per_record_agreement(a, b, rtol=rtol, atol=atol)
-            cmp["n_paired"] = agreement.n
-            cmp["agreement_share"] = agreement.share
-            cmp["verdict_share"] = agreement.verdict_share
+            cmp.update(_versus_reference(ok, name, reference, v, ref_ok, rtol, atol))
         row.update(cmp)
         if "wall_s" in results.columns:
             w = results.loc[results["engine"].astype(str) == name, "wall_s"].astype(np.float64)
@@ -193,6 +175,39 @@ def compare_engines(
             row["wall_s_total"] = float(w.sum())
         rows.append(row)
     return pd.DataFrame(rows).set_index("engine")
+
+
+def _distribution_columns(v: np.ndarray, qa: np.ndarray, ci: float, p_ci: float, p_method: str, n_boot: int,
+                          seed) -> dict[str, float]:  # fmt: skip
+    """One engine's percentiles ``q25``, ``q25_low``, ``q25_high``... and P[overturn] with its interval, from its
+    usable theta_max/alpha ``v`` (NaN without one)."""
+    if v.size:
+        pe = percentiles(v, qa, ci=ci, n_boot=n_boot, seed=seed)
+        po = overturn_probability(np.isposinf(v), ci=p_ci, method=p_method)
+    else:
+        nan = np.full(qa.shape, np.nan)
+        pe = PercentileEstimate(qa, nan, nan, nan)
+        po = ProportionCI(math.nan, math.nan, math.nan)
+    row: dict[str, float] = {}
+    for k, qn in enumerate(f"q{x:g}" for x in qa):
+        row[qn], row[f"{qn}_low"], row[f"{qn}_high"] = pe.value[k], pe.low[k], pe.high[k]
+    row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"] = po
+    return row
+
+
+def _versus_reference(ok: pd.DataFrame, name: str, reference: str, v: np.ndarray, ref_ok: np.ndarray, rtol: float,
+                      atol: float) -> dict[str, float]:  # fmt: skip
+    """The :data:`_VERSUS_COLUMNS` of engine ``name`` (usable values ``v``) against the reference's ``ref_ok``."""
+    cmp: dict[str, float] = {}
+    cmp["ks_distance"], cmp["ks_pvalue"] = ks_2samp(v, ref_ok)
+    cmp["wasserstein"] = wasserstein(v, ref_ok)
+    cmp["overturn_diff"] = float(np.isposinf(v).mean() - np.isposinf(ref_ok).mean())
+    a, b = _paired(ok, name, reference)
+    agreement = per_record_agreement(a, b, rtol=rtol, atol=atol)
+    cmp["n_paired"] = agreement.n
+    cmp["agreement_share"] = agreement.share
+    cmp["verdict_share"] = agreement.verdict_share
+    return cmp
 
 
 def percentile_table(

@@ -1,4 +1,4 @@
-"""Where the runner's records are simulated: in this process, in a fault-tolerant process pool, or on Dask.
+"""Where the runner's records are simulated in parallel on this machine: a fault-tolerant process pool.
 
 Work is split into chunks of (engine, motions, effects); each chunk runs where it is
 sent (:mod:`housner.scenarios.execution.chunks`): in one batched call where the engine
@@ -11,13 +11,13 @@ the record it was running is retried once in a fresh worker, then listed as fail
 with the reason (``killed by SIGKILL``...), and the rest of its chunk is re-queued; in a
 batched chunk, where the record that killed it is unknown, each unfinished record is
 retried alone once. Ctrl-C stops the workers at once and raises :class:`RunInterrupted`.
+The same chunks run on a Dask cluster in :mod:`housner.scenarios.execution.cluster`;
+:class:`Progress` is the progress bar of both.
 """
 
 from __future__ import annotations
 
-import asyncio
 import multiprocessing as mp
-import multiprocessing.connection
 import os
 import queue as _queue
 import runpy
@@ -28,6 +28,7 @@ import time
 from collections import deque
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
+from multiprocessing.connection import wait as wait_for_connections
 from multiprocessing.reduction import ForkingPickler
 from typing import Any
 
@@ -35,13 +36,12 @@ from housner.motion import GroundMotion
 from housner.scenarios.execution.chunks import (
     WORKER_FILE,
     WORKER_RUN_NAME,
-    run_chunk,
     unpack,
     worker_main,
 )
 from housner.specimen import Specimen
 
-__all__ = ["RunInterrupted", "SchedulerError", "connect_scheduler"]
+__all__ = ["Chunk", "Progress", "RunInterrupted", "failed_record", "run_pool"]
 
 
 # --------------------------------------------------------------------------
@@ -62,102 +62,6 @@ class RunInterrupted(KeyboardInterrupt):
         self.total = total
         self.cached = cached
         super().__init__(f"interrupted after {done} of {total} records")
-
-
-class SchedulerError(ConnectionError):
-    """The Dask scheduler cannot be reached (the message names its address)."""
-
-
-#: Seconds to wait for a Dask scheduler to answer before giving up.
-SCHEDULER_TIMEOUT_S = 5.0
-
-
-def connect_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT_S):
-    """Connect to the Dask distributed scheduler at ``address``.
-
-    Parameters
-    ----------
-    address : str
-        Scheduler address, e.g. ``tcp://host:8786``.
-    timeout : float
-        Seconds to wait for the connection.
-
-    Returns
-    -------
-    distributed.Client
-
-    Raises
-    ------
-    SchedulerError
-        No scheduler answered within ``timeout`` (the message names the address).
-    """
-    _probe_scheduler(address, timeout)
-    from distributed import Client
-
-    try:
-        return Client(address, timeout=timeout, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as e:
-        detail = str(e).splitlines()[0] if str(e) else type(e).__name__
-        if isinstance(e, TimeoutError) or "timed out" in detail.lower():
-            detail = f"no answer within {timeout:g} s; is a scheduler running there?"
-        raise SchedulerError(f"cannot reach the Dask scheduler at {address}: {detail}") from None
-
-
-_SCHEMES = ("tcp", "tls", "inproc", "ucx", "ws", "wss")
-
-
-def _probe_scheduler(address: str, timeout: float) -> None:
-    """Refuse an unknown scheme, and a TCP address where nothing listens, at once (a
-    Client would retry until its timeout, and leave a traceback behind on a bad scheme)."""
-    import socket
-    from urllib.parse import urlsplit
-
-    scheme, sep, _rest = address.partition("://")
-    if not sep:
-        scheme, address_url = "tcp", f"tcp://{address}"
-    else:
-        address_url = address
-    if scheme not in _SCHEMES:
-        raise SchedulerError(
-            f"cannot reach the Dask scheduler at {address}: unknown scheme {scheme!r} (known: {', '.join(_SCHEMES)})"
-        )
-    if scheme not in ("tcp", "tls"):
-        return
-    try:
-        parts = urlsplit(address_url)
-        host, port = parts.hostname, parts.port or 8786
-    except ValueError as e:
-        raise SchedulerError(f"cannot reach the Dask scheduler at {address}: malformed address ({e})") from None
-    if not host:
-        raise SchedulerError(f"cannot reach the Dask scheduler at {address}: no host in the address")
-    try:
-        socket.create_connection((host, port), timeout=timeout).close()
-    except TimeoutError:
-        raise SchedulerError(f"cannot reach the Dask scheduler at {address}: no answer within {timeout:g} s") from None
-    except OSError as e:
-        raise SchedulerError(
-            f"cannot reach the Dask scheduler at {address}: {e.strerror or e}; is a scheduler running there?"
-        ) from None
-    try:  # something listens: ask it who it is, in a loop of our own (no half-built Client left behind)
-        kind = asyncio.run(_identity(address_url, timeout))
-    except Exception as e:
-        kind = f"no Dask reply: {type(e).__name__}"
-    if kind != "Scheduler":
-        raise SchedulerError(
-            f"cannot use {address}: it does not answer like a Dask scheduler ({kind}); check the address and port"
-        )
-
-
-async def _identity(address: str, timeout: float) -> str:
-    from distributed.comm import connect
-
-    comm = await connect(address, timeout=timeout)
-    try:
-        await comm.write({"op": "identity", "reply": True})
-        reply = await asyncio.wait_for(comm.read(), timeout)
-    finally:
-        await comm.close()
-    return reply.get("type", "no type") if isinstance(reply, dict) else type(reply).__name__
 
 
 @dataclass
@@ -335,6 +239,123 @@ class _Pool:
         self.workers.clear()
 
 
+class _PoolRun:
+    """The state of one :func:`run_pool` call: the chunks left to give out, the deaths so far, and the
+    steps of its loop (give work out, take a message, account for a worker that died, give up)."""
+
+    def __init__(self, pool: _Pool, chunks: list[Chunk], specimen: Specimen, jobs: int, on_record: Any,
+                 deaths: dict[tuple[str, int], list[str]], worker_deaths: dict[str, int], cache_dir: str | None,
+                 thetas: bool):  # fmt: skip
+        self.pool = pool
+        self.specimen, self.jobs, self.on_record = specimen, jobs, on_record
+        self.deaths, self.worker_deaths = deaths, worker_deaths
+        self.cache_dir, self.thetas = cache_dir, thetas
+        self.todo = deque(chunks)
+        self.next_id = max((c.id for c in chunks), default=0) + 1
+        self.n_dead, self.max_dead = 0, 2 * jobs + 8
+        self.last_reason = ""
+
+    def new_part(self, chunk: Chunk, items: list[tuple[int, GroundMotion]], batched: bool | None = None) -> Chunk:
+        """Some of ``chunk``'s records as a chunk of their own, under the next free id."""
+        part = chunk.part(self.next_id, items, batched=batched)
+        self.next_id += 1
+        return part
+
+    def loop(self) -> None:
+        """Give out the chunks and take the workers' messages until every chunk is done (or the run gives up)."""
+        while self.todo or any(w.chunks for w in self.pool.workers):
+            if self.n_dead > self.max_dead:
+                self.give_up()
+                break
+            self.give_out()
+            busy = {w.conn: w for w in self.pool.workers if w.chunks}
+            for conn in wait_for_connections(list(busy)):
+                self.take(busy[conn])
+
+    def give_out(self) -> None:
+        """Give the next chunks to the workers that take them, starting workers up to ``jobs``."""
+        todo = self.todo
+        for w in self.pool.workers:
+            while todo and w.takes(todo[0]):
+                w.give(todo.popleft(), self.specimen, self.cache_dir, self.thetas)
+        while todo and len(self.pool.workers) < self.jobs:
+            w = self.pool.start()
+            while todo and w.takes(todo[0]):
+                w.give(todo.popleft(), self.specimen, self.cache_dir, self.thetas)
+
+    def take(self, w: _Worker) -> None:
+        """Read one message of ``w`` and act on it."""
+        try:
+            kind, _cid, payload = w.conn.recv()
+        except (EOFError, OSError):
+            self.lost(w)
+            return
+        if kind == "ready":
+            w.ready = True
+        elif kind == "start":
+            w.running, w.next = True, 0
+        elif kind == "rec":
+            rows = unpack(payload)
+            w.next += len(rows)
+            for row in rows:
+                self.on_record(w.chunks[0].engine, row)
+        else:  # "done"
+            w.chunks.popleft()
+            w.running, w.next = False, 0
+
+    def lost(self, w: _Worker) -> None:
+        """A worker died: count it, and queue again (or fail) the records it had not reported."""
+        w.proc.join(2.0)
+        reason = self.last_reason = _death_reason(w.proc.exitcode)
+        self.n_dead += 1
+        self.pool.drop(w)
+        given = list(w.chunks)
+        if not w.running:  # no chunk of its had started (it died starting up, or idle): run them elsewhere
+            self.todo.extendleft(reversed(given))
+            return
+        chunk, rest = given[0], given[0].items[w.next :]
+        self.todo.extendleft(reversed(given[1:]))  # prefetched, never started
+        if not rest:
+            return
+        self.worker_deaths[chunk.engine] = self.worker_deaths.get(chunk.engine, 0) + 1
+        if chunk.batched and len(rest) > 1:  # which record killed it is unknown: each is retried alone, last
+            for i, m in rest:
+                self.deaths.setdefault((chunk.engine, i), []).append(f"{reason}, running it in a batch of {len(rest)}")
+                self.todo.append(self.new_part(chunk, [(i, m)], batched=False))
+            return
+        self.retry_or_fail(chunk, rest, reason)
+
+    def retry_or_fail(self, chunk: Chunk, rest: list[tuple[int, GroundMotion]], reason: str) -> None:
+        """After a death in a chunk run record by record: its other records re-queued first, the record that
+        was running retried once, last, or listed as failed if it had killed a worker before."""
+        (i, m), rest = rest[0], rest[1:]
+        if rest:
+            self.todo.appendleft(self.new_part(chunk, rest))
+        reasons = self.deaths.setdefault((chunk.engine, i), [])
+        reasons.append(reason)
+        if len(reasons) >= 2:
+            msg = f"the worker process died while simulating this record: {reasons[0]}; on the retry: {reasons[1]}"
+            self.on_record(chunk.engine, failed_record(i, msg))
+        else:
+            self.todo.append(self.new_part(chunk, [(i, m)], batched=False))  # the one retry, last
+
+    def give_up(self) -> None:
+        """Too many workers died: fail every record not yet reported, and stop the workers."""
+        msg = f"not run: {self.n_dead} worker processes died (the last {self.last_reason}); gave up"
+        todo = self.todo
+        for w in self.pool.workers:
+            if w.chunks:
+                first = w.chunks[0]
+                todo.extendleft(reversed(list(w.chunks)[1:]))
+                todo.appendleft(first.part(0, first.items[w.next :] if w.running else first.items))
+                w.chunks.clear()
+        for c in todo:
+            for i, _ in c.items:
+                self.on_record(c.engine, failed_record(i, msg))
+        todo.clear()
+        self.pool.kill()
+
+
 def run_pool(
     chunks: list[Chunk],
     specimen: Specimen,
@@ -367,102 +388,14 @@ def run_pool(
     if own:
         pool = _Pool(jobs)
     worker_deaths = {} if worker_deaths is None else worker_deaths
-    todo = deque(chunks)
-    next_id = max((c.id for c in chunks), default=0) + 1
-    n_dead, max_dead = 0, 2 * jobs + 8
-    last_reason = ""
-
-    def lost(w: _Worker) -> None:
-        nonlocal next_id, n_dead, last_reason
-        w.proc.join(2.0)
-        reason = last_reason = _death_reason(w.proc.exitcode)
-        n_dead += 1
-        pool.drop(w)
-        given = list(w.chunks)
-        if not w.running:  # no chunk of its had started (it died starting up, or idle): run them elsewhere
-            todo.extendleft(reversed(given))
-            return
-        chunk, rest = given[0], given[0].items[w.next :]
-        todo.extendleft(reversed(given[1:]))  # prefetched, never started
-        if not rest:
-            return
-        worker_deaths[chunk.engine] = worker_deaths.get(chunk.engine, 0) + 1
-        if chunk.batched and len(rest) > 1:  # which record killed it is unknown: each is retried alone, last
-            for i, m in rest:
-                deaths.setdefault((chunk.engine, i), []).append(f"{reason}, running it in a batch of {len(rest)}")
-                todo.append(chunk.part(next_id, [(i, m)], batched=False))
-                next_id += 1
-            return
-        (i, m), rest = rest[0], rest[1:]
-        if rest:
-            todo.appendleft(chunk.part(next_id, rest))
-            next_id += 1
-        reasons = deaths.setdefault((chunk.engine, i), [])
-        reasons.append(reason)
-        if len(reasons) >= 2:
-            msg = f"the worker process died while simulating this record: {reasons[0]}; on the retry: {reasons[1]}"
-            on_record(chunk.engine, failed_record(i, msg))
-        else:
-            todo.append(chunk.part(next_id, [(i, m)], batched=False))  # the one retry, last
-            next_id += 1
-
-    def give_out() -> None:
-        for w in pool.workers:
-            while todo and w.takes(todo[0]):
-                w.give(todo.popleft(), specimen, cache_dir, thetas)
-        while todo and len(pool.workers) < jobs:
-            w = pool.start()
-            while todo and w.takes(todo[0]):
-                w.give(todo.popleft(), specimen, cache_dir, thetas)
-
-    def give_up() -> None:
-        msg = f"not run: {n_dead} worker processes died (the last {last_reason}); gave up"
-        for w in pool.workers:
-            if w.chunks:
-                first = w.chunks[0]
-                todo.extendleft(reversed(list(w.chunks)[1:]))
-                todo.appendleft(first.part(0, first.items[w.next :] if w.running else first.items))
-                w.chunks.clear()
-        for c in todo:
-            for i, _ in c.items:
-                on_record(c.engine, failed_record(i, msg))
-        todo.clear()
-        pool.kill()
-
-    def take(w: _Worker) -> None:
-        """Read one message of ``w`` and act on it."""
-        try:
-            kind, _cid, payload = w.conn.recv()
-        except (EOFError, OSError):
-            lost(w)
-            return
-        if kind == "ready":
-            w.ready = True
-        elif kind == "start":
-            w.running, w.next = True, 0
-        elif kind == "rec":
-            rows = unpack(payload)
-            w.next += len(rows)
-            for row in rows:
-                on_record(w.chunks[0].engine, row)
-        else:  # "done"
-            w.chunks.popleft()
-            w.running, w.next = False, 0
-
+    run = _PoolRun(pool, chunks, specimen, jobs, on_record, deaths, worker_deaths, cache_dir, thetas)
     try:
-        while todo or any(w.chunks for w in pool.workers):
-            if n_dead > max_dead:
-                give_up()
-                break
-            give_out()
-            busy = {w.conn: w for w in pool.workers if w.chunks}
-            for conn in mp.connection.wait(list(busy)):
-                take(busy[conn])
+        run.loop()
     except KeyboardInterrupt:
         # A worker stores a record's entry, then reports it: take the reports already on their way, so that
         # the records counted as done are those in the cache; then stop the workers at once.
         try:
-            _drain(pool, take)
+            _drain(pool, run.take)
         finally:
             pool.kill()
         raise
@@ -478,51 +411,11 @@ def _drain(pool: _Pool, take: Any, quiet: float = 0.05, limit: float = 0.5) -> N
     deadline = time.monotonic() + limit
     while (left := deadline - time.monotonic()) > 0:
         busy = {w.conn: w for w in pool.workers if w.chunks}
-        ready = mp.connection.wait(list(busy), timeout=min(quiet, left)) if busy else []
+        ready = wait_for_connections(list(busy), timeout=min(quiet, left)) if busy else []
         if not ready:
             return
         for conn in ready:
             take(busy[conn])
-
-
-def run_dask(chunks: list[Chunk], specimen: Specimen, scheduler: Any, on_record: Any) -> None:
-    """Run ``chunks`` on a Dask cluster; a task that fails twice (Dask retries it once) fails its records.
-
-    ``scheduler`` is a connected client, used as it is (never the process's default client, which a
-    command-line run has none of), or an address, connected to here and closed after. A worker that dies
-    is the scheduler's to handle: its tasks are run again on the others (up to the scheduler's
-    ``allowed-failures``, then they fail with ``KilledWorker`` and their records are listed as failed).
-    The results (histories included) come back in bulk, one packed set per chunk; the caller stores the
-    cache entries (a cluster's workers need not see this machine's cache)."""
-    from distributed import Client, KilledWorker, as_completed
-
-    client = scheduler if isinstance(scheduler, Client) else connect_scheduler(scheduler)
-    futs: dict[Any, Chunk] = {}
-    try:
-        for c in chunks:
-            f = client.submit(run_chunk, c.engine, c.settings, specimen, c.items, c.effects, c.batched, pure=False,
-                              retries=1)  # fmt: skip
-            futs[f] = c
-        # Without a loop, as_completed takes the default client's, and a command-line run has no default client.
-        for f in as_completed(futs, loop=client.loop):
-            c = futs[f]
-            try:
-                res = unpack(f.result())
-            except KilledWorker as e:  # the workers running it died, as often as the scheduler allows
-                n = e.allowed_failures
-                msg = (f"KilledWorker: the Dask workers running it died {n + 1} time(s), all that the scheduler "
-                       f"allows (distributed.scheduler.allowed-failures = {n}); see the workers' logs")  # fmt: skip
-                res = [failed_record(i, msg) for i, _ in c.items]
-            except Exception as e:  # the task raised, or could not run, twice
-                res = [failed_record(i, f"Dask task failed twice: {type(e).__name__}: {e}") for i, _ in c.items]
-            for r in res:
-                on_record(c.engine, r)
-    except BaseException:
-        client.cancel(list(futs))
-        raise
-    finally:
-        if not isinstance(scheduler, Client):
-            client.close(timeout=2)
 
 
 class Progress:

@@ -56,9 +56,8 @@ def build_motions(
         and with ``band_check`` the ``band_check`` table.
     """
     src = scenario.source
-    m = scenario.motions
     meta: dict[str, Any] = {"source": src, "S": scenario.S}
-    amp = float(m.get("amplitude", 1.0))
+    amp = float(scenario.motions.get("amplitude", 1.0))
     if src == "records":
         suite = scenario.record_files()["records"]
         meta["records"] = [facts for _, facts in suite]
@@ -67,42 +66,61 @@ def build_motions(
         record, meta["record"] = _record(scenario)
         if src == "record":
             return [_to_model(record, amp, scenario.S)], meta
-        if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
-            raise ValueError(f"`n` (number of motions) must be a positive integer, got {n!r}")
-        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
-            raise ValueError(f"`seed` must be a non-negative integer, got {seed!r}")
-        n = int(m.get("n", 100)) if n is None else int(n)
-        seed = int(m.get("seed", 0)) if seed is None else int(seed)
-        model = m.get("model", DEFAULT_RDK_MODEL)
-        try:
-            fit = _fit(model, record)
-        except ValueError as e:  # a user's record the model cannot be fitted to
-            raise scenario.error(
-                "record", f"[motions] cannot fit model {model!r} to record {record.name!r}: {one_line(e)}"
-            ) from None
-        meta["model"] = model
-        meta["seed"] = seed
-        if model == "matched":
-            meta["rdk_params"] = fit.params.describe()
-            meta["matched_gain"] = _gain_facts(fit)
-            proto = rdk_match.simulate_matched(fit, n, seed)
-        else:
-            meta["rdk_params"] = fit.describe()
-            proto = rdk.simulate(fit, n, seed)
-        if band_check:
-            meta["band_check"] = _band_facts(proto, record, seed)
+        proto = _rdk_ensemble(scenario, record, n, seed, band_check, meta)
         return [_to_model(g, amp, scenario.S) for g in proto], meta
     if src == "free_vibration":
-        alpha = scenario.specimen.alpha
-        dur = float(m.get("duration", 10.0))
-        dt = float(m.get("dt", 0.002))
-        motions = [
-            GroundMotion.free_vibration(a * alpha, dur, dt, name=f"release {a:.2f} alpha")
-            for a in m["theta0_over_alpha"]
-        ]
-        meta["theta0_over_alpha"] = list(m["theta0_over_alpha"])
-        return motions, meta
-    # pulses
+        return _free_vibration_motions(scenario, meta), meta
+    return _pulse_motions(scenario, meta), meta
+
+
+def _rdk_ensemble(scenario, record: GroundMotion, n, seed, band_check: bool, meta: dict) -> list[GroundMotion]:
+    """The prototype-scale RDK ensemble of a scenario fitted to ``record``; its facts go into ``meta``
+    (``model``, ``seed``, ``rdk_params``, for the matched model ``matched_gain``, and ``band_check``)."""
+    m = scenario.motions
+    if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
+        raise ValueError(f"`n` (number of motions) must be a positive integer, got {n!r}")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+        raise ValueError(f"`seed` must be a non-negative integer, got {seed!r}")
+    n = int(m.get("n", 100)) if n is None else int(n)
+    seed = int(m.get("seed", 0)) if seed is None else int(seed)
+    model = m.get("model", DEFAULT_RDK_MODEL)
+    try:
+        fit = _fit(model, record)
+    except ValueError as e:  # a user's record the model cannot be fitted to
+        raise scenario.error(
+            "record", f"[motions] cannot fit model {model!r} to record {record.name!r}: {one_line(e)}"
+        ) from None
+    meta["model"] = model
+    meta["seed"] = seed
+    if model == "matched":
+        meta["rdk_params"] = fit.params.describe()
+        meta["matched_gain"] = _gain_facts(fit)
+        proto = rdk_match.simulate_matched(fit, n, seed)
+    else:
+        meta["rdk_params"] = fit.describe()
+        proto = rdk.simulate(fit, n, seed)
+    if band_check:
+        meta["band_check"] = _band_facts(proto, record, seed)
+    return proto
+
+
+def _free_vibration_motions(scenario, meta: dict) -> list[GroundMotion]:
+    """Free-vibration releases from rest at theta0/alpha of the scenario (facts into ``meta``)."""
+    m = scenario.motions
+    alpha = scenario.specimen.alpha
+    dur = float(m.get("duration", 10.0))
+    dt = float(m.get("dt", 0.002))
+    motions = [
+        GroundMotion.free_vibration(a * alpha, dur, dt, name=f"release {a:.2f} alpha")
+        for a in m["theta0_over_alpha"]
+    ]
+    meta["theta0_over_alpha"] = list(m["theta0_over_alpha"])
+    return motions
+
+
+def _pulse_motions(scenario, meta: dict) -> list[GroundMotion]:
+    """One pulse per point of the scenario's grid of omega_p/p and a_p/(g tan alpha) (facts into ``meta``)."""
+    m = scenario.motions
     W, A = scenario.pulse_grid()
     p = scenario.specimen.p
     a_up = scenario.specimen.uplift_acceleration
@@ -118,7 +136,7 @@ def build_motions(
             GroundMotion(g.acc, g.dt, f"{kind} w/p={w:.3g} a/gtan={a:.3g}", g.provenance, g.theta0, g.theta_dot0)
         )
     meta.update({"pulse": kind, "omega_ratio": W.tolist(), "accel_ratio": A.tolist()})
-    return motions, meta
+    return motions
 
 
 def _record(scenario) -> tuple[GroundMotion, dict]:

@@ -72,20 +72,13 @@ from scipy.optimize import minimize_scalar
 from housner.motion import GroundMotion
 from housner.scenarios.motions.elastic import sdof_history
 from housner.scenarios.motions.rdk_envelope import P5, P45, P95
-from housner.scenarios.motions.rdk_params import DEFAULT_OMEGA_C, RDKParams, settle_time
+from housner.scenarios.motions.rdk_params import DEFAULT_OMEGA_C, RDKParams
 from housner.scenarios.motions.records import arias_intensity, husid_time, pmnm_count, upcrossing_count
 
 __all__ = [
-    "DEFAULT_COUNT_LOWPASS",
-    "DEFAULT_FIT_SEED",
-    "DEFAULT_OMEGA_C",
-    "RDKParams",
-    "fit",
-    "pmnm_count",
-    "settle_time",
-    "simulate",
-    "upcrossing_count",
-]
+    "DEFAULT_COUNT_LOWPASS", "DEFAULT_FIT_SEED", "fit", "highpass", "modulated_noise", "seed_sequence", "simulate",
+    "white_noise",
+]  # fmt: skip
 
 #: Default low-pass corner [Hz] applied to record and simulations alike before
 #: positive minima and negative maxima are counted in :func:`fit`: the PEER
@@ -145,7 +138,7 @@ def _filtered_noise(u, omega, zeta, dt, tol):  # pragma: no cover - compiled
     return x
 
 
-def _modulated_noise(params: RDKParams, u: np.ndarray) -> np.ndarray:
+def modulated_noise(params: RDKParams, u: np.ndarray) -> np.ndarray:
     """The modulated filtered noise x before the high-pass filter, shape (params.n, m) [m/s^2].
 
     ``u`` holds white-noise columns of shape (params.n_warm + params.n_noise, m);
@@ -161,7 +154,7 @@ def _modulated_noise(params: RDKParams, u: np.ndarray) -> np.ndarray:
     return x
 
 
-def _highpass(x: np.ndarray, dt: float, omega_c: float) -> np.ndarray:
+def highpass(x: np.ndarray, dt: float, omega_c: float) -> np.ndarray:
     """ü = x - 2 omega_c u' - omega_c^2 u with u'' + 2 omega_c u' + omega_c^2 u = x from rest [m/s^2], along axis 0."""
     disp, vel = sdof_history(x, dt, omega_c, 1.0)
     return x - 2.0 * omega_c * vel - omega_c**2 * disp
@@ -174,11 +167,11 @@ def _simulate_array(params: RDKParams, u: np.ndarray) -> tuple[np.ndarray, np.nd
     accelerations and the modulated noise x before the filter, both of shape
     (params.n, m) [m/s^2].
     """
-    x = _modulated_noise(params, u)
-    return _highpass(x, params.dt, params.omega_c), x
+    x = modulated_noise(params, u)
+    return highpass(x, params.dt, params.omega_c), x
 
 
-def _seed_sequence(seed) -> np.random.SeedSequence:
+def seed_sequence(seed) -> np.random.SeedSequence:
     """A fresh SeedSequence (spawning from it never advances the caller's object)."""
     if isinstance(seed, np.random.SeedSequence):
         return np.random.SeedSequence(seed.entropy, spawn_key=seed.spawn_key, pool_size=seed.pool_size)
@@ -192,7 +185,7 @@ def _seed_sequence(seed) -> np.random.SeedSequence:
     return np.random.SeedSequence(int(seed))
 
 
-def _white_noise(children: list, n_samples: int) -> np.ndarray:
+def white_noise(children: list, n_samples: int) -> np.ndarray:
     """Standard normal columns, column c from ``default_rng(children[c])``."""
     u = np.empty((n_samples, len(children)))
     for c, child in enumerate(children):
@@ -247,7 +240,7 @@ def check_count(n, name: str, minimum: int = 0) -> int:
 
 def seed_text(seed) -> str:
     """The SeedSequence of ``seed`` as provenance names it."""
-    ss = _seed_sequence(seed)
+    ss = seed_sequence(seed)
     return f"SeedSequence(entropy={ss.entropy}, spawn_key={tuple(ss.spawn_key)})"
 
 
@@ -264,13 +257,13 @@ def simulate_motions(params: RDKParams, n, seed, name: str, what: str, acc_of) -
     (in chunks of :data:`_CHUNK`) and the provenance ``what``, its index and its seed.
     """
     n = check_count(n, "n", 0)
-    ss = _seed_sequence(seed)
+    ss = seed_sequence(seed)
     children = ss.spawn(n)
     seed_txt = seed_text(ss)
     out: list[GroundMotion] = []
     for start in range(0, n, _CHUNK):
         block = children[start : start + _CHUNK]
-        acc = acc_of(_white_noise(block, params.n_warm + params.n_noise))
+        acc = acc_of(white_noise(block, params.n_warm + params.n_noise))
         for c in range(len(block)):
             i = start + c
             out.append(
@@ -365,6 +358,48 @@ def fit(
       slow content), so omega_mid comes out ~3 % high when a simulated motion
       is fitted back.
     """
+    lowpass = _count_filter(record, n_sim, count_lowpass)
+    Ia = arias_intensity(record)
+    t5, t45, t95 = (float(v) for v in husid_time(record, [P5, P45, P95]))
+    j0 = int(np.searchsorted(record.t, t5, side="left"))
+    j1 = int(np.searchsorted(record.t, t95, side="right")) - 1
+    omega_mid, omega_prime = _record_frequency(record, j0, j1, t45, omega_c)
+    target = _window_counts(pmnm_count(lowpass(record.acc)), j0, j1)
+    base = RDKParams(Ia, t95 - t5, t45, omega_mid, omega_prime, 0.5, omega_c, record.dt, record.duration, T0, tail)
+    n_white = max(replace(base, zeta_f=z).n_warm for z in (0.01, 0.99)) + base.n_noise
+    u = white_noise(seed_sequence(seed).spawn(int(n_sim)), n_white)
+    fitted = replace(base, zeta_f=_fit_zeta(base, u, lowpass, target, j0, j1))
+    return _with_record_arias(fitted, u)
+
+
+def _record_frequency(record: GroundMotion, j0: int, j1: int, t_mid: float, omega_c: float) -> tuple[float, float]:
+    """omega_mid [rad/s] and omega' [rad/s^2] fitted to the record's zero-level up-crossings on samples j0..j1;
+    a ValueError when omega_mid is not above the high-pass corner ``omega_c`` [rad/s]."""
+    n_up = _window_counts(upcrossing_count(record.acc), j0, j1)
+    omega_mid, omega_prime = _fit_frequency(record.t[j0 : j1 + 1], n_up, t_mid)
+    if not omega_mid > omega_c:
+        raise ValueError(
+            f"record {record.name!r}: fitted omega_mid = {omega_mid:.4g} rad/s is not above "
+            f"`omega_c` = {omega_c:.4g} rad/s"
+        )
+    return omega_mid, omega_prime
+
+
+def _with_record_arias(fitted: RDKParams, u: np.ndarray) -> RDKParams:
+    """``fitted`` with Ia [m/s] scaled so that its high-passed motions have the record's Arias intensity.
+
+    Ia of the model refers to x before the high-pass filter, which removes the
+    content below ~1 Hz in part (|H|^2 = r^4 / (1 + r^2)^2, r = omega / omega_c);
+    scale it so that the filtered motions have the record's Arias intensity on
+    average. The same noise before and after the filter makes the ratio precise.
+    """
+    acc, x = _run_on_shared_noise(fitted, u)
+    kept = float(np.sum(_trapezoid_sq(acc, fitted.dt)) / np.sum(_trapezoid_sq(x, fitted.dt)))
+    return replace(fitted, Ia=fitted.Ia / kept)
+
+
+def _count_filter(record: GroundMotion, n_sim, count_lowpass: float | None):
+    """Check the arguments of :func:`fit`; the low-pass applied before extrema are counted (identity for None)."""
     if not isinstance(record, GroundMotion):
         raise TypeError(f"`record` must be a housner.GroundMotion, got {type(record).__name__}")
     if isinstance(n_sim, (bool, np.bool_)) or not isinstance(n_sim, (int, np.integer)) or n_sim < 1:
@@ -383,30 +418,21 @@ def fit(
         def lowpass(a: np.ndarray) -> np.ndarray:
             return signal.sosfiltfilt(sos, a, axis=0)
 
-    Ia = arias_intensity(record)
-    t5, t45, t95 = (float(v) for v in husid_time(record, [P5, P45, P95]))
-    t = record.t
-    j0 = int(np.searchsorted(t, t5, side="left"))
-    j1 = int(np.searchsorted(t, t95, side="right")) - 1
-    n_up = _window_counts(upcrossing_count(record.acc), j0, j1)
-    omega_mid, omega_prime = _fit_frequency(t[j0 : j1 + 1], n_up, t45)
-    if not omega_mid > omega_c:
-        raise ValueError(
-            f"record {record.name!r}: fitted omega_mid = {omega_mid:.4g} rad/s is not above "
-            f"`omega_c` = {omega_c:.4g} rad/s"
-        )
-    target = _window_counts(pmnm_count(lowpass(record.acc)), j0, j1)
+    return lowpass
 
-    base = RDKParams(Ia, t95 - t5, t45, omega_mid, omega_prime, 0.5, omega_c, record.dt, record.duration, T0, tail)
-    n_white = max(replace(base, zeta_f=z).n_warm for z in (0.01, 0.99)) + base.n_noise
-    u = _white_noise(_seed_sequence(seed).spawn(int(n_sim)), n_white)
 
-    def run(params: RDKParams) -> tuple[np.ndarray, np.ndarray]:
-        # the last n_noise pulses are shared by every trial; the warm-up takes what precedes them
-        return _simulate_array(params, u[u.shape[0] - params.n_warm - params.n_noise :])
+def _run_on_shared_noise(params: RDKParams, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_simulate_array` on the fit's noise ``u``: the last n_noise pulses are shared by every trial
+    zeta_f; the warm-up takes what precedes them."""
+    return _simulate_array(params, u[u.shape[0] - params.n_warm - params.n_noise :])
+
+
+def _fit_zeta(base: RDKParams, u: np.ndarray, lowpass, target: np.ndarray, j0: int, j1: int) -> float:
+    """zeta_f [-] whose simulations on ``u`` match the record's count of positive minima and negative maxima
+    (``target``, samples j0..j1) in the mean: a coarse grid, then a bounded Brent search, rounded to 0.001."""
 
     def objective(zeta: float) -> float:
-        acc, _ = run(replace(base, zeta_f=zeta))
+        acc, _ = _run_on_shared_noise(replace(base, zeta_f=zeta), u)
         sim = _window_counts(pmnm_count(lowpass(acc)), j0, j1).mean(axis=1)
         return float(np.sum((sim - target) ** 2))
 
@@ -417,14 +443,7 @@ def fit(
     res = minimize_scalar(
         objective, bounds=(max(0.01, z0 - 0.1), min(0.99, z0 + 0.1)), method="bounded", options={"xatol": 2e-3}
     )
-    fitted = replace(base, zeta_f=round(float(res.x), 3))
-    # Ia of the model refers to x before the high-pass filter, which removes the
-    # content below ~1 Hz in part (|H|^2 = r^4 / (1 + r^2)^2, r = omega / omega_c);
-    # scale it so that the filtered motions have the record's Arias intensity on
-    # average. The same noise before and after the filter makes the ratio precise.
-    acc, x = run(fitted)
-    kept = float(np.sum(_trapezoid_sq(acc, record.dt)) / np.sum(_trapezoid_sq(x, record.dt)))
-    return replace(fitted, Ia=Ia / kept)
+    return round(float(res.x), 3)
 
 
 def _trapezoid_sq(a: np.ndarray, dt: float) -> np.ndarray:

@@ -33,7 +33,7 @@ ratios change only through G. What is matched is the ensemble *mean* spectrum,
 as Cacciola (2010) does for a code spectrum, not each motion: the motions keep
 the model's record-to-record variability. The fit sees only the record.
 
-Acceptance (:func:`band_check`): in every third-octave band (centres 2^(k/3) s,
+Acceptance (:func:`housner.scenarios.motions.bands.band_check`): in every third-octave band (centres 2^(k/3) s,
 band k spanning T_k 2^(-1/6) .. T_k 2^(1/6)) that overlaps 0.05-3 s, the
 geometric mean over ``per_band`` periods spread evenly (in log T) across the
 band of (ensemble-mean PSa / record PSa) must lie in [0.8, 1.25]; the same for
@@ -82,36 +82,20 @@ from housner.motion import GroundMotion
 from housner.scenarios.motions import rdk
 from housner.scenarios.motions.bands import (
     BAND_BOUNDS,
-    CHECK_PER_BAND,
     DEFAULT_PSA_RANGE,
     DEFAULT_SD_RANGE,
     BandCheck,
     BandTable,
     band_centres,
-    band_check,
     band_periods,
     band_table,
     check_bounds,
     check_range,
 )
 from housner.scenarios.motions.elastic import POINTS_PER_PERIOD, check_damping, linear_step_coefficients
-from housner.scenarios.motions.rdk import RDKParams
+from housner.scenarios.motions.rdk_params import RDKParams
 
-__all__ = [
-    "BAND_BOUNDS",
-    "CHECK_PER_BAND",
-    "DEFAULT_FIR_LENGTH",
-    "DEFAULT_PSA_RANGE",
-    "DEFAULT_SD_RANGE",
-    "BandCheck",
-    "BandTable",
-    "MatchedRDK",
-    "band_centres",
-    "band_check",
-    "band_periods",
-    "fit_matched",
-    "simulate_matched",
-]
+__all__ = ["DEFAULT_FIR_LENGTH", "MatchedRDK", "fit_matched", "simulate_matched"]
 
 #: Length of the gain's minimum-phase FIR filter [s]: a frequency resolution of
 #: ~0.1 Hz; it realises the fitted El Centro gains within 0.4 % rms (8 % at the
@@ -297,10 +281,10 @@ class MatchedRDK:
 
 
 def _simulate_array(model: MatchedRDK, u: np.ndarray) -> np.ndarray:
-    """Matched accelerations [m/s^2] of shape (model.n, m) for white-noise columns u (see rdk._modulated_noise)."""
+    """Matched accelerations [m/s^2] of shape (model.n, m) for white-noise columns u (see rdk.modulated_noise)."""
     p = model.params
-    y = _convolve_columns(rdk._modulated_noise(p, u), model._fir)
-    return rdk._highpass(y, p.dt, p.omega_c)
+    y = _convolve_columns(rdk.modulated_noise(p, u), model._fir)
+    return rdk.highpass(y, p.dt, p.omega_c)
 
 
 def simulate_matched(model: MatchedRDK, n: int, seed, *, name: str = "rdkm") -> list[GroundMotion]:
@@ -453,12 +437,32 @@ def fit_matched(
     -----
     Each iteration costs one response spectrum of the fit ensemble (~0.2 s for
     100 motions and 57 periods, compiled); the white noise and x are computed
-    once. The worst in-sample band (``history``) goes 0.57 -> 0.81 -> 0.87 ->
-    1.10 -> 1.07 for PEER 1999 El Centro, and 0.51 -> 0.79 -> 1.18 -> 1.18 ->
-    1.17 for NGA-West2, where it is the 0.05 s band (PSa ~ PGA), which the
-    gain barely moves; all other bands are then within 5 %. Fit and 100
-    motions take 1.6-2.5 s against 0.7-0.9 s for the published model alone.
+    once. The in-sample convergence and the cost on El Centro: see
+    docs/results.md#ground-motions-that-stand-for-their-record.
     """
+    n_fit, iterations, beta, tol, bounds, damping = _check_fit_args(
+        record, n_fit, iterations, beta, tol, gain_bounds, damping, fir_length
+    )
+    ss = rdk.seed_sequence(seed)
+    centres = band_centres(*check_range(psa_range, "psa_range"))
+    periods = band_periods(centres, per_band)
+    params = _published_model(record, params, ss)
+    plan = _psa_plan(params.dt, periods, damping)
+    rec_psa = _psa_batch(record.acc[:, None], plan)[0]
+    n_taps = MatchedRDK(params, tuple(centres), tuple(np.exp(np.zeros(centres.size))), fir_length).n_taps
+    x = rdk.modulated_noise(params, rdk.white_noise(ss.spawn(n_fit), params.n_warm + params.n_noise))
+    log_g, psa, done, history = _iterate_gain(x, params, centres, per_band, plan, rec_psa, n_taps,
+                                              iterations, beta, tol, bounds)  # fmt: skip
+    tables = _in_sample_tables(centres, periods, per_band, psa, rec_psa)
+    return MatchedRDK(
+        params, tuple(centres), tuple(np.exp(log_g)), fir_length, record=record.name, n_fit=n_fit,
+        iterations=done, beta=beta, fit_seed=seed, history=tuple(history),
+        achieved=BandCheck(*tables, record=record.name, damping=damping),
+    )  # fmt: skip
+
+
+def _check_fit_args(record, n_fit, iterations, beta, tol, gain_bounds, damping, fir_length) -> tuple:
+    """The checked arguments of :func:`fit_matched`: (n_fit, iterations, beta, tol, gain bounds, damping)."""
     if not isinstance(record, GroundMotion):
         raise TypeError(f"`record` must be a housner.GroundMotion, got {type(record).__name__}")
     n_fit = rdk.check_count(n_fit, "n_fit", 1)
@@ -478,26 +482,36 @@ def fit_matched(
     damping = check_damping(damping)
     if not (isinstance(fir_length, (int, float, np.number)) and math.isfinite(fir_length) and fir_length > 0.0):
         raise ValueError(f"`fir_length` must be a positive number of seconds, got {fir_length!r}")
-    ss = rdk._seed_sequence(seed)
-    centres = band_centres(*check_range(psa_range, "psa_range"))
-    periods = band_periods(centres, per_band)
+    return n_fit, iterations, beta, tol, (g_lo, g_hi), damping
+
+
+def _published_model(record: GroundMotion, params: RDKParams | None, ss: np.random.SeedSequence) -> RDKParams:
+    """The published model under the gain: ``params``, or :func:`housner.scenarios.motions.rdk.fit` to ``record``
+    with seed ``ss``; its step must be the record's."""
     if params is None:
         params = rdk.fit(record, seed=ss)
     elif not isinstance(params, RDKParams):
         raise TypeError(f"`params` must be an RDKParams, got {type(params).__name__}")
     if abs(params.dt - record.dt) > 1e-9 * record.dt:
         raise ValueError(f"`params` has dt = {params.dt} s but the record {record.dt} s")
-    plan = _psa_plan(params.dt, periods, damping)
-    rec_psa = _psa_batch(record.acc[:, None], plan)[0]
+    return params
 
+
+def _iterate_gain(x, params, centres, per_band, plan, rec_psa, n_taps, iterations, beta, tol, bounds) -> tuple:
+    """The gain's SIMQKE-style iteration: log G <- clip(log G - beta log(mean PSa / record PSa)) per band.
+
+    ``x`` is the fit ensemble's modulated noise, one column per motion; ``plan`` and ``rec_psa`` the spectrum
+    plan of the fit's periods and the record's PSa there [m/s^2]. Stops after ``iterations`` updates or once
+    every band's |log ratio| is below ``tol``. Returns (log G per band centre, the last ensemble's PSa
+    [m/s^2], updates done, the worst band ratio of each ensemble [-]).
+    """
+    g_lo, g_hi = bounds
     log_g = np.zeros(centres.size)
-    model = MatchedRDK(params, tuple(centres), tuple(np.exp(log_g)), fir_length)
-    x = rdk._modulated_noise(params, rdk._white_noise(ss.spawn(n_fit), params.n_warm + params.n_noise))
     done = 0
     history = []
     while True:
-        h = _min_phase_fir(centres, log_g, params.dt, model.n_taps)
-        acc = rdk._highpass(_convolve_columns(x, h), params.dt, params.omega_c)
+        h = _min_phase_fir(centres, log_g, params.dt, n_taps)
+        acc = rdk.highpass(_convolve_columns(x, h), params.dt, params.omega_c)
         psa = _psa_batch(acc, plan)
         band_log = np.log(psa.mean(axis=0) / rec_psa).reshape(centres.size, per_band).mean(axis=1)
         history.append(float(np.exp(band_log[np.argmax(np.abs(band_log))])))
@@ -505,22 +519,15 @@ def fit_matched(
             break
         log_g = np.clip(log_g - beta * band_log, math.log(g_lo), math.log(g_hi))
         done += 1
-    # in-sample tables; Sd = PSa / omega^2 at each period, over the bands of DEFAULT_SD_RANGE
+    return log_g, psa, done, history
+
+
+def _in_sample_tables(centres, periods, per_band, psa, rec_psa) -> tuple[BandTable, BandTable]:
+    """The in-sample PSa table and the Sd table (Sd = PSa / omega^2 at each period, over the bands of
+    :data:`~housner.scenarios.motions.bands.DEFAULT_SD_RANGE`) of the fitted ensemble against the record."""
     table = band_table("PSa", centres, per_band, psa, rec_psa, BAND_BOUNDS)
     in_sd = np.isin(centres, band_centres(*DEFAULT_SD_RANGE))
     cols = np.repeat(in_sd, per_band)
     w2 = (2.0 * np.pi / periods[cols]) ** 2
     sd_table = band_table("Sd", centres[in_sd], per_band, psa[:, cols] / w2, rec_psa[cols] / w2, BAND_BOUNDS)
-    return MatchedRDK(
-        params,
-        tuple(centres),
-        tuple(np.exp(log_g)),
-        fir_length,
-        record=record.name,
-        n_fit=n_fit,
-        iterations=done,
-        beta=beta,
-        fit_seed=seed,
-        achieved=BandCheck(table, sd_table, record=record.name, damping=damping),
-        history=tuple(history),
-    )
+    return table, sd_table

@@ -42,9 +42,10 @@ import numpy as np
 from housner.engines.base import RECORD_ERRORS, Engine, get_engine
 from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
+from housner.proportions import wilson_interval
 from housner.scenarios.execution.cache import code_version, content_key, store_text
 from housner.specimen import Specimen
-from housner.stats import per_record_agreement, wilson_interval
+from housner.stats import per_record_agreement
 
 #: Record-by-record agreement: both overturned, or both rocked with theta_max/alpha within this relative
 #: tolerance of the reference's [-] (the run report's rule, and housner explain's).

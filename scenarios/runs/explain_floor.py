@@ -147,7 +147,7 @@ def engine_chaos_floor(
 
     As ``housner run`` measures the errors (:func:`housner.scenarios.runs.chaos.run_engine_errors`:
     releases sampled at the ensemble's median step, r against the analytic model's r) and as its
-    report computes the floor (``housner.reports.run.view.Run.chaos_floors``).
+    report computes the floor (``housner.scenarios.runs.view.Run.chaos_floors``).
 
     Parameters
     ----------

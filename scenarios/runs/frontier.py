@@ -229,28 +229,11 @@ def engine_frontier(
     ref = record_thetas(res_h, "housner")
     mform = model_form_floor(sc.specimen, [motions[i] for i in sorted(ref.index)], href)
     for i, p in enumerate(pts):
-        row = table.iloc[i]
-        p.r_error, p.small_error = float(row["worst_rel_error"]), float(row["small_worst_rel_error"])
-        p.decay_error, p.pulse_error = float(row["decay_rel_error"]), float(row["pulse_rel_error"])
-        p.checks_met, p.cpu_per_sim_second = bool(row["met"]), float(row["cost_per_sim_second"])
-        p.failed, p.score = str(row.get("failed", "") or ""), float(row["score"])
-        p.error = str(row["error"] or "")
+        _take_checks(p, table.iloc[i])
         if p.error:
             continue
         say(f"{engine} {p.label} on {len(motions)} ground motions ({i + 1}/{len(pts)})")
-        settings = {**base, **p.settings}
-        res, _h, _i = run_engines(sc.specimen, motions, {engine: settings}, options, histories=False)
-        th = record_thetas(res, engine)
-        p.agreement, p.n_records = record_agreement(th, ref)
-        both = th.index.intersection(ref.index)
-        if not len(both):
-            p.error = "no record ran"
-            continue
-        p.ks = float(ks_2samp(th[both].to_numpy(), ref[both].to_numpy()).distance)
-        p.overturned = int(np.isinf(th[both].to_numpy()).sum())
-        chaos = engine_chaos_floor(engine, settings, sc.specimen, [motions[j] for j in sorted(both)], href.get("r"))
-        p.floor_parts = {"chaos": float(chaos.share), "model_form": float(mform.share)}
-        p.floor = extended_floor(chaos, mform)
+        _measure_on_motions(p, engine, {**base, **p.settings}, sc.specimen, motions, ref, mform, href, options)
     out = Frontier(
         engine=engine,
         scenario=sc.name,
@@ -267,6 +250,34 @@ def engine_frontier(
     out.knee = knee(out.points)
     out.wall_s = time.perf_counter() - t0
     return out
+
+
+def _take_checks(p: FrontierPoint, row) -> None:
+    """Copy the tuner's checks of point ``p`` (its row of the tuner's candidates table) onto it."""
+    p.r_error, p.small_error = float(row["worst_rel_error"]), float(row["small_worst_rel_error"])
+    p.decay_error, p.pulse_error = float(row["decay_rel_error"]), float(row["pulse_rel_error"])
+    p.checks_met, p.cpu_per_sim_second = bool(row["met"]), float(row["cost_per_sim_second"])
+    p.failed, p.score = str(row.get("failed", "") or ""), float(row["score"])
+    p.error = str(row["error"] or "")
+
+
+def _measure_on_motions(p: FrontierPoint, engine: str, settings: dict, specimen, motions: list, ref, mform, href: dict,
+                        options: RunOptions | None) -> None:  # fmt: skip
+    """Run ``engine`` with the point's ``settings`` on the ground motions and set the point's agreement with the
+    analytic model's theta_max/alpha ``ref``, KS distance, overturns and extended floor (``mform``: the
+    model-form floor; ``href``: the analytic model's settings)."""
+    res, _h, _i = run_engines(specimen, motions, {engine: settings}, options, histories=False)
+    th = record_thetas(res, engine)
+    p.agreement, p.n_records = record_agreement(th, ref)
+    both = th.index.intersection(ref.index)
+    if not len(both):
+        p.error = "no record ran"
+        return
+    p.ks = float(ks_2samp(th[both].to_numpy(), ref[both].to_numpy()).distance)
+    p.overturned = int(np.isinf(th[both].to_numpy()).sum())
+    chaos = engine_chaos_floor(engine, settings, specimen, [motions[j] for j in sorted(both)], href.get("r"))
+    p.floor_parts = {"chaos": float(chaos.share), "model_form": float(mform.share)}
+    p.floor = extended_floor(chaos, mform)
 
 
 def knee(points: Sequence[FrontierPoint]) -> int:

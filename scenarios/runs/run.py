@@ -18,7 +18,7 @@ from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import RUN_FILES, effect_data, provenance, write_run
+from housner.scenarios.execution.rundir import RUN_FILES, RunMeta, effect_data, provenance, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs.chaos import run_engine_errors, run_engine_errors_meanwhile
@@ -30,12 +30,12 @@ __all__ = ["RunResult", "effects_series", "run_scenario"]
 # --------------------------------------------------------------------------
 @dataclass
 class RunResult:
-    """What a run produced (also written to ``out``)."""
+    """What a run produced (also written to ``out``); ``meta`` is its run.json."""
 
     results: pd.DataFrame
     histories: dict[tuple[str, int], np.ndarray]
     motions: list[GroundMotion]
-    meta: dict = field(default_factory=dict)
+    meta: RunMeta = field(default_factory=RunMeta)
     out: Path | None = None
 
     @property
@@ -126,24 +126,22 @@ def run_scenario(
     k = int(scenario.analysis.get("seed_spread", 0) or 0)
     if k > 1 and "housner" in names and n_motions is None and seed is None:
         spread = seed_spread(scenario, k, options=RunOptions(cache_dir=opts.cache_dir, use_cache=opts.use_cache))
-    meta = {
-        "scenario": scenario.describe(),
-        "specimen": scenario.specimen.describe(),
-        "motions": mmeta,
-        "n_motions": len(motions),
-        "engines": info,
-        "analysis": scenario.analysis,
-        "failures": fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records"),
-        "engine_errors": engine_errors,
-        "wall_s": {"motions": t_motions, "total": time.perf_counter() - t0},
-        "provenance": provenance(),
-    }
-    if spread is not None:
-        meta["table2_spread"] = spread
+    effects = None
     if scenario.effects:
-        meta["effects"] = {
-            "label": effects_label(scenario.effects),
-            "effects": [effect_data(e) for e in scenario.effects],
-        }
+        effects = {"label": effects_label(scenario.effects), "effects": [effect_data(e) for e in scenario.effects]}
+    meta = RunMeta(
+        scenario=scenario.describe(),
+        specimen=scenario.specimen.describe(),
+        motions=mmeta,
+        n_motions=len(motions),
+        engines=info,
+        analysis=scenario.analysis,
+        failures=fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records"),
+        engine_errors=engine_errors,
+        wall_s={"motions": t_motions, "total": time.perf_counter() - t0},
+        provenance=provenance(),
+        table2_spread=spread,
+        effects=effects,
+    )
     write_run(out, results, histories, motions, meta)
     return RunResult(results, histories, motions, meta, out)

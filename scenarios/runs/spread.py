@@ -173,7 +173,22 @@ def record_against_ensemble(
     if not (math.isfinite(S) and S > 0):
         raise ValueError(f"`S` must be positive, got {S!r}")
     rec = record.scaled(amplitude=amplitude) if amplitude != 1.0 else record
-    eng = get_engine(engine, **(settings or {}))
+    x, v, pct = _record_rank(get_engine(engine, **(settings or {})), specimen, rec, motions, S, ensemble_values)
+    return {
+        "engine": engine,
+        "amplitude": amplitude,
+        "record": rec.name,
+        "record_theta_max_over_alpha": x,
+        "record_percentile": float(pct),
+        "n_ensemble": int(v.size),
+        **_record_spectra(specimen, rec, motions, S, band, short, damping, n_periods),
+    }
+
+
+def _record_rank(eng, specimen, rec, motions: list, S: float, ensemble_values) -> tuple[float, np.ndarray, float]:
+    """The record's theta_max/alpha (compressed by sqrt(S), through ``eng``), the ensemble's values that are
+    not NaN (simulated with ``eng`` when ``ensemble_values`` is None), and the record's percentile among them
+    [%] (ties counted half)."""
     x = float(eng.simulate(specimen, rec.to_model_scale(S)).theta_max_over_alpha)
     if ensemble_values is None:
         resp = eng.simulate_many(specimen, motions)
@@ -181,7 +196,14 @@ def record_against_ensemble(
     v = np.asarray(ensemble_values, dtype=float)
     v = v[~np.isnan(v)]
     pct = 100.0 * (np.sum(v < x) + 0.5 * np.sum(v == x)) / v.size if v.size else math.nan
+    return x, v, pct
 
+
+def _record_spectra(specimen, rec, motions: list, S: float, band: tuple[float, float], short: tuple[float, float],
+                    damping: float, n_periods: int) -> dict:  # fmt: skip
+    """The spectral and energy part of :func:`record_against_ensemble` (its keys from ``damping`` on): the
+    ensemble's mean PSa over the record's at prototype scale in ``band`` and at ``short`` periods, the
+    prototype's omega_p/p at the band's ends, and the Arias intensities [m/s]."""
     proto = [m.scaled(time=math.sqrt(S)) for m in motions]
     T_band = np.geomspace(band[0], band[1], n_periods)
     T_short = np.geomspace(short[0], short[1], n_periods)
@@ -194,12 +216,6 @@ def record_against_ensemble(
     p_proto = specimen.p / math.sqrt(S)
     ia = np.array([arias_intensity(m) for m in proto])
     return {
-        "engine": engine,
-        "amplitude": amplitude,
-        "record": rec.name,
-        "record_theta_max_over_alpha": x,
-        "record_percentile": float(pct),
-        "n_ensemble": int(v.size),
         "damping": damping,
         "band_s": [float(band[0]), float(band[1])],
         "band_periods_s": T_band.tolist(),
@@ -276,6 +292,43 @@ def equivalent_amplitude(
     motions = list(motions)
     if not motions:
         raise ValueError("`motions` is empty")
+    tg = _checked_targets(targets)
+    values = _AmplitudeSweep(get_engine(engine, **(settings or {})), specimen, motions)
+    grid = _factor_grid(tg, values, step, max_factor)
+    V = np.stack([values(float(a)) for a in grid])  # (grid, records)
+    V = V[:, ~np.isnan(V).any(axis=0)]  # a record that failed at any factor leaves every factor
+    n = V.shape[1]
+    if n == 0:
+        raise ValueError("no record of `motions` gives a theta_max/alpha at every factor")
+    return {
+        "factors": _crossings(V, grid, tg, ci, n_boot, seed),
+        "grid": grid.tolist(),
+        "evaluations": len(values.cache),
+        "step": step,
+        "ci": ci,
+        "engine": engine,
+        "n": int(n),
+    }
+
+
+class _AmplitudeSweep:
+    """theta_max/alpha of every record of an ensemble at a factor ``a`` on its accelerations, called as
+    ``sweep(a)``; each factor is simulated once (``cache``: factor -> values)."""
+
+    def __init__(self, eng, specimen, motions: list):
+        self.eng, self.specimen, self.motions = eng, specimen, motions
+        self.cache: dict[float, np.ndarray] = {}
+
+    def __call__(self, a: float) -> np.ndarray:
+        if a not in self.cache:
+            ms = [m.scaled(amplitude=a) for m in self.motions]
+            resp = self.eng.simulate_many(self.specimen, ms)
+            self.cache[a] = np.array([r.theta_max_over_alpha for r in resp], dtype=float)
+        return self.cache[a]
+
+
+def _checked_targets(targets: dict) -> dict[float, float]:
+    """``targets`` as {percentile [%]: theta_max/alpha [-]} floats, each checked (ValueError naming the bad one)."""
     tg = {}
     for q, v in targets.items():
         q, v = float(q), float(v)
@@ -286,48 +339,46 @@ def equivalent_amplitude(
         tg[q] = v
     if not tg:
         raise ValueError("`targets` is empty")
-    eng = get_engine(engine, **(settings or {}))
-    cache: dict[float, np.ndarray] = {}
+    return tg
 
-    def values(a: float) -> np.ndarray:
-        if a not in cache:
-            ms = [m.scaled(amplitude=a) for m in motions]
-            resp = eng.simulate_many(specimen, ms)
-            cache[a] = np.array([r.theta_max_over_alpha for r in resp], dtype=float)
-        return cache[a]
 
-    def pct(v: np.ndarray, q: float) -> float:
-        v = v[~np.isnan(v)]
-        return float(np.percentile(v, q, method="inverted_cdf")) if v.size else math.nan
+def _valid_percentile(v: np.ndarray, q: float) -> float:
+    """The ``q``-th percentile (inverted CDF) of the values of ``v`` that are not NaN; NaN if none is."""
+    v = v[~np.isnan(v)]
+    return float(np.percentile(v, q, method="inverted_cdf")) if v.size else math.nan
 
-    # bracket every target by steps of 1.25 from 1
+
+def _factor_grid(tg: dict[float, float], values, step: float, max_factor: float) -> np.ndarray:
+    """The factors to simulate: powers of 1 + ``step`` over the bracket of every target (found by steps of
+    1.25 from 1 with ``values(a)``, the records' theta_max/alpha at factor a), widened by one step of 1.1."""
     lo_all, hi_all = 1.0, 1.0
     for q, t in tg.items():
         a = 1.0
-        if pct(values(a), q) >= t:
-            while a > 1.0 / max_factor and pct(values(a), q) >= t:
+        if _valid_percentile(values(a), q) >= t:
+            while a > 1.0 / max_factor and _valid_percentile(values(a), q) >= t:
                 a /= 1.25
             lo_all = min(lo_all, a)
         else:
-            while a < max_factor and not pct(values(a), q) >= t:
+            while a < max_factor and not _valid_percentile(values(a), q) >= t:
                 a *= 1.25
             hi_all = max(hi_all, a)
     # one step of 1.1 beyond the bracket, so that the bootstrap's crossings are rarely cut off by the grid
     lo_all, hi_all = max(lo_all / 1.1, 1.0 / max_factor), min(hi_all * 1.1, max_factor)
     k0 = math.floor(math.log(lo_all) / math.log1p(step))
     k1 = math.ceil(math.log(hi_all) / math.log1p(step))
-    grid = np.array([(1.0 + step) ** k for k in range(k0, k1 + 1)])
-    V = np.stack([values(float(a)) for a in grid])  # (grid, records)
+    return np.array([(1.0 + step) ** k for k in range(k0, k1 + 1)])
+
+
+def _crossings(V: np.ndarray, grid: np.ndarray, tg: dict[float, float], ci: float, n_boot: int, seed: int) -> dict:
+    """Per target percentile q: the first factor of ``grid`` where the q-th percentile of ``V`` (grid, records)
+    reaches the target, and its bootstrap interval over resampled records (nan where not reached)."""
 
     def first_crossing(P: np.ndarray, t: float) -> np.ndarray:
         hit = P >= t
         idx = np.argmax(hit, axis=-1)
         return np.where(hit.any(axis=-1), grid[idx], np.nan)
 
-    V = V[:, ~np.isnan(V).any(axis=0)]  # a record that failed at any factor leaves every factor
     n = V.shape[1]
-    if n == 0:
-        raise ValueError("no record of `motions` gives a theta_max/alpha at every factor")
     Vb = V[:, np.random.default_rng(seed).integers(0, n, size=(n_boot, n))]  # (grid, boot, records)
     out = {}
     for q, t in tg.items():
@@ -338,12 +389,4 @@ def equivalent_amplitude(
         lo, hi = fb[int((1 - ci) / 2 * fb.size)], fb[min(math.ceil((1 + ci) / 2 * fb.size) - 1, fb.size - 1)]
         lo, hi = (float(x) if math.isfinite(x) else math.nan for x in (lo, hi))
         out[q] = {"factor": f, "low": float(lo), "high": float(hi), "target": t}
-    return {
-        "factors": out,
-        "grid": grid.tolist(),
-        "evaluations": len(cache),
-        "step": step,
-        "ci": ci,
-        "engine": engine,
-        "n": int(n),
-    }
+    return out

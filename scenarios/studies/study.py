@@ -82,7 +82,7 @@ from housner.units import G
 
 __all__ = [
     "STUDY_FILES",
-    "Study",
+    "StudyMeta",
     "StudyResult",
     "intensity_measure",
     "load_study",
@@ -171,6 +171,76 @@ def study_motions(study: Study, base: list[GroundMotion], S0: float, size: int, 
 
 
 # --------------------------------------------------------------------------
+@dataclass(frozen=True)
+class StudyMeta:
+    """A study's metadata: what study.json holds, one field per key.
+
+    :func:`write_study` writes it (:meth:`to_json`, the keys in the order of the fields) and
+    :func:`load_study` reads it back (:meth:`from_json`, that of an earlier version too: a key it
+    lacks takes its field's default, a key this version does not know is kept in ``extra``).
+
+    Attributes
+    ----------
+    scenario : dict
+        The scenario as run (``Scenario.describe()``).
+    specimen : dict
+        The specimen's geometry and derived figures (``Specimen.describe()``).
+    motions : dict
+        Facts of the scenario's ground motions (``build_motions``), at its own size ratio.
+    study : dict
+        The [study] table as run (``Study.describe()``) with ``n_motions``, ``reference`` and
+        ``compare_ci`` (the level of each interval of an engine comparison).
+    engines : dict
+        Engine -> ``settings``, ``version``, ``wall_s`` [s] summed over the sizes, ``cached``,
+        ``worker_deaths``.
+    n_records : int or None
+        Records run (None: not stated).
+    n_failed : int or None
+        Records failed (None: not stated).
+    wall_s : float or None
+        Wall time of the study [s] (None: not stated).
+    provenance : dict
+        Versions, git commit, platform, CPUs and the creation time.
+    extra : dict
+        Keys of study.json this version does not know, as read.
+    """
+
+    scenario: dict = field(default_factory=dict)
+    specimen: dict = field(default_factory=dict)
+    motions: dict = field(default_factory=dict)
+    study: dict = field(default_factory=dict)
+    engines: dict = field(default_factory=dict)
+    n_records: int | None = None
+    n_failed: int | None = None
+    wall_s: float | None = None
+    provenance: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    #: Tables (an empty one when absent) and counts (None when absent), in study.json's order.
+    _TABLES = ("scenario", "specimen", "motions", "study", "engines")
+    _COUNTS = ("n_records", "n_failed", "wall_s")
+
+    @classmethod
+    def from_json(cls, data: dict) -> StudyMeta:
+        """The metadata of a study.json's contents (a missing or null table becomes an empty one)."""
+        data = data if isinstance(data, dict) else {}
+        known = (*cls._TABLES, *cls._COUNTS, "provenance")
+        return cls(**{k: data.get(k) or {} for k in (*cls._TABLES, "provenance")},
+                   **{k: data.get(k) for k in cls._COUNTS},
+                   extra={k: v for k, v in data.items() if k not in known})  # fmt: skip
+
+    def to_json(self) -> dict:
+        """study.json's keys and values, in its order (the counts only when stated), then ``extra``."""
+        out = {k: getattr(self, k) for k in self._TABLES}
+        out.update({k: getattr(self, k) for k in self._COUNTS if getattr(self, k) is not None})
+        return {**out, "provenance": self.provenance, **self.extra}
+
+    @property
+    def reference(self) -> str | None:
+        """The engine the study compares the others with (None when study.json does not say)."""
+        return self.study.get("reference")
+
+
 @dataclass
 class StudyResult:
     """What :func:`run_study` returns (and :func:`load_study` reads back).
@@ -187,7 +257,7 @@ class StudyResult:
         Per (engine, size): median, beta and their intervals, status, message.
     comparisons : list of dict
         Per (engine, size) against the reference: median ratio, beta difference, intervals, disagree.
-    meta : dict
+    meta : StudyMeta
         study.json.
     out : Path or None
         The study directory.
@@ -198,7 +268,7 @@ class StudyResult:
     exceedance: pd.DataFrame
     fits: list[dict]
     comparisons: list[dict]
-    meta: dict
+    meta: StudyMeta
     out: Path | None = None
     histories: dict = field(default_factory=dict, repr=False)
 
@@ -253,7 +323,6 @@ def run_study(
         Also written to ``out`` (see the module notes).
     """
     opts = RunOptions.merged(options, execution, "run_study")
-    jobs, scheduler, progress = opts.jobs, opts.scheduler, opts.progress
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     study = scenario.study
@@ -267,9 +336,43 @@ def run_study(
     base, mmeta = build_motions(scenario, n_motions, seed=seed)
     n = len(base)
     eng_settings = {e: dict(scenario.engine_settings.get(e, {})) for e in names}
-    total = len(names) * n * len(study.levels) * len(study.S)
-    how = "on the Dask cluster" if scheduler is not None else ("in this process" if jobs == 1 else "worker processes")
-    bar = Progress(total, progress, f"{len(study.S)} sizes x {len(study.levels)} stripes x {n} motions, {how}")
+    results, info, hist = _run_sizes(scenario, base, eng_settings, opts)
+    reference = str(scenario.analysis.get("reference", "housner"))
+    analysis = analyse(results, study, names, reference)
+    meta = StudyMeta(
+        scenario=scenario.describe(),
+        specimen=scenario.specimen.describe(),
+        motions=mmeta,
+        study={**study.describe(), "n_motions": n, "reference": reference, "compare_ci": compare_ci(study.ci)},
+        engines=info,
+        n_records=int(len(results)),
+        n_failed=int((results["status"] != "ok").sum()),
+        wall_s=time.perf_counter() - t0,
+        provenance=provenance(),
+    )
+    result = StudyResult(results, analysis["fragility"], analysis["exceedance"], analysis["fits"],
+                         analysis["comparisons"], meta, out, hist)  # fmt: skip
+    write_study(out, result)
+    return result
+
+
+def _run_sizes(scenario: Scenario, base: list[GroundMotion], eng_settings: dict, opts: RunOptions) -> tuple:
+    """Every record of a study, one size after another under one progress bar.
+
+    Returns
+    -------
+    results : DataFrame
+        One row per (engine, size, stripe, motion): :data:`RESULT_COLUMNS`.
+    info : dict
+        Engine -> settings, version, and wall time [s], cached records and worker deaths summed over the sizes.
+    histories : dict
+        (engine, size index, record) -> theta [rad], when the study keeps histories.
+    """
+    study, n = scenario.study, len(base)
+    total = len(eng_settings) * n * len(study.levels) * len(study.S)
+    where = "in this process" if opts.jobs == 1 else "worker processes"
+    how = "on the Dask cluster" if opts.scheduler is not None else where
+    bar = Progress(total, opts.progress, f"{len(study.S)} sizes x {len(study.levels)} stripes x {n} motions, {how}")
     parts, info, hist = [], {}, {}
     try:
         for k, S in enumerate(study.S):
@@ -289,35 +392,23 @@ def run_study(
                     amplitude_factor=factors[stripe, motion_id],
                 )[RESULT_COLUMNS]
             )
-            for e, v in inf.items():
-                tot = info.setdefault(e, {"settings": v["settings"], "version": v["version"], "wall_s": 0.0,
-                                          "cached": 0, "worker_deaths": 0})  # fmt: skip
-                tot["wall_s"] += v["wall_s"]
-                tot["cached"] += v["cached"]
-                tot["worker_deaths"] += v.get("worker_deaths", 0)
+            _add_engine_info(info, inf)
             if study.histories:
                 hist.update({(e, k, i): th for (e, i), th in h.items()})
             del motions, res, h
     finally:
         bar.close()
-    results = pd.concat(parts, ignore_index=True)
-    reference = str(scenario.analysis.get("reference", "housner"))
-    analysis = analyse(results, study, names, reference)
-    meta = {
-        "scenario": scenario.describe(),
-        "specimen": scenario.specimen.describe(),
-        "motions": mmeta,
-        "study": {**study.describe(), "n_motions": n, "reference": reference, "compare_ci": compare_ci(study.ci)},
-        "engines": info,
-        "n_records": int(len(results)),
-        "n_failed": int((results["status"] != "ok").sum()),
-        "wall_s": time.perf_counter() - t0,
-        "provenance": provenance(),
-    }
-    result = StudyResult(results, analysis["fragility"], analysis["exceedance"], analysis["fits"],
-                         analysis["comparisons"], meta, out, hist)  # fmt: skip
-    write_study(out, result)
-    return result
+    return pd.concat(parts, ignore_index=True), info, hist
+
+
+def _add_engine_info(info: dict, size_info: dict) -> None:
+    """Add one size's engine facts (the runner's) to the study's: settings and version, times and counts summed."""
+    for e, v in size_info.items():
+        tot = info.setdefault(e, {"settings": v["settings"], "version": v["version"], "wall_s": 0.0,
+                                  "cached": 0, "worker_deaths": 0})  # fmt: skip
+        tot["wall_s"] += v["wall_s"]
+        tot["cached"] += v["cached"]
+        tot["worker_deaths"] += v.get("worker_deaths", 0)
 
 
 def _matrices(results: pd.DataFrame, engine: str, size: float, n_stripes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -423,7 +514,7 @@ def write_study(out: Path, result: StudyResult) -> None:
     result.exceedance.to_parquet(out / EXCEEDANCE_FILE, index=False)
     (out / FITS_FILE).write_text(json.dumps(_plain({"fits": result.fits, "comparisons": result.comparisons}),
                                             indent=1))  # fmt: skip
-    (out / STUDY_FILE).write_text(json.dumps(_plain(result.meta), indent=1))
+    (out / STUDY_FILE).write_text(json.dumps(_plain(result.meta.to_json()), indent=1))
 
 
 def load_study(path: str | Path) -> StudyResult:
@@ -460,6 +551,6 @@ def load_study(path: str | Path) -> StudyResult:
         exceedance=read(EXCEEDANCE_FILE, pd.read_parquet),
         fits=num(fits["fits"]),
         comparisons=num(fits["comparisons"]),
-        meta=read(STUDY_FILE, lambda p: json.loads(p.read_text())),
+        meta=StudyMeta.from_json(read(STUDY_FILE, lambda p: json.loads(p.read_text()))),
         out=out,
     )

@@ -15,10 +15,21 @@ import pandas as pd
 
 from housner import calibration
 from housner.reports import figures
-from housner.reports.page import engine_tag, esc, fmt_g, fmt_num, fmt_p, fmt_pct, html_figure, html_note, html_table
-from housner.reports.run.view import RECORD_RTOL, Run
+from housner.reports.page import (
+    engine_tag,
+    esc,
+    fmt_g,
+    fmt_num,
+    fmt_p,
+    fmt_pct,
+    html_figure,
+    html_note,
+    html_table,
+    view_colors,
+)
 from housner.scenarios.execution.rundir import json_number
-from housner.scenarios.runs.chaos import floor_verdict
+from housner.scenarios.runs.chaos import RECORD_RTOL, floor_verdict
+from housner.scenarios.runs.view import Run
 
 #: Records with the largest disagreement shown as time histories.
 N_WORST = 4
@@ -55,9 +66,33 @@ def _floor_cell(fl) -> str:
 
 
 def agreement_section(run: Run) -> str:
+    """The agreement section: each engine against the reference record by record, the scatter of every record,
+    and the records where the engines disagree most with their time histories."""
     if not run.others:
         return html_note("Only one engine: no cross-engine comparison.")
-    cmp = run.comparison
+    floors = run.chaos_floors
+    parts = [_agreement_table(run, floors)]
+    lines = []
+    for e in run.others:
+        r, fl = run.comparison.loc[e], floors.get(e)
+        if fl is None or not (r["n_paired"] > 0):
+            continue
+        n = int(r["n_paired"])
+        lines.append(f"{esc(e)}: {esc(floor_verdict(int(round(r['agreement_share'] * n)), n, fl))}.")
+    if lines:
+        parts.append(html_note("<br>".join(lines)))
+    wide = _disagreement(run)
+    parts.append(_scatter_figure(run, wide))
+    worst = wide[wide["score"] > 0].sort_values("score", ascending=False, kind="stable").head(N_WORST)
+    if worst.empty:
+        parts.append(html_note("Every record agrees: no record to single out."))
+        return "".join(parts)
+    parts.append(_worst_records(run, worst))
+    return "".join(parts)
+
+
+def _agreement_table(run: Run, floors: dict) -> str:
+    """Per engine: the distances to the reference, the shares of records in agreement and the chaos floor."""
     header = [
         "engine",
         "KS distance",
@@ -69,11 +104,9 @@ def agreement_section(run: Run) -> str:
         f"&theta;<sub>max</sub> within {RECORD_RTOL:.0%}",
         "chaos floor<br><small>(analytic model with the engine's r, p errors)</small>",
     ]
-    floors = run.chaos_floors
     rows = []
     for e in run.others:
-        r = cmp.loc[e]
-        fl = floors.get(e)
+        r = run.comparison.loc[e]
         rows.append(
             [
                 engine_tag(e, run),
@@ -84,52 +117,43 @@ def agreement_section(run: Run) -> str:
                 fmt_num(r["n_paired"], 0),
                 fmt_pct(r["verdict_share"]),
                 fmt_pct(r["agreement_share"]),
-                _floor_cell(fl),
+                _floor_cell(floors.get(e)),
             ]
         )
-    parts = [
-        html_table(
-            header,
-            rows,
-            caption=f"Each engine against {esc(run.reference)}. &ldquo;Same verdict&rdquo;: both overturned or "
-            f"neither did; &ldquo;within {RECORD_RTOL:.0%}&rdquo;: both overturned, or both rocked with "
-            f"&theta;<sub>max</sub> within {RECORD_RTOL:.0%} of the reference's. Rocking is sensitive to small "
-            "perturbations (seed Fig. 9), so record-by-record agreement can be low while the distributions agree. "
-            "The chaos floor is how often the analytic model agrees with itself, by the same rule, when its r and p "
-            "are perturbed by the engine's measured free-rocking errors (mean of the four perturbations, their range "
-            "below): agreement at the floor is chaos, agreement below it a model difference.",
-        )
-    ]
-    lines = []
-    for e in run.others:
-        r, fl = cmp.loc[e], floors.get(e)
-        if fl is None or not (r["n_paired"] > 0):
-            continue
-        n = int(r["n_paired"])
-        lines.append(f"{esc(e)}: {esc(floor_verdict(int(round(r['agreement_share'] * n)), n, fl))}.")
-    if lines:
-        parts.append(html_note("<br>".join(lines)))
-    wide = _disagreement(run)
+    return html_table(
+        header,
+        rows,
+        caption=f"Each engine against {esc(run.reference)}. &ldquo;Same verdict&rdquo;: both overturned or "
+        f"neither did; &ldquo;within {RECORD_RTOL:.0%}&rdquo;: both overturned, or both rocked with "
+        f"&theta;<sub>max</sub> within {RECORD_RTOL:.0%} of the reference's. Rocking is sensitive to small "
+        "perturbations (seed Fig. 9), so record-by-record agreement can be low while the distributions agree. "
+        "The chaos floor is how often the analytic model agrees with itself, by the same rule, when its r and p "
+        "are perturbed by the engine's measured free-rocking errors (mean of the four perturbations, their range "
+        "below): agreement at the floor is chaos, agreement below it a model difference.",
+    )
+
+
+def _scatter_figure(run: Run, wide: pd.DataFrame) -> str:
+    """Each engine's theta_max/alpha against the reference's, one point per record ("" when no record pairs)."""
     pairs = {}
     for e in run.others:
         m = wide[e].notna() & wide[run.reference].notna()
         pairs[e] = (wide.loc[m, e].to_numpy(float), wide.loc[m, run.reference].to_numpy(float))
-    if any(a.size for a, _ in pairs.values()):
-        fig = figures.plot_agreement_scatter(pairs, run.reference, rtol=RECORD_RTOL, colors=run.colors)
-        parts.append(
-            html_figure(
-                fig,
-                f"&theta;<sub>max</sub>/&alpha; of each engine against {esc(run.reference)}, one point per record. "
-                f"Points in the grey band agree within {RECORD_RTOL:.0%}. Overturned records sit in the shaded strips: "
-                "at the top when only the engine overturned, at the right when only the reference did, in the corner "
-                "when both did.",
-                "engine against reference scatter",
-            )
-        )
-    worst = wide[wide["score"] > 0].sort_values("score", ascending=False, kind="stable").head(N_WORST)
-    if worst.empty:
-        parts.append(html_note("Every record agrees: no record to single out."))
-        return "".join(parts)
+    if not any(a.size for a, _ in pairs.values()):
+        return ""
+    fig = figures.plot_agreement_scatter(pairs, run.reference, rtol=RECORD_RTOL, colors=view_colors(run))
+    return html_figure(
+        fig,
+        f"&theta;<sub>max</sub>/&alpha; of each engine against {esc(run.reference)}, one point per record. "
+        f"Points in the grey band agree within {RECORD_RTOL:.0%}. Overturned records sit in the shaded strips: "
+        "at the top when only the engine overturned, at the right when only the reference did, in the corner "
+        "when both did.",
+        "engine against reference scatter",
+    )
+
+
+def _worst_records(run: Run, worst: pd.DataFrame) -> str:
+    """The records where the engines disagree most: their table and every engine's time histories on them."""
     names = run.results.drop_duplicates("motion_id").set_index("motion_id")["motion_name"]
     rows = []
     for mid, r in worst.iterrows():
@@ -138,7 +162,7 @@ def agreement_section(run: Run) -> str:
             + [fmt_num(r[e], 3) for e in run.engines]
             + ["overturn verdicts differ" if math.isinf(r["score"]) else f"{r['score']:.3f}"]
         )
-    parts.append(f"<h3>The {len(worst)} records where the engines disagree most</h3>")
+    parts = [f"<h3>The {len(worst)} records where the engines disagree most</h3>"]
     parts.append(
         html_table(
             ["motion", "name"] + [engine_tag(e, run) for e in run.engines] + ["largest |difference| [&alpha;]"],
@@ -154,7 +178,7 @@ def agreement_section(run: Run) -> str:
             data = {e: (t, th / run.alpha) for (e, i), (t, th) in hist.items() if i == mid}
             if data:
                 panels.append((f"motion {mid}: {names.get(mid, '')}", data))
-        fig = figures.plot_histories(panels, reference=run.reference, colors=run.colors)
+        fig = figures.plot_histories(panels, reference=run.reference, colors=view_colors(run))
         parts.append(
             html_figure(
                 fig,
@@ -240,7 +264,7 @@ def free_vibration_section(run: Run) -> str:
             releases.append((amp_of(i), {e: data[e] for e in run.engines if e in data}))
     parts = [
         html_figure(
-            figures.plot_free_vibration(releases, reference=run.reference, colors=run.colors),
+            figures.plot_free_vibration(releases, reference=run.reference, colors=view_colors(run)),
             "Free rocking after a release from rest at each amplitude (seed Fig. 5). The time between impacts "
             "shrinks as the amplitude decays (seed eq. 7); engines whose curves drift apart dissipate differently "
             "per impact or have another p.",
@@ -271,7 +295,10 @@ def free_vibration_section(run: Run) -> str:
         parts.append(
             html_figure(
                 figures.plot_energy_ratios(
-                    data, r_housner=r_h if math.isfinite(r_h) else None, reference=run.reference, colors=run.colors
+                    data,
+                    r_housner=r_h if math.isfinite(r_h) else None,
+                    reference=run.reference,
+                    colors=view_colors(run),
                 ),
                 "Energy ratio of every impact, c<sub>i</sub> = (cos(&alpha; &minus; &theta;<sub>i+1</sub>) &minus; "
                 "cos &alpha;)/(cos(&alpha; &minus; &theta;<sub>i</sub>) &minus; cos &alpha;) (seed eq. 8), against "

@@ -26,10 +26,11 @@ from housner.reports.page import (
     html_figure,
     html_note,
     html_table,
+    view_colors,
 )
-from housner.reports.run.view import QUARTILES, Run, source_record
 from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.execution.tables import percentile_table
+from housner.scenarios.runs.view import QUARTILES, Run, source_record
 
 
 def distribution_section(run: Run) -> str:
@@ -37,9 +38,8 @@ def distribution_section(run: Run) -> str:
     samples = {e: run.values(e) for e in run.engines if run.values(e).size}
     if not samples:
         return html_note("No usable record: nothing to plot.", "warn")
-    analysis = run.meta.get("analysis") or {}
-    paper = {float(k): json_number(v) for k, v in (analysis.get("paper_percentiles") or {}).items()}
-    fig = figures.plot_cdfs(samples, reference=run.reference, ci=0.95, paper=paper or None, colors=run.colors)
+    paper = {float(k): json_number(v) for k, v in (run.meta.analysis.get("paper_percentiles") or {}).items()}
+    fig = figures.plot_cdfs(samples, reference=run.reference, ci=0.95, paper=paper or None, colors=view_colors(run))
     parts = [
         html_figure(
             fig,
@@ -86,7 +86,7 @@ def distribution_section(run: Run) -> str:
     if len(run.engines) > 1 or paper:
         parts.append("<h3>In the layout of the seed's Table 2</h3>")
         parts.append(_table2(run, paper))
-    spread = run.meta.get("table2_spread")
+    spread = run.meta.table2_spread
     if spread:
         parts.append("<h3>Spread over independent ensembles</h3>")
         parts.append(guarded("The seed-spread table", lambda: _spread_table(spread)))
@@ -129,7 +129,7 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
             "motions.npz is missing" if run.motions is None else "the motions are not simulated from a record"
         )
         parts.append(
-            html_note(f"No measured cause on this page: {why}, so the record cannot be set against its ensemble.")
+            html_note(f"No measured cause on this page: {esc(why)}, so the record cannot be set against its ensemble.")
         )
         return "".join(parts)
     g = run.record_gap
@@ -143,7 +143,7 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
         items.append(guarded("The equivalent amplitudes", lambda: _factor_line(run)))
     lis = "".join(f"<li>{t}</li>" for t in items)
     parts.append(f"<p>Measured cause, on this run's own motions:</p><ul class=cause>{lis}</ul><p>{verdict}</p>")
-    note = (run.meta.get("analysis") or {}).get("paper_note")
+    note = run.meta.analysis.get("paper_note")
     if gap and note:
         parts.append(
             "<p><strong>What this page cannot measure</strong> (from the scenario's <code>paper_note</code>): "

@@ -19,8 +19,8 @@ import math
 from housner.reports.frontier_figure import frontier_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_stored_figure, html_table, status_badge
 from housner.reports.run.sections.tuning import engine_defaults, model_data, model_file, settings_differ
-from housner.reports.run.view import Run
 from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
+from housner.scenarios.runs.view import Run
 
 __all__ = ["engines_explained", "has_engine_measurements"]
 
@@ -157,7 +157,7 @@ def _frontier(run: Run, name: str, d: dict) -> str:
         f"{esc(fr.date)}, version {esc(fr.version)}; errors are the worst by magnitude. Knee: "
         f"{esc(knee_reason(fr))}.",
     )
-    used = ((run.meta.get("engines") or {}).get(name) or {}).get("settings") or {}
+    used = run.meta.engine_settings(name)
     differ = settings_differ(fr.knee_settings(), used)
     note = html_note(f"This run's {esc(', '.join(differ))} differ from the knee's.", "warn") if differ else ""
     fig = html_stored_figure(frontier_figure, (fr,), d, f"{esc(name)}: accuracy against cost", f"{name} frontier")

@@ -13,12 +13,13 @@ import numpy as np
 
 from housner.reports.page import esc, fmt_g, fmt_num, guarded, html_figure, html_note, html_table, status_badge
 from housner.reports.run.ground_figures import plot_ensemble_spectra
-from housner.reports.run.view import Run, motion_list, source_record
 from housner.scenarios.execution.rundir import json_number
+from housner.scenarios.runs.view import Run, motion_list, source_record
 from housner.units import G
 
 
 def ensemble_section(run: Run) -> str:
+    """The ground-motions section: their source and intensity, the record(s), the fitted model, the band check."""
     mm = run.motions_meta
     parts = []
     src = run.source or "unknown"
@@ -43,21 +44,7 @@ def ensemble_section(run: Run) -> str:
         )
     if "seed" in mm:
         facts.append(["seed", esc(mm["seed"])])
-    m = run.motions
-    if m is not None and len(m.get("n", [])):
-        n = np.asarray(m["n"])
-        dt = np.asarray(m["dt"], dtype=float)
-        dur = (n - 1) * dt
-        acc = np.asarray(m["acc"], dtype=float)
-        pga = np.max(np.abs(acc), axis=1) if acc.size else np.zeros(len(n))
-        facts.append(["motions", f"{len(n)}"])
-        facts.append(["step dt", _range(dt * 1000, "ms")])
-        facts.append(["duration", _range(dur, "s")])
-        if np.any(pga > 0):
-            ratio = ""
-            if math.isfinite(run.alpha):
-                ratio = f"; PGA/(g tan &alpha;) {_range(pga / (G * math.tan(run.alpha)), '')}"
-            facts.append(["peak ground acceleration", _range(pga, "m/s&sup2;") + f" ({_range(pga / G, 'g')}){ratio}"])
+    facts += _stored_facts(run)
     parts.append(html_table(["", ""], facts, cls="kv"))
     rec = mm.get("record")
     if isinstance(rec, dict):
@@ -101,6 +88,25 @@ def ensemble_section(run: Run) -> str:
     return "".join(parts)
 
 
+def _stored_facts(run: Run) -> list[list[str]]:
+    """Rows on the stored motions (motions.npz): how many, their steps, durations and peak accelerations."""
+    m = run.motions
+    if m is None or not len(m.get("n", [])):
+        return []
+    n = np.asarray(m["n"])
+    dt = np.asarray(m["dt"], dtype=float)
+    dur = (n - 1) * dt
+    acc = np.asarray(m["acc"], dtype=float)
+    pga = np.max(np.abs(acc), axis=1) if acc.size else np.zeros(len(n))
+    facts = [["motions", f"{len(n)}"], ["step dt", _range(dt * 1000, "ms")], ["duration", _range(dur, "s")]]
+    if np.any(pga > 0):
+        ratio = ""
+        if math.isfinite(run.alpha):
+            ratio = f"; PGA/(g tan &alpha;) {_range(pga / (G * math.tan(run.alpha)), '')}"
+        facts.append(["peak ground acceleration", _range(pga, "m/s&sup2;") + f" ({_range(pga / G, 'g')}){ratio}"])
+    return facts
+
+
 def _band_table(check: dict, gain: dict | None) -> str:
     """Per third-octave band: ensemble-mean / record of PSa and Sd with PASS/FAIL (and the matched model's gain)."""
     rows: dict[float, list[str]] = {}
@@ -130,7 +136,7 @@ def _band_table(check: dict, gain: dict | None) -> str:
         f"{verdict} {esc(check.get('what', ''))}: ratio of the geometric mean over the band of ensemble mean / record, "
         f"accepted within [{fmt_g(lo)}, {fmt_g(hi)}]; PSa checked over {fmt_g(ranges['psa'][0])}-"
         f"{fmt_g(ranges['psa'][1])} s, Sd over {fmt_g(ranges['sd'][0])}-{fmt_g(ranges['sd'][1])} s "
-        "(housner.scenarios.motions.rdk_match.band_check)." + gain_note
+        "(housner.scenarios.motions.bands.band_check)." + gain_note
     )
     return html_table(header, [rows[c] for c in sorted(rows)], cls="kv", caption=caption)
 
@@ -147,7 +153,7 @@ def _range(x: np.ndarray, unit: str) -> str:
     return f"{lo:.4g} &ndash; {hi:.4g}{u} (median {float(np.median(x)):.4g})"
 
 
-#: Fitted Rezaeian & Der Kiureghian parameters (keys of ``housner.scenarios.motions.rdk.RDKParams.describe()``):
+#: Fitted Rezaeian & Der Kiureghian parameters (keys of ``housner.scenarios.motions.rdk_params.RDKParams.describe()``):
 #: key -> (symbol, meaning), or (symbol, meaning, unit) where the key's unit suffix (:func:`_unit_from_key`)
 #: does not give the unit.
 _RDK_ROWS = {
@@ -218,7 +224,7 @@ def _spectra_figure(run: Run) -> str:
         return html_note("motions.npz is missing: no spectra.")
     record, why = source_record(run)
     if record is None:
-        return html_note(f"{why}: no spectra.", "warn" if "catalogue" in why or "Record file" in why else "note")
+        return html_note(f"{esc(why)}: no spectra.", "warn" if "catalogue" in why or "Record file" in why else "note")
     S = run.S
     # motions.npz holds the model-scale motions (time compressed by sqrt(S), seed eq. 9); the figure takes
     # the prototype-scale ensemble and draws the time-scaled spectra itself.

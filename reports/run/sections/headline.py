@@ -28,22 +28,20 @@ from housner.reports.page import (
     status_badge,
 )
 from housner.reports.run.sections.tuning import settings_html, tuning_caveats, tuning_section
-from housner.reports.run.view import (
-    BOOT_SEED,
-    MIN_RECORDS,
-    N_BOOT,
-    Run,
-    checks_html,
-    engine_verdict,
-)
+from housner.scenarios.runs.verdicts import MIN_RECORDS, EngineVerdict
+from housner.scenarios.runs.view import BOOT_SEED, N_BOOT, Run
 from housner.stats import KS_MAX, OVERTURN_TOL
 from housner.units import G
 
 
-def _effect_series(run: Run) -> dict[str, str]:
-    """Series of the run that are an engine with the scenario's [[effects]]: series -> engine without them."""
-    info = run.meta.get("engines") or {}
-    return {n: str(v["engine"]) for n, v in info.items() if isinstance(v, dict) and v.get("effects") and "engine" in v}
+def checks_html(v: EngineVerdict) -> list[str]:
+    """Each criterion of a verdict as the page writes it: its figures, marked met or not."""
+    return [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
+
+
+def _html_figures(text: str) -> str:
+    """A criterion's plain text as the page writes it (entities for <=, > and Delta)."""
+    return esc(text).replace("&lt;=", "&le;").replace("dP[", "&Delta;P[")
 
 
 def _moved(run: Run, base: str, series: str) -> str:
@@ -63,18 +61,16 @@ def _moved(run: Run, base: str, series: str) -> str:
 
 
 def headline_section(run: Run) -> str:
-    cmp = run.comparison
-    ref = run.reference
+    """The verdict section: one line per engine with its verdict and figures, the table behind them, the rule."""
     parts = []
     if not run.reference_is_requested:
-        want = (run.meta.get("analysis") or {}).get("reference") or "housner"
         parts.append(
             html_note(
-                f"The reference engine {esc(want)!s} is not in this run; {esc(ref)} stands in as the reference.", "warn"
+                f"The reference engine {esc(run.meta.reference)!s} is not in this run; {esc(run.reference)} stands in "
+                "as the reference.",
+                "warn",
             )
         )
-    # one line per engine, the answer first
-    lines = []
     try:
         caveats = tuning_caveats(run)
     except Exception as e:  # an unreadable tuning file must not lose the verdict; say so instead
@@ -82,36 +78,47 @@ def headline_section(run: Run) -> str:
         parts.append(
             html_note(f"The tuning files could not be checked: <code>{esc(type(e).__name__)}: {esc(e)}</code>", "warn")
         )
-    effects = _effect_series(run)
-    if effects:
-        label = esc((run.meta.get("effects") or {}).get("label", ""))
+    if run.meta.effect_series:
         parts.append(
             html_note(
-                f"This run adds physical effects (the scenario's <code>[[effects]]</code>): <strong>{label}</strong>. "
+                "This run adds physical effects (the scenario's <code>[[effects]]</code>): "
+                f"<strong>{esc(run.meta.effects_label)}</strong>. "
                 "Each series &ldquo;ENGINE + effects&rdquo; is that engine with them, beside the same engine "
                 "without them: an effect is meant to move the distribution, so it gets no pass or fail, only "
                 "how far it moves it."
             )
         )
-    floors = _floors(run, parts)
+    verdicts = run.verdicts(_floors(run, parts))
+    parts.append(_verdict_lines(run, verdicts, caveats))
+    parts.append(_headline_table(run, verdicts, caveats))
+    parts.append(html_note(_rule_text(run)))
+    return "".join(parts)
+
+
+def _verdict_lines(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[str, str]) -> str:
+    """One line per engine, the answer first: its badges and figures, or how far an effect moves its engine."""
+    effects = run.meta.effect_series
+    lines = []
     for name in run.others:
-        row = cmp.loc[name]
         if name in effects:
-            base = effects[name]
             lines.append(
-                f'<li><span class="badge na">effect</span> {engine_tag(name, run)}: {_moved(run, base, name)}</li>'
+                f'<li><span class="badge na">effect</span> {engine_tag(name, run)}: '
+                f"{_moved(run, effects[name], name)}</li>"
             )
             continue
-        v = engine_verdict(row, floors.get(name))
-        reasons = checks_html(v)
+        v = verdicts[name]
         extra = f'<div class="caveat">{caveats[name]}</div>' if name in caveats else ""
         if v.records:
             extra = f"<div><strong>Record by record</strong>: {esc(v.records)}.</div>" + extra
-        lines.append(f"<li>{_badges(v)} {engine_tag(name, run)}: {'; '.join(reasons)}{extra}</li>")
+        lines.append(f"<li>{_badges(v)} {engine_tag(name, run)}: {'; '.join(checks_html(v))}{extra}</li>")
     if lines:
-        parts.append(f'<ul class="verdicts">{"".join(lines)}</ul>')
-    else:
-        parts.append(html_note(f"Only one engine ({esc(ref)}) in this run: nothing to compare it with."))
+        return f'<ul class="verdicts">{"".join(lines)}</ul>'
+    return html_note(f"Only one engine ({esc(run.reference)}) in this run: nothing to compare it with.")
+
+
+def _headline_table(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[str, str]) -> str:
+    """Every engine's records, KS distance, P[overturn], median and verdict, the reference first."""
+    cmp, ref = run.comparison, run.reference
     header = [
         "engine",
         "records<br>ok / failed",
@@ -125,8 +132,13 @@ def headline_section(run: Run) -> str:
     for name in run.engines:
         row = cmp.loc[name]
         is_ref = name == ref
-        v = engine_verdict(row, floors.get(name)) if not is_ref else None
         nf = int(row["n_failed"])
+        if is_ref:
+            verdict = "reference"
+        elif name in verdicts:
+            verdict = _badges(verdicts[name]) + (_caveat_mark(caveats[name]) if name in caveats else "")
+        else:
+            verdict = "effect"
         rows.append(
             [
                 engine_tag(name, run) + (" <small>(reference)</small>" if is_ref else ""),
@@ -135,14 +147,15 @@ def headline_section(run: Run) -> str:
                 ci_cell(row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"], 2),
                 "&ndash;" if is_ref else fmt_signed(row["overturn_diff"], 3),
                 ci_cell(row["q50"], row["q50_low"], row["q50_high"], 3),
-                "reference"
-                if is_ref
-                else "effect"
-                if name in effects
-                else _badges(v) + (_caveat_mark(caveats[name]) if name in caveats else ""),
+                verdict,
             ]
         )
-    parts.append(html_table(header, rows, cls="headline"))
+    return html_table(header, rows, cls="headline")
+
+
+def _rule_text(run: Run) -> str:
+    """What pass means, and how sure a verdict on this many records is."""
+    cmp, ref = run.comparison, run.reference
     n = int(cmp.loc[ref, "n_ok"]) if ref in cmp.index else 0
     # Smirnov's asymptotic 5 % critical distance for two samples of n: sqrt(-ln(0.025) / 2) sqrt(2 / n).
     crit = math.sqrt(-math.log(0.025) / 2.0) * math.sqrt(2.0 / n) if n else math.nan
@@ -159,18 +172,15 @@ def headline_section(run: Run) -> str:
             f"record moves the KS distance by 1/n, so at least {MIN_RECORDS} records are needed for a tolerance of "
             f"{KS_MAX}; the figures are shown, not judged."
         )
-    parts.append(
-        html_note(
-            f"Pass means KS distance &le; {KS_MAX}, |&Delta;P[overturn]| &le; {OVERTURN_TOL} and no "
-            "failed record (the defaults of <code>housner.reports.assertions.runs.assert_cdf_agreement</code>), "
-            f"on at least {MIN_RECORDS} records. Record by record, an engine is <em>at the chaos floor</em> when its "
-            "share of records within the agreement tolerance reaches what the analytic model keeps under its own "
-            "measured r and p errors, and <em>below</em> it otherwise. "
-            "P[overturn] intervals are Wilson score intervals; median intervals are percentile bootstraps "
-            f"({N_BOOT} resamples, seed {BOOT_SEED}). " + how_sure
-        )
+    return (
+        f"Pass means KS distance &le; {KS_MAX}, |&Delta;P[overturn]| &le; {OVERTURN_TOL} and no "
+        "failed record (the defaults of <code>housner.reports.assertions.runs.assert_cdf_agreement</code>), "
+        f"on at least {MIN_RECORDS} records. Record by record, an engine is <em>at the chaos floor</em> when its "
+        "share of records within the agreement tolerance reaches what the analytic model keeps under its own "
+        "measured r and p errors, and <em>below</em> it otherwise. "
+        "P[overturn] intervals are Wilson score intervals; median intervals are percentile bootstraps "
+        f"({N_BOOT} resamples, seed {BOOT_SEED}). " + how_sure
     )
-    return "".join(parts)
 
 
 def _floors(run: Run, parts: list[str]) -> dict:
@@ -230,10 +240,9 @@ def specimen_section(run: Run) -> str:
         parts.append(html_table(["quantity", "value", "unit"], rows, cls="kv"))
     else:
         parts.append(html_note("run.json holds no specimen.", "warn"))
-    engines = run.meta.get("engines") or {}
     rows = []
     for name in run.engines:
-        info = engines.get(name, {})
+        info = run.meta.engine(name)
         settings = info.get("settings") or {}
         sset = settings_html(settings) or "defaults"
         rows.append([engine_tag(name, run), esc(info.get("version", "")) or "&ndash;", sset])

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_table
-from housner.reports.run.view import Run
+from housner.scenarios.runs.view import Run
 
 
 def failures_section(run: Run) -> str:
@@ -31,10 +31,10 @@ def failures_section(run: Run) -> str:
 
 def provenance_section(run: Run) -> str:
     meta = run.meta
-    prov = meta.get("provenance") or {}
+    prov = meta.provenance
     parts = []
     rows = [[esc(k), esc(v)] for k, v in (prov.get("versions") or {}).items()]
-    for name, info in (meta.get("engines") or {}).items():
+    for name, info in meta.engines.items():
         if info.get("version"):
             rows.append([f"engine {esc(name)}", esc(info["version"])])
     for k in ("git_commit", "platform", "cpus", "created"):
@@ -43,7 +43,7 @@ def provenance_section(run: Run) -> str:
     mm = run.motions_meta
     if "seed" in mm:
         rows.append(["ensemble seed", esc(mm["seed"])])
-    wall = meta.get("wall_s")
+    wall = meta.wall_s
     if isinstance(wall, dict):
         for k, v in wall.items():
             rows.append([f"wall time: {esc(k)}", f"{fmt_g(v, 4)} s"])
@@ -53,12 +53,12 @@ def provenance_section(run: Run) -> str:
     parts.append("<h3>Speed</h3>")
     parts.append(_speed(run))
     parts.append("<h3>Scenario file</h3>")
-    parts.append(f"<pre>{esc(_scenario_text(meta.get('scenario') or {}))}</pre>")
+    parts.append(f"<pre>{esc(_scenario_text(meta.scenario))}</pre>")
     return "".join(parts)
 
 
 def _speed(run: Run) -> str:
-    info = run.meta.get("engines") or {}
+    info = run.meta.engines
     m = run.motions
     rows = []
     for e in run.engines:

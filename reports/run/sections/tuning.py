@@ -20,9 +20,20 @@ from housner import engines
 from housner.engines.base import engine_class
 from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR
 from housner.reports import figures
-from housner.reports.page import engine_tag, esc, fmt_g, fmt_num, html_figure, html_note, html_table, status_badge
-from housner.reports.run.view import Run, engine_verdict
+from housner.reports.page import (
+    engine_tag,
+    esc,
+    fmt_g,
+    fmt_num,
+    html_figure,
+    html_note,
+    html_table,
+    status_badge,
+    view_colors,
+)
 from housner.scenarios.execution.rundir import json_number
+from housner.scenarios.runs.verdicts import engine_verdict
+from housner.scenarios.runs.view import Run
 from housner.stats import KS_MAX
 
 #: Folder of the tuning results ``tuning-<engine>.json`` written by ``housner tune``;
@@ -142,91 +153,100 @@ def _tuning_checks(d: dict) -> list[_Check]:
     here is the one ``housner tune`` counted; tables absent from the file give no row.
     """
     rtol = json_number(d.get("rtol"))
-    out: list[_Check] = []
+    found = (_first_impact_check(d, rtol), _small_check(d, rtol), _decay_check(d), _pulse_check(d, rtol))
+    return [c for c in found if c is not None]
 
-    def worst_row(df: pd.DataFrame, col: str) -> pd.Series:
-        return df.iloc[int(np.argmax(np.abs(df[col].to_numpy(float))))]
 
+def _worst_row(df: pd.DataFrame, col: str) -> pd.Series:
+    """The row of ``df`` with the largest |``col``|."""
+    return df.iloc[int(np.argmax(np.abs(df[col].to_numpy(float))))]
+
+
+def _first_impact_check(d: dict, rtol: float) -> _Check | None:
+    """r of the first impact after a release at the large amplitudes (the file's ``table``), within rtol."""
     table = _frame(d, "table")
     target = json_number(d.get("target_r"))
     if "rel_error" not in table.columns and "r_engine" in table.columns and math.isfinite(target):
         table["rel_error"] = table["r_engine"].astype(float) / target - 1.0  # files older than the error column
-    if {"amplitude", "rel_error"} <= set(table.columns) and len(table):
-        w = worst_row(table, "rel_error")
-        amps = table["amplitude"].to_numpy(float)
-        rng = f"{amps.min():g}-{amps.max():g} &alpha;"
-        ok = abs(w.rel_error) <= rtol
-        out.append(
-            _Check(
-                f"r of the first impact, {rng}",
-                f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); "
-                f"mean {table['rel_error'].mean():+.2%}",
-                f"&plusmn;{rtol:.2%}",
-                bool(ok),
-                f"r at {rng} worst {w.rel_error:+.2%} (accepted &plusmn;{rtol:.2%})",
-            )
-        )
+    if not ({"amplitude", "rel_error"} <= set(table.columns) and len(table)):
+        return None
+    w = _worst_row(table, "rel_error")
+    amps = table["amplitude"].to_numpy(float)
+    rng = f"{amps.min():g}-{amps.max():g} &alpha;"
+    return _Check(
+        f"r of the first impact, {rng}",
+        f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); "
+        f"mean {table['rel_error'].mean():+.2%}",
+        f"&plusmn;{rtol:.2%}",
+        bool(abs(w.rel_error) <= rtol),
+        f"r at {rng} worst {w.rel_error:+.2%} (accepted &plusmn;{rtol:.2%})",
+    )
+
+
+def _small_check(d: dict, rtol: float) -> _Check | None:
+    """r of the first impact at small amplitudes (``small_table``): the worst within a wider band, each step's mean
+    within rtol."""
     small = _frame(d, "small_table")
-    if {"amplitude", "rel_error"} <= set(small.columns) and len(small):
-        w = worst_row(small, "rel_error")
-        means = small.groupby("dt", dropna=False, sort=False)["rel_error"].mean()
-        m = float(means.iloc[int(np.argmax(np.abs(means.to_numpy(float))))])
-        amps = small["amplitude"].to_numpy(float)
-        rng = f"{amps.min():g}-{amps.max():g} &alpha;"
-        tol_w = SMALL_WORST_FACTOR * rtol
-        ok = abs(w.rel_error) <= tol_w and abs(m) <= rtol
-        out.append(
-            _Check(
-                f"r of the first impact, {rng}",
-                f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); worst mean {m:+.2%}",
-                f"worst &plusmn;{tol_w:.2%}, mean &plusmn;{rtol:.2%}",
-                bool(ok),
-                f"r at {rng} worst {w.rel_error:+.2%}, mean {m:+.2%} (accepted &plusmn;{tol_w:.2%} and "
-                f"&plusmn;{rtol:.2%})",
-            )
-        )
+    if not ({"amplitude", "rel_error"} <= set(small.columns) and len(small)):
+        return None
+    w = _worst_row(small, "rel_error")
+    means = small.groupby("dt", dropna=False, sort=False)["rel_error"].mean()
+    m = float(means.iloc[int(np.argmax(np.abs(means.to_numpy(float))))])
+    amps = small["amplitude"].to_numpy(float)
+    rng = f"{amps.min():g}-{amps.max():g} &alpha;"
+    tol_w = SMALL_WORST_FACTOR * rtol
+    return _Check(
+        f"r of the first impact, {rng}",
+        f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); worst mean {m:+.2%}",
+        f"worst &plusmn;{tol_w:.2%}, mean &plusmn;{rtol:.2%}",
+        bool(abs(w.rel_error) <= tol_w and abs(m) <= rtol),
+        f"r at {rng} worst {w.rel_error:+.2%}, mean {m:+.2%} (accepted &plusmn;{tol_w:.2%} and &plusmn;{rtol:.2%})",
+    )
+
+
+def _decay_check(d: dict) -> _Check | None:
+    """A free decay's peaks after many impacts against the exact sequence (``decay_table``), within DECAY_RTOL."""
     decay = _frame(d, "decay_table")
-    if {"impacts", "rel_error", "peak_engine", "peak_analytic"} <= set(decay.columns) and len(decay):
-        w = worst_row(decay, "rel_error")
-        bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
-        where = ""
-        if len(bad):
-            where = (
-                f"; beyond the tolerance from {int(bad['impacts'].min())} impacts on, i.e. at peaks of "
-                f"{bad['peak_analytic'].max():.3f} &alpha; and below"
-            )
-        out.append(
-            _Check(
-                "free decay: peaks after " + ", ".join(str(int(k)) for k in sorted(set(decay["impacts"]))) + " impacts",
-                f"worst {w.rel_error:+.1%} after {int(w.impacts)} impacts ({w.peak_engine:.4f} &alpha; against "
-                f"{w.peak_analytic:.4f} &alpha;, {_step_label(w['dt'])}){where}",
-                f"&plusmn;{DECAY_RTOL:.0%}",
-                bool(abs(w.rel_error) <= DECAY_RTOL),
-                f"a free decay's peak after {int(w.impacts)} impacts is {w.rel_error:+.1%} off the analytic "
-                f"{w.peak_analytic:.4f} &alpha; ({_step_label(w['dt'])}; accepted &plusmn;{DECAY_RTOL:.0%})",
-            )
+    if not ({"impacts", "rel_error", "peak_engine", "peak_analytic"} <= set(decay.columns) and len(decay)):
+        return None
+    w = _worst_row(decay, "rel_error")
+    bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
+    where = ""
+    if len(bad):
+        where = (
+            f"; beyond the tolerance from {int(bad['impacts'].min())} impacts on, i.e. at peaks of "
+            f"{bad['peak_analytic'].max():.3f} &alpha; and below"
         )
+    return _Check(
+        "free decay: peaks after " + ", ".join(str(int(k)) for k in sorted(set(decay["impacts"]))) + " impacts",
+        f"worst {w.rel_error:+.1%} after {int(w.impacts)} impacts ({w.peak_engine:.4f} &alpha; against "
+        f"{w.peak_analytic:.4f} &alpha;, {_step_label(w['dt'])}){where}",
+        f"&plusmn;{DECAY_RTOL:.0%}",
+        bool(abs(w.rel_error) <= DECAY_RTOL),
+        f"a free decay's peak after {int(w.impacts)} impacts is {w.rel_error:+.1%} off the analytic "
+        f"{w.peak_analytic:.4f} &alpha; ({_step_label(w['dt'])}; accepted &plusmn;{DECAY_RTOL:.0%})",
+    )
+
+
+def _pulse_check(d: dict, rtol: float) -> _Check | None:
+    """One-sine pulses (``pulse_table``): the first peak within rtol and theta_max within each pulse's tolerance."""
     pulses = _frame(d, "pulse_table")
-    if {"rel_error", "theta_max_rel_error", "theta_max_rtol"} <= set(pulses.columns) and len(pulses):
-        w = worst_row(pulses, "rel_error")
-        scaled = np.abs(pulses["theta_max_rel_error"].to_numpy(float)) / pulses["theta_max_rtol"].to_numpy(float)
-        k = int(np.argmax(scaled))
-        wt = pulses.iloc[k]
-        ok = abs(w.rel_error) <= rtol and scaled[k] <= 1.0
-        n = pulses["pulse"].nunique() if "pulse" in pulses.columns else len(pulses)
-        out.append(
-            _Check(
-                f"{n} one-sine pulses: first peak and &theta;<sub>max</sub>",
-                f"first peak worst {w.rel_error:+.2%}; &theta;<sub>max</sub> worst {wt.theta_max_rel_error:+.2%} "
-                f"({esc(wt.get('pulse', ''))}, {_step_label(wt['dt'])})",
-                f"first peak &plusmn;{rtol:.2%}; &theta;<sub>max</sub> &plusmn;"
-                + ", &plusmn;".join(f"{x:.2%}" for x in sorted(set(pulses["theta_max_rtol"]))),
-                bool(ok),
-                f"pulse &theta;<sub>max</sub> worst {wt.theta_max_rel_error:+.2%} "
-                f"(accepted &plusmn;{wt.theta_max_rtol:.2%})",
-            )
-        )
-    return out
+    if not ({"rel_error", "theta_max_rel_error", "theta_max_rtol"} <= set(pulses.columns) and len(pulses)):
+        return None
+    w = _worst_row(pulses, "rel_error")
+    scaled = np.abs(pulses["theta_max_rel_error"].to_numpy(float)) / pulses["theta_max_rtol"].to_numpy(float)
+    k = int(np.argmax(scaled))
+    wt = pulses.iloc[k]
+    n = pulses["pulse"].nunique() if "pulse" in pulses.columns else len(pulses)
+    return _Check(
+        f"{n} one-sine pulses: first peak and &theta;<sub>max</sub>",
+        f"first peak worst {w.rel_error:+.2%}; &theta;<sub>max</sub> worst {wt.theta_max_rel_error:+.2%} "
+        f"({esc(wt.get('pulse', ''))}, {_step_label(wt['dt'])})",
+        f"first peak &plusmn;{rtol:.2%}; &theta;<sub>max</sub> &plusmn;"
+        + ", &plusmn;".join(f"{x:.2%}" for x in sorted(set(pulses["theta_max_rtol"]))),
+        bool(abs(w.rel_error) <= rtol and scaled[k] <= 1.0),
+        f"pulse &theta;<sub>max</sub> worst {wt.theta_max_rel_error:+.2%} (accepted &plusmn;{wt.theta_max_rtol:.2%})",
+    )
 
 
 def _tuning_series(d: dict) -> tuple[dict, dict]:
@@ -283,49 +303,12 @@ def tuning_section(run: Run) -> str:
     rows = []
     curves, decays = {}, {}
     target = rtol = None
-    engines = run.meta.get("engines") or {}
     for name, (f, d) in found.items():
         if "error" in d and len(d) == 1:
             rows.append([engine_tag(name, run), f"<code>{esc(f.name)}</code>: {esc(d['error'])}", "", "", "", ""])
             continue
-        tuned = d.get("settings") or {}
-        used = (engines.get(name) or {}).get("settings") or {}
-        # a setting the file lacks did not exist when it was written: the engine's default keeps the
-        # behaviour of that time (e.g. impact_energy_factor 1)
-        tuned = {**engine_defaults(name), **tuned}
-        differ = settings_differ(tuned, used)
-        if not used:
-            same = f"{settings_html(tuned) or '&ndash;'}<br><small>(the run recorded no settings)</small>"
-        elif differ:
-            same = '<span class="bad">the run differs:</span><br>' + "<br>".join(
-                f"<code>{esc(k)}</code>: tuned {esc(json.dumps(tuned[k]))}, run {esc(json.dumps(used[k]))}"
-                for k in differ
-            )
-        else:
-            same = "the run's settings (above)"
-        checks = _tuning_checks(d)
-        met = d.get("met")
-        check_cells = "<br>".join(
-            f'<span class="{"ok" if c.met else "bad"}">{"met" if c.met else "NOT MET"}</span>: {c.name}: '
-            f"{c.measured} <span class=muted>(accepted {c.accepted})</span>"
-            for c in checks
-        )
-        rows.append(
-            [
-                engine_tag(name, run),
-                same,
-                fmt_g(d.get("target_r"), 5),
-                check_cells or "&ndash;",
-                status_badge(bool(met), "MET", "NOT MET") if met is not None else "&ndash;",
-                f"{esc(d.get('date', ''))}, version {esc(d.get('version', ''))}",
-            ]
-        )
-        c, dec = _tuning_series(d)
-        if not c:  # older files: one table without sample steps
-            table = d.get("table") or {}
-            amp, r = table.get("amplitude"), table.get("r_engine")
-            if isinstance(amp, list) and isinstance(r, list) and len(amp) == len(r) and amp:
-                c = {"": (np.array([json_number(x) for x in amp]), np.array([json_number(x) for x in r]))}
+        rows.append(_tuning_row(run, name, d))
+        c, dec = _tuning_curves(d)
         if c:
             curves[name] = c
         if dec:
@@ -347,31 +330,77 @@ def tuning_section(run: Run) -> str:
         )
     )
     if curves:
-        bands = []
-        if rtol is not None:
-            amps = [a for c in curves.values() for a, _ in c.values()]
-            lo = min(float(np.nanmin(a)) for a in amps)
-            bands = [(0.2, 0.9, rtol)]
-            if lo < 0.2:
-                bands.insert(0, (lo, 0.2, SMALL_WORST_FACTOR * rtol))
-        fig = figures.plot_tuning(
-            curves,
-            target_r=target,
-            bands=bands,
-            decay=decays or None,
-            decay_rtol=DECAY_RTOL,
-            decay_start=DECAY_START,
-            colors=run.colors,
-        )
-        parts.append(
-            html_figure(
-                fig,
-                "Left: energy ratio r of the first impact after a release from rest against the release amplitude, "
-                "one line per engine and sample step, with the accepted band around the target. A flat line on the "
-                "target means the contact dissipates like Housner's impact at every amplitude; a trend means its "
-                "losses depend on the impact velocity. Right: a free decay, the engine's peak after 10-40 impacts "
-                "against the exact sequence; energy lost between impacts accumulates here.",
-                "r against amplitude for the tuned engines, and the free-decay check",
-            )
-        )
+        parts.append(_tuning_figure(run, curves, decays, target, rtol))
     return "".join(parts)
+
+
+def _tuning_row(run: Run, name: str, d: dict) -> list[str]:
+    """An engine's row of the tuning table: its tuned settings against the run's, the checks, the verdict, when."""
+    tuned = d.get("settings") or {}
+    used = run.meta.engine_settings(name)
+    # a setting the file lacks did not exist when it was written: the engine's default keeps the
+    # behaviour of that time (e.g. impact_energy_factor 1)
+    tuned = {**engine_defaults(name), **tuned}
+    differ = settings_differ(tuned, used)
+    if not used:
+        same = f"{settings_html(tuned) or '&ndash;'}<br><small>(the run recorded no settings)</small>"
+    elif differ:
+        same = '<span class="bad">the run differs:</span><br>' + "<br>".join(
+            f"<code>{esc(k)}</code>: tuned {esc(json.dumps(tuned[k]))}, run {esc(json.dumps(used[k]))}" for k in differ
+        )
+    else:
+        same = "the run's settings (above)"
+    met = d.get("met")
+    check_cells = "<br>".join(
+        f'<span class="{"ok" if c.met else "bad"}">{"met" if c.met else "NOT MET"}</span>: {c.name}: '
+        f"{c.measured} <span class=muted>(accepted {c.accepted})</span>"
+        for c in _tuning_checks(d)
+    )
+    return [
+        engine_tag(name, run),
+        same,
+        fmt_g(d.get("target_r"), 5),
+        check_cells or "&ndash;",
+        status_badge(bool(met), "MET", "NOT MET") if met is not None else "&ndash;",
+        f"{esc(d.get('date', ''))}, version {esc(d.get('version', ''))}",
+    ]
+
+
+def _tuning_curves(d: dict) -> tuple[dict, dict]:
+    """:func:`_tuning_series` of a tuning file, or for an older file its one table without sample steps."""
+    c, dec = _tuning_series(d)
+    if not c:  # older files: one table without sample steps
+        table = d.get("table") or {}
+        amp, r = table.get("amplitude"), table.get("r_engine")
+        if isinstance(amp, list) and isinstance(r, list) and len(amp) == len(r) and amp:
+            c = {"": (np.array([json_number(x) for x in amp]), np.array([json_number(x) for x in r]))}
+    return c, dec
+
+
+def _tuning_figure(run: Run, curves: dict, decays: dict, target: float | None, rtol: float | None) -> str:
+    """r against amplitude for every tuned engine with its accepted bands, and the free-decay check."""
+    bands = []
+    if rtol is not None:
+        amps = [a for c in curves.values() for a, _ in c.values()]
+        lo = min(float(np.nanmin(a)) for a in amps)
+        bands = [(0.2, 0.9, rtol)]
+        if lo < 0.2:
+            bands.insert(0, (lo, 0.2, SMALL_WORST_FACTOR * rtol))
+    fig = figures.plot_tuning(
+        curves,
+        target_r=target,
+        bands=bands,
+        decay=decays or None,
+        decay_rtol=DECAY_RTOL,
+        decay_start=DECAY_START,
+        colors=view_colors(run),
+    )
+    return html_figure(
+        fig,
+        "Left: energy ratio r of the first impact after a release from rest against the release amplitude, "
+        "one line per engine and sample step, with the accepted band around the target. A flat line on the "
+        "target means the contact dissipates like Housner's impact at every amplitude; a trend means its "
+        "losses depend on the impact velocity. Right: a free decay, the engine's peak after 10-40 impacts "
+        "against the exact sequence; energy lost between impacts accumulates here.",
+        "r against amplitude for the tuned engines, and the free-decay check",
+    )

@@ -1,11 +1,13 @@
-"""A run directory as the report reads it: results, run.json, motions and histories, and what follows from them.
+"""A run directory as the CLI, the report and users read it: results, run.json, motions and histories, and what
+follows from them.
 
 :class:`Run` loads the files through :mod:`housner.scenarios.execution.rundir` (the one owner of
-their format) and derives, lazily, what the report's sections share: the
-reference and the engine order, the usable and failed rows, the engine
-comparison (:func:`housner.scenarios.execution.tables.compare_engines` with the report's fixed
-bootstrap seed, so that pages are reproducible), the specimen, the motions and
-the stored histories.
+their format, and of the run's metadata, :class:`~housner.scenarios.execution.rundir.RunMeta`) and
+derives, lazily, what ``housner run``'s verdicts and the report's sections share: the reference and
+the engine order, the usable and failed rows, the engine comparison
+(:func:`housner.scenarios.execution.tables.compare_engines` with a fixed bootstrap seed, so that
+pages are reproducible), each engine's verdict (:mod:`housner.scenarios.runs.verdicts`), the chaos
+floors, the record against its ensemble, the specimen, the motions and the stored histories.
 """
 
 from __future__ import annotations
@@ -22,41 +24,50 @@ import pandas as pd
 from housner import Specimen
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
-from housner.reports import figures
-from housner.reports.page import esc
-from housner.scenarios.execution.rundir import json_number, load_results, read_histories, read_motions
+from housner.scenarios.execution.rundir import RunMeta, json_number, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
-from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, floor_check, floor_verdict
+from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict
 from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
-from housner.stats import KS_MAX, OVERTURN_TOL
+from housner.scenarios.runs.verdicts import EngineVerdict, engine_verdict
+
+__all__ = ["BOOT_SEED", "N_BOOT", "QUARTILES", "Run", "motion_list", "source_record"]
 
 #: Bootstrap resamples for percentile intervals (Efron and Tibshirani 1993, ch. 13, ask for at
 #: least 1000 for percentile intervals) and the fixed seed that makes pages reproducible.
 N_BOOT = 2000
-
-
 BOOT_SEED = 0
 
-
+#: Percentile levels [%] of the comparison table and the report's percentile tables.
 QUARTILES = (25.0, 50.0, 75.0)
 
 
 @dataclass
 class Run:
-    """A loaded run directory with lazily read motions and histories."""
+    """A loaded run directory with lazily read motions and histories.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The run directory.
+    results : pandas.DataFrame
+        Its results table, the runner's optional columns filled where another tool left them out.
+    meta : RunMeta
+        Its run.json (empty for a table without one).
+    """
 
     path: Path
     results: pd.DataFrame
-    meta: dict
+    meta: RunMeta
 
     @classmethod
     def load(cls, run_dir: str | Path) -> Run:
+        """Read the run directory ``run_dir`` (:func:`housner.scenarios.execution.rundir.load_results`)."""
         path = Path(run_dir)
         if not path.is_dir():
             raise DataFileError(path, "not a directory (expected a run directory with results.parquet)")
         results = load_results(path)
-        meta = results.attrs.get("run", {})
+        meta = RunMeta.from_json(results.attrs.get("run", {}))
         results = results.copy()
         results["engine"] = results["engine"].astype(str)
         if "motion_name" not in results.columns:
@@ -70,14 +81,17 @@ class Run:
     # --- derived facts
     @cached_property
     def split(self) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """(usable rows, failed rows) of the results table."""
         return split_failed(self.results)
 
     @property
     def ok(self) -> pd.DataFrame:
+        """The usable rows."""
         return self.split[0]
 
     @property
     def failed(self) -> pd.DataFrame:
+        """The failed rows."""
         return self.split[1]
 
     @cached_property
@@ -92,36 +106,37 @@ class Run:
 
     @cached_property
     def reference(self) -> str:
+        """The reference engine: the one the scenario asks for, or the table's first when that one is not in it."""
         names = list(dict.fromkeys(self.results["engine"]))
-        want = (self.meta.get("analysis") or {}).get("reference") or "housner"
+        want = self.meta.reference
         if want in names:
             return want
         return names[0] if names else want
 
     @property
     def reference_is_requested(self) -> bool:
-        want = (self.meta.get("analysis") or {}).get("reference") or "housner"
-        return want == self.reference
+        """Whether the reference is the one the scenario asks for (not a stand-in)."""
+        return self.meta.reference == self.reference
 
     @property
     def others(self) -> list[str]:
+        """The engines other than the reference, in order."""
         return [e for e in self.engines if e != self.reference]
-
-    @cached_property
-    def colors(self) -> dict[str, str]:
-        return figures.engine_colors(self.engines, self.reference)
 
     @property
     def specimen(self) -> dict:
-        return self.meta.get("specimen") or {}
+        """The specimen's facts from run.json (``Specimen.describe()``; empty when not stored)."""
+        return self.meta.specimen
 
     @property
     def alpha(self) -> float:
+        """The specimen's slenderness alpha [rad] (NaN when not stored)."""
         return json_number(self.specimen.get("alpha_rad"))
 
     @property
     def motions_meta(self) -> dict:
-        return self.meta.get("motions") or {}
+        """The ground motions' facts from run.json."""
+        return self.meta.motions
 
     @property
     def S(self) -> float:
@@ -131,6 +146,7 @@ class Run:
 
     @property
     def source(self) -> str:
+        """Where the motions come from: ``rdk``, ``record``, ``records``, ``pulses``, ``free_vibration`` or ""."""
         return str(self.motions_meta.get("source", ""))
 
     def values(self, engine: str) -> np.ndarray:
@@ -145,8 +161,13 @@ class Run:
         v = v.where(~r["overturned"].astype(bool), np.inf)
         return v.where(r["status"].astype(str) == "ok", np.nan)
 
+    def reference_ids(self) -> np.ndarray:
+        """motion_id of the reference's usable records."""
+        return self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int)
+
     @cached_property
     def comparison(self) -> pd.DataFrame:
+        """Every engine against the reference (:func:`~housner.scenarios.execution.tables.compare_engines`)."""
         return compare_engines(
             self.results,
             self.reference,
@@ -159,9 +180,26 @@ class Run:
             atol=0.0,
         )
 
+    def verdicts(self, floors: dict | None = None) -> dict[str, EngineVerdict]:
+        """Engine -> its verdict against the reference, for every engine but the series with the scenario's
+        [[effects]] (an effect is meant to move the distribution: it gets no verdict).
+
+        ``floors`` are the chaos floors to judge against (default :attr:`chaos_floors`; a caller that could not
+        compute them passes those it has).
+        """
+        floors = self.chaos_floors if floors is None else floors
+        effects = self.meta.effect_series
+        return {e: engine_verdict(self.comparison.loc[e], floors.get(e)) for e in self.others if e not in effects}
+
     @cached_property
     def motions(self) -> dict | None:
+        """The arrays of motions.npz (None when absent)."""
         return read_motions(self.path)
+
+    def reference_motions(self) -> list[GroundMotion]:
+        """The motions of the reference's usable records, in the order of the results table."""
+        motions = motion_list(self)
+        return [motions[i] for i in self.reference_ids() if i < len(motions)]
 
     @cached_property
     def record_gap(self) -> dict:
@@ -171,19 +209,12 @@ class Run:
             raise DataFileError(self.path / "run.json", why)
         if self.motions is None:
             raise DataFileError(self.path / "motions.npz", "missing: the ensemble is needed")
-        specimen = self.specimen_obj
-        amp = json_number(((self.meta.get("scenario") or {}).get("motions") or {}).get("amplitude", 1.0))
-        settings = {
-            k: v
-            for k, v in ((self.meta.get("engines") or {}).get(self.reference, {}).get("settings") or {}).items()
-            if v is not None
-        }
-        ids = self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int)
-        motions = motion_list(self)
+        amp = json_number((self.meta.scenario.get("motions") or {}).get("amplitude", 1.0))
+        settings = {k: v for k, v in self.meta.engine_settings(self.reference).items() if v is not None}
         return record_against_ensemble(
-            specimen,
+            self.specimen_obj,
             record,
-            [motions[i] for i in ids if i < len(motions)],
+            self.reference_motions(),
             self.S,
             amplitude=amp if math.isfinite(amp) else 1.0,
             engine=self.reference,
@@ -198,16 +229,11 @@ class Run:
         The analytic model with the specimen's own r (the paper's numerical column is Housner's model),
         whatever the run's reference: how much stronger, in effect, the paper's motions were.
         """
-        analysis = self.meta.get("analysis") or {}
-        targets = {float(k): json_number(v) for k, v in (analysis.get("paper_percentiles") or {}).items()}
+        targets = {float(k): json_number(v) for k, v in (self.meta.analysis.get("paper_percentiles") or {}).items()}
         targets = {q: v for q, v in targets.items() if not math.isnan(v)}
         if not targets or self.motions is None:
             return None
-        ids = self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int)
-        motions = motion_list(self)
-        return equivalent_amplitude(
-            self.specimen_obj, [motions[i] for i in ids if i < len(motions)], targets, seed=BOOT_SEED
-        )
+        return equivalent_amplitude(self.specimen_obj, self.reference_motions(), targets, seed=BOOT_SEED)
 
     @cached_property
     def chaos_floors(self) -> dict:
@@ -218,12 +244,12 @@ class Run:
         computed. Empty when the run stored no errors (the reference is not the analytic model,
         or an older run) or has no motions.
         """
-        stored = self.meta.get("engine_errors") or {}
+        stored = self.meta.engine_errors
         if not stored or self.motions is None or self.reference != "housner":
             return {}
         motions = motion_list(self)
-        r = ((self.meta.get("engines") or {}).get(self.reference, {}).get("settings") or {}).get("r")
-        ref_ok = set(self.ok.loc[self.ok["engine"] == self.reference, "motion_id"].to_numpy(int))
+        r = self.meta.engine_settings(self.reference).get("r")
+        ref_ok = set(self.reference_ids())
         out = {}
         for e in self.others:
             d = stored.get(e)
@@ -237,7 +263,7 @@ class Run:
         return out
 
     @cached_property
-    def specimen_obj(self):
+    def specimen_obj(self) -> Specimen:
         """The run's specimen as a :class:`housner.Specimen` (from run.json)."""
         sp = self.specimen
         return Specimen(
@@ -250,6 +276,7 @@ class Run:
         )
 
     def motion_dt(self, motion_id: int) -> float:
+        """The step [s] of motion ``motion_id`` (NaN when motions.npz does not hold it)."""
         m = self.motions
         if m is not None and "dt" in m and motion_id < len(m["dt"]):
             return float(m["dt"][motion_id])
@@ -261,7 +288,8 @@ class Run:
         return read_histories(self.path, ids, {i: self.motion_dt(i) for i in ids})
 
 
-def motion_list(run: Run):
+def motion_list(run: Run) -> list[GroundMotion]:
+    """The run's motions as stored in motions.npz (model scale), one :class:`GroundMotion` per motion_id."""
     m = run.motions
     out = []
     names = m.get("names", [])
@@ -271,11 +299,10 @@ def motion_list(run: Run):
     return out
 
 
-def source_record(run: Run):
-    """(the record the run's motions come from, at prototype scale, None) or (None, why not)."""
-    scen = run.meta.get("scenario") or {}
+def source_record(run: Run) -> tuple[GroundMotion | None, str]:
+    """(the record the run's motions come from, at prototype scale, "") or (None, why not, in plain text)."""
     facts = run.motions_meta.get("record") or {}
-    key = (scen.get("motions") or {}).get("record") or facts.get("name")
+    key = (run.meta.scenario.get("motions") or {}).get("record") or facts.get("name")
     if not key:
         return None, "run.json names no record"
     if facts.get("path"):  # a user's file: read it again if it has not changed since the run
@@ -283,100 +310,10 @@ def source_record(run: Run):
         try:
             same = file_sha256(path) == facts.get("sha256")
         except OSError:
-            return None, f"Record file {esc(path)} is no longer there"
+            return None, f"Record file {path} is no longer there"
         if not same:
-            return None, f"Record file {esc(path)} has changed since the run"
+            return None, f"Record file {path} has changed since the run"
         return read_record_file(path), ""
     if key not in RECORDS:
-        return None, f"Record {esc(key)!r} is not in the catalogue (housner.scenarios.motions.records.RECORDS)"
+        return None, f"Record {key!r} is not in the catalogue (housner.scenarios.motions.records.RECORDS)"
     return RECORDS[key](), ""
-
-
-
-
-#: Fewest records of each engine that a distribution verdict is drawn from: one record moves the KS distance
-#: by 1/n, so below 3 / KS_MAX = 20 records a single record's difference is a third of the tolerance
-#: or more, and one record gives KS 0 or 1 whatever the engines do. Fewer records: "inconclusive".
-MIN_RECORDS = math.ceil(3 / KS_MAX)
-
-
-@dataclass(frozen=True)
-class EngineVerdict:
-    """What a run says of one engine against the reference, in plain text (the page and the command line).
-
-    Attributes
-    ----------
-    status : str
-        The distribution verdict: ``"PASS"``, ``"FAIL"`` (against the default tolerances),
-        ``"inconclusive"`` (fewer than :data:`MIN_RECORDS` records, none failed) or ``"no data"``.
-    checks : tuple of (bool, str)
-        Each criterion: met, and its figures.
-    records : str or None
-        The record-by-record verdict against the chaos floor
-        (:func:`housner.scenarios.runs.chaos.floor_verdict`), None where the run has no floor.
-    below_floor : bool or None
-        Whether the record-by-record agreement lies below the chaos floor.
-    """
-
-    status: str
-    checks: tuple
-    records: str | None = None
-    below_floor: bool | None = None
-    #: The record-by-record figures in short: "28 % [20 %, 37 %] vs chaos floor 66 %" (None without a floor).
-    records_short: str | None = None
-
-    @property
-    def ok(self) -> bool | None:
-        """True for PASS, False for FAIL, None otherwise (as a page's badge takes it)."""
-        return {"PASS": True, "FAIL": False}.get(self.status)
-
-    def line(self) -> str:
-        """One line for the command line: the distribution verdict, its figures, the record-by-record one."""
-        figures = "; ".join(t for _, t in self.checks)
-        if self.records_short:
-            side = "below the floor" if self.below_floor else "at the floor"
-            return f"{self.status}: {figures}; record by record: {self.records_short}, {side}"
-        return f"{self.status}: {figures}"
-
-
-def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
-    """The verdict of one engine (its row of the run's comparison table) against the default tolerances.
-
-    ``floor`` is the engine's :class:`housner.scenarios.runs.chaos.ChaosFloor`, if the run has one.
-    """
-    ks, dp, nf = float(row["ks_distance"]), float(row["overturn_diff"]), int(row["n_failed"])
-    if math.isnan(ks) or math.isnan(dp):
-        return EngineVerdict("no data", ((False, "no usable records to compare"),))
-    checks = (
-        (ks <= KS_MAX, f"KS {ks:.3f} {'<=' if ks <= KS_MAX else '>'} {KS_MAX}"),
-        (
-            abs(dp) <= OVERTURN_TOL,
-            f"|dP[overturn]| {abs(dp):.3f} {'<=' if abs(dp) <= OVERTURN_TOL else '>'} {OVERTURN_TOL}",
-        ),
-        (nf == 0, f"{nf} failed record{'s' if nf != 1 else ''}"),
-    )
-    n = int(row["n_ok"])
-    if n < MIN_RECORDS and nf == 0:  # a failed record fails at any size; the two statistics need records
-        status = "inconclusive"
-        checks = ((False, f"only {n} record{'s' if n != 1 else ''} (a distribution verdict needs {MIN_RECORDS}: one "
-                   f"record moves the KS distance by 1/n = {1 / max(n, 1):.2f})"), *checks)  # fmt: skip
-    else:
-        status = "PASS" if all(c for c, _ in checks) else "FAIL"
-    paired = float(row.get("n_paired", 0) or 0)
-    if floor is None or not paired > 0:  # (NaN: no paired records)
-        return EngineVerdict(status, checks)
-    n_pair = int(paired)
-    k = int(round(float(row["agreement_share"]) * n_pair))
-    lo, hi, below = floor_check(k, n_pair, floor)
-    short = f"{k / n_pair:.0%} [{lo:.0%}, {hi:.0%}] vs chaos floor {floor.share:.0%}"
-    return EngineVerdict(status, checks, floor_verdict(k, n_pair, floor), below, short)
-
-
-def checks_html(v: EngineVerdict) -> list[str]:
-    """Each criterion of a verdict as the page writes it: its figures, marked met or not."""
-    return [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
-
-
-def _html_figures(text: str) -> str:
-    """A criterion's plain text as the page writes it (entities for <=, > and Delta)."""
-    return esc(text).replace("&lt;=", "&le;").replace("dP[", "&Delta;P[")
