@@ -59,7 +59,7 @@ def _params(name: str, params: dict) -> str:
 
 def _candidate_params(c) -> str:
     """A candidate's parameters with units; a pair's are keyed ``"effect.param"``."""
-    names = c.effect.split(" + ")
+    names = c.effects
     if len(names) == 1:
         return _params(c.effect, c.params)
     return "; ".join(

@@ -21,7 +21,12 @@ from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.compare import Comparison
 from housner.scenarios.execution.rundir import jsonable
 
-__all__ = ["Candidate", "Diagnosis", "Step", "change_text", "fmt_pm", "params_text", "signed_words"]
+__all__ = ["Candidate", "Diagnosis", "Step", "change_text", "fmt_pm", "names_label", "params_text", "signed_words"]
+
+
+def names_label(names) -> str:
+    """Effects' registered names as one label, ``"a + b"`` (the form the results, the JSON and the text use)."""
+    return " + ".join(names)
 
 
 @dataclass(frozen=True)
@@ -30,8 +35,8 @@ class Candidate:
 
     Attributes
     ----------
-    effect : str
-        Registered name.
+    effects : tuple of str
+        Registered name(s): one effect, or two that are tried together (a pair).
     params : dict
         Fitted parameters (units of the effect's ParamSpec).
     base : tuple of str
@@ -58,7 +63,7 @@ class Candidate:
         Per fold: mean improvement on that fold's records [alpha] (None when not held out).
     """
 
-    effect: str
+    effects: tuple
     params: dict
     base: tuple
     round: int
@@ -73,6 +78,11 @@ class Candidate:
     reason: str
     heldout_errors: np.ndarray = field(repr=False, compare=False, default=None)
     fold_wins: np.ndarray = field(repr=False, compare=False, default=None)
+
+    @property
+    def effect(self) -> str:
+        """The candidate's name in the results and the text: its effect's, or a pair's ``"a + b"``."""
+        return names_label(self.effects)
 
     def to_dict(self) -> dict:
         return {
@@ -101,9 +111,9 @@ class Step:
     ----------
     effects : tuple of (str, dict)
         (name, fitted parameters) of each effect in the model, in the order added.
-    added : str or None
-        The effect this step added (None for the baseline); two effects that
-        only help together enter in one step, written ``"a + b"``.
+    added_effects : tuple of str
+        The registered name(s) of the effect(s) this step added (empty for the baseline); two
+        effects that only help together enter in one step.
     by_hand : bool
         Added with ``add`` rather than by the greedy search.
     train_error, heldout_error, heldout_se : float
@@ -118,7 +128,7 @@ class Step:
     """
 
     effects: tuple
-    added: str | None
+    added_effects: tuple
     by_hand: bool
     train_error: float
     heldout_error: float
@@ -134,9 +144,9 @@ class Step:
         return [n for n, _p in self.effects]
 
     @property
-    def added_names(self) -> tuple[str, ...]:
-        """The registered names of the effect(s) this step added."""
-        return tuple(self.added.split(" + ")) if self.added else ()
+    def added(self) -> str | None:
+        """What this step added, as the results and the text name it (``"a + b"`` for a pair); None: the baseline."""
+        return names_label(self.added_effects) if self.added_effects else None
 
     def label(self) -> str:
         return "Housner (baseline)" if not self.effects else " + ".join(self.names)
@@ -237,7 +247,7 @@ class Diagnosis:
         if chosen:
             ladder = []
             for st in chosen:
-                prm = "; ".join(params_text(n, dict(st.effects)[n]) for n in st.added_names)
+                prm = "; ".join(params_text(n, dict(st.effects)[n]) for n in st.added_effects)
                 how = " (by hand)" if st.by_hand else ""
                 ladder.append(
                     f"+ {st.added}{how} ({prm}): held-out error {fmt_pm(st.heldout_error, st.heldout_se)} alpha, "

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 
 from housner.scenarios.campaigns.crossval import CVModel, add_to_folds, refit_folds
 from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit
-from housner.scenarios.campaigns.results import Candidate, Step
+from housner.scenarios.campaigns.results import Candidate, Step, names_label
 from housner.scenarios.campaigns.scoring import SEARCH_RATE, NonFiniteHistory
 from housner.scenarios.campaigns.trial import (
     PRACTICAL,
@@ -26,7 +26,6 @@ from housner.scenarios.campaigns.trial import (
     Trial,
     TrialSetup,
     compatible,
-    effects_label,
     fit_records,
     fmt_params,
     held_text,
@@ -100,7 +99,7 @@ def start(setup: TrialSetup) -> SearchState:
     # the loss of these errors: not simulated again; no fitted parameter: out-of-fold errors are the plain errors
     plain = CurrentModel(CVModel([], [[] for _ in range(folds.count)]), plain_errors.copy(), every.weigh(plain_errors))
     held = plain.heldout_errors
-    baseline = Step(effects=(), added=None, by_hand=False, train_error=plain.train_loss,
+    baseline = Step(effects=(), added_effects=(), by_hand=False, train_error=plain.train_loss,
                     heldout_error=float(held.mean()), heldout_se=sem(held), improvement=math.nan,
                     improvement_se=math.nan, significant=False, heldout_errors=held)  # fmt: skip
     setup.progress(f"baseline: held-out error {baseline.heldout_error:.4f} +- {baseline.heldout_se:.4f} alpha "
@@ -144,7 +143,7 @@ def _add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchStat
     held = setup.scorers.out_of_fold(with_it)
     level = setup.level_for(1)
     judged = judge(state.current.heldout_errors, held, level, cv.noise_floor)
-    step = Step(effects=tuple(with_it.full), added=name, by_hand=True, train_error=train_loss,
+    step = Step(effects=tuple(with_it.full), added_effects=(name,), by_hand=True, train_error=train_loss,
                 heldout_error=float(held.mean()), heldout_se=sem(held), improvement=judged.improvement,
                 improvement_se=judged.improvement_se, significant=judged.significant, heldout_errors=held)  # fmt: skip
     setup.progress(f"+ {name} (by hand) {fmt_params(params)}: held-out error {held.mean():.4f}")
@@ -222,8 +221,8 @@ def accept(setup: TrialSetup, state: SearchState, trial: Trial, test_level: floa
     with_it = refit_folds(cv, CVModel(full, trial.model.folds), fit_train)
     held = setup.scorers.out_of_fold(with_it)
     judged = judge(state.current.heldout_errors, held, test_level, cv.noise_floor)
-    label = effects_label(trial.effects)
-    step = Step(effects=tuple(with_it.full), added=label, by_hand=False, train_error=train_loss,
+    label = names_label(trial.effects)
+    step = Step(effects=tuple(with_it.full), added_effects=tuple(trial.effects), by_hand=False, train_error=train_loss,
                 heldout_error=float(held.mean()), heldout_se=sem(held), improvement=judged.improvement,
                 improvement_se=judged.improvement_se, significant=True, heldout_errors=held)  # fmt: skip
     setup.progress(f"+ {label}: held-out error {held.mean():.4f} +- {sem(held):.4f} alpha")

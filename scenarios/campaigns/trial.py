@@ -37,7 +37,7 @@ from housner.scenarios.campaigns.crossval import (
 )
 from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit, param_dims
 from housner.scenarios.campaigns.fv_check import FreeVibrationCheck
-from housner.scenarios.campaigns.results import Candidate
+from housner.scenarios.campaigns.results import Candidate, names_label
 from housner.scenarios.campaigns.scoring import NonFiniteHistory, Scorer
 
 __all__ = [
@@ -48,7 +48,6 @@ __all__ = [
     "Trial",
     "TrialSetup",
     "compatible",
-    "effects_label",
     "fit_records",
     "fmt_params",
     "held_text",
@@ -239,11 +238,6 @@ def fmt_params(p: dict) -> str:
     return ", ".join(f"{k}={v:.4g}" for k, v in p.items())
 
 
-def effects_label(effects: Sequence[str]) -> str:
-    """The name a candidate of one effect, or of a pair, goes by in the results (``"a + b"``)."""
-    return " + ".join(effects)
-
-
 def held_text(c: Candidate, held_out: bool = True) -> str:
     """A candidate's held-out result in a line of progress (its reason when it was not held out)."""
     if not held_out:
@@ -262,7 +256,7 @@ def judged_candidate(setup: TrialSetup, current: CurrentModel, effects: tuple[st
                      reason: str = "") -> Candidate:  # fmt: skip
     """The candidate ``effects`` of round ``round_no``, judged on its out-of-fold errors ``heldout`` against
     the current model's (None: not held out, for ``reason``)."""
-    common = dict(effect=effects_label(effects), params=params, base=current.model.names, round=round_no,
+    common = dict(effects=tuple(effects), params=params, base=current.model.names, round=round_no,
                   train_error=train_error)  # fmt: skip
     if heldout is None:
         return Candidate(**common, heldout_error=math.nan, heldout_se=math.nan, improvement=math.nan,
@@ -489,7 +483,7 @@ def try_pairs(setup: TrialSetup, current: CurrentModel, trials: Sequence[Trial],
             out.append(_pair(setup, current, a, b, test_level))
         except NonFiniteHistory as e:
             pair, why = (a.effect, b.effect), rejected_text(e)
-            setup.progress(f"round {a.round}: {effects_label(pair):32s} {why} (pair)")
+            setup.progress(f"round {a.round}: {names_label(pair):32s} {why} (pair)")
             rejected = judged_candidate(setup, current, pair, {}, a.round, math.nan, test_level, reason=why)
             out.append(Trial(rejected, None, pair))
     return out
@@ -535,5 +529,5 @@ def _pair(setup: TrialSetup, current: CurrentModel, a: Candidate, b: Candidate, 
     heldout = setup.scorers.out_of_fold(with_both)
     cand = judged_candidate(setup, current, pair, params, a.round, train_error, test_level, heldout)
     cand = _beyond_kernel(setup, cand, fixed, both[n_before:], heldout, test_level)
-    setup.progress(f"round {a.round}: {effects_label(pair):32s} {fmt_params(params):40s} {held_text(cand)} (pair)")
+    setup.progress(f"round {a.round}: {names_label(pair):32s} {fmt_params(params):40s} {held_text(cand)} (pair)")
     return Trial(cand, with_both, pair)
