@@ -5,7 +5,9 @@ settings checked against their ranges, pickling by settings, the sample loop of 
 with its runaway and overturn checks, and the :class:`housner.Response` from the sampled theta. The
 kinematics of a release (:func:`release_state`), the ground motion as a gravity component
 (:func:`gravity_x`), and the impact law (:class:`ImpactLaw`) through which every planar adapter
-realises an energy ratio below its contact's own.
+realises an energy ratio below its contact's own. Every planar adapter realises the effect
+``asymmetric_pivots`` in its geometry: its pivots at x = B - e and -(B + e) of the centre of mass
+(:func:`pivot_x`, :func:`pivot_offset`), the release turned about the pivot on its side.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from housner.engines.base import Engine, SpecAttribute
 from housner.errors import EngineError, EngineUnavailable, unknown_choice
 from housner.impacts import impact_times, uplift_time
 from housner.response import Response
+from housner.rocking_params import RockingParams, pivot_impact_ratios
 
 __all__ = [
     "IMPACT_LAW_DELAY",
@@ -36,9 +39,12 @@ __all__ = [
     "PlanarEngine",
     "checked_settings",
     "com_state",
+    "contact_r",
     "gravity_x",
     "law_factor",
     "optional_package",
+    "pivot_offset",
+    "pivot_x",
     "release_state",
     "sampled_response",
     "start_states",
@@ -123,6 +129,23 @@ def checked_settings(
     return s
 
 
+#: The registered name of the effect that moves the pivots relative to the centre of mass
+#: (:class:`housner.effects.AsymmetricPivots`), which every planar adapter realises in its geometry.
+ASYMMETRIC = "asymmetric_pivots"
+
+
+def pivot_offset(effects: tuple) -> float:
+    """The offset e [m] of the centre of mass toward +x of the pivots' midpoint: that of an ``asymmetric_pivots``
+    effect among ``effects``, else 0 (the symmetric block)."""
+    return sum(float(e.e) for e in effects if getattr(e, "name", "") == ASYMMETRIC)
+
+
+def pivot_x(B: float, e: float = 0.0) -> tuple[float, float]:
+    """The pivots' x [m] in the body frame at the centre of mass: (B - e, -(B + e)) for half width B [m] and the
+    centre of mass e [m] toward +x of their midpoint; (B, -B) exactly at e = 0."""
+    return B - e, -(B + e)
+
+
 def com_state(H: float, pivot_x: float, theta: float, omega: float) -> tuple[float, float, float, float]:
     """Centre of mass (x, z) [m] and velocity (x', z') [m/s] of the block turned by ``theta`` about (pivot_x, 0).
 
@@ -134,19 +157,41 @@ def com_state(H: float, pivot_x: float, theta: float, omega: float) -> tuple[flo
     return pivot_x + rx * c + rz * s, -rx * s + rz * c, (-rx * s + rz * c) * omega, (-rx * c - rz * s) * omega
 
 
-def release_state(H: float, B: float, theta0: float, omega0: float) -> tuple[float, float, float, float]:
+def release_state(
+    H: float, B: float, theta0: float, omega0: float, e: float = 0.0
+) -> tuple[float, float, float, float]:
     """:func:`com_state` of a record's start: turned by ``theta0`` [rad] about the pivot on its side.
 
     The side is that of theta0, else of the initial rate ``omega0`` [rad/s]; a block at rest
-    (both zero) stands on both pivots.
+    (both zero) stands on both pivots. The pivots are at x = B - e and -(B + e) [m] of the centre of
+    mass (:func:`pivot_x`; e = 0: +-B).
     """
     side = math.copysign(1.0, theta0) if theta0 != 0.0 else (math.copysign(1.0, omega0) if omega0 != 0.0 else 0.0)
-    return com_state(H, side * B, theta0, omega0)
+    if side == 0.0:
+        return com_state(H, 0.0 * B, theta0, omega0)
+    return com_state(H, pivot_x(B, e)[0 if side > 0.0 else 1], theta0, omega0)
+
+
+def contact_r(specimen, e: float = 0.0) -> float:
+    """The r [-] a rigid plastic contact realises on its own: Housner's r of the specimen, or with the centre of
+    mass ``e`` [m] off-centre the product rho+- rho-+ of the two impacts' angular-velocity ratios (the geometric
+    mean of r_pos and r_neg that :class:`housner.effects.AsymmetricPivots` sets, each impact keeping the angular
+    momentum about its landing pivot)."""
+    if e == 0.0:
+        return specimen.r_housner
+    rho_pn, rho_np = pivot_impact_ratios(specimen.B - e, specimen.B + e, specimen.H, specimen.centroidal_inertia,
+                                         specimen.mass)  # fmt: skip
+    return rho_pn * rho_np
 
 
 def law_factor(setting: float, specimen, effects: tuple) -> float:
-    """The impact law's factor for a record: the ``impact_energy_factor`` setting times r / Housner's r
+    """The impact law's factor for a record: the ``impact_energy_factor`` setting times r / the contact's r
     of a ``restitution`` effect (the contacts reproduce Housner's r, so the law takes the rest).
+
+    With an ``asymmetric_pivots`` effect the contact's r is the geometric mean rho+- rho-+ of the two
+    impacts' (:func:`contact_r`): the analytic engine rescales both per-side ratios r_pos, r_neg by
+    r / that mean (:meth:`housner.rocking_params.RockingParams.with_r`), one factor for both sides, which
+    is what the law applies to each impact.
 
     Parameters
     ----------
@@ -155,12 +200,12 @@ def law_factor(setting: float, specimen, effects: tuple) -> float:
     specimen : Specimen
         Provides Housner's r.
     effects : tuple
-        The record's effects; a ``restitution`` one sets r [-].
+        The record's effects; a ``restitution`` one sets r [-], an ``asymmetric_pivots`` one the pivots.
     """
     f = float(setting)
     for e in effects:
         if getattr(e, "name", "") == "restitution":
-            f *= float(e.r) / specimen.r_housner
+            f *= float(e.r) / contact_r(specimen, pivot_offset(effects))
     return f
 
 
@@ -169,9 +214,11 @@ def law_refusal(label: str, setting: float, specimen, effects: tuple) -> str | N
     if law_factor(setting, specimen, effects) <= 1.0 + 1e-12:
         return None
     r = next(float(e.r) for e in effects if getattr(e, "name", "") == "restitution")
+    e = pivot_offset(effects)
+    whose = "Housner's r" if e == 0.0 else f"the asymmetric pivots' (e = {e:g} m) r = rho+- rho-+"
     return (
-        f"engine {label!r} cannot realise restitution r = {r:g}: its contact keeps Housner's r = "
-        f"{specimen.r_housner:.4f} of the energy at an impact (times impact_energy_factor = {float(setting):g}), "
+        f"engine {label!r} cannot realise restitution r = {r:g}: its contact keeps {whose} = "
+        f"{contact_r(specimen, e):.4f} of the energy at an impact (times impact_energy_factor = {float(setting):g}), "
         "and its impact law only takes energy away"
     )
 
@@ -292,16 +339,27 @@ class ImpactLaw:
         The engine step [s] at which :meth:`after_step` is called.
     theta0 : float
         The record's initial rotation [rad].
+    params : RockingParams, optional
+        alpha and p of each pivot (``alpha_pos``, ``p_pos`` for theta > 0, ``alpha_neg``, ``p_neg`` for
+        theta < 0) of a block whose pivots are not symmetric (``asymmetric_pivots``): the energy above
+        is then that per unit of the inertia about the pivot the block rocks on, with that pivot's alpha
+        and p, and the threshold of step 1 is IMPACT_LAW_TOL times the smaller alpha. None (default):
+        the specimen's alpha and p on both sides.
     """
 
-    __slots__ = ("factor", "tol", "_alpha", "_cos_a", "_p2", "_wait", "_side", "_peak", "_countdown")
+    __slots__ = ("factor", "tol", "_alpha", "_cos_a", "_p2", "_sides", "_wait", "_side", "_peak", "_countdown")
 
-    def __init__(self, factor: float, specimen, step: float, theta0: float = 0.0):
+    def __init__(self, factor: float, specimen, step: float, theta0: float = 0.0, params: RockingParams | None = None):
         self.factor = float(factor)
         self._alpha = specimen.alpha
         self._cos_a = math.cos(self._alpha)
         self._p2 = specimen.frequency_parameter**2
         self.tol = IMPACT_LAW_TOL * self._alpha
+        self._sides = None  # ((alpha, cos alpha, p^2) of the + pivot, of the - pivot), or None: symmetric
+        if params is not None:
+            self._sides = tuple((a, math.cos(a), p * p) for a, p in ((params.alpha_pos, params.p_pos),
+                                                                      (params.alpha_neg, params.p_neg)))  # fmt: skip
+            self.tol = IMPACT_LAW_TOL * min(params.alpha_pos, params.alpha_neg)
         self._wait = max(1, math.ceil(IMPACT_LAW_DELAY / step * (1.0 - 1e-9)))
         self._side = 0.0 if theta0 == 0.0 else math.copysign(1.0, theta0)
         self._peak = abs(theta0)
@@ -341,6 +399,10 @@ class ImpactLaw:
         k = 0.5 * omega * omega
         if k <= 0.0:
             return 1.0
+        if self._sides is not None:  # the pivot the block rocks on now, that of theta's side
+            alpha, cos_a, p2 = self._sides[0 if theta >= 0.0 else 1]
+            u = p2 * (math.cos(alpha - abs(theta)) - cos_a)
+            return math.sqrt(max(self.factor * (k + u) - u, 0.0) / k)
         u = self._p2 * (math.cos(self._alpha - abs(theta)) - self._cos_a)
         return math.sqrt(max(self.factor * (k + u) - u, 0.0) / k)
 
@@ -372,11 +434,12 @@ def optional_package(engine: str, package: str, module: str, install: str) -> An
         ) from None
 
 
-def start_states(specimen, motion) -> np.ndarray:
+def start_states(specimen, motion, e: float = 0.0) -> np.ndarray:
     """Room for the sampled rigid-body states (z, x, theta [m, m, rad], z', x', theta' [m/s, m/s, rad/s]) of a
-    record, one row per sample, the first that of its release (:func:`release_state`)."""
+    record, one row per sample, the first that of its release (:func:`release_state`, the centre of mass
+    ``e`` [m] toward +x of the pivots' midpoint)."""
     th0, om0 = motion.theta0, motion.theta_dot0
-    x0, z0, dx0, dz0 = release_state(specimen.H, specimen.B, th0, om0)
+    x0, z0, dx0, dz0 = release_state(specimen.H, specimen.B, th0, om0, e)
     states = np.empty((motion.n, 6))
     states[0] = (z0, x0, th0, dz0, dx0, om0)
     return states
@@ -390,7 +453,10 @@ class PlanarEngine(Engine):
     engine its :attr:`MODULE` (:meth:`require`); or its own ``__init__``. Its :attr:`LABEL` and
     :attr:`INSTALL` are its registry spec's (:class:`housner.engines.EngineSpec`). An
     instance pickles as its settings: models, contexts and clients are rebuilt in the receiving
-    process. The ``restitution`` effect is realised through the impact law (:class:`ImpactLaw`). A
+    process. The ``restitution`` effect is realised through the impact law (:class:`ImpactLaw`), the
+    ``asymmetric_pivots`` effect by the pivots' places: at x = B - e and -(B + e) of the centre of mass
+    (:func:`pivot_x`), the mass and the centroidal inertia unchanged, so the uplift thresholds
+    g tan(alpha+-), each pivot's p and each impact's ratio are the contact's own. A
     subclass that keeps the rigid-body state (z, x, theta, z', x', theta') implements
     :meth:`_stepper`; the others their own ``_simulate``.
 
@@ -424,8 +490,8 @@ class PlanarEngine(Engine):
     [True, True, True]
     """
 
-    #: The ``restitution`` effect, through the impact law.
-    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution"})
+    #: The ``restitution`` effect, through the impact law; ``asymmetric_pivots``, through the pivots' places.
+    effects_supported: ClassVar[frozenset[str]] = frozenset({"restitution", ASYMMETRIC})
     #: Every setting and its default.
     DEFAULTS: ClassVar[dict] = {}
     #: The engine as messages name it ("DART", "OpenSees", "Drake"), from its spec.
@@ -461,12 +527,31 @@ class PlanarEngine(Engine):
         self.__init__(**state["settings"])
 
     def effect_refusal(self, specimen, effects: tuple) -> str | None:
-        """A ``restitution`` effect above the contact's r (the impact law only takes energy away), else None."""
+        """An ``asymmetric_pivots`` offset out of its range for ``specimen`` (both pivots must stay on their side
+        of the centre of mass), or a ``restitution`` effect above the contact's r (the impact law only takes
+        energy away), else None."""
+        for e in effects:
+            if getattr(e, "name", "") == ASYMMETRIC:
+                try:
+                    e.check(specimen)
+                except ValueError as err:
+                    return f"engine {self.name!r}: {err}"
         return law_refusal(self.name, self._settings["impact_energy_factor"], specimen, effects)
 
     def impact_law(self, specimen, effects: tuple, step: float, theta0: float) -> ImpactLaw:
-        """The law of one record: the setting times a ``restitution`` effect's share, at engine step ``step`` [s]."""
-        return ImpactLaw(law_factor(self._settings["impact_energy_factor"], specimen, effects), specimen, step, theta0)
+        """The law of one record: the setting times a ``restitution`` effect's share, at engine step ``step`` [s];
+        with an ``asymmetric_pivots`` effect each pivot's alpha and p (:meth:`pivot_params`)."""
+        factor = law_factor(self._settings["impact_energy_factor"], specimen, effects)
+        return ImpactLaw(factor, specimen, step, theta0, self.pivot_params(specimen, effects))
+
+    @staticmethod
+    def pivot_params(specimen, effects: tuple) -> RockingParams | None:
+        """The rocking parameters (alpha and p per pivot) of the block with the record's ``asymmetric_pivots``
+        effect, as the analytic engine forms them; None without one (or at e = 0)."""
+        asym = [e for e in effects if getattr(e, "name", "") == ASYMMETRIC and float(e.e) != 0.0]
+        if not asym:
+            return None
+        return asym[0].modify_params(RockingParams.from_specimen(specimen), specimen)
 
     def _pivot_radius(self, specimen) -> float:
         """The ``pivot_radius`` setting [m] of an adapter with pivot spheres; ValueError above 1e-3 H."""
@@ -489,7 +574,7 @@ class PlanarEngine(Engine):
         """The record sample by sample (:meth:`_run_samples`) with the steps of :meth:`_stepper`, and its response."""
         wall0 = time.perf_counter()
         k, h = substeps(motion.dt, self._settings["timestep"])
-        states = start_states(specimen, motion)
+        states = start_states(specimen, motion, pivot_offset(effects))
         advance = self._stepper(specimen, motion, effects, states, k, h)
         last, overturned = self._run_samples(motion, states, advance)
         wall = time.perf_counter() - wall0

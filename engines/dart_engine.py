@@ -16,7 +16,9 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
 4. Pivots: the only collision shapes, two spheres of radius rho = 10 um at
    (+-B, -H + rho) in the body frame, touching the ground at (+-B, 0) when the
    block stands upright: one contact point per pivot, as in Housner's model.
-   Restitution 0 (Housner's plastic impact), Coulomb friction mu = 1.5.
+   Restitution 0 (Housner's plastic impact), Coulomb friction mu = 1.5. With the
+   effect ``asymmetric_pivots`` (centre of mass e toward +x of the pivots'
+   midpoint) the spheres sit at x = B - e and -(B + e), mass and I_c unchanged.
 5. Contact: DART's default rigid contact, a boxed LCP (Dantzig) solved every
    step; impacts are velocity-level impulses, so no contact stiffness or
    damping needs tuning. Collisions are found by DART's own detector
@@ -42,7 +44,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from housner.engines._planar import PIVOT_RANGES, PlanarEngine, gravity_x
+from housner.engines._planar import PIVOT_RANGES, PlanarEngine, gravity_x, pivot_offset, pivot_x
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
 from housner.units import G
@@ -113,8 +115,9 @@ class DartEngine(PlanarEngine):
         return out
 
     # ------------------------------------------------------------------
-    def build(self, specimen: Specimen, step: float):
-        """The DART world of ``specimen`` (steps 1-5 of the module docstring) and the block's skeleton."""
+    def build(self, specimen: Specimen, step: float, offset: float = 0.0):
+        """The DART world of ``specimen`` (steps 1-5 of the module docstring) and the block's skeleton; the
+        pivots at x = B - e and -(B + e) of the centre of mass for ``offset`` e [m] (``asymmetric_pivots``)."""
         dart = self.require()
         H, B, m = specimen.H, specimen.B, specimen.mass
         rho = self._pivot_radius(specimen)
@@ -134,13 +137,13 @@ class DartEngine(PlanarEngine):
         joint.setZXPlane()  # dofs: z, x, rotation about +y
         ic = specimen.centroidal_inertia
         body.setInertia(dart.dynamics.Inertia(m, [0.0, 0.0, 0.0], np.diag([ic, ic, ic])))
-        for side in (1.0, -1.0):
-            _collider(dart, body, dart.dynamics.SphereShape(rho), (side * B, 0.0, -H + rho), self._settings)
+        for x in pivot_x(B, offset):  # (B, -B) at offset 0
+            _collider(dart, body, dart.dynamics.SphereShape(rho), (x, 0.0, -H + rho), self._settings)
         world.addSkeleton(block)
         return world, block
 
     def _stepper(self, specimen: Specimen, motion: GroundMotion, effects: tuple, states, k: int, h: float):
-        world, block = self.build(specimen, h)
+        world, block = self.build(specimen, h, pivot_offset(effects))
         block.setPositions(states[0, :3].tolist())
         block.setVelocities(states[0, 3:].tolist())
         gx_rows = gravity_x(motion.acc, k)  # step 1 of the module docstring

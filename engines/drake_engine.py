@@ -22,7 +22,9 @@ reused for every record (numbered as in ``engines/models/drake.md``):
    rho = 10 um at (+-B, -H + rho) in the body frame, touching the ground at
    (+-B, 0) when the block stands: one contact point per pivot, as in
    Housner's model. Coulomb friction mu = 1.5 (Drake combines the pair's
-   coefficients as 2 mu1 mu2 / (mu1 + mu2), so both carry mu).
+   coefficients as 2 mu1 mu2 / (mu1 + mu2), so both carry mu). With the effect
+   ``asymmetric_pivots`` (centre of mass e toward +x of the pivots' midpoint)
+   the spheres sit at x = B - e and -(B + e), mass and I_c unchanged.
 5. Contact: point contact (``ContactModel.kPoint``) with the pair's
    stiffness k (``stiffness``, 2.5e9 N/m per pivot), solved by the discrete
    solver ``contact_approximation`` names:
@@ -76,7 +78,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from housner.engines._planar import PIVOT_RANGES, PlanarEngine, gravity_x
+from housner.engines._planar import PIVOT_RANGES, PlanarEngine, gravity_x, pivot_offset, pivot_x
 from housner.errors import EngineError
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
@@ -196,8 +198,9 @@ class DrakeEngine(PlanarEngine):
         return [dict(), dict(timestep=1e-4), sap]
 
     # ------------------------------------------------------------------
-    def build(self, specimen: Specimen, step: float):
-        """Drake's diagram of ``specimen`` (steps 1-5 of the module docstring) and the block's plant.
+    def build(self, specimen: Specimen, step: float, offset: float = 0.0):
+        """Drake's diagram of ``specimen`` (steps 1-5 of the module docstring) and the block's plant; the pivots
+        at x = B - e and -(B + e) of the centre of mass for ``offset`` e [m] (``asymmetric_pivots``).
 
         Returns
         -------
@@ -249,16 +252,17 @@ class DrakeEngine(PlanarEngine):
         ground = Box(100.0 * H, 100.0 * H, 1.0)
         register = plant.RegisterCollisionGeometry
         register(plant.world_body(), RigidTransform([0.0, 0.0, -0.5]), ground, "ground", material())
-        for side, label in ((1.0, "pivot+x"), (-1.0, "pivot-x")):
-            register(body, RigidTransform([side * B, 0.0, -H + rho]), Sphere(rho), label, material())
+        for x, label in zip(pivot_x(B, offset), ("pivot+x", "pivot-x"), strict=True):  # (B, -B) at offset 0
+            register(body, RigidTransform([x, 0.0, -H + rho]), Sphere(rho), label, material())
         plant.Finalize()
         return builder.Build(), plant
 
-    def _model_for(self, specimen: Specimen, step: float):
-        """The cached (plant, plant context, applied-force vector) of ``specimen`` at ``step``, built if new."""
-        key = (specimen.H, specimen.B, specimen.mass, specimen.centroidal_inertia, step)
+    def _model_for(self, specimen: Specimen, step: float, offset: float = 0.0):
+        """The cached (plant, plant context, applied-force vector) of ``specimen`` at ``step`` with the pivots'
+        ``offset`` [m], built if new."""
+        key = (specimen.H, specimen.B, specimen.mass, specimen.centroidal_inertia, step, offset)
         if self._model is None or self._model[0] != key:
-            diagram, plant = self.build(specimen, step)
+            diagram, plant = self.build(specimen, step, offset)
             root = diagram.CreateDefaultContext()
             ctx = plant.GetMyMutableContextFromRoot(root)
             fixed = plant.get_applied_generalized_force_input_port().FixValue(ctx, np.zeros(3))
@@ -267,7 +271,7 @@ class DrakeEngine(PlanarEngine):
         return self._model[1:4]
 
     def _stepper(self, specimen: Specimen, motion: GroundMotion, effects: tuple, states, k: int, h: float):
-        plant, ctx, force = self._model_for(specimen, h)
+        plant, ctx, force = self._model_for(specimen, h, pivot_offset(effects))
         plant.SetPositionsAndVelocities(ctx, states[0].tolist())
         force.SetFromVector(np.zeros(3))
         m = specimen.mass

@@ -23,19 +23,22 @@ import numpy as np
 
 from housner.free_rocking import energy_ratios, half_cycle_integral
 from housner.response import Response
+from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
 
 __all__ = [
     "decay_peaks",
     "first_impact_ratio",
     "first_peak",
+    "first_impact_velocity_ratio",
     "free_rocking_quarter_period",
     "half_cycle_peaks",
     "parabolic_peak",
+    "rocking_energy",
 ]
 
 
-def free_rocking_quarter_period(specimen: Specimen, theta0: float) -> float:
+def free_rocking_quarter_period(specimen: Specimen, theta0: float, params: RockingParams | None = None) -> float:
     """Time [s] from a release at rest at ``theta0`` [rad] to the first impact, exact for Housner's equation.
 
     With no ground motion, rocking on the +x pivot obeys
@@ -55,6 +58,9 @@ def free_rocking_quarter_period(specimen: Specimen, theta0: float) -> float:
         Provides p [1/s] and alpha [rad].
     theta0 : float
         Release angle [rad], 0 < |theta0| < alpha.
+    params : RockingParams, optional
+        alpha and p of each pivot (a block with ``asymmetric_pivots``): those of the pivot on
+        theta0's side are used. None (default): the specimen's.
 
     References
     ----------
@@ -62,6 +68,8 @@ def free_rocking_quarter_period(specimen: Specimen, theta0: float) -> float:
     """
     th0 = abs(float(theta0))
     alpha, p = specimen.alpha, specimen.p
+    if params is not None:
+        alpha, p = (params.alpha_pos, params.p_pos) if theta0 > 0.0 else (params.alpha_neg, params.p_neg)
     if not 0.0 < th0 < alpha:
         raise ValueError(f"`theta0` must satisfy 0 < |theta0| < alpha = {alpha:.6g} rad, got {theta0!r}")
     return float(half_cycle_integral(th0, alpha)) / p
@@ -213,3 +221,41 @@ def decay_peaks(specimen: Specimen, theta0: float, n_impacts: int, r: float | No
     e0 = math.cos(alpha - th0) - math.cos(alpha)
     k = np.arange(int(n_impacts) + 1)
     return alpha - np.arccos(np.cos(alpha) + r**k * e0)
+
+
+def rocking_energy(params: RockingParams, theta: float, theta_dot: float) -> float:
+    """Rocking energy per unit of the inertia about the pivot rocked on [1/s^2]:
+    theta'^2 / 2 + p_s^2 (cos(alpha_s - |theta|) - cos alpha_s), with alpha_s, p_s of the pivot of theta's
+    side s (``params``: per pivot, as ``asymmetric_pivots`` sets them). Constant in free rocking between
+    impacts; theta'^2 / 2 at theta = 0."""
+    alpha, p = (params.alpha_pos, params.p_pos) if theta >= 0.0 else (params.alpha_neg, params.p_neg)
+    return 0.5 * theta_dot * theta_dot + p * p * (math.cos(alpha - abs(theta)) - math.cos(alpha))
+
+
+def first_impact_velocity_ratio(response: Response, params: RockingParams, window: float = 0.01) -> float:
+    """|theta'| after / before the first impact of a free-rocking response [-], from its rocking energy.
+
+    The energy (:func:`rocking_energy`, per unit of the inertia about the pivot rocked on) at the
+    sample ``window`` [s] before the first impact and at the one ``window`` after it; in free rocking
+    each is theta'^2 / 2 at theta = 0 on its side, so the ratio's square root is that of the angular
+    velocities just before and just after the impact (sqrt(r_pos) or sqrt(r_neg) of
+    :class:`housner.rocking_params.RockingParams` for the analytic model). Unlike
+    :func:`first_impact_ratio` it needs no second peak, so it also measures a first impact after which
+    the block falls. ``window`` leaves a compliant contact time to finish the impact (MuJoCo's time
+    constant is 0.4 ms, the OpenSees springs' contact half-period about 1 ms).
+
+    Raises
+    ------
+    ValueError
+        The response has no impact, or not ``window`` of samples on either side of the first.
+    """
+    if response.impact_times.size == 0:
+        raise ValueError("`response` has no impact")
+    t, t1 = response.t, float(response.impact_times[0])
+    if not (t[0] <= t1 - window and t1 + window <= t[-1]):
+        raise ValueError(f"`response` needs {window:g} s of samples on either side of its first impact at {t1:g} s")
+    ib = int(np.searchsorted(t, t1 - window, side="right")) - 1
+    ia = int(np.searchsorted(t, t1 + window))
+    before = rocking_energy(params, float(response.theta[ib]), float(response.theta_dot[ib]))
+    after = rocking_energy(params, float(response.theta[ia]), float(response.theta_dot[ia]))
+    return math.sqrt(after / before)

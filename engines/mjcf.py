@@ -49,6 +49,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from housner.engines._planar import pivot_x
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -164,7 +165,9 @@ def block_inertia(specimen: Specimen) -> tuple[float, float, float]:
     return iyy, iyy, izz
 
 
-def initial_qpos(specimen: Specimen, theta0: float, pivot_radius: float = 0.0) -> tuple[float, float, float]:
+def initial_qpos(
+    specimen: Specimen, theta0: float, pivot_radius: float = 0.0, offset: float = 0.0
+) -> tuple[float, float, float]:
     """Joint positions (x [m], z [m], theta [rad]) of the block at rest, rotated by ``theta0`` about a pivot.
 
     The block is rotated about the +x pivot for ``theta0`` > 0 and about the -x
@@ -174,13 +177,16 @@ def initial_qpos(specimen: Specimen, theta0: float, pivot_radius: float = 0.0) -
     block turns about that centre, so its centre of mass is at
     (s B (1 - cos theta0) + (H - rho) sin theta0, rho + B |sin theta0| + (H - rho) cos theta0);
     the slides hold its offset from the upright position (0, H). rho = 0 is
-    rotation about the corner itself.
+    rotation about the corner itself. With the centre of mass ``offset`` e [m] toward +x of the
+    pivots' midpoint (``asymmetric_pivots``) s B is the pivot's x, B - e or -(B + e), and B its
+    distance |s B| from the centre of mass.
     """
     th = float(theta0)
     s = math.copysign(1.0, th) if th != 0.0 else 0.0
-    B, H, rho = specimen.B, specimen.H, float(pivot_radius)
-    x = s * B * (1.0 - math.cos(th)) + (H - rho) * math.sin(th)
-    z = rho + B * abs(math.sin(th)) + (H - rho) * math.cos(th) - H
+    H, rho = specimen.H, float(pivot_radius)
+    bx = 0.0 if s == 0.0 else pivot_x(specimen.B, offset)[0 if s > 0.0 else 1]  # s B at offset 0
+    x = bx * (1.0 - math.cos(th)) + (H - rho) * math.sin(th)
+    z = rho + abs(bx) * abs(math.sin(th)) + (H - rho) * math.cos(th) - H
     return x, z, th
 
 
@@ -200,6 +206,7 @@ def mjcf_from_specimen(
     strip_width: float = MJCF_DEFAULTS["strip_width"],
     strip_height: float = MJCF_DEFAULTS["strip_height"],
     pivot_radius: float = MJCF_DEFAULTS["pivot_radius"],
+    offset: float = 0.0,
 ) -> str:
     """The MJCF XML text of a planar rocking block, commented with each number's derivation.
 
@@ -229,6 +236,12 @@ def mjcf_from_specimen(
     pivot_radius : float
         Radius [m] of the contact spheres at the strips' outer bottom edges, the
         pivots; at most 1e-3 H.
+    offset : float
+        e [m]: the centre of mass e toward +x of the pivots' midpoint (the effect
+        ``asymmetric_pivots``), |e| < B: the pivots (and drawn strips) at x = B - e and
+        -(B + e) of the body frame (the centre of mass), the drawn block centred on their
+        midpoint; mass and inertia unchanged. 0 (default): the symmetric block, the same text
+        as without the keyword.
 
     Returns
     -------
@@ -257,7 +270,16 @@ def mjcf_from_specimen(
             pivot_radius=pivot_radius,
         ),
     )
-    return _head_xml(specimen) + _scene_xml(s, specimen.H) + _block_xml(specimen, s) + _TAIL
+    try:
+        e = float(offset)
+    except (TypeError, ValueError):
+        raise ValueError(f"`offset` must be a number [m], got {offset!r}") from None
+    if not abs(e) < specimen.B:
+        raise ValueError(
+            f"`offset` ({offset!r} m) must lie in (-B, B) = +-{specimen.B:g} m, so that the pivots stand on "
+            "either side of the centre of mass"
+        )
+    return _head_xml(specimen) + _scene_xml(s, specimen.H) + _block_xml(specimen, s, e) + _TAIL
 
 
 def _head_xml(specimen: Specimen) -> str:
@@ -310,15 +332,30 @@ def _scene_xml(s: dict, H: float) -> str:
 """
 
 
-def _block_xml(specimen: Specimen, s: dict) -> str:
-    """The block: frame, joints, inertia, drawn body and strips, and the two pivot spheres (steps 5-11)."""
+def _block_xml(specimen: Specimen, s: dict, e: float = 0.0) -> str:
+    """The block: frame, joints, inertia, drawn body and strips, and the two pivot spheres (steps 5-11);
+    the pivots at x = B - e and -(B + e) of the centre of mass (``e`` [m], 0: +-B)."""
     H, B, D, m = specimen.H, specimen.B, specimen.depth, specimen.mass
     ixx, iyy, izz = block_inertia(specimen)
     w, hs = s["strip_width"], s["strip_height"]
-    strip_x = B - w / 2.0
+    bp, bn = pivot_x(B, e)
+    strip_x, strip_x_neg = bp - w / 2.0, bn + w / 2.0  # -(B - w/2) at e = 0, the same float
     strip_z = -H + hs / 2.0
     rho = s["pivot_radius"]
     pivot_z = -H + rho
+    if e == 0.0:
+        body_pos = ""
+        strips = f"x = +-B = +-{_num(B)} m, so centres at x = +-(B - w/2) = +-{_num(strip_x)} m"
+        pivots = f"x = +-B = +-{_num(B)} m"
+        touch = "(+-B, 0)"
+    else:
+        body_pos = f' pos="{_vec((-e, 0, 0))}"'
+        strips = (
+            f"x = B - e = {_num(bp)} m and -(B + e) = {_num(bn)} m (centre of mass e = {_num(e)} m toward +x of\n"
+            f"           their midpoint), so centres at x = {_num(strip_x)} m and {_num(strip_x_neg)} m"
+        )
+        pivots = f"x = B - e = {_num(bp)} m and -(B + e) = {_num(bn)} m"
+        touch = "(B - e, 0) and (-(B + e), 0)"
     return f"""\
     <!-- (5) The body frame is the centre of mass, at height H = 2H / 2 = {_num(H)} m above the pivot line. -->
     <body name="block" pos="0 0 {_num(H)}">
@@ -334,24 +371,24 @@ def _block_xml(specimen: Specimen, s: dict) -> str:
            = {_num(izz)} kg m^2. Only Iyy enters the planar motion. -->
       <inertial pos="0 0 0" mass="{_num(m)}" diaginertia="{_vec((ixx, iyy, izz))}"/>
       <!-- (8) Visual block: half-sizes (B, depth/2, H) = ({_vec((B, D / 2, H))}) m; no contact, no mass. -->
-      <geom name="body" type="box" size="{_vec((B, D / 2, H))}" contype="0" conaffinity="0" mass="0"
+      <geom name="body" type="box" size="{_vec((B, D / 2, H))}"{body_pos} contype="0" conaffinity="0" mass="0"
             rgba=".75 .78 .82 .6"/>
       <!-- (9) Contact strips (drawn only: no contact, no mass), {_num(w)} m wide and {_num(hs)} m tall, full depth;
-           outer edges at x = +-B = +-{_num(B)} m, so centres at x = +-(B - w/2) = +-{_num(strip_x)} m and
+           outer edges at {strips} and
            z = -H + h/2 = {_num(strip_z)} m (bottom on the pivot line). -->
       <geom name="strip_pos" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((strip_x, 0, strip_z))}"
             contype="0" conaffinity="0" mass="0" rgba=".2 .3 .8 1"/>
-      <geom name="strip_neg" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((-strip_x, 0, strip_z))}"
+      <geom name="strip_neg" type="box" size="{_vec((w / 2, D / 2, hs / 2))}" pos="{_vec((strip_x_neg, 0, strip_z))}"
             contype="0" conaffinity="0" mass="0" rgba=".8 .3 .2 1"/>
       <!-- (10) Pivots, the only contact geoms: spheres of radius rho = {_num(rho)} m at the strips' outer bottom
-           edges, centres at x = +-B = +-{_num(B)} m, z = -H + rho = {_num(pivot_z)} m, so each touches the ground
-           at (+-B, 0) when upright: one contact point per pivot, as in Housner's model.
+           edges, centres at {pivots}, z = -H + rho = {_num(pivot_z)} m, so each touches the ground
+           at {touch} when upright: one contact point per pivot, as in Housner's model.
            (11) friction mu = {_num(s["friction"])}; solref = (timeconst [s], dampratio [-]);
            solimp = (dmin, dmax, width [m], midpoint, power): contact settings, the ground's too. -->
-      <geom name="pivot_pos" type="sphere" size="{_num(rho)}" pos="{_vec((B, 0, pivot_z))}"
+      <geom name="pivot_pos" type="sphere" size="{_num(rho)}" pos="{_vec((bp, 0, pivot_z))}"
             condim="3" friction="{_num(s["friction"])} 0 0" solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"
             mass="0" rgba=".1 .1 .1 1"/>
-      <geom name="pivot_neg" type="sphere" size="{_num(rho)}" pos="{_vec((-B, 0, pivot_z))}"
+      <geom name="pivot_neg" type="sphere" size="{_num(rho)}" pos="{_vec((bn, 0, pivot_z))}"
             condim="3" friction="{_num(s["friction"])} 0 0" solref="{_vec(s["solref"])}" solimp="{_vec(s["solimp"])}"
             mass="0" rgba=".1 .1 .1 1"/>
     </body>

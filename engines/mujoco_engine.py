@@ -83,6 +83,11 @@ Limitations
   couple, the same moment about the pivot as about the centre of mass
   (``tests/test_mujoco.py`` checks it against the analytic engine).
   ``restitution`` is realised by the impact law (``impact_energy_factor``).
+  ``asymmetric_pivots`` (the centre of mass e toward +x of the pivots' midpoint) by the
+  pivots' places, x = B - e and -(B + e) of the centre of mass (:mod:`housner.engines.mjcf`),
+  the mass and centroidal inertia unchanged: the uplift thresholds, each pivot's p and each
+  impact's ratio are the contact's. Refused together with ``rotational_damping`` (the hinge's
+  damping is one c I; the effect's moment takes the inertia about the pivot rocked on).
 * Term effects (:mod:`housner.effects.terms`) whose terms are all moment
   terms that vanish at rest are realised as a couple on the theta hinge;
   the others are refused by name (:mod:`housner.engines.mujoco_terms`).
@@ -106,7 +111,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from housner.engines._planar import IMPACT_LAW_RANGE, PlanarEngine, checked_settings
+from housner.engines._planar import ASYMMETRIC, IMPACT_LAW_RANGE, PlanarEngine, checked_settings, pivot_offset, pivot_x
 from housner.engines.mjcf import MJCF_DEFAULTS, initial_qpos, mjcf_from_specimen
 from housner.engines.mujoco_terms import (
     OWN_EFFECTS,
@@ -141,7 +146,7 @@ _LAW_CHUNK_S = 0.02
 
 
 def initial_qvel(
-    specimen: Specimen, theta0: float, theta_dot0: float, pivot_radius: float = 0.0
+    specimen: Specimen, theta0: float, theta_dot0: float, pivot_radius: float = 0.0, offset: float = 0.0
 ) -> tuple[float, float, float]:
     """Joint velocities (vx [m/s], vz [m/s], theta_dot [rad/s]) of a block rotating about its pivot.
 
@@ -151,17 +156,19 @@ def initial_qvel(
     instantaneous centre of rotation is the contact point (s B, 0) and the
     centre of mass moves as omega x r, with r the vector from that point to the
     centre of mass (placed by :func:`housner.engines.mjcf.initial_qpos`):
-    (vx, vz) = theta_dot0 (r_z, -r_x).
+    (vx, vz) = theta_dot0 (r_z, -r_x). With the centre of mass ``offset`` e [m] toward +x of the pivots'
+    midpoint the pivot's x, s B above, is B - e or -(B + e).
     """
     th, w = float(theta0), float(theta_dot0)
     if w == 0.0:
         return 0.0, 0.0, 0.0
     s = math.copysign(1.0, th) if th != 0.0 else math.copysign(1.0, w)
-    B, H, rho = specimen.B, specimen.H, float(pivot_radius)
+    H, rho = specimen.H, float(pivot_radius)
+    bx = pivot_x(specimen.B, offset)[0 if s > 0.0 else 1]  # s B at offset 0
     # contact point -> centre of mass: sphere centre (s B, rho) -> centre of mass, upright (-s B, H - rho),
     # rotated by th about y: (x cos + z sin, -x sin + z cos); plus rho up from the contact to the sphere centre
-    rx = -s * B * math.cos(th) + (H - rho) * math.sin(th)
-    rz = rho + s * B * math.sin(th) + (H - rho) * math.cos(th)
+    rx = -bx * math.cos(th) + (H - rho) * math.sin(th)
+    rz = rho + bx * math.sin(th) + (H - rho) * math.cos(th)
     return w * rz, -w * rx, w
 
 
@@ -272,16 +279,23 @@ class MujocoEngine(PlanarEngine):
         """The MuJoCo package version."""
         return mujoco.__version__
 
-    def mjcf(self, specimen: Specimen) -> str:
-        """The MJCF text of ``specimen`` with this engine's settings."""
-        return mjcf_from_specimen(specimen, **{k: v for k, v in self._settings.items() if k in MJCF_DEFAULTS})
+    def mjcf(self, specimen: Specimen, offset: float = 0.0) -> str:
+        """The MJCF text of ``specimen`` with this engine's settings, the pivots at x = B - e and -(B + e) of the
+        centre of mass for ``offset`` e [m] (``asymmetric_pivots``; 0: the symmetric block)."""
+        settings = {k: v for k, v in self._settings.items() if k in MJCF_DEFAULTS}
+        if offset == 0.0:
+            return mjcf_from_specimen(specimen, **settings)
+        return mjcf_from_specimen(specimen, offset=offset, **settings)
 
-    def _model(self, specimen: Specimen):
-        entry = self._cache.get(specimen)
+    def _model(self, specimen: Specimen, offset: float = 0.0):
+        key = specimen if offset == 0.0 else (specimen, offset)
+        entry = self._cache.get(key)
         if entry is None:
-            model = mujoco.MjModel.from_xml_string(self.mjcf(specimen))
+            # a subclass's mjcf(specimen) of the symmetric block keeps its signature
+            text = self.mjcf(specimen) if offset == 0.0 else self.mjcf(specimen, offset)
+            model = mujoco.MjModel.from_xml_string(text)
             entry = (model, mujoco.MjData(model))
-            self._cache[specimen] = entry
+            self._cache[key] = entry
         return entry
 
     # ------------------------------------------------------------------
@@ -332,8 +346,16 @@ class MujocoEngine(PlanarEngine):
         """Why MuJoCo cannot realise these (supported) effects on ``specimen``, or None.
 
         An effect realised through terms whose terms here are not all moment terms that vanish at rest
-        (named), or a ``restitution`` above the contact's r.
+        (named), ``rotational_damping`` together with ``asymmetric_pivots`` (the hinge's damping is one
+        c I, the effect's moment -c I+- theta' is per pivot), or a ``restitution`` above the contact's r.
         """
+        names = {e.name for e in effects}
+        if ASYMMETRIC in names and "rotational_damping" in names and pivot_offset(effects) != 0.0:
+            return (
+                f"engine {self.name!r} cannot realise 'rotational_damping' together with 'asymmetric_pivots': its "
+                "hinge damping is one c I, while the moment -c I theta' of the effect takes the inertia about the "
+                "pivot rocked on, which differs between the two pivots"
+            )
         if any(e.name not in OWN_EFFECTS for e in effects):
             for e, terms in terms_of(specimen, effects)[1]:
                 why = term_refusal(self.name, e, terms)
@@ -342,7 +364,8 @@ class MujocoEngine(PlanarEngine):
         return super().effect_refusal(specimen, effects)
 
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
-        model, data = self._model(specimen)
+        e = pivot_offset(effects)
+        model, data = self._model(specimen, e)
         # every call sets the hinge's damping (the model is cached per specimen): c I0 [N m s], 0 without the effect
         model.dof_damping[THETA_DOF] = sum(e.c for e in effects if e.name == "rotational_damping") * specimen.inertia
         n_sub = max(1, math.ceil(motion.dt / self._settings["timestep"] * (1.0 - 1e-12)))
@@ -354,7 +377,7 @@ class MujocoEngine(PlanarEngine):
         t_mid = (np.arange(nstep) + 0.5) * h
         ctrl = (-specimen.mass * np.interp(t_mid, motion.t, motion.acc)).reshape(-1, 1)
 
-        state = self._release(model, data, specimen, motion)
+        state = self._release(model, data, specimen, motion, e)
         i_q = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_TIME)
         i_v = i_q + model.nq
 
@@ -372,7 +395,7 @@ class MujocoEngine(PlanarEngine):
         if law.active:
             chunk = min(chunk, max(n_sub, round(_LAW_CHUNK_S / h)))
         # the effects' moment terms as a couple on the hinge, evaluated before each step (None: the rollout alone)
-        moment = moment_couple(specimen, motion, effects, h, nstep)
+        moment = moment_couple(specimen, motion, effects, h, nstep, e)
         while done < nstep:
             k1 = min(nstep, done + chunk)
             if moment is None:
@@ -401,18 +424,19 @@ class MujocoEngine(PlanarEngine):
                 break
             done = k1
         k = done + 1
-        res = self._response(specimen, motion, x[:k], z[:k], th[:k], w[:k], h, n_sub, overturn_step)
+        res = self._response(specimen, motion, x[:k], z[:k], th[:k], w[:k], h, n_sub, overturn_step, e)
         if moment is not None:
             res.info["terms"] = moment[1]  # as the analytic engine's Response.info lists them
         return res
 
-    def _release(self, model, data, specimen: Specimen, motion: GroundMotion) -> np.ndarray:
-        """Put ``data`` in the motion's initial state (its release: theta0 [rad], theta_dot0 [rad/s]) and
+    def _release(self, model, data, specimen: Specimen, motion: GroundMotion, offset: float = 0.0) -> np.ndarray:
+        """Put ``data`` in the motion's initial state (its release: theta0 [rad], theta_dot0 [rad/s], about the
+        pivot on its side with the centre of mass ``offset`` [m] toward +x of the pivots' midpoint) and
         return that state as MuJoCo's full physics state vector."""
         mujoco.mj_resetData(model, data)
         rho = self._settings["pivot_radius"]
-        data.qpos[:] = initial_qpos(specimen, motion.theta0, rho)
-        data.qvel[:] = initial_qvel(specimen, motion.theta0, motion.theta_dot0, rho)
+        data.qpos[:] = initial_qpos(specimen, motion.theta0, rho, offset)
+        data.qvel[:] = initial_qvel(specimen, motion.theta0, motion.theta_dot0, rho, offset)
         mujoco.mj_forward(model, data)
         spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
         state = np.empty(mujoco.mj_stateSize(model, spec))
@@ -440,8 +464,9 @@ class MujocoEngine(PlanarEngine):
                 f"(settings {self.settings()})"
             )
 
-    def _response(self, specimen, motion, x, z, th, w, h, n_sub, overturn_step) -> Response:
-        """Assemble the Response from per-step histories (index 0 = initial state, step i at t = i h)."""
+    def _response(self, specimen, motion, x, z, th, w, h, n_sub, overturn_step, offset: float = 0.0) -> Response:
+        """Assemble the Response from per-step histories (index 0 = initial state, step i at t = i h); the
+        pivots at x = B - e and -(B + e) of the centre of mass, e = ``offset`` [m]."""
         alpha = specimen.alpha
         n = motion.n
         if overturn_step is not None:
@@ -472,15 +497,17 @@ class MujocoEngine(PlanarEngine):
         impacts = impact_times(t_steps, th, eps)
         theta_max = math.pi / 2 if overturn_step is not None else float(np.max(np.abs(th)))
         B, H, rho = specimen.B, specimen.H, self._settings["pivot_radius"]
+        bp, bn = pivot_x(B, offset)  # (B, -B) at offset 0
         # height of the bottom of the heel pivot sphere (centre (-s B, -H + rho) in the body frame, s = sgn th):
-        # H + z + B |sin th| - (H - rho) cos th - rho
-        heel = H + z + B * np.abs(np.sin(th)) - (H - rho) * np.cos(th) - rho
+        # H + z + B |sin th| - (H - rho) cos th - rho; B is the heel's distance from the centre of mass
+        b_heel = B if offset == 0.0 else np.where(th >= 0.0, -bn, bp)
+        heel = H + z + b_heel * np.abs(np.sin(th)) - (H - rho) * np.cos(th) - rho
         uplift_time = _uplift_time(t_steps, th, heel, eps, released=motion.theta0 != 0.0 or motion.theta_dot0 != 0.0)
 
         # slip of the pivot the block stands on: its sphere's centre, at x + s B cos th - (H - rho) sin th, minus
         # where rolling without slip from (s B, rho) upright would put it, s B + rho th
-        s = np.where(th >= 0.0, 1.0, -1.0)
-        slip = np.abs(x + s * B * np.cos(th) - (H - rho) * np.sin(th) - s * B - rho * th)
+        sb = np.where(th >= 0.0, bp, bn)  # s B, the x of the pivot stood on
+        slip = np.abs(x + sb * np.cos(th) - (H - rho) * np.sin(th) - sb - rho * th)
         rocking = np.abs(th) <= alpha
         info = {
             "settings": self.settings(),

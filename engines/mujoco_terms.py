@@ -46,8 +46,9 @@ from housner.units import G
 #: Degree of freedom of the theta hinge (joints x, z, theta, one dof each).
 THETA_DOF = 2
 
-#: Effects with a route of their own (hinge damping, the impact law); the others are realised through their terms.
-OWN_EFFECTS = frozenset({"rotational_damping", "restitution"})
+#: Effects with a route of their own (hinge damping, the impact law, the pivots' places); the others are realised
+#: through their terms.
+OWN_EFFECTS = frozenset({"rotational_damping", "restitution", "asymmetric_pivots"})
 
 #: The hooks of an effect realised through its terms that must stay :class:`housner.effects.Effect`'s no-ops.
 _NO_OP_HOOKS = ("modify_params", "transform_input", "observe", "solver")
@@ -145,7 +146,9 @@ def terms_of(specimen: Specimen, effects: tuple) -> tuple[Any, list]:
     return prm, out
 
 
-def moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: float, nstep: int) -> tuple | None:
+def moment_couple(
+    specimen: Specimen, motion: GroundMotion, effects: tuple, h: float, nstep: int, offset: float = 0.0
+) -> tuple | None:
     """The couple of the effects' moment terms on the theta hinge, and the terms described; None without terms.
 
     Returns ``(couple, described)``: ``couple(i, theta, theta_dot) -> float`` is the couple [N m] over engine
@@ -155,7 +158,9 @@ def moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: f
     v = 0, alpha and p^2 of pivot s. I0 = ``specimen.inertia`` [kg m^2] is the model's inertia about a
     pivot (the rocking parameters of an effect MuJoCo realises are the specimen's, p^2 = m g R / I0), so the
     couple turns the block with the acceleration the terms give; a generalised force on theta is a pure
-    couple, the same moment about the pivot as about the centre of mass.
+    couple, the same moment about the pivot as about the centre of mass. With the centre of mass ``offset``
+    e [m] toward +x of the pivots' midpoint (``asymmetric_pivots``) I0 is the inertia about pivot s,
+    I_c + m (H^2 + b_s^2) with b+ = B - e, b- = B + e, and alpha, p of pivot s are those the effect sets.
     """
     if all(e.name in OWN_EFFECTS for e in effects):
         return None
@@ -164,18 +169,22 @@ def moment_couple(specimen: Specimen, motion: GroundMotion, effects: tuple, h: f
     if not terms:
         return None
     fns = tuple((t.fn, np.array(t.q, dtype=np.float64)) for t in terms)
-    i0 = specimen.inertia
-    pos = (prm.alpha_pos, prm.p_pos * prm.p_pos)
-    neg = (prm.alpha_neg, prm.p_neg * prm.p_neg)
+    if offset == 0.0:
+        i_pos = i_neg = specimen.inertia
+    else:
+        m, hh, ic = specimen.mass, specimen.H, specimen.centroidal_inertia
+        i_pos, i_neg = (ic + m * (hh * hh + b * b) for b in (specimen.B - offset, specimen.B + offset))
+    pos = (prm.alpha_pos, prm.p_pos * prm.p_pos, i_pos)
+    neg = (prm.alpha_neg, prm.p_neg * prm.p_neg, i_neg)
     t_start = np.arange(nstep) * h
     times = t_start.tolist()
     ug = (np.interp(t_start, motion.t, motion.acc) / G).tolist()  # ug''/g at the start of each step [-]
 
     def couple(i: int, theta: float, theta_dot: float) -> float:
         if theta > 0.0 or (theta == 0.0 and theta_dot >= 0.0):
-            s, (alpha, p2) = 1.0, pos
+            s, (alpha, p2, i0) = 1.0, pos
         else:
-            s, (alpha, p2) = -1.0, neg
+            s, (alpha, p2, i0) = -1.0, neg
         phi, w, t, a = s * theta, s * theta_dot, times[i], s * ug[i]
         acc = 0.0
         for fn, q in fns:

@@ -17,7 +17,10 @@ The model, built from a :class:`housner.Specimen` for every run (numbered as in
    (E A = 1e10 N, E I = 1e8 N m^2) with the ``Corotational`` transformation:
    rigid for all purposes (their deformation under the block's weight is
    below 1e-10 m) and exact for any rotation, unlike ``rigidLink``, whose
-   constraint is linearised in the rotation.
+   constraint is linearised in the rotation. With the effect
+   ``asymmetric_pivots`` (centre of mass e toward +x of the pivots' midpoint)
+   the corners, and the ground nodes under them, are at (B - e, 0) and
+   (-(B + e), 0); mass and I_c unchanged.
 3. Ground: two fixed nodes at (+-B, 0), one under each corner.
 4. Contact, per corner, two elements between the ground node and the
    corner node, in parallel:
@@ -85,6 +88,8 @@ from housner.engines._planar import (
     RUNAWAY_M,
     ImpactLaw,
     PlanarEngine,
+    pivot_offset,
+    pivot_x,
     release_state,
     substeps,
 )
@@ -242,24 +247,25 @@ class OpenSeesEngine(PlanarEngine):
         return [dict(contact_damping=b) for b in (4.5e-4, 5.0e-4, 6.0e-4, 7.0e-4, 1.0e-3, 2.0e-3)]
 
     # ------------------------------------------------------------------
-    def build(self, specimen: Specimen, motion: GroundMotion, step: float):
+    def build(self, specimen: Specimen, motion: GroundMotion, step: float, offset: float = 0.0):
         """The OpenSees model of ``specimen`` under ``motion`` (steps 1-5 of the module docstring), at rest.
 
-        Node tags: 1 centre of mass, 2 and 3 the corners at +B and -B, 4 and 5 the ground under them.
-        Returns the module.
+        Node tags: 1 centre of mass, 2 and 3 the corners at +B and -B (at B - e and -(B + e) for the
+        ``offset`` e [m] of ``asymmetric_pivots``), 4 and 5 the ground under them. Returns the module.
         """
         ops = _opensees()
         s = self._settings
         H, B, m = specimen.H, specimen.B, specimen.mass
+        bp, bn = pivot_x(B, offset)  # (B, -B) at offset 0
         k, beta = s["contact_stiffness"], s["contact_damping"]
         ops.wipe()
         ops.logFile(os.devnull, "-noEcho")  # OpenSees writes warnings to stderr: keep records quiet
         ops.model("basic", "-ndm", 2, "-ndf", 3)
         ops.node(1, 0.0, H)
-        ops.node(2, B, 0.0)
-        ops.node(3, -B, 0.0)
-        ops.node(4, B, 0.0)
-        ops.node(5, -B, 0.0)
+        ops.node(2, bp, 0.0)
+        ops.node(3, bn, 0.0)
+        ops.node(4, bp, 0.0)
+        ops.node(5, bn, 0.0)
         ops.fix(4, 1, 1, 1)
         ops.fix(5, 1, 1, 1)
         ops.mass(1, m, m, specimen.centroidal_inertia)
@@ -294,16 +300,25 @@ class OpenSeesEngine(PlanarEngine):
         ops.analysis("Transient")
         return ops
 
-    def _set_initial_state(self, ops, specimen: Specimen, motion: GroundMotion) -> None:
-        """Nodes at the release: turned by theta0 about the pivot on its side, sunk by the static compression."""
+    def _set_initial_state(self, ops, specimen: Specimen, motion: GroundMotion, offset: float = 0.0) -> None:
+        """Nodes at the release: turned by theta0 about the pivot on its side, sunk by the static compression.
+
+        With the pivots' ``offset`` e [m] (``asymmetric_pivots``) a block at rest on both carries
+        m g b-/(2B) on the + corner and m g b+/(2B) on the - one: each corner sinks by its own
+        load / (2 k_n), the block tilted rigidly between them.
+        """
         H, B, m, k = specimen.H, specimen.B, specimen.mass, self._settings["contact_stiffness"]
         th0, om0 = motion.theta0, motion.theta_dot0
-        x0, z0, dx0, dz0 = release_state(H, B, th0, om0)
+        x0, z0, dx0, dz0 = release_state(H, B, th0, om0, offset)
         on_one = th0 != 0.0 or om0 != 0.0
         sink = m * G / ((2.0 if on_one else 4.0) * k)  # weight on one pivot (two springs) or on both
+        if offset != 0.0 and not on_one:
+            self._set_asymmetric_rest(ops, specimen, offset)
+            return
         c, sn = math.cos(th0), math.sin(th0)
-        for node, side in ((1, 0.0), (2, 1.0), (3, -1.0)):
-            bx, bz = side * B, (-H if side else 0.0)  # body frame, from the centre of mass
+        bp, bn = pivot_x(B, offset)  # (B, -B) at offset 0
+        for node, bx in ((1, 0.0), (2, bp), (3, bn)):
+            bz = -H if node != 1 else 0.0  # body frame, from the centre of mass
             rx, rz = bx * c + bz * sn, -bx * sn + bz * c  # Rot(theta) of the suite
             ux, uz = x0 + rx - bx, z0 + rz - H - bz - sink
             ops.setNodeDisp(node, 1, ux, "-commit")
@@ -314,11 +329,28 @@ class OpenSeesEngine(PlanarEngine):
                 ops.setNodeVel(node, 2, dz0 - om0 * rx, "-commit")
                 ops.setNodeVel(node, 3, -om0, "-commit")
 
+    def _set_asymmetric_rest(self, ops, specimen: Specimen, offset: float) -> None:
+        """Nodes of a block at rest on both corners with the pivots' ``offset`` e [m]: the + corner sunk by
+        d+ = m g b- / (2B) / (2 k_n), the - one by d- = m g b+ / (2B) / (2 k_n), the block turned rigidly
+        about the + corner by theta = asin((d+ - d-) / (2B)) (theta > 0 lowers the + corner)."""
+        H, B, m, k = specimen.H, specimen.B, specimen.mass, self._settings["contact_stiffness"]
+        bp, bn = pivot_x(B, offset)
+        d_pos, d_neg = (m * G * b / (2.0 * B) / (2.0 * k) for b in (-bn, bp))
+        th = math.asin((d_pos - d_neg) / (2.0 * B))
+        c, sn = math.cos(th), math.sin(th)
+        for node, bx, bz in ((1, 0.0, 0.0), (2, bp, -H), (3, bn, -H)):
+            rx, rz = bx - bp, bz + H  # from the + corner, body frame
+            x, z = bp + rx * c + rz * sn, -d_pos - rx * sn + rz * c  # turned by th about the sunk + corner
+            ops.setNodeDisp(node, 1, x - bx, "-commit")
+            ops.setNodeDisp(node, 2, z - (bz + H), "-commit")
+            ops.setNodeDisp(node, 3, -th, "-commit")
+
     def _simulate(self, specimen: Specimen, motion: GroundMotion, effects: tuple) -> Response:
         wall0 = time.perf_counter()
         k, h = substeps(motion.dt, self._settings["timestep"])
-        ops = self.build(specimen, motion, h)
-        self._set_initial_state(ops, specimen, motion)
+        e = pivot_offset(effects)
+        ops = self.build(specimen, motion, h, e)
+        self._set_initial_state(ops, specimen, motion, e)
         n = motion.n
         theta = np.empty(n)
         theta_dot = np.empty(n)

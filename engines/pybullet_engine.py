@@ -2,7 +2,9 @@
 
 Model. The block is the URDF of :func:`housner.engines.urdf.urdf_from_specimen` (a
 massless x-slide, a massless z-slide and a hinge about +y through the centre of
-mass, two 2 mm contact strips whose outer edges are the pivots at x = +-B),
+mass, two 2 mm contact strips whose outer edges are the pivots at x = +-B; at
+x = B - e and -(B + e) with the effect ``asymmetric_pivots``, the centre of mass e
+toward +x of their midpoint, mass and centroidal inertia unchanged),
 written to a private temporary folder and loaded with ``loadURDF`` (the
 inertia from the file, not from the collision boxes). The ground is PyBullet's
 infinite plane z = 0, fixed in the world. The hinge angle is the suite's theta
@@ -81,6 +83,8 @@ from housner.engines._planar import (
     RUNAWAY_M,
     PlanarEngine,
     gravity_x,
+    pivot_offset,
+    pivot_x,
     release_state,
     substeps,
 )
@@ -314,8 +318,10 @@ class PybulletEngine(PlanarEngine):
             self._urdf = {}
         return self._client
 
-    def _urdf_path(self, specimen: Specimen) -> Path:
+    def _urdf_path(self, specimen: Specimen, offset: float = 0.0) -> Path:
         key = (specimen.height, specimen.width, specimen.depth, specimen.mass, specimen.inertia)
+        if offset != 0.0:
+            key += (offset,)
         path = self._urdf.get(key)
         if path is None:
             path = write_urdf(
@@ -323,6 +329,7 @@ class PybulletEngine(PlanarEngine):
                 self._tmp / f"block{len(self._urdf)}.urdf",
                 strip_width=self.strip_width,
                 bevel=self._settings["bevel"],
+                **({"offset": offset} if offset != 0.0 else {}),
             )
             self._urdf[key] = path
         return path
@@ -332,7 +339,7 @@ class PybulletEngine(PlanarEngine):
         """Width of each contact strip [m]."""
         return self._settings["strip_width"]
 
-    def build(self, specimen: Specimen, step: float) -> tuple[int, int]:
+    def build(self, specimen: Specimen, step: float, offset: float = 0.0) -> tuple[int, int]:
         """Reset the client's world to the specimen standing on the plane.
 
         Parameters
@@ -340,6 +347,9 @@ class PybulletEngine(PlanarEngine):
         specimen : Specimen
         step : float
             Engine step [s].
+        offset : float
+            e [m] of the effect ``asymmetric_pivots``: the strips' outer edges at x = B - e and
+            -(B + e) of the centre of mass (:func:`housner.engines.urdf.urdf_from_specimen`); 0: +-B.
 
         Returns
         -------
@@ -371,7 +381,7 @@ class PybulletEngine(PlanarEngine):
             0.0, pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=cid), physicsClientId=cid
         )
         body = pb.loadURDF(
-            str(self._urdf_path(specimen)),
+            str(self._urdf_path(specimen, offset)),
             useFixedBase=True,
             flags=pb.URDF_USE_INERTIA_FROM_FILE,
             physicsClientId=cid,
@@ -404,12 +414,13 @@ class PybulletEngine(PlanarEngine):
 
         wall0 = time.perf_counter()
         H, B = specimen.H, specimen.B
+        e = pivot_offset(effects)
         k, h = substeps(motion.dt, self._settings["timestep"])
-        cid, body = self.build(specimen, h)
+        cid, body = self.build(specimen, h, e)
 
         # Release state: rotated by theta0 about the pivot on its side, touching the ground.
         th0, om0 = motion.theta0, motion.theta_dot0
-        xc, zc, dxc, dzc = release_state(H, B, th0, om0)
+        xc, zc, dxc, dzc = release_state(H, B, th0, om0, e)
         pb.resetJointState(body, 0, xc, dxc, physicsClientId=cid)
         pb.resetJointState(body, 1, zc - H, dzc, physicsClientId=cid)
         pb.resetJointState(body, 2, th0, om0, physicsClientId=cid)
@@ -450,12 +461,13 @@ class PybulletEngine(PlanarEngine):
         upright = np.abs(states[: last + 1, 2]) < _SLIP_ANGLE
         x_com, th = states[: last + 1, 0][upright], states[: last + 1, 2][upright]
         sgn = np.sign(th)
-        slip = x_com + sgn * B * np.cos(th) - H * np.sin(th) - sgn * B
+        sb = sgn * B if e == 0.0 else np.where(th > 0.0, pivot_x(B, e)[0], np.where(th < 0.0, pivot_x(B, e)[1], 0.0))
+        slip = x_com + sb * np.cos(th) - H * np.sin(th) - sb
         return self._response(
             specimen, motion, states[:, 2].copy(), states[:, 5].copy(), last, overturned, h, k,
             time.perf_counter() - wall0,
             max_pivot_slip_m=float(np.max(np.abs(slip), initial=0.0)),
-            max_penetration_m=float(max(0.0, -np.min(_pivot_z(states[: last + 1], H, B)))),
+            max_penetration_m=float(max(0.0, -np.min(_pivot_z(states[: last + 1], H, B, e)))),
         )  # fmt: skip
 
 
@@ -567,8 +579,14 @@ def _close_client(cid: int, tmp: str) -> None:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _pivot_z(states: np.ndarray, H: float, B: float) -> np.ndarray:
-    """Height of the lower pivot edge [m] from the states (x, z - H, theta, ...); negative = penetration."""
+def _pivot_z(states: np.ndarray, H: float, B: float, e: float = 0.0) -> np.ndarray:
+    """Height of the lower pivot edge [m] from the states (x, z - H, theta, ...); negative = penetration.
+
+    The pivots are at x = B - e and -(B + e) of the centre of mass (``e`` [m], 0: +-B); the lower one is
+    that of theta's side.
+    """
     z = states[:, 1] + H
     th = states[:, 2]
+    if e != 0.0:
+        B = np.where(th >= 0.0, B - e, B + e)  # distance of the pivot of theta's side from the centre of mass
     return z - H * np.cos(th) - B * np.abs(np.sin(th))

@@ -122,8 +122,8 @@ def test_out_of_bounds_parameter_is_named(name, kwargs, param):
 
 def test_specimen_dependent_bounds_and_required_parameters():
     with pytest.raises(ValueError, match="`e`"):
-        make_effect("asymmetric_pivots", specimen=SPEC, e=0.6 * SPEC.B)
-    effect = make_effect("asymmetric_pivots", e=0.6 * SPEC.B)  # no specimen: checked when applied
+        make_effect("asymmetric_pivots", specimen=SPEC, e=1.0 * SPEC.B)
+    effect = make_effect("asymmetric_pivots", e=1.0 * SPEC.B)  # no specimen: checked when applied
     with pytest.raises(ValueError, match="`e`"):
         ENGINE.simulate(SPEC, GroundMotion.free_vibration(0.1, 0.1), [effect])
     with pytest.raises(ValueError, match="needs `r`"):

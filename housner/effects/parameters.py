@@ -248,8 +248,13 @@ class AsymmetricPivots(Effect):
     Parameters
     ----------
     e : float
-        Horizontal offset of the centre of mass toward +x [m], within
-        +-B/2 (B the half width); neutral 0.
+        Horizontal offset of the centre of mass toward +x [m]; neutral 0.
+        Any |e| < B (B the half width) is accepted, so that both pivots stay
+        on their side of the centre of mass (b+ and b- > 0: the block stands
+        upright); the parameter's bounds, +-B/2, are the range the diagnosis
+        searches (:func:`housner.scenarios.campaigns.fitting.param_dims`), not
+        a physical limit (a scanned rock's equivalent block may need more:
+        e / B = 0.70 for the ASU granite SP1).
 
     References
     ----------
@@ -262,6 +267,18 @@ class AsymmetricPivots(Effect):
     e: float = param(
         "m", lambda s: (-0.5 * s.B, 0.5 * s.B), neutral=0.0, default=0.0, doc="offset of the centre of mass toward +x"
     )
+
+    def check(self, specimen: Specimen) -> None:
+        """ValueError naming ``e`` unless |e| < B of ``specimen`` (b+ = B - e and b- = B + e both positive).
+
+        The bounds +-B/2 of the parameter are the diagnosis' search range only (see the class docstring).
+        """
+        B = specimen.B
+        if not abs(self.e) < B:
+            raise ValueError(
+                f"`e` of effect {self.name!r} must lie in (-{B:g}, {B:g}) m for specimen {specimen.name!r} "
+                f"(|e| < B: both pivots on their side of the centre of mass), got {self.e!r}"
+            )
 
     def modify_params(self, params, specimen):
         if self.e == 0.0:
