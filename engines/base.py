@@ -185,6 +185,16 @@ ENGINES = EngineRegistry(
             install="pip install -e '.[drake]'  (or: pip install drake)",
             label="Drake",
         ),
+        # The 3D scan-mesh engines (a rock's mesh as a free rigid body), after the planar six whose order tests pin.
+        EngineSpec(
+            "mujoco-3d", "housner.engines.mujoco_mesh_engine:MujocoMeshEngine", distribution="mujoco", label="MuJoCo 3D"
+        ),
+        EngineSpec(
+            "pybullet-3d",
+            "housner.engines.pybullet_mesh_engine:PybulletMeshEngine",
+            distribution="pybullet",
+            label="PyBullet 3D",
+        ),
     )
 )
 
