@@ -1,5 +1,6 @@
 """``housner run SCENARIO``: run a scenario on its engines, write the run directory and its report (its parser
-and its run)."""
+and its run); ``housner run CAMPAIGN --engines ...``: the same on a measured campaign's records and specimen, each
+engine's predicted outcomes scored against the measured ones."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from housner.cli.args import (
     EXIT_FAILURE,
     EXIT_OK,
     EXIT_VERDICT,
+    UsageError,
     check_ensemble_option,
     engines_arg,
     nonneg_int,
@@ -25,11 +27,12 @@ from housner.scenarios.execution.cluster import connect_scheduler
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES
+from housner.scenarios.runs.campaign_run import is_campaign, run_campaign
 from housner.scenarios.runs.run import run_scenario
 from housner.scenarios.runs.view import Run
 from housner.scenarios.studies.study import STUDY_FILES, run_study
 
-SUMMARY = "run a scenario on its engines and write results and an HTML report"
+SUMMARY = "run a scenario (or a measured campaign) on its engines and write results and an HTML report"
 
 
 def add_parser(sub, names: dict) -> argparse.ArgumentParser:
@@ -46,7 +49,8 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
             ctrl_c="; finished records stay in the cache, re-run to resume",
         ),
     )
-    r.add_argument("scenario", help="catalogue name (see `housner scenarios`) or path to a TOML file")
+    r.add_argument("scenario", help="catalogue name (see `housner scenarios`), path to a TOML file, or a campaign "
+                   "folder holding campaign.toml (then --engines is required)")  # fmt: skip
     r.add_argument(
         "--engines", type=engines_arg, help=f"comma-separated engines (default: the scenario's): {names['engines']}"
     )
@@ -74,6 +78,8 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Run the scenario (or its study), print the summary and the verdicts. Returns the exit status."""
     # Everything is checked before the first simulation: scenario, engines, arguments, outputs, scheduler.
+    if is_campaign(args.scenario):
+        return _run_campaign(args)
     scenario = load_scenario(args.scenario, allow_outside=args.allow_outside)
     engines = args.engines or scenario.engines
     scenario.check_engines(engines)
@@ -90,6 +96,12 @@ def run(args: argparse.Namespace) -> int:
         return _run_study(args, scenario, engines, out, client, n)
     print(f"scenario {scenario.name}: {n} motions x engines {', '.join(engines)} -> {out}", file=sys.stderr)
     done = _call_runner(run_scenario, args, scenario, engines, out, client)
+    _print_engines(done)
+    return _finish(args, done, out)
+
+
+def _print_engines(done) -> None:
+    """One line per engine (or series): records ok, overturns, median theta_max/alpha, engine time."""
     res = done.results
     for name in dict.fromkeys(res.engine):  # the engines, then the series with the scenario's [[effects]]
         sub = res[res.engine == name]
@@ -104,12 +116,19 @@ def run(args: argparse.Namespace) -> int:
             f"median theta_max/alpha {median:.3f}, "
             f"{info['wall_s']:.1f} s engine time ({info['cached']} cached{rejected})"
         )
+
+
+def _finish(args: argparse.Namespace, done, out: Path) -> int:
+    """The failures, the report and the verdicts of a written run; the exit status."""
+    res = done.results
     if len(done.failures):
         print(f"{len(done.failures)} record(s) failed (kept out of the statistics):", file=sys.stderr)
         for r in done.failures.itertuples():
             print(f"  {r.engine} motion {r.motion_id} ({r.motion_name}): {r.error}", file=sys.stderr)
     print(f"results: {out / 'results.parquet'}")
     view = Run.load(out)  # once: the report and the verdicts read the same run (its chaos floors computed once)
+    if view.meta.is_campaign:
+        _print_outcomes(view)
     if not args.no_report:
         path = write_report(out, view=view)
         print(f"report:  {path}")
@@ -126,6 +145,52 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return EXIT_VERDICT
     return EXIT_OK
+
+
+def _run_campaign(args: argparse.Namespace) -> int:
+    """`housner run CAMPAIGN --engines ...`: the engines on the campaign's records, scored on its outcomes."""
+    if not args.engines:
+        raise UsageError(f"{args.scenario} is a campaign: name the engines to run on it, --engines NAME[,NAME...]")
+    for opt in ("n_motions", "seed"):
+        if getattr(args, opt) is not None:
+            raise UsageError(f"--{opt.replace('_', '-')} is for a scenario's ensemble; a campaign runs its own records")
+    folder = Path(args.scenario).resolve()
+    out = Path(args.out) if args.out else Path("runs") / (folder.parent if folder.is_file() else folder).name
+    check_output_dir(out, "--out" if args.out else "run directory (--out)", files=RUN_FILES)
+    client = connect_scheduler(args.scheduler) if args.scheduler else None
+    try:
+        options = RunOptions(jobs=args.jobs, scheduler=client, use_cache=not args.no_cache, progress=not args.quiet)
+        done = run_campaign(args.scenario, engines=args.engines, out=out, options=options,
+                            allow_outside=args.allow_outside, say=lambda s: print(s, file=sys.stderr))  # fmt: skip
+    finally:
+        if client is not None:
+            client.close(timeout=2)
+    _print_engines(done)
+    return _finish(args, done, out)
+
+
+def _print_outcomes(view: Run) -> None:
+    """Each engine's outcome scores against the campaign's measured outcomes (as the report's table gives them)."""
+    rows = view.outcome_scores
+    if not rows:
+        return
+    print(f"outcomes against the campaign's measured ones (95 % bootstrap intervals over the records; log loss "
+          f"of 0/1 predictions with P clipped to [{rows[0]['p_clip']:g}, {1 - rows[0]['p_clip']:g}]):")  # fmt: skip
+    for r in rows:
+        failed = f", {r['n_failed']} failed records left out" if r["n_failed"] else ""
+        if not r["n"]:
+            print(f"  {r['engine']:9s} no record with an outcome ran{failed}")
+            continue
+        ci = {k: r[f"{k}_ci"] or [math.nan, math.nan] for k in ("accuracy", "f1", "log_loss")}
+        print(
+            f"  {r['engine']:9s} accuracy {r['accuracy']:.3f} [{ci['accuracy'][0]:.3f}, {ci['accuracy'][1]:.3f}], "
+            f"F1 {r['f1']:.3f} [{ci['f1'][0]:.3f}, {ci['f1'][1]:.3f}], log loss {r['log_loss']:.3f} "
+            f"[{ci['log_loss'][0]:.3f}, {ci['log_loss'][1]:.3f}], {r['n_predicted']} predicted / "
+            f"{r['n_overturned']} measured overturns of {r['n']} records{failed}"
+        )
+    for p in view.published_outcomes:
+        print(f"  ({p['note']}: {p['model']}: accuracy {p['accuracy']:.3f}, F1 {p['f1']:.3f}, "
+              f"{p['n_predicted']} predicted / {p['n_overturned']} measured overturns)")  # fmt: skip
 
 
 def _print_verdicts(view: Run) -> list[str]:

@@ -33,6 +33,7 @@ from housner.reports.run.sections.distribution import distribution_section
 from housner.reports.run.sections.engines_explained import engines_explained, has_engine_measurements
 from housner.reports.run.sections.ensemble import ensemble_section
 from housner.reports.run.sections.headline import headline_section, specimen_section
+from housner.reports.run.sections.outcomes import outcomes_section
 from housner.reports.run.sections.run_info import failures_section, provenance_section
 from housner.scenarios.execution.rundir import REPORT_FILE
 from housner.scenarios.runs.view import Run
@@ -93,6 +94,8 @@ def write_report(run_dir: str | Path, out: str | Path | None = None, *, view: Ru
 # ----------------------------------------------------------------------------
 # sections
 def _build_sections(run: Run) -> list[Section]:
+    if run.meta.is_campaign:
+        return _campaign_sections(run)
     out = [
         Section("verdict", "How far is each engine from the reference?", headline_section(run)),
         Section("specimen", "Specimen and engines", specimen_section(run)),
@@ -114,6 +117,23 @@ def _build_sections(run: Run) -> list[Section]:
     return out
 
 
+def _campaign_sections(run: Run) -> list[Section]:
+    """A measured campaign's run: the outcomes first; the distribution against the analytic model where it makes
+    sense (the chaos floor, the record against its ensemble and the paper's Table 2 do not apply and are left out)."""
+    out = [Section("outcomes", "How well does each engine predict the measured outcomes?",
+                   guarded("The outcome scores", lambda: outcomes_section(run)))]  # fmt: skip
+    if run.others:  # one engine alone has no distribution to be judged against
+        out.append(Section("verdict", "How far is each engine from the analytic model?", headline_section(run)))
+    return out + [
+        Section("specimen", "Specimen and engines", specimen_section(run)),
+        Section("ensemble", "Ground motions", ensemble_section(run)),
+        Section("distribution", "Distribution of the peak rotation", distribution_section(run)),
+        Section("agreement", "Cross-engine agreement", agreement_section(run)),
+        Section("failures", "Failed records", failures_section(run)),
+        Section("provenance", "Provenance", provenance_section(run)),
+    ]  # fmt: skip
+
+
 # ----------------------------------------------------------------------------
 # the page
 
@@ -125,7 +145,7 @@ def _page(run: Run, sections: list[Section], seconds: float) -> str:
         sections,
         seconds,
         title="housner report",
-        heading="Scenario",
+        heading="Campaign" if run.meta.is_campaign else "Scenario",
         writer="housner.reports.run.write_report",
         specimen=run.specimen.get("name", ""),
         n_motions=n_motions,

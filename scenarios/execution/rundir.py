@@ -9,7 +9,9 @@ and :mod:`housner.reports.assertions.runs`):
   scenario's [[effects]]), ``motion_id``, ``motion_name``,
   ``theta_max_over_alpha`` (inf when overturned, NaN when failed),
   ``overturned``, ``n_impacts``, ``wall_s``, ``status``, ``error``,
-  ``cached``, ``effects`` ("" for none);
+  ``cached``, ``effects`` ("" for none); a campaign's run (``housner run CAMPAIGN``)
+  adds :data:`CAMPAIGN_COLUMNS`: ``record_id`` and ``observed_overturned`` (nullable
+  boolean, the campaign's measured outcome of the record; NA where it has none);
 - ``histories.parquet``: ``engine``, ``motion_id``, ``t`` [s], ``theta`` [rad];
 - ``motions.npz``: the ensemble's accelerations [m/s^2] and steps [s];
 - ``run.json``: the run's :class:`RunMeta` (scenario, specimen, motions' facts,
@@ -70,6 +72,8 @@ RESULT_COLUMNS = [
     "effects",
 ]
 
+#: The columns a campaign's run adds after :data:`RESULT_COLUMNS` (:mod:`housner.scenarios.runs.campaign_run`).
+CAMPAIGN_COLUMNS = ["record_id", "observed_overturned"]
 
 #: Files a run writes into its directory (``report.html`` is written by the CLI after it).
 RUN_FILES = ("results.parquet", "histories.parquet", "motions.npz", "run.json", "report.html")
@@ -140,6 +144,11 @@ class RunMeta:
         The spread of Table 2 over independent ensembles (``seed_spread``), when measured.
     effects : dict or None
         The scenario's [[effects]]: ``label`` and each effect's data, when it lists any.
+    campaign : dict or None
+        Set when the run is a measured campaign's (``housner run CAMPAIGN``,
+        :mod:`housner.scenarios.runs.campaign_run`): its ``name`` and ``path``, its records (``n_records``,
+        ``n_outcomes``, ``n_overturned``, ``skipped``), the planar engines' ``geometry`` effects (``label``,
+        ``effects``), the 3D engines' ``mesh`` settings and the ``scan``'s pivots; None for a scenario's run.
     complete : bool or None
         run.json's completion marker as read (None: not read from a file, or an earlier
         version's run.json without one); :func:`write_run` writes its own.
@@ -161,6 +170,7 @@ class RunMeta:
     provenance: dict = field(default_factory=dict)
     table2_spread: dict | None = None
     effects: dict | None = None
+    campaign: dict | None = None
     complete: bool | None = None
     content: dict | None = None
     extra: dict = field(default_factory=dict)
@@ -168,7 +178,8 @@ class RunMeta:
     #: Keys written whatever their value, in this order; then the optional ones, when set.
     _ALWAYS = ("scenario", "specimen", "motions", "n_motions", "engines", "analysis", "failures", "engine_errors",
                "wall_s", "provenance")  # fmt: skip
-    _OPTIONAL = ("table2_spread", "effects", "complete", "content")
+    _OPTIONAL = ("table2_spread", "effects", "campaign", "complete", "content")
+    _MARKERS = 2  # the last optional keys: the completion marker and the content key, written last
 
     @classmethod
     def from_json(cls, data: dict) -> RunMeta:
@@ -184,9 +195,10 @@ class RunMeta:
         """run.json's keys and values, in its order: the fields, then ``extra`` (n_motions and the optional ones only
         when set)."""
         out = {k: getattr(self, k) for k in self._ALWAYS if not (k == "n_motions" and self.n_motions is None)}
-        out.update({k: getattr(self, k) for k in self._OPTIONAL[:2] if getattr(self, k) is not None})
+        data, markers = self._OPTIONAL[: -self._MARKERS], self._OPTIONAL[-self._MARKERS :]
+        out.update({k: getattr(self, k) for k in data if getattr(self, k) is not None})
         out.update(self.extra)
-        out.update({k: getattr(self, k) for k in self._OPTIONAL[2:] if getattr(self, k) is not None})
+        out.update({k: getattr(self, k) for k in markers if getattr(self, k) is not None})
         return out
 
     @property
@@ -207,6 +219,11 @@ class RunMeta:
         """Series that are an engine with the scenario's [[effects]]: series -> the engine without them."""
         return {n: str(v["engine"]) for n, v in self.engines.items()
                 if isinstance(v, dict) and v.get("effects") and "engine" in v}  # fmt: skip
+
+    @property
+    def is_campaign(self) -> bool:
+        """Whether the run is a measured campaign's (``housner run CAMPAIGN``), not a scenario's."""
+        return isinstance(self.campaign, dict)
 
     @property
     def effects_label(self) -> str:

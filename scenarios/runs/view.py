@@ -27,6 +27,7 @@ from housner.motion import GroundMotion
 from housner.scenarios.execution.rundir import RunMeta, json_number, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
+from housner.scenarios.runs.campaign_run import outcome_table, published_rows
 from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict
 from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
 from housner.scenarios.runs.verdicts import EngineVerdict, engine_verdict
@@ -160,6 +161,26 @@ class Run:
         v = r["theta_max_over_alpha"].astype(np.float64)
         v = v.where(~r["overturned"].astype(bool), np.inf)
         return v.where(r["status"].astype(str) == "ok", np.nan)
+
+    @property
+    def campaign(self) -> dict | None:
+        """run.json's ``campaign`` table when the run is a measured campaign's (``housner run CAMPAIGN``), else None."""
+        return self.meta.campaign if self.meta.is_campaign else None
+
+    @cached_property
+    def outcome_scores(self) -> list[dict]:
+        """Each engine's predicted outcomes against the campaign's measured ones
+        (:func:`housner.scenarios.runs.campaign_run.outcome_table`, seed :data:`BOOT_SEED`); empty for a
+        scenario's run or a campaign without outcomes."""
+        if self.campaign is None:
+            return []
+        rows = outcome_table(self.results, self.engines, seed=BOOT_SEED)
+        return rows if any(r["n"] or r["n_failed"] for r in rows) else []
+
+    @property
+    def published_outcomes(self) -> list[dict]:
+        """Published outcome scores of other models on this campaign (reported elsewhere, not recomputed)."""
+        return published_rows(self.campaign.get("name", "")) if self.campaign is not None else []
 
     def reference_ids(self) -> np.ndarray:
         """motion_id of the reference's usable records."""

@@ -29,6 +29,8 @@ def ensemble_section(run: Run) -> str:
         "records": "a suite of recorded ground motions, each run as recorded",
         "pulses": "analytical pulses on a grid",
         "free_vibration": "free rocking after a release from rest (no ground motion)",
+        "campaign": "a measured campaign's table motions, each run as recorded (free vibrations from their "
+        "measured release)",
     }.get(src, esc(src))
     facts = [["source", words]]
     if "model" in mm:

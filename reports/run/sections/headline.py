@@ -227,6 +227,12 @@ _SPECIMEN_ROWS = {
 def specimen_section(run: Run) -> str:
     spec = run.specimen
     parts = []
+    geometry = ((run.campaign or {}).get("geometry") or {}).get("label")
+    if geometry:
+        parts.append(html_note(
+            "The planar engines ran this symmetric block with <code>" + esc(geometry) + "</code>, the scan's two "
+            "pivots (see <a href='#outcomes'>What the campaign gave the engines</a>); &theta;<sub>max</sub>/&alpha; "
+            "in this report is taken with the &alpha; below, that of the mean pivot."))  # fmt: skip
     if spec:
         rows = []
         for key, value in spec.items():
