@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 
-from housner.cli import campaign, diagnose, explain, frontier, report, run, scenarios, specimen, tune
+from housner.cli import campaign, diagnose, explain, frontier, impact_map, report, run, scenarios, specimen, tune
 from housner.cli.args import Parser, VersionAction
 from housner.cli.command import EXIT_HELP
 from housner.effects import available_effects
@@ -47,6 +47,7 @@ def build_parser(full_help: bool = True) -> argparse.ArgumentParser:
     diagnose.add_parser(sub, names)
     explain.add_parser(sub, names)
     frontier.add_parser(sub, names)
+    impact_map.add_parser(sub, names)
     specimen.add_parser(sub)
     campaign.add_parser(sub)
     return p
