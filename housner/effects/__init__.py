@@ -82,6 +82,7 @@ from __future__ import annotations
 from housner.effects.composition import EffectPlan, apply_effects, simulate_with_effects
 from housner.effects.flexible import FlexibleFoundation, simulate_flexible
 from housner.effects.lookup import available_effects, effect_class, make_effect, make_effects
+from housner.effects.measured import MeasuredMaps  # noqa: F401 - registers the effect measured_maps
 from housner.effects.parameters import (
     AmplitudeDependentRestitution,
     AsymmetricPivots,

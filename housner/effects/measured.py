@@ -1,0 +1,270 @@
+"""An engine's measured impact and flight maps, composed into Housner's kernel (effect ``measured_maps``).
+
+An engine is characterised, record by record, by two maps measured on its free rocking:
+
+impact map
+    the ratio k(x) by which the engine's kinetic-energy ratio at an impact differs from the ratio r in
+    force in Housner's model (Housner's r_H unless another effect sets it), as a function of the
+    pre-impact speed x = theta'_before / (p alpha) [-];
+flight map
+    the rate c(x) [1/s] of the engine's loss of rocking energy between impacts, as a viscous moment
+    -c I0 theta', as a function of the half-cycle's energy-equivalent speed x [-].
+
+:class:`MeasuredMaps` puts both into the analytic kernel as terms (:mod:`housner.effects.terms`), so
+that "Housner + the engine's measured maps" runs on the records the engine ran, and what is left of
+the difference between the two is neither an impact loss nor a flight loss of the kind measured.
+
+Both maps are tables (x_i, y_i), x_i > 0 strictly increasing, interpolated linearly in log x and held
+constant beyond the ends (y_1 below x_1, y_n above x_n). In the kernel's reduced coordinates on the
+current pivot (phi = s theta >= 0, w = s theta', alpha and p of that pivot):
+
+* at an impact with speed w > 0 before it, the energy ratio becomes r' = clip(r k(w / (p alpha)), 0, 1),
+  r the ratio in force (so a constant table k is ``restitution`` with r = k r_H);
+* in flight the equation of motion gains phi'' += -c(x_E) w [rad/s^2], with
+  x_E = sqrt(w^2 + 2 p^2 (cos(alpha - phi) - cos alpha)) / (p alpha): the speed at which the half-cycle
+  reaches (or left) theta = 0 with its present energy. In reduced coordinates this is theta'' += -c theta'
+  on either pivot, so the rocking energy per unit I0, E = theta'^2/2 + p^2 (cos(alpha - |theta|) - cos alpha)
+  [1/s^2], changes at dE/dt = -c(x_E) theta'^2 on both sides: c > 0 removes energy, c < 0 adds it (an engine
+  that gains energy in flight), a constant c is ``rotational_damping``.
+
+The tables travel in the terms' parameters ``q = (n, x_1..x_N, y_1..y_N)``: n the table's length, N >= n
+its capacity (the next power of two, at least 8; the slots past n are 0 and never read), so that tables of
+different lengths up to N share one compiled kernel (a kernel is compiled per term structure, which counts
+the parameters). The flight law and the interpolation are inlined into the kernel (numba ``inline="always"``):
+called, they cost ~1.5x more per record.
+
+The effect is built from a measurement, not fitted: it is a probe of the registry (``probe = True``: never a
+candidate of a diagnosis search, not listed by ``available_effects``; the analytic engine realises it). Its
+one registry parameter, ``digest``, is a 52-bit fingerprint of the tables read off them (0 for the empty
+maps, the neutral effect), so that everything that keys on an effect's parameters (the results cache's
+``effect_data``, equality, hashing, labels) tells two tables apart; ``describe()`` also lists the tables.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from housner.effects.registry import STAGE_DISSIPATION, Effect, param, register_effect
+from housner.effects.terms import ImpactTerm, MomentTerm
+
+__all__ = ["MeasuredMaps", "interp_log", "measured_flight_moment", "measured_impact_law", "table_q"]
+
+#: Smallest capacity of a table in ``q`` (tables are padded to the next power of two, at least this).
+MIN_CAPACITY = 8
+
+
+# ----------------------------------------------------------------------
+# the kernel's laws
+@njit(cache=True, inline="always")
+def interp_log(x, q):
+    """The table of ``q = (n, x_1..x_N, y_1..y_N)`` at x: linear in log x, y_1 for x <= x_1, y_n for x >= x_n."""
+    n = int(q[0])
+    cap = (q.shape[0] - 1) // 2
+    if n == 1 or x <= q[1]:
+        return q[1 + cap]
+    if x >= q[n]:
+        return q[cap + n]
+    lo, hi = 0, n - 1  # x_lo <= x < x_hi (0-based)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if x >= q[1 + mid]:
+            lo = mid
+        else:
+            hi = mid
+    x0, x1 = q[1 + lo], q[1 + hi]
+    y0, y1 = q[1 + cap + lo], q[1 + cap + hi]
+    return y0 + (y1 - y0) * (math.log(x / x0) / math.log(x1 / x0))
+
+
+@njit(cache=True)
+def measured_impact_law(w, r, s, alpha, p2, q):
+    """Energy ratio [-] of an impact at speed w > 0 [rad/s]: clip(r k(w / (p alpha)), 0, 1), k the table ``q``."""
+    r_eff = r * interp_log(w / (math.sqrt(p2) * alpha), q)
+    if r_eff > 1.0:
+        r_eff = 1.0
+    if r_eff < 0.0:
+        r_eff = 0.0
+    return r_eff
+
+
+@njit(cache=True, inline="always")
+def measured_flight_moment(phi, w, t, a, v, s, alpha, p2, q):
+    """Flight loss per unit I0 [rad/s^2], -c(x_E) w, c [1/s] the table ``q`` at the energy-equivalent speed x_E.
+
+    x_E = sqrt(w^2 + 2 p^2 (cos(alpha - phi) - cos alpha)) / (p alpha) [-], phi = |theta| on the current pivot.
+    """
+    if q[0] == 1.0:  # a constant rate: no speed to compute
+        return -(q[(q.shape[0] + 1) // 2] * w)
+    e2 = w * w + 2.0 * p2 * (math.cos(alpha - phi) - math.cos(alpha))
+    if e2 < 0.0:
+        e2 = 0.0
+    return -(interp_log(math.sqrt(e2) / (math.sqrt(p2) * alpha), q) * w)
+
+
+def table_q(x: Sequence[float], y: Sequence[float]) -> tuple[float, ...]:
+    """The parameters ``q = (n, x_1..x_N, y_1..y_N)`` of a table of n points, padded with 0 to its capacity N."""
+    n = len(x)
+    cap = max(MIN_CAPACITY, 1 << (n - 1).bit_length())
+    pad = (0.0,) * (cap - n)
+    return (float(n), *map(float, x), *pad, *map(float, y), *pad)
+
+
+# ----------------------------------------------------------------------
+# the tables
+def _table(name_x: str, x, name_y: str, y, *, nonnegative: bool, allow_empty: bool) -> tuple[tuple, tuple]:
+    """Validated (x, y) as tuples of floats; ValueError naming the argument."""
+    arrays = []
+    for name, v in ((name_x, x), (name_y, y)):
+        try:
+            a = np.asarray(v, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"`{name}` must be a sequence of numbers, got {v!r}") from None
+        if a.ndim != 1:
+            raise ValueError(f"`{name}` must be one-dimensional, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"`{name}` must be finite, got {a.tolist()!r}")
+        arrays.append(a)
+    xa, ya = arrays
+    if xa.size != ya.size:
+        raise ValueError(f"`{name_x}` and `{name_y}` must have the same length, got {xa.size} and {ya.size}")
+    if xa.size == 0 and not allow_empty:
+        raise ValueError(f"`{name_x}` must hold at least one point")
+    if np.any(xa <= 0.0):
+        raise ValueError(f"`{name_x}` must be positive (speeds x = theta'/(p alpha) [-]), got {xa.tolist()!r}")
+    if np.any(np.diff(xa) <= 0.0):
+        raise ValueError(f"`{name_x}` must be strictly increasing, got {xa.tolist()!r}")
+    if nonnegative and np.any(ya < 0.0):
+        raise ValueError(f"`{name_y}` must be non-negative, got {ya.tolist()!r}")
+    return tuple(float(v) for v in xa), tuple(float(v) for v in ya)
+
+
+def _digest(*tables: tuple) -> float:
+    """A fingerprint of the tables in [1, 2^52): the first 52 bits of a SHA-256 of their lengths and values."""
+    h = hashlib.sha256()
+    for t in tables:
+        h.update(len(t).to_bytes(8, "little"))
+        h.update(np.asarray(t, dtype="<f8").tobytes())
+    return float(max(1, int(h.hexdigest()[:13], 16)))
+
+
+@register_effect
+@dataclass(frozen=True, init=False, repr=False)
+class MeasuredMaps(Effect):
+    """An engine's measured impact and flight maps in Housner's kernel (see the module docstring).
+
+    Parameters
+    ----------
+    impact_x : sequence of float
+        Pre-impact speeds x_i = theta'_before / (p alpha) [-], positive, strictly increasing (n >= 1).
+    impact_ratio : sequence of float
+        The factor k_i >= 0 [-] on the energy ratio in force at speed x_i: r' = clip(r k, 0, 1).
+    flight_x : sequence of float, optional
+        Energy-equivalent speeds x_j [-], positive, strictly increasing; empty (default): no flight term.
+    flight_c : sequence of float, optional
+        Flight loss rates c_j [1/s] at x_j: the moment -c I0 theta' (c > 0 a loss, c < 0 a gain).
+    digest : float, optional
+        The tables' fingerprint; read off them (give it only to check it). Without tables, 0: the neutral
+        effect, which adds nothing.
+
+    Notes
+    -----
+    Both tables are interpolated linearly in log x and held at their end values beyond their ends.
+    Realised by the analytic engine through its terms (an :class:`~housner.effects.terms.ImpactTerm`,
+    and a :class:`~housner.effects.terms.MomentTerm` zero at rest when a flight table is given).
+
+    Examples
+    --------
+    >>> maps = MeasuredMaps.from_tables([0.1, 0.3, 1.0], [1.02, 0.99, 0.97], flight_x=[0.1, 1.0], flight_c=[0.2, 0.1])
+    >>> resp = HousnerEngine().simulate(specimen, motion, [maps])  # doctest: +SKIP
+    """
+
+    name = "measured_maps"
+    stage = STAGE_DISSIPATION
+    probe = True  # built from a measurement: never a search candidate
+    digest: float = param(
+        "-", (0.0, 2.0**52), neutral=0.0, default=0.0, doc="fingerprint of the measured tables (read off them)"
+    )
+
+    def __init__(
+        self,
+        impact_x: Sequence[float] = (),
+        impact_ratio: Sequence[float] = (),
+        flight_x: Sequence[float] = (),
+        flight_c: Sequence[float] = (),
+        digest: float | None = None,
+    ) -> None:
+        empty = all(len(np.atleast_1d(v)) == 0 for v in (impact_x, impact_ratio, flight_x, flight_c))
+        if empty:
+            ix, ir, fx, fc = (), (), (), ()
+        else:
+            ix, ir = _table("impact_x", impact_x, "impact_ratio", impact_ratio, nonnegative=True, allow_empty=False)
+            fx, fc = _table("flight_x", flight_x, "flight_c", flight_c, nonnegative=False, allow_empty=True)
+        own = 0.0 if empty else _digest(ix, ir, fx, fc)
+        if digest is not None and digest != own:
+            raise ValueError(
+                f"`digest` of effect 'measured_maps' is read off its tables ({own!r}), got {digest!r}: "
+                "build the effect with MeasuredMaps.from_tables(impact_x, impact_ratio, flight_x, flight_c)"
+            )
+        for key, value in (("impact_x", ix), ("impact_ratio", ir), ("flight_x", fx), ("flight_c", fc)):
+            object.__setattr__(self, key, value)
+        object.__setattr__(self, "digest", own)
+        self.__post_init__()
+
+    @classmethod
+    def from_tables(
+        cls,
+        impact_x: Sequence[float],
+        impact_ratio: Sequence[float],
+        flight_x: Sequence[float] = (),
+        flight_c: Sequence[float] = (),
+    ) -> MeasuredMaps:
+        """The effect of an impact table (x_i, k_i) and an optional flight table (x_j, c_j [1/s])."""
+        if len(np.atleast_1d(impact_x)) == 0:
+            raise ValueError("`impact_x` must hold at least one point")
+        return cls(impact_x, impact_ratio, flight_x, flight_c)
+
+    @classmethod
+    def from_engine_maps(cls, maps) -> MeasuredMaps:
+        """The effect of an engine's measured maps: any object with ``impact_table()`` and ``flight_table()``
+        returning (x, y) arrays (``housner.scenarios.runs.impact_map.EngineMaps``); bins whose x or y is not
+        finite (no data) are left out."""
+        tables = []
+        for name in ("impact_table", "flight_table"):
+            if not callable(getattr(maps, name, None)):
+                raise ValueError(f"`maps` must have an {name}() method (an EngineMaps), got {type(maps).__name__}")
+            x, y = (np.asarray(v, dtype=np.float64).ravel() for v in getattr(maps, name)())
+            ok = np.isfinite(x) & np.isfinite(y) if x.shape == y.shape else slice(None)
+            tables += [x[ok], y[ok]]
+        return cls.from_tables(*tables)
+
+    def __repr__(self) -> str:
+        return (
+            f"MeasuredMaps(impact: {len(self.impact_x)} points, flight: {len(self.flight_x)} points, "
+            f"digest={self.digest:.0f})"
+        )
+
+    def describe(self) -> dict:
+        """Plain data: the name, the fingerprint and the tables."""
+        return {
+            "name": self.name,
+            "digest": self.digest,
+            "impact_x": list(self.impact_x),
+            "impact_ratio": list(self.impact_ratio),
+            "flight_x": list(self.flight_x),
+            "flight_c": list(self.flight_c),
+        }
+
+    def terms(self, params, specimen) -> tuple:
+        """The impact term (and the flight term when a flight table is given); none for the neutral effect."""
+        out = []
+        if self.impact_x:
+            out.append(ImpactTerm(measured_impact_law, table_q(self.impact_x, self.impact_ratio)))
+        if self.flight_x:
+            out.append(MomentTerm(measured_flight_moment, table_q(self.flight_x, self.flight_c), at_rest=False))
+        return tuple(out)
