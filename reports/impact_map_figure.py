@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from housner.reports.figures import engine_colors
 from housner.scenarios.runs.impact_map import EngineMaps
@@ -66,10 +67,12 @@ def maps_figure(maps: Sequence[EngineMaps], reference: str = "housner") -> Figur
         ax_f.plot(xf, c, "o-", color=col, ms=3.5, lw=1.2, label=f"{m.label} ({sum(m.flights['n'])} flights)")
     spec = maps[0].specimen
     ax_i.set_xscale("log")
+    _plain_log_ticks(ax_i)
     ax_i.set_xlabel("impact speed x = |w-| / (p alpha)  [-]")
     ax_i.set_ylabel("r / r_housner  [-]")
     ax_i.set_title(f"impact: energy kept over Housner's (r_housner = {maps[0].r_housner:.4f})", fontsize=10.5)
     ax_f.set_xscale("log")
+    _plain_log_ticks(ax_f)
     ax_f.set_yscale("symlog", linthresh=C_LINTHRESH)
     ax_f.set_xlabel("flight energy x = sqrt(2 E) / (p alpha)  [-]")
     ax_f.set_ylabel("c [1/s]  (dE/dt = -c w^2; > 0 a loss)")
@@ -80,6 +83,13 @@ def maps_figure(maps: Sequence[EngineMaps], reference: str = "housner") -> Figur
     fig.suptitle(f"Departure from Housner's model, free rocking of {spec.get('name', 'the specimen')}, "
                  f"sampled every {1e3 * maps[0].dt_s:g} ms, engines at their settings", fontsize=11)  # fmt: skip
     return fig
+
+
+def _plain_log_ticks(ax) -> None:
+    """Label a log x axis with plain numbers at 1-2-5 steps (matplotlib's minor labels overlap on a short span)."""
+    ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
 
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = _DPI) -> Path:

@@ -46,6 +46,15 @@ def test_the_analytic_engine_explains_itself(control):
     assert expl.n_records == 12 and "Nothing beyond the floor" in expl.remains
     d = expl.to_dict()
     assert json.loads(json.dumps(d))["effects"] == [] and set(d["floor_parts"]) == {"chaos", "model_form"}
+    # the analytic engine's measured maps are Housner's own (ratio 1 to 1e-6, the impact-map tests' tolerance),
+    # so Housner + its maps is the model itself: every record agrees, none parts
+    m = expl.maps
+    assert m["agreement"] == 1.0 and m["reaches_floor"] and m["departures"]["n"] == 0
+    ratios = np.asarray(m["maps"]["impacts"]["ratio_median"], float)
+    assert np.all(np.abs(ratios[np.isfinite(ratios)] - 1.0) < 1e-6)
+    # the maps' rounding (ratios 1 +- 1e-11) moves the peaks by ~1e-10: the two-sample KS distance, a step function
+    # of the ordering, then reads one record's step (1/12) where two equal samples read 0
+    assert expl.ks["with_maps"] <= 1.0 / expl.n_records + 1e-12 and "explained by what was measured" in m["remains"]
 
 
 def test_the_campaign_orders_and_flags_its_records(control):
@@ -68,17 +77,32 @@ def test_the_campaign_orders_and_flags_its_records(control):
 
 def test_cli_on_mujoco_writes_the_figures(tmp_path, capsys):
     out = tmp_path / "mujoco.json"
+    fig = tmp_path / "maps.png"
     rc = main(["explain", "mujoco", "--n-motions", "4", "--effects", "restitution,time_lag", "--json", str(out),
-               "--jobs", "1", "-q"])  # fmt: skip
+               "--figure", str(fig), "--jobs", "1", "-q"])  # fmt: skip
     assert rc == 0
     text = capsys.readouterr().out
     assert "agreement with mujoco" in text and "floor" in text and "remains:" in text
+    assert "measured impact and flight maps" in text and fig.read_bytes()[:4] == b"\x89PNG"
     d = json.loads(out.read_text())
     for key in ("agreement", "agreement_plain", "floor"):
         assert 0.0 <= d[key] <= 1.0, key
     assert all(0.0 <= v <= 1.0 for v in d["floor_parts"].values())
     assert isinstance(d["effects"], list) and isinstance(d["reaches_floor"], bool)
     assert d["diagnosis"]["status"] and d["remains"]
+    # Housner + MuJoCo's measured maps, compared record by record; where they disagree, the phase is named
+    m = d["maps"]
+    assert 0.0 <= m["agreement"] <= 1.0 and isinstance(m["reaches_floor"], bool) and m["remains"]
+    assert sum(m["departures"]["by_phase"].values()) == m["departures"]["n"] <= 4
+    assert m["maps"]["engine"] == "mujoco" and len(m["maps"]["impact_points"]["x"]) > 50
+
+
+def test_cli_figure_needs_the_maps_and_a_known_format(tmp_path, capsys):
+    for extra, words in ((["--no-maps", "--figure", str(tmp_path / "m.png")], "--no-maps"),
+                         (["--figure", str(tmp_path / "m.pdf")], "PNG or SVG")):  # fmt: skip
+        assert main(["explain", "mujoco", *extra]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and words in err
 
 
 def test_cli_refuses_an_unknown_engine_in_one_line(tmp_path, capsys):

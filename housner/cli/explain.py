@@ -8,7 +8,7 @@ import json
 import math
 from pathlib import Path
 
-from housner.cli.args import EXIT_OK, check_effects, float_within, names_arg, nonneg_int
+from housner.cli.args import EXIT_OK, UsageError, check_effects, float_within, names_arg, nonneg_int
 from housner.cli.command import plugin_option
 from housner.cli.engine_command import add_engine_command, add_engine_command_tail, engine_scenario, engine_work
 from housner.scenarios.execution.outputs import check_output_dir, check_output_file
@@ -34,6 +34,9 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
                    help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}")
     e.add_argument("--json", help="write the explanation to this JSON file")
     e.add_argument("--workdir", help="keep the engine's campaign in WORKDIR/ENGINE-SCENARIO (default: a temporary one)")
+    e.add_argument("--no-maps", action="store_true",
+                   help="skip measuring the engine's impact and flight maps and running Housner + those maps")
+    e.add_argument("--figure", help="write the figure of the engine's impact and flight maps to this file (PNG, SVG)")
     plugin_option(e)
     add_engine_command_tail(e)
     return e
@@ -51,9 +54,15 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.json, "--json")
     if args.workdir:
         check_output_dir(Path(args.workdir), "--workdir")
+    if args.figure:
+        if args.no_maps:
+            raise UsageError("--figure draws the maps, which --no-maps skips: give one of them")
+        if Path(args.figure).suffix.lower() not in (".png", ".svg"):
+            raise UsageError(f"--figure {args.figure}: the figure is written as PNG or SVG (.png, .svg)")
+        check_output_file(args.figure, "--figure")
     common = engine_work(args, scenario, "explain", "ground motions and free vibrations")
     expl = explain_engine(args.engine, scenario, sigma=args.sigma, seed=args.seed, effects=args.effects,
-                          workdir=args.workdir, **common)  # fmt: skip
+                          workdir=args.workdir, maps=not args.no_maps, **common)  # fmt: skip
     print(expl.summary())
     print(f"wall time {expl.wall_s['total']:.1f} s")
     if args.workdir:
@@ -61,4 +70,10 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps(expl.to_dict(), indent=2))
         print(f"json:   {args.json}")
+    if args.figure and expl.maps:
+        from housner.reports.impact_map_figure import maps_figure, save_figure
+        from housner.scenarios.runs.impact_map import EngineMaps
+
+        maps = EngineMaps.from_json(json.dumps(expl.maps["maps"]))
+        print(f"figure: {save_figure(maps_figure([maps]), args.figure)}")
     return EXIT_OK

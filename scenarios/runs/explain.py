@@ -37,7 +37,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from housner.effects import available_effects, make_effect
 from housner.errors import unknown_choice
@@ -49,7 +48,7 @@ from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.runs.chaos import RECORD_RTOL
+from housner.scenarios.runs.departure import record_agreement, record_ks, record_thetas
 from housner.scenarios.runs.engine_campaign import (
     AMPLITUDES,
     check_engine,
@@ -63,10 +62,9 @@ from housner.scenarios.runs.explain_floor import (
     extended_floor,
     model_form_floor,
 )
-from housner.stats import ks_2samp, per_record_agreement
+from housner.scenarios.runs.explain_maps import compare_with_maps
 
-__all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "Explanation", "explain_engine", "record_agreement",
-           "record_thetas"]  # fmt: skip
+__all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "Explanation", "explain_engine"]
 
 #: Noise added to the engine's theta before the diagnosis [rad]. The diagnosis takes a record as signal plus
 #: white noise of the level it estimates from the record (third differences,
@@ -111,8 +109,15 @@ class Explanation:
     n_records : int
         Ground motions on which both the engine and the analytic model ran.
     ks : dict
-        ``plain`` and ``with_effects``: the two-sample KS distance [-] of the engine's theta_max/alpha
-        distribution from the analytic model's, without and with ``effects`` (overturns as +inf).
+        ``plain``, ``with_effects`` and ``with_maps``: the two-sample KS distance [-] of the engine's
+        theta_max/alpha distribution from the analytic model's, plain, with ``effects`` and with the engine's
+        measured maps (overturns as +inf).
+    maps : dict
+        Housner + the engine's measured impact and flight maps (:mod:`housner.scenarios.runs.explain_maps`):
+        ``agreement`` [-], ``reaches_floor``, ``n_records``, ``overturned``, ``departures`` and
+        ``departures_plain`` (where the records that disagree part: phase of the motion, impacts before,
+        the records), ``remains`` (one sentence) and ``maps`` (the maps, :meth:`EngineMaps.to_dict`). Empty when
+        the step did not run.
     details : dict
         The two floors in full (per perturbation), overturn counts, settings and the campaign's path.
     wall_s : dict
@@ -131,6 +136,7 @@ class Explanation:
     remains: str
     n_records: int
     ks: dict = field(default_factory=dict)
+    maps: dict = field(default_factory=dict)
     details: dict = field(default_factory=dict)
     wall_s: dict = field(default_factory=dict)
 
@@ -156,30 +162,20 @@ class Explanation:
             f"held-out error {d['heldout_error']['before']:.4f} -> {d['heldout_error']['after']:.4f} alpha, "
             f"residual ratio {d['residual_ratio']:.2f}",
             f"remains: {self.remains}",
+            *self._maps_lines(),
         ])  # fmt: skip
 
+    def _maps_lines(self) -> list[str]:
+        m = self.maps
+        if not m:
+            return []
+        return [
+            f"with {self.engine}'s measured impact and flight maps: agreement {m['agreement']:.0%} "
+            f"(plain {self.agreement_plain:.0%}, floor {self.floor:.0%}), KS {self.ks.get('with_maps', math.nan):.3f}; "
+            f"reaches the floor: {'yes' if m['reaches_floor'] else 'no'}",
+            f"remains with the maps: {m['remains']}",
+        ]
 
-
-def record_thetas(results: pd.DataFrame, engine: str, offset: int = 0) -> pd.Series:
-    """theta_max/alpha per ground motion (+inf: overturned) of an engine's ok rows, indexed by motion."""
-    ok = results[(results["engine"] == engine) & (results["status"] == "ok") & (results["motion_id"] >= offset)]
-    v = np.where(ok["overturned"].to_numpy(bool), np.inf, ok["theta_max_over_alpha"].to_numpy(float))
-    return pd.Series(v, index=ok["motion_id"].to_numpy(int) - offset)
-
-
-def _ks(engine_theta: pd.Series, model_theta: pd.Series) -> float:
-    """KS distance [-] between the engine's and the model's theta_max/alpha on the records both ran."""
-    both = engine_theta.index.intersection(model_theta.index)
-    return ks_2samp(engine_theta[both].to_numpy(), model_theta[both].to_numpy()).distance if len(both) else math.nan
-
-
-def record_agreement(engine_theta: pd.Series, model_theta: pd.Series) -> tuple[float, int]:
-    """Per-record agreement share [-] of the model with the engine (the reference) on the records both ran."""
-    both = engine_theta.index.intersection(model_theta.index)
-    if not len(both):
-        return math.nan, 0
-    ag = per_record_agreement(model_theta[both].to_numpy(), engine_theta[both].to_numpy(), rtol=RECORD_RTOL, atol=0.0)
-    return ag.share, ag.n
 
 
 def _where(verdict) -> str:
@@ -220,6 +216,7 @@ def explain_engine(
     options: RunOptions | None = None,
     workdir: str | Path | None = None,
     progress: Callable[[str], None] | None = None,
+    maps: bool = True,
 ) -> Explanation:
     """Explain how an engine departs from the analytic model (module docstring).
 
@@ -245,6 +242,9 @@ def explain_engine(
         folder, removed after.
     progress : callable, optional
         Called with a line of text as the work goes (the diagnosis' lines among them).
+    maps : bool
+        Also measure the engine's impact and flight maps and compare Housner + those maps with the engine
+        (:mod:`housner.scenarios.runs.explain_maps`; about a minute of CPU per engine).
 
     Returns
     -------
@@ -263,11 +263,12 @@ def explain_engine(
                 raise unknown_choice("effect", nm, known)
     if workdir is None:
         with tempfile.TemporaryDirectory(prefix="housner-explain-") as tmp:
-            return _explain(engine, sc, n_motions, sig, int(seed), effects, options, Path(tmp), say, t0, keep=False)
-    return _explain(engine, sc, n_motions, sig, int(seed), effects, options, Path(workdir), say, t0, keep=True)
+            return _explain(engine, sc, n_motions, sig, int(seed), effects, options, Path(tmp), say, t0, False, maps)
+    return _explain(engine, sc, n_motions, sig, int(seed), effects, options, Path(workdir), say, t0, True, maps)
 
 
-def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say, t0, keep: bool) -> Explanation:
+def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say, t0, keep: bool,
+             with_maps: bool) -> Explanation:  # fmt: skip
     out = check_output_dir(workdir / f"{engine}-{sc.name}", "`workdir`", files=("campaign.toml",))
     say(f"running {engine} and the analytic model on {sc.name}")
     runs = run_engine_records(engine, sc, n_motions, AMPLITUDES, options)
@@ -298,6 +299,8 @@ def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say,
     mform = model_form_floor(sc.specimen, ms, runs.settings["housner"])
     floor = extended_floor(chaos, mform)
     reaches = bool(with_eff >= floor - REACH_MARGIN)
+    t4 = time.perf_counter()
+    mp = compare_with_maps(engine, runs, eng_theta, options, say) if with_maps else None
     v = d.verdict
     names = [nm for nm, _ in final]
     return Explanation(
@@ -314,7 +317,9 @@ def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say,
                    "residual_ratio": v.residual.ratio},  # fmt: skip
         remains=_remains(engine, names, with_eff, floor, reaches, d),
         n_records=int(n),
-        ks={"plain": _ks(eng_theta, plain_theta), "with_effects": _ks(eng_theta, eff_theta)},
+        ks={"plain": record_ks(eng_theta, plain_theta), "with_effects": record_ks(eng_theta, eff_theta),
+            **({"with_maps": record_ks(eng_theta, mp.theta)} if mp else {})},
+        maps=_maps_part(engine, mp, floor),
         details={
             "chaos_floor": chaos.to_dict(),
             "model_form_floor": mform.to_dict(),
@@ -327,5 +332,18 @@ def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say,
             "diagnosis_seconds": d.elapsed,
         },
         wall_s={"engine_runs": runs.wall_s, "diagnosis": t2 - t1, "with_effects": t3 - t2,
-                "floors": time.perf_counter() - t3, "total": time.perf_counter() - t0},  # fmt: skip
+                "floors": t4 - t3, "maps": mp.wall_s if mp else 0.0, "total": time.perf_counter() - t0},  # fmt: skip
     )
+
+
+def _maps_part(engine: str, mp, floor: float) -> dict:
+    """The Explanation's ``maps``: the comparison's figures, whether it reaches the floor, what remains."""
+    if mp is None:
+        return {}
+    reaches = bool(mp.agreement >= floor - REACH_MARGIN)
+    head = f"Housner + {engine}'s measured maps agrees with {engine} on {mp.agreement:.0%} of the records"
+    if reaches:
+        remains = f"{head}, at the floor of {floor:.0%}: the departure is explained by what was measured."
+    else:
+        remains = f"{head}, {floor - mp.agreement:.0%} below the floor of {floor:.0%}. {mp.departures['text']}"
+    return {**mp.to_dict(), "reaches_floor": reaches, "remains": remains.strip(), "maps": mp.maps.to_dict()}

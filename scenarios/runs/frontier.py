@@ -41,8 +41,8 @@ from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import build_motions
+from housner.scenarios.runs.departure import record_agreement, record_thetas
 from housner.scenarios.runs.engine_campaign import check_engine, ground_motion_scenario
-from housner.scenarios.runs.explain import record_agreement, record_thetas
 from housner.scenarios.runs.explain_floor import engine_chaos_floor, extended_floor, model_form_floor
 from housner.stats import KS_MAX, ks_2samp
 

@@ -14,12 +14,15 @@ Both were measured on a named scenario, not on this run; the section says which.
 
 from __future__ import annotations
 
+import json
 import math
 
 from housner.reports.frontier_figure import frontier_figure
+from housner.reports.impact_map_figure import maps_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_stored_figure, html_table, status_badge
 from housner.reports.run.sections.tuning import engine_defaults, model_data, model_file, settings_differ
 from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
+from housner.scenarios.runs.impact_map import EngineMaps
 from housner.scenarios.runs.view import Run
 
 __all__ = ["engines_explained", "has_engine_measurements"]
@@ -55,20 +58,23 @@ def _decomposition(run: Run, found: dict) -> str:
     rows = []
     for name, (f, d) in found.items():
         if "engine" not in d:
-            rows.append([engine_tag(name, run), f"<code>{esc(f.name)}</code>: unreadable", "", "", "", "", ""])
+            rows.append([engine_tag(name, run), f"<code>{esc(f.name)}</code>: unreadable", "", "", "", "", "", ""])
             continue
         parts = d.get("floor_parts") or {}
         reaches = d.get("reaches_floor")
+        maps = d.get("maps") or {}
         rows.append(
             [
                 engine_tag(name, run),
                 f"{esc(d.get('scenario', ''))}, {esc(d.get('n_records', ''))} records",
                 _effects_html(d.get("effects")),
                 f"{_pct(d.get('agreement_plain'))} &rarr; {_pct(d.get('agreement'))}" + _ks_html(d.get("ks")),
+                _maps_cell(maps, d.get("ks")),
                 f"{_pct(d.get('floor'))} <small>(chaos {_pct(parts.get('chaos'))}, "
                 f"model form {_pct(parts.get('model_form'))})</small>",
                 status_badge(bool(reaches), "reaches it", "below it") if reaches is not None else "&ndash;",
-                esc(d.get("remains", "")),
+                esc(d.get("remains", "")) + (f"<br><small>With its maps: {esc(maps['remains'])}</small>"
+                                             if maps.get("remains") else ""),
             ]
         )
     return html_table(
@@ -77,6 +83,7 @@ def _decomposition(run: Run, found: dict) -> str:
             "measured on",
             "effects found",
             "agreement: Housner &rarr; Housner + effects",
+            "Housner + the engine's measured maps",
             "extended floor",
             "at the floor (within 5 points)",
             "what remains",
@@ -86,8 +93,32 @@ def _decomposition(run: Run, found: dict) -> str:
         "both overturn, or both rock with &theta;<sub>max</sub>/&alpha; within 3 %. The extended floor is the "
         "agreement a correct model could still miss: the lower of the chaos floor (the analytic model against "
         "itself with r and p perturbed by the engine's measured errors) and the model-form floor (two correct "
-        "integrators' conventions).",
+        "integrators' conventions). The measured maps are the engine's own impact law (energy kept against the "
+        "speed of the impact) and flight loss, measured on free rocking and composed into the analytic model "
+        "(figure below).",
     )
+
+
+def _maps_cell(maps: dict, ks) -> str:
+    """The agreement of Housner + the engine's measured maps, whether it reaches the floor, its KS."""
+    if not maps or maps.get("agreement") is None:
+        return "&ndash;"
+    badge = status_badge(bool(maps.get("reaches_floor")), "reaches it", "below it")
+    ks_m = (ks or {}).get("with_maps")
+    return f"{_pct(maps.get('agreement'))} {badge}" + (f"<br><small>KS {fmt_g(ks_m, 3)}</small>" if ks_m is not None
+                                                       else "")  # fmt: skip
+
+
+def _maps_figure(found: dict) -> str:
+    """The engines' measured impact and flight maps in one figure (drawn from the stored explanations)."""
+    data = {name: d["maps"]["maps"] for name, (_f, d) in found.items() if (d.get("maps") or {}).get("maps")}
+    if not data:
+        return ""
+    maps = [EngineMaps.from_json(json.dumps(m)) for m in data.values()]
+    return html_stored_figure(maps_figure, (maps,), data, "Each engine's measured impact map (the kinetic-energy "
+                              "ratio of an impact over Housner's, against the impact speed) and flight map (the "
+                              "equivalent viscous loss between impacts), with Housner's constants",
+                              "impact and flight maps")  # fmt: skip
 
 
 def current_point(fr: Frontier, defaults: dict) -> int | None:
@@ -182,7 +213,7 @@ def engines_explained(run: Run) -> str:
         )
     out = []
     if expl:
-        out.append("<h3>The departure, decomposed</h3>" + _decomposition(run, expl))
+        out.append("<h3>The departure, decomposed</h3>" + _decomposition(run, expl) + _maps_figure(expl))
     if front:
         out.append("<h3>Accuracy against cost</h3><p>Each engine's time step and main contact setting swept, the "
                    "other settings at their defaults: the tuner's checks, per-record agreement with the analytic "

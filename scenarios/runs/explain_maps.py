@@ -1,0 +1,115 @@
+"""Housner plus an engine's measured maps, against the engine record by record (a step of ``housner explain``).
+
+The diagnosis of :mod:`housner.scenarios.runs.explain` searches the library's effects; none of them is an
+engine's impact. This step measures the engine's own impact and flight maps on free-rocking releases
+(:func:`housner.scenarios.runs.impact_map.measure_maps`), composes them into the analytic kernel
+(:class:`housner.effects.measured.MeasuredMaps`: the impact law r' = r ratio(x) and the flight moment
+-c(x_E) w), runs that model on the scenario's ground motions, and compares it with the engine record by
+record, as the plain model and the diagnosis' model are compared. Where it disagrees, :mod:`departure`
+says in which phase of the motion the two part (uplift, small rocking, rocking) and after how many impacts.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from housner.effects.measured import MeasuredMaps
+from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.runs.departure import departures, disagreeing, record_agreement, record_thetas, summarise
+from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
+
+__all__ = ["MapsComparison", "compare_with_maps", "maps_effect"]
+
+
+@dataclass(frozen=True)
+class MapsComparison:
+    """Housner + the engine's measured maps against the engine.
+
+    Attributes
+    ----------
+    maps : EngineMaps
+        The measured maps.
+    agreement : float
+        Per-record agreement of Housner + maps with the engine [-].
+    n_records : int
+        Records both ran.
+    theta : pandas.Series
+        theta_max/alpha per ground motion of Housner + maps (+inf: overturned).
+    departures : dict
+        :func:`housner.scenarios.runs.departure.summarise` of the records where Housner + maps disagrees.
+    departures_plain : dict
+        The same for the plain model.
+    wall_s : float
+        Wall time of the step (measuring the maps included) [s].
+    """
+
+    maps: EngineMaps
+    agreement: float
+    n_records: int
+    theta: pd.Series
+    departures: dict
+    departures_plain: dict
+    wall_s: float
+
+    def to_dict(self) -> dict:
+        """Plain data: the figures and the departures (the maps themselves are written on their own)."""
+        return {"agreement": self.agreement, "n_records": self.n_records, "departures": self.departures,
+                "departures_plain": self.departures_plain, "wall_s": self.wall_s,
+                "overturned": int(np.isinf(self.theta).sum())}  # fmt: skip
+
+
+def maps_effect(maps: EngineMaps) -> MeasuredMaps:
+    """The maps as an effect of the analytic kernel: the bins with a finite value (a bin no impact or flight
+    fell in is left out; the effect interpolates between the others)."""
+    ix, ir = maps.impact_table()
+    fx, fc = maps.flight_table()
+    ok_i = np.isfinite(ix) & np.isfinite(ir)
+    ok_f = np.isfinite(fx) & np.isfinite(fc)
+    if not ok_i.any():
+        raise ValueError(f"the impact map of {maps.engine!r} holds no impact: nothing to compose")
+    return MeasuredMaps.from_tables(ix[ok_i], ir[ok_i], fx[ok_f], fc[ok_f])
+
+
+def _departures(records, engine: str, runs, model_hist: dict, alpha: float) -> dict:
+    n_fv = len(runs.releases)
+    eng = {i: runs.histories[(engine, n_fv + i)] for i in records}
+    mod = {i: model_hist[("housner", i)] for i in records}
+    dts = {i: runs.motions[i].dt for i in records}
+    return summarise(departures(records, eng, mod, dts, alpha))
+
+
+def compare_with_maps(
+    engine: str,
+    runs,
+    engine_theta: pd.Series,
+    options,
+    progress: Callable[[str], None],
+) -> MapsComparison:
+    """Measure the engine's maps, run Housner + maps on ``runs``' ground motions, compare record by record.
+
+    ``runs`` is the :class:`~housner.scenarios.runs.engine_campaign.EngineRuns` of the explanation (its
+    engine histories are read), ``engine_theta`` the engine's theta_max/alpha per ground motion.
+    """
+    t0 = time.perf_counter()
+    sc = runs.scenario
+    progress(f"measuring {engine}'s impact and flight maps (free-rocking releases)")
+    maps = measure_maps(engine, sc.specimen, settings=runs.settings[engine])
+    effect = maps_effect(maps)
+    progress(f"running Housner + {engine}'s measured maps on the {len(runs.motions)} ground motions")
+    settings = {"housner": runs.settings["housner"]}
+    res, hist, _ = run_engines(sc.specimen, runs.motions, settings, options, effects=(effect,))
+    theta = record_thetas(res, "housner")
+    agreement, n = record_agreement(engine_theta, theta)
+    _r, plain_hist, _i = run_engines(sc.specimen, runs.motions, settings, options)  # cached: the plain model's
+    plain_theta = record_thetas(_r, "housner")
+    alpha = sc.specimen.alpha
+    deps = _departures(disagreeing(engine_theta, theta), engine, runs, hist, alpha)
+    deps_plain = _departures(disagreeing(engine_theta, plain_theta), engine, runs, plain_hist, alpha)
+    return MapsComparison(maps, float(agreement) if n else math.nan, int(n), theta, deps, deps_plain,
+                          time.perf_counter() - t0)  # fmt: skip
