@@ -39,16 +39,18 @@ is caught by a "speculative" contact a step early and the impact loses about
 0.5 % too much energy. The impact is then the solver's plastic impulse at the
 landing pivot, and the energy ratio scatters about Housner's
 r = (1 - 2 m R^2 / I0 sin^2 alpha)^2 by an amount that shrinks with the step:
-at the default 2e-4 s it is within 0.31 % of it at every release amplitude
-from 0.2 to 0.9 alpha (0.01 alpha grid; mean -0.05 %). A compliant contact
+at the default 1e-4 s it is within 0.18 % of it at every release amplitude
+from 0.2 to 0.9 alpha (0.01 alpha grid; mean -0.02 %; 0.31 % at 2e-4 s). Below
+about 0.2 in x = |w-|/(p alpha) its impacts keep less energy than Housner's, in
+proportion to the step (4.7 % less at x = 0.05 at 1e-4 s; ``housner impact-map
+pybullet``). A compliant contact
 (``contact_stiffness`` and ``contact_damping``, both set) can reach other r
 values in free rocking but distorts the forced response, see
 :meth:`PybulletEngine.tuning_candidates`.
 
 Speed. One ``setGravity`` and one ``stepSimulation`` call per step, the
-state read once per sample: about 8 us per step on one core, 0.04 CPU
-seconds per simulated second at the default step (El Centro ensemble of the
-seed paper: 100 motions of 15 s in about 60 CPU seconds).
+state read once per sample: about 5 us per step on one core, 0.054 CPU
+seconds per simulated second at the default 0.1 ms step (0.030 at 0.2 ms).
 
 References
 ----------
@@ -190,9 +192,13 @@ class PybulletEngine(PlanarEngine):
     name = "pybullet"
 
     #: Default settings: the choice of ``housner tune pybullet`` (housner.engines.tuning.tune) for
-    #: Specimen.bachmann2017() and Housner's r (what they measure: docs/results.md#defaults-pybullet).
+    #: Specimen.bachmann2017() and Housner's r (what they measure: docs/results.md#defaults-pybullet), with the
+    #: step halved to 0.1 ms on 2026-11-27: PyBullet's impacts below x = |w-|/(p alpha) ~ 0.2 keep too little
+    #: energy, in proportion to the step (its impact map: 7.1 % at x = 0.05 at 0.2 ms, 4.7 % at 0.1 ms, 0.4 % at
+    #: 0.01 ms); at 0.1 ms the KS distance on three El Centro ensembles of 100 motions fell from 0.18, 0.09, 0.12
+    #: to 0.09, 0.07, 0.09, for 1.8 times the CPU (docs/results.md#pybullet-verdict).
     DEFAULTS: dict = {
-        "timestep": 2.0e-4,
+        "timestep": 1.0e-4,
         "solver_iterations": 10,
         "lateral_friction": 1.5,
         "restitution": 0.0,
