@@ -70,3 +70,16 @@ def test_summary_counts_phases_and_names_records():
     assert s["impacts_before"]["median"] == 2
     assert "Of the 3 records" in s["text"] and "1 parts before the first impact" in s["text"]
     assert summarise([])["text"] == ""
+
+
+def test_disagreeing_applies_the_per_record_rule_and_agrees_with_record_agreement():
+    import pandas as pd
+
+    from housner.scenarios.runs.departure import disagreeing, record_agreement
+
+    eng = pd.Series([np.inf, 0.50, 0.50, np.inf, 0.30], index=[0, 1, 2, 3, 4])
+    mod = pd.Series([np.inf, 0.51, 0.60, 0.40, np.inf], index=[0, 1, 2, 3, 4])
+    # both overturned; within 3 % of the engine's (0.51 vs 0.50: 2 %); 20 % off; one overturned, the other not
+    assert disagreeing(eng, mod) == [2, 3, 4]
+    share, n = record_agreement(eng, mod)
+    assert n == 5 and share == 1.0 - len(disagreeing(eng, mod)) / n

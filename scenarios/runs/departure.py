@@ -77,7 +77,9 @@ def disagreeing(engine_theta: pd.Series, model_theta: pd.Series) -> list[int]:
     both = engine_theta.index.intersection(model_theta.index)
     e = engine_theta[both].to_numpy(float)
     m = model_theta[both].to_numpy(float)
-    agree = (np.isinf(e) & np.isinf(m)) | (np.isfinite(e) & np.isfinite(m) & (np.abs(m - e) <= RECORD_RTOL * np.abs(e)))
+    with np.errstate(invalid="ignore"):  # inf - inf where both overturned: decided by the first term
+        close = np.isfinite(e) & np.isfinite(m) & (np.abs(m - e) <= RECORD_RTOL * np.abs(e))
+    agree = (np.isinf(e) & np.isinf(m)) | close
     return [int(i) for i, ok in zip(both, agree, strict=True) if not ok]
 
 
