@@ -166,7 +166,7 @@ def _load_rock(path: str, sha1: str, azimuth: float, density: float) -> MeshRock
 
     p = Path(path)
     spec = scan.specimen_from_mesh(p, azimuth=azimuth, contact="hull", density=density)
-    rest = scan._rest(scan._load(p), density, p)  # the same rest frame as spec's (origin at the COM, z up)
+    rest = scan.mesh_at_rest(p, density)  # the same rest frame as spec's (origin at the COM, z up)
     c, s = math.cos(math.radians(azimuth)), math.sin(math.radians(azimuth))
     turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # rest frame -> shaking frame (+x along azimuth)
     hull = rest.hull_vertices @ turn.T

@@ -252,24 +252,29 @@ def mjcf_from_specimen(
     ----------
     Bachmann, J. A. et al. (2017). COMPDYN 2017, eqs. 3-4, section 3.1.
     """
-    s = _check_settings(
-        specimen,
-        dict(
-            timestep=timestep,
-            solref=solref,
-            solimp=solimp,
-            friction=friction,
-            cone=cone,
-            impratio=impratio,
-            noslip_iterations=noslip_iterations,
-            integrator=integrator,
-            iterations=iterations,
-            tolerance=tolerance,
-            strip_width=strip_width,
-            strip_height=strip_height,
-            pivot_radius=pivot_radius,
-        ),
+    settings = dict(
+        timestep=timestep,
+        solref=solref,
+        solimp=solimp,
+        friction=friction,
+        cone=cone,
+        impratio=impratio,
+        noslip_iterations=noslip_iterations,
+        integrator=integrator,
+        iterations=iterations,
+        tolerance=tolerance,
+        strip_width=strip_width,
+        strip_height=strip_height,
+        pivot_radius=pivot_radius,
     )
+    s = _check_settings(specimen, settings)
+    e = _check_offset(specimen, offset)
+    return _head_xml(specimen) + _scene_xml(s, specimen.H) + _block_xml(specimen, s, e) + _TAIL
+
+
+def _check_offset(specimen: Specimen, offset) -> float:
+    """The pivots' offset e [m] (``offset``) as a float in (-B, B), so that the pivots stand on either side of the
+    centre of mass; else ValueError naming ``offset``."""
     try:
         e = float(offset)
     except (TypeError, ValueError):
@@ -279,7 +284,7 @@ def mjcf_from_specimen(
             f"`offset` ({offset!r} m) must lie in (-B, B) = +-{specimen.B:g} m, so that the pivots stand on "
             "either side of the centre of mass"
         )
-    return _head_xml(specimen) + _scene_xml(s, specimen.H) + _block_xml(specimen, s, e) + _TAIL
+    return e
 
 
 def _head_xml(specimen: Specimen) -> str:

@@ -82,11 +82,11 @@ from typing import ClassVar
 
 import numpy as np
 
+from housner.engines._impact_law import ImpactLaw
 from housner.engines._planar import (
     OVERTURN_ANGLE,
     PIVOT_RANGES,
     RUNAWAY_M,
-    ImpactLaw,
     PlanarEngine,
     pivot_offset,
     pivot_x,

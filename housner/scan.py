@@ -51,7 +51,7 @@ from housner.rocking_params import RockingParams, pivot_impact_ratios
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = ["CONTACTS", "PlanarSide", "ScanSpecimen", "footprint_figure", "specimen_from_mesh"]
+__all__ = ["CONTACTS", "PlanarSide", "ScanSpecimen", "footprint_figure", "mesh_at_rest", "specimen_from_mesh"]
 
 #: Contact models: ``"hull"`` or ``"flat:TOL"`` with TOL [m], e.g. ``"flat:0.006"``.
 CONTACTS = ("hull", "flat")
@@ -295,8 +295,7 @@ def specimen_from_mesh(
     contact = _normal_contact(contact)
     rho = positive("density", density)
     path = Path(path)
-    mesh = _load(path)
-    return _specimen(mesh, path, az, contact, rho, path.stem if name is None else str(name))
+    return _specimen(mesh_at_rest(path, rho), path, az, contact, rho, path.stem if name is None else str(name))
 
 
 def _normal_contact(contact) -> str:
@@ -362,7 +361,7 @@ def _load(path: Path) -> trimesh.Trimesh:
 
 
 @dataclass(frozen=True)
-class _Rest:
+class MeshAtRest:
     """A mesh at rest: mass properties and geometry in the rest frame (origin at the COM, z up)."""
 
     volume: float
@@ -376,8 +375,14 @@ class _Rest:
     faces: np.ndarray
 
 
-def _rest(mesh: trimesh.Trimesh, density: float, path: Path) -> _Rest:
-    """Mass properties and the rest frame (steps 2-4 of the module docstring)."""
+def mesh_at_rest(path: str | Path, density: float) -> MeshAtRest:
+    """The scan mesh at ``path`` standing on its rest facet, of uniform ``density`` [kg/m^3]: its mass properties
+    and geometry in the rest frame (steps 1-4 of the module docstring), the frame :func:`specimen_from_mesh` works
+    in. A bad ``density`` is a ValueError naming it; a file that is missing, not a mesh, not watertight or not in
+    metres a :class:`housner.errors.DataFileError`."""
+    density = positive("density", density)
+    path = Path(path)
+    mesh = _load(path)
     # Scan coordinates carry arbitrary offsets (SP1: z near 312 m): work near the origin.
     shift = mesh.bounds.mean(axis=0)
     mesh = mesh.copy()
@@ -392,7 +397,7 @@ def _rest(mesh: trimesh.Trimesh, density: float, path: Path) -> _Rest:
     verts = (mesh.vertices - com) @ rot.T
     hull_verts = (hull.vertices - com) @ rot.T
     h = float(np.dot(com - point, -normal))  # the COM's distance above the facet plane
-    return _Rest(
+    return MeshAtRest(
         volume=float(mesh.volume),
         mass=mass,
         com=com + shift,
@@ -436,7 +441,7 @@ def _rotation_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.eye(3) + k + k @ k * ((1.0 - c) / (s * s))
 
 
-def _contact_points(rest: _Rest, contact: str) -> np.ndarray:
+def _contact_points(rest: MeshAtRest, contact: str) -> np.ndarray:
     """(k, 2) [m] rest-frame vertices of the contact polygon (counter-clockwise), relative to the COM."""
     tol = _flat_tol(contact)
     if tol is None:
@@ -464,7 +469,7 @@ def _alphas(poly: np.ndarray, h: float, azimuths) -> tuple[np.ndarray, np.ndarra
     return np.arctan2(proj.max(axis=0), h), np.arctan2(-proj.min(axis=0), h)
 
 
-def _outline(rest: _Rest, azimuth: float) -> np.ndarray:
+def _outline(rest: MeshAtRest, azimuth: float) -> np.ndarray:
     """Segments (n, 2, 2) [m] of the mesh's section _OUTLINE_HEIGHT above the rest plane, shaking frame."""
     cut = trimesh.intersections.mesh_plane(
         trimesh.Trimesh(rest.vertices, rest.faces, process=False),
@@ -474,8 +479,7 @@ def _outline(rest: _Rest, azimuth: float) -> np.ndarray:
     return _turn(np.asarray(cut)[:, :, :2], azimuth) if len(cut) else np.empty((0, 2, 2))
 
 
-def _specimen(mesh, path: Path, az: float, contact: str, density: float, name: str) -> ScanSpecimen:
-    rest = _rest(mesh, density, path)
+def _specimen(rest: MeshAtRest, path: Path, az: float, contact: str, density: float, name: str) -> ScanSpecimen:
     contacts = dict.fromkeys((*BRACKET_CONTACTS, contact))
     polys = {c: _contact_points(rest, c) for c in contacts}
     poly = polys[contact]

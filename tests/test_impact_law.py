@@ -1,4 +1,4 @@
-"""The adapters' impact law (housner.engines._planar.ImpactLaw): detection, energy, every planar engine, the tuner."""
+"""The adapters' impact law (housner.engines._impact_law.ImpactLaw): detection, energy, every planar engine, tuner."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from shared import optional_engine
 
 from housner import GroundMotion, Specimen
 from housner.engines import get_engine
-from housner.engines._planar import IMPACT_LAW_DELAY, IMPACT_LAW_TOL, ImpactLaw
+from housner.engines._impact_law import IMPACT_LAW_DELAY, IMPACT_LAW_TOL, ImpactLaw
 from housner.engines.measures import decay_peaks, first_impact_ratio, half_cycle_peaks
 from housner.engines.tuning import DECAY_IMPACTS, _best, check_suite, tune
 from housner.impacts import impact_times

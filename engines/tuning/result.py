@@ -150,7 +150,7 @@ class TuningResult:
         """What the impact law does in the chosen settings, and how close the contact alone got."""
         line = (
             f"with the adapters' impact law: the block keeps {law:.4f} of the energy its contact leaves "
-            f"it at each impact (housner.engines._planar.ImpactLaw); the contact itself loses Housner's share"
+            f"it at each impact (housner.engines._impact_law.ImpactLaw); the contact itself loses Housner's share"
         )
         alone = self.contact_alone
         if alone is not None:

@@ -155,7 +155,7 @@ def impact_law_candidates(cls, specimen: Specimen, target_r: float) -> list[dict
     No engine's contact takes uniformly more energy than Housner's plastic impact (its damping
     knobs saturate near r = 0.94 or make r depend on the amplitude: ``engines/models/README.md``).
     Below Housner's r the tuner therefore also tries each engine's default contact with the
-    adapters' impact law (:class:`housner.engines._planar.ImpactLaw`): the block keeps the
+    adapters' impact law (:class:`housner.engines._impact_law.ImpactLaw`): the block keeps the
     fraction ``impact_energy_factor`` of the kinetic energy the contact leaves it at each impact.
     A contact setting that meets the target alone is preferred to the law (:func:`_best`); the
     summary says which was chosen, and how close the contact alone gets.

@@ -267,20 +267,7 @@ def run_campaign(
             f" free-vibration records x engines {', '.join(engines)} -> {out}"
             + (f"; planar engines with {effects_label(inp.geometry)}" if inp.geometry else "")
         )
-    planar = {n: s for n, s in settings.items() if not is_mesh_engine(n)}
-    mesh = {n: s for n, s in settings.items() if is_mesh_engine(n)}
-    parts, histories, info = [], {}, {}
-    for group, effects in ((planar, inp.geometry), (mesh, ())):
-        if group:
-            res, hist, inf = run_engines(inp.specimen, inp.motions, group, opts, effects=effects)
-            parts.append(res)
-            histories.update(hist)
-            info.update(inf)
-    order = {n: k for k, n in enumerate(engines)}
-    results = pd.concat(parts, ignore_index=True)
-    results = results.sort_values(["engine", "motion_id"], key=lambda s: s.map(order) if s.name == "engine" else s,
-                                  kind="stable", ignore_index=True)  # fmt: skip
-    results = with_records(results, inp)
+    results, histories, info = campaign_results(inp, settings, engines, opts)
     fails = results[results["status"] != "ok"]
     meta = RunMeta(
         scenario={"name": campaign.name, "description": _description(campaign), "file": str(campaign.path.resolve())},
@@ -302,6 +289,32 @@ def run_campaign(
     )
     write_run(out, results, histories, inp.motions, meta)
     return RunResult(results, histories, inp.motions, meta, out)
+
+
+def campaign_results(
+    inp: CampaignInput, settings: dict[str, dict], engines: list[str], opts: RunOptions
+) -> tuple[pd.DataFrame, dict, dict]:
+    """Every engine on the campaign's records: (results, histories, engine info) of
+    :func:`housner.scenarios.execution.runner.run_engines`.
+
+    The planar engines of ``settings`` (engine -> settings, :func:`check_campaign_engines`) run with the
+    specimen's geometry effect, the 3D ones without; the rows come in the order of ``engines``, then of the
+    records, with each record's id and measured outcome (:func:`with_records`).
+    """
+    planar = {n: s for n, s in settings.items() if not is_mesh_engine(n)}
+    mesh = {n: s for n, s in settings.items() if is_mesh_engine(n)}
+    parts, histories, info = [], {}, {}
+    for group, effects in ((planar, inp.geometry), (mesh, ())):
+        if group:
+            res, hist, inf = run_engines(inp.specimen, inp.motions, group, opts, effects=effects)
+            parts.append(res)
+            histories.update(hist)
+            info.update(inf)
+    order = {n: k for k, n in enumerate(engines)}
+    results = pd.concat(parts, ignore_index=True)
+    results = results.sort_values(["engine", "motion_id"], key=lambda s: s.map(order) if s.name == "engine" else s,
+                                  kind="stable", ignore_index=True)  # fmt: skip
+    return with_records(results, inp), histories, info
 
 
 def _description(campaign: Campaign) -> str:

@@ -492,6 +492,25 @@ def _tables(impacts: dict, flights: dict) -> tuple[dict, dict]:
 # the measurement
 
 
+def _measured_points(engine, name: str, specimen: Specimen, amps: tuple, dt: float, n_impacts: int, progress):
+    """Every release's impacts and flights (:func:`_release`), as columns (:data:`_IMPACT_COLUMNS`,
+    :data:`_FLIGHT_COLUMNS`) -> values over all releases; release i at ``amps[i]`` alpha toward +x for even i,
+    -x for odd, each reported to ``progress`` (if given) under the engine's registry ``name``."""
+    imp_rows, fl_rows = [], []
+    for i, a in enumerate(amps):
+        sign = 1.0 if i % 2 == 0 else -1.0
+        imps, fls = _release(engine, specimen, a, sign, dt, n_impacts, i)
+        imp_rows += imps
+        fl_rows += fls
+        if progress is not None:
+            rat = np.median([row[7] for row in imps]) if imps else math.nan
+            progress(f"{name}: release {i + 1}/{len(amps)} at {sign * a:+.4g} alpha: {len(imps)} impacts, "
+                     f"median r/r_housner {rat:.4f}")  # fmt: skip
+    impacts = {c: [row[j] for row in imp_rows] for j, c in enumerate(_IMPACT_COLUMNS)}
+    flights = {c: [row[j] for row in fl_rows] for j, c in enumerate(_FLIGHT_COLUMNS)}
+    return impacts, flights
+
+
 def measure_maps(
     engine: str,
     specimen: Specimen = SEED,
@@ -541,18 +560,7 @@ def measure_maps(
         raise ValueError(f"`n_impacts` must be an integer of at least 2, got {n_impacts!r}")
     eng = get_engine(name, **dict(settings or {}))
     wall0 = time.perf_counter()
-    imp_rows, fl_rows = [], []
-    for i, a in enumerate(amps):
-        sign = 1.0 if i % 2 == 0 else -1.0
-        imps, fls = _release(eng, specimen, a, sign, dt, n_impacts, i)
-        imp_rows += imps
-        fl_rows += fls
-        if progress is not None:
-            rat = np.median([row[7] for row in imps]) if imps else math.nan
-            progress(f"{name}: release {i + 1}/{len(amps)} at {sign * a:+.4g} alpha: {len(imps)} impacts, "
-                     f"median r/r_housner {rat:.4f}")  # fmt: skip
-    impacts = {c: [row[j] for row in imp_rows] for j, c in enumerate(_IMPACT_COLUMNS)}
-    flights = {c: [row[j] for row in fl_rows] for j, c in enumerate(_FLIGHT_COLUMNS)}
+    impacts, flights = _measured_points(eng, name, specimen, amps, dt, n_impacts, progress)
     imp_table, fl_table = _tables(impacts, flights)
     spec = engine_spec(name)
     return EngineMaps(
