@@ -50,6 +50,8 @@ def test_the_analytic_engine_explains_itself(control):
     # so Housner + its maps is the model itself: every record agrees, none parts
     m = expl.maps
     assert m["agreement"] == 1.0 and m["reaches_floor"] and m["departures"]["n"] == 0
+    # its measured scatter (spread ~1e-11) moves no record by 3 %: the scatter floor is whole
+    assert m["scatter_floor"]["share"] == 1.0 and m["reaches_scatter_floor"]
     ratios = np.asarray(m["maps"]["impacts"]["ratio_median"], float)
     assert np.all(np.abs(ratios[np.isfinite(ratios)] - 1.0) < 1e-6)
     # the maps' rounding (ratios 1 +- 1e-11) moves the peaks by ~1e-10: the two-sample KS distance, a step function
@@ -94,6 +96,7 @@ def test_cli_on_mujoco_writes_the_figures(tmp_path, capsys):
     m = d["maps"]
     assert 0.0 <= m["agreement"] <= 1.0 and isinstance(m["reaches_floor"], bool) and m["remains"]
     assert sum(m["departures"]["by_phase"].values()) == m["departures"]["n"] <= 4
+    assert len(m["scatter_floor"]["shares"]) == 3 and 0.0 <= m["scatter_floor"]["share"] <= 1.0
     assert m["maps"]["engine"] == "mujoco" and len(m["maps"]["impact_points"]["x"]) > 50
 
 

@@ -53,7 +53,8 @@ from numba import njit
 from housner.effects.registry import STAGE_DISSIPATION, Effect, param, register_effect
 from housner.effects.terms import ImpactTerm, MomentTerm
 
-__all__ = ["MeasuredMaps", "interp_log", "measured_flight_moment", "measured_impact_law", "table_q"]
+__all__ = ["MeasuredMaps", "interp_log", "measured_flight_moment", "measured_impact_law", "measured_scatter_law",
+           "scatter_q", "table_q"]  # fmt: skip
 
 #: Smallest capacity of a table in ``q`` (tables are padded to the next power of two, at least this).
 MIN_CAPACITY = 8
@@ -94,6 +95,62 @@ def measured_impact_law(w, r, s, alpha, p2, q):
 
 
 @njit(cache=True, inline="always")
+def _interp_column(x, q, cap, col):
+    """Column ``col`` (1, 2, ...) of ``q = (n, x_1..x_cap, col 1, col 2, ...)`` at x, as :func:`interp_log`."""
+    n = int(q[0])
+    base = 1 + col * cap
+    if n == 1 or x <= q[1]:
+        return q[base]
+    if x >= q[n]:
+        return q[base + n - 1]
+    lo, hi = 0, n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if x >= q[1 + mid]:
+            lo = mid
+        else:
+            hi = mid
+    x0, x1 = q[1 + lo], q[1 + hi]
+    y0, y1 = q[base + lo], q[base + hi]
+    return y0 + (y1 - y0) * (math.log(x / x0) / math.log(x1 / x0))
+
+
+@njit(cache=True, inline="always")
+def _splitmix(z):
+    """One step of SplitMix64 on an unsigned 64-bit integer (Steele, Lea & Flood 2014): a well-mixed hash."""
+    z = z + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(cache=True)
+def measured_scatter_law(w, r, s, alpha, p2, q):
+    """Energy ratio [-] of an impact at speed w: clip(r (k(x) + sigma(x) z), 0, 1), z a standard normal drawn
+    from the impact's own speed and the seed: ``q = (n, x_1..x_N, k_1..k_N, sigma_1..sigma_N, seed)``.
+
+    z is a pseudo-random number of the state, not of a stream: SplitMix64 of the bits of w and the seed, turned
+    normal by Box-Muller. The same record and seed give the same impacts; another seed, another realisation.
+    """
+    cap = (q.shape[0] - 2) // 3
+    x = w / (math.sqrt(p2) * alpha)
+    k = _interp_column(x, q, cap, 1)
+    sigma = _interp_column(x, q, cap, 2)
+    bits = np.array([w]).view(np.uint64)[0]
+    h1 = _splitmix(bits ^ _splitmix(np.uint64(int(q[q.shape[0] - 1]))))
+    h2 = _splitmix(h1)
+    u1 = (float(h1 >> np.uint64(11)) + 0.5) / 9007199254740992.0  # (0, 1): 53 bits
+    u2 = float(h2 >> np.uint64(11)) / 9007199254740992.0
+    z = math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+    r_eff = r * (k + sigma * z)
+    if r_eff > 1.0:
+        r_eff = 1.0
+    if r_eff < 0.0:
+        r_eff = 0.0
+    return r_eff
+
+
+@njit(cache=True, inline="always")
 def measured_flight_moment(phi, w, t, a, v, s, alpha, p2, q):
     """Flight loss per unit I0 [rad/s^2], -c(x_E) w, c [1/s] the table ``q`` at the energy-equivalent speed x_E.
 
@@ -113,6 +170,13 @@ def table_q(x: Sequence[float], y: Sequence[float]) -> tuple[float, ...]:
     cap = max(MIN_CAPACITY, 1 << (n - 1).bit_length())
     pad = (0.0,) * (cap - n)
     return (float(n), *map(float, x), *pad, *map(float, y), *pad)
+
+
+def scatter_q(x: Sequence[float], k: Sequence[float], sigma: Sequence[float], seed: int) -> tuple[float, ...]:
+    """The parameters of :func:`measured_scatter_law`: ``(n, x_1..x_N, k_1..k_N, sigma_1..sigma_N, seed)``."""
+    head = table_q(x, k)
+    cap = (len(head) - 1) // 2
+    return (*head, *map(float, sigma), *(0.0,) * (cap - len(sigma)), float(seed))
 
 
 # ----------------------------------------------------------------------
@@ -168,6 +232,13 @@ class MeasuredMaps(Effect):
         Energy-equivalent speeds x_j [-], positive, strictly increasing; empty (default): no flight term.
     flight_c : sequence of float, optional
         Flight loss rates c_j [1/s] at x_j: the moment -c I0 theta' (c > 0 a loss, c < 0 a gain).
+    impact_spread : sequence of float, optional
+        The standard deviation sigma_i >= 0 [-] of the factor at x_i, impact to impact; empty (default): every
+        impact takes the mean k(x). Given, each impact takes k(x) + sigma(x) z, z a standard normal drawn from
+        the impact's speed and ``seed`` (:func:`measured_scatter_law`): one realisation of an engine whose
+        impacts scatter as measured.
+    seed : int, optional
+        The realisation of the scatter (0 by default; read only with ``impact_spread``).
     digest : float, optional
         The tables' fingerprint; read off them (give it only to check it). Without tables, 0: the neutral
         effect, which adds nothing.
@@ -197,21 +268,31 @@ class MeasuredMaps(Effect):
         impact_ratio: Sequence[float] = (),
         flight_x: Sequence[float] = (),
         flight_c: Sequence[float] = (),
+        impact_spread: Sequence[float] = (),
+        seed: int = 0,
         digest: float | None = None,
     ) -> None:
-        empty = all(len(np.atleast_1d(v)) == 0 for v in (impact_x, impact_ratio, flight_x, flight_c))
+        empty = all(len(np.atleast_1d(v)) == 0 for v in (impact_x, impact_ratio, flight_x, flight_c, impact_spread))
         if empty:
-            ix, ir, fx, fc = (), (), (), ()
+            ix, ir, fx, fc, sp = (), (), (), (), ()
         else:
             ix, ir = _table("impact_x", impact_x, "impact_ratio", impact_ratio, nonnegative=True, allow_empty=False)
             fx, fc = _table("flight_x", flight_x, "flight_c", flight_c, nonnegative=False, allow_empty=True)
-        own = 0.0 if empty else _digest(ix, ir, fx, fc)
+            sp = ()
+            if len(np.atleast_1d(impact_spread)):
+                _x, sp = _table("impact_x", impact_x, "impact_spread", impact_spread, nonnegative=True,
+                                allow_empty=False)  # fmt: skip
+        if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and 0 <= seed < 2**53):
+            raise ValueError(f"`seed` must be an integer in [0, 2^53), got {seed!r}")
+        seed = int(seed) if sp else 0
+        own = 0.0 if empty else _digest(ix, ir, fx, fc, *((sp, (float(seed),)) if sp else ()))
         if digest is not None and digest != own:
             raise ValueError(
                 f"`digest` of effect 'measured_maps' is read off its tables ({own!r}), got {digest!r}: "
                 "build the effect with MeasuredMaps.from_tables(impact_x, impact_ratio, flight_x, flight_c)"
             )
-        for key, value in (("impact_x", ix), ("impact_ratio", ir), ("flight_x", fx), ("flight_c", fc)):
+        for key, value in (("impact_x", ix), ("impact_ratio", ir), ("flight_x", fx), ("flight_c", fc),
+                           ("impact_spread", sp), ("seed", seed)):  # fmt: skip
             object.__setattr__(self, key, value)
         object.__setattr__(self, "digest", own)
         self.__post_init__()
@@ -246,7 +327,8 @@ class MeasuredMaps(Effect):
     def __repr__(self) -> str:
         return (
             f"MeasuredMaps(impact: {len(self.impact_x)} points, flight: {len(self.flight_x)} points, "
-            f"digest={self.digest:.0f})"
+            + (f"scatter seed {self.seed}, " if self.impact_spread else "")
+            + f"digest={self.digest:.0f})"
         )
 
     def describe(self) -> dict:
@@ -258,12 +340,16 @@ class MeasuredMaps(Effect):
             "impact_ratio": list(self.impact_ratio),
             "flight_x": list(self.flight_x),
             "flight_c": list(self.flight_c),
+            **({"impact_spread": list(self.impact_spread), "seed": self.seed} if self.impact_spread else {}),
         }
 
     def terms(self, params, specimen) -> tuple:
         """The impact term (and the flight term when a flight table is given); none for the neutral effect."""
         out = []
-        if self.impact_x:
+        if self.impact_spread:
+            q = scatter_q(self.impact_x, self.impact_ratio, self.impact_spread, self.seed)
+            out.append(ImpactTerm(measured_scatter_law, q))
+        elif self.impact_x:
             out.append(ImpactTerm(measured_impact_law, table_q(self.impact_x, self.impact_ratio)))
         if self.flight_x:
             out.append(MomentTerm(measured_flight_moment, table_q(self.flight_x, self.flight_c), at_rest=False))

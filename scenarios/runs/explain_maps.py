@@ -24,7 +24,11 @@ from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.runs.departure import departures, disagreeing, record_agreement, record_thetas, summarise
 from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
 
-__all__ = ["MapsComparison", "compare_with_maps", "maps_effect"]
+__all__ = ["SCATTER_SEEDS", "MapsComparison", "compare_with_maps", "maps_effect", "scatter_floor"]
+
+#: Realisations of the measured impact scatter behind :func:`scatter_floor` (three: the floor is their mean; on
+#: 100 records one realisation's share moves by a few points).
+SCATTER_SEEDS = (1, 2, 3)
 
 
 @dataclass(frozen=True)
@@ -45,6 +49,9 @@ class MapsComparison:
         :func:`housner.scenarios.runs.departure.summarise` of the records where Housner + maps disagrees.
     departures_plain : dict
         The same for the plain model.
+    scatter : dict
+        :func:`scatter_floor`: the agreement a model of the measured mean law keeps with an engine whose impacts
+        scatter as measured.
     wall_s : float
         Wall time of the step (measuring the maps included) [s].
     """
@@ -55,25 +62,44 @@ class MapsComparison:
     theta: pd.Series
     departures: dict
     departures_plain: dict
+    scatter: dict
     wall_s: float
 
     def to_dict(self) -> dict:
         """Plain data: the figures and the departures (the maps themselves are written on their own)."""
         return {"agreement": self.agreement, "n_records": self.n_records, "departures": self.departures,
-                "departures_plain": self.departures_plain, "wall_s": self.wall_s,
+                "departures_plain": self.departures_plain, "scatter_floor": self.scatter, "wall_s": self.wall_s,
                 "overturned": int(np.isinf(self.theta).sum())}  # fmt: skip
 
 
-def maps_effect(maps: EngineMaps) -> MeasuredMaps:
+def maps_effect(maps: EngineMaps, seed: int | None = None) -> MeasuredMaps:
     """The maps as an effect of the analytic kernel: the bins with a finite value (a bin no impact or flight
-    fell in is left out; the effect interpolates between the others)."""
+    fell in is left out; the effect interpolates between the others). With ``seed``, each impact also scatters
+    by the bin's measured spread: one realisation of that scatter
+    (:func:`housner.effects.measured.measured_scatter_law`)."""
     ix, ir = maps.impact_table()
     fx, fc = maps.flight_table()
     ok_i = np.isfinite(ix) & np.isfinite(ir)
     ok_f = np.isfinite(fx) & np.isfinite(fc)
     if not ok_i.any():
         raise ValueError(f"the impact map of {maps.engine!r} holds no impact: nothing to compose")
-    return MeasuredMaps.from_tables(ix[ok_i], ir[ok_i], fx[ok_f], fc[ok_f])
+    if seed is None:
+        return MeasuredMaps.from_tables(ix[ok_i], ir[ok_i], fx[ok_f], fc[ok_f])
+    spread = np.nan_to_num(np.asarray(maps.impacts["ratio_spread"], float)[ok_i], nan=0.0)
+    return MeasuredMaps(ix[ok_i], ir[ok_i], fx[ok_f], fc[ok_f], impact_spread=spread, seed=int(seed))
+
+
+def scatter_floor(sc, motions, settings: dict, maps: EngineMaps, theta: pd.Series, options) -> dict:
+    """The agreement [-] of Housner + the maps' mean law (``theta``) with realisations of an engine whose impacts
+    also scatter by the maps' measured spread (seeds :data:`SCATTER_SEEDS`): what the mean law must miss,
+    record by record, of an engine that does exactly what was measured. ``{"share", "shares", "seeds"}``."""
+    shares = []
+    for seed in SCATTER_SEEDS:
+        res, _h, _i = run_engines(sc.specimen, motions, settings, options, effects=(maps_effect(maps, seed),),
+                                  histories=False)  # fmt: skip
+        share, _n = record_agreement(record_thetas(res, "housner"), theta)
+        shares.append(float(share))
+    return {"share": float(np.mean(shares)), "shares": shares, "seeds": list(SCATTER_SEEDS)}
 
 
 def _departures(records, engine: str, runs, model_hist: dict, alpha: float) -> dict:
@@ -111,5 +137,7 @@ def compare_with_maps(
     alpha = sc.specimen.alpha
     deps = _departures(disagreeing(engine_theta, theta), engine, runs, hist, alpha)
     deps_plain = _departures(disagreeing(engine_theta, plain_theta), engine, runs, plain_hist, alpha)
-    return MapsComparison(maps, float(agreement) if n else math.nan, int(n), theta, deps, deps_plain,
+    progress(f"Housner + the maps' mean against {len(SCATTER_SEEDS)} realisations of their measured impact scatter")
+    scatter = scatter_floor(sc, runs.motions, settings, maps, theta, options)
+    return MapsComparison(maps, float(agreement) if n else math.nan, int(n), theta, deps, deps_plain, scatter,
                           time.perf_counter() - t0)  # fmt: skip
