@@ -195,7 +195,11 @@ def test_mesh_engine_gets_the_campaign_mesh_settings(scan, tmp_path, mesh_engine
     res = pd.read_parquet(out / "results.parquet")
     assert set(res.loc[res.engine == "test-mesh", "effects"]) == {""}
     assert res.loc[res.engine == "housner", "effects"].str.startswith("asymmetric_pivots").all()
-    assert [r["engine"] for r in Run.load(out).outcome_scores] == ["housner", "test-mesh"]
+    view = Run.load(out)
+    assert [r["engine"] for r in view.outcome_scores] == ["housner", "test-mesh"]
+    # a 3D engine's theta is not the planar block's: no distribution verdict against it, said on the report
+    assert view.mesh_engines == ["test-mesh"] and "test-mesh" not in view.verdicts()
+    assert "no distribution verdict against the planar block" in (out / "report.html").read_text()
 
 
 def test_bad_inputs_fail_in_one_line_before_any_work(block, scan, tmp_path, capsys, mesh_engine):

@@ -22,7 +22,8 @@ import numpy as np
 import pandas as pd
 
 from housner import Specimen
-from housner.errors import DataFileError
+from housner.engines.base import engine_class
+from housner.errors import DataFileError, EngineError
 from housner.motion import GroundMotion
 from housner.scenarios.execution.rundir import RunMeta, json_number, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
@@ -209,8 +210,23 @@ class Run:
         compute them passes those it has).
         """
         floors = self.chaos_floors if floors is None else floors
-        effects = self.meta.effect_series
-        return {e: engine_verdict(self.comparison.loc[e], floors.get(e)) for e in self.others if e not in effects}
+        skip = set(self.meta.effect_series) | set(self.mesh_engines)
+        return {e: engine_verdict(self.comparison.loc[e], floors.get(e)) for e in self.others if e not in skip}
+
+    @property
+    def mesh_engines(self) -> list[str]:
+        """The run's 3D scan-mesh engines (``mesh_engine``): their theta is a 3D body's tilt, not the planar block's
+        rotation, so they get no distribution verdict against a planar reference (a campaign scores their
+        outcomes)."""
+        out = []
+        for e in self.engines:
+            try:
+                cls = engine_class(e)
+            except (ImportError, ValueError, EngineError):  # not importable here: judged as a planar engine
+                continue
+            if getattr(cls, "mesh_engine", False):
+                out.append(e)
+        return out
 
     @cached_property
     def motions(self) -> dict | None:

@@ -106,6 +106,11 @@ def _verdict_lines(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[s
                 f"{_moved(run, effects[name], name)}</li>"
             )
             continue
+        if name not in verdicts:  # a 3D engine: its theta is not the planar block's (Run.mesh_engines)
+            lines.append(f'<li><span class="badge na">3D</span> {engine_tag(name, run)}: no distribution verdict '
+                         "against the planar block (its &theta; is the tilt of the scan's 3D body, not the block's "
+                         "rotation); judged by the measured outcomes</li>")  # fmt: skip
+            continue
         v = verdicts[name]
         extra = f'<div class="caveat">{caveats[name]}</div>' if name in caveats else ""
         if v.records:
@@ -138,7 +143,7 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[
         elif name in verdicts:
             verdict = _badges(verdicts[name]) + (_caveat_mark(caveats[name]) if name in caveats else "")
         else:
-            verdict = "effect"
+            verdict = "3D: outcomes only" if name in run.mesh_engines else "effect"
         rows.append(
             [
                 engine_tag(name, run) + (" <small>(reference)</small>" if is_ref else ""),

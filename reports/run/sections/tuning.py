@@ -59,9 +59,11 @@ def tuning_caveats(run: Run) -> dict[str, str]:
         first_impact_ok = all(c.met for c in _tuning_checks(d) if c.name.startswith("r of the first impact"))
         if any(n.startswith("free decay") for n in names) and first_impact_ok:
             text += (
-                "The first-impact r is within tolerance at every amplitude checked, so the missing energy is lost "
-                "between impacts and piles up only over many small rockings (the measured cause is in "
-                "<code>engines/models/README.md</code>). "
+                "The first-impact r is within tolerance at every amplitude the tuner releases from, so the missing "
+                "energy goes where it does not look: in the slow impacts of small rocking, or in flight, and piles "
+                "up over many small rockings. The engine's impact and flight maps say which "
+                "(<code>housner impact-map ENGINE</code>; PyBullet's: its slow impacts, "
+                "<code>docs/results.md#pybullet-verdict</code>). "
             )
         decay = _frame(d, "decay_table")
         small_limit = math.nan
