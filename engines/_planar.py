@@ -44,6 +44,7 @@ __all__ = [
     "optional_package",
     "pivot_offset",
     "pivot_x",
+    "check_offset",
     "release_state",
     "sampled_response",
     "start_states",
@@ -133,6 +134,21 @@ def pivot_x(B: float, e: float = 0.0) -> tuple[float, float]:
     """The pivots' x [m] in the body frame at the centre of mass: (B - e, -(B + e)) for half width B [m] and the
     centre of mass e [m] toward +x of their midpoint; (B, -B) exactly at e = 0."""
     return B - e, -(B + e)
+
+
+def check_offset(B: float, offset) -> float:
+    """The pivots' offset e [m] (a model builder's ``offset``) as a float in (-B, B), so that the pivots stand on
+    either side of the centre of mass; else ValueError naming ``offset``."""
+    try:
+        e = float(offset)
+    except (TypeError, ValueError):
+        raise ValueError(f"`offset` must be a number [m], got {offset!r}") from None
+    if not abs(e) < B:
+        raise ValueError(
+            f"`offset` ({offset!r} m) must lie in (-B, B) = +-{B:g} m, so that the pivots stand on "
+            "either side of the centre of mass"
+        )
+    return e
 
 
 def com_state(H: float, pivot_x: float, theta: float, omega: float) -> tuple[float, float, float, float]:

@@ -49,7 +49,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-from housner.engines._planar import pivot_x
+from housner.engines._planar import check_offset, pivot_x
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -268,23 +268,8 @@ def mjcf_from_specimen(
         pivot_radius=pivot_radius,
     )
     s = _check_settings(specimen, settings)
-    e = _check_offset(specimen, offset)
+    e = check_offset(specimen.B, offset)
     return _head_xml(specimen) + _scene_xml(s, specimen.H) + _block_xml(specimen, s, e) + _TAIL
-
-
-def _check_offset(specimen: Specimen, offset) -> float:
-    """The pivots' offset e [m] (``offset``) as a float in (-B, B), so that the pivots stand on either side of the
-    centre of mass; else ValueError naming ``offset``."""
-    try:
-        e = float(offset)
-    except (TypeError, ValueError):
-        raise ValueError(f"`offset` must be a number [m], got {offset!r}") from None
-    if not abs(e) < specimen.B:
-        raise ValueError(
-            f"`offset` ({offset!r} m) must lie in (-B, B) = +-{specimen.B:g} m, so that the pivots stand on "
-            "either side of the centre of mass"
-        )
-    return e
 
 
 def _head_xml(specimen: Specimen) -> str:

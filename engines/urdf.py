@@ -73,7 +73,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from housner.engines._planar import pivot_x
+from housner.engines._planar import check_offset, pivot_x
 from housner.specimen import Specimen
 
 __all__ = [
@@ -190,15 +190,7 @@ def urdf_from_specimen(
     strip, carriage = _checked_parts(specimen, (strip_width, strip_height, bevel), (carriage_mass, carriage_inertia))
     if not (isinstance(name, str) and name and all(ch.isalnum() or ch in "_-." for ch in name)):
         raise ValueError(f"`name` must be a non-empty identifier (letters, digits, _ - .), got {name!r}")
-    try:
-        e = float(offset)
-    except (TypeError, ValueError):
-        raise ValueError(f"`offset` must be a number [m], got {offset!r}") from None
-    if not abs(e) < specimen.B:
-        raise ValueError(
-            f"`offset` ({offset!r} m) must lie in (-B, B) = +-{specimen.B:g} m, so that the pivots stand on "
-            "either side of the centre of mass"
-        )
+    e = check_offset(specimen.B, offset)
     return _urdf_header(specimen, e) + _urdf_robot(specimen, name, strip, carriage, e)
 
 

@@ -63,40 +63,9 @@ MIN_CAPACITY = 8
 # ----------------------------------------------------------------------
 # the kernel's laws
 @njit(cache=True, inline="always")
-def interp_log(x, q):
-    """The table of ``q = (n, x_1..x_N, y_1..y_N)`` at x: linear in log x, y_1 for x <= x_1, y_n for x >= x_n."""
-    n = int(q[0])
-    cap = (q.shape[0] - 1) // 2
-    if n == 1 or x <= q[1]:
-        return q[1 + cap]
-    if x >= q[n]:
-        return q[cap + n]
-    lo, hi = 0, n - 1  # x_lo <= x < x_hi (0-based)
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if x >= q[1 + mid]:
-            lo = mid
-        else:
-            hi = mid
-    x0, x1 = q[1 + lo], q[1 + hi]
-    y0, y1 = q[1 + cap + lo], q[1 + cap + hi]
-    return y0 + (y1 - y0) * (math.log(x / x0) / math.log(x1 / x0))
-
-
-@njit(cache=True)
-def measured_impact_law(w, r, s, alpha, p2, q):
-    """Energy ratio [-] of an impact at speed w > 0 [rad/s]: clip(r k(w / (p alpha)), 0, 1), k the table ``q``."""
-    r_eff = r * interp_log(w / (math.sqrt(p2) * alpha), q)
-    if r_eff > 1.0:
-        r_eff = 1.0
-    if r_eff < 0.0:
-        r_eff = 0.0
-    return r_eff
-
-
-@njit(cache=True, inline="always")
 def _interp_column(x, q, cap, col):
-    """Column ``col`` (1, 2, ...) of ``q = (n, x_1..x_cap, col 1, col 2, ...)`` at x, as :func:`interp_log`."""
+    """Column ``col`` (1, 2, ...) of ``q = (n, x_1..x_cap, col 1, col 2, ...)`` at x: linear in log x, held at the
+    end values beyond the table's ends."""
     n = int(q[0])
     base = 1 + col * cap
     if n == 1 or x <= q[1]:
@@ -113,6 +82,23 @@ def _interp_column(x, q, cap, col):
     x0, x1 = q[1 + lo], q[1 + hi]
     y0, y1 = q[base + lo], q[base + hi]
     return y0 + (y1 - y0) * (math.log(x / x0) / math.log(x1 / x0))
+
+
+@njit(cache=True, inline="always")
+def interp_log(x, q):
+    """The table of ``q = (n, x_1..x_N, y_1..y_N)`` at x: linear in log x, y_1 for x <= x_1, y_n for x >= x_n."""
+    return _interp_column(x, q, (q.shape[0] - 1) // 2, 1)
+
+
+@njit(cache=True)
+def measured_impact_law(w, r, s, alpha, p2, q):
+    """Energy ratio [-] of an impact at speed w > 0 [rad/s]: clip(r k(w / (p alpha)), 0, 1), k the table ``q``."""
+    r_eff = r * interp_log(w / (math.sqrt(p2) * alpha), q)
+    if r_eff > 1.0:
+        r_eff = 1.0
+    if r_eff < 0.0:
+        r_eff = 0.0
+    return r_eff
 
 
 @njit(cache=True, inline="always")
