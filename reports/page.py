@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from housner.reports import figures
+from housner.reports.glossary import spell_out
 from housner.scenarios.execution.cache import code_version, content_key, default_cache_dir, store_text
 from housner.scenarios.execution.rundir import json_number
 
@@ -208,14 +209,16 @@ figure { margin: 1rem 0; }
 figure img { max-width: 100%; height: auto; border: 1px solid var(--line); border-radius: 4px; }
 figcaption { color: var(--muted); font-size: .88rem; max-width: 60rem; margin-top: .3rem; }
 .badge { display: inline-block; border-radius: 4px; padding: 0 .45rem; font-weight: 700; font-size: .85rem;
-         letter-spacing: .03em; }
+         letter-spacing: .03em; white-space: nowrap; }
 .badge.pass { background: #dff0d8; color: #2b6a2b; border: 1px solid #9ccc9c; }
 .badge.fail { background: #f2dede; color: #a94442; border: 1px solid #e4a5a5; }
 .badge.na { background: #eee; color: #555; border: 1px solid #ccc; }
+.badge.warn { background: #fcefd2; color: #7a5200; border: 1px solid #e2bf6e; }
 ul.verdicts { list-style: none; padding: 0; font-size: 1.05rem; }
-ul.verdicts li { margin: .3rem 0; }
-ul.verdicts div.caveat { font-size: .88rem; max-width: 60rem; margin: .2rem 0 .4rem 1.2rem; padding: .3rem .6rem;
-                         background: #fcf8e3; border-left: 3px solid #f0e1a1; }
+ul.verdicts li { margin: .55rem 0; max-width: 64rem; }
+ul.verdicts div.figs { color: var(--muted); font-size: .86rem; margin: .15rem 0 0 1.2rem; }
+div.caveat { font-size: .88rem; max-width: 60rem; margin: .2rem 0 .4rem 1.2rem; padding: .3rem .6rem;
+             background: #fcf8e3; border-left: 3px solid #f0e1a1; }
 .ok { color: #2b6a2b; } .bad { color: #a94442; font-weight: 600; } .muted { color: var(--muted); }
 .eng { white-space: nowrap; font-weight: 600; }
 .swatch { display: inline-block; width: .8em; height: .8em; border-radius: 2px; margin-right: .35em;
@@ -229,6 +232,8 @@ code { font-size: .9em; }
 footer { color: var(--muted); font-size: .82rem; margin-top: 3rem; border-top: 1px solid var(--line); }
 p.lead { font-size: 1.08rem; background: var(--alt); border-left: 4px solid var(--accent); padding: .6rem .9rem; }
 span.warn { color: #8a6d3b; font-weight: 600; }
+dl.glossary { max-width: 62rem; } dl.glossary dt { font-weight: 600; margin-top: .6rem; }
+dl.glossary dd { margin: .1rem 0 0 1.2rem; }
 """
 
 
@@ -240,7 +245,7 @@ def document(title: str, heading: str, subtitle: str, sections: list[Section], f
     """
     toc = "".join(f'<li><a href="#{s.id}">{esc(s.title)}</a></li>' for s in sections)
     body = "".join(f'<section id="{s.id}"><h2>{esc(s.title)}</h2>{s.body}</section>' for s in sections)
-    return (
+    return spell_out(
         "<!DOCTYPE html>\n"
         '<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
@@ -250,7 +255,7 @@ def document(title: str, heading: str, subtitle: str, sections: list[Section], f
         f'<nav class="toc"><strong>Contents</strong><ol>{toc}</ol></nav>'
         f"{body}<footer><p>{footer}</p></footer>"
         "</main></body></html>\n"
-    )
+    )  # every abbreviation spelled out at its first use
 
 
 def write_page(path: str | Path, text: str) -> Path:

@@ -96,7 +96,8 @@ def test_verdict_names_the_figures_and_the_side():
     fl = ChaosFloor({"r+": 0.7, "r-": 0.8}, {"r+": 1.0, "r-": 1.0}, 0.75, 0.7, 0.8, 100,
                     engine="e", eps_r=1e-3, eps_p=5e-4)
     at = floor_verdict(72, 100, fl)
-    assert "agreement 72%" in at and "chaos floor of 75%" in at and "at the floor" in at
+    # the floor is the lowest perturbed share (70 %): the one the verdict is decided against
+    assert "72% [" in at and "chaos floor of 70%" in at and "70%-80%" in at and "at the floor" in at
     below = floor_verdict(40, 100, fl)  # Wilson upper bound of 40/100 is about 50 % < 70 %
     assert "below the floor" in below
     assert floor_verdict(0, 0, fl) == "no paired records"

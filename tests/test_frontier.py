@@ -163,7 +163,7 @@ def test_report_section_shows_the_decomposition_and_the_frontier(tmp_path, monke
     (tmp_path / "frontier-beta-engine.json").write_text(json.dumps(_frontier_file()))
     html = engines_explained(Run.load(run_dir))
     assert "28% &rarr; 31%" in html and "viscous_damping" in html and "zeta = 0.0012" in html
-    assert "chaos 67%" in html and "below it" in html
+    assert "chaos floor 67%" in html and "below it" in html
     assert "swept from, knee" in html and "data:image/png;base64," in html
     assert "NOT met" in html  # the cheap point that fails a check
 

@@ -177,7 +177,7 @@ def test_one_self_contained_file(shaken):
 
 def test_sections_and_table_of_contents(shaken):
     _, _, page = shaken
-    expected = ["verdict", "specimen", "ensemble", "distribution", "agreement", "failures", "provenance"]
+    expected = ["verdict", "specimen", "ensemble", "distribution", "agreement", "failures", "provenance", "glossary"]
     assert page.sections == expected  # no pulse or free-vibration section for a record ensemble
     toc = [v for tag, k, v in page.attrs if tag == "a" and k == "href" and v.startswith("#")]
     assert all(f"#{s}" in toc for s in expected)
@@ -227,11 +227,12 @@ def test_verdict_marks_failed_records(shaken):
     # fails, because a failed record fails the verdict (as in housner.reports.assertions.runs).
     row = page.row("verdict", "report-flaky")
     assert float(row[2].split()[0]) <= 1 / 12 + 1e-9
-    assert row[-1] == "FAIL"
+    assert row[-1] == "FAILS"
     assert row[1] == "11 / 1"
-    line = next(li for li in path.read_text().split("<li>") if "report-flaky</span>:" in li)
-    assert '<span class="ok">KS' in line
-    assert '<span class="bad">1 failed record</span>' in line
+    line = next(li for li in path.read_text().split("<li>") if "report-flaky</span>:" in li).split("</li>")[0]
+    # one badge, and the figure that decided it: the failed record, not the KS distance that passed
+    assert line.count('class="badge') == 1 and '<span class="badge fail">FAILS</span>' in line
+    assert "records failed to run: <strong>1 failed record</strong>" in line
 
 
 def test_failed_records_are_listed(shaken):
@@ -289,8 +290,9 @@ def test_agreement_table_gives_the_chaos_floor(shaken):
         SPEC, [ms[i] for i in sorted(ok)], errors_from_dict(errs["report-r80"]), rtol=RECORD_RTOL, atol=0.0
     )
     row = page.row("agreement", "report-r80")
-    assert row[8] == f"{fl.share:.0%} {fl.share_min:.0%}\u2013{fl.share_max:.0%}"
-    assert "chaos floor of" in text and ("at the floor" in text or "below the floor" in text)
+    # the floor is the lowest of the four perturbed shares (what the verdict is decided against), their range beside
+    assert row[8] == f"{fl.share_min:.0%} (of {fl.share_min:.0%}\u2013{fl.share_max:.0%})"
+    assert f"chaos floor of {fl.share_min:.0%}" in text and ("at the floor" in text or "below the floor" in text)
 
 
 def test_cdf_figure_stops_at_one_minus_overturn_probability():
@@ -377,7 +379,7 @@ def test_written_tables_from_any_engines(tmp_path, monkeypatch):
     assert "not in this run" in text  # the requested reference "housner" is absent
     row = page.row("verdict", "beta-engine")
     assert row[2].startswith("1.000")
-    assert row[-1] == "FAIL 1 tuning check not met (above)"
+    assert row[-1] == "FAILS"
     assert page.row("verdict", "alpha-engine")[-1] == "reference"
     # the tuning file is read: settings (the run recorded none), target, the failed check in words, verdict
     tuned = page.row("specimen", "beta-engine", table=-1)
@@ -593,15 +595,16 @@ def test_a_tuning_check_not_met_is_explained_under_the_verdict(tuned_run, monkey
     text = html.render_report(out)
     page = Page(text)
     row = page.row("verdict", "report-r80")
-    assert "1 tuning check not met" in row[-1]
-    line = next(li for li in text.split("<li>") if "report-r80</span>:" in li)
+    head = next(li for li in text.split("<li>") if "report-r80</span>:" in li)
+    assert "1 tuning check not met (below)" in head
+    line = next(c for c in text.split('<div class="caveat">')[1:] if "report-r80</span>" in c.split("</strong>")[0])
     # what was not met, by how much, against what
     assert "Tuning not met" in line
     assert "after 40 impacts is -14.0% off the analytic 0.0106 &alpha;" in line
     assert "accepted &plusmn;5%" in line
     # and what it means for the verdict, with the verdict's own figure
     ks = float(row[2].split()[0])
-    if row[-1].startswith("PASS"):
+    if row[-1] in ("AGREES", "ENSEMBLE ONLY"):
         assert "It does not change this verdict" in line and f"KS {ks:.3f}" in line
         # records of the reference at or below the largest failing peak (0.018 alpha) are counted
         df = pd.read_parquet(out / "results.parquet")
@@ -743,3 +746,34 @@ def test_the_factor_line_says_whether_one_factor_reaches_the_whole_row(factors, 
     text = distribution_section._factor_line(SimpleNamespace(paper_factors=f))
     for s in says:
         assert s in text, text
+
+
+# ----------------------------------------------------------------------------
+# the one verdict: the page, the command line and users' CI ask the same
+@register_engine("report-twin")
+class TwinEngine(HousnerEngine):
+    """The analytic engine itself under another name: it must agree with the reference on every record."""
+
+
+def test_assert_verdict_says_what_the_page_says(shaken, tmp_path):
+    from housner.reports.assertions.verdict import VerdictError, assert_verdict
+
+    out, _, page = shaken
+    # 12 motions: the flaky engine fails (a failed record), the r = 0.80 one is inconclusive (fewer than 20 records)
+    for engine, badge in (("report-flaky", "FAILS"), ("report-r80", "INCONCLUSIVE")):
+        assert page.row("verdict", engine)[-1] == badge
+        with pytest.raises(VerdictError, match=f"{engine} against housner: {badge}: ") as e:
+            assert_verdict(out, engine)
+        assert e.value.verdict.badge == badge
+    # 20 motions and a twin of the reference: KS 0, every record agrees, whatever the floor: AGREES
+    engines, motions = {"housner": {}, "report-twin": {}}, shaking(20, seed=3)
+    twin = make_run(tmp_path / "twin", motions, engines,
+                    extra={"engine_errors": run_engine_errors(SPEC, engines, motions)})  # fmt: skip
+    assert assert_verdict(twin, "report-twin", at_least="agrees").badge == "AGREES"
+    table = pd.read_parquet(twin / "results.parquet")
+    table.attrs["source"] = str(twin / "results.parquet")  # as the housner_results fixture gives it
+    assert assert_verdict(table, "report-twin").kind == "agrees"
+    with pytest.raises(ValueError, match="unknown verdict level `at_least` 'exact'"):
+        assert_verdict(twin, "report-twin", at_least="exact")
+    with pytest.raises(ValueError, match="did you mean 'report-twin'"):
+        assert_verdict(twin, "report-twn")

@@ -7,6 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import housner
 from housner import GroundMotion, Specimen
 from housner.engines.analytic import HousnerEngine
 from housner.engines.base import ENGINES, register_engine
@@ -72,6 +73,24 @@ def test_cache_reuses_results(tmp_path):
     # Another setting is another key: nothing reused.
     _, _, info3 = run_engines(SPEC, ms, {"housner": {"r": 0.9}}, jobs=1, cache_dir=tmp_path, progress=False)
     assert info3["housner"]["cached"] == 0
+
+
+def test_a_run_says_when_and_from_where_it_reuses_cached_results(tmp_path, capsys, monkeypatch):
+    """A fresh checkout reading a cache other checkouts filled says so, names the folder and what the key holds."""
+    from housner.scenarios.execution import cache
+
+    ms = motions()
+    run_engines(SPEC, ms[:2], {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=True)
+    assert "reusing" not in capsys.readouterr().err  # nothing cached yet: nothing said
+    run_engines(SPEC, ms, {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=True)
+    err = capsys.readouterr().err
+    assert f"reusing 2 of 4 records from the result cache in {tmp_path}" in err and "--no-cache" in err
+    assert f"housner {housner.__version__}" in err and cache.code_version() in err
+    # the version is part of the key: another version reuses nothing
+    monkeypatch.setattr(cache, "_CODE_VERSION", None)
+    monkeypatch.setattr(housner, "__version__", housner.__version__ + ".post1")
+    _, _, info = run_engines(SPEC, ms, {"housner": {}}, jobs=1, cache_dir=tmp_path, progress=False)
+    assert info["housner"]["cached"] == 0
 
 
 def test_process_pool_matches_in_process(tmp_path):

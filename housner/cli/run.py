@@ -194,15 +194,17 @@ def _print_outcomes(view: Run) -> None:
 
 
 def _print_verdicts(view: Run) -> list[str]:
-    """Print each engine's verdict against the reference (as the report's headline gives it); the failed ones."""
-    if not view.others:
-        return []
+    """Print each engine's one verdict against the reference (as the report's headline gives it), with the figures
+    behind it; the engines that fail."""
     verdicts = view.verdicts()  # an engine with the scenario's effects is meant to differ: it has none
-    print(f"verdict against {view.reference} (the report's headline):")
+    if not verdicts:
+        return []
+    print(f"verdict against {view.reference} (as the report's first screen; the rule: docs/explanation/verdict.md):")
     failed = []
     for name, v in verdicts.items():
         print(f"  {name:9s} {v.line()}")
-        if v.status == "FAIL":
+        print(f"  {'':9s} {v.figures()}")
+        if v.kind == "fails":
             failed.append(name)
     return failed
 

@@ -1,4 +1,4 @@
-"""Tolerance assertions for users' pytest: CDF, record-by-record and fragility agreement.
+"""Tolerance assertions for users' pytest: an engine's one verdict, CDF, record-by-record and fragility agreement.
 
 The criteria and the report of them are :mod:`housner.reports.assertions.criteria`'s; ``load_results``
 (a run directory's results table) is :func:`housner.scenarios.execution.rundir.load_results`.
@@ -7,6 +7,7 @@ The criteria and the report of them are :mod:`housner.reports.assertions.criteri
 from housner.reports.assertions.criteria import AgreementReport, CDFAgreementError, Criterion, RecordAgreementError
 from housner.reports.assertions.runs import assert_cdf_agreement, assert_record_agreement
 from housner.reports.assertions.studies import FragilityAgreementError, assert_fragility_agreement
+from housner.reports.assertions.verdict import VerdictError, assert_verdict
 from housner.scenarios.execution.rundir import load_results
 
 __all__ = [
@@ -15,8 +16,10 @@ __all__ = [
     "Criterion",
     "FragilityAgreementError",
     "RecordAgreementError",
+    "VerdictError",
     "assert_cdf_agreement",
     "assert_fragility_agreement",
     "assert_record_agreement",
+    "assert_verdict",
     "load_results",
 ]

@@ -27,6 +27,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from housner.reports._scenario_page import scenario_page
+from housner.reports.glossary import glossary_html
 from housner.reports.page import Section, guarded, render_directory, write_directory_report
 from housner.reports.run.sections.agreement import agreement_section, free_vibration_section, spectra_section
 from housner.reports.run.sections.distribution import distribution_section
@@ -114,6 +115,7 @@ def _build_sections(run: Run) -> list[Section]:
                            guarded("Free rocking", lambda: free_vibration_section(run))))
     out.append(Section("failures", "Failed records", failures_section(run)))
     out.append(Section("provenance", "Provenance", provenance_section(run)))
+    out.append(Section("glossary", "Glossary", glossary_html()))
     return out
 
 
@@ -131,6 +133,7 @@ def _campaign_sections(run: Run) -> list[Section]:
         Section("agreement", "Cross-engine agreement", agreement_section(run)),
         Section("failures", "Failed records", failures_section(run)),
         Section("provenance", "Provenance", provenance_section(run)),
+        Section("glossary", "Glossary", glossary_html()),
     ]  # fmt: skip
 
 

@@ -15,6 +15,7 @@ How it executes is a :class:`~housner.scenarios.execution.options.RunOptions`.
 from __future__ import annotations
 
 import math
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,10 +23,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+import housner
 from housner.engines.base import engine_class
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.schema import effects_label
-from housner.scenarios.execution.cache import cache_keys, runner_logger
+from housner.scenarios.execution.cache import cache_keys, code_version, runner_logger
 from housner.scenarios.execution.chunks import (
     REPAIRS,
     engine_batches,
@@ -119,6 +121,8 @@ def run_engines(
     n_workers, per_worker = _workers_and_chunks(scheduler, jobs)
     plan = _plan(specimen, motions, engines, effects, opts.cache_folder(), n_workers,
                  opts.chunk_size, per_worker, histories)  # fmt: skip
+    if plan.rows and opts.progress:
+        _say_reused(plan, len(engines) * len(motions))
     elapsed = _execute(plan, specimen, jobs, scheduler, opts.progress)
     for name in plan.info:
         plan.info[name]["elapsed_s"] = elapsed
@@ -221,6 +225,17 @@ def _parts(todo: list, size: int, n_workers: int, *, guided: bool) -> list[list]
     bulk, end = todo[: len(todo) - tail], todo[len(todo) - tail :]
     head = [bulk[c : c + size] for c in range(0, len(bulk), size)]
     return head + [end[c : c + small] for c in range(0, len(end), small)]
+
+
+def _say_reused(plan: _Plan, total: int) -> None:
+    """Say on stderr that records come from the result cache, from where, and why they are valid."""
+    print(
+        f"reusing {len(plan.rows)} of {total} records from the result cache in {plan.cache_dir} (computed earlier "
+        f"by housner {housner.__version__}, physics and engine code {code_version()}, with the same engine "
+        "versions, settings and motions; --no-cache recomputes them)",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 def _cached_row(plan: _Plan, name: str, i: int, k: str) -> dict | None:

@@ -382,8 +382,8 @@ def floor_verdict(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) 
     """One sentence: is an engine's record-by-record agreement at the chaos floor or below it?
 
     The engine's share gets a Wilson interval; it is "at the chaos floor" when
-    that interval reaches the lowest perturbed share, "below the chaos floor"
-    otherwise (a difference its measured r and p errors do not explain).
+    that interval reaches the floor, the lowest perturbed share (``floor.share_min``),
+    "below the chaos floor" otherwise (a difference its measured r and p errors do not explain).
 
     Parameters
     ----------
@@ -396,11 +396,10 @@ def floor_verdict(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) 
     if n <= 0:
         return "no paired records"
     low, high, below = floor_check(n_agree, n, floor, ci=ci)
-    lo, hi = floor.share_min, floor.share_max
-    span = f"{lo:.0%}" if lo == hi else f"{lo:.0%}-{hi:.0%}"
     head = (
-        f"agreement {n_agree / n:.0%} [{low:.0%}, {high:.0%}] against a chaos floor of {floor.share:.0%} "
-        f"({span}; analytic model with r x (1 +- {floor.eps_r:.2%}), p x (1 +- {floor.eps_p:.2%}))"
+        f"{n_agree / n:.0%} [{low:.0%}, {high:.0%}] of records agree against a chaos floor of {floor.share_min:.0%} "
+        f"(the analytic model against itself with r off by {floor.eps_r:.2%} and p by {floor.eps_p:.2%}, this "
+        f"engine's measured errors: {floor.share_min:.0%}-{floor.share_max:.0%} of records over the four runs)"
     )
     if not below:
         return head + ": at the floor, record-by-record differences no larger than its measured r and p errors give"

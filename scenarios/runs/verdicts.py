@@ -1,12 +1,27 @@
-"""An engine's verdict against the reference in a run: the distribution's, and record by record against the
-chaos floor.
+"""An engine's one verdict against the reference in a run, from one rule: the distribution test and the
+record-by-record agreement against the chaos floor, combined.
+
+The rule (docs/explanation/verdict.md), for an engine against the analytic model on the same motions:
+
+1. **Distribution.** The engine's distribution of peak rotations theta_max/alpha passes when the
+   Kolmogorov-Smirnov (KS) distance to the reference's (the largest gap between the two cumulative
+   distributions) is at most :data:`housner.stats.KS_MAX`, its probability of overturning is within
+   :data:`housner.stats.OVERTURN_TOL` of the reference's, and no record failed; on at least
+   :data:`MIN_RECORDS` records (fewer: inconclusive). These are the defaults of
+   :func:`housner.reports.assertions.runs.assert_cdf_agreement`.
+2. **Record by record.** The share of records on which the engine agrees with the reference (both
+   overturn, or both peak within 10 %) is compared with the *chaos floor*: the lowest share the
+   analytic model keeps with itself when its r and p are perturbed by the engine's measured errors.
+   The engine is at the floor when the 95 % Wilson interval of its share reaches the floor.
+
+The verdict (:data:`KINDS`): ``agrees`` (1 and 2 hold: use the engine for ensembles and single records),
+``ensemble`` (1 holds, 2 does not, or the run has no floor: ensemble statistics only), ``fails`` (1 does
+not hold: neither), ``inconclusive`` (too few records), ``no data``.
 
 :func:`engine_verdict` judges one engine's row of the run's comparison table
-(:func:`housner.scenarios.execution.tables.compare_engines`) against the default tolerances of
-:func:`housner.reports.assertions.runs.assert_cdf_agreement` (:data:`housner.stats.KS_MAX`,
-:data:`housner.stats.OVERTURN_TOL`, no failed record), so that ``housner run``, the report's
-headline and users' CI say the same; :meth:`housner.scenarios.runs.view.Run.verdicts` asks it for
-every engine of a run.
+(:func:`housner.scenarios.execution.tables.compare_engines`); ``housner run``, the report's headline and
+:func:`housner.reports.assertions.verdict.assert_verdict` all ask it through
+:meth:`housner.scenarios.runs.view.Run.verdicts`, so they say the same.
 """
 
 from __future__ import annotations
@@ -19,32 +34,53 @@ import pandas as pd
 from housner.scenarios.runs.chaos import floor_check, floor_verdict
 from housner.stats import KS_MAX, OVERTURN_TOL
 
-__all__ = ["MIN_RECORDS", "EngineVerdict", "engine_verdict"]
+__all__ = ["KINDS", "MIN_RECORDS", "EngineVerdict", "engine_verdict"]
 
 #: Fewest records of each engine that a distribution verdict is drawn from: one record moves the KS distance
 #: by 1/n, so below 3 / KS_MAX = 20 records a single record's difference is a third of the tolerance
 #: or more, and one record gives KS 0 or 1 whatever the engines do. Fewer records: "inconclusive".
 MIN_RECORDS = math.ceil(3 / KS_MAX)
 
+#: The verdict's kinds: (badge, the page's badge class, what the engine is good for). Best first.
+KINDS = {
+    "agrees": ("AGREES", "pass", "good for ensembles and for single records"),
+    "ensemble": ("ENSEMBLE ONLY", "warn", "good for ensemble statistics (P[overturn], fragility, percentiles), "
+                 "not for one record's response"),
+    "fails": ("FAILS", "fail", "good for neither"),
+    "inconclusive": ("INCONCLUSIVE", "na", "too few records to tell"),
+    "no data": ("NO DATA", "na", "no usable records"),
+}
+
+
+#: The verdict's first words, by kind.
+_HEADS = {
+    "agrees": "agrees in distribution and record by record, as closely as chaos allows",
+    "ensemble": "its distribution of peak rotations agrees, but record by record it departs more than chaos explains",
+    "fails": "its distribution of peak rotations differs from the reference's",
+    "inconclusive": "too few records for a verdict",
+    "no data": "no usable records to compare",
+}
+
 
 @dataclass(frozen=True)
 class EngineVerdict:
-    """What a run says of one engine against the reference, in plain text (the page and the command line).
+    """What a run says of one engine against the reference (the page, the command line and the assertions).
 
     Attributes
     ----------
     status : str
-        The distribution verdict: ``"PASS"``, ``"FAIL"`` (against the default tolerances),
+        The distribution test alone: ``"PASS"``, ``"FAIL"`` (against the default tolerances),
         ``"inconclusive"`` (fewer than :data:`MIN_RECORDS` records, none failed) or ``"no data"``.
     checks : tuple of (bool, str)
-        Each criterion: met, and its figures.
+        Each criterion of the distribution test: met, and its figures.
     records : str or None
-        The record-by-record verdict against the chaos floor
+        The record-by-record verdict against the chaos floor in a sentence
         (:func:`housner.scenarios.runs.chaos.floor_verdict`), None where the run has no floor.
     below_floor : bool or None
-        Whether the record-by-record agreement lies below the chaos floor.
+        Whether the record-by-record agreement lies below the chaos floor (None: no floor).
     records_short : str or None
-        The record-by-record figures in short: "28 % [20 %, 37 %] vs chaos floor 66 %" (None without a floor).
+        The record-by-record figures in short: "28 % [20 %, 37 %] of records agree, chaos floor 47 %"
+        (None without a floor).
     """
 
     status: str
@@ -55,16 +91,58 @@ class EngineVerdict:
 
     @property
     def ok(self) -> bool | None:
-        """True for PASS, False for FAIL, None otherwise (as a page's badge takes it)."""
+        """The distribution test: True for PASS, False for FAIL, None otherwise."""
         return {"PASS": True, "FAIL": False}.get(self.status)
 
+    @property
+    def kind(self) -> str:
+        """The one verdict (a key of :data:`KINDS`), by the rule of the module docstring."""
+        if self.status == "PASS":
+            return "agrees" if self.below_floor is False else "ensemble"
+        return {"FAIL": "fails", "inconclusive": "inconclusive"}.get(self.status, "no data")
+
+    @property
+    def badge(self) -> str:
+        """The verdict's badge text: "AGREES", "ENSEMBLE ONLY", "FAILS", "INCONCLUSIVE" or "NO DATA"."""
+        return KINDS[self.kind][0]
+
+    @property
+    def good_for(self) -> str:
+        """What the engine is good for, in a few words."""
+        if self.kind == "ensemble" and self.records_short is None:
+            return "good for ensemble statistics; for single records not judged"
+        return KINDS[self.kind][2]
+
+    @property
+    def decided_by(self) -> str:
+        """The one figure that decided the verdict, in words."""
+        failed = [t for c, t in self.checks if not c]
+        if self.kind in ("fails", "inconclusive", "no data"):
+            return failed[0] if failed else self.checks[0][1]
+        return self.checks[0][1] if self.records_short is None else self.records_short
+
+    def sentence(self) -> str:
+        """The verdict in one sentence of plain words, its deciding figure in brackets."""
+        kind = self.kind
+        if kind == "ensemble" and self.records_short is None:
+            head = "its distribution of peak rotations agrees; record by record it was not judged (no chaos floor)"
+        elif kind == "fails" and any(not c and "failed record" in t for c, t in self.checks):
+            head = "records failed to run"
+        else:
+            head = _HEADS[kind]
+        tail = "" if kind in ("inconclusive", "no data") else f": {self.good_for}"
+        return f"{head} ({self.decided_by}){tail}"
+
     def line(self) -> str:
-        """One line for the command line: the distribution verdict, its figures, the record-by-record one."""
-        figures = "; ".join(t for _, t in self.checks)
+        """One line for the command line: the badge and the sentence."""
+        return f"{self.badge}: {self.sentence()}"
+
+    def figures(self) -> str:
+        """Every figure behind the verdict, in one line: the distribution test's, then the record-by-record one."""
+        out = f"distribution test {self.status}: " + "; ".join(t for _, t in self.checks)
         if self.records_short:
-            side = "below the floor" if self.below_floor else "at the floor"
-            return f"{self.status}: {figures}; record by record: {self.records_short}, {side}"
-        return f"{self.status}: {figures}"
+            out += f"; record by record: {self.records_short}, {'below' if self.below_floor else 'at'} the floor"
+        return out
 
 
 def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
@@ -86,8 +164,8 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
     n = int(row["n_ok"])
     if n < MIN_RECORDS and nf == 0:  # a failed record fails at any size; the two statistics need records
         status = "inconclusive"
-        checks = ((False, f"only {n} record{'s' if n != 1 else ''} (a distribution verdict needs {MIN_RECORDS}: one "
-                   f"record moves the KS distance by 1/n = {1 / max(n, 1):.2f})"), *checks)  # fmt: skip
+        checks = ((False, f"only {n} record{'s' if n != 1 else ''}; a distribution verdict needs {MIN_RECORDS}: one "
+                   f"record moves the KS distance by 1/n = {1 / max(n, 1):.2f}"), *checks)  # fmt: skip
     else:
         status = "PASS" if all(c for c, _ in checks) else "FAIL"
     paired = float(row.get("n_paired", 0) or 0)
@@ -96,5 +174,5 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
     n_pair = int(paired)
     k = int(round(float(row["agreement_share"]) * n_pair))
     lo, hi, below = floor_check(k, n_pair, floor)
-    short = f"{k / n_pair:.0%} [{lo:.0%}, {hi:.0%}] vs chaos floor {floor.share:.0%}"
+    short = f"{k / n_pair:.0%} [{lo:.0%}, {hi:.0%}] of records agree, chaos floor {floor.share_min:.0%}"
     return EngineVerdict(status, checks, floor_verdict(k, n_pair, floor), below, short)

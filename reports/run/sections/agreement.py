@@ -59,10 +59,10 @@ def _disagreement(run: Run) -> pd.DataFrame:
 
 
 def _floor_cell(fl) -> str:
-    """The chaos floor as a table cell: mean share and the range of the four perturbations."""
+    """The chaos floor as a table cell: the lowest share of the four perturbations (the floor), and their range."""
     if fl is None:
         return "&ndash;"
-    return f"{fl.share:.0%}<br><small>{fl.share_min:.0%}&ndash;{fl.share_max:.0%}</small>"
+    return f"{fl.share_min:.0%}<br><small>(of {fl.share_min:.0%}&ndash;{fl.share_max:.0%})</small>"
 
 
 def agreement_section(run: Run) -> str:
@@ -127,9 +127,10 @@ def _agreement_table(run: Run, floors: dict) -> str:
         f"neither did; &ldquo;within {RECORD_RTOL:.0%}&rdquo;: both overturned, or both rocked with "
         f"&theta;<sub>max</sub> within {RECORD_RTOL:.0%} of the reference's. Rocking is sensitive to small "
         "perturbations (seed Fig. 9), so record-by-record agreement can be low while the distributions agree. "
-        "The chaos floor is how often the analytic model agrees with itself, by the same rule, when its r and p "
-        "are perturbed by the engine's measured free-rocking errors (mean of the four perturbations, their range "
-        "below): agreement at the floor is chaos, agreement below it a model difference.",
+        "The <a href='#glossary-chaos-floor'>chaos floor</a> is how often the analytic model agrees with itself, "
+        "by the same rule, when its r and p are perturbed by the engine's measured free-rocking errors: the lowest "
+        "of the four perturbations (r and p, each up and down; their range below it). Agreement at the floor is "
+        "chaos, agreement below it a model difference.",
     )
 
 

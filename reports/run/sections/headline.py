@@ -1,10 +1,10 @@
 """Report sections on the verdict and the specimen: how far each engine is from the reference, and with what.
 
-The headline gives each engine's PASS/FAIL against the default tolerances (the
-same as :func:`housner.reports.assertions.runs.assert_cdf_agreement`'s, so the page says what
-users' CI says) with the figures behind it, and for a scenario with effects how
-far they moved the distribution; the specimen section lists the geometry and
-every engine's settings.
+The headline gives each engine's one verdict (:mod:`housner.scenarios.runs.verdicts`: agrees, ensemble only,
+fails, inconclusive), one badge and one sentence with the figure that decided it, the same verdict
+``housner run`` prints and :func:`housner.reports.assertions.verdict.assert_verdict` asserts; then the
+figures behind it, and for a scenario with effects how far they moved the distribution. The specimen
+section lists the geometry and every engine's settings.
 """
 
 from __future__ import annotations
@@ -25,23 +25,12 @@ from housner.reports.page import (
     guarded,
     html_note,
     html_table,
-    status_badge,
 )
 from housner.reports.run.sections.tuning import settings_html, tuning_caveats, tuning_section
-from housner.scenarios.runs.verdicts import MIN_RECORDS, EngineVerdict
+from housner.scenarios.runs.verdicts import KINDS, MIN_RECORDS, EngineVerdict
 from housner.scenarios.runs.view import BOOT_SEED, N_BOOT, Run
 from housner.stats import KS_MAX, OVERTURN_TOL
 from housner.units import G
-
-
-def checks_html(v: EngineVerdict) -> list[str]:
-    """Each criterion of a verdict as the page writes it: its figures, marked met or not."""
-    return [f'<span class="{"ok" if c else "bad"}">{_html_figures(t)}</span>' for c, t in v.checks]
-
-
-def _html_figures(text: str) -> str:
-    """A criterion's plain text as the page writes it (entities for <=, > and Delta)."""
-    return esc(text).replace("&lt;=", "&le;").replace("dP[", "&Delta;P[")
 
 
 def _moved(run: Run, base: str, series: str) -> str:
@@ -90,13 +79,21 @@ def headline_section(run: Run) -> str:
         )
     verdicts = run.verdicts(_floors(run, parts))
     parts.append(_verdict_lines(run, verdicts, caveats))
-    parts.append(_headline_table(run, verdicts, caveats))
+    parts.append(_headline_table(run, verdicts))
     parts.append(html_note(_rule_text(run)))
+    parts.extend(f'<div class="caveat"><strong>{engine_tag(n, run)}</strong>: {caveats[n]}</div>'
+                 for n in run.others if n in caveats and n in verdicts)  # fmt: skip
     return "".join(parts)
 
 
+def verdict_badge(v: EngineVerdict) -> str:
+    """The verdict's one badge (its colour: :data:`housner.scenarios.runs.verdicts.KINDS`)."""
+    return f'<span class="badge {KINDS[v.kind][1]}">{v.badge}</span>'
+
+
 def _verdict_lines(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[str, str]) -> str:
-    """One line per engine, the answer first: its badges and figures, or how far an effect moves its engine."""
+    """One line per engine, the answer first: its badge, its sentence with the deciding figure, the figures
+    behind it; or how far an effect moves its engine."""
     effects = run.meta.effect_series
     lines = []
     for name in run.others:
@@ -108,21 +105,40 @@ def _verdict_lines(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[s
             continue
         if name not in verdicts:  # a 3D engine: its theta is not the planar block's (Run.mesh_engines)
             lines.append(f'<li><span class="badge na">3D</span> {engine_tag(name, run)}: no distribution verdict '
-                         "against the planar block (its &theta; is the tilt of the scan's 3D body, not the block's "
-                         "rotation); judged by the measured outcomes</li>")  # fmt: skip
+                         "against the planar block (its &theta;<sub>max</sub> is the tilt of the scan's 3D body, not "
+                         "the block's rotation); judged by the measured outcomes</li>")  # fmt: skip
             continue
         v = verdicts[name]
-        extra = f'<div class="caveat">{caveats[name]}</div>' if name in caveats else ""
-        if v.records:
-            extra = f"<div><strong>Record by record</strong>: {esc(v.records)}.</div>" + extra
-        lines.append(f"<li>{_badges(v)} {engine_tag(name, run)}: {'; '.join(checks_html(v))}{extra}</li>")
+        head, _, good = v.sentence().partition(f" ({v.decided_by})")
+        mark = f' <small class="bad">{_caveat_count(caveats[name])} (below)</small>' if name in caveats else ""
+        lines.append(
+            f"<li>{verdict_badge(v)} {engine_tag(name, run)}: {esc(head)}: <strong>{_html_figures(v.decided_by)}"
+            f"</strong>{esc(good)}.{mark}<div class=figs>{_figures_line(run, name, v)}</div></li>"
+        )
     if lines:
         return f'<ul class="verdicts">{"".join(lines)}</ul>'
     return html_note(f"Only one engine ({esc(run.reference)}) in this run: nothing to compare it with.")
 
 
-def _headline_table(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[str, str]) -> str:
-    """Every engine's records, KS distance, P[overturn], median and verdict, the reference first."""
+def _figures_line(run: Run, name: str, v: EngineVerdict) -> str:
+    """The figures behind a verdict, in words: the distribution test's and the record-by-record one."""
+    cmp, ref = run.comparison, run.reference
+    row, rrow = cmp.loc[name], cmp.loc[ref]
+    nf = int(row["n_failed"])
+    dist = (
+        f"Distribution: KS distance {fmt_num(row['ks_distance'])} (limit {KS_MAX}); P[overturn] "
+        f"{fmt_num(row['p_overturn'], 2)} against {fmt_num(rrow['p_overturn'], 2)} (limit &plusmn;{OVERTURN_TOL}); "
+        f"median &theta;<sub>max</sub>/&alpha; {fmt_num(row['q50'], 3)} against {fmt_num(rrow['q50'], 3)} "
+        f"(the reference's 90 % interval {fmt_num(rrow['q50_low'], 3)}-{fmt_num(rrow['q50_high'], 3)}); "
+        f"{nf} failed record{'s' if nf != 1 else ''}."
+    )
+    if v.records_short is None:
+        return dist + " Record by record: not judged (no chaos floor for this run)."
+    return dist + f" Record by record: {_html_figures(v.records_short)}."
+
+
+def _headline_table(run: Run, verdicts: dict[str, EngineVerdict]) -> str:
+    """Every engine's records, KS distance, P[overturn], median, record agreement and verdict, the reference first."""
     cmp, ref = run.comparison, run.reference
     header = [
         "engine",
@@ -131,6 +147,7 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[
         "P[overturn]<br>[95 % CI]",
         "&Delta;P[overturn]",
         "median &theta;<sub>max</sub>/&alpha;<br>[90 % CI]",
+        "records that agree<br>[95 % CI] / chaos floor",
         "verdict",
     ]
     rows = []
@@ -138,12 +155,15 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[
         row = cmp.loc[name]
         is_ref = name == ref
         nf = int(row["n_failed"])
+        v = verdicts.get(name)
         if is_ref:
             verdict = "reference"
-        elif name in verdicts:
-            verdict = _badges(verdicts[name]) + (_caveat_mark(caveats[name]) if name in caveats else "")
+        elif v is not None:
+            verdict = verdict_badge(v)
         else:
             verdict = "3D: outcomes only" if name in run.mesh_engines else "effect"
+        records = "&ndash;" if v is None or v.records_short is None else _html_figures(
+            v.records_short.replace(" of records agree, chaos floor", " /"))
         rows.append(
             [
                 engine_tag(name, run) + (" <small>(reference)</small>" if is_ref else ""),
@@ -152,6 +172,7 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[
                 ci_cell(row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"], 2),
                 "&ndash;" if is_ref else fmt_signed(row["overturn_diff"], 3),
                 ci_cell(row["q50"], row["q50_low"], row["q50_high"], 3),
+                records,
                 verdict,
             ]
         )
@@ -159,7 +180,7 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[
 
 
 def _rule_text(run: Run) -> str:
-    """What pass means, and how sure a verdict on this many records is."""
+    """The one rule behind the verdicts, and how sure a verdict on this many records is."""
     cmp, ref = run.comparison, run.reference
     n = int(cmp.loc[ref, "n_ok"]) if ref in cmp.index else 0
     # Smirnov's asymptotic 5 % critical distance for two samples of n: sqrt(-ln(0.025) / 2) sqrt(2 / n).
@@ -168,23 +189,29 @@ def _rule_text(run: Run) -> str:
         how_sure = (
             f"How sure: two <em>independent</em> ensembles of n = {n} records from one distribution differ by a KS "
             f"distance above {fmt_num(crit, 2)} one time in twenty; here every engine sees the very same motions, "
-            "so engines that agree should sit well below that, and the p-value (which assumes independent samples) "
-            "is conservative."
+            "so engines that agree should sit well below that. The KS distance is the largest gap between the two "
+            "cumulative distributions; where the peaks spread over a decade, a gap of 0.1 can move the median by "
+            "20 %, which is why the medians are shown beside it."
         )
     else:
         how_sure = (
-            f"With {n} record{'s' if n != 1 else ''} the distribution verdict is <strong>inconclusive</strong>: one "
+            f"With {n} record{'s' if n != 1 else ''} the verdict is <strong>inconclusive</strong>: one "
             f"record moves the KS distance by 1/n, so at least {MIN_RECORDS} records are needed for a tolerance of "
             f"{KS_MAX}; the figures are shown, not judged."
         )
     return (
-        f"Pass means KS distance &le; {KS_MAX}, |&Delta;P[overturn]| &le; {OVERTURN_TOL} and no "
-        "failed record (the defaults of <code>housner.reports.assertions.runs.assert_cdf_agreement</code>), "
-        f"on at least {MIN_RECORDS} records. Record by record, an engine is <em>at the chaos floor</em> when its "
-        "share of records within the agreement tolerance reaches what the analytic model keeps under its own "
-        "measured r and p errors, and <em>below</em> it otherwise. "
-        "P[overturn] intervals are Wilson score intervals; median intervals are percentile bootstraps "
-        f"({N_BOOT} resamples, seed {BOOT_SEED}). " + how_sure
+        "<strong>The rule</strong> (one for the page, <code>housner run</code> and "
+        "<code>housner.reports.assertions.verdict.assert_verdict</code>; docs/explanation/verdict.md). "
+        f"<em>Distribution test</em>: KS distance &le; {KS_MAX}, |&Delta;P[overturn]| &le; {OVERTURN_TOL}, no "
+        f"failed record, on at least {MIN_RECORDS} records. <em>Record by record</em>: the share of records on "
+        "which the engine and the reference agree (both overturn, or both peak within 10 %) against the "
+        "<a href='#glossary-chaos-floor'><em>chaos floor</em></a>, the lowest share the analytic model keeps with "
+        "itself when its r and p are off by "
+        "this engine's measured errors; the engine is at the floor when the 95 % interval of its share reaches "
+        "it. <span class='badge pass'>AGREES</span>: both hold. <span class='badge warn'>ENSEMBLE ONLY</span>: "
+        "the distribution test holds, the records fall below the floor. <span class='badge fail'>FAILS</span>: the "
+        "distribution test fails. P[overturn] intervals are Wilson score intervals; median intervals are "
+        f"percentile bootstraps ({N_BOOT} resamples, seed {BOOT_SEED}). " + how_sure
     )
 
 
@@ -199,20 +226,14 @@ def _floors(run: Run, parts: list[str]) -> dict:
         return {}
 
 
-def _badges(v) -> str:
-    """The distribution verdict's badge, and the record-by-record one beside it where the run has a floor."""
-    if v.status == "inconclusive":
-        out = '<span class="badge na">inconclusive</span>'
-    else:
-        out = status_badge(v.ok)
-    if v.below_floor is not None:
-        out += " " + status_badge(not v.below_floor, yes="at the floor", no="below the floor")
-    return out
+def _html_figures(text: str) -> str:
+    """A verdict's plain figures as the page writes them (entities for <=, > and Delta, spaced percent signs)."""
+    return esc(text).replace("&lt;=", "&le;").replace("dP[", "&Delta;P[").replace("%", "&#8239;%")
 
 
-def _caveat_mark(text: str) -> str:
+def _caveat_count(text: str) -> str:
     n = text.count('class="bad"')
-    return f"<br><small>{n} tuning check{'s' if n != 1 else ''} not met (above)</small>" if n else ""
+    return f"{n} tuning check{'s' if n != 1 else ''} not met"
 
 
 _SPECIMEN_ROWS = {
