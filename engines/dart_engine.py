@@ -147,19 +147,23 @@ class DartEngine(PlanarEngine):
         block.setPositions(states[0, :3].tolist())
         block.setVelocities(states[0, 3:].tolist())
         gx_rows = gravity_x(motion.acc, k)  # step 1 of the module docstring
-        # One gravity vector, its x written in place before each step: dartpy converts an ndarray to its
-        # Eigen vector faster than a new list, same numbers (docs/results.md#defaults-dart).
-        gravity = np.array([0.0, 0.0, -G])
-        set_gravity, step = world.setGravity, world.step
+        # Gravity set before each step from its three components: dartpy's (x, y, z) overload takes 0.3 us where
+        # an ndarray converted to its Eigen vector takes 1.0 us (a list 1.6 us), the same numbers.
+        set_gravity, step, gz = world.setGravity, world.step, -G
         law = self.impact_law(specimen, effects, h, motion.theta0)
+        scaled = law.active  # without the impact law, the loop checks nothing after a step
 
         def advance(i: int) -> np.ndarray:
-            for gxi in gx_rows[i - 1]:
-                gravity[0] = gxi
-                set_gravity(gravity)
-                step()
-                if law.active and (c := law.after_step(block.getPosition(2), block.getVelocity(2))) is not None:
-                    block.setVelocities(c * block.getVelocities())
+            if not scaled:
+                for gxi in gx_rows[i - 1]:
+                    set_gravity(gxi, 0.0, gz)
+                    step()
+            else:
+                for gxi in gx_rows[i - 1]:
+                    set_gravity(gxi, 0.0, gz)
+                    step()
+                    if (c := law.after_step(block.getPosition(2), block.getVelocity(2))) is not None:
+                        block.setVelocities(c * block.getVelocities())
             q = states[i, :3] = block.getPositions()
             states[i, 3:] = block.getVelocities()
             return q
