@@ -43,7 +43,7 @@ GLOSSARY = (
      "distribution functions (CDFs) of &theta;<sub>max</sub>/&alpha; (overturns counted as +&infin;), from 0 "
      "(identical) to 1."),
     ("agreement", "records that agree", "Record by record, an engine agrees with the reference on a record when "
-     "both overturn, or both rock with peaks &theta;<sub>max</sub>/&alpha; within 10 % of each other."),
+     "both overturn, or both rock with peaks &theta;<sub>max</sub>/&alpha; within 3 % of each other."),
     ("chaos-floor", "chaos floor", "Rocking is chaotic: a tiny change of r or p changes single records, not the "
      "distribution. The chaos floor is the lowest share of records on which the analytic model agrees with itself "
      "when its r and p are off by as much as an engine's are measured to be (four runs: r and p each up and down). "

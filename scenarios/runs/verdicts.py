@@ -10,8 +10,9 @@ The rule (docs/explanation/verdict.md), for an engine against the analytic model
    :data:`MIN_RECORDS` records (fewer: inconclusive). These are the defaults of
    :func:`housner.reports.assertions.runs.assert_cdf_agreement`.
 2. **Record by record.** The share of records on which the engine agrees with the reference (both
-   overturn, or both peak within 10 %) is compared with the *chaos floor*: the lowest share the
-   analytic model keeps with itself when its r and p are perturbed by the engine's measured errors.
+   overturn, or both peak within :data:`housner.scenarios.runs.chaos.RECORD_RTOL`, 3 %) is compared
+   with the *chaos floor*: the lowest share the analytic model keeps with itself when its r and p are
+   perturbed by the engine's measured errors.
    The engine is at the floor when the 95 % Wilson interval of its share reaches the floor.
 
 The verdict (:data:`KINDS`): ``agrees`` (1 and 2 hold: use the engine for ensembles and single records),

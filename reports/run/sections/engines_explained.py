@@ -6,7 +6,8 @@ Reads, for each of the run's engines, the stored measurements next to its tuning
 * ``explain-<engine>.json`` (``housner explain ENGINE --json FILE``): the effects that carry
   the analytic model to the engine, its per-record agreement with the engine before and
   after them, the agreement a correct model could reach (the *reachable agreement*: the report's single
-  floor concept, the chaos floor, with this section's stricter rule, or the model-form limit if lower),
+  floor concept, the chaos floor, on the scenario the explanation was measured on, or the model-form limit
+  if lower),
   and what remains;
 * ``frontier-<engine>.json`` (``housner frontier ENGINE --json FILE``): the engine's
   accuracy-cost frontier, its defaults and its knee.
@@ -94,9 +95,9 @@ def _decomposition(run: Run, found: dict) -> str:
         ],  # fmt: skip
         rows,
         caption="Per-record agreement: the share of ground motions on which the analytic model and the engine both "
-        "overturn, or both rock with &theta;<sub>max</sub>/&alpha; within 3 % (stricter than the 10 % of the "
-        "verdict above, so the shares are lower). The reachable agreement is what a correct model could still"
-        " reach: the lower of the <a href='#glossary-chaos-floor'>chaos floor</a> by this 3 % rule and the "
+        "overturn, or both rock with &theta;<sub>max</sub>/&alpha; within 3 % (the rule of the verdict above, "
+        "here on the scenario each explanation was measured on). The reachable agreement is what a correct model "
+        "could still reach: the lower of the <a href='#glossary-chaos-floor'>chaos floor</a> and the "
         "model-form limit (two correct integrators' conventions agreeing with each other). The measured maps "
         "are the engine's own impact law (energy kept against the speed of the impact) and flight loss, "
         "measured on free rocking and composed into the analytic model (figure below); their scatter limit is"

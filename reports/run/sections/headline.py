@@ -27,6 +27,7 @@ from housner.reports.page import (
     html_table,
 )
 from housner.reports.run.sections.tuning import settings_html, tuning_caveats, tuning_section
+from housner.scenarios.runs.chaos import RECORD_RTOL
 from housner.scenarios.runs.verdicts import KINDS, MIN_RECORDS, EngineVerdict
 from housner.scenarios.runs.view import BOOT_SEED, N_BOOT, Run
 from housner.stats import KS_MAX, OVERTURN_TOL
@@ -204,7 +205,7 @@ def _rule_text(run: Run) -> str:
         "<code>housner.reports.assertions.verdict.assert_verdict</code>; docs/explanation/verdict.md). "
         f"<em>Distribution test</em>: KS distance &le; {KS_MAX}, |&Delta;P[overturn]| &le; {OVERTURN_TOL}, no "
         f"failed record, on at least {MIN_RECORDS} records. <em>Record by record</em>: the share of records on "
-        "which the engine and the reference agree (both overturn, or both peak within 10 %) against the "
+        f"which the engine and the reference agree (both overturn, or both peak within {RECORD_RTOL:.0%}) against the "
         "<a href='#glossary-chaos-floor'><em>chaos floor</em></a>, the lowest share the analytic model keeps with "
         "itself when its r and p are off by "
         "this engine's measured errors; the engine is at the floor when the 95 % interval of its share reaches "
