@@ -77,7 +77,7 @@ def apply_effects(
     specimen: Specimen, motion: GroundMotion, effects: Iterable[Effect] = (), *, params=None,
     prefer_terms: bool = False,
 ) -> EffectPlan:  # fmt: skip
-    """Resolve ``effects`` for one simulation (see the module docstring for the order).
+    """Resolve ``effects`` for one simulation (the order they compose in: the ``housner.effects`` package docstring).
 
     Parameters
     ----------

@@ -89,17 +89,64 @@ def _q_values(kind: str, q) -> tuple[float, ...]:
 
 @dataclass(frozen=True)
 class MomentTerm:
-    """A smooth extra angular acceleration phi'' [rad/s^2] (see the module docstring).
+    """A smooth extra angular acceleration of the block, a term of the analytic kernel.
+
+    The kernel adds ``fn(...)`` to Housner's equation of motion, written in reduced coordinates on
+    the pivot s the block rocks on: ``phi'' = -p2 (sin(alpha - phi) + a cos(alpha - phi)) + (sum of
+    the moment terms) - sgn(w) (sum of the Coulomb capacities)``. A moment M [N m] on the block,
+    positive when it turns the block toward +x (theta increasing), is the term ``s M / I0_s``, with
+    I0_s = m g R_s / p_s^2 the inertia about pivot s.
 
     Parameters
     ----------
     fn : numba dispatcher
-        ``fn(phi, w, t, a, v, s, alpha, p2, q) -> float``, defined at the top level of a module.
+        ``fn(phi, w, t, a, v, s, alpha, p2, q) -> float``: returns the extra phi'' [rad/s^2],
+        positive away from upright. Its arguments, in this order (names free), are floats but q:
+
+        - ``phi`` = s theta [rad], the rotation toward the pivot: >= 0 while the block rocks on s,
+          0 at rest, slightly negative while an impact is being located;
+        - ``w`` = s theta' [rad/s]: > 0 moving away from upright, < 0 falling back;
+        - ``t``: time since the start of the motion [s];
+        - ``a`` = s ug''/g [-]: the horizontal ground acceleration the block feels (after every
+          ``transform_input``), linear between samples; a < -tan(alpha) lifts the block onto s;
+        - ``v`` = a_v/g [-]: the vertical table acceleration, positive up, the same on both
+          pivots; 0 unless an effect of the simulation reads or makes the channel
+          ``ground_acc_vertical``;
+        - ``s``: the pivot, +1.0 for the +x corner (theta > 0), -1.0 for the -x corner;
+        - ``alpha`` [rad] and ``p2`` = p^2 [1/s^2]: slenderness and squared frequency parameter
+          of pivot s, after every ``modify_params``;
+        - ``q``: this term's parameters, a float64 array in the order given.
+
+        A numba ``@njit`` function (write ``@njit(cache=True)``) at the top level of a module
+        importable by name (an installed module, or a plugin file loaded with
+        ``housner.effects.load_plugin``); pure (it keeps no state and never writes into q: the
+        kernel calls it at trial states, out of time order), finite, and smooth in phi, w and t
+        within a sample (a moment that switches with the direction of motion is a
+        ``CoulombTerm``).
     q : sequence of float
-        Its parameters (units as the function says).
+        The term's parameters, finite numbers in the units ``fn`` reads them in; run-time data (a
+        new value recompiles nothing).
     at_rest : bool
-        The moment may be non-zero at phi = w = 0, so the uplift rule becomes the net moment's
-        (default True; False for a moment proportional to w).
+        Whether the moment may be non-zero at phi = w = 0 (default True). With such a term (or a
+        Coulomb term) in the simulation a block at rest, or stuck, starts to move at the first
+        instant at which phi'' at w = 0, the terms included, is positive on a corner (exceeds the
+        dry capacity): the uplift rule becomes the net moment's. Without one the kernel keeps
+        Housner's rule a <= -tan(alpha) and does not evaluate the terms at rest. False is right
+        for a moment that vanishes at rest (damping, drag: proportional to w); a moment that acts
+        on a block at rest (a vertical input, a steady force, a tilted base) declared False is
+        ignored until the block lifts by Housner's rule. MuJoCo realises only False moments.
+
+    Raises
+    ------
+    ValueError
+        ``fn`` is not a module-level numba function of 9 arguments, or ``q`` holds a value that is
+        not a finite number.
+
+    Notes
+    -----
+    The kernel calls ``fn`` at each of the four stages of each RK4 step while the block moves, in
+    the iterations that locate its events (impact, peak, overturn), and, when a term acts at rest,
+    at the hold checks on both corners. The moments of all effects add up.
     """
 
     fn: Any
@@ -114,13 +161,33 @@ class MomentTerm:
 
 @dataclass(frozen=True)
 class CoulombTerm:
-    """A dry moment of capacity C >= 0 [rad/s^2]: -C sgn(w) while turning, sticking within +-C at w = 0.
+    """A dry (Coulomb) moment at the pivot, a term of the analytic kernel: it resists turning and holds the block.
+
+    While the block turns, the kernel adds -C sgn(w) to phi'' (the direction is frozen over a
+    step; a step in which w reaches 0 is cut there). At w = 0 the block holds while the other
+    moments stay within +-C: stuck at phi > 0, or at rest on the ground, from which it lifts onto
+    a corner only once phi'' there exceeds C (a raised uplift threshold). A Coulomb term makes the
+    kernel use the net moment's uplift rule (see ``MomentTerm``'s ``at_rest``). The capacities of
+    all Coulomb terms add up.
 
     Parameters
     ----------
     fn : numba dispatcher
-        ``fn(phi, t, a, v, s, alpha, p2, q) -> float`` (the capacity, >= 0).
+        ``fn(phi, t, a, v, s, alpha, p2, q) -> float``: returns the capacity C >= 0 [rad/s^2],
+        M_f / I0_s for a dry moment M_f [N m] at pivot s (I0_s = m g R_s / p_s^2). Its arguments
+        are ``MomentTerm``'s without w: ``phi`` = s theta [rad], ``t`` [s], ``a`` = s ug''/g
+        [-], ``v`` = a_v/g [-] (positive up; 0 without a ``ground_acc_vertical`` channel), ``s``
+        (+1.0 for the +x corner, -1.0), ``alpha`` [rad] and ``p2`` = p^2 [1/s^2] of pivot s, and
+        ``q``, this term's parameters (a float64 array). The same rules as a moment's function:
+        a module-level numba ``@njit`` function, pure, finite.
     q : sequence of float
+        The term's parameters, finite numbers (units as ``fn`` reads them).
+
+    Raises
+    ------
+    ValueError
+        ``fn`` is not a module-level numba function of 8 arguments, or ``q`` holds a value that is
+        not a finite number.
     """
 
     fn: Any
@@ -133,16 +200,37 @@ class CoulombTerm:
 
 @dataclass(frozen=True)
 class ImpactTerm:
-    """A change of the impact map through its energy ratio: r' = fn(w, r, s, alpha, p2, q) [-].
+    """A change of the impact law, a term of the analytic kernel: it gives the energy ratio r' of an impact.
+
+    At an impact the angular velocity after is sqrt(r') times the one before. The kernel starts
+    from the rocking parameters' ratio of the corner that lands (``r_pos`` or ``r_neg``,
+    Housner's by default) and passes it through the impact terms: those with ``replaces`` first,
+    then the others, each in the order of the effects; the amplitude exponent of the rocking
+    parameters applies last. Then the rest rule: a block whose new speed could not lift it above
+    ``rest_tol`` alpha in free rocking is put at rest.
 
     Parameters
     ----------
     fn : numba dispatcher
-        ``fn(w, r, s, alpha, p2, q) -> float``: w the speed before the impact [rad/s] (> 0), r
-        the ratio in force; the speed after is sqrt(r') w.
+        ``fn(w, r, s, alpha, p2, q) -> float``: returns the energy ratio r' [-], in [0, 1] (it is
+        not clipped: above 1 the impact adds energy). Called once per impact with ``w`` the speed
+        just before it [rad/s] (> 0), ``r`` the ratio in force [-] (of the corner that lands, or
+        the previous impact term's result), ``s`` the pivot before the impact (+1.0 for the +x
+        corner, -1.0; the block lands on -s), ``alpha`` [rad] and ``p2`` = p^2 [1/s^2] of pivot
+        s, and ``q``, this term's parameters (a float64 array). A module-level numba ``@njit``
+        function, pure, finite.
     q : sequence of float
+        The term's parameters, finite numbers (units as ``fn`` reads them).
     replaces : bool
-        The law sets the ratio without reading r; such laws run before the others.
+        The law sets the ratio without reading r (a restitution); such laws run before those
+        that modify the ratio in force (an amplitude dependence), whatever the order of the
+        effects. Default False.
+
+    Raises
+    ------
+    ValueError
+        ``fn`` is not a module-level numba function of 6 arguments, or ``q`` holds a value that is
+        not a finite number.
     """
 
     fn: Any
