@@ -434,3 +434,22 @@ def test_example_fitted_on_its_campaign(plugins, base, example):
     assert np.all(fitted[fv] < 1.4)  # the free vibrations at their noise (the plain model's own: 1.0-1.34)
     assert np.median(fitted[judged]) < 1.1
     assert np.median(neutral[judged]) > 3.0  # the effect matters on these records
+
+
+def test_a_term_module_without_a_source_file_is_keyed_by_its_functions_code():
+    """A term typed into an interactive session has no source file: its compiled code keys its kernel, so a function
+    typed again with another body gets a new kernel instead of the machine code of the old one."""
+    import sys
+    import types
+
+    from housner.effects.codegen import _source_bytes
+
+    mod = types.ModuleType("housner_test_session_terms")
+    sys.modules[mod.__name__] = mod
+    try:
+        exec("def drag(phi, w, t, a, v, s, alpha, p2, q):\n    return -q[0] * w\n", mod.__dict__)
+        first = _source_bytes(mod.__name__, ("drag",))
+        exec("def drag(phi, w, t, a, v, s, alpha, p2, q):\n    return -2.0 * q[0] * w\n", mod.__dict__)
+        assert first and _source_bytes(mod.__name__, ("drag",)) != first
+    finally:
+        del sys.modules[mod.__name__]

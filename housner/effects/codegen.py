@@ -36,6 +36,7 @@ import importlib
 import importlib.util
 import inspect
 import logging
+import marshal
 import os
 import pickle
 import sys
@@ -87,13 +88,28 @@ _MODULES: dict[tuple, ModuleType] = {}
 _LOCK = threading.Lock()
 
 
-def _source_bytes(module: str) -> bytes:
-    """The source file of ``module`` (empty when it has none, e.g. an interactive session)."""
+def _source_bytes(module: str, names: tuple[str, ...] = ()) -> bytes:
+    """The source file of ``module``; for a module without one (an interactive session), the compiled code of its
+    term functions ``names`` (qualified names), so that a function typed again differently gets a new kernel."""
     try:
-        path = inspect.getsourcefile(sys.modules.get(module) or importlib.import_module(module))
-        return Path(path).read_bytes() if path else b""
-    except (TypeError, OSError, ImportError):
+        mod = sys.modules.get(module) or importlib.import_module(module)
+    except ImportError:
         return b""
+    try:
+        path = inspect.getsourcefile(mod)
+        if path:
+            return Path(path).read_bytes()
+    except (TypeError, OSError):
+        pass
+    out = b""
+    for qual in names:
+        obj = mod
+        for part in qual.split("."):
+            obj = getattr(obj, part, None)
+        code = getattr(getattr(obj, "py_func", obj), "__code__", None)  # a numba dispatcher keeps its Python function
+        if code is not None:
+            out += qual.encode() + b"\0" + marshal.dumps(code)
+    return out
 
 
 def _hooks(structure: tuple) -> str:
@@ -191,7 +207,7 @@ def kernel_module(structure: tuple) -> ModuleType:
         for f in (_STEPS, _RUN, _PARTS):
             h.update(f.read_bytes())
         for m in sorted({s[1] for s in structure}):
-            h.update(m.encode() + b"\0" + _source_bytes(m))
+            h.update(m.encode() + b"\0" + _source_bytes(m, tuple(sorted({s[2] for s in structure if s[1] == m}))))
         name = f"housner_terms_{h.hexdigest()[:24]}"
         d = kernel_dir()
         steps, run = generated_source(structure, f"{name}_steps")
