@@ -271,3 +271,6 @@ def test_a_campaign_of_both_kinds_gets_both_diagnoses(tmp_path, capsys):
     assert "steps" in data or "ladder" in data or "verdict" in data  # the theta diagnosis' own keys
     assert data["outcomes_diagnosis"]["n_records"] == 30
     assert {"accuracy", "f1", "log_loss", "baselines"} <= set(data["outcomes"])
+    # two verdicts, each line saying which records it judges: `verdict:` (the theta records') once
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("verdict")]
+    assert len(lines) == 2 and lines[0].startswith("verdict (outcome records): ") and lines[1].startswith("verdict: ")

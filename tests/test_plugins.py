@@ -58,7 +58,9 @@ def test_cli_loads_a_plugin_and_refuses_a_missing_one(base, tmp_path):
            "--add", "pivot_friction", "--effects", "none", "-q"]  # fmt: skip
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
-    assert "Explained" in res.stdout and "pivot_friction" in res.stdout
+    # the status once, on its own line (the paragraph under it does not open with it again)
+    assert res.stdout.startswith("verdict: explained\n") and "pivot_friction" in res.stdout
+    assert "Explained:" not in res.stdout
     bad = subprocess.run([sys.executable, "-m", "housner.cli", "diagnose", str(root), "--plugin", "nope.py"],
                          capture_output=True, text=True, timeout=120)  # fmt: skip
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "nope.py" in bad.stderr

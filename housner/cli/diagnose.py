@@ -81,15 +81,16 @@ def run(args: argparse.Namespace) -> int:
         progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
     )
     print(f"verdict: {diag.status}")
-    print(diag.summary())
+    print(_without_status(diag.summary(), diag.status))  # the status once: on the line above
     print()
     print(f"{'step':45s} {'held-out error [alpha]':>24s} {'improvement':>20s}")
     for s in diag.steps:
         imp = "" if s.added is None else f"{s.improvement:+.4f} +- {s.improvement_se:.2g}"
         print(f"{s.label()[:45]:45s} {s.heldout_error:>13.4f} +- {s.heldout_se:<8.2g} {imp:>20s}")
     res = diag.verdict.residual
-    print(f"correct-model floor {res.floor:.4f} (measured), error/floor {res.ratio:.2f}, z {res.z:+.1f}; "
-          f"sensor noise sigma/alpha = {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
+    print(f"{'final model' if len(diag.steps) > 1 else 'plain model'}: held-out error {res.error:.4f} alpha, "
+          f"correct-model floor {res.floor:.4f} alpha, residual ratio {res.ratio:.2f} (the worse group's error over "
+          f"its floor); sensor noise sigma/alpha {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
     if args.json:
         if outcomes is None:
             diag.to_json(args.json)
@@ -104,6 +105,16 @@ def run(args: argparse.Namespace) -> int:
     if want_report:
         print(f"report: {write_diagnosis_report(diag, args.report)}")
     return 0
+
+
+def _without_status(text: str, status: str) -> str:
+    """The verdict's paragraph without its leading status word ("Explained: ..."), which the ``verdict:`` line
+    before it gives."""
+    head = status.replace("_", " ") + ":"
+    if text[: len(head)].lower() == head:
+        text = text[len(head) :].lstrip()
+        text = text[:1].upper() + text[1:]
+    return text
 
 
 def _folds(args: argparse.Namespace) -> int:
@@ -121,8 +132,9 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign):
 
     d = diagnose_outcomes(campaign, folds=args.folds, seed=args.seed,
                           progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)))  # fmt: skip
-    print(f"verdict: {d.status}")
-    print(d.summary())
+    # a campaign of both kinds prints two verdicts: each line says which records it judges
+    print(f"verdict{' (outcome records)' if campaign.records else ''}: {d.status}")
+    print(_without_status(d.summary(), d.status))
     print()
     keys = SCORE_KEYS[:4]
     print(f"{'held out, same folds':34s}" + "".join(f"{k:>22s}" for k in keys))

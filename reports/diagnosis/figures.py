@@ -276,7 +276,8 @@ def histories_figure(diag) -> Figure | None:
     e_before, e_after = _baseline_heldout(diag), _final_heldout(diag)
     c_before, c_after = _colors(diag.steps)[0], _colors(diag.steps)[-1]
     lab_after = "after: Housner + " + " + ".join(diag.final.names)
-    fig = Figure(figsize=(7.8, 2.15 * len(picks) + 0.7))
+    # constrained layout with the legend "outside": the layout makes room for it, whatever its labels' length
+    fig = Figure(figsize=(7.8, 2.15 * len(picks) + 0.7), layout="constrained")
     axes = fig.subplots(len(picks), 1, squeeze=False)[:, 0]
     for ax, (rid, role) in zip(axes, picks, strict=True):
         rec = diag.campaign.record(rid)
@@ -314,9 +315,10 @@ def histories_figure(diag) -> Figure | None:
     axes[-1].set_xlabel("t [s]" + (" (free vibration: from the release)" if picks[-1][1] == "free vibration" else ""))
     handles, labels = axes[0].get_legend_handles_labels()
     order = sorted(range(len(labels)), key=lambda i: labels[i] != "measured")  # the measurement first
-    fig.legend([handles[i] for i in order], [labels[i] for i in order], loc="upper center",
-               ncol=min(len(labels), 4), fontsize=8, frameon=False)  # fmt: skip
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.4 / fig.get_figheight()))
+    # one row when the labels fit the figure's width (about 110 characters at 8 pt on 7.8 in), else two columns
+    ncol = min(len(labels), 4) if sum(len(lab) + 8 for lab in labels) <= 110 else 2
+    fig.legend([handles[i] for i in order], [labels[i] for i in order], loc="outside upper center",
+               ncol=ncol, fontsize=8, frameon=False)  # fmt: skip
     return fig
 
 

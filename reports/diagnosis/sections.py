@@ -81,8 +81,8 @@ def _verdict_text(v) -> str:
     evidence."""
     head = v.status.replace("_", " ")
     text = v.text
-    if _shows_next(v) and " Where to look first: " in text:
-        text = text[: text.index(" Where to look first: ")] + " Where to look: see the list below."
+    if _shows_next(v) and " Where to look first" in text:
+        text = text[: text.index(" Where to look first")] + " Where to look: see the list below."
     if text[: len(head) + 1].lower() == head + ":":
         text = text[len(head) + 1 :].lstrip()
         text = text[:1].upper() + text[1:]
@@ -155,9 +155,16 @@ def _verdict_detail(diag) -> str:
     for label, res in (("plain Housner model", v.baseline), ("final model", v.residual)):
         for kind, g in res.groups.items():
             rows.append([esc(label), esc(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
-                         f"{g['ratio']:.2f}", f"{g['z']:+.1f}", '<span class="bad">yes</span>' if g["misfit"] else "no",
+                         f"{g['ratio']:.2f}", esc(verdict.z_text(g["z"])),
+                         '<span class="bad">yes</span>' if g["misfit"] else "no",
                          f"{g.get('detectable_ratio', float('nan')):.2f}"])  # fmt: skip
     # the constants are read from the verdict's module when the page is built (they are its, never copied)
+    fam, fam_plain = diag.settings.get("floor_family", ""), diag.settings.get("floor_family_plain", "")
+    fams = ""
+    if fam:
+        fams = (f" The plain model's floor is over correct models of the {verdict.family_text(fam_plain or fam)}"
+                + ("" if (fam_plain or fam) == fam else f"; the final model's over the {verdict.family_text(fam)}")
+                + " (each model's narrowest family whose floor its ground motions reach; the widest when none).")
     table = html_table(
         ["model", "records", "n", "held-out error [alpha]", "correct-model floor", "ratio", "z", "misfit",
          "detectable ratio"],
@@ -169,22 +176,37 @@ def _verdict_detail(diag) -> str:
             f"{residual.Z_MISFIT:g} and ratio > {residual.RATIO_MISFIT:g}, or a ratio above {residual.RATIO_MISFIT:g} "
             f"with a localisation quantity more than {verdict.Z_LOCAL:g} "
             "standard errors from the measured one (never a ratio within the band: the status rule); the "
-            "detectable ratio is what these records would reveal with 80 % power."
+            f"detectable ratio is what these records would reveal with 80 % power. Ratio: the group's held-out "
+            f"error over its floor (a correct model: 1); {verdict.Z_LEGEND}." + fams
         ),
     )  # fmt: skip
     nxt = ""
     if _shows_next(v):
         items = []
+        names = diag.final.names if len(diag.steps) > 1 else []
         for c in v.next:
+            who = "the model with " + " + ".join(names) if names and c.get("from") != "plain" else "the plain model"
             ev = "; ".join(
-                f"{esc(e['label'])}: measured {_pm(e['measured'], e['measured_se'])}, model "
-                f"{_pm(e['model'], e['model_se'])} (z = {e['z']:+.1f})"
+                esc(verdict.evidence_text(e)) if e["metric"].startswith("probe:") else
+                f"{esc(e['label'])}: measured {_pm(e['measured'], e['measured_se'])}, {esc(who)} "
+                f"{_pm(e['model'], e['model_se'])} ({esc(verdict.z_text(e['z']))})"
                 for e in c["evidence"]
-            )
+            )  # fmt: skip
             items.append(
                 f"<li><b>{esc(c['class'])}</b> &mdash; {esc(c['meaning'])}<br><span class=sub>{ev}</span></li>"
             )
-        nxt = "<h3>Where to look next</h3><ol>" + "".join(items) + "</ol>"
+        src = {c.get("from") for c in v.next}
+        if names and src == {"final"}:
+            whose = f"what the model with {' + '.join(names)} still gets wrong (a pointer of the plain model that " \
+                    "this model no longer shows beyond 3 standard errors is not listed)"  # fmt: skip
+        elif names:
+            whose = (f"the model with {' + '.join(names)} departs from no localisation quantity by more than 3 "
+                     "standard errors, so these are the plain model's pointers, some of which the added effects may "
+                     "already cover")  # fmt: skip
+        else:
+            whose = "what the plain model gets wrong"
+        nxt = (f'<h3>Where to look next</h3><p class="sub">From {esc(whose)}; {esc(verdict.Z_LOCAL_LEGEND)}.</p><ol>'
+               + "".join(items) + "</ol>")
     freq = ""
     if diag.selection_frequency:
         k = diag.settings.get("folds", "?")

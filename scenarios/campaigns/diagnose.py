@@ -171,18 +171,21 @@ class Conclusion:
     steps : tuple of Step
         The ladder, each step with its comparison where it was run.
     family : str
-        The family of correct integrators the floors were measured over.
+        The family of correct integrators the final model's floor was measured over.
+    family_plain : str
+        The plain model's (its own family loop: the same model gets the same floor whatever is added).
     """
 
     verdict: Verdict
     floors: tuple[Floor, Floor]
     steps: tuple[Step, ...]
     family: str
+    family_plain: str = ""
 
 
 def conclude(setup: TrialSetup, state: SearchState, search: tuple[TrialSetup, SearchState], *, library: list[str],
              selected: list[str], compare_steps: bool, n_replicas: int, seed,
-             added: Sequence[str] = ()) -> Conclusion:  # fmt: skip
+             added: Sequence[str] = (), search_ran: str = "ran") -> Conclusion:  # fmt: skip
     """Both ends of the ladder against their measured floors: the verdict and the two floors.
 
     ``setup`` and ``state`` are on the records as measured, ``search`` the same on the search's (the
@@ -195,24 +198,25 @@ def conclude(setup: TrialSetup, state: SearchState, search: tuple[TrialSetup, Se
                    for i in range(len(state.steps)) if compare_steps or i in (0, last)}  # fmt: skip
     steps = tuple(replace(s, comparison=comparisons[i]) if i in comparisons else s for i, s in enumerate(state.steps))
     seed_int = seed if isinstance(seed, int) else 0
-    # One family of correct integrators per campaign (housner.scenarios.campaigns.model_form): the closest to the
-    # library's conventions at which the final model's ground motions are at the floor (not a
-    # misfit, and within RATIO_MISFIT of it both on the mean, which counts the records chaos carries
-    # off, and on the 10 %-trimmed mean, the typical record), the widest when none is; the baseline is judged
-    # against the same family. (Its floor is another: a correct model of other physics leaves
-    # another error, as chaos carries its records elsewhere.)
+    # Each model's family of correct integrators (housner.scenarios.campaigns.model_form): the closest to the
+    # library's conventions at which its ground motions are at the floor (not a misfit, and within RATIO_MISFIT
+    # of it both on the mean, which counts the records chaos carries off, and on the 10 %-trimmed mean, the
+    # typical record), the widest when none is. The plain model runs its own loop, so that it gets the same
+    # floor whatever is added to it (its floor differs from the final model's anyway: a correct model of other
+    # physics leaves another error, as chaos carries its records elsewhere).
     kinds = [r.kind for r in cv.campaign.records]
     setup.progress("measuring the correct-model floor (parametric bootstrap over correct integrators)")
-    family, floor_final = floor_family(setup, state, n_replicas, seed_int, kinds)
-    floor_plain = floor_final if not final.model.full else measure_floor(
-        setup.scorers.every_record, [], plain.model.folds, cv.folds.fold_of, n_replicas=n_replicas, seed=seed_int,
-        family=family)  # fmt: skip
+    family, floor_final = floor_family(setup, state, n_replicas, seed_int, kinds,
+                                       who="the final model" if final.model.full else "the plain model")
+    family_plain, floor_plain = (family, floor_final) if not final.model.full else floor_family(
+        setup, state, n_replicas, seed_int, kinds, model=plain, who="the plain model")  # fmt: skip
     for what, v in (("the plain model's held-out error", plain.heldout_errors),
                     ("the final model's held-out error", final.heldout_errors),
                     ("the plain model's correct-model floor", floor_plain.mean),
                     ("the final model's correct-model floor", floor_final.mean)):  # fmt: skip
         check_finite(what, v, cv.folds.ids)
-    setup.progress(f"floor: correct integrators of the family {family!r}")
+    setup.progress(f"floor: correct integrators of the family {family!r}"
+                   + (f" (the plain model: {family_plain!r})" if family_plain != family else ""))  # fmt: skip
     probes = probe(*search)
     mf = measured_features(cv.campaign)
     drift = order_drift([plain.heldout_errors - floor_plain.mean, final.heldout_errors - floor_final.mean],
@@ -221,16 +225,19 @@ def conclude(setup: TrialSetup, state: SearchState, search: tuple[TrialSetup, Se
         n_records=len(cv.folds.ids), baseline=residual_test(plain.heldout_errors, floor_plain, kinds),
         final=residual_test(final.heldout_errors, floor_final, kinds), selected=selected,
         params=dict(final.model.full), baseline_cmp=steps[0].comparison, final_cmp=steps[-1].comparison,
-        library=library, added=added, drift=drift, family=family, probes=probes,
+        library=library, added=added, drift=drift, family=family, probes=probes, family_plain=family_plain,
+        search=search_ran,
     )  # fmt: skip
-    return Conclusion(verdict, (floor_plain, floor_final), steps, family)
+    return Conclusion(verdict, (floor_plain, floor_final), steps, family, family_plain)
 
 
-def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: int,
-                 kinds: list[str]) -> tuple[str, Floor]:  # fmt: skip
-    """The family of correct integrators of the verdict, and the final model's floor under it.
+def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: int, kinds: list[str],
+                 model=None, who: str = "the final model") -> tuple[str, Floor]:  # fmt: skip
+    """The family of correct integrators of a model's verdict, and its floor under it.
 
-    The families of :data:`FAMILIES` narrowest first, until the final model's ground motions are
+    ``model`` is the search's current model (default the final one, ``state.current``; the plain model,
+    ``state.plain``, runs the same loop), ``who`` names it in ``economies``.
+    The families of :data:`FAMILIES` narrowest first, until the model's ground motions are
     at their floor (not a misfit, and within RATIO_MISFIT of it on the mean and on the trimmed
     mean); the widest when at none. Stopped early: when the narrowest family puts them more than
     :data:`FAMILY_JUMP` x RATIO_MISFIT above their floor, the widest is measured next, and when
@@ -239,13 +246,13 @@ def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: i
     the answer, the widest, is the one the whole loop gives); ``economies`` says so.
     """
     families = list(FAMILIES)
-    final = state.current
+    final = state.current if model is None else model
     measured: dict[str, tuple[Floor, bool, float]] = {}
 
     def measure(family: str) -> tuple[Floor, bool, float]:
         """The final model's floor under ``family``, whether its ground motions are at it, and their ratio."""
         if family not in measured:
-            floor = measure_floor(setup.scorers.every_record, final.model.full, final.model.folds,
+            floor = measure_floor(setup.scorers.every_record, final.model.full or [], final.model.folds,
                                   setup.cv.folds.fold_of, n_replicas=n_replicas, seed=seed, family=family)  # fmt: skip
             gm = residual_test(final.heldout_errors, floor, kinds).groups.get("ground_motion")
             ratio = math.nan if gm is None else max(gm["ratio"], gm["ratio_trimmed"])
@@ -260,15 +267,20 @@ def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: i
             widest, widest_at_floor, widest_ratio = measure(families[-1])
             if not widest_at_floor:
                 skipped = ", ".join(repr(f) for f in families[1:-1])
-                setup.economies.append(
-                    f"The floor's family loop stopped early: the final model's ground motions are {ratio:.2f}x "
-                    f"their floor under the narrowest family ({families[0]!r}, more than {FAMILY_JUMP:g} x "
-                    f"{RATIO_MISFIT:g}) and {widest_ratio:.2f}x it under the widest ({families[-1]!r}, not at it "
-                    f"either), so the families between ({skipped}) were not measured: nested, their floors "
-                    f"lie below the widest's."
-                )  # fmt: skip
-                setup.progress(f"floor: not at it under {families[0]!r} ({ratio:.2f}x) nor under {families[-1]!r} "
-                               f"({widest_ratio:.2f}x); the families between not measured")  # fmt: skip
+                said = "The floor's family loop stopped early"
+                if any(e.startswith(said) for e in setup.economies):  # the other model's said it at length
+                    setup.economies.append(f"{said} for {who} too: {ratio:.2f}x under {families[0]!r}, "
+                                           f"{widest_ratio:.2f}x under {families[-1]!r}.")  # fmt: skip
+                else:
+                    setup.economies.append(
+                        f"{said}: {who}'s ground motions are {ratio:.2f}x their floor under the narrowest family "
+                        f"({families[0]!r}, more than {FAMILY_JUMP:g} x {RATIO_MISFIT:g}) and {widest_ratio:.2f}x it "
+                        f"under the widest ({families[-1]!r}, not at it either), so the families between "
+                        f"({skipped}) were not measured: nested, their floors lie below the widest's."
+                    )  # fmt: skip
+                setup.progress(f"floor of {who}: not at it under {families[0]!r} ({ratio:.2f}x) nor under "
+                               f"{families[-1]!r} ({widest_ratio:.2f}x); the families between not "
+                               "measured")  # fmt: skip
                 return families[-1], widest
     return families[-1], measured[families[-1]][0]
 
@@ -384,14 +396,18 @@ def diagnose(
     state, found = greedy(setup, state, candidates, max_effects, pairs)
     full_setup, full_state = at_full_rate(setup, state)
     # the library is claimed only where the search tried it: a first round skipped (the training error already at
-    # the sensor noise) tried no effect
-    tried = [] if found.rounds and all("not searched" in c.reason for c in found.rounds[0]) else candidates
+    # the sensor noise) tried no effect, and no round (no candidate: effects=[], or max_effects=0) none either
+    skipped = bool(found.rounds) and all("not searched" in c.reason for c in found.rounds[0])
+    tried = candidates if found.rounds and not skipped else []
+    search_ran = "ran" if tried else "skipped" if skipped else "off" if not candidates else "none_left"
     end = conclude(full_setup, full_state, (setup, state), library=tried, selected=found.selected,
-                   compare_steps=compare_steps, n_replicas=n_replicas, seed=seed, added=list(add))  # fmt: skip
+                   compare_steps=compare_steps, n_replicas=n_replicas, seed=seed, added=list(add),
+                   search_ran=search_ran)  # fmt: skip
     settings = {"effects": candidates, "add": list(add), "folds": cv.folds.count,
                 "seed": seed if isinstance(seed, (int, type(None))) else str(seed), "max_effects": max_effects,
                 "level": level, "practical": PRACTICAL, "pairs": pairs, "replicas": n_replicas,
                 "engine_settings": dict(engine_settings or {}), "floor_family": end.family,
+                "floor_family_plain": end.family_plain, "search": search_ran,
                 "decimation": cv.decimation, "economies": list(setup.economies)}  # fmt: skip
     diag = _diagnosis(campaign, cv.folds, found, end, list(add), cv.noise_floor, settings)
     diag.elapsed = time.perf_counter() - t_start

@@ -246,8 +246,9 @@ class Diagnosis:
         chosen = self.steps[1:]
         if chosen:
             ladder = []
+            final_params = dict(self.steps[-1].effects)
             for st in chosen:
-                prm = "; ".join(params_text(n, dict(st.effects)[n]) for n in st.added_effects)
+                prm = "; ".join(_step_params(n, dict(st.effects)[n], final_params.get(n)) for n in st.added_effects)
                 how = " (by hand)" if st.by_hand else ""
                 ladder.append(
                     f"+ {st.added}{how} ({prm}): held-out error {fmt_pm(st.heldout_error, st.heldout_se)} alpha, "
@@ -426,6 +427,16 @@ def param_unit(name: str, key: str) -> str:
         return effect_class(name).param_specs[key].unit
     except (KeyError, ValueError, AttributeError):
         return ""
+
+
+def _step_params(name: str, params: dict, final: dict | None) -> str:
+    """An effect's parameters as fitted at its step of the ladder; where the final model's joint refit moved
+    them, both, each labelled (the verdict's text gives the final model's)."""
+    text = params_text(name, params)
+    if final is None or params_text(name, final) == text:
+        return text
+    return (f"{text} as fitted at this step; {params_text(name, final)} in the final model, refitted with the "
+            "effects after it")
 
 
 def params_text(name: str, params: dict, *, digits: int = 4) -> str:

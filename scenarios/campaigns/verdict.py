@@ -41,15 +41,20 @@ __all__ = [
     "DIST_LEVEL",
     "STATUSES",
     "STATUS_RULE",
+    "Z_LEGEND",
     "Z_LOCAL",
+    "Z_LOCAL_LEGEND",
     "Verdict",
     "VerdictFacts",
     "decide",
     "distribution_checks",
+    "evidence_text",
+    "family_text",
     "pointer_classes",
     "pointer_text",
     "status_rule",
     "verdict_text",
+    "z_text",
 ]
 
 STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconclusive")
@@ -61,26 +66,79 @@ Z_LOCAL = 4.0
 DIST_LEVEL = 0.01
 
 
-def _groups_text(r: Residual) -> str:
+#: Beyond this |z| the text says "z > 100": more digits say nothing more about a misfit [-].
+Z_SHOWN = 100.0
+#: The residual's z, said once where it first appears in the verdict.
+Z_LEGEND = ("z: the held-out error's excess over the floor, record by record, in standard errors of that excess; "
+            "about 0 for a correct model")  # fmt: skip
+#: The localisation's z, said once where the pointer first gives one.
+Z_LOCAL_LEGEND = ("z: how many standard errors of their difference separate the model's value from the measured "
+                  "one; beyond 3 it points here")  # fmt: skip
+
+
+def z_text(z: float) -> str:
+    """``z = +2.9``, or ``z > 100`` where more digits say nothing more."""
+    if math.isfinite(z) and abs(z) < Z_SHOWN:
+        return f"z = {z:+.1f}"
+    return f"z > {Z_SHOWN:g}" if z > 0 else f"z < -{Z_SHOWN:g}"
+
+
+def _groups_text(r: Residual, legend: bool = False) -> str:
+    """Each group's error over its floor with its z; ``legend``: say once what z is (its first appearance)."""
     names = {"ground_motion": "ground motions", "free_vibration": "free vibrations"}
 
     def one(k: str, g: dict) -> str:
         if k != "ground_motion":
-            return f"{names[k]} {g['ratio']:.2f}x, z = {g['z']:+.1f}"
+            return f"{names[k]} {g['ratio']:.2f}x, {z_text(g['z'])}"
         # the typical record first (10 %-trimmed); the mean, when the few records chaos carries off weigh on it
-        out = f"{names[k]} {g['ratio_trimmed']:.2f}x 10 %-trimmed, z = {g['z_trimmed']:+.1f}"
+        out = (f"{names[k]} {g['ratio_trimmed']:.2f}x for the typical record (10 %-trimmed mean), "
+               f"{z_text(g['z_trimmed'])}")
         if abs(g.get("ratio_trimmed", g["ratio"]) - g["ratio"]) > 0.05:
-            out += f" ({g['ratio']:.2f}x on the mean, z = {g['z']:+.1f})"
+            out += f", {g['ratio']:.2f}x on the plain mean, {z_text(g['z'])}"
         return out
 
-    return "; ".join(one(k, g) for k, g in r.groups.items())
+    text = "; ".join(one(k, g) for k, g in r.groups.items())
+    if legend:
+        text += (f"; {Z_LEGEND}; a group is a misfit when z > {Z_MISFIT:g} and its error is more than "
+                 f"{RATIO_MISFIT}x its floor")  # fmt: skip
+    return text
 
 
-def _evidence_text(ev: dict) -> str:
+def _probe_words(name: str) -> str:
+    """What a probe (:mod:`housner.scenarios.campaigns.probes`) adds, in words: its docstring's first line."""
+    try:
+        from housner.effects import effect_class
+
+        doc = (effect_class(name).__doc__ or "").strip().splitlines()[0]
+    except (KeyError, ValueError, IndexError):
+        return name
+    return doc.removeprefix("Probe: ").rstrip(".")
+
+
+def evidence_text(ev: dict, model: str = "model") -> str:
+    """One piece of a pointer's evidence in words: the measured value, the model's (named ``model``) and z."""
+    if ev["metric"].startswith("probe:"):
+        return f"{ev['label']} ({z_text(ev['z'])}: the fall in standard errors of the paired differences)"
     return (
-        f"{ev['label']}: measured {_g(ev['measured'])} +- {_g(ev['measured_se'])}, model {_g(ev['model'])} "
-        f"+- {_g(ev['model_se'])} (z = {ev['z']:+.1f})"
+        f"{ev['label']}: measured {_g(ev['measured'])} +- {_g(ev['measured_se'])}, {model} {_g(ev['model'])} "
+        f"+- {_g(ev['model_se'])} ({z_text(ev['z'])})"
     )
+
+
+def family_text(family: str) -> str:
+    """The correct integrators a floor was measured over, in words (:data:`housner.scenarios.campaigns.model_form.
+    FAMILIES`)."""
+    words = {
+        "exact": "integrated as this library integrates, with the table acceleration's measured noise",
+        "solver": "another integrator step and rest rule on the same table motion",
+        "any": "any integrator step and rest rule, and the table motion's timing and scale anywhere in their "
+               "uncertainty (up to half a sample; about 0.1 %), held or linear between samples",
+    }  # fmt: skip
+    if family.startswith("input-"):
+        share = family.split("-", 1)[1]
+        return (f"family '{family}': another integrator step and rest rule, and the table motion's timing and "
+                f"scale within {share} of their uncertainty")  # fmt: skip
+    return f"family '{family}': {words[family]}" if family in words else f"family '{family}'"
 
 
 def _g(v: float) -> str:
@@ -108,14 +166,31 @@ def distribution_checks(cmp: Comparison | None) -> list[str]:
 
 # ----------------------------------------------------------------------------
 # the verdict
-def pointer_text(classes: Sequence[dict]) -> str:
+def pointer_text(classes: Sequence[dict], model: Sequence[str] = ()) -> str:
     """Where to look first: the strongest physical class (:func:`physical_classes`) with two pieces of its
-    evidence, then the others by name; ``""`` for none. The verdict's text ends with it."""
+    evidence, then the others by name; ``""`` for none. The verdict's text ends with it.
+
+    ``model``: the effects of the model the classes were drawn from (:func:`pointer_classes`); a class drawn
+    from the plain model's localisation instead (``"from": "plain"``) says so.
+    """
     if not classes:
         return ""
     top = classes[0]
-    ev = "; ".join(_evidence_text(e) for e in top["evidence"][:2])
-    text = f"Where to look first: {top['meaning']} ({ev})."
+    src, names = top.get("from"), " + ".join(model)
+    # whose values the evidence gives: the final model's, the plain model's, or (a drift, a probe) its own
+    who = f"the model with {names}" if src == "final" and model else "the plain model" if src == "plain" else "model"
+    ev = "; ".join(evidence_text(e, who) for e in top["evidence"][:2])
+    if src == "plain" and model:
+        why = (f"Where to look first (the model with {names} departs from no localisation quantity by more than 3 "
+               f"standard errors, so this reuses the plain model's evidence: what it points to may be what the "
+               f"added effect already covers, in part): ")  # fmt: skip
+    elif model:
+        why = f"Where to look first, from what the model with {names} still gets wrong: "
+    else:
+        why = "Where to look first: "
+    text = f"{why}{top['meaning']} ({ev}; {Z_LOCAL_LEGEND})."
+    if model and src != "plain":
+        text += f" (These figures are with {names} in the model, which leaves this gap.)"
     if len(classes) > 1:
         text += " Then: " + "; ".join(c["class"] for c in classes[1:]) + "."
     return text
@@ -134,7 +209,8 @@ class Verdict:
     baseline : Residual
         The plain model's.
     text : str
-        One paragraph in words (the same in the JSON, the CLI and the report).
+        One paragraph in words, opening with the status ("Explained: ..."): the JSON's; the command line and
+        the report print it without that word, which their ``verdict:`` line and badge give.
     where : list of str
         Localisation items where the final model still differs from the measurement.
     next : list of dict
@@ -189,7 +265,7 @@ class VerdictFacts:
     drift : dict or None
         :func:`order_drift`'s class, if any.
     family : str
-        The correct integrators the floors were measured over.
+        The correct integrators the final model's floor was measured over.
     classes : list of dict
         The physical classes to look at, strongest first (drift and probes first).
     final_classes : list of dict
@@ -204,6 +280,12 @@ class VerdictFacts:
         Whether the records would show a misfit of :data:`DETECTABLE_RATIO` x the floor.
     probed : bool
         Whether a probe of physics outside the library lowered the error significantly.
+    family_plain : str
+        The plain model's (its own family loop; ``""``: ``family``).
+    search : str
+        What the search did: ``"ran"`` (it tried ``library``), ``"off"`` (no candidate effect was given),
+        ``"none_left"`` (no candidate could be tried: max_effects 0, or each already in the model or
+        incompatible with it), ``"skipped"`` (the training error was already at the sensor noise).
     """
 
     n_records: int
@@ -226,6 +308,8 @@ class VerdictFacts:
     final_misfit: bool
     powered: bool
     probed: bool
+    family_plain: str = ""
+    search: str = "ran"
 
     @property
     def records_needed(self) -> int:
@@ -247,20 +331,25 @@ def decide(
     drift: dict | None = None,
     family: str = "",
     probes: Sequence[dict] = (),
+    family_plain: str = "",
+    search: str | None = None,
 ) -> Verdict:
     """The status (:func:`status_rule`) and its paragraph (:func:`verdict_text`) from the residuals, the effects
     in the final model and the localisation.
 
     ``selected`` are the effects the search added, ``added`` those added by hand (both in the final
     model, which is the one judged); ``drift`` is :func:`order_drift`'s class, if any; ``family`` the
-    correct integrators the floor was measured over (:data:`housner.scenarios.campaigns.model_form.FAMILIES`).
+    correct integrators the final model's floor was measured over
+    (:data:`housner.scenarios.campaigns.model_form.FAMILIES`), ``family_plain`` the plain model's; ``search``
+    what the search did (:class:`VerdictFacts`; default ``"ran"`` when ``library`` is given, else ``"off"``).
     """
+    model = [*added, *[n for n in selected if n not in added]]
     base_classes = physical_classes(baseline_cmp)
     final_classes = physical_classes(final_cmp)
-    classes = pointer_classes(base_classes, final_classes, probes, drift)
-    where = [_evidence_text(ev) for c in final_classes for ev in c["evidence"]]
+    classes = pointer_classes(base_classes, final_classes, probes, drift, has_effects=bool(model))
+    where = [evidence_text(ev) for c in final_classes for ev in c["evidence"]]
     if drift is not None:
-        where = [_evidence_text(ev) for ev in drift["evidence"]] + where
+        where = [evidence_text(ev) for ev in drift["evidence"]] + where
     # a localisation quantity beyond Z_LOCAL standard errors points to where to look; it is no misfit by
     # itself (the status follows from the residual's tests alone: status_rule)
     local_plain = evidence_beyond(base_classes, Z_LOCAL)
@@ -272,13 +361,14 @@ def decide(
     residual_tests = drift is not None or bool(probes)
     facts = VerdictFacts(
         n_records=n_records, baseline=baseline, final=final, selected=selected, added=added,
-        model=[*added, *[n for n in selected if n not in added]], params=params, library=library, drift=drift,
+        model=model, params=params, library=library, drift=drift,
         family=family, classes=classes, final_classes=final_classes, local_plain=local_plain,
         local_final=local_final, dist_plain=distribution_checks(baseline_cmp),
         dist_final=distribution_checks(final_cmp),
         plain_misfit=baseline.misfit or residual_tests or (bool(local_plain) and baseline.ratio > RATIO_MISFIT),
         final_misfit=final.misfit or residual_tests or (bool(local_final) and final.ratio > RATIO_MISFIT),
         powered=final.detectable_ratio <= DETECTABLE_RATIO, probed=bool(probes),
+        family_plain=family_plain or family, search=search or ("ran" if library else "off"),
     )  # fmt: skip
     status = status_rule(n_records >= MIN_RECORDS, bool(facts.model), facts.plain_misfit, facts.final_misfit,
                          facts.powered)  # fmt: skip
@@ -287,26 +377,33 @@ def decide(
 
 
 def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes: Sequence[dict],
-                    drift: dict | None) -> list[dict]:  # fmt: skip
+                    drift: dict | None, has_effects: bool = False) -> list[dict]:  # fmt: skip
     """The physical classes to look at, strongest first: a drift along the recording order, then the probes'
-    classes, then what the localisation of the plain model and of the final model points to."""
-    # what differs from Housner's physics (the plain model) names the family; what the final model still
-    # misses follows
-    have = {c["class"] for c in base_classes}
-    classes = base_classes + [c for c in final_classes if c["class"] not in have]
+    classes, then what the localisation points to: of the final model when it holds effects
+    (``has_effects``: what an added effect took is no pointer any more), else of the plain model.
+
+    A final model whose localisation points nowhere falls back on the plain model's classes, each marked
+    ``"from": "plain"`` (:func:`pointer_text` says so); the others are marked with the model they come from.
+    """
+    if has_effects and final_classes:
+        classes = [{**c, "from": "final"} for c in final_classes]
+    else:
+        classes = [{**c, "from": "plain"} for c in base_classes]
     # a probe of physics outside the library that lowers the error significantly is the most direct
     # pointer there is: its class first (housner.scenarios.campaigns.probes)
     for found in sorted(probes, key=lambda p: p["z"]):
         evidence = {
             "metric": f"probe:{found['probe']}",
-            "label": f"held-out error with the probe {found['probe']} ("
+            "label": f"a trial of physics outside the library (the probe {found['probe']}: "
+                     + _probe_words(found["probe"]) + "; "
                      + ", ".join(f"{k} = {v:.3g}" for k, v in found["params"].items())
-                     + f"), against {found['error']:.4g} without it",
+                     + "), fitted on top of the final model and held out as a candidate is: held-out error "
+                     + f"{found['error_with']:.4g} alpha against {found['error']:.4g} without it",
             "measured": found["error_with"], "measured_se": found["se"], "model": found["error"], "model_se": 0.0,
             "z": found["z"],
         }  # fmt: skip
         entry = {"class": found["class"], "meaning": CLASSES[found["class"]], "z": abs(found["z"]),
-                 "evidence": [evidence]}  # fmt: skip
+                 "evidence": [evidence], "from": "final" if has_effects else "plain"}  # fmt: skip
         old = [c for c in classes if c["class"] == found["class"]]
         if old:
             entry["evidence"] += old[0]["evidence"]
@@ -320,25 +417,23 @@ def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes:
 # ----------------------------------------------------------------------------
 # the verdict in words
 def verdict_text(facts: VerdictFacts, status: str) -> str:
-    """The verdict's paragraph: the status in words with its figures, what is unusual, the legend of the
-    figures and, for a misfit, where to look next."""
+    """The verdict's paragraph: the status in words with its figures (each statistic said once where it first
+    appears), what is unusual and, for a misfit, where to look next."""
     text = _status_sentence(facts, status)
     if status in ("no_misfit", "explained"):
         local = facts.local_final if facts.model else facts.local_plain
         dist = facts.dist_final if facts.model else facts.dist_plain
-        bits = [_evidence_text(e) for c in local for e in c["evidence"][:1]] + dist
+        who = "the model with " + " + ".join(facts.model) if facts.model else "the plain model"
+        bits = [evidence_text(e, who) for c in local for e in c["evidence"][:1]] + dist
         if bits:
             text += (f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
-                     ". It says where a model with more physics would differ first, not that this one fails.")
-    if status != "inconclusive" or facts.n_records >= MIN_RECORDS:
-        text += (" (Residual ratio: the held-out error over the correct-model floor, the error a correct model "
-                 f"shows on these records; z: its excess over the floor in standard errors, significant above "
-                 f"{Z_MISFIT:g}.)")  # fmt: skip
+                     f" ({Z_LOCAL_LEGEND}). It says where a model with more physics would differ first, not that "
+                     "this one fails.")  # fmt: skip
     if status in ("partly_explained", "unexplained"):
         if facts.dist_final:
             text += " The distributions disagree too: " + "; ".join(facts.dist_final) + "."
         if facts.classes:
-            text += " " + pointer_text(facts.classes)
+            text += " " + pointer_text(facts.classes, facts.model)
         else:
             text += f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is " \
                     "in the time histories only."  # fmt: skip
@@ -346,32 +441,75 @@ def verdict_text(facts: VerdictFacts, status: str) -> str:
 
 
 def _figures(facts: VerdictFacts) -> tuple[str, str]:
-    """The final and the plain model's figures: held-out error, floor, residual ratio, by group."""
+    """The final and the plain model's figures: held-out error, floor (with the correct integrators it was
+    measured over), residual ratio, by group. The plain model's come first in every paragraph: they say what
+    the held-out error, the floor, the residual ratio and z are."""
     final, baseline = facts.final, facts.baseline
-    fam = f" (correct integrators of the family '{facts.family}')" if facts.family else ""
-    figs = f"held-out error {final.error:.4f} alpha against a correct-model floor of {final.floor:.4f}{fam}, " \
-           f"residual ratio {final.ratio:.2f} ({_groups_text(final)})"  # fmt: skip
-    base_figs = f"the plain Housner model's held-out error is {baseline.error:.4f} alpha against a correct-model " \
-                f"floor of {baseline.floor:.4f}{fam}, residual ratio {baseline.ratio:.2f} " \
-                f"({_groups_text(baseline)})"  # fmt: skip
-    if facts.model and abs(final.floor - baseline.floor) > 1e-12:
-        # one floor per model: say once why the two differ
-        figs += (" (each model has its own floor: a correct model of other physics leaves another error, as chaos "
-                 "carries its records elsewhere)")  # fmt: skip
+    fam_plain = facts.family_plain or facts.family
+    fam = f"; correct models of the {family_text(fam_plain)}" if fam_plain else ""
+    base_figs = (
+        f"the plain Housner model's held-out error (each record predicted by the model fitted without it, mean "
+        f"over the records) is {baseline.error:.4f} alpha against a correct-model floor of {baseline.floor:.4f} "
+        f"alpha (the error a correct model leaves on these same records: their noise, and rocking's sensitivity "
+        f"to small differences{fam}), residual ratio {baseline.ratio:.2f} (the worse group's error over its "
+        f"floor; a correct model: 1; {_groups_text(baseline, legend=True)})"
+    )  # fmt: skip
+    # figs follow the fall's text ("... falls from 0.1752 to 0.0055 alpha"), which gives the final model's error
+    figs = f"against its own correct-model floor of {final.floor:.4f} alpha"
+    if facts.model:
+        if facts.family and facts.family != fam_plain:
+            figs += f" (correct models of the {family_text(facts.family)})"
+        figs += f", residual ratio {final.ratio:.2f} ({_groups_text(final)})"
+        figs += _floors_note(facts)
     return figs, base_figs
+
+
+def _floors_note(facts: VerdictFacts) -> str:
+    """Why the plain and the final model have two floors ('' when they have one)."""
+    fam_plain = facts.family_plain or facts.family
+    if facts.family and facts.family != fam_plain:
+        return (f" (each model is judged against its own floor, measured over the narrowest family of correct "
+                f"integrators whose floor its ground motions reach, the widest ('any') when they reach none: "
+                f"'{fam_plain}' for the plain model, '{facts.family}' for this one; the plain model's floor is the "
+                f"same whatever is added)")  # fmt: skip
+    if abs(facts.final.floor - facts.baseline.floor) > 1e-12:
+        return (" (each model is judged against its own floor: a correct model of other physics leaves another "
+                "error, as the records' chaos carries it elsewhere)")  # fmt: skip
+    return ""
+
+
+def _effects_text(facts: VerdictFacts) -> str:
+    """The final model's effects with their parameters as the final model holds them (fitted together)."""
+    from housner.scenarios.campaigns.results import params_text
+
+    eff = " and ".join(f"{n} ({params_text(n, facts.params.get(n, {}))})" for n in facts.model)
+    return eff + (", all parameters fitted together in the final model" if len(facts.model) > 1 else "")
 
 
 def _fall_text(facts: VerdictFacts) -> str:
     """What the effects of the final model did to the held-out error ('' for the plain model)."""
     if not facts.model:
         return ""
-    params = facts.params
-    eff = "; ".join(f"{n} ({', '.join(f'{k} = {v:.4g}' for k, v in params.get(n, {}).items())})" for n in facts.model)
     before, after = facts.baseline.error, facts.final.error
     change = "falls" if after < before else "rises"
     how = "added by hand" if not facts.selected else "found by the search" if not facts.added else \
         "added by hand and found"  # fmt: skip
-    return f"with {eff} ({how}) the held-out error {change} from {before:.4f} to {after:.4f} alpha"
+    return f"with {_effects_text(facts)} ({how}) the held-out error {change} from {before:.4f} to {after:.4f} alpha"
+
+
+def _search_text(facts: VerdictFacts, other: bool) -> str:
+    """What the search tried, exactly; ``other``: the final model holds effects already."""
+    if facts.search == "ran" and facts.library:
+        what = "none of the other effects" if other else "none of the effects"
+        return f"{what} the search tried ({', '.join(facts.library)}) lowers it significantly"
+    if facts.search == "skipped":
+        return ("the search tried no effect: the training error was already within a tenth of the sensor noise "
+                "of the error the noise alone leaves, so nothing was left for an effect to take")  # fmt: skip
+    if facts.search == "none_left":
+        return ("the search tried no effect: no candidate was left to try (--max-effects 0, or each candidate "
+                "already in the model or incompatible with it)")  # fmt: skip
+    return ("no library search ran (no candidate effects were given: --effects none, or effects=[])"
+            + ("; only the effects added by hand were tried" if other else ", and no effect was added by hand"))
 
 
 def _status_sentence(facts: VerdictFacts, status: str) -> str:
@@ -391,13 +529,7 @@ def _status_sentence(facts: VerdictFacts, status: str) -> str:
             f"ground-motion records are needed to see one of {DETECTABLE_RATIO}x.",
         )  # fmt: skip
     if not facts.model:
-        if facts.library:
-            return (f"Unexplained: {base_figs}, a misfit that no effect in the library "
-                    f"({', '.join(facts.library)}) reduces significantly.")  # fmt: skip
-        # the search was switched off (effects=[] / --effects none) and nothing was added
-        return (f"Unexplained: {base_figs}, a misfit; no effect was tried (the search was switched off, or "
-                "it found the training error already at the sensor noise, and none was added by "
-                "hand).")  # fmt: skip
+        return f"Unexplained: {base_figs}: a misfit; {_search_text(facts, other=False)}."
     if not facts.final_misfit:
         return _explained_sentence(facts, figs, base_figs)
     return _partly_explained_sentence(facts, figs, base_figs)
@@ -410,13 +542,12 @@ def _explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
                                        "significant on the held-out records: a small effect that many records prove.")
     doubt = "" if final.ratio <= RATIO_MISFIT else (
         f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
-        f"(z = {final.z:+.1f} <= {Z_MISFIT:g}): these records cannot tell it from the floor.")  # fmt: skip
+        f"({z_text(final.z)} <= {Z_MISFIT:g}): these records cannot tell it from the floor.")  # fmt: skip
     return _unless_underpowered(
         facts.powered,
-        f"Explained: {base_figs}; {fall}, residual ratio {final.ratio:.2f} ({_groups_text(final)}), no group "
-        f"more than {RATIO_MISFIT}x above it with significance: what a correct model shows. "
-        f"{' + '.join(facts.model)} explains it.{small}{doubt}",
-        f"Inconclusive: {base_figs}; {fall}, to a {figs}, but these records would only show a remaining misfit "
+        f"Explained: {base_figs}; {fall}, {figs}: no group more than {RATIO_MISFIT}x above its floor with "
+        f"significance, what a correct model shows. {' + '.join(facts.model)} explains it.{small}{doubt}",
+        f"Inconclusive: {base_figs}; {fall}, {figs}, but these records would only show a remaining misfit "
         f"of {final.detectable_ratio:.2f}x or more; about {facts.records_needed} more ground-motion records are "
         "needed.",
     )  # fmt: skip
@@ -425,16 +556,17 @@ def _explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
 def _partly_explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
     """The verdict of a final model still above its floor."""
     fall = _fall_text(facts)
-    searched = "that no effect in the library explains" if facts.library else "(no library search ran)"
+    searched = _search_text(facts, other=True)
     if facts.final.misfit or not (facts.drift or facts.probed or facts.local_final):
-        return (f"Partly explained: {base_figs}; {fall}, to a {figs}. A misfit of {facts.final.ratio:.2f}x the floor "
-                f"(the typical record) remains {searched}.")  # fmt: skip
+        return (f"Partly explained: {base_figs}; {fall}, {figs}. A misfit of {facts.final.ratio:.2f}x the floor "
+                f"(the worse group of records) remains; {searched}.")  # fmt: skip
     probed = [c for c in facts.classes if any(e["metric"].startswith("probe:") for e in c["evidence"])]
-    ev = "; ".join(_evidence_text(e) for c in ([facts.drift] if facts.drift else []) + probed + facts.local_final
+    who = "the model with " + " + ".join(facts.model)
+    ev = "; ".join(evidence_text(e, who) for c in ([facts.drift] if facts.drift else []) + probed + facts.local_final
                    for e in c["evidence"][:2])  # fmt: skip
-    return (f"Partly explained: {base_figs}; {fall}, to a {figs}: above the floor's {RATIO_MISFIT}x band, "
+    return (f"Partly explained: {base_figs}; {fall}, {figs}: above the floor's {RATIO_MISFIT}x band, "
             f"and the recording order, a probe of physics outside the library or the localisation (beyond "
-            f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}) {searched}.")  # fmt: skip
+            f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}; {Z_LOCAL_LEGEND}); {searched}.")  # fmt: skip
 
 
 #: The status rule (docs/explanation/verdict.md): (enough records, an effect in the final model, the plain
