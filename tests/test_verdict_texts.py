@@ -159,3 +159,13 @@ def test_the_histories_legend_fits_the_figure(tmp_path):
     assert all(ax.title.get_window_extent(renderer).y1 <= legend.y0 + 1 for ax in fig.axes)
     assert render_diagnosis(d).count("Where to look first") == 0  # the page lists the pointers instead
     assert params_text("restitution", dict(d.final.effects)["restitution"]) in render_diagnosis(d)
+
+
+def test_a_parameter_fitted_at_an_end_of_its_range_is_said_to_be():
+    """A fit stopped at the top of its range (not at its neutral value) does not rule the effect out: said so."""
+    from housner.scenarios.campaigns.results import params_text
+
+    top = params_text("rotational_damping", {"c": 5.0})  # bounds (0, 5) 1/s
+    assert "at the top of its search range 0 to 5" in top and "does not rule the effect out" in top
+    assert params_text("rotational_damping", {"c": 0.0}) == "c = 0 1/s"  # the neutral end: no damping found
+    assert params_text("rotational_damping", {"c": 2.0}) == "c = 2.000 1/s"

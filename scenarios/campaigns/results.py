@@ -440,13 +440,41 @@ def _step_params(name: str, params: dict, final: dict | None) -> str:
 
 
 def params_text(name: str, params: dict, *, digits: int = 4) -> str:
-    """``"c = 0.5999 1/s"``: an effect's fitted parameters with their units ([-] when dimensionless)."""
+    """``"c = 0.5999 1/s"``: an effect's fitted parameters with their units ([-] when dimensionless), and where
+    one stopped at an end of its search range that is not its neutral value, that it did (:func:`at_bound`)."""
     out = []
     for k, v in params.items():
         unit = param_unit(name, k)
         unit = "[-]" if unit in ("-", "") else unit
-        out.append(f"{k} = {_sig(float(v), digits) if math.isfinite(float(v)) else v} {unit}")
+        out.append(f"{k} = {_sig(float(v), digits) if math.isfinite(float(v)) else v} {unit}{at_bound(name, k, v)}")
     return ", ".join(out)
+
+
+def at_bound(name: str, key: str, value) -> str:
+    """``" (at the top of its search range 0-0.5: the fit may want a larger value ...)"``, or ``""``.
+
+    A parameter fitted to within 1e-6 of the range's span from an end that is not its neutral value (0 damping
+    at the bottom is a fit that found no effect, not a range too narrow) may be held back by the range: an
+    effect that fails so is not shown to be wrong. Ranges that depend on the specimen are not checked here.
+    """
+    from housner.scenarios.campaigns.fitting import FIT_BOUNDS
+
+    try:
+        spec = effect_class(name).param_specs[key]
+        bounds = FIT_BOUNDS.get((name, key)) or spec.bounds_for(None)
+        neutral = spec.neutral_for(None)
+        v = float(value)
+    except (KeyError, ValueError, TypeError, AttributeError):
+        return ""
+    if bounds is None or not math.isfinite(v):
+        return ""
+    lo, hi = float(bounds[0]), float(bounds[1])
+    near = 1e-6 * (hi - lo)
+    for end, word, more in ((hi, "top", "larger"), (lo, "bottom", "smaller")):
+        if math.isfinite(end) and abs(v - end) <= near and end != neutral:
+            return (f" (at the {word} of its search range {lo:g} to {hi:g}: the fit may want a {more} value, so this "
+                    "fit does not rule the effect out; widen its bounds to test it)")
+    return ""
 
 
 def _nan_none(v: float):
