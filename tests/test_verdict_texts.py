@@ -22,7 +22,7 @@ from housner.reports.diagnosis import render_diagnosis
 from housner.reports.diagnosis.figures import histories_figure
 from housner.scenarios.campaigns.diagnose import diagnose
 from housner.scenarios.campaigns.results import params_text
-from housner.scenarios.campaigns.verdict import Z_LEGEND, Z_LOCAL_LEGEND
+from housner.scenarios.campaigns.verdict_words import Z_LEGEND, Z_LOCAL_LEGEND
 
 ROOT = Path(__file__).resolve().parents[1]
 CAMPAIGN = ROOT / "examples" / "campaigns" / "pivot-friction"

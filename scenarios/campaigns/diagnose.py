@@ -395,11 +395,7 @@ def diagnose(
         state = add_by_hand(setup, state, name)
     state, found = greedy(setup, state, candidates, max_effects, pairs)
     full_setup, full_state = at_full_rate(setup, state)
-    # the library is claimed only where the search tried it: a first round skipped (the training error already at
-    # the sensor noise) tried no effect, and no round (no candidate: effects=[], or max_effects=0) none either
-    skipped = bool(found.rounds) and all("not searched" in c.reason for c in found.rounds[0])
-    tried = candidates if found.rounds and not skipped else []
-    search_ran = "ran" if tried else "skipped" if skipped else "off" if not candidates else "none_left"
+    tried, search_ran = _what_the_search_did(found, candidates)
     end = conclude(full_setup, full_state, (setup, state), library=tried, selected=found.selected,
                    compare_steps=compare_steps, n_replicas=n_replicas, seed=seed, added=list(add),
                    search_ran=search_ran)  # fmt: skip
@@ -412,6 +408,15 @@ def diagnose(
     diag = _diagnosis(campaign, cv.folds, found, end, list(add), cv.noise_floor, settings)
     diag.elapsed = time.perf_counter() - t_start
     return diag
+
+
+def _what_the_search_did(found: GreedyRounds, candidates: list[str]) -> tuple[list[str], str]:
+    """The effects the search tried, and what it did (:class:`housner.scenarios.campaigns.verdict.VerdictFacts`'s
+    ``search``). The library is claimed only where the search tried it: a first round skipped (the training error
+    already at the sensor noise) tried no effect, and no round (no candidate: effects=[], or max_effects=0) none."""
+    skipped = bool(found.rounds) and all("not searched" in c.reason for c in found.rounds[0])
+    tried = candidates if found.rounds and not skipped else []
+    return tried, "ran" if tried else "skipped" if skipped else "off" if not candidates else "none_left"
 
 
 def _diagnosis(campaign: Campaign, folds: Folds, found: GreedyRounds, end: Conclusion, added: list[str],

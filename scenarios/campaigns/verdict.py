@@ -36,25 +36,28 @@ from housner.scenarios.campaigns.pointers import (
     physical_classes,
 )
 from housner.scenarios.campaigns.residual import DETECTABLE_RATIO, RATIO_MISFIT, Z_MISFIT, Residual
+from housner.scenarios.campaigns.verdict_words import (
+    Z_LEGEND,
+    Z_LOCAL_LEGEND,
+    evidence_text,
+    family_text,
+    probe_words,
+    z_text,
+)
 
 __all__ = [
     "DIST_LEVEL",
     "STATUSES",
     "STATUS_RULE",
-    "Z_LEGEND",
     "Z_LOCAL",
-    "Z_LOCAL_LEGEND",
     "Verdict",
     "VerdictFacts",
     "decide",
     "distribution_checks",
-    "evidence_text",
-    "family_text",
     "pointer_classes",
     "pointer_text",
     "status_rule",
     "verdict_text",
-    "z_text",
 ]
 
 STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconclusive")
@@ -64,23 +67,6 @@ STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconc
 Z_LOCAL = 4.0
 #: Significance level of each distribution check (KS of theta_max/alpha, overturn fraction) [-].
 DIST_LEVEL = 0.01
-
-
-#: Beyond this |z| the text says "z > 100": more digits say nothing more about a misfit [-].
-Z_SHOWN = 100.0
-#: The residual's z, said once where it first appears in the verdict.
-Z_LEGEND = ("z: the held-out error's excess over the floor, record by record, in standard errors of that excess; "
-            "about 0 for a correct model")  # fmt: skip
-#: The localisation's z, said once where the pointer first gives one.
-Z_LOCAL_LEGEND = ("z: how many standard errors of their difference separate the model's value from the measured "
-                  "one; beyond 3 it points here")  # fmt: skip
-
-
-def z_text(z: float) -> str:
-    """``z = +2.9``, or ``z > 100`` where more digits say nothing more."""
-    if math.isfinite(z) and abs(z) < Z_SHOWN:
-        return f"z = {z:+.1f}"
-    return f"z > {Z_SHOWN:g}" if z > 0 else f"z < -{Z_SHOWN:g}"
 
 
 def _groups_text(r: Residual, legend: bool = False) -> str:
@@ -102,47 +88,6 @@ def _groups_text(r: Residual, legend: bool = False) -> str:
         text += (f"; {Z_LEGEND}; a group is a misfit when z > {Z_MISFIT:g} and its error is more than "
                  f"{RATIO_MISFIT}x its floor")  # fmt: skip
     return text
-
-
-def _probe_words(name: str) -> str:
-    """What a probe (:mod:`housner.scenarios.campaigns.probes`) adds, in words: its docstring's first line."""
-    try:
-        from housner.effects import effect_class
-
-        doc = (effect_class(name).__doc__ or "").strip().splitlines()[0]
-    except (KeyError, ValueError, IndexError):
-        return name
-    return doc.removeprefix("Probe: ").rstrip(".")
-
-
-def evidence_text(ev: dict, model: str = "model") -> str:
-    """One piece of a pointer's evidence in words: the measured value, the model's (named ``model``) and z."""
-    if ev["metric"].startswith("probe:"):
-        return f"{ev['label']} ({z_text(ev['z'])}: the fall in standard errors of the paired differences)"
-    return (
-        f"{ev['label']}: measured {_g(ev['measured'])} +- {_g(ev['measured_se'])}, {model} {_g(ev['model'])} "
-        f"+- {_g(ev['model_se'])} ({z_text(ev['z'])})"
-    )
-
-
-def family_text(family: str) -> str:
-    """The correct integrators a floor was measured over, in words (:data:`housner.scenarios.campaigns.model_form.
-    FAMILIES`)."""
-    words = {
-        "exact": "integrated as this library integrates, with the table acceleration's measured noise",
-        "solver": "another integrator step and rest rule on the same table motion",
-        "any": "any integrator step and rest rule, and the table motion's timing and scale anywhere in their "
-               "uncertainty (up to half a sample; about 0.1 %), held or linear between samples",
-    }  # fmt: skip
-    if family.startswith("input-"):
-        share = family.split("-", 1)[1]
-        return (f"family '{family}': another integrator step and rest rule, and the table motion's timing and "
-                f"scale within {share} of their uncertainty")  # fmt: skip
-    return f"family '{family}': {words[family]}" if family in words else f"family '{family}'"
-
-
-def _g(v: float) -> str:
-    return f"{v:.4g}" if math.isfinite(v) else str(v)
 
 
 def distribution_checks(cmp: Comparison | None) -> list[str]:
@@ -395,7 +340,7 @@ def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes:
         evidence = {
             "metric": f"probe:{found['probe']}",
             "label": f"a trial of physics outside the library (the probe {found['probe']}: "
-                     + _probe_words(found["probe"]) + "; "
+                     + probe_words(found["probe"]) + "; "
                      + ", ".join(f"{k} = {v:.3g}" for k, v in found["params"].items())
                      + "), fitted on top of the final model and held out as a candidate is: held-out error "
                      + f"{found['error_with']:.4g} alpha against {found['error']:.4g} without it",
