@@ -122,8 +122,9 @@ class EngineVerdict:
             return failed[0] if failed else self.checks[0][1]
         return self.checks[0][1] if self.records_short is None else self.records_short
 
-    def sentence(self) -> str:
-        """The verdict in one sentence of plain words, its deciding figure in brackets."""
+    def parts(self) -> tuple[str, str, str]:
+        """The sentence's three parts: its first words, the deciding figure (:attr:`decided_by`) and what the engine
+        is good for (``""`` where too few records or none tell)."""
         kind = self.kind
         if kind == "ensemble" and self.records_short is None:
             head = "its distribution of peak rotations agrees; record by record it was not judged (no chaos floor)"
@@ -131,8 +132,12 @@ class EngineVerdict:
             head = "records failed to run"
         else:
             head = _HEADS[kind]
-        tail = "" if kind in ("inconclusive", "no data") else f": {self.good_for}"
-        return f"{head} ({self.decided_by}){tail}"
+        return head, self.decided_by, "" if kind in ("inconclusive", "no data") else self.good_for
+
+    def sentence(self) -> str:
+        """The verdict in one sentence of plain words, its deciding figure in brackets."""
+        head, figure, good = self.parts()
+        return f"{head} ({figure})" + (f": {good}" if good else "")
 
     def line(self) -> str:
         """One line for the command line: the badge and the sentence."""

@@ -110,11 +110,12 @@ def _verdict_lines(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[s
                          "the block's rotation); judged by the measured outcomes</li>")  # fmt: skip
             continue
         v = verdicts[name]
-        head, _, good = v.sentence().partition(f" ({v.decided_by})")
+        head, figure, good = v.parts()
+        good = f": {esc(good)}" if good else ""
         mark = f' <small class="bad">{_caveat_count(caveats[name])} (below)</small>' if name in caveats else ""
         lines.append(
-            f"<li>{verdict_badge(v)} {engine_tag(name, run)}: {esc(head)}: <strong>{_html_figures(v.decided_by)}"
-            f"</strong>{esc(good)}.{mark}<div class=figs>{_figures_line(run, name, v)}</div></li>"
+            f"<li>{verdict_badge(v)} {engine_tag(name, run)}: {esc(head)}: <strong>{_html_figures(figure)}"
+            f"</strong>{good}.{mark}<div class=figs>{_figures_line(run, name, v)}</div></li>"
         )
     if lines:
         return f'<ul class="verdicts">{"".join(lines)}</ul>'
