@@ -97,6 +97,12 @@ class ImpactLaw:
         """Whether the law changes anything (``factor`` below 1)."""
         return self.factor != 1.0
 
+    @property
+    def step_hook(self):
+        """:meth:`after_step`, or None where the law changes nothing: a step loop asks it after a step only when it
+        is not None (an attribute test per step, not a property call)."""
+        return self.after_step if self.active else None
+
     def after_step(self, theta: float, omega: float) -> float | None:
         """The factor to multiply every velocity of the block by after a step that reached (theta, omega), or None.
 

@@ -277,21 +277,15 @@ class DrakeEngine(PlanarEngine):
         m = specimen.mass
         fx_rows = (m * np.asarray(gravity_x(motion.acc, k))).tolist()  # step 6: m times the mean of -ug''
         set_force, step, state = force.SetAtIndex, plant.ExecuteForcedEvents, ctx.get_discrete_state_vector
-        law = self.impact_law(specimen, effects, h, motion.theta0)
-        scaled = law.active  # without the impact law, the loop checks nothing after a step
+        after = self.impact_law(specimen, effects, h, motion.theta0).step_hook
 
         def advance(i: int) -> np.ndarray:
             try:
-                if not scaled:
-                    for fx in fx_rows[i - 1]:
-                        set_force(1, fx)
-                        step(ctx, False)
-                else:
-                    for fx in fx_rows[i - 1]:
-                        set_force(1, fx)
-                        step(ctx, False)
-                        if (c := law.after_step(state().GetAtIndex(2), state().GetAtIndex(5))) is not None:
-                            plant.SetVelocities(ctx, c * plant.GetVelocities(ctx))
+                for fx in fx_rows[i - 1]:
+                    set_force(1, fx)
+                    step(ctx, False)
+                    if after is not None and (c := after(state().GetAtIndex(2), state().GetAtIndex(5))) is not None:
+                        plant.SetVelocities(ctx, c * plant.GetVelocities(ctx))
             except RuntimeError as e:  # the contact solver did not converge
                 raise EngineError(
                     f"Drake failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: {e}; "

@@ -442,8 +442,7 @@ class PybulletEngine(PlanarEngine):
         g = -G
         last = n - 1
         overturned = False
-        law = self.impact_law(specimen, effects, h, th0)
-        after = law.after_step if law.active else None  # without the impact law, nothing to ask after a step
+        after = self.impact_law(specimen, effects, h, th0).step_hook
         for i in range(1, n):
             for gxi in gx_rows[i - 1]:
                 set_gravity(gxi, 0.0, g, physicsClientId=cid)
