@@ -86,12 +86,18 @@ class ParamDim:
         return self.to_u(self.lo), self.to_u(self.hi)
 
 
+def search_bounds(name: str, key: str, specimen=None) -> tuple[float, float] | None:
+    """The search range of parameter ``key`` of effect ``name``: :data:`FIT_BOUNDS`, else the effect's own bounds
+    (None where they depend on a specimen that is not given)."""
+    return FIT_BOUNDS.get((name, key)) or effect_class(name).param_specs[key].bounds_for(specimen)
+
+
 def param_dims(name: str, specimen) -> list[ParamDim]:
     """The fitted parameters of effect ``name`` on ``specimen``: :data:`FIT_BOUNDS` or the effect's own bounds."""
     cls = effect_class(name)
     dims = []
     for key, spec in cls.param_specs.items():
-        b = FIT_BOUNDS.get((name, key)) or spec.bounds_for(specimen)
+        b = search_bounds(name, key, specimen)
         if b is None:
             raise ValueError(f"effect {name!r}: parameter `{key}` has no bounds to fit within")
         lo, hi = float(b[0]), float(b[1])

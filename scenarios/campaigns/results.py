@@ -457,12 +457,11 @@ def at_bound(name: str, key: str, value) -> str:
     at the bottom is a fit that found no effect, not a range too narrow) may be held back by the range: an
     effect that fails so is not shown to be wrong. Ranges that depend on the specimen are not checked here.
     """
-    from housner.scenarios.campaigns.fitting import FIT_BOUNDS
+    from housner.scenarios.campaigns.fitting import search_bounds
 
     try:
-        spec = effect_class(name).param_specs[key]
-        bounds = FIT_BOUNDS.get((name, key)) or spec.bounds_for(None)
-        neutral = spec.neutral_for(None)
+        bounds = search_bounds(name, key)
+        neutral = effect_class(name).param_specs[key].neutral_for(None)
         v = float(value)
     except (KeyError, ValueError, TypeError, AttributeError):
         return ""
