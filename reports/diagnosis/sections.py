@@ -23,7 +23,7 @@ from housner.reports.diagnosis.figures import (
     tilt_figure,
 )
 from housner.reports.page import esc, html_figure, html_table
-from housner.scenarios.campaigns import residual, verdict
+from housner.scenarios.campaigns import residual, verdict, verdict_words
 from housner.scenarios.campaigns.localise import METRICS
 from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
 
@@ -155,15 +155,16 @@ def _verdict_detail(diag) -> str:
     for label, res in (("plain Housner model", v.baseline), ("final model", v.residual)):
         for kind, g in res.groups.items():
             rows.append([esc(label), esc(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
-                         f"{g['ratio']:.2f}", esc(verdict.z_text(g["z"])),
+                         f"{g['ratio']:.2f}", esc(verdict_words.z_text(g["z"])),
                          '<span class="bad">yes</span>' if g["misfit"] else "no",
                          f"{g.get('detectable_ratio', float('nan')):.2f}"])  # fmt: skip
     # the constants are read from the verdict's module when the page is built (they are its, never copied)
     fam, fam_plain = diag.settings.get("floor_family", ""), diag.settings.get("floor_family_plain", "")
     fams = ""
     if fam:
-        fams = (f" The plain model's floor is over correct models of the {verdict.family_text(fam_plain or fam)}"
-                + ("" if (fam_plain or fam) == fam else f"; the final model's over the {verdict.family_text(fam)}")
+        plain_fam = fam_plain or fam
+        fams = (f" The plain model's floor is over correct models of the {verdict_words.family_text(plain_fam)}"
+                + ("" if plain_fam == fam else f"; the final model's over the {verdict_words.family_text(fam)}")
                 + " (each model's narrowest family whose floor its ground motions reach; the widest when none).")
     table = html_table(
         ["model", "records", "n", "held-out error [alpha]", "correct-model floor", "ratio", "z", "misfit",
@@ -177,7 +178,7 @@ def _verdict_detail(diag) -> str:
             f"with a localisation quantity more than {verdict.Z_LOCAL:g} "
             "standard errors from the measured one (never a ratio within the band: the status rule); the "
             f"detectable ratio is what these records would reveal with 80 % power. Ratio: the group's held-out "
-            f"error over its floor (a correct model: 1); {verdict.Z_LEGEND}." + fams
+            f"error over its floor (a correct model: 1); {verdict_words.Z_LEGEND}." + fams
         ),
     )  # fmt: skip
     nxt = ""
@@ -187,9 +188,9 @@ def _verdict_detail(diag) -> str:
         for c in v.next:
             who = "the model with " + " + ".join(names) if names and c.get("from") != "plain" else "the plain model"
             ev = "; ".join(
-                esc(verdict.evidence_text(e)) if e["metric"].startswith("probe:") else
+                esc(verdict_words.evidence_text(e)) if e["metric"].startswith("probe:") else
                 f"{esc(e['label'])}: measured {_pm(e['measured'], e['measured_se'])}, {esc(who)} "
-                f"{_pm(e['model'], e['model_se'])} ({esc(verdict.z_text(e['z']))})"
+                f"{_pm(e['model'], e['model_se'])} ({esc(verdict_words.z_text(e['z']))})"
                 for e in c["evidence"]
             )  # fmt: skip
             items.append(
@@ -205,7 +206,8 @@ def _verdict_detail(diag) -> str:
                      "already cover")  # fmt: skip
         else:
             whose = "what the plain model gets wrong"
-        nxt = (f'<h3>Where to look next</h3><p class="sub">From {esc(whose)}; {esc(verdict.Z_LOCAL_LEGEND)}.</p><ol>'
+        legend = esc(verdict_words.Z_LOCAL_LEGEND)
+        nxt = (f'<h3>Where to look next</h3><p class="sub">From {esc(whose)}; {legend}.</p><ol>'
                + "".join(items) + "</ol>")
     freq = ""
     if diag.selection_frequency:
