@@ -198,12 +198,12 @@ def _verdict_detail(diag) -> str:
             )
         src = {c.get("from") for c in v.next}
         if names and src == {"final"}:
-            whose = f"what the model with {' + '.join(names)} still gets wrong (a pointer of the plain model that " \
-                    "this model no longer shows beyond 3 standard errors is not listed)"  # fmt: skip
+            whose = f"what the model with {' + '.join(names)} still gets wrong"
         elif names:
-            whose = (f"the model with {' + '.join(names)} departs from no localisation quantity by more than 3 "
-                     "standard errors, so these are the plain model's pointers, some of which the added effects may "
-                     "already cover")  # fmt: skip
+            whose = (f"what the plain model gets wrong, in its order, each with the figures of the model with "
+                     f"{' + '.join(names)} where that model still departs there by more than 3 standard errors, else "
+                     "the plain model's (the added effects may cover those in part); then what only the model with "
+                     "them shows")  # fmt: skip
         else:
             whose = "what the plain model gets wrong"
         legend = esc(verdict_words.Z_LOCAL_LEGEND)

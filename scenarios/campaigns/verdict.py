@@ -126,9 +126,9 @@ def pointer_text(classes: Sequence[dict], model: Sequence[str] = ()) -> str:
     who = f"the model with {names}" if src == "final" and model else "the plain model" if src == "plain" else "model"
     ev = "; ".join(evidence_text(e, who) for e in top["evidence"][:2])
     if src == "plain" and model:
-        why = (f"Where to look first (the model with {names} departs from no localisation quantity by more than 3 "
-               f"standard errors, so this reuses the plain model's evidence: what it points to may be what the "
-               f"added effect already covers, in part): ")  # fmt: skip
+        why = (f"Where to look first (what the plain model gets wrong, with the plain model's figures: the model "
+               f"with {names} no longer departs here by more than 3 standard errors, so the added effect may cover "
+               f"it in part): ")  # fmt: skip
     elif model:
         why = f"Where to look first, from what the model with {names} still gets wrong: "
     else:
@@ -324,16 +324,20 @@ def decide(
 def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes: Sequence[dict],
                     drift: dict | None, has_effects: bool = False) -> list[dict]:  # fmt: skip
     """The physical classes to look at, strongest first: a drift along the recording order, then the probes'
-    classes, then what the localisation points to: of the final model when it holds effects
-    (``has_effects``: what an added effect took is no pointer any more), else of the plain model.
+    classes, then what the localisation points to: the plain model's classes in their order (what differs from
+    Housner's physics names the family: on the independent generator's pivot-friction campaign the plain model
+    points to dissipation, the model with the restitution the search adds to impact), then those only the final
+    model shows.
 
-    A final model whose localisation points nowhere falls back on the plain model's classes, each marked
-    ``"from": "plain"`` (:func:`pointer_text` says so); the others are marked with the model they come from.
+    Each class carries whose figures it gives (``"from"``): where the model with effects (``has_effects``) still
+    shows a class, its own evidence (``"final"``); otherwise the plain model's (``"plain"``), which
+    :func:`pointer_text` says.
     """
-    if has_effects and final_classes:
-        classes = [{**c, "from": "final"} for c in final_classes]
-    else:
-        classes = [{**c, "from": "plain"} for c in base_classes]
+    final = {c["class"]: c for c in final_classes} if has_effects else {}
+    classes = [{**final[c["class"]], "from": "final"} if c["class"] in final else {**c, "from": "plain"}
+               for c in base_classes]  # fmt: skip
+    have = {c["class"] for c in classes}
+    classes += [{**c, "from": "final"} for c in final_classes if has_effects and c["class"] not in have]
     # a probe of physics outside the library that lowers the error significantly is the most direct
     # pointer there is: its class first (housner.scenarios.campaigns.probes)
     for found in sorted(probes, key=lambda p: p["z"]):
