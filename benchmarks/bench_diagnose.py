@@ -64,8 +64,12 @@ SLOWEST_TEXT = (
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--records", type=int, default=103, help="records in all (3 of them free vibration)")
-    ap.add_argument("--hidden", default=None, choices=sorted([*cg.HIDDEN, *cg.OUTSIDE]),
-                    help="the hidden effect (default rotational_damping; --slowest: pivot_friction)")  # fmt: skip
+    ap.add_argument(
+        "--hidden",
+        default=None,
+        choices=sorted([*cg.HIDDEN, *cg.OUTSIDE]),
+        help="the hidden effect (default rotational_damping; --slowest: pivot_friction)",
+    )
     ap.add_argument("--seed", type=int, default=2017)
     ap.add_argument("--slowest", action="store_true", help=f"the slowest kind: {SLOWEST_TEXT}")
     ap.add_argument("--rate", type=float, help="sample rate [Hz] (default 500; --slowest: 2000)")
@@ -128,18 +132,24 @@ def main(argv=None) -> int:
     print(diag.summary())
     print()
     n_samples = sum(r.theta.size for r in camp.records)
-    print(f"campaign: {len(camp.free_vibration)} free vibrations ({fv_dur:g} s) + {len(camp.ground_motion)} ground "
-          f"motions ({gm_dur:g} s) at {rate:g} Hz, {n_samples} samples, hidden effect {hidden!r}, named "
-          f"{diag.selected or 'none'}, verdict {diag.status}")  # fmt: skip
+    print(
+        f"campaign: {len(camp.free_vibration)} free vibrations ({fv_dur:g} s) + {len(camp.ground_motion)} ground "
+        f"motions ({gm_dur:g} s) at {rate:g} Hz, {n_samples} samples, hidden effect {hidden!r}, named "
+        f"{diag.selected or 'none'}, verdict {diag.status}"
+    )
     for line in diag.settings.get("economies", []):
         print(f"economy: {line}")
     print(f"generate {t_gen:6.1f} s   load {t_load:6.1f} s")
     print(f"baseline: one comparison of the campaign         {t_base:7.2f} s")
     verdict = "MET" if t_diag < TARGET_S else "MISSED"
-    print(f"diagnosis, {len(diag.candidates)} candidates, {len(diag.rounds)} rounds    {t_diag:7.1f} s "
-          f"= {t_diag / t_base:.0f} comparisons; target < {TARGET_S:.0f} s: {verdict}")  # fmt: skip
-    print(f"  (CPU time of the diagnosis {c_diag:.1f} s = {c_diag / t_diag:.2f} cores; load average "
-          f"{load0:.2f} at its start, {os.getloadavg()[0]:.2f} at its end, on {os.cpu_count()} cores)")  # fmt: skip
+    print(
+        f"diagnosis, {len(diag.candidates)} candidates, {len(diag.rounds)} rounds    {t_diag:7.1f} s "
+        f"= {t_diag / t_base:.0f} comparisons; target < {TARGET_S:.0f} s: {verdict}"
+    )
+    print(
+        f"  (CPU time of the diagnosis {c_diag:.1f} s = {c_diag / t_diag:.2f} cores; load average "
+        f"{load0:.2f} at its start, {os.getloadavg()[0]:.2f} at its end, on {os.cpu_count()} cores)"
+    )
     if args.report:
         print(f"report {t_rep:.1f} s -> {args.report}")
     return 0 if t_diag < TARGET_S else 1

@@ -82,8 +82,10 @@ def main(argv=None) -> int:
             olds.append(cost[id(old)])
             news.append(cost[id(new)])
         ratios = [b / a for a, b in zip(olds, news, strict=True)]
-        print(f"{name:10s} {statistics.median(olds):12.4f} {statistics.median(news):12.4f} "
-              f"{statistics.median(ratios):8.3f} {min(ratios):6.3f}-{max(ratios):.3f}  {replaced}")  # fmt: skip
+        print(
+            f"{name:10s} {statistics.median(olds):12.4f} {statistics.median(news):12.4f} "
+            f"{statistics.median(ratios):8.3f} {min(ratios):6.3f}-{max(ratios):.3f}  {replaced}"
+        )
     return 0
 
 

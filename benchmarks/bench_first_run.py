@@ -35,9 +35,16 @@ ROOT = Path(__file__).resolve().parents[1]
 
 COMMANDS = {
     "run": ["run", "elcentro", "-q", "--out", "{tmp}/run"],
-    "diagnose": ["diagnose", "examples/campaigns/pivot-friction", "-q", "--report", "{tmp}/diagnosis.html",
-                 "--json", "{tmp}/diagnosis.json"],
-}  # fmt: skip
+    "diagnose": [
+        "diagnose",
+        "examples/campaigns/pivot-friction",
+        "-q",
+        "--report",
+        "{tmp}/diagnosis.html",
+        "--json",
+        "{tmp}/diagnosis.json",
+    ],
+}
 
 
 def machine() -> str:

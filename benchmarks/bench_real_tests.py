@@ -72,17 +72,22 @@ def main(argv=None) -> int:
     times["diagnose"] = time.perf_counter() - t
     loop = times["import"] + times["load"] + times["diagnose"]
     print(f"{len(campaign.outcomes)} records; specimen {times['specimen']:.2f} s (target < {TARGET_SPECIMEN_S:g} s)")
-    print(f"import {times['import']:.1f} s, load {times['load']:.1f} s, diagnose {times['diagnose']:.1f} s: "
-          f"{loop:.1f} s in all (target < {TARGET_LOOP_S:g} s)")  # fmt: skip
-    print(f"baseline: one pass of the plain model over every record {times['one_pass']:.3f} s; the diagnosis costs "
-          f"{times['diagnose'] / times['one_pass']:.0f} passes")  # fmt: skip
+    print(
+        f"import {times['import']:.1f} s, load {times['load']:.1f} s, diagnose {times['diagnose']:.1f} s: "
+        f"{loop:.1f} s in all (target < {TARGET_LOOP_S:g} s)"
+    )
+    print(
+        f"baseline: one pass of the plain model over every record {times['one_pass']:.3f} s; the diagnosis costs "
+        f"{times['diagnose'] / times['one_pass']:.0f} passes"
+    )
     print()
     print(d.summary())
     rows = [(s.name, s.scores) for s in d.steps] + list(d.baselines.items())
     print(f"\n{'model':32s} {'accuracy':>22s} {'F1':>22s} {'log loss':>22s}")
     for name, sc in rows:
-        cells = " ".join(f"{sc[k]:7.3f} [{sc[k + '_ci'][0]:.3f}, {sc[k + '_ci'][1]:.3f}]" for k in
-                         ("accuracy", "f1", "log_loss"))  # fmt: skip
+        cells = " ".join(
+            f"{sc[k]:7.3f} [{sc[k + '_ci'][0]:.3f}, {sc[k + '_ci'][1]:.3f}]" for k in ("accuracy", "f1", "log_loss")
+        )
         print(f"{name:32s} {cells}")
     return 0 if times["specimen"] < TARGET_SPECIMEN_S and loop < TARGET_LOOP_S else 1
 

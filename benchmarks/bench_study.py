@@ -71,13 +71,23 @@ def _child_study(toml: str, out: str, cache: str, jobs: int) -> None:
     res = run_study(toml, out=out, options=RunOptions(jobs=jobs, cache_dir=cache, progress=False))
     wall = time.perf_counter() - t0
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(json.dumps({"wall_s": wall, "records": len(res.results), "peak_rss_mb": rss_mb,
-                      "failed": int((res.results.status != "ok").sum())}))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "wall_s": wall,
+                "records": len(res.results),
+                "peak_rss_mb": rss_mb,
+                "failed": int((res.results.status != "ok").sum()),
+            }
+        )
+    )
 
 
 def _run_child(toml: Path, out: Path, cache: Path, jobs: int) -> dict:
-    code = f"import sys; sys.path.insert(0, {str(ROOT)!r}); from benchmarks.bench_study import _child_study; " \
-           f"_child_study({str(toml)!r}, {str(out)!r}, {str(cache)!r}, {jobs})"  # fmt: skip
+    code = (
+        f"import sys; sys.path.insert(0, {str(ROOT)!r}); from benchmarks.bench_study import _child_study; "
+        f"_child_study({str(toml)!r}, {str(out)!r}, {str(cache)!r}, {jobs})"
+    )
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
     return json.loads(p.stdout.strip().splitlines()[-1])
 

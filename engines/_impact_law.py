@@ -84,8 +84,9 @@ class ImpactLaw:
         self.tol = IMPACT_LAW_TOL * self._alpha
         self._sides = None  # ((alpha, cos alpha, p^2) of the + pivot, of the - pivot), or None: symmetric
         if params is not None:
-            self._sides = tuple((a, math.cos(a), p * p) for a, p in ((params.alpha_pos, params.p_pos),
-                                                                      (params.alpha_neg, params.p_neg)))  # fmt: skip
+            self._sides = tuple(
+                (a, math.cos(a), p * p) for a, p in ((params.alpha_pos, params.p_pos), (params.alpha_neg, params.p_neg))
+            )
             self.tol = IMPACT_LAW_TOL * min(params.alpha_pos, params.alpha_neg)
         self._wait = max(1, math.ceil(IMPACT_LAW_DELAY / step * (1.0 - 1e-9)))
         self._side = 0.0 if theta0 == 0.0 else math.copysign(1.0, theta0)

@@ -184,8 +184,9 @@ def contact_r(specimen, e: float = 0.0) -> float:
     momentum about its landing pivot)."""
     if e == 0.0:
         return specimen.r_housner
-    rho_pn, rho_np = pivot_impact_ratios(specimen.B - e, specimen.B + e, specimen.H, specimen.centroidal_inertia,
-                                         specimen.mass)  # fmt: skip
+    rho_pn, rho_np = pivot_impact_ratios(
+        specimen.B - e, specimen.B + e, specimen.H, specimen.centroidal_inertia, specimen.mass
+    )
     return rho_pn * rho_np
 
 

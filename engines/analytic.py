@@ -130,8 +130,14 @@ class HousnerEngine(Engine):
                 groups.setdefault((pl.params, pl.terms), []).append(i)
         for (prm, terms), idx in groups.items():
             try:
-                res = simulate_batch(specimen, [plans[i].motion for i in idx], params=prm, substeps=self.substeps,
-                                   rest_tol=self.rest_tol, terms=terms)
+                res = simulate_batch(
+                    specimen,
+                    [plans[i].motion for i in idx],
+                    params=prm,
+                    substeps=self.substeps,
+                    rest_tol=self.rest_tol,
+                    terms=terms,
+                )
             except RECORD_ERRORS:
                 continue  # one record at a time, so that the failing one is named
             for i, r in zip(idx, res, strict=True):

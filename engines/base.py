@@ -74,8 +74,10 @@ class EngineSpec:
             if not (module and attr):
                 raise ValueError(f"engine {self.name!r}: entry point {self.entry_point!r} is not 'module:Class'")
         elif not isinstance(self.entry_point, type):
-            raise TypeError(f"engine {self.name!r}: the entry point must be a class or 'module:Class', "
-                            f"got {type(self.entry_point).__name__}")  # fmt: skip
+            raise TypeError(
+                f"engine {self.name!r}: the entry point must be a class or 'module:Class', "
+                f"got {type(self.entry_point).__name__}"
+            )
         if not self.label:
             object.__setattr__(self, "label", self.name)
 

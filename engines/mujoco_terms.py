@@ -194,8 +194,9 @@ def moment_couple(
     return couple, TermSet(terms).describe()
 
 
-def roll_with_couple(model: Any, data: Any, state: np.ndarray, ctrl: np.ndarray, warm: np.ndarray,
-                      couple: Any, first: int) -> np.ndarray:  # fmt: skip
+def roll_with_couple(
+    model: Any, data: Any, state: np.ndarray, ctrl: np.ndarray, warm: np.ndarray, couple: Any, first: int
+) -> np.ndarray:
     """One chunk as :func:`mujoco.rollout.rollout` runs it, with the couple [N m] on the theta hinge.
 
     The chunk's steps are steps ``first``, ``first + 1``, ... of the record; before each, ``couple(i,

@@ -242,8 +242,7 @@ class OpenSeesEngine(PlanarEngine):
         if target > r_h * 1.002:
             return [dict(contact_stiffness=k) for k in (1.0e7, 6.0e6, 4.0e6, 3.0e6, 2.0e6)]
         if target >= r_h * 0.998:
-            return [dict(), dict(contact_damping=4.0e-4), dict(contact_damping=3.0e-4),
-                    dict(timestep=1e-3 / 6)]  # fmt: skip
+            return [dict(), dict(contact_damping=4.0e-4), dict(contact_damping=3.0e-4), dict(timestep=1e-3 / 6)]
         return [dict(contact_damping=b) for b in (4.5e-4, 5.0e-4, 6.0e-4, 7.0e-4, 1.0e-3, 2.0e-3)]
 
     # ------------------------------------------------------------------
@@ -279,11 +278,29 @@ class OpenSeesEngine(PlanarEngine):
         bearing = s["contact_element"] == "flatSliderBearing"
         for i, (ground, corner) in enumerate(((4, 2), (5, 3))):
             if bearing:
-                ops.element("flatSliderBearing", 10 + i, ground, corner, 1, _STICK_K, "-P", 1, "-Mz", 2,
-                            "-orient", 0.0, 1.0, 0.0, -1.0, 0.0, 0.0)  # fmt: skip
+                ops.element(
+                    "flatSliderBearing",
+                    10 + i,
+                    ground,
+                    corner,
+                    1,
+                    _STICK_K,
+                    "-P",
+                    1,
+                    "-Mz",
+                    2,
+                    "-orient",
+                    0.0,
+                    1.0,
+                    0.0,
+                    -1.0,
+                    0.0,
+                    0.0,
+                )
             else:  # the corner is the constrained node, the ground's upward normal the retained side's
-                ops.element("zeroLengthContact2D", 10 + i, corner, ground, k, _STICK_K, s["friction"],
-                            "-normal", 0.0, 1.0)  # fmt: skip
+                ops.element(
+                    "zeroLengthContact2D", 10 + i, corner, ground, k, _STICK_K, s["friction"], "-normal", 0.0, 1.0
+                )
             ops.element("zeroLength", 20 + i, ground, corner, "-mat", 3, "-dir", 2, "-doRayleigh", 1)
         ops.rayleigh(0.0, beta, 0.0, 0.0)  # current stiffness: only the contact springs opt in
         ops.timeSeries("Path", 1, "-dt", motion.dt, "-values", *motion.acc.tolist())
@@ -378,8 +395,19 @@ class OpenSeesEngine(PlanarEngine):
         finally:
             ops.wipe()
         wall = time.perf_counter() - wall0
-        return self._response(specimen, motion, theta, theta_dot, last, overturned, h, k, wall, retried_samples=retried,
-                              loose_samples=loose)  # fmt: skip
+        return self._response(
+            specimen,
+            motion,
+            theta,
+            theta_dot,
+            last,
+            overturned,
+            h,
+            k,
+            wall,
+            retried_samples=retried,
+            loose_samples=loose,
+        )
 
     def _steps_with_law(self, ops, motion: GroundMotion, i: int, k: int, h: float, law: ImpactLaw) -> int:
         """Sample interval i step by step, scaling every node's velocity at an impact; the retry stage that

@@ -467,11 +467,18 @@ class PybulletEngine(PlanarEngine):
         sb = sgn * B if e == 0.0 else np.where(th > 0.0, pivot_x(B, e)[0], np.where(th < 0.0, pivot_x(B, e)[1], 0.0))
         slip = x_com + sb * np.cos(th) - H * np.sin(th) - sb
         return self._response(
-            specimen, motion, states[:, 2].copy(), states[:, 5].copy(), last, overturned, h, k,
+            specimen,
+            motion,
+            states[:, 2].copy(),
+            states[:, 5].copy(),
+            last,
+            overturned,
+            h,
+            k,
             time.perf_counter() - wall0,
             max_pivot_slip_m=float(np.max(np.abs(slip), initial=0.0)),
             max_penetration_m=float(max(0.0, -np.min(_pivot_z(states[: last + 1], H, B, e)))),
-        )  # fmt: skip
+        )
 
 
 # ----------------------------------------------------------------------

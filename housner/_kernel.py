@@ -146,8 +146,29 @@ def _run(acc_g, v_g, dt, m, prm, q, theta0, theta_dot0, rest_tol, record, theta_
         tau, j, n_ev = 0.0, 0, 0
         while mode != OVERTURNED:
             if mode == REST or mode == STUCK:
-                tl, s, phi, sig, t_uplift = _depart(mode, phi, s, sig, tau, m, dt, g0, g1, u0, u1, t_k, t_uplift,
-                                                    alpha_p, alpha_n, p2_p, p2_n, c, tan_p, tan_n, q)  # fmt: skip
+                tl, s, phi, sig, t_uplift = _depart(
+                    mode,
+                    phi,
+                    s,
+                    sig,
+                    tau,
+                    m,
+                    dt,
+                    g0,
+                    g1,
+                    u0,
+                    u1,
+                    t_k,
+                    t_uplift,
+                    alpha_p,
+                    alpha_n,
+                    p2_p,
+                    p2_n,
+                    c,
+                    tan_p,
+                    tan_n,
+                    q,
+                )
                 if tl == math.inf:
                     break
                 tau = tl
@@ -228,16 +249,16 @@ def _start(acc_g, v_g, dt, theta0, theta_dot0, alpha_p, alpha_n, p2_p, p2_n, c, 
 
 
 @njit(cache=True, inline="always")
-def _depart(mode, phi, s, sig, tau, m, dt, g0, g1, u0, u1, t_k, t_uplift, alpha_p, alpha_n, p2_p, p2_n, c, tan_p,
-            tan_n, q):  # fmt: skip
+def _depart(
+    mode, phi, s, sig, tau, m, dt, g0, g1, u0, u1, t_k, t_uplift, alpha_p, alpha_n, p2_p, p2_n, c, tan_p, tan_n, q
+):
     """When a block at REST (or STUCK) starts to rock, at or after local time tau [s] of the sample from t_k [s].
 
     Returns (tau, s, phi, sig, t_uplift): the local time it starts (inf when it stays through the sample,
     the rest unchanged then), its pivot, angle, direction, and the first uplift time [s].
     """
     if AT_REST:
-        tl, sd, sg = leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n,
-                           p2_p, p2_n, c, q)  # fmt: skip
+        tl, sd, sg = leave(mode == STUCK, phi, s, tau, m, dt, g0, g1, u0, u1, t_k, alpha_p, alpha_n, p2_p, p2_n, c, q)
         if tl == math.inf:
             return tl, s, phi, sig, t_uplift
         if mode == REST:
@@ -289,9 +310,23 @@ def _turn(ph_h, tau, fr, q, sig):
 
 @njit(cache=True)
 def run_batch(
-    acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-    imp_offsets, out,
-):  # fmt: skip
+    acc_g,
+    v_g,
+    offsets,
+    dts,
+    ms,
+    prm,
+    q,
+    theta0s,
+    theta_dot0s,
+    rest_tol,
+    record,
+    theta,
+    theta_dot,
+    impacts,
+    imp_offsets,
+    out,
+):
     """Serial batch over records i with samples acc_g[offsets[i]:offsets[i+1]]; ``q`` [n_rec, n_q]: their terms.
 
     ``out`` [n_rec, 6] receives (theta_max, overturned, t_over, t_uplift, n_imp, guard).
@@ -299,29 +334,88 @@ def run_batch(
     """
     for i in range(offsets.size - 1):
         _one_of_batch(
-            i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-            imp_offsets, out,
-        )  # fmt: skip
+            i,
+            acc_g,
+            v_g,
+            offsets,
+            dts,
+            ms,
+            prm,
+            q,
+            theta0s,
+            theta_dot0s,
+            rest_tol,
+            record,
+            theta,
+            theta_dot,
+            impacts,
+            imp_offsets,
+            out,
+        )
 
 
 @njit(cache=True, parallel=True)
 def run_batch_parallel(
-    acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-    imp_offsets, out,
-):  # fmt: skip
+    acc_g,
+    v_g,
+    offsets,
+    dts,
+    ms,
+    prm,
+    q,
+    theta0s,
+    theta_dot0s,
+    rest_tol,
+    record,
+    theta,
+    theta_dot,
+    impacts,
+    imp_offsets,
+    out,
+):
     """:func:`run_batch` with the records spread over threads (numba ``prange``)."""
     for i in prange(offsets.size - 1):
         _one_of_batch(
-            i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-            imp_offsets, out,
-        )  # fmt: skip
+            i,
+            acc_g,
+            v_g,
+            offsets,
+            dts,
+            ms,
+            prm,
+            q,
+            theta0s,
+            theta_dot0s,
+            rest_tol,
+            record,
+            theta,
+            theta_dot,
+            impacts,
+            imp_offsets,
+            out,
+        )
 
 
 @njit(cache=True)
 def _one_of_batch(
-    i, acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot, impacts,
-    imp_offsets, out,
-):  # fmt: skip
+    i,
+    acc_g,
+    v_g,
+    offsets,
+    dts,
+    ms,
+    prm,
+    q,
+    theta0s,
+    theta_dot0s,
+    rest_tol,
+    record,
+    theta,
+    theta_dot,
+    impacts,
+    imp_offsets,
+    out,
+):
     a = offsets[i]
     b = offsets[i + 1]
     if record:
@@ -331,9 +425,20 @@ def _one_of_batch(
         th = theta[0:0]
         thd = theta_dot[0:0]
     res = run_one(
-        acc_g[a:b], v_g[a:b], dts[i], ms[i], prm[i], q[i], theta0s[i], theta_dot0s[i], rest_tol, record, th, thd,
+        acc_g[a:b],
+        v_g[a:b],
+        dts[i],
+        ms[i],
+        prm[i],
+        q[i],
+        theta0s[i],
+        theta_dot0s[i],
+        rest_tol,
+        record,
+        th,
+        thd,
         impacts[imp_offsets[i] : imp_offsets[i + 1]],
-    )  # fmt: skip
+    )
     out[i, 0] = res[0]
     out[i, 1] = 1.0 if res[1] else 0.0
     out[i, 2] = res[2]

@@ -542,11 +542,23 @@ def calibrate_free_vibration(
     p, p_std = _weighted_mean(p_exact[:k], var_lnp[:k] * p_exact[:k] ** 2)
     p_l, _ = _weighted_mean(p_lin[:k], var_lnp[:k] * p_lin[:k] ** 2)
     return FreeVibrationCalibration(
-        p=p, p_std=p_std, p_linearised=p_l, r=r, r_std=r_std,
-        n_half_cycles=len(pk), n_p=k, alpha=alpha, noise=pk.noise, peaks=pk,
-        p_half_cycle=p_exact, p_half_cycle_linearised=p_lin, half_cycle_amplitude=a_c, half_cycle_duration=T,
-        c=energy_ratios(amp, alpha), c_amplitude=amp[:-1],
-    )  # fmt: skip
+        p=p,
+        p_std=p_std,
+        p_linearised=p_l,
+        r=r,
+        r_std=r_std,
+        n_half_cycles=len(pk),
+        n_p=k,
+        alpha=alpha,
+        noise=pk.noise,
+        peaks=pk,
+        p_half_cycle=p_exact,
+        p_half_cycle_linearised=p_lin,
+        half_cycle_amplitude=a_c,
+        half_cycle_duration=T,
+        c=energy_ratios(amp, alpha),
+        c_amplitude=amp[:-1],
+    )
 
 
 def _energy_decay_r(amp: np.ndarray, s_amp: np.ndarray, alpha: float) -> tuple[float, float]:

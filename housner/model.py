@@ -296,8 +296,26 @@ def _vertical(motions, terms) -> np.ndarray:
     return np.concatenate([mo.channels[VERTICAL] for mo in motions]) / G
 
 
-def _run_kernel(terms, parallel: bool, acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta,
-                theta_dot, impacts, imp_off, out) -> None:  # fmt: skip
+def _run_kernel(
+    terms,
+    parallel: bool,
+    acc_g,
+    v_g,
+    offsets,
+    dts,
+    ms,
+    prm_a,
+    q,
+    th0,
+    thd0,
+    rest_tol,
+    record,
+    theta,
+    theta_dot,
+    impacts,
+    imp_off,
+    out,
+) -> None:
     """Run the plain kernel (``terms`` None: no v_g nor q) or the one generated for ``terms``."""
     if terms is None:
         kern = run_batch_parallel if parallel else run_batch
@@ -334,8 +352,26 @@ def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: 
     np.cumsum(caps, out=imp_off[1:])
     impacts = np.empty(imp_off[-1])
     out = np.empty((n_rec, 6))
-    _run_kernel(terms, parallel and n_rec > 1, acc_g, v_g, offsets, dts, ms_a, prm_a, q, th0, thd0, rest_tol, True,
-                theta, theta_dot, impacts, imp_off, out)  # fmt: skip
+    _run_kernel(
+        terms,
+        parallel and n_rec > 1,
+        acc_g,
+        v_g,
+        offsets,
+        dts,
+        ms_a,
+        prm_a,
+        q,
+        th0,
+        thd0,
+        rest_tol,
+        True,
+        theta,
+        theta_dot,
+        impacts,
+        imp_off,
+        out,
+    )
     results = []
     prm_d = asdict(prm)  # once: a record's info holds its own shallow copy (the values are numbers)
     for i, mo in enumerate(motions):
@@ -345,10 +381,25 @@ def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: 
             one = np.array([0, mo.n], dtype=np.int64)
             ab = slice(offsets[i], offsets[i + 1])
             _run_kernel(
-                terms, False, acc_g[ab], None if v_g is None else v_g[ab], one, dts[i : i + 1], ms_a[i : i + 1],
-                prm_a[i : i + 1], None if q is None else q[i : i + 1], th0[i : i + 1], thd0[i : i + 1], rest_tol,
-                False, theta[:0], theta_dot[:0], imp_i, np.array([0, n_imp], dtype=np.int64), np.empty((1, 6)),
-            )  # fmt: skip
+                terms,
+                False,
+                acc_g[ab],
+                None if v_g is None else v_g[ab],
+                one,
+                dts[i : i + 1],
+                ms_a[i : i + 1],
+                prm_a[i : i + 1],
+                None if q is None else q[i : i + 1],
+                th0[i : i + 1],
+                thd0[i : i + 1],
+                rest_tol,
+                False,
+                theta[:0],
+                theta_dot[:0],
+                imp_i,
+                np.array([0, n_imp], dtype=np.int64),
+                np.empty((1, 6)),
+            )
         else:
             imp_i = impacts[imp_off[i] : imp_off[i] + n_imp].copy()
         info = {"substeps": int(ms_a[i]), "rest_tol": rest_tol, "params": dict(prm_d)}
@@ -426,8 +477,24 @@ def theta_max_many(
     out = np.empty((n_rec, 6))
     empty = np.empty(0)
     kern = run_batch_parallel if parallel and n_rec > 1 else run_batch
-    kern(acc_g, acc_g, offsets, dts, ms, prm_a, _no_terms(n_rec), th0, thd0, tol, False, empty, empty, empty,
-         np.zeros(n_rec + 1, np.int64), out)  # fmt: skip
+    kern(
+        acc_g,
+        acc_g,
+        offsets,
+        dts,
+        ms,
+        prm_a,
+        _no_terms(n_rec),
+        th0,
+        thd0,
+        tol,
+        False,
+        empty,
+        empty,
+        empty,
+        np.zeros(n_rec + 1, np.int64),
+        out,
+    )
     overturned = out[:, 1] != 0.0
     ratio = np.where(overturned, np.inf, out[:, 0] / specimen.alpha)
     return ratio, overturned, out[:, 4].astype(np.int64)

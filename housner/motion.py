@@ -112,8 +112,12 @@ class GroundMotion:
             raise ValueError(f"`channels` of motion {self.name!r} must be a mapping of name -> samples")
         out = {}
         for key in sorted(channels):
-            if not (isinstance(key, str) and key.startswith(CHANNEL_PREFIX) and key.isidentifier()
-                    and len(key) > len(CHANNEL_PREFIX)):  # fmt: skip
+            if not (
+                isinstance(key, str)
+                and key.startswith(CHANNEL_PREFIX)
+                and key.isidentifier()
+                and len(key) > len(CHANNEL_PREFIX)
+            ):
                 raise ValueError(
                     f"channel {key!r} of motion {self.name!r}: a channel is an acceleration named "
                     f"'{CHANNEL_PREFIX}<what>' (e.g. {VERTICAL!r})"
@@ -248,8 +252,15 @@ class GroundMotion:
         if len(k) == 0:
             raise ValueError(f"`sliced({start!r}, {stop!r})` of motion {self.name!r} ({self.n} samples) is empty")
         sl = slice(k.start, k.stop)
-        return GroundMotion(self.acc[sl], self.dt, self.name, self.provenance, self.theta0, self.theta_dot0,
-                            {key: a[sl] for key, a in self.channels.items()})  # fmt: skip
+        return GroundMotion(
+            self.acc[sl],
+            self.dt,
+            self.name,
+            self.provenance,
+            self.theta0,
+            self.theta_dot0,
+            {key: a[sl] for key, a in self.channels.items()},
+        )
 
     @classmethod
     def free_vibration(cls, theta0: float, duration: float, dt: float = 0.002, name: str | None = None) -> GroundMotion:
@@ -283,6 +294,7 @@ class GroundMotion:
     ) -> GroundMotion:
         """Read a CSV record: time and acceleration columns, units in the header, extra ``ground_acc_<what>``
         columns as channels (:func:`housner.motion_readers.read_csv_motion`). ``name`` defaults to the file's stem."""
-        acc, dt, provenance, channels = read_csv_motion(path, time_column=time_column, acc_column=acc_column,
-                                                        units=units)  # fmt: skip
+        acc, dt, provenance, channels = read_csv_motion(
+            path, time_column=time_column, acc_column=acc_column, units=units
+        )
         return cls(acc=acc, dt=dt, name=name or Path(path).stem, provenance=provenance, channels=channels)

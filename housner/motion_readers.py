@@ -73,9 +73,7 @@ def read_at2(path: str | Path, *, units: str | None = None) -> tuple[np.ndarray,
             header_line = i
             break
     if header_line is None:
-        raise DataFileError(
-            path, "no 'NPTS= n, DT= dt' header line in the first 50 lines; is this a PEER AT2 file?"
-        )
+        raise DataFileError(path, "no 'NPTS= n, DT= dt' header line in the first 50 lines; is this a PEER AT2 file?")
     npts = int(m.group(1))
     try:
         dt = float(m.group(2).replace("D", "E").replace("d", "e"))
@@ -210,14 +208,14 @@ def _at2_units(path: Path, header: list[str], given: tuple[str, str, float] | No
         raise DataFileError(
             path,
             f"cannot read the acceleration units {excerpt(tok)} in the header (understood: "
-            f"{UNIT_CHOICES['acceleration']}); declare the unit: `units = \"g\"` in the scenario's "
-            "[motions] table, units=\"g\" in Python",
+            f'{UNIT_CHOICES["acceleration"]}); declare the unit: `units = "g"` in the scenario\'s '
+            '[motions] table, units="g" in Python',
             line=line,
         )
     raise DataFileError(
         path,
         f"the header (lines 1-{len(header)}) names no acceleration units (expected e.g. 'UNITS OF G' or "
-        "'CM/SEC/SEC'); declare the unit: `units = \"g\"` (or \"cm/s^2\", ...) in the scenario's [motions] "
-        "table, units=\"g\" in Python",
+        '\'CM/SEC/SEC\'); declare the unit: `units = "g"` (or "cm/s^2", ...) in the scenario\'s [motions] '
+        'table, units="g" in Python',
         line=len(header),
     )

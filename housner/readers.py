@@ -22,6 +22,7 @@ with the file, line and column; a record needs :data:`MIN_RECORD_SAMPLES` sample
 (:func:`require_samples`); a file whose first line is not a CSV header of names is refused
 without quoting that line (a message never echoes a file that is not a record).
 """
+
 from __future__ import annotations
 
 import csv
@@ -272,8 +273,9 @@ def _column_unit(
             continue
         u = parse_unit(u_text)
         if quantity is None:
-            raise DataFileError(path, f"column `{column}` takes no unit, got [{excerpt(u_text, quote=False)}]",
-                                line=1, column=column)  # fmt: skip
+            raise DataFileError(
+                path, f"column `{column}` takes no unit, got [{excerpt(u_text, quote=False)}]", line=1, column=column
+            )
         if u is None or u[0] != quantity:
             what = "unknown unit" if u is None else f"{u[0]} unit"
             raise DataFileError(
@@ -285,7 +287,9 @@ def _column_unit(
             )
         if source == "default" and label is not None and label != u[1]:
             raise DataFileError(
-                path, f"the header says [{excerpt(written, quote=False)}] but units={default!r} was given", line=1,
+                path,
+                f"the header says [{excerpt(written, quote=False)}] but units={default!r} was given",
+                line=1,
                 column=column,
             )
         if label is None:

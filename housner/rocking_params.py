@@ -159,8 +159,15 @@ class RockingParams:
             rr = math.hypot(b, h)
             side[name] = (math.atan2(b, h), math.sqrt(mass * G * rr / (centroidal_inertia + mass * rr * rr)))
         rho_pn, rho_np = pivot_impact_ratios(b_pos, b_neg, h, centroidal_inertia, mass)
-        return cls(side["pos"][0], side["neg"][0], side["pos"][1], side["neg"][1], min(1.0, abs(rho_pn * rho_np)),
-                   r_pos=min(1.0, rho_np * rho_np), r_neg=min(1.0, rho_pn * rho_pn))  # fmt: skip
+        return cls(
+            side["pos"][0],
+            side["neg"][0],
+            side["pos"][1],
+            side["neg"][1],
+            min(1.0, abs(rho_pn * rho_np)),
+            r_pos=min(1.0, rho_np * rho_np),
+            r_neg=min(1.0, rho_pn * rho_pn),
+        )
 
     @property
     def is_housner(self) -> bool:
@@ -255,5 +262,7 @@ def pivot_impact_ratios(b_pos: float, b_neg: float, h: float, centroidal_inertia
         symmetric block both are 1 - 2 m b^2 / I0 = sqrt(r_housner).
     """
     common = centroidal_inertia + mass * (h * h - b_pos * b_neg)
-    return (common / (centroidal_inertia + mass * (h * h + b_neg * b_neg)),
-            common / (centroidal_inertia + mass * (h * h + b_pos * b_pos)))  # fmt: skip
+    return (
+        common / (centroidal_inertia + mass * (h * h + b_neg * b_neg)),
+        common / (centroidal_inertia + mass * (h * h + b_pos * b_pos)),
+    )

@@ -152,8 +152,9 @@ def plot_cdfs(
     for k, name in enumerate(names):
         c = colors.get(name, _PALETTE[k % len(_PALETTE)])
         filled = name == reference or reference not in names
-        _draw_cdf(ax, samples[name], name, c, ci, edge, edge + (k + 0.5) * slot, reference=name == reference,
-                  filled=filled)  # fmt: skip
+        _draw_cdf(
+            ax, samples[name], name, c, ci, edge, edge + (k + 0.5) * slot, reference=name == reference, filled=filled
+        )
     if paper:
         pts = [(float(v), float(q) / 100.0) for q, v in paper.items() if _finite_number(v)]
         if pts:
@@ -181,8 +182,9 @@ def plot_cdfs(
     return fig
 
 
-def _draw_cdf(ax, values, name: str, c: str, ci: float, edge: float, xe: float, *, reference: bool,
-              filled: bool) -> None:  # fmt: skip
+def _draw_cdf(
+    ax, values, name: str, c: str, ci: float, edge: float, xe: float, *, reference: bool, filled: bool
+) -> None:
     """One engine's empirical CDF of theta_max/alpha, run on to ``edge``, with its DKW band (``filled``, or
     its two edges dashed) and its overturn atom: a bar from the CDF's end to 1 at ``xe``, a marker at its foot."""
     v = np.asarray(values, dtype=np.float64)
@@ -413,8 +415,14 @@ def plot_energy_ratios(
         )
     if r_housner is not None:
         ax.axhline(r_housner, color="#555555", ls="--", lw=1, label=f"Housner r = {r_housner:.4f}")
-    return finish(fig, ax, r"peak before the impact $\theta_i/\alpha$ [-]", r"energy ratio $r_i$ [-]",
-                  "Energy ratio per impact (seed eq. 8)", legend_size=8)  # fmt: skip
+    return finish(
+        fig,
+        ax,
+        r"peak before the impact $\theta_i/\alpha$ [-]",
+        r"energy ratio $r_i$ [-]",
+        "Energy ratio per impact (seed eq. 8)",
+        legend_size=8,
+    )
 
 
 def plot_tuning(
@@ -495,8 +503,9 @@ def _draw_target_r(ax, target_r: float, bands: Sequence[tuple[float, float, floa
     handles[f"target r = {target_r:.4f}"] = ax.axhline(target_r, color="#555555", ls="--", lw=1)
 
 
-def _draw_decay_panel(axd, decay: Mapping, decay_rtol: float | None, decay_start: float | None, handles: dict,
-                      line) -> None:  # fmt: skip
+def _draw_decay_panel(
+    axd, decay: Mapping, decay_rtol: float | None, decay_start: float | None, handles: dict, line
+) -> None:
     """The free-decay panel of :func:`plot_tuning`: each series' peak error [%] against the impact, sorted by
     impact and drawn by ``line`` (as the r panel's), with the accepted band."""
     if decay_rtol is not None:

@@ -61,11 +61,18 @@ def frontier_figure(frontier: Frontier):
         ax_e.plot(x, [abs(p.r_error) * 100 for p in group], mk, color="tab:blue", ms=6)
         ax_e.plot(x, [abs(p.decay_error) * 100 for p in group], mk, color="tab:orange", ms=6, mfc="none")
         for j, p in enumerate(group):  # labels alternately above and below: neighbours often share a share
-            ax_a.annotate(_value_label(p.axis, p.settings), (p.cpu_per_sim_second, p.agreement), fontsize=7,
-                          xytext=(4, 4 if j % 2 == 0 else -11), textcoords="offset points")  # fmt: skip
+            ax_a.annotate(
+                _value_label(p.axis, p.settings),
+                (p.cpu_per_sim_second, p.agreement),
+                fontsize=7,
+                xytext=(4, 4 if j % 2 == 0 else -11),
+                textcoords="offset points",
+            )
     d, kn = frontier.points[frontier.default], frontier.points[frontier.knee]
-    for p, style in ((d, {"s": 220, "facecolors": "none", "edgecolors": "k", "label": "defaults"}),
-                     (kn, {"s": 160, "marker": "*", "color": "gold", "edgecolors": "k", "label": "knee"})):  # fmt: skip
+    for p, style in (
+        (d, {"s": 220, "facecolors": "none", "edgecolors": "k", "label": "defaults"}),
+        (kn, {"s": 160, "marker": "*", "color": "gold", "edgecolors": "k", "label": "knee"}),
+    ):
         if not p.error:
             ax_a.scatter([p.cpu_per_sim_second], [p.agreement], zorder=5, **style)
     ax_a.axhline(frontier.model_form_floor, color="grey", ls="--", lw=1, label="model-form floor")

@@ -26,38 +26,80 @@ ABBREVIATIONS = {
 
 #: (anchor key, term as the page writes it (HTML), definition (HTML)), in reading order.
 GLOSSARY = (
-    ("theta-max", "&theta;<sub>max</sub>/&alpha;",
-     "A record's largest absolute rotation of the block &theta;<sub>max</sub> [rad] divided by its slenderness "
-     "&alpha;: 1 is the angle at which a block at rest would topple. <em>overturn</em> (+&infin; in the data) when "
-     "the block fell."),
-    ("alpha", "&alpha;", "The slenderness angle atan(B/H) [rad], B and H the half width between the pivots and "
-     "the half height."),
-    ("p", "p", "The frequency parameter &radic;(m g R / I<sub>0</sub>) [1/s], R the half diagonal and "
-     "I<sub>0</sub> the moment of inertia about a pivot: the time scale of rocking."),
-    ("r", "r", "The energy ratio of an impact: the kinetic energy just after a pivot change over the energy just "
-     "before. Housner's r follows from the conservation of angular momentum about the new pivot (the seed paper's "
-     "eq. 4: 0.9465 for its specimen); an engine's r is measured on free releases."),
-    ("p-overturn", "P[overturn]", "The share of an ensemble's records in which the block overturned, with its 95 % "
-     "Wilson score interval; &Delta;P[overturn] is an engine's minus the reference's."),
-    ("ks", "KS distance", "Kolmogorov&ndash;Smirnov distance: the largest vertical gap between two cumulative "
-     "distribution functions (CDFs) of &theta;<sub>max</sub>/&alpha; (overturns counted as +&infin;), from 0 "
-     "(identical) to 1."),
-    ("agreement", "records that agree", "Record by record, an engine agrees with the reference on a record when "
-     "both overturn, or both rock with peaks &theta;<sub>max</sub>/&alpha; within 3 % of each other."),
-    ("chaos-floor", "chaos floor", "Rocking is chaotic: a tiny change of r or p changes single records, not the "
-     "distribution. The chaos floor is the lowest share of records on which the analytic model agrees with itself "
-     "when its r and p are off by as much as an engine's are measured to be (four runs: r and p each up and down). "
-     "An engine whose share of agreeing records reaches it (within its 95 % interval) departs record by record no "
-     "more than its own measured errors explain."),
+    (
+        "theta-max",
+        "&theta;<sub>max</sub>/&alpha;",
+        "A record's largest absolute rotation of the block &theta;<sub>max</sub> [rad] divided by its slenderness "
+        "&alpha;: 1 is the angle at which a block at rest would topple. <em>overturn</em> (+&infin; in the data) when "
+        "the block fell.",
+    ),
+    (
+        "alpha",
+        "&alpha;",
+        "The slenderness angle atan(B/H) [rad], B and H the half width between the pivots and the half height.",
+    ),
+    (
+        "p",
+        "p",
+        "The frequency parameter &radic;(m g R / I<sub>0</sub>) [1/s], R the half diagonal and "
+        "I<sub>0</sub> the moment of inertia about a pivot: the time scale of rocking.",
+    ),
+    (
+        "r",
+        "r",
+        "The energy ratio of an impact: the kinetic energy just after a pivot change over the energy just "
+        "before. Housner's r follows from the conservation of angular momentum about the new pivot (the seed paper's "
+        "eq. 4: 0.9465 for its specimen); an engine's r is measured on free releases.",
+    ),
+    (
+        "p-overturn",
+        "P[overturn]",
+        "The share of an ensemble's records in which the block overturned, with its 95 % "
+        "Wilson score interval; &Delta;P[overturn] is an engine's minus the reference's.",
+    ),
+    (
+        "ks",
+        "KS distance",
+        "Kolmogorov&ndash;Smirnov distance: the largest vertical gap between two cumulative "
+        "distribution functions (CDFs) of &theta;<sub>max</sub>/&alpha; (overturns counted as +&infin;), from 0 "
+        "(identical) to 1.",
+    ),
+    (
+        "agreement",
+        "records that agree",
+        "Record by record, an engine agrees with the reference on a record when "
+        "both overturn, or both rock with peaks &theta;<sub>max</sub>/&alpha; within 3 % of each other.",
+    ),
+    (
+        "chaos-floor",
+        "chaos floor",
+        "Rocking is chaotic: a tiny change of r or p changes single records, not the "
+        "distribution. The chaos floor is the lowest share of records on which the analytic model agrees with itself "
+        "when its r and p are off by as much as an engine's are measured to be (four runs: r and p each up and down). "
+        "An engine whose share of agreeing records reaches it (within its 95 % interval) departs record by record no "
+        "more than its own measured errors explain.",
+    ),
     ("ensemble", "ensemble", "The set of ground motions of a run, all engines on the same motions."),
-    ("rdk", "RDK", "Ground motions generated with the stochastic model of Rezaeian &amp; Der Kiureghian (2010), its "
-     "parameters fitted to a real record (here El Centro 1940 NS), scaled from the prototype to the model by the "
-     "length scale S (time by &radic;S)."),
-    ("seed-paper", "seed paper", "Bachmann, J. A. et al. (2017), <em>Probabilistic validation of the Housner rocking "
-     "model</em>, COMPDYN 2017: the specimen (2H = 0.5 m, 2B = 0.075 m, 3.94 kg) and the calibration this suite "
-     "starts from."),
-    ("ci", "CI", "Confidence interval: P[overturn]'s are Wilson score intervals; a median's and a share's are "
-     "percentile bootstraps over the records or Wilson intervals, as each table says."),
+    (
+        "rdk",
+        "RDK",
+        "Ground motions generated with the stochastic model of Rezaeian &amp; Der Kiureghian (2010), its "
+        "parameters fitted to a real record (here El Centro 1940 NS), scaled from the prototype to the model by the "
+        "length scale S (time by &radic;S).",
+    ),
+    (
+        "seed-paper",
+        "seed paper",
+        "Bachmann, J. A. et al. (2017), <em>Probabilistic validation of the Housner rocking "
+        "model</em>, COMPDYN 2017: the specimen (2H = 0.5 m, 2B = 0.075 m, 3.94 kg) and the calibration this suite "
+        "starts from.",
+    ),
+    (
+        "ci",
+        "CI",
+        "Confidence interval: P[overturn]'s are Wilson score intervals; a median's and a share's are "
+        "percentile bootstraps over the records or Wilson intervals, as each table says.",
+    ),
 )
 
 _WORD = {k: re.compile(rf"(?<![\w&;-]){re.escape(k)}(?![\w-])") for k in ABBREVIATIONS}

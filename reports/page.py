@@ -122,9 +122,14 @@ def _stored_figure_path(draw: Callable[..., Any], data: Any) -> Path | None:
         source = Path(inspect.getsourcefile(draw) or "").read_bytes()
     except (TypeError, OSError):
         return None
-    content = {"what": "figure", "data": data, "draw": f"{draw.__module__}.{draw.__qualname__}",
-               "source": hashlib.sha256(source).hexdigest(), "matplotlib": matplotlib.__version__,
-               "code": code_version()}  # fmt: skip
+    content = {
+        "what": "figure",
+        "data": data,
+        "draw": f"{draw.__module__}.{draw.__qualname__}",
+        "source": hashlib.sha256(source).hexdigest(),
+        "matplotlib": matplotlib.__version__,
+        "code": code_version(),
+    }
     return default_cache_dir() / "figures" / f"{content_key(content)[:32]}.b64"
 
 

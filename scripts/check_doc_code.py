@@ -149,9 +149,15 @@ def parse_page(path: Path) -> list[Block]:
         if lang in PYTHON:
             code = _expand_snippets(code, page, start + 2)
         executed = attrs.get("exec", "").lower() in ("on", "1", "true", "yes")
-        block = Block(page=page, line=start + 2, lang=lang, info=info, code=code,
-                      skip=skip["reason"] if skip else None,
-                      hidden=executed and attrs.get("source", "") in ("", "none"))  # fmt: skip
+        block = Block(
+            page=page,
+            line=start + 2,
+            lang=lang,
+            info=info,
+            code=code,
+            skip=skip["reason"] if skip else None,
+            hidden=executed and attrs.get("source", "") in ("", "none"),
+        )
         if block.kind == "shell":
             block.commands = shell_commands(code, block.line)
         blocks.append(block)
@@ -189,9 +195,15 @@ class Interpreter:
     def __init__(self, log):
         read, write = os.pipe()
         self.proc = subprocess.Popen(
-            [sys.executable, "-c", DRIVER, str(write)], cwd=ROOT, stdin=subprocess.PIPE, stdout=log,
-            stderr=subprocess.STDOUT, pass_fds=(write,), text=True, env={**os.environ, "MPLBACKEND": "Agg"},
-        )  # fmt: skip
+            [sys.executable, "-c", DRIVER, str(write)],
+            cwd=ROOT,
+            stdin=subprocess.PIPE,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            pass_fds=(write,),
+            text=True,
+            env={**os.environ, "MPLBACKEND": "Agg"},
+        )
         os.close(write)
         self.status = os.fdopen(read)
 
@@ -210,8 +222,9 @@ class Interpreter:
 
 
 def git_status() -> str:
-    return subprocess.run(["git", "status", "--porcelain", "--untracked-files=all"], cwd=ROOT,
-                          capture_output=True, text=True, check=True).stdout  # fmt: skip
+    return subprocess.run(
+        ["git", "status", "--porcelain", "--untracked-files=all"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout
 
 
 def last_line(text: str) -> str:
@@ -297,8 +310,13 @@ def default_pages() -> list[Path]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--page", action="append", type=Path, metavar="FILE",
-                    help="a Markdown page to check (repeatable); default: the tutorial and every how-to")  # fmt: skip
+    ap.add_argument(
+        "--page",
+        action="append",
+        type=Path,
+        metavar="FILE",
+        help="a Markdown page to check (repeatable); default: the tutorial and every how-to",
+    )
     ap.add_argument("--list", action="store_true", help="list each page's blocks and what would be done with them")
     ap.add_argument("-v", "--verbose", action="store_true", help="print everything the blocks print")
     args = ap.parse_args(argv)
@@ -310,8 +328,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.list:
         for p in pages:
             for b in parse_page(p):
-                what = ("not code" if b.kind == "other" else "hidden (build only)" if b.hidden
-                        else f"skip ({b.skip})" if b.skip else f"run {b.kind}")  # fmt: skip
+                what = (
+                    "not code"
+                    if b.kind == "other"
+                    else "hidden (build only)"
+                    if b.hidden
+                    else f"skip ({b.skip})"
+                    if b.skip
+                    else f"run {b.kind}"
+                )
                 extra = f" {len(b.commands)} command(s)" if b.kind == "shell" and what.startswith("run") else ""
                 print(f"{b.page}:{b.line}: {b.lang or '-'}: {what}{extra}")
         return 0
@@ -321,8 +346,10 @@ def main(argv: list[str] | None = None) -> int:
         r = check_page(p, args.verbose)
         results.append(r)
         state = "FAIL" if r["failures"] else "ok"
-        print(f"{state:4s} {r['page']}: {r['run']} block(s) run, {len(r['skipped'])} skipped, {r['seconds']:.0f} s",
-              flush=True)  # fmt: skip
+        print(
+            f"{state:4s} {r['page']}: {r['run']} block(s) run, {len(r['skipped'])} skipped, {r['seconds']:.0f} s",
+            flush=True,
+        )
         for where, error in r["failures"]:
             print(f"  {where}: {error}", flush=True)
     skips = [s for r in results for s in r["skipped"]]
@@ -334,8 +361,10 @@ def main(argv: list[str] | None = None) -> int:
     if slowest:
         print("the slowest blocks: " + ", ".join(f"{where} {sec:.0f} s" for where, sec in slowest))
     failures = [f for r in results for f in r["failures"]]
-    print(f"{len(results)} page(s), {sum(r['run'] for r in results)} block(s) run, {len(skips)} skipped, "
-          f"{len(failures)} failure(s), {time.perf_counter() - total:.0f} s")  # fmt: skip
+    print(
+        f"{len(results)} page(s), {sum(r['run'] for r in results)} block(s) run, {len(skips)} skipped, "
+        f"{len(failures)} failure(s), {time.perf_counter() - total:.0f} s"
+    )
     return 1 if failures else 0
 
 

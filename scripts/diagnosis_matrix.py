@@ -72,14 +72,28 @@ def main(argv=None) -> int:
             right += ok
             v = diag.verdict
             eff = ", ".join(f"{n}({', '.join(f'{k}={x:.4g}' for k, x in p.items())})" for n, p in diag.final.effects)
-            print(f"{name:34s} {seed:4d} {v.status:17s} {eff or '-':44s} {v.residual.ratio:6.2f} {v.residual.z:6.1f} "
-                  f"{'yes' if ok else 'NO':>3s} {el:5.0f}s" + (f"  {why}" if why else ""), flush=True)  # fmt: skip
-            rows.append({
-                "case": name, "seed": seed, "expected": cases[name], "status": v.status,
-                "effects": [[n, p] for n, p in diag.final.effects], "ratio": v.residual.ratio, "z": v.residual.z,
-                "baseline_ratio": v.baseline.ratio, "next": [c["class"] for c in v.next], "right": ok,
-                "why": why, "family": diag.settings.get("floor_family"), "seconds": el,
-            })  # fmt: skip
+            print(
+                f"{name:34s} {seed:4d} {v.status:17s} {eff or '-':44s} {v.residual.ratio:6.2f} {v.residual.z:6.1f} "
+                f"{'yes' if ok else 'NO':>3s} {el:5.0f}s" + (f"  {why}" if why else ""),
+                flush=True,
+            )
+            rows.append(
+                {
+                    "case": name,
+                    "seed": seed,
+                    "expected": cases[name],
+                    "status": v.status,
+                    "effects": [[n, p] for n, p in diag.final.effects],
+                    "ratio": v.residual.ratio,
+                    "z": v.residual.z,
+                    "baseline_ratio": v.baseline.ratio,
+                    "next": [c["class"] for c in v.next],
+                    "right": ok,
+                    "why": why,
+                    "family": diag.settings.get("floor_family"),
+                    "seconds": el,
+                }
+            )
     print(f"right {right} of {len(rows)}")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1, default=str))

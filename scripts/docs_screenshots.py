@@ -24,9 +24,21 @@ PAGES = {"explanation-diagnosis.png": "explanation/diagnosis", "reference-cli.pn
 
 
 def shot(chromium: str, url: str, out: Path, height: int) -> None:
-    subprocess.run([chromium, "--headless=new", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-                    f"--window-size=1280,{height}", f"--screenshot={out}", url],
-                   check=True, capture_output=True, timeout=120)  # fmt: skip
+    subprocess.run(
+        [
+            chromium,
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            f"--window-size=1280,{height}",
+            f"--screenshot={out}",
+            url,
+        ],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
 
 
 def final_figure(full: Path) -> Image.Image:

@@ -46,8 +46,10 @@ def main(argv=None) -> int:
 
     gens = {"a": campaign_generators, "b": independent_campaigns}
     rows = []
-    print(f"{'gen':3s} {'case':16s} {'seed':>4s} {'status':12s} {'ratio':>6s} {'gm':>6s} {'z':>6s} {'family':7s} "
-          f"{'time':>5s}")  # fmt: skip
+    print(
+        f"{'gen':3s} {'case':16s} {'seed':>4s} {'status':12s} {'ratio':>6s} {'gm':>6s} {'z':>6s} {'family':7s} "
+        f"{'time':>5s}"
+    )
     for g, cases in CONTROLS.items():
         for case in cases:
             for seed in range(args.campaigns):
@@ -56,17 +58,30 @@ def main(argv=None) -> int:
                 d = diagnose(load_campaign(info["root"]), effects=[], compare_steps=False)
                 v = d.verdict
                 gm = v.residual.groups.get("ground_motion", {}).get("ratio", float("nan"))
-                row = {"generator": g, "case": case, "seed": seed, "status": v.status, "ratio": v.residual.ratio,
-                       "gm_ratio": gm, "z": v.residual.z, "family": d.settings["floor_family"]}  # fmt: skip
+                row = {
+                    "generator": g,
+                    "case": case,
+                    "seed": seed,
+                    "status": v.status,
+                    "ratio": v.residual.ratio,
+                    "gm_ratio": gm,
+                    "z": v.residual.z,
+                    "family": d.settings["floor_family"],
+                }
                 rows.append(row)
-                print(f"{g:3s} {case:16s} {seed:4d} {v.status:12s} {v.residual.ratio:6.2f} {gm:6.2f} "
-                      f"{v.residual.z:6.1f} {row['family']:7s} {time.perf_counter() - t0:4.0f}s", flush=True)
+                print(
+                    f"{g:3s} {case:16s} {seed:4d} {v.status:12s} {v.residual.ratio:6.2f} {gm:6.2f} "
+                    f"{v.residual.z:6.1f} {row['family']:7s} {time.perf_counter() - t0:4.0f}s",
+                    flush=True,
+                )
     r = np.array([x["ratio"] for x in rows])
     inside = np.mean((r >= 0.8) & (r <= 1.25))
     ok = sum(x["status"] == "no_misfit" and x["z"] < 3 for x in rows)
-    print(f"ratios: median {np.median(r):.2f}, 10-90 % {np.percentile(r, 10):.2f}-{np.percentile(r, 90):.2f}, "
-          f"min {r.min():.2f}, max {r.max():.2f}; within [0.8, 1.25]: {inside:.0%}; no_misfit with z < 3: "
-          f"{ok} of {len(rows)}")  # fmt: skip
+    print(
+        f"ratios: median {np.median(r):.2f}, 10-90 % {np.percentile(r, 10):.2f}-{np.percentile(r, 90):.2f}, "
+        f"min {r.min():.2f}, max {r.max():.2f}; within [0.8, 1.25]: {inside:.0%}; no_misfit with z < 3: "
+        f"{ok} of {len(rows)}"
+    )
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     return 0

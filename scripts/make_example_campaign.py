@@ -177,8 +177,9 @@ def _same(a: Path, b: Path) -> list[str]:
     """Files that differ between the campaign folders ``a`` and ``b`` (missing on either side included)."""
     names = {p.relative_to(a).as_posix() for p in a.rglob("*") if p.is_file()}
     names |= {p.relative_to(b).as_posix() for p in b.rglob("*") if p.is_file()}
-    return sorted(n for n in names if not ((a / n).is_file() and (b / n).is_file()
-                                           and filecmp.cmp(a / n, b / n, shallow=False)))  # fmt: skip
+    return sorted(
+        n for n in names if not ((a / n).is_file() and (b / n).is_file() and filecmp.cmp(a / n, b / n, shallow=False))
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -197,8 +198,10 @@ def main(argv: list[str] | None = None) -> int:
     info = write(args.out, args.n_ground, args.seed)
     size = sum(p.stat().st_size for p in args.out.rglob("*") if p.is_file())
     n_rec = len(ic.recording_order(args.n_ground))
-    print(f"wrote {args.out}: {n_rec} records, {size / 1e6:.2f} MB, "
-          f"{int(np.sum(info['overturned']))} of {args.n_ground} ground motions overturn")  # fmt: skip
+    print(
+        f"wrote {args.out}: {n_rec} records, {size / 1e6:.2f} MB, "
+        f"{int(np.sum(info['overturned']))} of {args.n_ground} ground motions overturn"
+    )
     return 0
 
 

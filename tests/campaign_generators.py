@@ -310,10 +310,24 @@ def simulate_truth(
     out = np.empty(acc.size)
     share = np.ones(1) if truth.u_low >= 1.0 else rng.uniform(truth.u_low, 1.0, 4096)
     over = _integrate(
-        np.ascontiguousarray(acc, dtype=np.float64) / G, dt, _substeps(dt), float(theta0), 0.0,
-        truth.alpha_pos, truth.alpha_neg, truth.p_pos, truth.p_neg, truth.rho_pn, truth.rho_np,
-        truth.c, truth.exponent, truth.cd, truth.mu_r, share, out,
-    )  # fmt: skip
+        np.ascontiguousarray(acc, dtype=np.float64) / G,
+        dt,
+        _substeps(dt),
+        float(theta0),
+        0.0,
+        truth.alpha_pos,
+        truth.alpha_neg,
+        truth.p_pos,
+        truth.p_neg,
+        truth.rho_pn,
+        truth.rho_np,
+        truth.c,
+        truth.exponent,
+        truth.cd,
+        truth.mu_r,
+        share,
+        out,
+    )
     return out, bool(over)
 
 
@@ -423,8 +437,24 @@ def simulate_contact(truth: Truth, acc: np.ndarray, *, theta0: float = 0.0, dt: 
     m = max(8, int(math.ceil(40 * max(truth.contact_freq, truth.tangential_freq) * dt)))
     out = np.empty(acc.size)
     b = WIDTH / 2
-    over = _integrate_contact(np.ascontiguousarray(acc, dtype=np.float64), dt, m, float(theta0), MASS, ic, hh,
-                              b, b, kn, cn, kt, ct, truth.mu, truth.both_corners_hold, out)  # fmt: skip
+    over = _integrate_contact(
+        np.ascontiguousarray(acc, dtype=np.float64),
+        dt,
+        m,
+        float(theta0),
+        MASS,
+        ic,
+        hh,
+        b,
+        b,
+        kn,
+        cn,
+        kt,
+        ct,
+        truth.mu,
+        truth.both_corners_hold,
+        out,
+    )
     return out, bool(over)
 
 
@@ -481,8 +511,14 @@ def _observe(truth: Truth, theta: np.ndarray, rng: np.random.Generator, dt: floa
 def _write_csv(path: Path, acc: np.ndarray, theta: np.ndarray, dt: float = DT) -> None:
     t = np.arange(acc.size) * dt
     tfmt = "%.4f" if dt == DT else f"%.{max(4, 3 + int(math.ceil(-math.log10(dt))))}f"
-    np.savetxt(path, np.column_stack((t, acc, theta)), fmt=(tfmt, "%.9e", "%.9e"), delimiter=",",
-               header="time,ground_acc,theta", comments="")  # fmt: skip
+    np.savetxt(
+        path,
+        np.column_stack((t, acc, theta)),
+        fmt=(tfmt, "%.9e", "%.9e"),
+        delimiter=",",
+        header="time,ground_acc,theta",
+        comments="",
+    )
 
 
 def write_campaign(

@@ -193,8 +193,10 @@ CASES: dict[str, tuple[dict, tuple[str, ...] | str]] = {
     # vibrations rock as Housner's block (friction demand <= 0.092 while rocking, impulse ratio 0.092)
     "sliding": ({"mu": 0.11}, ("sliding",)),
     "time_lag+restitution": ({"tau": 0.008, "r": 0.90}, ("restitution", "time_lag")),
-    "frequency_parameter+sensor_offset": ({"p": 0.95 * P_STATED, "offset": 3.0e-3}, ("frequency_parameter",
-                                                                                       "sensor_offset")),
+    "frequency_parameter+sensor_offset": (
+        {"p": 0.95 * P_STATED, "offset": 3.0e-3},
+        ("frequency_parameter", "sensor_offset"),
+    ),
     # outside the library
     "pivot_friction": ({"pivot_moment": 0.09}, "dissipation"),
     "vertical_table": ({"vertical_ratio": 0.25, "vertical_cutoff": 8.0, "vertical_delay": 0.03}, "vertical_input"),
@@ -203,14 +205,36 @@ CASES: dict[str, tuple[dict, tuple[str, ...] | str]] = {
     # sensors" in the module docstring): nothing physical to find
     "colored_tau0.02": ({"noise_white": 0.3e-3, "noise_ou": 0.8e-3, "noise_tau": 0.02}, ()),
     "colored_tau0.2": ({"noise_white": 0.3e-3, "noise_ou": 0.8e-3, "noise_tau": 0.2}, ()),
-    "colored_hum50": ({"noise_white": 0.4e-3, "noise_ou": 0.6e-3, "noise_tau": 0.1, "hum_amp": 0.6e-3,
-                       "hum_freq": 50.0}, ()),
-    "colored_hum60_big_200hz": ({"scale": 2.0, "dt": 0.005, "noise_white": 0.4e-3, "noise_ou": 0.8e-3,
-                                 "noise_tau": 0.5, "hum_amp": 0.5e-3, "hum_freq": 60.0}, ()),
+    "colored_hum50": (
+        {"noise_white": 0.4e-3, "noise_ou": 0.6e-3, "noise_tau": 0.1, "hum_amp": 0.6e-3, "hum_freq": 50.0},
+        (),
+    ),
+    "colored_hum60_big_200hz": (
+        {
+            "scale": 2.0,
+            "dt": 0.005,
+            "noise_white": 0.4e-3,
+            "noise_ou": 0.8e-3,
+            "noise_tau": 0.5,
+            "hum_amp": 0.5e-3,
+            "hum_freq": 60.0,
+        },
+        (),
+    ),
     "white_big_1000hz": ({"scale": 1.6, "dt": 0.001, "noise_white": 0.8e-3}, ()),
-    "colored_small_1000hz": ({"scale": 0.7, "dt": 0.001, "noise_white": 0.2e-3, "noise_ou": 0.6e-3,
-                              "noise_tau": 0.05, "hum_amp": 0.3e-3, "hum_freq": 50.0}, ()),
-}  # fmt: skip
+    "colored_small_1000hz": (
+        {
+            "scale": 0.7,
+            "dt": 0.001,
+            "noise_white": 0.2e-3,
+            "noise_ou": 0.6e-3,
+            "noise_tau": 0.05,
+            "hum_amp": 0.3e-3,
+            "hum_freq": 50.0,
+        },
+        (),
+    ),
+}
 
 #: Campaigns with sensor faults, kept out of :data:`CASES` (the diagnosis matrix): name -> (truth parameters,
 #: expected diagnosis as in CASES, the faults present). Fault names: "saturation" (the theta channel clipped at
@@ -221,11 +245,17 @@ CASES: dict[str, tuple[dict, tuple[str, ...] | str]] = {
 FAULT_CASES: dict[str, tuple[dict, tuple[str, ...], tuple[str, ...]]] = {
     "saturation": ({"saturation": 0.45 * ALPHA}, (), ("saturation",)),
     "gain_drift": ({"gain_end": 1.25}, (), ("gain_drift",)),
-    "spikes_dropouts": ({"spike_rate": 0.3, "spike_amp": 25e-3, "dropout_rate": 0.1, "dropout_len": 0.1}, (),
-                        ("spikes", "dropouts")),
-    "saturation_colored_restitution": ({"r": 0.90, **CASES["colored_hum50"][0], "saturation": 0.45 * ALPHA},
-                                       ("restitution",), ("saturation",)),
-}  # fmt: skip
+    "spikes_dropouts": (
+        {"spike_rate": 0.3, "spike_amp": 25e-3, "dropout_rate": 0.1, "dropout_len": 0.1},
+        (),
+        ("spikes", "dropouts"),
+    ),
+    "saturation_colored_restitution": (
+        {"r": 0.90, **CASES["colored_hum50"][0], "saturation": 0.45 * ALPHA},
+        ("restitution",),
+        ("saturation",),
+    ),
+}
 
 #: Campaigns of the example effects (examples/effects, loaded as plugins), not diagnosed: name -> truth parameters.
 #: acc_gain [-]: the written ground_acc is acc_gain times the acceleration the block felt; vertical_channel: the
@@ -234,17 +264,30 @@ FAULT_CASES: dict[str, tuple[dict, tuple[str, ...], tuple[str, ...]]] = {
 EXAMPLE_CASES: dict[str, dict] = {
     "pivot_friction+asymmetric_pivots": {"pivot_moment": 0.09, "e": 0.25 * B_HALF, "fv_releases": (0.6, -0.2, 0.4)},
     "accelerometer_gain": {"acc_gain": 1.12},
-    "vertical_table_measured": {"vertical_ratio": 1.0, "vertical_cutoff": 8.0, "vertical_delay": 0.03,
-                                "vertical_channel": True},
-}  # fmt: skip
+    "vertical_table_measured": {
+        "vertical_ratio": 1.0,
+        "vertical_cutoff": 8.0,
+        "vertical_delay": 0.03,
+        "vertical_channel": True,
+    },
+}
 
 #: Campaign options: parameters of the recording (and the specimen's size), not of the physics' effects.
 #: scale is the only one that changes the block (:func:`truth_for`); the sensor's are described in
 #: :func:`sensor_noise` and :func:`sensor_faults`.
 _SENSOR_KEYS = ("noise_white", "noise_ou", "noise_tau", "hum_amp", "hum_freq")
 _FAULT_KEYS = ("saturation", "gain_end", "spike_rate", "spike_amp", "dropout_rate", "dropout_len")
-_INPUT_KEYS = ("convention", "acc_noise", "fv_releases", "acc_gain", "vertical_channel", "dt", "scale",
-               *_SENSOR_KEYS, *_FAULT_KEYS)  # fmt: skip
+_INPUT_KEYS = (
+    "convention",
+    "acc_noise",
+    "fv_releases",
+    "acc_gain",
+    "vertical_channel",
+    "dt",
+    "scale",
+    *_SENSOR_KEYS,
+    *_FAULT_KEYS,
+)
 
 
 # ----------------------------------------------------------------------------
@@ -394,8 +437,13 @@ def stated_specimen(case: str, *, options: dict | None = None) -> dict[str, floa
     scale = float(campaign_options(case, options).get("scale", 1.0))
     if scale == 1.0:
         return {"height": HEIGHT, "width": WIDTH, "depth": DEPTH, "mass": MASS, "p": P_STATED}
-    return {"height": HEIGHT * scale, "width": WIDTH * scale, "depth": DEPTH * scale, "mass": MASS * scale**3,
-            "p": P_STATED / math.sqrt(scale)}  # fmt: skip
+    return {
+        "height": HEIGHT * scale,
+        "width": WIDTH * scale,
+        "depth": DEPTH * scale,
+        "mass": MASS * scale**3,
+        "p": P_STATED / math.sqrt(scale),
+    }
 
 
 def noise_truth(case: str, *, options: dict | None = None) -> dict[str, float]:
@@ -420,8 +468,16 @@ def noise_truth(case: str, *, options: dict | None = None) -> dict[str, float]:
     cov1 = (ou**2 * math.exp(-dt / tau) if ou > 0.0 else 0.0) + 0.5 * hum**2 * (
         math.cos(w * dt) + math.cos(2 * w * dt) / 9.0
     )
-    return {"sd": math.sqrt(var), "white": white, "ou": ou, "tau": tau, "hum_amp": hum, "hum_freq": f_hum,
-            "dt": dt, "lag1": cov1 / var}  # fmt: skip
+    return {
+        "sd": math.sqrt(var),
+        "white": white,
+        "ou": ou,
+        "tau": tau,
+        "hum_amp": hum,
+        "hum_freq": f_hum,
+        "dt": dt,
+        "lag1": cov1 / var,
+    }
 
 
 def truth_for(case: str, n_records: int = 0, *, options: dict | None = None) -> Truth:
@@ -516,8 +572,29 @@ def library_parameters(case: str) -> dict[str, dict[str, float]]:
 # the integrator (numba)
 # Constants vector q (SI): the block, then per-side geometry (precomputed: the right-hand side is called
 # ~10^6 times per campaign), the impact law, the foundation.
-(Q_M, Q_G, Q_H, Q_BP, Q_BN, Q_IC, Q_C, Q_MF, Q_MU, Q_KAPPA, Q_ETA, Q_RP, Q_RN, Q_AP, Q_AN, Q_I0P, Q_I0N,
- Q_RHO_PN, Q_RHO_NP, Q_REXP, Q_REST) = range(21)  # fmt: skip
+(
+    Q_M,
+    Q_G,
+    Q_H,
+    Q_BP,
+    Q_BN,
+    Q_IC,
+    Q_C,
+    Q_MF,
+    Q_MU,
+    Q_KAPPA,
+    Q_ETA,
+    Q_RP,
+    Q_RN,
+    Q_AP,
+    Q_AN,
+    Q_I0P,
+    Q_I0N,
+    Q_RHO_PN,
+    Q_RHO_NP,
+    Q_REXP,
+    Q_REST,
+) = range(21)
 N_Q = 21
 #: Model kinds and the rigid block's modes.
 RIGID, FLEX = 0, 1
@@ -527,15 +604,17 @@ M_S, M_SIG, M_AP, M_AN = range(4)
 #: Input vector gin over the current sample, local time t in [0, dt]: ug'' = a0 + a1 t, a_v = v0 + v1 t.
 #: Dormand-Prince 5(4) tableau.
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
-_A = np.array([
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [1 / 5, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [3 / 40, 9 / 40, 0.0, 0.0, 0.0, 0.0],
-    [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0, 0.0],
-    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0, 0.0],
-    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0.0],
-    [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84],
-])  # fmt: skip
+_A = np.array(
+    [
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1 / 5, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [3 / 40, 9 / 40, 0.0, 0.0, 0.0, 0.0],
+        [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0, 0.0],
+        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0, 0.0],
+        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0.0],
+        [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84],
+    ]
+)
 #: 5th-order weights minus the embedded 4th-order ones (the error estimate).
 _E = np.array([71 / 57600, 0.0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40])
 #: At most this many events in one sample before the kernel gives up (chattering contact).
@@ -579,8 +658,12 @@ def _deriv(kind, t, y, dy, q, md, gin):
     ax_th = sb * cs - hh * sn
     fp, fn = _flex_forces(th, thd, w, wd, md[M_AP] > 0.5, md[M_AN] > 0.5, q)
     m = q[Q_M]
-    num = (-ax * (a + ax_th * thd * thd) + hh * sn * (fp + fn) - cs * (q[Q_BP] * fp - q[Q_BN] * fn)
-           - q[Q_C] * (i0 / m) * thd)  # fmt: skip
+    num = (
+        -ax * (a + ax_th * thd * thd)
+        + hh * sn * (fp + fn)
+        - cs * (q[Q_BP] * fp - q[Q_BN] * fn)
+        - q[Q_C] * (i0 / m) * thd
+    )
     thdd = num / (q[Q_IC] / m + ax * ax)
     dy[0] = thd
     dy[1] = thdd
@@ -882,7 +965,7 @@ def _run(kind, acc, av, dt, held, q, y_init, out, imp):
                 hs = dt - tau  # no sliver of a step before the sample boundary
             err = _dp5(kind, tau, y, f0, hs, q, md, gin, k, ytmp, ynew, atol)
             if not err <= 1.0:  # also NaN
-                h = hs * max(0.2, 0.9 * err ** -0.2) if err == err else 0.1 * hs
+                h = hs * max(0.2, 0.9 * err**-0.2) if err == err else 0.1 * hs
                 continue
             grow = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.9 * err**-0.2))
             # events of the frozen mode: the earliest root of an event function that ends the step negative
@@ -1047,8 +1130,9 @@ def simulate_details(
     return out, status == OVERTURNED, imp[: min(n_imp, max_impacts)]
 
 
-def simulate(truth: Truth, acc: np.ndarray, dt: float, *, theta0: float = 0.0, record_index: int = 0,
-             convention: str = "linear") -> tuple[np.ndarray, bool]:  # fmt: skip
+def simulate(
+    truth: Truth, acc: np.ndarray, dt: float, *, theta0: float = 0.0, record_index: int = 0, convention: str = "linear"
+) -> tuple[np.ndarray, bool]:
     """The block's rotation at the samples of a ground motion.
 
     Parameters
@@ -1072,8 +1156,9 @@ def simulate(truth: Truth, acc: np.ndarray, dt: float, *, theta0: float = 0.0, r
         Rotation at the samples [rad], the block's own (no sensor effects); +-pi/2 once overturned.
     overturned : bool
     """
-    theta, over, _imp = simulate_details(truth, acc, dt, theta0=theta0, record_index=record_index,
-                                         convention=convention)  # fmt: skip
+    theta, over, _imp = simulate_details(
+        truth, acc, dt, theta0=theta0, record_index=record_index, convention=convention
+    )
     return theta, over
 
 
@@ -1093,8 +1178,9 @@ def _mp_pulse_acc(t: np.ndarray, fp: float, gamma: float, nu: float, t0: float) 
     return np.where(inside, a, 0.0)
 
 
-def ground_motion(rng: np.random.Generator, *, dt: float = DT, duration: float = GM_DURATION,
-                  freq_scale: float = 1.0) -> np.ndarray:  # fmt: skip
+def ground_motion(
+    rng: np.random.Generator, *, dt: float = DT, duration: float = GM_DURATION, freq_scale: float = 1.0
+) -> np.ndarray:
     """One synthetic ground motion at model scale [m/s^2], ``duration`` s at ``dt`` (n = duration / dt samples).
 
     ``freq_scale`` [-] multiplies the drawn ground and pulse frequencies (the same random numbers are drawn):
@@ -1128,8 +1214,13 @@ def ground_motion(rng: np.random.Generator, *, dt: float = DT, duration: float =
     x = x * (t / tp) ** bb * np.exp(bb * (1 - t / tp))
     x /= np.max(np.abs(x))
     if rng.random() < 0.5:
-        pulse = _mp_pulse_acc(t, rng.uniform(*FP_RANGE) * freq_scale, rng.uniform(1.5, 3.0),
-                              rng.uniform(0, 2 * math.pi), rng.uniform(1.5, 3.5))  # fmt: skip
+        pulse = _mp_pulse_acc(
+            t,
+            rng.uniform(*FP_RANGE) * freq_scale,
+            rng.uniform(1.5, 3.0),
+            rng.uniform(0, 2 * math.pi),
+            rng.uniform(1.5, 3.5),
+        )
         x = x + rng.uniform(*PULSE_RANGE) * pulse / np.max(np.abs(pulse))
     k = int(round(0.3 / dt))
     x[-k:] *= 0.5 * (1 + np.cos(np.linspace(0.0, math.pi, k)))
@@ -1232,8 +1323,15 @@ def sensor_faults(
     return y, {"clipped": clipped, "spikes": spikes, "dropouts": dropouts}
 
 
-def _observe(truth: Truth, theta: np.ndarray, dt: float, rng: np.random.Generator, *, gain: float = 1.0,
-             noise: dict | None = None) -> np.ndarray:  # fmt: skip
+def _observe(
+    truth: Truth,
+    theta: np.ndarray,
+    dt: float,
+    rng: np.random.Generator,
+    *,
+    gain: float = 1.0,
+    noise: dict | None = None,
+) -> np.ndarray:
     """What the theta sensor puts out: gain x (theta(t - tau) (held at the start) + the offset), plus the noise
     (:func:`sensor_noise` with ``noise``' keyword arguments; default white :data:`NOISE`)."""
     th = theta
@@ -1336,21 +1434,37 @@ def write_campaign(
     noise = None
     if any(k in kw for k in _SENSOR_KEYS):
         nt = noise_truth(case, options=options)
-        noise = {"white": nt["white"], "ou": nt["ou"], "tau": nt["tau"], "hum_amp": nt["hum_amp"],
-                 "hum_freq": nt["hum_freq"]}  # fmt: skip
-    faults = {k: float(kw[k]) for k in ("saturation", "spike_rate", "spike_amp", "dropout_rate", "dropout_len")
-              if k in kw}  # fmt: skip
+        noise = {
+            "white": nt["white"],
+            "ou": nt["ou"],
+            "tau": nt["tau"],
+            "hum_amp": nt["hum_amp"],
+            "hum_freq": nt["hum_freq"],
+        }
+    faults = {
+        k: float(kw[k]) for k in ("saturation", "spike_rate", "spike_amp", "dropout_rate", "dropout_len") if k in kw
+    }
     gain_end = float(kw.get("gain_end", 1.0))
     order = recording_order(n_ground)
     truth = truth_for(case, n_records=len(order), options=options)
     spec = stated_specimen(case, options=options)
     overturned, gm_ids, theta_max, sensor_log = [], [], [], {}
     if scale == 1.0:
-        lines = [f'name = "independent synthetic campaign, case: {case}"', "[specimen]", f"height = {HEIGHT}",
-                 f"width = {WIDTH}", f"depth = {DEPTH}", f"mass = {MASS}", f"p = {P_STATED}"]  # fmt: skip
+        lines = [
+            f'name = "independent synthetic campaign, case: {case}"',
+            "[specimen]",
+            f"height = {HEIGHT}",
+            f"width = {WIDTH}",
+            f"depth = {DEPTH}",
+            f"mass = {MASS}",
+            f"p = {P_STATED}",
+        ]
     else:
-        lines = [f'name = "independent synthetic campaign, case: {case}"', "[specimen]",
-                 *(f"{k} = {_toml_number(v)}" for k, v in spec.items())]  # fmt: skip
+        lines = [
+            f'name = "independent synthetic campaign, case: {case}"',
+            "[specimen]",
+            *(f"{k} = {_toml_number(v)}" for k, v in spec.items()),
+        ]
     for k, (rid, kind, i) in enumerate(order):
         ss = _seed(seed, 1 if kind == "ground_motion" else 0, i)
         # the first three children are those of the first generator's ss.spawn(3); the fourth draws the faults

@@ -82,9 +82,15 @@ def reference_solve_ivp(acc, dt, alpha, p, r, rest_tol=1e-6, rtol=1e-12, atol=1e
             th, thd, at_rest = 0.0, 0.0, False
         impact.direction = -s
         sol = solve_ivp(
-            rhs, (t, t_end), [th, thd], method="DOP853", rtol=rtol, atol=atol, events=[impact, overturn, peak],
+            rhs,
+            (t, t_end),
+            [th, thd],
+            method="DOP853",
+            rtol=rtol,
+            atol=atol,
+            events=[impact, overturn, peak],
             args=(s,),
-        )  # fmt: skip
+        )
         theta_max = max(theta_max, np.max(np.abs(sol.y[0])))
         if sol.t_events[2].size:
             theta_max = max(theta_max, np.max(np.abs(sol.y_events[2][:, 0])))

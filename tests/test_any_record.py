@@ -109,9 +109,9 @@ def test_at2_path_gives_the_shipped_records_motions(tmp_path):
     # source = "record", the path absolute: the record itself, time-compressed by sqrt(S)
     one = f'source = "record"\nrecord = "{tmp_path / "recs" / "ec.AT2"}"\namplitude = 1.5'
     (m,), _ = build_motions(load_scenario(scenario(tmp_path, one, "b.toml")))
-    (m0,), _ = build_motions(load_scenario(
-        scenario(tmp_path, one.split("\n")[0] + '\nrecord = "elcentro"\namplitude = 1.5', "c.toml")
-    ))
+    (m0,), _ = build_motions(
+        load_scenario(scenario(tmp_path, one.split("\n")[0] + '\nrecord = "elcentro"\namplitude = 1.5', "c.toml"))
+    )
     same([m], [m0])
     assert m.dt == pytest.approx(0.01 / np.sqrt(10.0), rel=1e-12) and m.pga == pytest.approx(1.5 * elcentro().pga)
 

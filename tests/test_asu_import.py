@@ -241,8 +241,9 @@ def test_bad_input_is_refused_in_one_line_before_writing(data, tmp_path, spoil, 
 
 def test_mesh_in_millimetres_is_refused(data, tmp_path):
     text = (data / "SP1.obj").read_text().splitlines()
-    scaled = [" ".join(["v", *(f"{1000 * float(c):g}" for c in ln.split()[1:])]) if ln.startswith("v ") else ln
-              for ln in text]  # fmt: skip
+    scaled = [
+        " ".join(["v", *(f"{1000 * float(c):g}" for c in ln.split()[1:])]) if ln.startswith("v ") else ln for ln in text
+    ]
     (tmp_path / "mm.obj").write_text("\n".join(scaled) + "\n")
     with pytest.raises(DataFileError, match="metres"):
         import_asu(data, tmp_path / "out", mesh=tmp_path / "mm.obj")

@@ -90,8 +90,13 @@ def test_release_after_a_hold_is_found_and_trimmed(tmp_path, small):
     assert abs(k - hold) <= 30
     assert th0 == pytest.approx(0.7 * ALPHA, abs=6e-4)
     d = _copy(small, tmp_path)
-    np.savetxt(d / "records" / "fv01.csv", np.column_stack((t, np.zeros_like(t), theta)), delimiter=",",
-               header="time,ground_acc,theta", comments="")  # fmt: skip
+    np.savetxt(
+        d / "records" / "fv01.csv",
+        np.column_stack((t, np.zeros_like(t), theta)),
+        delimiter=",",
+        header="time,ground_acc,theta",
+        comments="",
+    )
     r = load_campaign(d).record("fv01")
     assert r.t_offset == pytest.approx(k * cg.DT)
     assert r.theta.size == theta.size - k
@@ -160,20 +165,25 @@ _REC = '[[record]]\nid = "{id}"\nkind = "{kind}"\nfile = "records/{id}.csv"\n'
 @pytest.mark.parametrize(
     ("text", "needles"),
     [
-        (_GOOD_HEAD.replace("height", "heigth") + _REC.format(id="gm001", kind="ground_motion"),
-         ["unknown key [specimen] 'heigth'", "did you mean 'height'", "line 3"]),
-        (_GOOD_HEAD.replace("mass = 3.94\n", "") + _REC.format(id="gm001", kind="ground_motion"),
-         ["missing key [specimen] 'mass'", "line 2"]),
-        (_GOOD_HEAD + _REC.format(id="gm001", kind="ground_motoin"),
-         ["'kind' must be one of", "did you mean 'ground_motion'", "line 10"]),
-        (_GOOD_HEAD + _REC.format(id="gm001", kind="ground_motion") * 2,
-         ["'id' 'gm001' is already used", "line 13"]),
+        (
+            _GOOD_HEAD.replace("height", "heigth") + _REC.format(id="gm001", kind="ground_motion"),
+            ["unknown key [specimen] 'heigth'", "did you mean 'height'", "line 3"],
+        ),
+        (
+            _GOOD_HEAD.replace("mass = 3.94\n", "") + _REC.format(id="gm001", kind="ground_motion"),
+            ["missing key [specimen] 'mass'", "line 2"],
+        ),
+        (
+            _GOOD_HEAD + _REC.format(id="gm001", kind="ground_motoin"),
+            ["'kind' must be one of", "did you mean 'ground_motion'", "line 10"],
+        ),
+        (_GOOD_HEAD + _REC.format(id="gm001", kind="ground_motion") * 2, ["'id' 'gm001' is already used", "line 13"]),
         (_GOOD_HEAD + "[[record]]\nid = 'gm001'\nkind = 'ground_motion'\n", ["missing key [[record]] #1 'file'"]),
         (_GOOD_HEAD.replace("p = 4.8883", "p = -1"), ["[specimen] 'p' must be a positive number", "line 7"]),
         (_GOOD_HEAD + "[[record]\nid = 1\n", ["not valid TOML", "line 8"]),
         (_GOOD_HEAD, ["no [[record]] tables"]),
     ],
-)  # fmt: skip
+)
 def test_campaign_toml_errors_name_the_key_and_line(small, tmp_path, text, needles):
     d = _copy(small, tmp_path)
     _write_toml(d, text)

@@ -50,8 +50,10 @@ def _write_campaign(root: Path, specimen: str, accs, observed) -> Path:
     for i, (a, o) in enumerate(zip(accs, observed, strict=True)):
         rows = "\n".join(f"{k * DT:.3f},{x:.6g}" for k, x in enumerate(a))
         (root / "records" / f"r{i:02d}.csv").write_text(f"time,ground_acc\n{rows}\n")
-        recs += (f'[[record]]\nid = "r{i:02d}"\nkind = "ground_motion"\nfile = "records/r{i:02d}.csv"\n'
-                 f"overturned = {'true' if o else 'false'}\n")  # fmt: skip
+        recs += (
+            f'[[record]]\nid = "r{i:02d}"\nkind = "ground_motion"\nfile = "records/r{i:02d}.csv"\n'
+            f"overturned = {'true' if o else 'false'}\n"
+        )
     (root / "campaign.toml").write_text(f'name = "small"\n[specimen]\n{specimen}\n{recs}')
     return root
 
@@ -154,8 +156,12 @@ def test_scan_campaign_gives_planar_engines_the_asymmetric_pivots(scan, tmp_path
     assert 0 < res["overturned"].sum() < N  # the pulses span both outcomes, so the effect is exercised
     meta = done.meta.campaign
     assert meta["geometry"]["effects"] == [{"name": "asymmetric_pivots", "e": e}]
-    assert meta["mesh"] == {"mesh": str((scan / "rock.obj").resolve()), "azimuth": 0.0, "density": 2600.0,
-                            "contact": "hull"}  # fmt: skip
+    assert meta["mesh"] == {
+        "mesh": str((scan / "rock.obj").resolve()),
+        "azimuth": 0.0,
+        "density": 2600.0,
+        "contact": "hull",
+    }
 
 
 class _RecordingMeshEngine(HousnerEngine):
@@ -242,8 +248,9 @@ def test_failed_records_are_counted_and_left_out(block, tmp_path):
 
     (row,) = outcome_table(res)
     ok = res[res.status == "ok"]
-    want = outcome_scores(np.clip(ok["overturned"].to_numpy(float), P_CLIP, 1 - P_CLIP),
-                          ok["observed_overturned"].to_numpy(bool), seed=0)  # fmt: skip
+    want = outcome_scores(
+        np.clip(ok["overturned"].to_numpy(float), P_CLIP, 1 - P_CLIP), ok["observed_overturned"].to_numpy(bool), seed=0
+    )
     assert row["n_failed"] == 1 and row["n"] == N - 1 and row["accuracy"] == want["accuracy"]
     assert math.isfinite(row["log_loss"])
 

@@ -93,8 +93,9 @@ def test_errors_are_cached_and_measured_meanwhile(motions, tmp_path, monkeypatch
 
 
 def test_verdict_names_the_figures_and_the_side():
-    fl = ChaosFloor({"r+": 0.7, "r-": 0.8}, {"r+": 1.0, "r-": 1.0}, 0.75, 0.7, 0.8, 100,
-                    engine="e", eps_r=1e-3, eps_p=5e-4)
+    fl = ChaosFloor(
+        {"r+": 0.7, "r-": 0.8}, {"r+": 1.0, "r-": 1.0}, 0.75, 0.7, 0.8, 100, engine="e", eps_r=1e-3, eps_p=5e-4
+    )
     at = floor_verdict(72, 100, fl)
     # the floor is the lowest perturbed share (70 %): the one the verdict is decided against
     assert "72% [" in at and "chaos floor of 70%" in at and "70%-80%" in at and "at the floor" in at

@@ -96,18 +96,37 @@ class Cluster:
             raise RuntimeError(f"the scheduler did not start:\n{self.log('scheduler')}")
         self.address = json.loads(file.read_text())["address"]
         for k in range(self.n_workers):
-            self.workers.append(self._start(f"worker{k}", "dask_worker", *loopback, "--scheduler-file", str(file),
-                                            "--nthreads", "1", "--nworkers", "1", "--death-timeout", "60",
-                                            "--local-directory", str(self.tmp / f"worker{k}")))  # fmt: skip
+            self.workers.append(
+                self._start(
+                    f"worker{k}",
+                    "dask_worker",
+                    *loopback,
+                    "--scheduler-file",
+                    str(file),
+                    "--nthreads",
+                    "1",
+                    "--nworkers",
+                    "1",
+                    "--death-timeout",
+                    "60",
+                    "--local-directory",
+                    str(self.tmp / f"worker{k}"),
+                )
+            )
         self.client = distributed.Client(self.address, set_as_default=False, timeout=START_S)
         self.client.wait_for_workers(self.n_workers, timeout=START_S)
         self.pids = self.client.run(os.getpid)  # worker address -> its process (the nanny's child)
 
     def _start(self, name: str, cli: str, *args: str) -> subprocess.Popen:
         with open(self.tmp / f"{name}.log", "w") as log:
-            p = subprocess.Popen([sys.executable, "-m", f"distributed.cli.{cli}", *args], cwd=self.tmp,
-                                 env=_env(self.tmp, **self.config), stdout=log, stderr=subprocess.STDOUT,
-                                 start_new_session=True)  # fmt: skip
+            p = subprocess.Popen(
+                [sys.executable, "-m", f"distributed.cli.{cli}", *args],
+                cwd=self.tmp,
+                env=_env(self.tmp, **self.config),
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
         self.procs.append(p)
         return p
 
@@ -159,8 +178,14 @@ def unforgiving_cluster(tmp_path):
 
 
 def _start_run(cluster: Cluster, tmp: Path) -> subprocess.Popen:
-    return subprocess.Popen(_cmd(tmp / "run", cluster.address), env=_env(tmp), cwd=tmp, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    return subprocess.Popen(
+        _cmd(tmp / "run", cluster.address),
+        env=_env(tmp),
+        cwd=tmp,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def _kill_a_busy_worker(cluster: Cluster, run: subprocess.Popen) -> tuple[str, list, subprocess.Popen]:
@@ -198,9 +223,11 @@ def test_run_on_a_cluster_equals_a_local_run(local_run, cluster, tmp_path):
     # Both workers ran records: the run was spread over the cluster.
     ran = cluster.client.run(lambda dask_worker: dask_worker.state.executed_count)
     assert len(ran) == 2 and all(n > 0 for n in ran.values()), ran
-    print(f"\n`housner run elcentro --engines housner --n-motions {N_MOTIONS} --no-cache` [s], command (simulation): "
-          f"local {local_wall:.2f} ({local_sim:.3f}); 2 Dask workers, cold {times['cold'][0]:.2f} "
-          f"({times['cold'][1]:.3f}), warm {times['warm'][0]:.2f} ({times['warm'][1]:.3f})")  # fmt: skip
+    print(
+        f"\n`housner run elcentro --engines housner --n-motions {N_MOTIONS} --no-cache` [s], command (simulation): "
+        f"local {local_wall:.2f} ({local_sim:.3f}); 2 Dask workers, cold {times['cold'][0]:.2f} "
+        f"({times['cold'][1]:.3f}), warm {times['warm'][0]:.2f} ({times['warm'][1]:.3f})"
+    )
 
 
 def test_a_worker_killed_mid_run_loses_nothing(local_run, cluster, tmp_path):
@@ -211,8 +238,10 @@ def test_a_worker_killed_mid_run_loses_nothing(local_run, cluster, tmp_path):
             t_kill = time.perf_counter()
         finally:
             out, err = _finish(run)
-    print(f"\nkilled the worker at {victim} holding {len(held)} task(s); the run ended "
-          f"{time.perf_counter() - t_kill:.2f} s later; housner's output:\n{out}{err}")  # fmt: skip
+    print(
+        f"\nkilled the worker at {victim} holding {len(held)} task(s); the run ended "
+        f"{time.perf_counter() - t_kill:.2f} s later; housner's output:\n{out}{err}"
+    )
     assert proc.wait(timeout=10) == -signal.SIGKILL
     assert run.returncode == 0, err
     assert "Traceback" not in err

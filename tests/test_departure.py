@@ -60,9 +60,11 @@ def test_nan_in_a_history_counts_as_parted_and_unequal_lengths_are_compared_over
 
 def test_summary_counts_phases_and_names_records():
     eng = _rocking([0.5, 0.4, 0.3])
-    deps = [departure(0, eng, _rocking([0.7, 0.4, 0.3]), DT, ALPHA),
-            departure(1, eng, _rocking([0.5, 0.4, 0.6]), DT, ALPHA),
-            departure(2, eng, eng, DT, ALPHA)]  # fmt: skip
+    deps = [
+        departure(0, eng, _rocking([0.7, 0.4, 0.3]), DT, ALPHA),
+        departure(1, eng, _rocking([0.5, 0.4, 0.6]), DT, ALPHA),
+        departure(2, eng, eng, DT, ALPHA),
+    ]
     s = summarise(deps)
     assert s["n"] == 3
     assert s["by_phase"] == {"uplift": 1, "small rocking": 0, "rocking": 1, "never": 1}

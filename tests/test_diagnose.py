@@ -127,8 +127,15 @@ def test_confusion_table_full(base, capsys):
 
 def _row(base, hidden):
     info, diag = _RESULTS[(hidden, True)] if (hidden, True) in _RESULTS else _diagnosis(base, hidden)
-    return (hidden, info["expected"], _named(diag), diag.baseline.heldout_error, diag.final.heldout_error,
-            diag.noise_floor, diag.elapsed)  # fmt: skip
+    return (
+        hidden,
+        info["expected"],
+        _named(diag),
+        diag.baseline.heldout_error,
+        diag.final.heldout_error,
+        diag.noise_floor,
+        diag.elapsed,
+    )
 
 
 def _table(rows) -> str:
@@ -192,15 +199,32 @@ def test_cli_diagnose(base, tmp_path):
     root = cg.cached_campaign(base, "sensor_offset")["root"]
     out_json, out_html = tmp_path / "d.json", tmp_path / "d.html"
     env = dict(os.environ)
-    cmd = [sys.executable, "-m", "housner.cli", "diagnose", str(root), "--effects", "sensor_offset,time_lag",
-           "--json", str(out_json), "--report", str(out_html), "-q"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "housner.cli",
+        "diagnose",
+        str(root),
+        "--effects",
+        "sensor_offset,time_lag",
+        "--json",
+        str(out_json),
+        "--report",
+        str(out_html),
+        "-q",
+    ]
     res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
     assert res.returncode == 0, res.stderr
     assert "sensor_offset" in res.stdout and "explains it" in res.stdout
     assert json.loads(out_json.read_text())["selected"] == ["sensor_offset"]
     assert out_html.read_text().count("data:image/png;base64,") == 11  # as test_report_is_self_contained
-    bad = subprocess.run([sys.executable, "-m", "housner.cli", "diagnose", str(tmp_path / "none")],
-                         capture_output=True, text=True, env=env, timeout=120)  # fmt: skip
+    bad = subprocess.run(
+        [sys.executable, "-m", "housner.cli", "diagnose", str(tmp_path / "none")],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert bad.returncode == 2 and "campaign.toml" in bad.stderr
 
 

@@ -36,9 +36,12 @@ def diag(tmp_path_factory):
     root = tmp_path_factory.mktemp("diag_report") / "rd"
     cg.write_campaign(root, "rotational_damping", n_ground=12, fv_duration=6.0)
     d = diagnose(
-        load_campaign(root), effects=["rotational_damping", "sensor_offset"], compare_steps=True, n_replicas=2,
+        load_campaign(root),
+        effects=["rotational_damping", "sensor_offset"],
+        compare_steps=True,
+        n_replicas=2,
         max_effects=1,
-    )  # fmt: skip
+    )
     assert d.selected == ["rotational_damping"], d.summary()
     return d
 
@@ -163,10 +166,24 @@ def _risen(diag):
     d = copy.copy(diag)
     b = diag.baseline
     worse = b.heldout_errors + 0.05
-    d.steps = [b, replace(diag.final, heldout_error=float(worse.mean()), heldout_se=b.heldout_se, improvement=-0.05,
-                          improvement_se=0.011, heldout_errors=worse, significant=False)]  # fmt: skip
-    d.rounds = [[replace(c, reason="training error falls by -0.0012 < 0.0054 alpha (noise floor): not held out")
-                 for c in diag.rounds[0]]]  # fmt: skip
+    d.steps = [
+        b,
+        replace(
+            diag.final,
+            heldout_error=float(worse.mean()),
+            heldout_se=b.heldout_se,
+            improvement=-0.05,
+            improvement_se=0.011,
+            heldout_errors=worse,
+            significant=False,
+        ),
+    ]
+    d.rounds = [
+        [
+            replace(c, reason="training error falls by -0.0012 < 0.0054 alpha (noise floor): not held out")
+            for c in diag.rounds[0]
+        ]
+    ]
     return d
 
 

@@ -58,20 +58,29 @@ def page(tmp_path):
 def test_blocks_kinds_and_lines(page):
     blocks = dc.parse_page(page)
     assert [(b.lang, b.line) for b in blocks] == [
-        ("python", 4), ("python", 8), ("toml", 12), ("bash", 17), ("console", 21), ("python", 30)
-    ]  # fmt: skip
+        ("python", 4),
+        ("python", 8),
+        ("toml", 12),
+        ("bash", 17),
+        ("console", 21),
+        ("python", 30),
+    ]
     hidden, shown, toml, skipped, console, plain = blocks
     assert hidden.hidden and not shown.hidden and not plain.hidden
     assert toml.kind == "other"
     assert skipped.skip == "needs a cluster" and console.skip is None
-    assert console.commands == [(21, "DATA=../data"), (22, "housner run elcentro \\\n    --engines housner"),
-                                (25, "echo done")]  # fmt: skip
+    assert console.commands == [
+        (21, "DATA=../data"),
+        (22, "housner run elcentro \\\n    --engines housner"),
+        (25, "echo done"),
+    ]
 
 
 def test_commands_without_prompts():
     assert dc.shell_commands("# a comment\nhousner tune mujoco --r 0.9\n\npytest\n", 10) == [
-        (11, "housner tune mujoco --r 0.9"), (13, "pytest")
-    ]  # fmt: skip
+        (11, "housner tune mujoco --r 0.9"),
+        (13, "pytest"),
+    ]
 
 
 def test_snippet_is_expanded(tmp_path):

@@ -655,8 +655,11 @@ def test_a_parameter_is_declared_once_on_its_field():
         assert Gain.param_specs["lag"].default is None
         with pytest.raises(ValueError, match="needs `lag`"):
             make_effect("test_param_gain", gain=1.5)
-        assert make_effect("test_param_gain", lag=0.01).describe() == {"name": "test_param_gain", "lag": 0.01,
-                                                                       "gain": 1.0}  # fmt: skip
+        assert make_effect("test_param_gain", lag=0.01).describe() == {
+            "name": "test_param_gain",
+            "lag": 0.01,
+            "gain": 1.0,
+        }
         with pytest.raises(ValueError, match="`gain`"):
             Gain(lag=0.0, gain=5.0)
     finally:

@@ -132,8 +132,13 @@ def test_an_r_above_the_engines_contact_is_refused_before_any_work(tmp_path):
 
 def test_an_r_below_housners_runs_on_an_engine_and_agrees_with_the_analytic_model(tmp_path):
     lower = '\n[[effects]]\nname = "restitution"\nr = 0.9\n'
-    run = run_scenario(scenario(tmp_path, lower, names='["housner", "mujoco"]'), out=tmp_path / "run", jobs=1,
-                       cache_dir=tmp_path / "c", progress=False)  # fmt: skip
+    run = run_scenario(
+        scenario(tmp_path, lower, names='["housner", "mujoco"]'),
+        out=tmp_path / "run",
+        jobs=1,
+        cache_dir=tmp_path / "c",
+        progress=False,
+    )
     df = run.results.set_index(["engine", "motion_id"]).theta_max_over_alpha
     with_r = df["mujoco + restitution(r=0.9)"].to_numpy()
     analytic = df["housner + restitution(r=0.9)"].to_numpy()

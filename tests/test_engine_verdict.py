@@ -20,8 +20,16 @@ from housner.stats import KS_MAX
 
 
 def _row(ks, dp, n_ok, n_failed=0, share=0.5, n_paired=None):
-    return pd.Series({"ks_distance": ks, "overturn_diff": dp, "n_ok": n_ok, "n_failed": n_failed,
-                      "agreement_share": share, "n_paired": n_ok if n_paired is None else n_paired})  # fmt: skip
+    return pd.Series(
+        {
+            "ks_distance": ks,
+            "overturn_diff": dp,
+            "n_ok": n_ok,
+            "n_failed": n_failed,
+            "agreement_share": share,
+            "n_paired": n_ok if n_paired is None else n_paired,
+        }
+    )
 
 
 def test_min_records_follows_from_the_tolerance():
@@ -77,8 +85,24 @@ def test_one_verdict_from_the_distribution_and_the_records():
 
 
 def test_run_prints_each_engines_verdict_and_check_passes_an_inconclusive_one(tmp_path):
-    cmd = [sys.executable, "-m", "housner.cli", "run", "elcentro", "--engines", "housner,mujoco", "--n-motions", "3",
-           "--out", str(tmp_path / "run"), "--no-report", "--check", "-q", "--jobs", "1"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "housner.cli",
+        "run",
+        "elcentro",
+        "--engines",
+        "housner,mujoco",
+        "--n-motions",
+        "3",
+        "--out",
+        str(tmp_path / "run"),
+        "--no-report",
+        "--check",
+        "-q",
+        "--jobs",
+        "1",
+    ]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
@@ -89,8 +113,23 @@ def test_run_prints_each_engines_verdict_and_check_passes_an_inconclusive_one(tm
 
 
 def test_a_run_with_one_engine_prints_no_verdict_heading(tmp_path):
-    cmd = [sys.executable, "-m", "housner.cli", "run", "elcentro", "--engines", "housner", "--n-motions", "2",
-           "--out", str(tmp_path / "run"), "--no-report", "-q", "--jobs", "1"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "housner.cli",
+        "run",
+        "elcentro",
+        "--engines",
+        "housner",
+        "--n-motions",
+        "2",
+        "--out",
+        str(tmp_path / "run"),
+        "--no-report",
+        "-q",
+        "--jobs",
+        "1",
+    ]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
     assert "verdict" not in res.stdout

@@ -80,8 +80,23 @@ def test_the_campaign_orders_and_flags_its_records(control):
 def test_cli_on_mujoco_writes_the_figures(tmp_path, capsys):
     out = tmp_path / "mujoco.json"
     fig = tmp_path / "maps.png"
-    rc = main(["explain", "mujoco", "--n-motions", "4", "--effects", "restitution,time_lag", "--json", str(out),
-               "--figure", str(fig), "--jobs", "1", "-q"])  # fmt: skip
+    rc = main(
+        [
+            "explain",
+            "mujoco",
+            "--n-motions",
+            "4",
+            "--effects",
+            "restitution,time_lag",
+            "--json",
+            str(out),
+            "--figure",
+            str(fig),
+            "--jobs",
+            "1",
+            "-q",
+        ]
+    )
     assert rc == 0
     text = capsys.readouterr().out
     assert "agreement with mujoco" in text and "floor" in text and "remains:" in text
@@ -101,8 +116,10 @@ def test_cli_on_mujoco_writes_the_figures(tmp_path, capsys):
 
 
 def test_cli_figure_needs_the_maps_and_a_known_format(tmp_path, capsys):
-    for extra, words in ((["--no-maps", "--figure", str(tmp_path / "m.png")], "--no-maps"),
-                         (["--figure", str(tmp_path / "m.pdf")], "PNG or SVG")):  # fmt: skip
+    for extra, words in (
+        (["--no-maps", "--figure", str(tmp_path / "m.png")], "--no-maps"),
+        (["--figure", str(tmp_path / "m.pdf")], "PNG or SVG"),
+    ):
         assert main(["explain", "mujoco", *extra]) == 2
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and words in err

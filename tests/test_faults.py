@@ -154,8 +154,16 @@ def test_ctrl_c_exits_fast_with_130_and_keeps_the_cache(tmp_path):
     # A session of its own, signalled as a whole: what a terminal does on Ctrl-C (workers get SIGINT too).
     # SIGINT back to its default in the child: a test run started in the background of a non-interactive shell
     # (`cmd &`) ignores SIGINT, and the child would inherit that and could never be interrupted.
-    proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, preexec_fn=_default_sigint)  # fmt: skip
+    proc = subprocess.Popen(
+        cmd,
+        env=env,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=_default_sigint,
+    )
     try:
         deadline = time.monotonic() + 90
         while time.monotonic() < deadline and len(list(cache.rglob("*.npz"))) < 2 and proc.poll() is None:
@@ -186,10 +194,25 @@ def test_sigterm_is_handled_like_ctrl_c_with_143(tmp_path):
     cache = tmp_path / "cache"
     env = dict(os.environ, HOUSNER_CACHE_DIR=str(cache))
     env.pop(CRASH_ENV, None)
-    cmd = [sys.executable, "-m", "housner.cli", "run", "elcentro", "--engines", "housner,mujoco", "--n-motions", "24",
-           "--out", str(tmp_path / "run"), "--jobs", "2", "--no-report"]  # fmt: skip
-    proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "housner.cli",
+        "run",
+        "elcentro",
+        "--engines",
+        "housner,mujoco",
+        "--n-motions",
+        "24",
+        "--out",
+        str(tmp_path / "run"),
+        "--jobs",
+        "2",
+        "--no-report",
+    ]
+    proc = subprocess.Popen(
+        cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
     try:
         deadline = time.monotonic() + 90
         while time.monotonic() < deadline and len(list(cache.rglob("*.npz"))) < 2 and proc.poll() is None:

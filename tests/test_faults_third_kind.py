@@ -336,8 +336,13 @@ def test_kernel_repairs_made_by_the_processes_of_a_run_are_counted_in_its_info(k
 
     def run() -> dict:
         plugin = Path(__file__).resolve().parents[1] / "examples" / "effects" / "pivot_friction.py"
-        res = subprocess.run([sys.executable, "-c", RUN_WITH_EFFECT, str(jobs), str(plugin)], capture_output=True,
-                             text=True, env=env, timeout=300)  # fmt: skip
+        res = subprocess.run(
+            [sys.executable, "-c", RUN_WITH_EFFECT, str(jobs), str(plugin)],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=300,
+        )
         assert res.returncode == 0, res.stderr
         return json.loads(res.stdout.strip().splitlines()[-1])
 

@@ -32,8 +32,16 @@ ENGINES = ("mujoco", "pybullet", "dart", "opensees", "drake")
 
 
 def point(agreement, cost, met=True, n=100, axis="timestep", error="", failed=""):
-    return FrontierPoint(axis, {"timestep": cost}, agreement=agreement, n_records=n, checks_met=met,
-                         failed=failed or ("" if met else "decay"), cpu_per_sim_second=cost, error=error)  # fmt: skip
+    return FrontierPoint(
+        axis,
+        {"timestep": cost},
+        agreement=agreement,
+        n_records=n,
+        checks_met=met,
+        failed=failed or ("" if met else "decay"),
+        cpu_per_sim_second=cost,
+        error=error,
+    )
 
 
 def test_knee_is_the_cheapest_point_not_significantly_below_the_best():
@@ -63,8 +71,17 @@ def test_knee_keeps_the_reports_distribution_verdict():
     d, coarse = point(0.35, 0.0707), point(0.36, 0.0564)
     d.score, coarse.score, d.ks, coarse.ks = 0.55, 0.46, 0.13, 0.19
     assert knee([d, coarse]) == 0
-    f = Frontier(engine="dart", scenario="elcentro", n_motions=100, defaults={"timestep": 1e-4},
-                 axes={"timestep": [1.25e-4]}, points=[d, coarse], knee=0, default=0, model_form_floor=0.5)  # fmt: skip
+    f = Frontier(
+        engine="dart",
+        scenario="elcentro",
+        n_motions=100,
+        defaults={"timestep": 1e-4},
+        axes={"timestep": [1.25e-4]},
+        points=[d, coarse],
+        knee=0,
+        default=0,
+        model_form_floor=0.5,
+    )
     assert "fail the run report's KS criterion" in knee_reason(f)
     coarse.ks = 0.15  # at the criterion: kept
     assert knee([d, coarse]) == 1
@@ -114,8 +131,13 @@ def test_each_engine_declares_a_step_and_a_contact_setting_of_three_to_five_valu
 
 def test_a_real_sweep_marks_a_coarser_step_that_fails_the_checks(tmp_path):
     """MuJoCo at 2.5x its step: r off by more than the tuner's 0.5 % (measured 0.72 %), so the knee stays."""
-    fr = engine_frontier("mujoco", "elcentro", n_motions=4, axes={"timestep": (2e-4, 5e-4)},
-                         options=RunOptions(jobs=1, progress=False, cache_dir=tmp_path))  # fmt: skip
+    fr = engine_frontier(
+        "mujoco",
+        "elcentro",
+        n_motions=4,
+        axes={"timestep": (2e-4, 5e-4)},
+        options=RunOptions(jobs=1, progress=False, cache_dir=tmp_path),
+    )
     assert [p.label for p in fr.points] == ["defaults", "timestep=0.0005"]
     d, coarse = fr.points
     assert d.checks_met and abs(d.r_error) <= 0.005
@@ -141,24 +163,46 @@ def _frontier_file() -> dict:
     pts = [point(0.30, 0.016), point(0.33, 0.03), point(0.31, 0.008, met=False)]
     for p, r in zip(pts, (0.003, 0.002, 0.007), strict=True):
         p.r_error, p.small_error, p.decay_error, p.pulse_error, p.ks, p.floor = r, r, 0.01, r, 0.1, 0.45
-    fr = Frontier("beta-engine", "elcentro", 100, {"timestep": 0.016}, {"timestep": [0.008, 0.016, 0.03]}, pts,
-                  knee=0, default=0, model_form_floor=0.45, version="1.0", date="2026-11-26")  # fmt: skip
+    fr = Frontier(
+        "beta-engine",
+        "elcentro",
+        100,
+        {"timestep": 0.016},
+        {"timestep": [0.008, 0.016, 0.03]},
+        pts,
+        knee=0,
+        default=0,
+        model_form_floor=0.45,
+        version="1.0",
+        date="2026-11-26",
+    )
     return fr.to_dict()
 
 
 def test_report_section_shows_the_decomposition_and_the_frontier(tmp_path, monkeypatch):
-    rows = [{"engine": e, "motion_id": i, "theta_max_over_alpha": 0.1 + 0.01 * i, "overturned": False,
-             "status": "ok"} for e in ("housner", "beta-engine") for i in range(5)]  # fmt: skip
+    rows = [
+        {"engine": e, "motion_id": i, "theta_max_over_alpha": 0.1 + 0.01 * i, "overturned": False, "status": "ok"}
+        for e in ("housner", "beta-engine")
+        for i in range(5)
+    ]
     run_dir = tmp_path / "run"
     run_dir.mkdir()
     pd.DataFrame(rows).to_parquet(run_dir / "results.parquet")
     monkeypatch.setattr(tuning_section, "TUNING_DIR", tmp_path)
     run = Run.load(run_dir)
     assert "No stored explanation or frontier" in engines_explained(run)
-    explanation = {"engine": "beta-engine", "scenario": "elcentro", "n_records": 100, "agreement_plain": 0.28,
-                   "agreement": 0.31, "floor": 0.49, "floor_parts": {"chaos": 0.67, "model_form": 0.49},
-                   "reaches_floor": False, "remains": "18% below the floor",
-                   "effects": [{"name": "viscous_damping", "params": {"zeta": 0.0012}}]}  # fmt: skip
+    explanation = {
+        "engine": "beta-engine",
+        "scenario": "elcentro",
+        "n_records": 100,
+        "agreement_plain": 0.28,
+        "agreement": 0.31,
+        "floor": 0.49,
+        "floor_parts": {"chaos": 0.67, "model_form": 0.49},
+        "reaches_floor": False,
+        "remains": "18% below the floor",
+        "effects": [{"name": "viscous_damping", "params": {"zeta": 0.0012}}],
+    }
     (tmp_path / "explain-beta-engine.json").write_text(json.dumps(explanation))
     (tmp_path / "frontier-beta-engine.json").write_text(json.dumps(_frontier_file()))
     html = engines_explained(Run.load(run_dir))

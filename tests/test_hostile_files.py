@@ -66,8 +66,9 @@ def make_campaign(folder: Path, records: dict[str, str], files: dict[str, str] |
     for rel, text in (files or {}).items():
         (folder / rel).parent.mkdir(parents=True, exist_ok=True)
         (folder / rel).write_text(text)
-    tables = "".join(f'[[record]]\nid = "{rid}"\nkind = "ground_motion"\nfile = "{f}"\n'
-                     for rid, f in {**good, **records}.items())  # fmt: skip
+    tables = "".join(
+        f'[[record]]\nid = "{rid}"\nkind = "ground_motion"\nfile = "{f}"\n' for rid, f in {**good, **records}.items()
+    )
     (folder / "campaign.toml").write_text('name = "hostile"\n' + SPECIMEN + tables)
     return folder
 
@@ -88,8 +89,13 @@ def test_a_campaign_record_outside_its_folder_is_skipped_by_name(tmp_path, how):
     assert [r.id for r in camp.records] == ["gm01", "gm02", "gm03"]
     msg = skipped_message(camp, "x")
     assert "\n" not in msg
-    for part in ("record 'x'", f"file {written!r}", f"outside the campaign folder {folder.resolve()}",
-                 "--allow-outside", "campaign.toml line 23"):  # fmt: skip
+    for part in (
+        "record 'x'",
+        f"file {written!r}",
+        f"outside the campaign folder {folder.resolve()}",
+        "--allow-outside",
+        "campaign.toml line 23",
+    ):
         assert part in msg, (part, msg)
     # the explicit opt-out reads it
     assert "x" in [r.id for r in load_campaign(folder, allow_outside=True).records]
@@ -117,8 +123,11 @@ def test_a_mesh_outside_the_campaign_folder_refuses_the_campaign(tmp_path):
     make_campaign(folder, {})
     text = (folder / "campaign.toml").read_text().replace(SPECIMEN, '[specimen]\nmesh = "../../block.obj"\n')
     (folder / "campaign.toml").write_text(text)
-    with pytest.raises(DataFileError, match=r"campaign\.toml line 3: \[specimen\] 'mesh' '\.\./\.\./block\.obj' "
-                       r"resolves outside the campaign folder .*--allow-outside"):  # fmt: skip
+    with pytest.raises(
+        DataFileError,
+        match=r"campaign\.toml line 3: \[specimen\] 'mesh' '\.\./\.\./block\.obj' "
+        r"resolves outside the campaign folder .*--allow-outside",
+    ):
         load_campaign(folder)
     with pytest.raises(DataFileError) as e:  # allowed: then it is read, and here it does not exist
         load_campaign(folder, allow_outside=True)
@@ -161,8 +170,12 @@ def test_a_scenario_record_outside_its_folder_is_refused(tmp_path, how):
         load_scenario(folder / "s.toml")
     msg = str(e.value)
     assert "\n" not in msg
-    for part in ("s.toml line 6", f"[motions] {key!r}",
-                 f"resolves outside the scenario folder {folder.resolve()}", "allow_outside=True"):  # fmt: skip
+    for part in (
+        "s.toml line 6",
+        f"[motions] {key!r}",
+        f"resolves outside the scenario folder {folder.resolve()}",
+        "allow_outside=True",
+    ):
         assert part in msg, (part, msg)
     assert load_scenario(folder / "s.toml", allow_outside=True).n_motions == 1
 
@@ -202,10 +215,15 @@ def test_a_header_of_names_is_listed_cut_short(tmp_path):
 
 @pytest.mark.parametrize(
     "first",
-    ["root:x:0:0:root:/root:/bin/bash", "secret token without a comma", "time,ground_acc\x07,theta",
-     "a,b,c", "time," + "y" * 3000],
+    [
+        "root:x:0:0:root:/root:/bin/bash",
+        "secret token without a comma",
+        "time,ground_acc\x07,theta",
+        "a,b,c",
+        "time," + "y" * 3000,
+    ],
     ids=["colons", "no-comma", "control-character", "no-known-name", "very-long"],
-)  # fmt: skip
+)
 def test_a_first_line_that_is_not_a_header_is_not_echoed(tmp_path, first):
     path = tmp_path / "f.csv"
     path.write_text(first + "\n1,2,3\n")
@@ -224,8 +242,11 @@ def test_every_reader_needs_the_same_number_of_samples(tmp_path):
     (tmp_path / "s" / "s.toml").write_text(SCENARIO.format(motions='record = "short.csv"'))
     with pytest.raises(ScenarioError, match=rule):
         load_scenario(tmp_path / "s" / "s.toml")
-    folder = make_campaign(tmp_path / "camp", {"x": "records/short.csv"},
-                           {"records/short.csv": "time,ground_acc,theta\n0,0.1,0\n0.01,0.2,0\n"})  # fmt: skip
+    folder = make_campaign(
+        tmp_path / "camp",
+        {"x": "records/short.csv"},
+        {"records/short.csv": "time,ground_acc,theta\n0,0.1,0\n0.01,0.2,0\n"},
+    )
     assert rule in skipped_message(load_campaign(folder), "x")
 
 
@@ -236,8 +257,11 @@ def test_a_declared_unit_is_checked_after_conversion(tmp_path):
     assert read_csv_si(spike, {"ground_acc": "acceleration"}).values[0].max() > 5.8 * G
     huge = tmp_path / "huge.csv"
     huge.write_text(record_csv(peak=1e6, header="time [s],ground_acc [m/s^2],theta [rad]"))
-    with pytest.raises(DataFileError, match=r"huge\.csv line \d+, column `ground_acc`: peak [\d.e+]+ m/s\^2 .* "
-                       r"declared unit m/s\^2, is above 50 g"):  # fmt: skip
+    with pytest.raises(
+        DataFileError,
+        match=r"huge\.csv line \d+, column `ground_acc`: peak [\d.e+]+ m/s\^2 .* "
+        r"declared unit m/s\^2, is above 50 g",
+    ):
         read_csv_si(huge, {"time": "time", "ground_acc": "acceleration"})
     in_g = tmp_path / "in_g.csv"  # m/s^2 values declared in g
     in_g.write_text(record_csv(peak=60.0, header="time,ground_acc [g],theta"))
@@ -246,8 +270,12 @@ def test_a_declared_unit_is_checked_after_conversion(tmp_path):
     folder = make_campaign(tmp_path / "camp", {"x": "records/huge.csv"}, {"records/huge.csv": huge.read_text()})
     assert "is above 50 g" in skipped_message(load_campaign(folder), "x")
     at2 = tmp_path / "big.AT2"
-    at2.write_text("PEER\nUNITS OF G\nx\nNPTS= 20, DT= 0.01 SEC\n" + "0.1 0.2 0.3 0.4 0.5\n" * 2
-                   + "0.1 0.2 70.0 0.4 0.5\n" + "0.1 0.2 0.3 0.4 0.5\n")  # fmt: skip
+    at2.write_text(
+        "PEER\nUNITS OF G\nx\nNPTS= 20, DT= 0.01 SEC\n"
+        + "0.1 0.2 0.3 0.4 0.5\n" * 2
+        + "0.1 0.2 70.0 0.4 0.5\n"
+        + "0.1 0.2 0.3 0.4 0.5\n"
+    )
     with pytest.raises(DataFileError, match=r"big\.AT2 line 7: peak .* = 70 g, read in the declared unit g"):
         GroundMotion.from_at2(at2)
 
@@ -256,8 +284,11 @@ BOOM = 'x = 1\nraise RuntimeError("boom")\n'
 SYNTAX = "x = 1\ndef broken(:\n    pass\n"
 
 
-@pytest.mark.parametrize("code, expect", [(BOOM, "line 2: raises RuntimeError when imported: boom"),
-                                          (SYNTAX, "line 2: syntax error")], ids=["raises", "syntax"])  # fmt: skip
+@pytest.mark.parametrize(
+    "code, expect",
+    [(BOOM, "line 2: raises RuntimeError when imported: boom"), (SYNTAX, "line 2: syntax error")],
+    ids=["raises", "syntax"],
+)
 def test_a_bad_plugin_is_exit_2_naming_the_file(tmp_path, capsys, code, expect):
     plugin = tmp_path / "bad_plugin.py"
     plugin.write_text(code)
@@ -265,9 +296,7 @@ def test_a_bad_plugin_is_exit_2_naming_the_file(tmp_path, capsys, code, expect):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "bad_plugin.py" in err and expect in err, err
     assert "unexpected" not in err and "Traceback" not in err
-    (tmp_path / "s.toml").write_text(
-        'plugins = ["bad_plugin.py"]\n' + SCENARIO.format(motions='record = "elcentro"')
-    )
+    (tmp_path / "s.toml").write_text('plugins = ["bad_plugin.py"]\n' + SCENARIO.format(motions='record = "elcentro"'))
     with pytest.raises(ScenarioError, match=rf"s\.toml line 1: plugin 'bad_plugin\.py': .*bad_plugin\.py.*{expect}"):
         load_scenario(tmp_path / "s.toml")
     assert main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o")]) == 2
@@ -280,8 +309,11 @@ def test_a_users_own_file_in_out_is_not_overwritten(tmp_path, capsys, name):
     out = tmp_path / "out"
     out.mkdir()
     (out / name).write_text('{"mine": true}' if name.endswith(".json") else "my own data")
-    with pytest.raises(OutputPathError, match=rf"{name!r} inside it is not from a housner run .*another --out or "
-                       "remove the file"):  # fmt: skip
+    with pytest.raises(
+        OutputPathError,
+        match=rf"{name!r} inside it is not from a housner run .*another --out or "
+        "remove the file",
+    ):
         check_output_dir(out, "--out", files=RUN_FILES)
     assert main(["run", "free-vibration", "--jobs", "1", "-q", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()

@@ -47,8 +47,11 @@ def test_the_analytic_engines_maps_are_flat(analytic_maps):
     alpha, a0 = m.specimen["alpha_rad"], m.amplitudes[-1]
     x0 = np.sqrt(2 * (np.cos(alpha - a0 * alpha) - np.cos(alpha))) / alpha
     pts = m.impact_points
-    first = [x for x, rel, k in zip(pts["x"], pts["release"], pts["k"], strict=True)
-             if rel == len(m.amplitudes) - 1 and k == 1]  # fmt: skip
+    first = [
+        x
+        for x, rel, k in zip(pts["x"], pts["release"], pts["k"], strict=True)
+        if rel == len(m.amplitudes) - 1 and k == 1
+    ]
     assert first == pytest.approx([x0], rel=1e-9)
 
 

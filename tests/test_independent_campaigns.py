@@ -400,8 +400,13 @@ def test_scaled_campaign_written_as_stated(tmp_path, case):
     dt = ic.sample_interval(case)
     info = ic.write_campaign(tmp_path / "c", case, n_ground=1, seed=2)
     spec = tomllib.loads((info["root"] / "campaign.toml").read_text())["specimen"]
-    expected = {"height": ic.HEIGHT * scale, "width": ic.WIDTH * scale, "depth": ic.DEPTH * scale,
-                "mass": ic.MASS * scale**3, "p": P / math.sqrt(scale)}  # fmt: skip
+    expected = {
+        "height": ic.HEIGHT * scale,
+        "width": ic.WIDTH * scale,
+        "depth": ic.DEPTH * scale,
+        "mass": ic.MASS * scale**3,
+        "p": P / math.sqrt(scale),
+    }
     assert spec.keys() == expected.keys()
     for k, v in expected.items():
         assert spec[k] == pytest.approx(v, rel=1e-11), k
@@ -419,8 +424,9 @@ def test_default_options_change_nothing(tmp_path):
     """Options set to their defaults write the bytes of the plain campaign (white noise of NOISE drawn as before,
     500 Hz, the seed specimen)."""
     a = ic.write_campaign(tmp_path / "a", "none", n_ground=2, seed=4)
-    b = ic.write_campaign(tmp_path / "b", "none", n_ground=2, seed=4,
-                          options={"noise_white": ic.NOISE, "dt": ic.DT, "scale": 1.0})  # fmt: skip
+    b = ic.write_campaign(
+        tmp_path / "b", "none", n_ground=2, seed=4, options={"noise_white": ic.NOISE, "dt": ic.DT, "scale": 1.0}
+    )
     for f in sorted(a["root"].rglob("*.csv")):
         assert f.read_bytes() == (b["root"] / f.relative_to(a["root"])).read_bytes()
     assert (a["root"] / "campaign.toml").read_bytes() == (b["root"] / "campaign.toml").read_bytes()
@@ -428,8 +434,13 @@ def test_default_options_change_nothing(tmp_path):
 
 def _noise_kwargs(case):
     nt = ic.noise_truth(case)
-    return {"white": nt["white"], "ou": nt["ou"], "tau": nt["tau"], "hum_amp": nt["hum_amp"],
-            "hum_freq": nt["hum_freq"]}  # fmt: skip
+    return {
+        "white": nt["white"],
+        "ou": nt["ou"],
+        "tau": nt["tau"],
+        "hum_amp": nt["hum_amp"],
+        "hum_freq": nt["hum_freq"],
+    }
 
 
 def _pooled(records):
@@ -575,8 +586,9 @@ def test_fault_generator_rates():
     untouched."""
     dt, n = 0.002, 1_000_000
     x = np.random.default_rng(0).normal(0.0, 1e-3, n)
-    y, log = ic.sensor_faults(x, dt, np.random.default_rng(1), spike_rate=0.3, spike_amp=25e-3, dropout_rate=0.1,
-                              dropout_len=0.1)  # fmt: skip
+    y, log = ic.sensor_faults(
+        x, dt, np.random.default_rng(1), spike_rate=0.3, spike_amp=25e-3, dropout_rate=0.1, dropout_len=0.1
+    )
     duration = n * dt
     spikes, drops = np.array(log["spikes"]), log["dropouts"]
     assert abs(spikes.size - 0.3 * duration) < 4 * math.sqrt(0.3 * duration)

@@ -257,8 +257,11 @@ def test_scatter_is_part_of_the_key_and_refused_when_malformed():
     c = MeasuredMaps([0.1, 1.0], [1.0, 1.0], impact_spread=[0.01, 0.01], seed=2)
     assert len({a.digest, b.digest, c.digest}) == 3 and b.describe()["seed"] == 1
     assert MeasuredMaps([0.1, 1.0], [1.0, 1.0], seed=5) == a  # no spread: the seed is not read
-    for kwargs, named in (({"impact_spread": [0.01]}, "impact_spread"), ({"impact_spread": [-0.01, 0.0]},
-                          "impact_spread"), ({"impact_spread": [0.01, 0.01], "seed": -1}, "seed"),
-                          ({"impact_spread": [0.01, 0.01], "seed": 1.5}, "seed")):  # fmt: skip
+    for kwargs, named in (
+        ({"impact_spread": [0.01]}, "impact_spread"),
+        ({"impact_spread": [-0.01, 0.0]}, "impact_spread"),
+        ({"impact_spread": [0.01, 0.01], "seed": -1}, "seed"),
+        ({"impact_spread": [0.01, 0.01], "seed": 1.5}, "seed"),
+    ):
         with pytest.raises(ValueError, match=f"`{named}`"):
             MeasuredMaps([0.1, 1.0], [1.0, 1.0], **kwargs)

@@ -133,8 +133,9 @@ def test_a_drift_along_the_recording_order_is_found_and_exchangeable_errors_are_
     assert "recording order" in d["meaning"] and "grows" in d["evidence"][0]["label"]
     # its level: on 400 campaigns of exchangeable heavy-tailed errors, two models each, at most 1 %
     # false alarms (nominal 2 x 4.7e-4; 1 % allows a binomial count of 4 where ~0.4 are expected)
-    alarms = sum(order_drift([np.abs(rng.standard_cauchy(n)), np.abs(rng.standard_cauchy(n))]) is not None
-                 for _ in range(400))  # fmt: skip
+    alarms = sum(
+        order_drift([np.abs(rng.standard_cauchy(n)), np.abs(rng.standard_cauchy(n))]) is not None for _ in range(400)
+    )
     assert alarms <= 4
 
 
@@ -162,13 +163,17 @@ def _m(v, se):
 def test_an_energy_loss_between_impacts_points_to_dissipation_and_one_at_the_impact_does_not():
     # measured energy ratio 0.90 against the model's 0.946; the flight ratio (energy kept between
     # impacts) falls by the same factor: all of the extra loss is between the impacts
-    between = {"energy_ratio": (_m(0.9026, 0.0013), _m(0.9461, 0.001)),
-               "flight_ratio": (_m(0.955, 0.029), _m(1.002, 0.02))}  # fmt: skip
+    between = {
+        "energy_ratio": (_m(0.9026, 0.0013), _m(0.9461, 0.001)),
+        "flight_ratio": (_m(0.955, 0.029), _m(1.002, 0.02)),
+    }
     s, se = _flight_share(between)
     assert s == pytest.approx(1.0, abs=0.05) and se > 0.3
     assert physical_classes(_Cmp(between))[0]["class"] == "dissipation"
-    at_impact = {"energy_ratio": (_m(0.9026, 0.0013), _m(0.9461, 0.001)),
-                 "flight_ratio": (_m(1.0, 0.029), _m(1.002, 0.02))}  # fmt: skip
+    at_impact = {
+        "energy_ratio": (_m(0.9026, 0.0013), _m(0.9461, 0.001)),
+        "flight_ratio": (_m(1.0, 0.029), _m(1.002, 0.02)),
+    }
     assert _flight_share(at_impact)[0] == pytest.approx(0.04, abs=0.05)
     assert physical_classes(_Cmp(at_impact))[0]["class"] == "impact"
 
@@ -184,8 +189,9 @@ def test_a_sensor_offset_starts_from_the_rotation_measured_at_rest():
     class Spec:
         alpha = 0.1489
 
-    assert SensorOffset.measured_params({"tilt_offset": Metric(0.02, 0.0001, 100)}, Spec) == \
-        {"offset": pytest.approx(0.02 * 0.1489)}  # fmt: skip
+    assert SensorOffset.measured_params({"tilt_offset": Metric(0.02, 0.0001, 100)}, Spec) == {
+        "offset": pytest.approx(0.02 * 0.1489)
+    }
     # not resolved (within 3 standard errors), or not measured: no start
     assert SensorOffset.measured_params({"tilt_offset": Metric(0.002, 0.001, 100)}, Spec) is None
     assert SensorOffset.measured_params({}, Spec) is None
@@ -209,17 +215,25 @@ def test_a_restitution_that_wears_shows_in_the_free_vibrations_energy_ratio_alon
 def test_a_measured_parameter_is_kept_by_the_fits():
     spec = Specimen.bachmann2017()
     # an objective whose optimum is elsewhere: the pinned offset stays as measured
-    params, _v, n = fit_effect("sensor_offset", lambda e: (e.offset - 0.01) ** 2, spec,
-                               pinned={"sensor_offset": {"offset": 0.003}})  # fmt: skip
+    params, _v, n = fit_effect(
+        "sensor_offset", lambda e: (e.offset - 0.01) ** 2, spec, pinned={"sensor_offset": {"offset": 0.003}}
+    )
     assert params == {"offset": 0.003} and n == 1
 
     class Scorer:
         def loss(self, effects):
-            return sum((getattr(e, "offset", 0.0) - 0.01) ** 2 + (getattr(e, "c", 0.0) - 0.5) ** 2
-                       + (getattr(e, "factor", 1.0) - 1.05) ** 2 for e in effects)  # fmt: skip
+            return sum(
+                (getattr(e, "offset", 0.0) - 0.01) ** 2
+                + (getattr(e, "c", 0.0) - 0.5) ** 2
+                + (getattr(e, "factor", 1.0) - 1.05) ** 2
+                for e in effects
+            )
 
-    model = [("sensor_offset", {"offset": 0.003}), ("rotational_damping", {"c": 0.2}),
-             ("frequency_parameter", {"factor": 1.0})]  # fmt: skip
+    model = [
+        ("sensor_offset", {"offset": 0.003}),
+        ("rotational_damping", {"c": 0.2}),
+        ("frequency_parameter", {"factor": 1.0}),
+    ]
     out, _f = joint_refit(model, Scorer(), spec, pinned={"sensor_offset": {"offset": 0.003}})
     assert dict(out)["sensor_offset"] == {"offset": 0.003}  # the others move toward their optimum
     assert dict(out)["rotational_damping"]["c"] > 0.2 and dict(out)["frequency_parameter"]["factor"] > 1.0

@@ -173,8 +173,11 @@ def test_ground_moment_term_under_a_pulse_as_the_analytic_model(registered, engi
     omega = 8.0 * SPEC.p
     tp = 2 * math.pi / omega
     t = np.arange(int(math.ceil((tp + 1.5) / 1e-3)) + 1) * 1e-3  # the pulse, then 1.5 s of free rocking
-    pulse = GroundMotion(np.where(t <= tp, 5.0 * SPEC.uplift_acceleration * np.sin(omega * t), 0.0), 1e-3,
-                         name="one-sine 8p 5g tan(alpha)")  # fmt: skip
+    pulse = GroundMotion(
+        np.where(t <= tp, 5.0 * SPEC.uplift_acceleration * np.sin(omega * t), 0.0),
+        1e-3,
+        name="one-sine 8p 5g tan(alpha)",
+    )
     _check(*_compare(engines, [pulse], make_effect("mujoco_test_moment", k=10.0), 4))
 
 
@@ -194,10 +197,12 @@ def test_a_zero_couple_gives_the_rollout_bit_for_bit(registered, engines):
 
 @pytest.mark.parametrize(
     "name, params, why",
-    [("mujoco_test_impact", {"share": 0.9}, "an impact term"),
-     ("pivot_friction", {"moment": 0.09}, "a Coulomb term"),
-     ("mujoco_test_wind", {"m": 1.0}, "a moment term that acts at rest")],
-)  # fmt: skip
+    [
+        ("mujoco_test_impact", {"share": 0.9}, "an impact term"),
+        ("pivot_friction", {"moment": 0.09}, "a Coulomb term"),
+        ("mujoco_test_wind", {"m": 1.0}, "a moment term that acts at rest"),
+    ],
+)
 def test_other_terms_are_refused_by_name(registered, engines, name, params, why):
     """Impact and Coulomb terms, and a moment at rest, are refused in one line naming the effect, before any work."""
     mj = engines[0]

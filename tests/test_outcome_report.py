@@ -49,14 +49,18 @@ def synthetic_campaign(seed: int = 0, n: int = N_RECORDS) -> Campaign:
         period = math.exp(rng.uniform(math.log(0.15), math.log(1.2)))
         amp = math.exp(rng.uniform(math.log(1.0), math.log(6.0)))
         accs.append(np.where((t >= 1.0) & (t < 1.0 + period), amp * np.sin(2 * np.pi * (t - 1.0) / period), 0.0))
-    truth = Specimen(height=spec.height, width=CONTACT_SHARE * spec.width, depth=spec.depth, mass=spec.mass,
-                     p=spec.p)  # fmt: skip
+    truth = Specimen(height=spec.height, width=CONTACT_SHARE * spec.width, depth=spec.depth, mass=spec.mass, p=spec.p)
     _, overturned, _ = theta_max_many(truth, accs, DT)
     recs = [
-        OutcomeRecord(id=f"pulse{i:02d}", kind="ground_motion", file=Path(f"pulse{i:02d}.csv"),
-                      motion=GroundMotion(a, DT, name=f"pulse{i:02d}"), overturned=bool(o))
+        OutcomeRecord(
+            id=f"pulse{i:02d}",
+            kind="ground_motion",
+            file=Path(f"pulse{i:02d}.csv"),
+            motion=GroundMotion(a, DT, name=f"pulse{i:02d}"),
+            overturned=bool(o),
+        )
         for i, (a, o) in enumerate(zip(accs, overturned, strict=True))
-    ]  # fmt: skip
+    ]
     return Campaign(name="synthetic-pulses", specimen=spec, records=[], outcomes=recs)
 
 
@@ -103,8 +107,13 @@ def test_every_status_is_stated_once_and_alone(diag, status):
     floor missed, the distance to it in words."""
     at_floor = status in ("no_effect_needed", "explained")
     steps = diag.steps if status in ("explained", "partly_explained") else diag.steps[:1]
-    d = replace(diag, status=status, steps=steps, floor=replace(diag.floor, at_floor=at_floor),
-                misses=[m for m in diag.misses if m["model"] in {s.name for s in steps}])  # fmt: skip
+    d = replace(
+        diag,
+        status=status,
+        steps=steps,
+        floor=replace(diag.floor, at_floor=at_floor),
+        misses=[m for m in diag.misses if m["model"] in {s.name for s in steps}],
+    )
     text = page_text(render_outcome_report(d))
     assert text.count(STATUS[status][0]) == 1
     assert not [w for k, (w, _, _) in STATUS.items() if k != status and w not in STATUS[status][0] and w in text]

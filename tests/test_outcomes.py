@@ -41,8 +41,13 @@ def _pulses(n: int, seed: int) -> list[np.ndarray]:
 
 def _campaign(accs, overturned, specimen=SPEC) -> Campaign:
     recs = [
-        OutcomeRecord(id=f"t{i:03d}", kind="ground_motion", file=None,
-                      motion=GroundMotion(acc=a, dt=DT, name=f"t{i:03d}"), overturned=bool(o))  # fmt: skip
+        OutcomeRecord(
+            id=f"t{i:03d}",
+            kind="ground_motion",
+            file=None,
+            motion=GroundMotion(acc=a, dt=DT, name=f"t{i:03d}"),
+            overturned=bool(o),
+        )
         for i, (a, o) in enumerate(zip(accs, overturned, strict=True))
     ]
     return Campaign(name="synthetic", specimen=specimen, records=[], outcomes=recs)
@@ -174,12 +179,16 @@ def test_campaign_mixes_outcome_records_with_theta_records(tmp_path):
     _write(
         tmp_path,
         '[[record]]\nid = "a"\nkind = "ground_motion"\nfile = "records/a.csv"\noverturned = true\npgv = 0.3\n'
-        'theta_max = 1.5708\n'
+        "theta_max = 1.5708\n"
         '[[record]]\nid = "b"\nkind = "ground_motion"\nfile = "records/b.csv"\noverturned = false\n'
         '[[record]]\nid = "c"\nkind = "ground_motion"\nfile = "records/c.csv"\n'
         '[[record]]\nid = "d"\nkind = "ground_motion"\nfile = "records/d.csv"\n',
-        {"a.csv": _csv(acc[0]), "b.csv": _csv(acc[1]), "c.csv": _csv(acc[2]),
-         "d.csv": _csv(np.zeros(50), theta=1e-4 * np.sin(np.arange(50)))},  # fmt: skip
+        {
+            "a.csv": _csv(acc[0]),
+            "b.csv": _csv(acc[1]),
+            "c.csv": _csv(acc[2]),
+            "d.csv": _csv(np.zeros(50), theta=1e-4 * np.sin(np.arange(50))),
+        },
     )
     c = load_campaign(tmp_path)
     assert [o.id for o in c.outcomes] == ["a", "b"]
@@ -189,13 +198,16 @@ def test_campaign_mixes_outcome_records_with_theta_records(tmp_path):
     # PGV of the one-sine pulse without a measured one: A / (pi f) from the integrated acceleration, within
     # the 10 % that the 0.1 Hz high-pass and the 4 s of rest change it by
     assert c.outcomes[1].pgv > 0
-    (rid, file, msg), = c.skipped
+    ((rid, file, msg),) = c.skipped
     assert rid == "c" and "no outcome" in msg and "overturned = true" in msg
 
 
 def test_outcome_record_key_of_the_wrong_type_names_it(tmp_path):
-    _write(tmp_path, '[[record]]\nid = "a"\nkind = "ground_motion"\nfile = "records/a.csv"\noverturned = true\n'
-           'pgv = "fast"\n', {"a.csv": _csv(np.ones(40))})  # fmt: skip
+    _write(
+        tmp_path,
+        '[[record]]\nid = "a"\nkind = "ground_motion"\nfile = "records/a.csv"\noverturned = true\npgv = "fast"\n',
+        {"a.csv": _csv(np.ones(40))},
+    )
     from housner.errors import DataFileError
 
     with pytest.raises(DataFileError, match=r"line 12: .*'pgv' must be a number >= 0 \[m/s\]"):
@@ -262,8 +274,10 @@ def test_a_campaign_of_both_kinds_gets_both_diagnoses(tmp_path, capsys):
     text = (root / "campaign.toml").read_text()
     for i, (a, o) in enumerate(zip(accs, y, strict=True)):
         (root / "records" / f"o{i}.csv").write_text(_csv(a))
-        text += (f'\n[[record]]\nid = "o{i}"\nkind = "ground_motion"\nfile = "records/o{i}.csv"\n'
-                 f"overturned = {'true' if o else 'false'}\n")  # fmt: skip
+        text += (
+            f'\n[[record]]\nid = "o{i}"\nkind = "ground_motion"\nfile = "records/o{i}.csv"\n'
+            f"overturned = {'true' if o else 'false'}\n"
+        )
     (root / "campaign.toml").write_text(text)
     out = tmp_path / "d.json"
     assert main(["diagnose", str(root), "--effects", "none", "--folds", "3", "--json", str(out), "-q"]) == 0

@@ -12,8 +12,12 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
-FOLDERS = {"housner": "housner", "engines": "housner.engines", "scenarios": "housner.scenarios",
-           "reports": "housner.reports"}  # fmt: skip
+FOLDERS = {
+    "housner": "housner",
+    "engines": "housner.engines",
+    "scenarios": "housner.scenarios",
+    "reports": "housner.reports",
+}
 
 
 def test_every_package_and_data_folder_is_listed_for_the_wheel():
@@ -32,8 +36,9 @@ def test_every_package_and_data_folder_is_listed_for_the_wheel():
 
 
 def _run(code: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-W", "always", "-c", code], cwd=cwd, capture_output=True, text=True,
-                          timeout=120)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-W", "always", "-c", code], cwd=cwd, capture_output=True, text=True, timeout=120
+    )
 
 
 def test_housner_installs_no_other_import_name(tmp_path):
@@ -75,8 +80,10 @@ def test_lazy_exports_are_the_public_names(package):
 def test_a_worker_imports_its_chunks_without_the_diagnosis():
     """What a pool worker loads to run records: no campaign, diagnosis, runner or report module (it was 1.45 s of
     imports with them, 0.16 s without, measured)."""
-    code = ("import sys, housner.scenarios.execution.chunks; "
-            "print(sorted(m for m in sys.modules if m.startswith(('housner.scenarios.campaigns', "
-            "'housner.scenarios.execution.runner', 'housner.reports', 'matplotlib'))))")  # fmt: skip
+    code = (
+        "import sys, housner.scenarios.execution.chunks; "
+        "print(sorted(m for m in sys.modules if m.startswith(('housner.scenarios.campaigns', "
+        "'housner.scenarios.execution.runner', 'housner.reports', 'matplotlib'))))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"

@@ -767,8 +767,9 @@ def test_assert_verdict_says_what_the_page_says(shaken, tmp_path):
         assert e.value.verdict.badge == badge
     # 20 motions and a twin of the reference: KS 0, every record agrees, whatever the floor: AGREES
     engines, motions = {"housner": {}, "report-twin": {}}, shaking(20, seed=3)
-    twin = make_run(tmp_path / "twin", motions, engines,
-                    extra={"engine_errors": run_engine_errors(SPEC, engines, motions)})  # fmt: skip
+    twin = make_run(
+        tmp_path / "twin", motions, engines, extra={"engine_errors": run_engine_errors(SPEC, engines, motions)}
+    )
     assert assert_verdict(twin, "report-twin", at_least="agrees").badge == "AGREES"
     table = pd.read_parquet(twin / "results.parquet")
     table.attrs["source"] = str(twin / "results.parquet")  # as the housner_results fixture gives it

@@ -84,11 +84,17 @@ def test_a_scenario_runs_a_plugins_effect_on_its_records_channel(tmp_path, plugi
 
 def test_motions_without_the_channel_are_refused_by_name_at_load(tmp_path, plugin):
     _record(tmp_path / "plain.csv", vertical=False)
-    with pytest.raises(ScenarioError, match=r"effect 'vertical_table' reads the channel 'ground_acc_vertical', "
-                       r"which record 'plain' does not carry"):  # fmt: skip
+    with pytest.raises(
+        ScenarioError,
+        match=r"effect 'vertical_table' reads the channel 'ground_acc_vertical', "
+        r"which record 'plain' does not carry",
+    ):
         load_scenario(_scenario(tmp_path, "plain.csv", plugin))
-    text = _scenario(tmp_path, "plain.csv", plugin).read_text().replace('source = "record"\nrecord = "plain.csv"',
-                                                                  'source = "rdk"\nn = 2')  # fmt: skip
+    text = (
+        _scenario(tmp_path, "plain.csv", plugin)
+        .read_text()
+        .replace('source = "record"\nrecord = "plain.csv"', 'source = "rdk"\nn = 2')
+    )
     (tmp_path / "rdk.toml").write_text(text)
     with pytest.raises(ScenarioError, match=r"which motions of source 'rdk' do not carry"):
         load_scenario(tmp_path / "rdk.toml")
@@ -106,8 +112,10 @@ def test_a_missing_plugin_file_is_one_line_naming_the_scenarios_line(tmp_path):
 
 def test_a_csv_records_extra_channels_are_read_in_si(tmp_path):
     p = tmp_path / "r.csv"
-    p.write_text("time [s],ground_acc [g],ground_acc_vertical [cm/s^2]\n0,0.1,50\n0.01,0.2,-50\n0.02,0,0\n"
-                 + "".join(f"{0.01 * k:.2f},0,0\n" for k in range(3, 20)))  # fmt: skip
+    p.write_text(
+        "time [s],ground_acc [g],ground_acc_vertical [cm/s^2]\n0,0.1,50\n0.01,0.2,-50\n0.02,0,0\n"
+        + "".join(f"{0.01 * k:.2f},0,0\n" for k in range(3, 20))
+    )
     g = GroundMotion.from_csv(p)
     assert g.acc[1] == pytest.approx(0.2 * 9.80665)
     assert g.channels["ground_acc_vertical"][:2] == pytest.approx([0.5, -0.5])  # cm/s^2 -> m/s^2

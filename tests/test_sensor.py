@@ -119,8 +119,13 @@ def test_the_status_rule_is_one_table_that_covers_every_case():
     assert status_rule(True, True, True, True, True) == "partly_explained"
     assert status_rule(True, False, True, True, True) == "unexplained"
     assert status_rule(False, False, False, False, True) == "inconclusive"
-    assert {s for _row, s in STATUS_RULE} == {"no_misfit", "explained", "partly_explained", "unexplained",
-                                              "inconclusive"}  # fmt: skip
+    assert {s for _row, s in STATUS_RULE} == {
+        "no_misfit",
+        "explained",
+        "partly_explained",
+        "unexplained",
+        "inconclusive",
+    }
 
 
 # ----------------------------------------------------------------------------
@@ -180,8 +185,9 @@ def test_sensor_faults_are_named_where_they_are_and_only_there(indep, case):
         assert f["relative_change"] == pytest.approx(0.25, abs=0.03)
     if case == "saturation":
         f = c.sensor.faults[0].figures
-        assert f["high"] == pytest.approx(0.45 * ic.ALPHA, rel=1e-6) and f["low"] == pytest.approx(-0.45 * ic.ALPHA,
-                                                                                                   rel=1e-6)
+        assert f["high"] == pytest.approx(0.45 * ic.ALPHA, rel=1e-6) and f["low"] == pytest.approx(
+            -0.45 * ic.ALPHA, rel=1e-6
+        )
         # free vibrations released beyond the range are left out, with the reason
         assert any("beyond the sensor's range" in s[2] for s in c.skipped)
 

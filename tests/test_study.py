@@ -43,7 +43,7 @@ def scenario_file(tmp_path, study: str, *, n: int = 6, names: str = '["housner"]
     "study, says",
     [
         ('intensity = "pgaa"\nlevels = [1.0]\n', ["line 14", "unknown intensity 'pgaa'", "did you mean 'pga'"]),
-        ("intensity = \"pga\"\n", ["needs `levels`"]),
+        ('intensity = "pga"\n', ["needs `levels`"]),
         ("levels = [1.0, 0.5]\n", ["line 14", "'levels' must increase"]),
         ("levels = [1.0, -2]\n", ["line 14", "non-empty list of positive numbers"]),
         ('intensity = "sa"\nlevels = [1.0]\n', ['intensity "sa" needs `period`']),
@@ -77,8 +77,12 @@ def test_stripes_scale_each_motion_to_its_target_at_each_size(tmp_path):
     base, _ = build_motions(scen)
     spec = scen.specimen
     g_tan = G * math.tan(spec.alpha)
-    for kind, levels, period in (("amplitude", [0.5, 2.0], None), ("pga", [1.5, 3.0], None),
-                                 ("pgv", [0.8], None), ("sa", [2.0], 0.8)):  # fmt: skip
+    for kind, levels, period in (
+        ("amplitude", [0.5, 2.0], None),
+        ("pga", [1.5, 3.0], None),
+        ("pgv", [0.8], None),
+        ("sa", [2.0], 0.8),
+    ):
         st = scen.study.__class__(kind, tuple(levels), scen.study.S, scen.study.prototype_heights, period=period)
         for k, S in enumerate(st.S):
             motions, factors = study_motions(st, base, scen.S, k, spec)
@@ -100,17 +104,27 @@ def test_stripes_scale_each_motion_to_its_target_at_each_size(tmp_path):
                     else:
                         im = response_spectrum(m, [period / math.sqrt(S)])[0][0] / g_tan
                     assert im == pytest.approx(level, rel=1e-9), (kind, S, i)
-                    assert factors[j, i] == pytest.approx(level / intensity_measure(
-                        b.scaled(time=math.sqrt(scen.S / S)), kind, spec,
-                        None if period is None else period / math.sqrt(S)), rel=1e-12)  # fmt: skip
+                    assert factors[j, i] == pytest.approx(
+                        level
+                        / intensity_measure(
+                            b.scaled(time=math.sqrt(scen.S / S)),
+                            kind,
+                            spec,
+                            None if period is None else period / math.sqrt(S),
+                        ),
+                        rel=1e-12,
+                    )
 
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
     """A small study on the analytic model and MuJoCo: 6 motions x 3 stripes x 2 sizes."""
     tmp = tmp_path_factory.mktemp("study")
-    p = scenario_file(tmp, "levels = [1.5, 2.5, 4.0]\nprototype_heights = [2.5, 10.0]\nbootstrap = 200\n",
-                      names='["housner", "mujoco"]')  # fmt: skip
+    p = scenario_file(
+        tmp,
+        "levels = [1.5, 2.5, 4.0]\nprototype_heights = [2.5, 10.0]\nbootstrap = 200\n",
+        names='["housner", "mujoco"]',
+    )
     res = run_study(p, out=tmp / "out", jobs=1, cache_dir=tmp / "cache", progress=False)
     return p, tmp, res
 
@@ -123,8 +137,18 @@ def test_a_study_runs_every_record_and_writes_its_directory(tiny):
     assert not res.results.duplicated(["engine", "size", "stripe", "motion_id"]).any()
     for name in ("results.parquet", "fragility.parquet", "exceedance.parquet", "fragility.json", "study.json"):
         assert (tmp / "out" / name).is_file()
-    assert list(res.fragility.columns[:10]) == ["engine", "size", "S", "stripe", "intensity", "n", "n_overturned",
-                                                "p", "p_low", "p_high"]  # fmt: skip
+    assert list(res.fragility.columns[:10]) == [
+        "engine",
+        "size",
+        "S",
+        "stripe",
+        "intensity",
+        "n",
+        "n_overturned",
+        "p",
+        "p_low",
+        "p_high",
+    ]
     assert len(res.fits) == 4 and len(res.comparisons) == 2  # (engine, size); mujoco against housner per size
     # histories are off by default: none kept
     assert res.histories == {}
@@ -189,8 +213,9 @@ def test_fragility_assertion_reports_every_size_and_fails_honestly(tiny):
         # a tolerance just above / below the measured figures decides the verdict, both ways
         rtol = max(abs(res.comparison("mujoco", h)["median_ratio"] - 1) for h in (2.5, 10.0))
         atol = max(abs(res.comparison("mujoco", h)["beta_diff"]) for h in (2.5, 10.0))
-        ok = assert_fragility_agreement(tmp / "out", "mujoco", "housner", median_rtol=rtol + 1e-9,
-                                        beta_atol=atol + 1e-9)  # fmt: skip
+        ok = assert_fragility_agreement(
+            tmp / "out", "mujoco", "housner", median_rtol=rtol + 1e-9, beta_atol=atol + 1e-9
+        )
         assert ok.passed and len(ok.criteria) == 2 + 2 * 2
         with pytest.raises(FragilityAgreementError) as e:
             assert_fragility_agreement(res, "mujoco", "housner", median_rtol=rtol / 2, beta_atol=10.0)

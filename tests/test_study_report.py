@@ -67,8 +67,18 @@ def ok_fit(engine: str, size: float, median: float | None = None, beta: float = 
 
 def degenerate_fit(engine: str, size: float, status: str, message: str, median=math.nan, beta=math.nan) -> dict:
     nan = math.nan
-    return {**ok_fit(engine, size), "median": median, "beta": beta, "median_low": nan, "median_high": nan,
-            "beta_low": nan, "beta_high": nan, "status": status, "message": message, "n_failed": 200}  # fmt: skip
+    return {
+        **ok_fit(engine, size),
+        "median": median,
+        "beta": beta,
+        "median_low": nan,
+        "median_high": nan,
+        "beta_low": nan,
+        "beta_high": nan,
+        "status": status,
+        "message": message,
+        "n_failed": 200,
+    }
 
 
 def comparison(engine: str, size: float, ratio=(1.02, 0.95, 1.10), diff=(0.01, -0.06, 0.08)) -> dict:
@@ -143,9 +153,22 @@ def make_study(
         valid = ~np.isnan(th)
         n, k = valid.sum(axis=0), np.isinf(th).sum(axis=0)
         p, lo, hi = proportion_intervals(k, n)
-        frag.append(pd.DataFrame({"engine": e, "size": size, "S": s, "stripe": np.arange(len(LEVELS)),
-                                  "intensity": LEVELS, "n": n, "n_overturned": k, "p": p, "p_low": lo,
-                                  "p_high": hi}))  # fmt: skip
+        frag.append(
+            pd.DataFrame(
+                {
+                    "engine": e,
+                    "size": size,
+                    "S": s,
+                    "stripe": np.arange(len(LEVELS)),
+                    "intensity": LEVELS,
+                    "n": n,
+                    "n_overturned": k,
+                    "p": p,
+                    "p_low": lo,
+                    "p_high": hi,
+                }
+            )
+        )
         ex = exceedance(th, THRESHOLDS, valid)
         exc.append(ex.assign(engine=e, size=size, S=s, intensity=np.asarray(LEVELS)[ex["stripe"]]))
     if fits is None:
@@ -350,8 +373,10 @@ def test_degenerate_fit_shows_its_message_and_no_fitted_number(tmp_path, nonfini
         degenerate_fit("mujoco", 4.0, "separated", separated, median=7.777, beta=0.0),
     ]
     # the bootstrap may still flag a disagreement from its replicates; with a degenerate point fit it is no verdict
-    comps = [comparison("mujoco", 0.5, ratio=(math.nan,) * 3, diff=(math.nan,) * 3),
-             comparison("mujoco", 4.0, ratio=(5.55, 4.4, 6.6))]  # fmt: skip
+    comps = [
+        comparison("mujoco", 0.5, ratio=(math.nan,) * 3, diff=(math.nan,) * 3),
+        comparison("mujoco", 4.0, ratio=(5.55, 4.4, 6.6)),
+    ]
     assert comps[1]["disagree"] and not comps[0]["disagree"]
     page = render_study_report(make_study(tmp_path / "s", fits=fits, comparisons=comps, nonfinite=nonfinite))
     assert html.escape(no_over) in page and html.escape(separated) in page
@@ -450,8 +475,11 @@ def _series(ax, kind: str) -> dict[str, object]:
 def test_fragility_figure_has_points_and_curves_per_engine(tmp_path):
     d = make_study(tmp_path / "s", (REF, "mujoco", "pybullet"))
     fr = pd.read_parquet(d / "fragility.parquet")
-    fits = [ok_fit(REF, 0.5), ok_fit("mujoco", 0.5, median=1.3, beta=0.3),
-            degenerate_fit("pybullet", 0.5, "no_overturn", "none overturned")]  # fmt: skip
+    fits = [
+        ok_fit(REF, 0.5),
+        ok_fit("mujoco", 0.5, median=1.3, beta=0.3),
+        degenerate_fit("pybullet", 0.5, "no_overturn", "none overturned"),
+    ]
     fig = study_figures.plot_fragility(fr, fits, 0.5, LABEL)
     assert isinstance(fig, Figure)
     (ax,) = fig.axes
@@ -494,8 +522,10 @@ def test_fragility_figure_dashes_a_step_and_uses_a_linear_axis_for_a_narrow_rang
 
 def test_size_effect_figure_has_one_series_per_engine():
     fits = [ok_fit(e, s, median=MEDIANS[s] * (1.2 if e == "mujoco" else 1.0)) for e in (REF, "mujoco") for s in SIZES]
-    fits += [degenerate_fit("pybullet", 0.5, "separated", "a step", median=1.0, beta=0.0),
-             degenerate_fit("pybullet", 4.0, "no_overturn", "none")]  # fmt: skip
+    fits += [
+        degenerate_fit("pybullet", 0.5, "separated", "a step", median=1.0, beta=0.0),
+        degenerate_fit("pybullet", 4.0, "no_overturn", "none"),
+    ]
     fig = study_figures.plot_size_effect(fits, label=LABEL)
     assert isinstance(fig, Figure)
     (ax,) = fig.axes

@@ -87,8 +87,22 @@ def test_the_template_without_terms_is_the_plain_kernel():
         theta, thd = np.empty(off[-1]), np.empty(off[-1])
         imp_off = np.arange(n_rec + 1, dtype=np.int64) * 4000
         imp, out = np.zeros(imp_off[-1]), np.empty((n_rec, 6))
-        kern(acc_g, np.zeros_like(acc_g), off, *args, np.zeros((n_rec, 0)), th0, np.zeros(n_rec), 1e-6, True,
-             theta, thd, imp, imp_off, out)  # fmt: skip
+        kern(
+            acc_g,
+            np.zeros_like(acc_g),
+            off,
+            *args,
+            np.zeros((n_rec, 0)),
+            th0,
+            np.zeros(n_rec),
+            1e-6,
+            True,
+            theta,
+            thd,
+            imp,
+            imp_off,
+            out,
+        )
         runs.append((theta, thd, imp, out))
     assert runs[0][3][:, 4].sum() > 50  # the records rock
     for a, b in zip(*runs, strict=True):
@@ -98,11 +112,17 @@ def test_the_template_without_terms_is_the_plain_kernel():
 FAST_PATH_CASES = {
     "damping": [("rotational_damping", {"c": 0.4})],
     "restitution": [("restitution", {"r": 0.9})],
-    "asymmetric+restitution+amplitude": [("asymmetric_pivots", {"e": 0.004}), ("restitution", {"r": 0.9}),
-                                         ("amplitude_dependent_restitution", {"exponent": 0.3})],
-    "amplitude+restitution+damping": [("amplitude_dependent_restitution", {"exponent": -0.2}),
-                                      ("restitution", {"r": 0.92}), ("rotational_damping", {"c": 0.2})],
-}  # fmt: skip
+    "asymmetric+restitution+amplitude": [
+        ("asymmetric_pivots", {"e": 0.004}),
+        ("restitution", {"r": 0.9}),
+        ("amplitude_dependent_restitution", {"exponent": 0.3}),
+    ],
+    "amplitude+restitution+damping": [
+        ("amplitude_dependent_restitution", {"exponent": -0.2}),
+        ("restitution", {"r": 0.92}),
+        ("rotational_damping", {"c": 0.2}),
+    ],
+}
 
 
 @pytest.mark.parametrize("case", list(FAST_PATH_CASES))
@@ -276,8 +296,10 @@ def test_the_analytic_engine_realises_term_effects_and_others_refuse_them(plugin
 
 def test_a_mechanics_effect_takes_no_terms(plugins):
     fx = [make_effect("sliding", mu=0.3), make_effect("pivot_friction", moment=0.05)]
-    with pytest.raises(ValueError, match="'sliding' replaces the equation of motion and cannot take the kernel terms "
-                                         "of 'pivot_friction'"):  # fmt: skip
+    with pytest.raises(
+        ValueError,
+        match="'sliding' replaces the equation of motion and cannot take the kernel terms of 'pivot_friction'",
+    ):
         apply_effects(SPEC, GroundMotion.free_vibration(0.5 * ALPHA, 0.1), fx)
 
 
@@ -399,8 +421,12 @@ def _objective(camp, ids):
 
     def errors(effect):
         res = simulate_records(camp.specimen, recs, "housner", [effect])
-        return np.array([1.0 if isinstance(r, str) else scored_error(r.theta, rec, end, ALPHA)
-                         for r, rec, end in zip(res, recs, ends, strict=True)])  # fmt: skip
+        return np.array(
+            [
+                1.0 if isinstance(r, str) else scored_error(r.theta, rec, end, ALPHA)
+                for r, rec, end in zip(res, recs, ends, strict=True)
+            ]
+        )
 
     return errors, np.array([r.noise / ALPHA for r in recs])
 

@@ -70,8 +70,11 @@ def _at2(path: Path, header_lines: list[str], values, dt: float = DT) -> Path:
 )
 def test_at2_units_from_the_header_match_si(tmp_path, units_line, unit):
     # the same record written in `unit` reads back as the SI samples; E15.7 keeps 8 significant digits
-    p = _at2(tmp_path / "rec.AT2", ["PEER STRONG MOTION DATABASE RECORD", "TEST 1/1/00, STATION", units_line],
-             ACC_SI / PER_UNIT[unit])  # fmt: skip
+    p = _at2(
+        tmp_path / "rec.AT2",
+        ["PEER STRONG MOTION DATABASE RECORD", "TEST 1/1/00, STATION", units_line],
+        ACC_SI / PER_UNIT[unit],
+    )
     m = GroundMotion.from_at2(p)
     np.testing.assert_allclose(m.acc, ACC_SI, rtol=1e-7, atol=0)
     assert m.dt == DT
@@ -94,18 +97,33 @@ def test_shipped_chopra_file_finds_g_in_its_free_text():
 @pytest.mark.parametrize(
     ("header", "units", "needles"),
     [
-        (["X", "Y", "ACCELERATION TIME HISTORY"], None,
-         ["nounits.AT2 line 4:", "names no acceleration units", "units="]),
-        (["X", "Y", "VELOCITY TIME HISTORY IN UNITS OF CM/SEC"], None,
-         ["nounits.AT2 line 3:", "cannot read the acceleration units 'CM/SEC'"]),
-        (["X", "UNITS OF FURLONGS/FORTNIGHT/FORTNIGHT", "Z"], None,
-         ["nounits.AT2 line 2:", "'FURLONGS/FORTNIGHT/FORTNIGHT'"]),
-        (["X", "ACCELERATION IN UNITS OF G", "PEAK 300 CM/S/S"], None,
-         ["nounits.AT2 line 3:", "two acceleration units, g (line 2) and cm/s^2 (line 3)"]),
-        (["X", "Y", "ACCELERATION IN UNITS OF CM/S/S"], "g",
-         ["nounits.AT2 line 3:", "header says cm/s^2 but units='g' was given"]),
+        (
+            ["X", "Y", "ACCELERATION TIME HISTORY"],
+            None,
+            ["nounits.AT2 line 4:", "names no acceleration units", "units="],
+        ),
+        (
+            ["X", "Y", "VELOCITY TIME HISTORY IN UNITS OF CM/SEC"],
+            None,
+            ["nounits.AT2 line 3:", "cannot read the acceleration units 'CM/SEC'"],
+        ),
+        (
+            ["X", "UNITS OF FURLONGS/FORTNIGHT/FORTNIGHT", "Z"],
+            None,
+            ["nounits.AT2 line 2:", "'FURLONGS/FORTNIGHT/FORTNIGHT'"],
+        ),
+        (
+            ["X", "ACCELERATION IN UNITS OF G", "PEAK 300 CM/S/S"],
+            None,
+            ["nounits.AT2 line 3:", "two acceleration units, g (line 2) and cm/s^2 (line 3)"],
+        ),
+        (
+            ["X", "Y", "ACCELERATION IN UNITS OF CM/S/S"],
+            "g",
+            ["nounits.AT2 line 3:", "header says cm/s^2 but units='g' was given"],
+        ),
     ],
-)  # fmt: skip
+)
 def test_at2_unreadable_units_are_refused_on_one_line(tmp_path, header, units, needles):
     p = _at2(tmp_path / "nounits.AT2", header, [0.1, 0.2, 0.3])
     with pytest.raises(DataFileError) as e:
@@ -301,19 +319,19 @@ _REC = '[[record]]\nid = "gm001"\nkind = "ground_motion"\nfile = "records/gm001.
 @pytest.mark.parametrize(
     ("text", "needles"),
     [
-        ('record = [1, 2]\n' + _HEAD, ["line 1:", "`record` must be an array of tables", "got int 1"]),
+        ("record = [1, 2]\n" + _HEAD, ["line 1:", "`record` must be an array of tables", "got int 1"]),
         ('record = "gm001"\n' + _HEAD, ["line 1:", "`record` must be an array of tables", "got str"]),
-        ('record = []\n' + _HEAD, ["line 1:", "`record` is empty"]),
-        ('specimen = 5\n' + _REC, ["line 1:", "`specimen` must be a table", "got int 5"]),
-        ('description = 1\n' + _HEAD + _REC, ["line 1:", "'description' must be a string, got 1"]),
+        ("record = []\n" + _HEAD, ["line 1:", "`record` is empty"]),
+        ("specimen = 5\n" + _REC, ["line 1:", "`specimen` must be a table", "got int 5"]),
+        ("description = 1\n" + _HEAD + _REC, ["line 1:", "'description' must be a string, got 1"]),
         ('name = ["a"]\n' + _HEAD.replace('name = "t"\n', "") + _REC, ["line 1:", "'name' must be a string"]),
-        (_HEAD + _REC.replace('"gm001"\nkind', '5\nkind'), ["line 9:", "'id' must be a non-empty string, got 5"]),
+        (_HEAD + _REC.replace('"gm001"\nkind', "5\nkind"), ["line 9:", "'id' must be a non-empty string, got 5"]),
         (_HEAD.replace("0.075", '"0.075"') + _REC, ["line 4:", "'width' must be a positive number"]),
         (_HEAD + _REC + 'overturned = "yes"\n', ["line 12:", "'overturned' must be true or false"]),
         (_HEAD + '[record]\nid = "gm001"\n', ["line 8:", "`record` must be an array of tables", "got dict"]),
         (_HEAD.replace("mass = 3.94", "mass = true") + _REC, ["line 6:", "'mass' must be a positive number"]),
     ],
-)  # fmt: skip
+)
 def test_wrong_types_in_campaign_toml_are_one_line_cli_errors(si_campaign, tmp_path, capsys, text, needles):
     d = tmp_path / "c"
     shutil.copytree(si_campaign, d)

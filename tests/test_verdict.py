@@ -88,8 +88,10 @@ def test_the_floors_parameter_draws_stay_within_the_fold_fits():
     # tan(alpha) = 0.15 (where the block rocks) 29 % of the time; the folds chose 0.132-0.141
     spec = Specimen.bachmann2017()
     rng = np.random.default_rng(0)
-    draws = [_perturbed("sliding", {"mu": 0.139}, {"sliding.mu": 0.02}, rng, spec, {"sliding.mu": (0.132, 0.141)})["mu"]
-             for _ in range(2000)]  # fmt: skip
+    draws = [
+        _perturbed("sliding", {"mu": 0.139}, {"sliding.mu": 0.02}, rng, spec, {"sliding.mu": (0.132, 0.141)})["mu"]
+        for _ in range(2000)
+    ]
     assert min(draws) >= 0.132 and max(draws) <= 0.141
     assert len(set(np.round(draws, 12))) > 100  # still a spread inside, not the end points alone
 
@@ -114,20 +116,54 @@ def test_one_record_carried_off_by_chaos_does_not_hide_the_power_of_sixty():
 
 def test_too_few_records_is_inconclusive():
     r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
-    v = decide(n_records=5, baseline=r, final=r, selected=[], params={}, baseline_cmp=None, final_cmp=None,
-               library=["restitution"])  # fmt: skip
+    v = decide(
+        n_records=5,
+        baseline=r,
+        final=r,
+        selected=[],
+        params={},
+        baseline_cmp=None,
+        final_cmp=None,
+        library=["restitution"],
+    )
     assert v.status == "inconclusive" and "too few" in v.text
 
 
 def test_the_status_is_the_truth_table_and_the_text_is_drawn_from_it():
     r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
-    facts = VerdictFacts(n_records=5, baseline=r, final=r, selected=[], added=[], model=[], params={},
-                         library=["restitution"], drift=None, family="", classes=[], final_classes=[], local_plain=[],
-                         local_final=[], dist_plain=[], dist_final=[], plain_misfit=False, final_misfit=False,
-                         powered=True, probed=False)  # fmt: skip
+    facts = VerdictFacts(
+        n_records=5,
+        baseline=r,
+        final=r,
+        selected=[],
+        added=[],
+        model=[],
+        params={},
+        library=["restitution"],
+        drift=None,
+        family="",
+        classes=[],
+        final_classes=[],
+        local_plain=[],
+        local_final=[],
+        dist_plain=[],
+        dist_final=[],
+        plain_misfit=False,
+        final_misfit=False,
+        powered=True,
+        probed=False,
+    )
     status = status_rule(False, False, False, False, True)
-    v = decide(n_records=5, baseline=r, final=r, selected=[], params={}, baseline_cmp=None, final_cmp=None,
-               library=["restitution"])  # fmt: skip
+    v = decide(
+        n_records=5,
+        baseline=r,
+        final=r,
+        selected=[],
+        params={},
+        baseline_cmp=None,
+        final_cmp=None,
+        library=["restitution"],
+    )
     assert v.status == status == "inconclusive"
     assert v.text == verdict_text(facts, status) and v.text.startswith("Inconclusive: 5 usable records are too few")
     # with enough records and the plain model at its floor, the same residual reads "no misfit"
@@ -209,8 +245,10 @@ def test_controls_are_no_misfit_at_both_split_seeds(base, campaign_seed):
 def test_verdict_matrix_table(base, capsys):
     """Every case at both split seeds, as one table (after the matrix above: its diagnoses are cached)."""
     cases = [(h, 0) for h in LIBRARY] + [(h, 0) for h in cg.OUTSIDE] + [("none", 0), ("none", 1)]
-    lines = [f"{'hidden effect (truth)':32s} {'camp':>4s}  {'split 0: status, named':54s} "
-             f"{'split 1: status, named':54s} {'ratio 0':>7s} {'ratio 1':>7s}"]  # fmt: skip
+    lines = [
+        f"{'hidden effect (truth)':32s} {'camp':>4s}  {'split 0: status, named':54s} "
+        f"{'split 1: status, named':54s} {'ratio 0':>7s} {'ratio 1':>7s}"
+    ]
     stable = []
     for hidden, cs in cases:
         cells, ratios = [], []

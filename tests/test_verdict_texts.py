@@ -29,7 +29,7 @@ CAMPAIGN = ROOT / "examples" / "campaigns" / "pivot-friction"
 FRICTION = ROOT / "examples" / "effects" / "pivot_friction.py"
 
 #: A user's effect that cannot explain the campaign: a moment quadratic in the rotation speed (air drag).
-AIR_DRAG = '''
+AIR_DRAG = """
 from dataclasses import dataclass
 
 from numba import njit
@@ -50,7 +50,7 @@ class StillAirDrag(Effect):
 
     def terms(self, params, specimen):
         return (MomentTerm(drag, (self.coefficient,), at_rest=False),) if self.coefficient else ()
-'''
+"""
 
 
 def _cli(tmp: Path, name: str, *args: str) -> tuple[str, dict]:
@@ -141,15 +141,14 @@ def test_one_value_per_fitted_parameter(runs):
     text = d["verdict"]["text"]
     assert "all parameters fitted together in the final model" in text
     # the ladder's value of the first effect, where the joint refit moved it, is labelled as the step's
-    ladder = out[out.index("Ladder:"):]
+    ladder = out[out.index("Ladder:") :]
     first = re.search(r"\+ restitution \(by hand\) \(([^)]*)\)", ladder).group(1)
     r_final = re.search(r"with restitution \((r = [0-9.]+ \[-\])\)", text).group(1)
     assert first == r_final or ("as fitted at this step" in first and f"{r_final} in the final model" in ladder)
 
 
 def test_the_histories_legend_fits_the_figure(tmp_path):
-    d = diagnose(CAMPAIGN, add=["restitution", "rotational_damping"], effects=[], compare_steps=True,
-                 n_replicas=2)  # fmt: skip
+    d = diagnose(CAMPAIGN, add=["restitution", "rotational_damping"], effects=[], compare_steps=True, n_replicas=2)
     fig = histories_figure(d)
     renderer = FigureCanvasAgg(fig).get_renderer()
     fig.draw(renderer)

@@ -127,9 +127,16 @@ def _candidate_list(cls, engine_name: str, specimen: Specimen, target: float, ca
 
 
 def _result(
-    engine_name: str, specimen: Specimen, target: float, settings: dict, table: pd.DataFrame, best: int, tables: dict,
-    rtol: float, version: str,
-) -> TuningResult:  # fmt: skip
+    engine_name: str,
+    specimen: Specimen,
+    target: float,
+    settings: dict,
+    table: pd.DataFrame,
+    best: int,
+    tables: dict,
+    rtol: float,
+    version: str,
+) -> TuningResult:
     """The :class:`TuningResult` of the candidate ``best`` (its row of ``table``, its ``settings`` as the engine
     states them, its check ``tables``) for the target r [-]."""
     return TuningResult(

@@ -120,4 +120,3 @@ def _classify(e: Exception) -> tuple[int, str]:
         where = f"{e.filename}: " if e.filename is not None else ""
         return EXIT_FAILURE, f"{where}{e.strerror or e}"
     return EXIT_FAILURE, f"unexpected {type(e).__name__}: {e}"
-

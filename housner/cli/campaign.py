@@ -28,18 +28,32 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("campaign", help=SUMMARY, description=SUMMARY)
     p.set_defaults(func=run)
     inner = p.add_subparsers(dest="campaign_cmd", metavar="{from-asu}")
-    a = inner.add_parser("from-asu", help=_FROM_ASU, description=_FROM_ASU, epilog=_FROM_ASU_EPILOG,
-                         formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    a = inner.add_parser(
+        "from-asu",
+        help=_FROM_ASU,
+        description=_FROM_ASU,
+        epilog=_FROM_ASU_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     a.add_argument("data", metavar="DATA", help="the data folder (index.csv with the npz or the Test###.txt files)")
     a.add_argument("out", metavar="OUT", help="the campaign directory to write")
     a.add_argument("--specimen", default="SP1", metavar="NAME", help="the specimen, SP1 or SP2 (default SP1)")
     a.add_argument("--flags", metavar="COLUMN", help="index.csv's outcome column (default overturn_<specimen>)")
     a.add_argument("--mesh", metavar="FILE", help="the specimen's scan mesh [m] (default DATA/<specimen>.obj)")
     # the range, [0, 360), is checked by housner.scan.specimen_from_mesh, with the mesh
-    a.add_argument("--azimuth", type=float_within(math.isfinite, "a number of degrees"), default=0.0, metavar="DEG",
-                   help="shaking direction from the mesh x axis [deg], in [0, 360) (default 0)")  # fmt: skip
-    a.add_argument("--contact", default="hull", metavar="hull|flat:TOL",
-                   help="the contact polygon: the hull's rest facet, or the vertices within TOL [m] of it")  # fmt: skip
+    a.add_argument(
+        "--azimuth",
+        type=float_within(math.isfinite, "a number of degrees"),
+        default=0.0,
+        metavar="DEG",
+        help="shaking direction from the mesh x axis [deg], in [0, 360) (default 0)",
+    )
+    a.add_argument(
+        "--contact",
+        default="hull",
+        metavar="hull|flat:TOL",
+        help="the contact polygon: the hull's rest facet, or the vertices within TOL [m] of it",
+    )
     return p
 
 

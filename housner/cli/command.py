@@ -30,5 +30,9 @@ def add_command(
 
 def plugin_option(p: argparse.ArgumentParser) -> None:
     """``--plugin FILE.py`` (repeatable), as run, diagnose and explain take it."""
-    p.add_argument("--plugin", action="append", metavar="FILE.py",
-                   help="load the effects this Python file registers (@register_effect; repeatable)")  # fmt: skip
+    p.add_argument(
+        "--plugin",
+        action="append",
+        metavar="FILE.py",
+        help="load the effects this Python file registers (@register_effect; repeatable)",
+    )

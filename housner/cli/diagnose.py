@@ -27,14 +27,25 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
     d.add_argument("--add", action="append", metavar="NAME", help="add this effect by hand first (repeatable)")
     d.add_argument("--json", help="write the diagnosis to this JSON file")
     d.add_argument("--report", help="write the HTML report to this file")
-    d.add_argument("--folds", type=folds_int, default=5,
-                   help="cross-validation folds: every record is held out once (5; at least 2)")
-    d.add_argument("--train-fraction", type=open_fraction, default=None,
-                   help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)")
+    d.add_argument(
+        "--folds",
+        type=folds_int,
+        default=5,
+        help="cross-validation folds: every record is held out once (5; at least 2)",
+    )
+    d.add_argument(
+        "--train-fraction",
+        type=open_fraction,
+        default=None,
+        help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)",
+    )
     d.add_argument("--seed", type=nonneg_int, default=0, help="seed of the fold assignment (0)")
     d.add_argument("--max-effects", type=nonneg_int, default=3, help="most effects the search adds (3)")
-    d.add_argument("--allow-outside", action="store_true",
-                   help="read record files and a mesh that resolve outside the campaign folder")  # fmt: skip
+    d.add_argument(
+        "--allow-outside",
+        action="store_true",
+        help="read record files and a mesh that resolve outside the campaign folder",
+    )
     plugin_option(d)
     d.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     return d
@@ -88,9 +99,11 @@ def run(args: argparse.Namespace) -> int:
         imp = "" if s.added is None else f"{s.improvement:+.4f} +- {s.improvement_se:.2g}"
         print(f"{s.label()[:45]:45s} {s.heldout_error:>13.4f} +- {s.heldout_se:<8.2g} {imp:>20s}")
     res = diag.verdict.residual
-    print(f"{'final model' if len(diag.steps) > 1 else 'plain model'}: held-out error {res.error:.4f} alpha, "
-          f"correct-model floor {res.floor:.4f} alpha, residual ratio {res.ratio:.2f} (the worse group's error over "
-          f"its floor); sensor noise sigma/alpha {diag.noise_floor:.4f}; {diag.elapsed:.1f} s")
+    print(
+        f"{'final model' if len(diag.steps) > 1 else 'plain model'}: held-out error {res.error:.4f} alpha, "
+        f"correct-model floor {res.floor:.4f} alpha, residual ratio {res.ratio:.2f} (the worse group's error over "
+        f"its floor); sensor noise sigma/alpha {diag.noise_floor:.4f}; {diag.elapsed:.1f} s"
+    )
     if args.json:
         if outcomes is None:
             diag.to_json(args.json)
@@ -98,8 +111,13 @@ def run(args: argparse.Namespace) -> int:
             from housner.scenarios.execution.rundir import jsonable
 
             both = outcomes.to_dict()
-            text = json.dumps(jsonable({**diag.to_dict(), "outcomes_diagnosis": both, "outcomes": both["outcomes"]},
-                                       nonfinite="null"), indent=2, allow_nan=False)  # fmt: skip
+            text = json.dumps(
+                jsonable(
+                    {**diag.to_dict(), "outcomes_diagnosis": both, "outcomes": both["outcomes"]}, nonfinite="null"
+                ),
+                indent=2,
+                allow_nan=False,
+            )
             Path(args.json).write_text(text + "\n")
         print(f"json:   {args.json}")
     if want_report:
@@ -130,8 +148,12 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign):
     from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS
     from housner.scenarios.campaigns.outcomes import diagnose_outcomes
 
-    d = diagnose_outcomes(campaign, folds=args.folds, seed=args.seed,
-                          progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)))  # fmt: skip
+    d = diagnose_outcomes(
+        campaign,
+        folds=args.folds,
+        seed=args.seed,
+        progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
+    )
     # a campaign of both kinds prints two verdicts: each line says which records it judges
     print(f"verdict{' (outcome records)' if campaign.records else ''}: {d.status}")
     print(_without_status(d.summary(), d.status))

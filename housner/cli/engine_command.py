@@ -47,8 +47,10 @@ def engine_scenario(args: argparse.Namespace, purpose: str):
     """``--scenario`` loaded and checked for an engine's analysis: ground motions, ``--n-motions``, the engine."""
     scenario = load_scenario(args.scenario)
     if scenario.source == "free_vibration" or scenario.study is not None:
-        raise UsageError(f"argument --scenario: scenario {scenario.name!r} has no ground motions to {purpose} "
-                         "(give one of ground motions, e.g. elcentro)")  # fmt: skip
+        raise UsageError(
+            f"argument --scenario: scenario {scenario.name!r} has no ground motions to {purpose} "
+            "(give one of ground motions, e.g. elcentro)"
+        )
     check_ensemble_option(scenario, "--n-motions", args.n_motions)
     scenario.check_engines([args.engine, "housner"])
     return scenario

@@ -27,15 +27,25 @@ _noise_rad = float_within(lambda x: math.isfinite(x) and x >= 0.0, "a noise leve
 def add_parser(sub, names: dict) -> argparse.ArgumentParser:
     """The ``explain`` subcommand's arguments; ``names`` are the registries' names for the help texts."""
     e = add_engine_command(sub, "explain", SUMMARY, run, names, "explain", DESCRIPTION)
-    e.add_argument("--sigma", type=_noise_rad, default=EXPLAIN_SIGMA,
-                   help=f"noise added to the engine's theta before the diagnosis [rad] (default {EXPLAIN_SIGMA:g})")
+    e.add_argument(
+        "--sigma",
+        type=_noise_rad,
+        default=EXPLAIN_SIGMA,
+        help=f"noise added to the engine's theta before the diagnosis [rad] (default {EXPLAIN_SIGMA:g})",
+    )
     e.add_argument("--seed", type=nonneg_int, default=0, help="seed of the noise and of the diagnosis' folds (0)")
-    e.add_argument("--effects", type=names_arg,
-                   help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}")
+    e.add_argument(
+        "--effects",
+        type=names_arg,
+        help=f"candidate effects, comma-separated, or 'none' (default: all): {names['effects']}",
+    )
     e.add_argument("--json", help="write the explanation to this JSON file")
     e.add_argument("--workdir", help="keep the engine's campaign in WORKDIR/ENGINE-SCENARIO (default: a temporary one)")
-    e.add_argument("--no-maps", action="store_true",
-                   help="skip measuring the engine's impact and flight maps and running Housner + those maps")
+    e.add_argument(
+        "--no-maps",
+        action="store_true",
+        help="skip measuring the engine's impact and flight maps and running Housner + those maps",
+    )
     e.add_argument("--figure", help="write the figure of the engine's impact and flight maps to this file (PNG, SVG)")
     plugin_option(e)
     add_engine_command_tail(e)
@@ -61,8 +71,16 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--figure {args.figure}: the figure is written as PNG or SVG (.png, .svg)")
         check_output_file(args.figure, "--figure")
     common = engine_work(args, scenario, "explain", "ground motions and free vibrations")
-    expl = explain_engine(args.engine, scenario, sigma=args.sigma, seed=args.seed, effects=args.effects,
-                          workdir=args.workdir, maps=not args.no_maps, **common)  # fmt: skip
+    expl = explain_engine(
+        args.engine,
+        scenario,
+        sigma=args.sigma,
+        seed=args.seed,
+        effects=args.effects,
+        workdir=args.workdir,
+        maps=not args.no_maps,
+        **common,
+    )
     print(expl.summary())
     print(f"wall time {expl.wall_s['total']:.1f} s")
     if args.workdir:

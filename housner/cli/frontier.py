@@ -22,8 +22,9 @@ DESCRIPTION = (
 def add_parser(sub, names: dict) -> argparse.ArgumentParser:
     """The ``frontier`` subcommand's arguments; ``names`` are the registries' names for the help texts."""
     f = add_engine_command(sub, "frontier", SUMMARY, run, names, "sweep", DESCRIPTION)
-    f.add_argument("--json", help="write the frontier to this JSON file (the run report reads "
-                   "engines/models/frontier-ENGINE.json)")  # fmt: skip
+    f.add_argument(
+        "--json", help="write the frontier to this JSON file (the run report reads engines/models/frontier-ENGINE.json)"
+    )
     f.add_argument("--figure", help="write the frontier's figure to this image file")
     add_engine_command_tail(f)
     return f
@@ -37,8 +38,9 @@ def run(args: argparse.Namespace) -> int:
 
     # inputs and outputs checked before the work: engine, scenario, options, files
     if args.engine == "housner":
-        raise UsageError("argument ENGINE: 'housner' is the reference the frontier is measured against; "
-                         "name another engine")  # fmt: skip
+        raise UsageError(
+            "argument ENGINE: 'housner' is the reference the frontier is measured against; name another engine"
+        )
     try:
         frontier_axes(args.engine)
     except ValueError as e:

@@ -56,14 +56,24 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
     """The ``impact-map`` subcommand's arguments; ``names`` are the registries' names for the help texts."""
     from housner.scenarios.runs.impact_map import AMPLITUDES, DT, N_IMPACTS
 
-    c = add_command(sub, "impact-map", SUMMARY, run, description=DESCRIPTION,
-                    epilog=f"engines: {names['engines']} (analytic: housner)\n\n"
-                    + EXIT_HELP.format(run_failure="", ctrl_c=""))  # fmt: skip
+    c = add_command(
+        sub,
+        "impact-map",
+        SUMMARY,
+        run,
+        description=DESCRIPTION,
+        epilog=f"engines: {names['engines']} (analytic: housner)\n\n" + EXIT_HELP.format(run_failure="", ctrl_c=""),
+    )
     c.add_argument("engines", nargs="+", type=_map_engine, metavar="ENGINE", help="engines to measure")
     c.add_argument("--out", default=DEFAULT_OUT, help=f"directory of the maps and the figure (default {DEFAULT_OUT})")
-    c.add_argument("--settings", action="append", type=_setting, default=[], metavar="[ENGINE.]KEY=VALUE",
-                   help="an engine setting (repeatable; without ENGINE. for every engine named); default: "
-                   "the engines' defaults")  # fmt: skip
+    c.add_argument(
+        "--settings",
+        action="append",
+        type=_setting,
+        default=[],
+        metavar="[ENGINE.]KEY=VALUE",
+        help="an engine setting (repeatable; without ENGINE. for every engine named); default: the engines' defaults",
+    )
     c.add_argument(
         "--amplitudes",
         type=amplitudes,
@@ -104,8 +114,9 @@ def run(args: argparse.Namespace) -> int:
     progress = None if args.quiet else (lambda line: print(line, file=sys.stderr))
     maps = []
     for n in names:
-        m = measure_maps(n, amplitudes=args.amplitudes, dt=args.dt, n_impacts=args.n_impacts,
-                         settings=settings[n], progress=progress)  # fmt: skip
+        m = measure_maps(
+            n, amplitudes=args.amplitudes, dt=args.dt, n_impacts=args.n_impacts, settings=settings[n], progress=progress
+        )
         (out / f"maps-{n}.json").write_text(m.to_json())
         print(m.summary())
         maps.append(m)

@@ -49,8 +49,11 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
             ctrl_c="; finished records stay in the cache, re-run to resume",
         ),
     )
-    r.add_argument("scenario", help="catalogue name (see `housner scenarios`), path to a TOML file, or a campaign "
-                   "folder holding campaign.toml (then --engines is required)")  # fmt: skip
+    r.add_argument(
+        "scenario",
+        help="catalogue name (see `housner scenarios`), path to a TOML file, or a campaign "
+        "folder holding campaign.toml (then --engines is required)",
+    )
     r.add_argument(
         "--engines", type=engines_arg, help=f"comma-separated engines (default: the scenario's): {names['engines']}"
     )
@@ -60,8 +63,11 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
     r.add_argument("--jobs", type=positive_int, help="worker processes (default: all CPUs; 1 = this process)")
     r.add_argument("--scheduler", help="address of a Dask distributed scheduler to run on (5 s to connect)")
     r.add_argument("--no-cache", action="store_true", help="recompute instead of reusing cached results")
-    r.add_argument("--allow-outside", action="store_true",
-                   help="read record files outside the scenario file's folder (refused by default)")  # fmt: skip
+    r.add_argument(
+        "--allow-outside",
+        action="store_true",
+        help="read record files outside the scenario file's folder (refused by default)",
+    )
     r.add_argument("--no-report", action="store_true", help="skip the HTML report")
     r.add_argument(
         "--allow-failures",
@@ -69,8 +75,11 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
         help="exit 0 even when records failed (they are listed, and kept out of the statistics)",
     )
     plugin_option(r)
-    r.add_argument("--check", action="store_true",
-                   help="exit 3 when an engine's verdict against the reference is FAIL (inconclusive does not fail)")
+    r.add_argument(
+        "--check",
+        action="store_true",
+        help="exit 3 when an engine's verdict against the reference is FAIL (inconclusive does not fail)",
+    )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     return r
 
@@ -141,8 +150,10 @@ def _finish(args: argparse.Namespace, done, out: Path) -> int:
         )
         return EXIT_FAILURE
     if failed_engines and args.check:
-        print(f"housner: error: verdict FAIL for {', '.join(failed_engines)}; exit status {EXIT_VERDICT} (--check)",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"housner: error: verdict FAIL for {', '.join(failed_engines)}; exit status {EXIT_VERDICT} (--check)",
+            file=sys.stderr,
+        )
         return EXIT_VERDICT
     return EXIT_OK
 
@@ -160,8 +171,14 @@ def _run_campaign(args: argparse.Namespace) -> int:
     client = connect_scheduler(args.scheduler) if args.scheduler else None
     try:
         options = RunOptions(jobs=args.jobs, scheduler=client, use_cache=not args.no_cache, progress=not args.quiet)
-        done = run_campaign(args.scenario, engines=args.engines, out=out, options=options,
-                            allow_outside=args.allow_outside, say=lambda s: print(s, file=sys.stderr))  # fmt: skip
+        done = run_campaign(
+            args.scenario,
+            engines=args.engines,
+            out=out,
+            options=options,
+            allow_outside=args.allow_outside,
+            say=lambda s: print(s, file=sys.stderr),
+        )
     finally:
         if client is not None:
             client.close(timeout=2)
@@ -174,8 +191,10 @@ def _print_outcomes(view: Run) -> None:
     rows = view.outcome_scores
     if not rows:
         return
-    print(f"outcomes against the campaign's measured ones (95 % bootstrap intervals over the records; log loss "
-          f"of 0/1 predictions with P clipped to [{rows[0]['p_clip']:g}, {1 - rows[0]['p_clip']:g}]):")  # fmt: skip
+    print(
+        f"outcomes against the campaign's measured ones (95 % bootstrap intervals over the records; log loss "
+        f"of 0/1 predictions with P clipped to [{rows[0]['p_clip']:g}, {1 - rows[0]['p_clip']:g}]):"
+    )
     for r in rows:
         failed = f", {r['n_failed']} failed records left out" if r["n_failed"] else ""
         if not r["n"]:
@@ -189,8 +208,10 @@ def _print_outcomes(view: Run) -> None:
             f"{r['n_overturned']} measured overturns of {r['n']} records{failed}"
         )
     for p in view.published_outcomes:
-        print(f"  ({p['note']}: {p['model']}: accuracy {p['accuracy']:.3f}, F1 {p['f1']:.3f}, "
-              f"{p['n_predicted']} predicted / {p['n_overturned']} measured overturns)")  # fmt: skip
+        print(
+            f"  ({p['note']}: {p['model']}: accuracy {p['accuracy']:.3f}, F1 {p['f1']:.3f}, "
+            f"{p['n_predicted']} predicted / {p['n_overturned']} measured overturns)"
+        )
 
 
 def _print_verdicts(view: Run) -> list[str]:
@@ -235,8 +256,10 @@ def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path
         if f["status"] != "ok":
             print(head + f"no fit ({f['message']})")
             continue
-        line = (f"median {f['median']:.3g} [{f['median_low']:.3g}, {f['median_high']:.3g}], "
-                f"beta {f['beta']:.2f} [{f['beta_low']:.2f}, {f['beta_high']:.2f}]")  # fmt: skip
+        line = (
+            f"median {f['median']:.3g} [{f['median_low']:.3g}, {f['median_high']:.3g}], "
+            f"beta {f['beta']:.2f} [{f['beta_low']:.2f}, {f['beta_high']:.2f}]"
+        )
         if f.get("caveat"):
             line += f" (caveat: {f['caveat']})"
         c = comps.get((f["engine"], f["size"]))
@@ -257,7 +280,10 @@ def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path
     if not args.no_report:
         print(f"report:  {write_study_report(out)}")
     if len(failed) and not args.allow_failures:
-        print(f"housner: error: {len(failed)} of {len(res.results)} records failed (listed above); exit status 1 "
-              "(--allow-failures: exit 0 when records fail)", file=sys.stderr)  # fmt: skip
+        print(
+            f"housner: error: {len(failed)} of {len(res.results)} records failed (listed above); exit status 1 "
+            "(--allow-failures: exit 0 when records fail)",
+            file=sys.stderr,
+        )
         return EXIT_FAILURE
     return EXIT_OK

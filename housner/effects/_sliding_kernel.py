@@ -323,8 +323,29 @@ def _sl_start(theta0, theta_dot0, acc0, q):
 
 
 @njit(cache=True, inline="always")
-def _sl_event(mode, s, sig, fric, jam, phi, w, xd, tau, t_k, dt, g0, g1, a_now, wrest2_p, wrest2_n, tan_p, tan_n, q,
-              impacts, n_imp):  # fmt: skip
+def _sl_event(
+    mode,
+    s,
+    sig,
+    fric,
+    jam,
+    phi,
+    w,
+    xd,
+    tau,
+    t_k,
+    dt,
+    g0,
+    g1,
+    a_now,
+    wrest2_p,
+    wrest2_n,
+    tan_p,
+    tan_n,
+    q,
+    impacts,
+    n_imp,
+):
     """The regime after a step of :func:`run_sliding` cut at local time tau [s] (not by an overturn).
 
     A sliding block's slip stops (rest, or slip again); a rocking one lands (an impact at phi < 0, its
@@ -350,8 +371,37 @@ def _sl_event(mode, s, sig, fric, jam, phi, w, xd, tau, t_k, dt, g0, g1, a_now, 
 
 
 @njit(cache=True, inline="always")
-def _sl_sample(t_k, g0, g1, dt, msub, mode, s, sig, fric, jam, phi, w, x, xd, theta_max, x_max, t_over, t_uplift,
-               t_slide, t_lift, n_imp, n_jam, guard, tan_p, tan_n, wrest2_p, wrest2_n, q, impacts):  # fmt: skip
+def _sl_sample(
+    t_k,
+    g0,
+    g1,
+    dt,
+    msub,
+    mode,
+    s,
+    sig,
+    fric,
+    jam,
+    phi,
+    w,
+    x,
+    xd,
+    theta_max,
+    x_max,
+    t_over,
+    t_uplift,
+    t_slide,
+    t_lift,
+    n_imp,
+    n_jam,
+    guard,
+    tan_p,
+    tan_n,
+    wrest2_p,
+    wrest2_n,
+    q,
+    impacts,
+):
     """:func:`run_sliding` through the sample interval from t_k [s] (ground acc g0 -> g1 [g]) in ``msub`` RK4
     substeps, each cut at the regime's events; returns the state and the running results at its end, in the
     order of the arguments from ``mode`` to ``guard``."""
@@ -397,13 +447,50 @@ def _sl_sample(t_k, g0, g1, dt, msub, mode, s, sig, fric, jam, phi, w, x, xd, th
             mode, t_over, theta_max = OVERTURNED, t_k + tau, HALF_PI
             continue
         mode, s, sig, fric, jam, phi, w, xd, n_imp, dj, slipped = _sl_event(
-            mode, s, sig, fric, jam, phi, w, xd, tau, t_k, dt, g0, g1, a0 + slope * tau, wrest2_p, wrest2_n,
-            tan_p, tan_n, q, impacts, n_imp
+            mode,
+            s,
+            sig,
+            fric,
+            jam,
+            phi,
+            w,
+            xd,
+            tau,
+            t_k,
+            dt,
+            g0,
+            g1,
+            a0 + slope * tau,
+            wrest2_p,
+            wrest2_n,
+            tan_p,
+            tan_n,
+            q,
+            impacts,
+            n_imp,
         )
         n_jam += dj
         t_slide = t_k + tau if slipped and math.isnan(t_slide) else t_slide
-    return (mode, s, sig, fric, jam, phi, w, x, xd, theta_max, x_max, t_over, t_uplift, t_slide, t_lift, n_imp, n_jam,
-            guard)  # fmt: skip
+    return (
+        mode,
+        s,
+        sig,
+        fric,
+        jam,
+        phi,
+        w,
+        x,
+        xd,
+        theta_max,
+        x_max,
+        t_over,
+        t_uplift,
+        t_slide,
+        t_lift,
+        n_imp,
+        n_jam,
+        guard,
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -450,11 +537,56 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
     for k in range(acc_g.size - 1):
         if mode == OVERTURNED and not record:
             break
-        (mode, s, sig, fric, jam, phi, w, x, xd, theta_max, x_max, t_over, t_uplift, t_slide, t_lift, n_imp, n_jam,
-         guard) = _sl_sample(
-            k * dt, acc_g[k], acc_g[k + 1], dt, msub, mode, s, sig, fric, jam, phi, w, x, xd, theta_max, x_max, t_over,
-            t_uplift, t_slide, t_lift, n_imp, n_jam, guard, tan_p, tan_n, wrest2_p, wrest2_n, q, impacts,
-        )  # fmt: skip
+        (
+            mode,
+            s,
+            sig,
+            fric,
+            jam,
+            phi,
+            w,
+            x,
+            xd,
+            theta_max,
+            x_max,
+            t_over,
+            t_uplift,
+            t_slide,
+            t_lift,
+            n_imp,
+            n_jam,
+            guard,
+        ) = _sl_sample(
+            k * dt,
+            acc_g[k],
+            acc_g[k + 1],
+            dt,
+            msub,
+            mode,
+            s,
+            sig,
+            fric,
+            jam,
+            phi,
+            w,
+            x,
+            xd,
+            theta_max,
+            x_max,
+            t_over,
+            t_uplift,
+            t_slide,
+            t_lift,
+            n_imp,
+            n_jam,
+            guard,
+            tan_p,
+            tan_n,
+            wrest2_p,
+            wrest2_n,
+            q,
+            impacts,
+        )
         if record:
             x_out[k + 1] = x
             reg_out[k + 1] = mode

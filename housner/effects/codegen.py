@@ -134,36 +134,38 @@ def _hooks(structure: tuple) -> str:
         else:
             calls[kind].append(f"    r = _term{i}(w, r, s, alpha, p2, {sl})")
     at_rest = any(k == "coulomb" or (k == "moment" and flag) for k, _m, _q, _n, flag in structure)
-    return "\n".join([
-        _BEGIN.rstrip("\n"),
-        f"HAS_MOMENT = {bool(calls['moment'])}",
-        f"HAS_DRY = {bool(calls['coulomb'])}",
-        f"HAS_IMPACT = {bool(calls['impact'])}",
-        f"AT_REST = {at_rest}",
-        "",
-        "from housner.effects.terms import _import_term  # noqa: E402",
-        "",
-        *imports,
-        "",
-        "",
-        "@njit(cache=True)",
-        "def _moment(phi, w, t, a, v, s, alpha, p2, q):",
-        "    return " + (" + ".join(calls["moment"]) or "0.0"),
-        "",
-        "",
-        "@njit(cache=True)",
-        "def _dry(phi, t, a, v, s, alpha, p2, q):",
-        "    return " + (" + ".join(calls["coulomb"]) or "0.0"),
-        "",
-        "",
-        "@njit(cache=True)",
-        "def impact_ratio(w, r, s, alpha, p2, q):",
-        *calls["impact"],
-        "    return r",
-        "",
-        "",
-        _END,
-    ])  # fmt: skip
+    return "\n".join(
+        [
+            _BEGIN.rstrip("\n"),
+            f"HAS_MOMENT = {bool(calls['moment'])}",
+            f"HAS_DRY = {bool(calls['coulomb'])}",
+            f"HAS_IMPACT = {bool(calls['impact'])}",
+            f"AT_REST = {at_rest}",
+            "",
+            "from housner.effects.terms import _import_term  # noqa: E402",
+            "",
+            *imports,
+            "",
+            "",
+            "@njit(cache=True)",
+            "def _moment(phi, w, t, a, v, s, alpha, p2, q):",
+            "    return " + (" + ".join(calls["moment"]) or "0.0"),
+            "",
+            "",
+            "@njit(cache=True)",
+            "def _dry(phi, t, a, v, s, alpha, p2, q):",
+            "    return " + (" + ".join(calls["coulomb"]) or "0.0"),
+            "",
+            "",
+            "@njit(cache=True)",
+            "def impact_ratio(w, r, s, alpha, p2, q):",
+            *calls["impact"],
+            "    return r",
+            "",
+            "",
+            _END,
+        ]
+    )
 
 
 def generated_source(structure: tuple, steps_module: str = "housner._kernel_steps") -> tuple[str, str]:
@@ -328,8 +330,12 @@ def _check_numba_cache(mod: ModuleType, drop: bool = False) -> None:
         for p in [index, *index.parent.glob(f"{base}.*.nbc")]:
             p.unlink(missing_ok=True)
         _REPAIRS["numba_caches"] += 1
-        _LOG.warning("kernel cache: numba's %s does not load (%s: %s); its cache removed, recompiling",
-                     bad[0], type(bad[1]).__name__, bad[1])  # fmt: skip
+        _LOG.warning(
+            "kernel cache: numba's %s does not load (%s: %s); its cache removed, recompiling",
+            bad[0],
+            type(bad[1]).__name__,
+            bad[1],
+        )
 
 
 def _raised_by_numba_cache(e: BaseException) -> bool:
@@ -372,8 +378,13 @@ class _HealingKernel:
                 if not _raised_by_numba_cache(e):
                     raise
                 _REPAIRS["numba_retries"] += 1
-                _LOG.warning("kernel cache: numba failed to load %s.%s (%s: %s); its cache removed, recompiling",
-                             mod.__name__, name, type(e).__name__, e)  # fmt: skip
+                _LOG.warning(
+                    "kernel cache: numba failed to load %s.%s (%s: %s); its cache removed, recompiling",
+                    mod.__name__,
+                    name,
+                    type(e).__name__,
+                    e,
+                )
                 for m in {mod, sys.modules.get(f"{mod.__name__}_steps")} - {None}:
                     _check_numba_cache(m, drop=True)
                 return fn(*args, **kwargs)

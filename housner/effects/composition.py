@@ -66,17 +66,22 @@ class EffectPlan:
             Rest rule of :func:`housner.model.simulate` [-].
         """
         if self.solver is None:
-            res = simulate(self.specimen, self.motion, params=self.params, substeps=substeps, rest_tol=rest_tol,
-                           terms=self.terms)  # fmt: skip
+            res = simulate(
+                self.specimen, self.motion, params=self.params, substeps=substeps, rest_tol=rest_tol, terms=self.terms
+            )
         else:
             res = self.solver(self.specimen, self.motion, self.params, substeps=substeps, rest_tol=rest_tol)
         return self.observe(res)
 
 
 def apply_effects(
-    specimen: Specimen, motion: GroundMotion, effects: Iterable[Effect] = (), *, params=None,
+    specimen: Specimen,
+    motion: GroundMotion,
+    effects: Iterable[Effect] = (),
+    *,
+    params=None,
     prefer_terms: bool = False,
-) -> EffectPlan:  # fmt: skip
+) -> EffectPlan:
     """Resolve ``effects`` for one simulation (the order they compose in: the ``housner.effects`` package docstring).
 
     Parameters

@@ -53,8 +53,15 @@ from numba import njit
 from housner.effects.registry import STAGE_DISSIPATION, Effect, param, register_effect
 from housner.effects.terms import ImpactTerm, MomentTerm
 
-__all__ = ["MeasuredMaps", "interp_log", "measured_flight_moment", "measured_impact_law", "measured_scatter_law",
-           "scatter_q", "table_q"]  # fmt: skip
+__all__ = [
+    "MeasuredMaps",
+    "interp_log",
+    "measured_flight_moment",
+    "measured_impact_law",
+    "measured_scatter_law",
+    "scatter_q",
+    "table_q",
+]
 
 #: Smallest capacity of a table in ``q`` (tables are padded to the next power of two, at least this).
 MIN_CAPACITY = 8
@@ -266,8 +273,9 @@ class MeasuredMaps(Effect):
             fx, fc = _table("flight_x", flight_x, "flight_c", flight_c, nonnegative=False, allow_empty=True)
             sp = ()
             if len(np.atleast_1d(impact_spread)):
-                _x, sp = _table("impact_x", impact_x, "impact_spread", impact_spread, nonnegative=True,
-                                allow_empty=False)  # fmt: skip
+                _x, sp = _table(
+                    "impact_x", impact_x, "impact_spread", impact_spread, nonnegative=True, allow_empty=False
+                )
         if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and 0 <= seed < 2**53):
             raise ValueError(f"`seed` must be an integer in [0, 2^53), got {seed!r}")
         seed = int(seed) if sp else 0
@@ -277,8 +285,14 @@ class MeasuredMaps(Effect):
                 f"`digest` of effect 'measured_maps' is read off its tables ({own!r}), got {digest!r}: "
                 "build the effect with MeasuredMaps.from_tables(impact_x, impact_ratio, flight_x, flight_c)"
             )
-        for key, value in (("impact_x", ix), ("impact_ratio", ir), ("flight_x", fx), ("flight_c", fc),
-                           ("impact_spread", sp), ("seed", seed)):  # fmt: skip
+        for key, value in (
+            ("impact_x", ix),
+            ("impact_ratio", ir),
+            ("flight_x", fx),
+            ("flight_c", fc),
+            ("impact_spread", sp),
+            ("seed", seed),
+        ):
             object.__setattr__(self, key, value)
         object.__setattr__(self, "digest", own)
         self.__post_init__()

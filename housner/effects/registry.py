@@ -296,7 +296,6 @@ class Effect:
         return ()
 
 
-
 # ----------------------------------------------------------------------
 # registry
 def register_effect(arg: type | str | None = None) -> Any:

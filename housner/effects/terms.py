@@ -280,10 +280,15 @@ class TermSet:
     def structure(self) -> tuple:
         """What the compiled kernel depends on: each term's kind, function, parameter count and flag."""
         return tuple(
-            (_KINDS[type(t)], t.fn.py_func.__module__, t.fn.py_func.__qualname__, len(t.q),
-             getattr(t, "at_rest", getattr(t, "replaces", False)))
+            (
+                _KINDS[type(t)],
+                t.fn.py_func.__module__,
+                t.fn.py_func.__qualname__,
+                len(t.q),
+                getattr(t, "at_rest", getattr(t, "replaces", False)),
+            )
             for t in self.terms
-        )  # fmt: skip
+        )
 
     def q_array(self) -> np.ndarray:
         """Every term's parameters in one float64 array, in kernel order."""
@@ -297,8 +302,10 @@ class TermSet:
 
     def describe(self) -> list[dict]:
         """Plain data for ``Response.info``: each term's kind, function and parameters."""
-        return [{"term": k, "fn": f"{m}.{n}", "q": list(t.q)} for (k, m, n, _nq, _f), t in
-                zip(self.structure, self.terms, strict=True)]  # fmt: skip
+        return [
+            {"term": k, "fn": f"{m}.{n}", "q": list(t.q)}
+            for (k, m, n, _nq, _f), t in zip(self.structure, self.terms, strict=True)
+        ]
 
 
 def _import_term(module: str, qualname: str, missing: Any = ...) -> Any:

@@ -48,15 +48,8 @@ from housner.stats import KS_MAX, OVERTURN_TOL
 __all__ = ["assert_cdf_agreement", "assert_record_agreement"]
 
 
-
 # ----------------------------------------------------------------------------
 # outcome of a check
-
-
-
-
-
-
 
 
 # ----------------------------------------------------------------------------
@@ -115,10 +108,6 @@ def _prepare(results, engine: str, reference: str, report) -> _Sides:
     return _Sides(engine, reference, ok, failed, a, b, source, report)
 
 
-
-
-
-
 def _record_criteria(s: _Sides, min_records: int | None, max_failed: int | None) -> list[Criterion]:
     out = []
     na, nb = s.a.size, s.b.size
@@ -174,8 +163,6 @@ def _not_evaluated(name: str, s: _Sides, threshold: float) -> Criterion:
         threshold,
         math.inf,
     )
-
-
 
 
 # ----------------------------------------------------------------------------
@@ -466,8 +453,6 @@ def _wasserstein_criterion(s: _Sides, limit: float, name: str) -> Criterion:
 # small helpers
 
 
-
-
 def _notes(s: _Sides) -> tuple[str, ...]:
     n_fail = {name: int((s.failed["engine"].astype(str) == name).sum()) for name in (s.engine, s.reference)}
     if any(n_fail.values()):
@@ -483,8 +468,3 @@ def _motion_names(ok: pd.DataFrame, motion_ids: np.ndarray) -> list[str]:
         return [f"motion {m}" for m in motion_ids]
     names = ok.drop_duplicates("motion_id").set_index("motion_id")["motion_name"]
     return [f"{names.get(m, '?')} (motion {m})" for m in motion_ids]
-
-
-
-
-

@@ -50,8 +50,9 @@ def _fit_words(fit: dict) -> str:
     )
 
 
-def _criterion(name: str, value: float, low: float, high: float, centre: float, tol: float, strict: bool,
-               level: str) -> Criterion:  # fmt: skip
+def _criterion(
+    name: str, value: float, low: float, high: float, centre: float, tol: float, strict: bool, level: str
+) -> Criterion:
     """|value - centre| <= tol (and, when strict, the whole interval [low, high] within centre +- tol)."""
     off = abs(value - centre)
     reach = max(abs(low - centre), abs(high - centre))
@@ -67,8 +68,15 @@ def _criterion(name: str, value: float, low: float, high: float, centre: float, 
     return Criterion(name, excess <= 0, detail, off, tol, excess)
 
 
-def _size_criteria(st: StudyResult, engine: str, reference: str, h: float, tols: tuple[float, float],
-                   require_interval: bool, level: str) -> list[Criterion]:  # fmt: skip
+def _size_criteria(
+    st: StudyResult,
+    engine: str,
+    reference: str,
+    h: float,
+    tols: tuple[float, float],
+    require_interval: bool,
+    level: str,
+) -> list[Criterion]:
     """The criteria at prototype height ``h`` [m]: both fits there, or the median ratio and the beta difference
     within ``tols`` (median_rtol, beta_atol)."""
     fe, fr = st.fit(engine, h), st.fit(reference, h)
@@ -79,12 +87,26 @@ def _size_criteria(st: StudyResult, engine: str, reference: str, h: float, tols:
     c = st.comparison(engine, h)
     median_rtol, beta_atol = tols
     return [
-        _criterion(f"median ratio at {tag} ({engine} {fe['median']:.4g} / {reference} {fr['median']:.4g})",
-                   c["median_ratio"], c["ratio_low"], c["ratio_high"], 1.0, median_rtol, require_interval,
-                   level),  # fmt: skip
-        _criterion(f"beta difference at {tag} ({engine} {fe['beta']:.3f} - {reference} {fr['beta']:.3f})",
-                   c["beta_diff"], c["diff_low"], c["diff_high"], 0.0, beta_atol, require_interval,
-                   level),  # fmt: skip
+        _criterion(
+            f"median ratio at {tag} ({engine} {fe['median']:.4g} / {reference} {fr['median']:.4g})",
+            c["median_ratio"],
+            c["ratio_low"],
+            c["ratio_high"],
+            1.0,
+            median_rtol,
+            require_interval,
+            level,
+        ),
+        _criterion(
+            f"beta difference at {tag} ({engine} {fe['beta']:.3f} - {reference} {fr['beta']:.3f})",
+            c["beta_diff"],
+            c["diff_low"],
+            c["diff_high"],
+            0.0,
+            beta_atol,
+            require_interval,
+            level,
+        ),
     ]
 
 
@@ -154,8 +176,16 @@ def assert_fragility_agreement(
     if max_failed is not None:
         for name in (engine, reference):
             bad = int(((st.results["engine"] == name) & (st.results["status"] != "ok")).sum())
-            criteria.append(Criterion(f"failed records of {name}", bad <= max_failed,
-                                      f"{bad} (limit {max_failed})", bad, max_failed, bad - max_failed))  # fmt: skip
+            criteria.append(
+                Criterion(
+                    f"failed records of {name}",
+                    bad <= max_failed,
+                    f"{bad} (limit {max_failed})",
+                    bad,
+                    max_failed,
+                    bad - max_failed,
+                )
+            )
     for h in sizes:
         criteria += _size_criteria(st, engine, reference, h, (median_rtol, beta_atol), require_interval, level)
     report = st.out / "report.html" if st.out is not None and (st.out / "report.html").exists() else None

@@ -83,11 +83,14 @@ def _scatter_figure(diag, xkey: str, ykey: str, *, xlabel: str, ylabel: str, tit
 def energy_figure(diag) -> Figure:
     r_h = diag.campaign.specimen.r_housner
     return _scatter_figure(
-        diag, "energy_amplitude", "energy_ratio",
-        xlabel=r"amplitude before the impact $\theta_i/\alpha$ [-]", ylabel="energy ratio c_i [-] (seed eq. 8)",
+        diag,
+        "energy_amplitude",
+        "energy_ratio",
+        xlabel=r"amplitude before the impact $\theta_i/\alpha$ [-]",
+        ylabel="energy ratio c_i [-] (seed eq. 8)",
         title="Energy ratio per impact against amplitude (free vibration)",
         lines=[([0, 1], [r_h, r_h], f"Housner r = {r_h:.4f}", "--")],
-    )  # fmt: skip
+    )
 
 
 def half_cycle_figure(diag) -> Figure:
@@ -95,21 +98,26 @@ def half_cycle_figure(diag) -> Figure:
     a = np.linspace(0.05, 0.95, 60)
     T = 2.0 * np.asarray(half_cycle_integral(a * spec.alpha, spec.alpha)) / spec.p
     return _scatter_figure(
-        diag, "half_cycle_amplitude", "half_cycle_duration",
-        xlabel=r"half-cycle amplitude $\theta_i/\alpha$ [-]", ylabel="half-cycle duration [s]",
+        diag,
+        "half_cycle_amplitude",
+        "half_cycle_duration",
+        xlabel=r"half-cycle amplitude $\theta_i/\alpha$ [-]",
+        ylabel="half-cycle duration [s]",
         title="Half-cycle duration against amplitude (free vibration)",
         lines=[(a, T, f"Housner, p = {spec.p:.4f} 1/s (exact eq. 7)", "--")],
-    )  # fmt: skip
+    )
 
 
 def flight_figure(diag) -> Figure:
     return _scatter_figure(
-        diag, "flight_amplitude", "flight_ratio",
+        diag,
+        "flight_amplitude",
+        "flight_ratio",
         xlabel=r"half-cycle amplitude $\theta_i/\alpha$ [-]",
         ylabel="(speed at closing / opening impact)$^2$ [-]",
         title="Energy kept between impacts (free vibration)",
         lines=[([0, 1], [1, 1], "no loss between impacts (Housner)", "--")],
-    )  # fmt: skip
+    )
 
 
 def onset_figure(diag) -> Figure:
@@ -192,8 +200,13 @@ def tilt_figure(diag) -> Figure:
             ax.plot(xs, o.value + k.value * xs, color=c, lw=1.4, ls="--", label=f"model: {step_label(s)}")
     sd = float(np.std(meas.tilt_theta)) if n else 0.01
     ax.set_ylim(-4 * sd - 0.01, 4 * sd + 0.01)
-    return figures.finish(fig, ax, r"ground acceleration / $g\tan\alpha$ [-]", r"$\theta/\alpha$ before uplift [-]",
-                          "Rotation before uplift (while |ground acc.| < g tan alpha)")  # fmt: skip
+    return figures.finish(
+        fig,
+        ax,
+        r"ground acceleration / $g\tan\alpha$ [-]",
+        r"$\theta/\alpha$ before uplift [-]",
+        "Rotation before uplift (while |ground acc.| < g tan alpha)",
+    )
 
 
 def sensor_figure(diag) -> Figure | None:
@@ -209,13 +222,22 @@ def sensor_figure(diag) -> Figure | None:
         ax.axhline(0.0, color=_MEASURED, lw=1.6, label="measured: white (no correlation told apart)")
     else:
         lags = np.arange(noise.rho.size) * noise.dt * 1e3
-        ax.plot(lags, noise.rho, color=_MEASURED, lw=1.6, label=f"measured (correlation time "
-                f"{noise.correlation_time * 1e3:.3g} ms)")  # fmt: skip
+        ax.plot(
+            lags,
+            noise.rho,
+            color=_MEASURED,
+            lw=1.6,
+            label=f"measured (correlation time {noise.correlation_time * 1e3:.3g} ms)",
+        )
     ax.plot([0.0], [1.0], "o", color="#1f77b4", label="white noise: 1 at lag 0, 0 beyond")
     ax.axhline(0.0, color="#1f77b4", lw=0.8, ls="--")
-    return figures.finish(fig, ax, "lag [ms]", "autocorrelation of the noise [-]",
-                          f"The theta sensor's noise: sigma {noise.sigma * 1e3:.3g} mrad on {noise.n_samples} quiet "
-                          "samples")  # fmt: skip
+    return figures.finish(
+        fig,
+        ax,
+        "lag [ms]",
+        "autocorrelation of the noise [-]",
+        f"The theta sensor's noise: sigma {noise.sigma * 1e3:.3g} mrad on {noise.n_samples} quiet samples",
+    )
 
 
 def cdf_figure(diag) -> Figure:
@@ -227,7 +249,6 @@ def cdf_figure(diag) -> Figure:
         samples[name] = s.comparison.distribution.model
         colors[name] = c
     return figures.plot_cdfs(samples, reference="measured", colors=colors)
-
 
 
 def _heldout(diag, step, compared) -> dict[str, float]:
@@ -317,8 +338,14 @@ def histories_figure(diag) -> Figure | None:
     order = sorted(range(len(labels)), key=lambda i: labels[i] != "measured")  # the measurement first
     # one row when the labels fit the figure's width (about 110 characters at 8 pt on 7.8 in), else two columns
     ncol = min(len(labels), 4) if sum(len(lab) + 8 for lab in labels) <= 110 else 2
-    fig.legend([handles[i] for i in order], [labels[i] for i in order], loc="outside upper center",
-               ncol=ncol, fontsize=8, frameon=False)  # fmt: skip
+    fig.legend(
+        [handles[i] for i in order],
+        [labels[i] for i in order],
+        loc="outside upper center",
+        ncol=ncol,
+        fontsize=8,
+        frameon=False,
+    )
     return fig
 
 

@@ -173,11 +173,21 @@ def outcome_map_figure(diag, best: str) -> Figure:
         where = f"line agrees with {agree}/{x.size} records' P" if segs else "no 0.5 line in the range"
         ax.plot([], [], color=color, ls=ls, lw=lw, label=f"P = 0.5: {label} ({where})")
     ax.plot(x[obs], y[obs], "^", color=_OVERTURNED, ms=6, label=f"overturned ({int(obs.sum())})", zorder=4)
-    ax.plot(x[~obs], y[~obs], "o", mfc="none", mec=_STOOD, mew=1.3, ms=6, label=f"stood ({int((~obs).sum())})",
-            zorder=4)  # fmt: skip
+    ax.plot(
+        x[~obs], y[~obs], "o", mfc="none", mec=_STOOD, mew=1.3, ms=6, label=f"stood ({int((~obs).sum())})", zorder=4
+    )
     miss = (np.asarray(diag.final.p) >= 0.5) != obs
-    ax.plot(x[miss], y[miss], "o", mfc="none", mec="#000000", mew=1.2, ms=13, zorder=5,
-            label=f"missed by the final model ({int(miss.sum())})")  # fmt: skip
+    ax.plot(
+        x[miss],
+        y[miss],
+        "o",
+        mfc="none",
+        mec="#000000",
+        mew=1.2,
+        ms=13,
+        zorder=5,
+        label=f"missed by the final model ({int(miss.sum())})",
+    )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlim(*xl)
@@ -198,20 +208,29 @@ def calibration_figure(final_rows: list, baseline_rows: list, final_label: str, 
     fig = Figure(figsize=(6.4, 5.0))
     ax = fig.add_subplot()
     ax.plot([0, 1], [0, 1], color="#555555", lw=1, ls=":", label="calibrated (observed = P)")
-    for rows, color, marker, label, dx in ((final_rows, _FINAL, "o", final_label, -0.006),
-                                           (baseline_rows, _BASELINE, "s", baseline_label_, 0.006)):  # fmt: skip
+    for rows, color, marker, label, dx in (
+        (final_rows, _FINAL, "o", final_label, -0.006),
+        (baseline_rows, _BASELINE, "s", baseline_label_, 0.006),
+    ):
         if not rows:
             continue
         mp = np.array([r["mean_p"] for r in rows])
         ob = np.array([r["observed"] for r in rows])
         lo = np.array([r["observed_ci"][0] for r in rows])
         hi = np.array([r["observed_ci"][1] for r in rows])
-        ax.errorbar(mp + dx, ob, yerr=[ob - lo, hi - ob], fmt=marker + "-", color=color, capsize=3, lw=1.3, ms=6,
-                    label=label)  # fmt: skip
+        ax.errorbar(
+            mp + dx, ob, yerr=[ob - lo, hi - ob], fmt=marker + "-", color=color, capsize=3, lw=1.3, ms=6, label=label
+        )
         for r, xx in zip(rows, mp + dx, strict=True):
-            ax.annotate(f"n={r['n']}", (xx, r["observed"]), textcoords="offset points", xytext=(6, -11 if dx < 0
-                        else 5), fontsize=7, color=color,
-                        bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 0.6})  # fmt: skip
+            ax.annotate(
+                f"n={r['n']}",
+                (xx, r["observed"]),
+                textcoords="offset points",
+                xytext=(6, -11 if dx < 0 else 5),
+                fontsize=7,
+                color=color,
+                bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 0.6},
+            )
     ax.set_xlim(-0.04, 1.1)  # room for the counts beside the end bins
     ax.set_ylim(-0.04, 1.06)
     ax.set_xlabel("mean predicted P(overturn) of the bin [-]")

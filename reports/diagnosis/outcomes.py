@@ -46,24 +46,43 @@ MISSES_SHOWN = 30
 
 #: Status -> (the verdict's words, its style class, its sentence; ``{effects}`` is the effects added).
 STATUS = {
-    "no_effect_needed": ("NO EFFECT NEEDED", "ok",
-                         "The plain model's held-out log loss is at the floor that a correct model with its "
-                         "probabilities reaches; no candidate effect lowered it significantly."),
-    "explained": ("EXPLAINED", "ok",
-                  "With {effects} added, the held-out log loss is at the floor that a correct model with its "
-                  "probabilities reaches."),
-    "partly_explained": ("PARTLY EXPLAINED", "bad",
-                         "Adding {effects} lowered the held-out log loss significantly, but it stays above the floor "
-                         "that a correct model with its probabilities reaches: a part of the outcomes is "
-                         "unexplained."),
-    "unexplained": ("UNEXPLAINED", "bad",
-                    "The plain model's held-out log loss is above the floor that a correct model with its "
-                    "probabilities reaches, and no candidate effect lowered it significantly."),
-}  # fmt: skip
+    "no_effect_needed": (
+        "NO EFFECT NEEDED",
+        "ok",
+        "The plain model's held-out log loss is at the floor that a correct model with its "
+        "probabilities reaches; no candidate effect lowered it significantly.",
+    ),
+    "explained": (
+        "EXPLAINED",
+        "ok",
+        "With {effects} added, the held-out log loss is at the floor that a correct model with its "
+        "probabilities reaches.",
+    ),
+    "partly_explained": (
+        "PARTLY EXPLAINED",
+        "bad",
+        "Adding {effects} lowered the held-out log loss significantly, but it stays above the floor "
+        "that a correct model with its probabilities reaches: a part of the outcomes is "
+        "unexplained.",
+    ),
+    "unexplained": (
+        "UNEXPLAINED",
+        "bad",
+        "The plain model's held-out log loss is above the floor that a correct model with its "
+        "probabilities reaches, and no candidate effect lowered it significantly.",
+    ),
+}
 
 #: Score key -> column heading.
-_SCORE_HEADINGS = {"accuracy": "accuracy", "f1": "F1", "log_loss": "log loss [nats]", "brier": "Brier",
-                   "precision": "precision", "recall": "recall", "roc_auc": "ROC AUC"}  # fmt: skip
+_SCORE_HEADINGS = {
+    "accuracy": "accuracy",
+    "f1": "F1",
+    "log_loss": "log loss [nats]",
+    "brier": "Brier",
+    "precision": "precision",
+    "recall": "recall",
+    "roc_auc": "ROC AUC",
+}
 
 #: Fitted parameter -> (what it is, symbol, unit).
 _PARAMS = {
@@ -182,24 +201,35 @@ def _verdict(diag, best: str) -> str:
     """The verdict (the only place the page states it) and its evidence, then what remains, in words."""
     f, s, p0 = diag.final, diag.final.scores, diag.steps[0].scores
     words, cls, sentence = STATUS.get(diag.status, (diag.status.replace("_", " ").upper(), "", ""))
-    lead = (f'<p class="lead"><span class="{cls}">{esc(words)}</span> &mdash; '
-            f"{sentence.format(effects=_effects(f.name))}</p>")  # fmt: skip
+    lead = (
+        f'<p class="lead"><span class="{cls}">{esc(words)}</span> &mdash; '
+        f"{sentence.format(effects=_effects(f.name))}</p>"
+    )
     if f.name == "plain":
         spread = f"&plusmn;{100 * AMPLITUDE_SPREAD:g} %"
-        model = ("the plain model: the specimen's block as built, Housner's impact law; each pivot sampled over "
-                 f"the specimen's bracket and the table amplitude within {spread}.")  # fmt: skip
+        model = (
+            "the plain model: the specimen's block as built, Housner's impact law; each pivot sampled over "
+            f"the specimen's bracket and the table amplitude within {spread}."
+        )
     else:
         model = f"{esc(step_label(f.name))}: {_params(f.params, diag.geometry, long=True)}."
     held = f"accuracy {_ci(s, 'accuracy')}, F1 {_ci(s, 'f1')}, log loss {_ci(s, 'log_loss')} nats"
     if f is not diag.steps[0]:
-        held += (f"; the plain model: accuracy {_ci(p0, 'accuracy')}, F1 {_ci(p0, 'f1')}, log loss "
-                 f"{_ci(p0, 'log_loss')} nats")  # fmt: skip
+        held += (
+            f"; the plain model: accuracy {_ci(p0, 'accuracy')}, F1 {_ci(p0, 'f1')}, log loss "
+            f"{_ci(p0, 'log_loss')} nats"
+        )
     fl = diag.floor
-    floor = (f"a correct model with these probabilities would score a log loss of {fmt_num(fl.log_loss)} "
-             f"<span class=ci>[{fmt_num(fl.log_loss_ci[0])}, {fmt_num(fl.log_loss_ci[1])}]</span> nats (central 95 % "
-             f"of campaigns drawn from them); measured {fmt_num(fl.measured_log_loss)} (z = {fmt_signed(fl.z, 1)}), "
-             + ('inside that range: <span class="ok">at the floor</span>' if fl.at_floor
-                else 'beyond that range: <span class="bad">above the floor</span>'))  # fmt: skip
+    floor = (
+        f"a correct model with these probabilities would score a log loss of {fmt_num(fl.log_loss)} "
+        f"<span class=ci>[{fmt_num(fl.log_loss_ci[0])}, {fmt_num(fl.log_loss_ci[1])}]</span> nats (central 95 % "
+        f"of campaigns drawn from them); measured {fmt_num(fl.measured_log_loss)} (z = {fmt_signed(fl.z, 1)}), "
+        + (
+            'inside that range: <span class="ok">at the floor</span>'
+            if fl.at_floor
+            else 'beyond that range: <span class="bad">above the floor</span>'
+        )
+    )
     items = [
         f"<li><b>Final model</b>: {model}</li>",
         f"<li><b>Held out</b> ({diag.folds} stratified folds, 95 % bootstrap intervals over the records): {held}.</li>",
@@ -223,11 +253,13 @@ def _against_baseline(diag, best: str) -> str:
     d = per_record_log_loss(diag.baseline_p[best], diag.observed) - per_record_log_loss(diag.final.p, diag.observed)
     se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else math.nan
     mean = float(np.mean(d))
-    text = (f"{esc(baseline_label(best))} on the same folds, log loss {_ci(b, 'log_loss')} nats, accuracy "
-            f"{_ci(b, 'accuracy')}: the model is "
-            + ('<span class="ok">ahead</span>' if ahead else '<span class="bad">NOT ahead</span>')
-            + f" in log loss (the baseline's minus the model's, record by record: {fmt_signed(mean, 3)} &plusmn; "
-            f"{fmt_num(se)} nats")  # fmt: skip
+    text = (
+        f"{esc(baseline_label(best))} on the same folds, log loss {_ci(b, 'log_loss')} nats, accuracy "
+        f"{_ci(b, 'accuracy')}: the model is "
+        + ('<span class="ok">ahead</span>' if ahead else '<span class="bad">NOT ahead</span>')
+        + f" in log loss (the baseline's minus the model's, record by record: {fmt_signed(mean, 3)} &plusmn; "
+        f"{fmt_num(se)} nats"
+    )
     if ahead and math.isfinite(se) and mean < 2 * se:
         text += ", within two standard errors: not a clear lead"
     text += ")."
@@ -241,17 +273,23 @@ def _remains(diag) -> str:
     s, n, fl = diag.final.scores, len(diag.ids), diag.floor
     fn, fp = int(s["fn"]), int(s["fp"])
     lo, hi = n * (1 - fl.accuracy_ci[1]), n * (1 - fl.accuracy_ci[0])
-    expect = (f"a correct model with these probabilities would miss about {n * (1 - fl.accuracy):.0f} "
-              f"<span class=ci>[{lo:.0f}, {hi:.0f}]</span>")  # fmt: skip
+    expect = (
+        f"a correct model with these probabilities would miss about {n * (1 - fl.accuracy):.0f} "
+        f"<span class=ci>[{lo:.0f}, {hi:.0f}]</span>"
+    )
     if fn + fp == 0:
         text = f"no record is missed: the final model puts all {n} on the right side of P = 0.5 ({expect})."
     else:
-        text = (f"{fn + fp} of {n} records {'is' if fn + fp == 1 else 'are'} missed by the final model: "
-                f"{_n(fn, 'overturn')} it gave P &lt; 0.5 and {_n(fp, 'standing record')} it gave P &ge; 0.5 "
-                f'(listed under <a href="#where">Where it fails</a>); {expect}.')  # fmt: skip
+        text = (
+            f"{fn + fp} of {n} records {'is' if fn + fp == 1 else 'are'} missed by the final model: "
+            f"{_n(fn, 'overturn')} it gave P &lt; 0.5 and {_n(fp, 'standing record')} it gave P &ge; 0.5 "
+            f'(listed under <a href="#where">Where it fails</a>); {expect}.'
+        )
     if not fl.at_floor:
-        text += (f" The log loss lies {fmt_num(fl.z, 1)} standard deviations above the floor: the outcomes are more "
-                 "surprising than the model's probabilities say, which no candidate effect removed.")  # fmt: skip
+        text += (
+            f" The log loss lies {fmt_num(fl.z, 1)} standard deviations above the floor: the outcomes are more "
+            "surprising than the model's probabilities say, which no candidate effect removed."
+        )
     return text
 
 
@@ -295,26 +333,34 @@ def _confusion(diag) -> str:
         c = st.scores
         title = step_label(st.name) + (" (final)" if st is diag.final else "")
         tables.append(
-            f'<div><h4>{esc(title)}</h4>'
+            f"<div><h4>{esc(title)}</h4>"
             + html_table(
                 ["observed \\ predicted", "overturn", "stand"],
-                [["<b>overturned</b>", f"{c['tp']}", f"<span class=bad>{c['fn']}</span>" if c["fn"] else "0"],
-                 ["<b>stood</b>", f"<span class=bad>{c['fp']}</span>" if c["fp"] else "0", f"{c['tn']}"]],
+                [
+                    ["<b>overturned</b>", f"{c['tp']}", f"<span class=bad>{c['fn']}</span>" if c["fn"] else "0"],
+                    ["<b>stood</b>", f"<span class=bad>{c['fp']}</span>" if c["fp"] else "0", f"{c['tn']}"],
+                ],
             )
             + "</div>"
-        )  # fmt: skip
+        )
     return (
-        '<div style="display:flex;flex-wrap:wrap;gap:0 2.5rem">' + "".join(tables) + "</div>"
-        + html_note(f"Out-of-fold predictions of all {len(diag.ids)} records: rows are what was observed, columns "
-                    "what the model predicted (overturn where P &ge; 0.5). The off-diagonal cells are the misses.")
-    )  # fmt: skip
+        '<div style="display:flex;flex-wrap:wrap;gap:0 2.5rem">'
+        + "".join(tables)
+        + "</div>"
+        + html_note(
+            f"Out-of-fold predictions of all {len(diag.ids)} records: rows are what was observed, columns "
+            "what the model predicted (overturn where P &ge; 0.5). The off-diagonal cells are the misses."
+        )
+    )
 
 
 def _calibration(diag, best: str) -> str:
     fig = calibration_figure(
-        diag.calibration, calibration_table(diag.baseline_p[best], diag.observed),
-        f"final model: {step_label(diag.final.name)}", f"best baseline: {baseline_label(best)}",
-    )  # fmt: skip
+        diag.calibration,
+        calibration_table(diag.baseline_p[best], diag.observed),
+        f"final model: {step_label(diag.final.name)}",
+        f"best baseline: {baseline_label(best)}",
+    )
     return html_figure(
         fig,
         "Records binned by their out-of-fold P (bins of 0.2): the observed share of overturns against the mean P of "
@@ -335,16 +381,27 @@ def _where(diag) -> str:
     for model, ms in by_model.items():
         ms = sorted(ms, key=lambda m: -abs(m["predicted_p"] - 0.5))
         for m in ms[:MISSES_SHOWN]:
-            rows.append([esc(step_label(model)), f"<code>{esc(m['id'])}</code>", esc(m["observed"]),
-                         fmt_num(m["predicted_p"]), fmt_num(m["pga_g"]), fmt_num(m["pgv_over_pga_s"])])  # fmt: skip
+            rows.append(
+                [
+                    esc(step_label(model)),
+                    f"<code>{esc(m['id'])}</code>",
+                    esc(m["observed"]),
+                    fmt_num(m["predicted_p"]),
+                    fmt_num(m["pga_g"]),
+                    fmt_num(m["pgv_over_pga_s"]),
+                ]
+            )
         if len(ms) > MISSES_SHOWN:
             more.append(f"{len(ms) - MISSES_SHOWN} more of {esc(step_label(model))} not listed")
     counts = "; ".join(f"{esc(step_label(m))}: {len(v)}" for m, v in by_model.items())
     rest = f"; {'; '.join(more)}" if more else ""
-    caption = (f"Records on the wrong side of P = 0.5, by model ({counts}), the most confident misses first (up "
-               f"to {MISSES_SHOWN} per model){rest}. P is out of fold.")  # fmt: skip
-    table = html_table(["model", "record", "observed", "predicted P [-]", "PGA [g]", "PGV/PGA [s]"], rows,
-                       caption=caption)  # fmt: skip
+    caption = (
+        f"Records on the wrong side of P = 0.5, by model ({counts}), the most confident misses first (up "
+        f"to {MISSES_SHOWN} per model){rest}. P is out of fold."
+    )
+    table = html_table(
+        ["model", "record", "observed", "predicted P [-]", "PGA [g]", "PGV/PGA [s]"], rows, caption=caption
+    )
     return pointer + table
 
 
@@ -363,8 +420,14 @@ def _candidates(diag) -> str:
         for c in diag.candidates
     ]
     return html_table(
-        ["candidate (added to the model of its round)", "fitted parameters (on all records)",
-         "held-out log loss [nats]", "fall of the held-out log loss [nats per record]", "p (one-sided)", "added"],
+        [
+            "candidate (added to the model of its round)",
+            "fitted parameters (on all records)",
+            "held-out log loss [nats]",
+            "fall of the held-out log loss [nats per record]",
+            "p (one-sided)",
+            "added",
+        ],
         rows,
         caption=(
             "Each candidate is fitted on the training folds by minimising the log loss and scored out of fold on the "
@@ -372,7 +435,7 @@ def _candidates(diag) -> str:
             "error. It is added when the fall passes a one-sided Diebold-Mariano test at a family-wise "
             f"{100 * LEVEL:g} % (Bonferroni over the candidates of its round); the best of those passing is added."
         ),
-    )  # fmt: skip
+    )
 
 
 def _settings(diag) -> str:
@@ -383,18 +446,25 @@ def _settings(diag) -> str:
             rows.append([esc(label), f"{float(value):.5g} {esc(unit)}"])
         elif key == "b_bracket_m" and isinstance(value, dict):
             for side, (lo, hi) in value.items():
-                rows.append([f"bracket of b{'+' if side == 'pos' else '-' if side == 'neg' else esc(side)} "
-                             "(the specimen's uncertainty)", f"{lo:.5g} .. {hi:.5g} m"])  # fmt: skip
+                rows.append(
+                    [
+                        f"bracket of b{'+' if side == 'pos' else '-' if side == 'neg' else esc(side)} "
+                        "(the specimen's uncertainty)",
+                        f"{lo:.5g} .. {hi:.5g} m",
+                    ]
+                )
         else:
             rows.append([esc(key), f"<code>{esc(value)}</code>"])
     rows += [
         ["records", f"{len(diag.ids)} ({int(np.sum(diag.observed))} overturned)"],
-        ["plain model's ensemble", f"pivots over their bracket &times; table amplitude &plusmn;"
-                                   f"{100 * AMPLITUDE_SPREAD:g} %"],
+        [
+            "plain model's ensemble",
+            f"pivots over their bracket &times; table amplitude &plusmn;{100 * AMPLITUDE_SPREAD:g} %",
+        ],
         ["folds", f"{diag.folds} (stratified)"],
         ["seed", esc(diag.seed)],
         ["elapsed", f"{diag.elapsed:.1f} s"],
-    ]  # fmt: skip
+    ]
     return html_table(
         ["", ""], rows, cls="kv", caption="The planar block behind the model, and the diagnosis' settings."
     )

@@ -68,11 +68,15 @@ def _candidate_params(c) -> str:
     )
 
 
-
 # ----------------------------------------------------------------------------
 # sections
-_STATUS_CLASS = {"no_misfit": "ok", "explained": "ok", "partly_explained": "bad", "unexplained": "bad",
-                 "inconclusive": "warn"}  # fmt: skip
+_STATUS_CLASS = {
+    "no_misfit": "ok",
+    "explained": "ok",
+    "partly_explained": "bad",
+    "unexplained": "bad",
+    "inconclusive": "warn",
+}
 
 
 def _verdict_text(v) -> str:
@@ -98,8 +102,10 @@ def _headline(diag) -> str:
     v = diag.verdict
     out = ""
     if v is not None:
-        out += (f'<p class="lead"><span class="{_STATUS_CLASS.get(v.status, "")}">'
-                f"{esc(v.status.replace('_', ' ').upper())}</span> &mdash; {esc(_verdict_text(v))}</p>")  # fmt: skip
+        out += (
+            f'<p class="lead"><span class="{_STATUS_CLASS.get(v.status, "")}">'
+            f"{esc(v.status.replace('_', ' ').upper())}</span> &mdash; {esc(_verdict_text(v))}</p>"
+        )
     b, f = diag.baseline, diag.final
     if len(diag.steps) > 1:
         d, se = _paired_fall(diag)
@@ -154,21 +160,41 @@ def _verdict_detail(diag) -> str:
     rows = []
     for label, res in (("plain Housner model", v.baseline), ("final model", v.residual)):
         for kind, g in res.groups.items():
-            rows.append([esc(label), esc(kind.replace("_", " ")), str(g["n"]), _f(g["error"]), _f(g["floor"]),
-                         f"{g['ratio']:.2f}", esc(verdict_words.z_text(g["z"])),
-                         '<span class="bad">yes</span>' if g["misfit"] else "no",
-                         f"{g.get('detectable_ratio', float('nan')):.2f}"])  # fmt: skip
+            rows.append(
+                [
+                    esc(label),
+                    esc(kind.replace("_", " ")),
+                    str(g["n"]),
+                    _f(g["error"]),
+                    _f(g["floor"]),
+                    f"{g['ratio']:.2f}",
+                    esc(verdict_words.z_text(g["z"])),
+                    '<span class="bad">yes</span>' if g["misfit"] else "no",
+                    f"{g.get('detectable_ratio', float('nan')):.2f}",
+                ]
+            )
     # the constants are read from the verdict's module when the page is built (they are its, never copied)
     fam, fam_plain = diag.settings.get("floor_family", ""), diag.settings.get("floor_family_plain", "")
     fams = ""
     if fam:
         plain_fam = fam_plain or fam
-        fams = (f" The plain model's floor is over correct models of the {verdict_words.family_text(plain_fam)}"
-                + ("" if plain_fam == fam else f"; the final model's over the {verdict_words.family_text(fam)}")
-                + " (each model's narrowest family whose floor its ground motions reach; the widest when none).")
+        fams = (
+            f" The plain model's floor is over correct models of the {verdict_words.family_text(plain_fam)}"
+            + ("" if plain_fam == fam else f"; the final model's over the {verdict_words.family_text(fam)}")
+            + " (each model's narrowest family whose floor its ground motions reach; the widest when none)."
+        )
     table = html_table(
-        ["model", "records", "n", "held-out error [alpha]", "correct-model floor", "ratio", "z", "misfit",
-         "detectable ratio"],
+        [
+            "model",
+            "records",
+            "n",
+            "held-out error [alpha]",
+            "correct-model floor",
+            "ratio",
+            "z",
+            "misfit",
+            "detectable ratio",
+        ],
         rows,
         caption=(
             "Held-out (out-of-fold) time-history error against the floor a correct model shows on the same records, "
@@ -180,7 +206,7 @@ def _verdict_detail(diag) -> str:
             f"detectable ratio is what these records would reveal with 80 % power. Ratio: the group's held-out "
             f"error over its floor (a correct model: 1); {verdict_words.Z_LEGEND}." + fams
         ),
-    )  # fmt: skip
+    )
     nxt = ""
     if _shows_next(v):
         items = []
@@ -188,11 +214,12 @@ def _verdict_detail(diag) -> str:
         for c in v.next:
             who = "the model with " + " + ".join(names) if names and c.get("from") != "plain" else "the plain model"
             ev = "; ".join(
-                esc(verdict_words.evidence_text(e)) if e["metric"].startswith("probe:") else
-                f"{esc(e['label'])}: measured {_pm(e['measured'], e['measured_se'])}, {esc(who)} "
+                esc(verdict_words.evidence_text(e))
+                if e["metric"].startswith("probe:")
+                else f"{esc(e['label'])}: measured {_pm(e['measured'], e['measured_se'])}, {esc(who)} "
                 f"{_pm(e['model'], e['model_se'])} ({esc(verdict_words.z_text(e['z']))})"
                 for e in c["evidence"]
-            )  # fmt: skip
+            )
             items.append(
                 f"<li><b>{esc(c['class'])}</b> &mdash; {esc(c['meaning'])}<br><span class=sub>{ev}</span></li>"
             )
@@ -200,20 +227,25 @@ def _verdict_detail(diag) -> str:
         if names and src == {"final"}:
             whose = f"what the model with {' + '.join(names)} still gets wrong"
         elif names:
-            whose = (f"what the plain model gets wrong, in its order, each with the figures of the model with "
-                     f"{' + '.join(names)} where that model still departs there by more than 3 standard errors, else "
-                     "the plain model's (the added effects may cover those in part); then what only the model with "
-                     "them shows")  # fmt: skip
+            whose = (
+                f"what the plain model gets wrong, in its order, each with the figures of the model with "
+                f"{' + '.join(names)} where that model still departs there by more than 3 standard errors, else "
+                "the plain model's (the added effects may cover those in part); then what only the model with "
+                "them shows"
+            )
         else:
             whose = "what the plain model gets wrong"
         legend = esc(verdict_words.Z_LOCAL_LEGEND)
-        nxt = (f'<h3>Where to look next</h3><p class="sub">From {esc(whose)}; {legend}.</p><ol>'
-               + "".join(items) + "</ol>")
+        nxt = (
+            f'<h3>Where to look next</h3><p class="sub">From {esc(whose)}; {legend}.</p><ol>' + "".join(items) + "</ol>"
+        )
     freq = ""
     if diag.selection_frequency:
         k = diag.settings.get("folds", "?")
-        cells = ", ".join(f"<code>{esc(n)}</code> {100 * f:.0f} %" for n, f in
-                          sorted(diag.selection_frequency.items(), key=lambda kv: -kv[1]))  # fmt: skip
+        cells = ", ".join(
+            f"<code>{esc(n)}</code> {100 * f:.0f} %"
+            for n, f in sorted(diag.selection_frequency.items(), key=lambda kv: -kv[1])
+        )
         freq = f'<p class="sub">Best candidate of its round, fold by fold ({k} folds): {cells}.</p>'
     dist = ""
     if v.distribution and not all(d in v.text for d in v.distribution):
@@ -229,14 +261,16 @@ def summary_section(diag) -> str:
         items = "".join(f"<li><code>{esc(rid)}</code> ({esc(f)}): {esc(msg)}</li>" for rid, f, msg in c.skipped)
         skipped = f'<p class="bad">{len(c.skipped)} record(s) skipped:</p><ul>{items}</ul>'
     return (
-        _headline(diag) + _histories(diag) + _verdict_detail(diag)
+        _headline(diag)
+        + _histories(diag)
+        + _verdict_detail(diag)
         + f'<p class="sub">Specimen: 2H = {spec.height:g} m, 2B = {spec.width:g} m, m = {spec.mass:g} kg, '
         f"alpha = {spec.alpha:.4f} rad, p = {spec.p:.4f} 1/s, Housner r = {spec.r_housner:.4f}. "
         f"{len(c.free_vibration)} free-vibration and {len(c.ground_motion)} ground-motion records, "
         f"{diag.settings.get('folds', '?')}-fold cross-validation (seed {esc(diag.settings.get('seed'))}): every "
         f"record is fitted on in the other folds and held out once; sensor noise sigma/alpha "
         f"{diag.noise_floor:.2g}.</p>{skipped}"
-    )  # fmt: skip
+    )
 
 
 def ladder_section(diag) -> str:
@@ -254,8 +288,14 @@ def ladder_section(diag) -> str:
             ]
         )
     table = html_table(
-        ["step", "effects (fitted parameters)", "held-out error [alpha]", "training error",
-         "held-out error against the previous step [alpha]", "significant"],
+        [
+            "step",
+            "effects (fitted parameters)",
+            "held-out error [alpha]",
+            "training error",
+            "held-out error against the previous step [alpha]",
+            "significant",
+        ],
         rows,
         caption=(
             "Time-history error over the measured window (see housner.scenarios.campaigns.compare), mean over every "
@@ -264,7 +304,7 @@ def ladder_section(diag) -> str:
             f"previous step. The sensor noise alone (sigma/alpha) is {diag.noise_floor:.2g}; the correct-model floor "
             "the verdict uses is in the table above."
         ),
-    )  # fmt: skip
+    )
     fig = html_figure(ladder_figure(diag), "Held-out error at each step, with the noise floor.", "error ladder")
     return table + fig
 
@@ -285,7 +325,7 @@ def candidates_section(diag) -> str:
                 + f" <span class=muted>({esc(signed_words(c.reason))})</span>",
             ]
             for c in rnd
-        ]  # fmt: skip
+        ]
         out.append(f"<h3>Round {k + 1}: candidates added to {esc(base)}</h3>")
         out.append(
             html_table(
@@ -299,7 +339,7 @@ def candidates_section(diag) -> str:
                     "significant",
                 ],
                 rows,
-            )  # fmt: skip
+            )
         )
     if not out:
         return "<p>No candidates were tried.</p>"
@@ -352,7 +392,7 @@ def localisation_section(diag) -> str:
                 "Direction bias and overturning (95 % intervals)",
                 "share [-]",
                 ref=0.5,
-            ),  # fmt: skip
+            ),
             "Share of excursions and of first uplifts toward +theta (0.5 for a symmetric block), and the overturn "
             "fraction of the ground-motion records.",
             "direction bias",
@@ -364,7 +404,7 @@ def localisation_section(diag) -> str:
                 "Alternation of free-vibration energy ratios (95 % intervals)",
                 "[-]",
                 ref=0.0,
-            ),  # fmt: skip
+            ),
             "Difference of the mean log energy ratio of impacts that end a theta > 0 half-cycle and of those that "
             "end a theta < 0 one: 0 for a symmetric block; peaks alternating in size give a non-zero value.",
             "alternation",
@@ -409,8 +449,11 @@ def _metric_table(diag) -> str:
 def records_section(diag) -> str:
     steps = diag.steps
     held = set(diag.heldout_ids)
-    header = ["record", "kind", "set", "window [s]"] + [f"error: {esc(step_label(s))}" for s in steps] + [
-        "theta_max/alpha measured", f"theta_max/alpha {esc(step_label(steps[-1]))}", "diverges at [s]"]  # fmt: skip
+    header = (
+        ["record", "kind", "set", "window [s]"]
+        + [f"error: {esc(step_label(s))}" for s in steps]
+        + ["theta_max/alpha measured", f"theta_max/alpha {esc(step_label(steps[-1]))}", "diverges at [s]"]
+    )
     rows = []
     per_step = [{r.id: r for r in s.comparison.records} for s in steps]
     for rec in diag.campaign.records:
@@ -420,9 +463,8 @@ def records_section(diag) -> str:
         rows.append(
             [f"<code>{esc(rec.id)}</code>", esc(rec.kind), which, _f(r0.window_end, 3)]
             + [_f(p[rec.id].error) for p in per_step]
-            + [_f(r0.theta_max_over_alpha_measured, 3), _f(rl.theta_max_over_alpha_model, 3),
-               _f(rl.divergence_time, 3)]
-        )  # fmt: skip
+            + [_f(r0.theta_max_over_alpha_measured, 3), _f(rl.theta_max_over_alpha_model, 3), _f(rl.divergence_time, 3)]
+        )
     return html_table(header, rows, caption="Errors in units of alpha over each record's window; failures show a dash.")
 
 
@@ -432,19 +474,32 @@ def sensor_section(diag) -> str:
     if sensor is None:
         return "<p>The sensor was not assessed.</p>"
     n = sensor.noise
-    rows = [["noise", esc(n.describe())],
-            ["records' sigma", f"mean {sensor.sigma_before * 1e3:.3g} mrad from differences, "
-                               f"{sensor.sigma_after * 1e3:.3g} mrad as used"],
-            ["quiet samples", esc(", ".join(f"{k}: {v}" for k, v in n.sources.items()) or "none")]]  # fmt: skip
+    rows = [
+        ["noise", esc(n.describe())],
+        [
+            "records' sigma",
+            f"mean {sensor.sigma_before * 1e3:.3g} mrad from differences, {sensor.sigma_after * 1e3:.3g} mrad as used",
+        ],
+        ["quiet samples", esc(", ".join(f"{k}: {v}" for k, v in n.sources.items()) or "none")],
+    ]
     rows += [[esc(f"fault: {f.kind.replace('_', ' ')}"), esc(f.text)] for f in sensor.faults]
     rows += [["note", esc(t)] for t in sensor.notes]
-    out = html_table(["", ""], rows, cls="kv", caption="What the records say the theta sensor did, before any physics "
-                     "was fitted (housner.scenarios.campaigns.sensor): faults' samples are left out of every error, "
-                     "drifts are corrected, and the floor draws noise of the measured correlation.")  # fmt: skip
+    out = html_table(
+        ["", ""],
+        rows,
+        cls="kv",
+        caption="What the records say the theta sensor did, before any physics "
+        "was fitted (housner.scenarios.campaigns.sensor): faults' samples are left out of every error, "
+        "drifts are corrected, and the floor draws noise of the measured correlation.",
+    )
     fig = sensor_figure(diag)
     if fig is not None:
-        out += html_figure(fig, "The autocorrelation of the noise on the quiet samples (the hold before a release, "
-                           "the rest after the motion), beside white noise's.", "noise autocorrelation")  # fmt: skip
+        out += html_figure(
+            fig,
+            "The autocorrelation of the noise on the quiet samples (the hold before a release, "
+            "the rest after the motion), beside white noise's.",
+            "noise autocorrelation",
+        )
     return out
 
 

@@ -105,14 +105,21 @@ def _build_sections(run: Run) -> list[Section]:
         Section("agreement", "Cross-engine agreement", agreement_section(run)),
     ]
     if has_engine_measurements(run):
-        out.append(Section("engines-explained", "What each engine's departure is made of, and what it costs",
-                           guarded("The engines' decomposition and frontiers", lambda: engines_explained(run))))
+        out.append(
+            Section(
+                "engines-explained",
+                "What each engine's departure is made of, and what it costs",
+                guarded("The engines' decomposition and frontiers", lambda: engines_explained(run)),
+            )
+        )
     if run.source == "pulses":
-        out.append(Section("rocking-spectra", "Rocking spectra",
-                           guarded("The rocking spectra", lambda: spectra_section(run))))
+        out.append(
+            Section("rocking-spectra", "Rocking spectra", guarded("The rocking spectra", lambda: spectra_section(run)))
+        )
     if run.source == "free_vibration":
-        out.append(Section("free-vibration", "Free rocking",
-                           guarded("Free rocking", lambda: free_vibration_section(run))))
+        out.append(
+            Section("free-vibration", "Free rocking", guarded("Free rocking", lambda: free_vibration_section(run)))
+        )
     out.append(Section("failures", "Failed records", failures_section(run)))
     out.append(Section("provenance", "Provenance", provenance_section(run)))
     out.append(Section("glossary", "Glossary", glossary_html()))
@@ -122,8 +129,13 @@ def _build_sections(run: Run) -> list[Section]:
 def _campaign_sections(run: Run) -> list[Section]:
     """A measured campaign's run: the outcomes first; the distribution against the analytic model where it makes
     sense (the chaos floor, the record against its ensemble and the paper's Table 2 do not apply and are left out)."""
-    out = [Section("outcomes", "How well does each engine predict the measured outcomes?",
-                   guarded("The outcome scores", lambda: outcomes_section(run)))]  # fmt: skip
+    out = [
+        Section(
+            "outcomes",
+            "How well does each engine predict the measured outcomes?",
+            guarded("The outcome scores", lambda: outcomes_section(run)),
+        )
+    ]
     if run.others:  # one engine alone has no distribution to be judged against
         out.append(Section("verdict", "How far is each engine from the analytic model?", headline_section(run)))
     return out + [
@@ -134,7 +146,7 @@ def _campaign_sections(run: Run) -> list[Section]:
         Section("failures", "Failed records", failures_section(run)),
         Section("provenance", "Provenance", provenance_section(run)),
         Section("glossary", "Glossary", glossary_html()),
-    ]  # fmt: skip
+    ]
 
 
 # ----------------------------------------------------------------------------

@@ -101,8 +101,9 @@ def _size_title(frame: pd.DataFrame, size: float) -> str:
     return f"prototype height {size:g} m" + (f" (S = {float(s[0]):g})" if len(s) == 1 else "")
 
 
-def _at_size(frame: pd.DataFrame, size: float, also: Sequence[str], reference: str | None,
-             colors: Mapping[str, str] | None) -> tuple:  # fmt: skip
+def _at_size(
+    frame: pd.DataFrame, size: float, also: Sequence[str], reference: str | None, colors: Mapping[str, str] | None
+) -> tuple:
     """A table's rows at one size, and what every figure of one size needs of them.
 
     Returns the rows, the engines (the reference first, then those of the rows and ``also``), their colours,
@@ -192,8 +193,16 @@ def plot_fragility(
     handles, labels = [], []
     for k, name in enumerate(names):
         d = sub[sub["engine"] == name].sort_values("intensity")
-        drawn = _fragility_series(ax, d[d["n"].astype(float) > 0], name, _fit_of(fits, name, size), grid, shift[k],
-                                  colors.get(name, "#444444"), name == reference)  # fmt: skip
+        drawn = _fragility_series(
+            ax,
+            d[d["n"].astype(float) > 0],
+            name,
+            _fit_of(fits, name, size),
+            grid,
+            shift[k],
+            colors.get(name, "#444444"),
+            name == reference,
+        )
         if drawn is not None:
             handles.append(drawn[0])
             labels.append(drawn[1])
@@ -223,8 +232,9 @@ def _curve_grid(levels: np.ndarray, log: bool) -> np.ndarray:
     return np.linspace(max(levels.min() - pad, 0.0), levels.max() + pad, 400)
 
 
-def _fragility_series(ax, d: pd.DataFrame, name: str, fit: Mapping | None, grid: np.ndarray, shift, c: str,
-                      is_reference: bool) -> tuple[tuple, str] | None:  # fmt: skip
+def _fragility_series(
+    ax, d: pd.DataFrame, name: str, fit: Mapping | None, grid: np.ndarray, shift, c: str, is_reference: bool
+) -> tuple[tuple, str] | None:
     """One engine of :func:`plot_fragility`: its stripes ``d`` (those with a valid record) as points with
     Wilson bars, and its fitted curve over ``grid`` where the fit has a median. Returns the legend's handle
     (the drawn artists) and text, or None when nothing was drawn."""
@@ -420,8 +430,16 @@ def plot_exceedance(
             d = dt[(dt["engine"] == name) & (dt["n"].astype(float) > 0)].sort_values("intensity")
             if not len(d):
                 continue
-            eb = _stripe_points(ax, d, shift[k], name, fmt="-o", ms=4, lw=1.6 if name == reference else 1.0,
-                                color=colors.get(name, "#444444"))  # fmt: skip
+            eb = _stripe_points(
+                ax,
+                d,
+                shift[k],
+                name,
+                fmt="-o",
+                ms=4,
+                lw=1.6 if name == reference else 1.0,
+                color=colors.get(name, "#444444"),
+            )
             handles.setdefault(name, eb)
         what = " (overturn)" if t >= 1.0 else ""
         ax.set_title(rf"P[$\theta_{{max}}/\alpha \geq$ {t:g}]{what}", fontsize=10)

@@ -11,8 +11,15 @@ from housner.reports.run.sections.tuning import settings_html
 from housner.reports.study.figures import plot_exceedance, plot_fragility, plot_size_effect
 from housner.reports.study.view import StudyView, key
 
-__all__ = ["MAX_FAILURE_ROWS", "exceedance_figures", "failures", "fragility_figures", "provenance", "size_figure",
-           "stripes"]  # fmt: skip
+__all__ = [
+    "MAX_FAILURE_ROWS",
+    "exceedance_figures",
+    "failures",
+    "fragility_figures",
+    "provenance",
+    "size_figure",
+    "stripes",
+]
 
 #: Failed records listed in full; beyond this the table is cut (the counts above it stay complete), so that a
 #: study where an engine failed on thousands of records still gives a page a browser opens.

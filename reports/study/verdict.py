@@ -228,8 +228,9 @@ def _degenerate(study: StudyView) -> str:
                 continue
             if is_ok(f):
                 if f.get("caveat"):
-                    caveats.append(f"<li>{engine_tag(engine, study)} at {esc(study.size_title(size))}: "
-                                   f"{esc(f['caveat'])}</li>")  # fmt: skip
+                    caveats.append(
+                        f"<li>{engine_tag(engine, study)} at {esc(study.size_title(size))}: {esc(f['caveat'])}</li>"
+                    )
                 continue
             msg = str(f.get("message") or "no message")
             rows.append(

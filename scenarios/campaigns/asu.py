@@ -214,9 +214,14 @@ def import_asu(
         spec = {"mesh": mesh_path.name, "azimuth": azimuth, "contact": contact}
         (tmp / "campaign.toml").write_text(_campaign_toml(data, specimen, flags, spec, written), encoding="utf-8")
         _move_into_place(tmp, out, replace)
-    return ImportResult(out=out, n_records=len(written), n_overturned=sum(over for _, over, _ in written),
-                        left_out=omitted.in_test_order(), n_absent=sum(not t.present for t in tests),
-                        elapsed=time.perf_counter() - start)  # fmt: skip
+    return ImportResult(
+        out=out,
+        n_records=len(written),
+        n_overturned=sum(over for _, over, _ in written),
+        left_out=omitted.in_test_order(),
+        n_absent=sum(not t.present for t in tests),
+        elapsed=time.perf_counter() - start,
+    )
 
 
 class _Omissions:
@@ -379,8 +384,11 @@ def _check_out(out: Path) -> bool:
     if (out / "records").is_dir():
         foreign += [f"records/{p.name}" for p in (out / "records").iterdir() if p.name not in files]
     if foreign:
-        raise DataFileError(out, f"a previous import, but it now also holds {foreign[0]!r}: not replaced "
-                            "(move that file away, or give another folder)")  # fmt: skip
+        raise DataFileError(
+            out,
+            f"a previous import, but it now also holds {foreign[0]!r}: not replaced "
+            "(move that file away, or give another folder)",
+        )
     return True
 
 
@@ -462,8 +470,17 @@ class _TxtSource:
 def _read_txt(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Columns 2 (acceleration [g]) and 6 (displacement [V]) of an original file; _LeftOut if malformed."""
     try:
-        table = pd.read_csv(path, sep="\t", header=None, skiprows=1, names=range(_N_COLS + 1), dtype=np.float64,
-                            skipinitialspace=True, skip_blank_lines=False, engine="c")  # fmt: skip
+        table = pd.read_csv(
+            path,
+            sep="\t",
+            header=None,
+            skiprows=1,
+            names=range(_N_COLS + 1),
+            dtype=np.float64,
+            skipinitialspace=True,
+            skip_blank_lines=False,
+            engine="c",
+        )
         x = table.to_numpy()
     except (ValueError, pd.errors.ParserError, UnicodeDecodeError):
         x = None
@@ -539,8 +556,10 @@ def _toml_str(s: str) -> str:
 
 def _campaign_toml(data: Path, specimen: str, flags: str, spec: dict, written: list) -> str:
     """The text of campaign.toml: the specimen from its mesh, then the records in the order of testing."""
-    desc = (f"{MARK} from {data.resolve()}; source: virtual-shake-robot project, Seismica doi "
-            f"10.26443/seismica.v3i1.692; outcomes from column {flags}")  # fmt: skip
+    desc = (
+        f"{MARK} from {data.resolve()}; source: virtual-shake-robot project, Seismica doi "
+        f"10.26443/seismica.v3i1.692; outcomes from column {flags}"
+    )
     lines = [
         f"name = {_toml_str(f'ASU granite shake-table tests (2021), specimen {specimen}')}",
         f"description = {_toml_str(desc)}",

@@ -43,6 +43,7 @@ from housner.specimen import Specimen
 
 __all__ = ["Campaign", "load_campaign"]
 
+
 @dataclass(eq=False)
 class Campaign:
     """A measurement campaign: the specimen and its records.
@@ -153,8 +154,11 @@ def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
         try:
             outside = None if allow_outside else path_outside(root / rec["file"], root)
             if outside is not None:
-                raise DataFileError(toml, f"record {rec['id']!r}: file {rec['file']!r} {outside}",
-                                    line=key_line(text, "file", "record", i))  # fmt: skip
+                raise DataFileError(
+                    toml,
+                    f"record {rec['id']!r}: file {rec['file']!r} {outside}",
+                    line=key_line(text, "file", "record", i),
+                )
             r = read_record(root, rec, specimen)
             if isinstance(r, MeasuredRecord):
                 r = replace(r, position=i)
@@ -165,16 +169,20 @@ def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
         (outcomes if isinstance(r, OutcomeRecord) else records).append(r)
     if 2 * len(skipped) > len(entries):
         raise DataFileError(toml, _unreadable_message(name, len(entries), skipped, errors))
-    return Campaign(name=name, specimen=specimen, records=records, skipped=skipped, path=root, outcomes=outcomes,
-                    scan=scan)  # fmt: skip
+    return Campaign(
+        name=name, specimen=specimen, records=records, skipped=skipped, path=root, outcomes=outcomes, scan=scan
+    )
 
 
 def _cause(e: DataFileError) -> tuple[str, str]:
     """The message of a record's error without its file and line, and that message with its numbers blanked
     (errors of the same cause share the latter)."""
     text = " ".join(str(e).split())  # one line
-    where = str(e.path) + (f" line {e.line}" if e.line is not None else "") + (
-        f", column `{e.column}`" if e.column is not None else "")  # fmt: skip
+    where = (
+        str(e.path)
+        + (f" line {e.line}" if e.line is not None else "")
+        + (f", column `{e.column}`" if e.column is not None else "")
+    )
     msg = text[len(where) + 2 :] if text.startswith(where + ": ") else text
     return msg, re.sub(r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?", "#", msg)
 
@@ -187,7 +195,8 @@ def _unreadable_message(name: str, n: int, skipped: list, errors: list[DataFileE
     ex = errors[first]
     where = f"record {skipped[first][0]!r}, {skipped[first][1]}"
     where += (f" line {ex.line}" if ex.line is not None else "") + (
-        f", column `{ex.column}`" if ex.column is not None else "")  # fmt: skip
+        f", column `{ex.column}`" if ex.column is not None else ""
+    )
     none = "no record could be read: " if len(errors) == n else ""
     return (
         f"campaign {name!r}: {none}{len(errors)} of {n} records could not be read, more than half, so the campaign "

@@ -229,14 +229,18 @@ def _mesh_specimen(path: Path, text: str, spec: dict, name: str, allow_outside: 
     kinds = {"mesh": str, "azimuth": (int, float), "contact": str, "density": (int, float)}
     for key, kind in kinds.items():
         if key in spec and (isinstance(spec[key], bool) or not isinstance(spec[key], kind)):
-            raise DataFileError(path, f"[specimen] {key!r} must be {_MESH_KEYS[key]}, got {spec[key]!r}",
-                                line=key_line(text, key, "specimen"))  # fmt: skip
+            raise DataFileError(
+                path,
+                f"[specimen] {key!r} must be {_MESH_KEYS[key]}, got {spec[key]!r}",
+                line=key_line(text, key, "specimen"),
+            )
     mesh = Path(spec["mesh"])
     mesh = mesh if mesh.is_absolute() else path.parent / mesh
     outside = None if allow_outside else path_outside(mesh, path.parent, "the files it names")
     if outside is not None:
-        raise DataFileError(path, f"[specimen] 'mesh' {spec['mesh']!r} {outside}",
-                            line=key_line(text, "mesh", "specimen"))  # fmt: skip
+        raise DataFileError(
+            path, f"[specimen] 'mesh' {spec['mesh']!r} {outside}", line=key_line(text, "mesh", "specimen")
+        )
     try:
         scan = specimen_from_mesh(
             mesh,
@@ -281,9 +285,10 @@ def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
                 )
             if not isinstance(rec[key], str) or not rec[key].strip():
                 raise DataFileError(
-                    path, f"{where}{key!r} must be a non-empty string, got {rec[key]!r}",
+                    path,
+                    f"{where}{key!r} must be a non-empty string, got {rec[key]!r}",
                     line=key_line(text, key, "record", i),
-                )  # fmt: skip
+                )
         rid = rec["id"]
         if rid in seen:
             raise DataFileError(
@@ -302,19 +307,20 @@ def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
             )
         if "overturned" in rec and not isinstance(rec["overturned"], bool):
             raise DataFileError(
-                path, f"{where}'overturned' must be true or false, got {rec['overturned']!r}",
+                path,
+                f"{where}'overturned' must be true or false, got {rec['overturned']!r}",
                 line=key_line(text, "overturned", "record", i),
-            )  # fmt: skip
+            )
         for key in _OUTCOME_KEYS:
             v = rec.get(key, 0.0)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise DataFileError(
-                    path, f"{where}{key!r} must be a number >= 0 {_RECORD_KEYS[key].split(' (')[0]}, got {v!r}",
+                    path,
+                    f"{where}{key!r} must be a number >= 0 {_RECORD_KEYS[key].split(' (')[0]}, got {v!r}",
                     line=key_line(text, key, "record", i),
-                )  # fmt: skip
+                )
         out.append(rec)
     return out
-
 
 
 def path_outside(path: Path, folder: Path, what: str = "records") -> str | None:
@@ -325,6 +331,7 @@ def path_outside(path: Path, folder: Path, what: str = "records") -> str | None:
             return None
     except (OSError, RuntimeError):  # a loop of symbolic links (RuntimeError before Python 3.13)
         return "cannot be resolved (a loop of symbolic links?)"
-    return (f"resolves outside the campaign folder {inside} ({what} must lie inside it; pass --allow-outside "
-            "to read it anyway, allow_outside=True in Python)")  # fmt: skip
-
+    return (
+        f"resolves outside the campaign folder {inside} ({what} must lie inside it; pass --allow-outside "
+        "to read it anyway, allow_outside=True in Python)"
+    )

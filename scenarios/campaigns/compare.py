@@ -123,9 +123,12 @@ def resolve_effects(effects: Iterable[Any], specimen=None) -> tuple:
 
 
 def simulate_records(
-    specimen, records: Sequence[MeasuredRecord], engine: Any = "housner", effects: Sequence[Any] = (),
+    specimen,
+    records: Sequence[MeasuredRecord],
+    engine: Any = "housner",
+    effects: Sequence[Any] = (),
     engine_settings: Mapping[str, Any] | None = None,
-) -> list[Response | str]:  # fmt: skip
+) -> list[Response | str]:
     """Run an engine on the measured records (whole record in, whole response out).
 
     Parameters
@@ -183,9 +186,14 @@ def simulate_records(
     return out
 
 
-def release_sensitivities(specimen, records: Sequence[MeasuredRecord], responses: Sequence[Response | str],
-                          engine: Any = "housner", effects: Sequence[Any] = (),
-                          engine_settings: Mapping[str, Any] | None = None) -> list[np.ndarray | None]:  # fmt: skip
+def release_sensitivities(
+    specimen,
+    records: Sequence[MeasuredRecord],
+    responses: Sequence[Response | str],
+    engine: Any = "housner",
+    effects: Sequence[Any] = (),
+    engine_settings: Mapping[str, Any] | None = None,
+) -> list[np.ndarray | None]:
     """d theta / d theta0 on each free-vibration record's grid (finite difference; None elsewhere).
 
     One more run of each free-vibration record, released RELEASE_DTHETA0_SIGMAS / 2 noise sigmas
@@ -195,10 +203,13 @@ def release_sensitivities(specimen, records: Sequence[MeasuredRecord], responses
     fv = [i for i, rec in enumerate(records) if rec.kind == "free_vibration" and isinstance(responses[i], Response)]
     if not fv:
         return out
-    eps = [math.copysign(0.5 * RELEASE_DTHETA0_SIGMAS * max(records[i].noise, 1e-9), records[i].motion.theta0)
-           for i in fv]  # fmt: skip
-    bumped = [replace(records[i], motion=replace(records[i].motion, theta0=records[i].motion.theta0 + e))
-              for i, e in zip(fv, eps, strict=True)]  # fmt: skip
+    eps = [
+        math.copysign(0.5 * RELEASE_DTHETA0_SIGMAS * max(records[i].noise, 1e-9), records[i].motion.theta0) for i in fv
+    ]
+    bumped = [
+        replace(records[i], motion=replace(records[i].motion, theta0=records[i].motion.theta0 + e))
+        for i, e in zip(fv, eps, strict=True)
+    ]
     res = simulate_records(specimen, bumped, engine, effects, engine_settings)
     for i, e, r, rec in zip(fv, eps, res, bumped, strict=True):
         if isinstance(r, Response):
@@ -480,8 +491,10 @@ def compare(
         )
     name = engine if isinstance(engine, str) else getattr(engine, "name", type(engine).__name__)
     sens = release_sensitivities(spec, campaign.records, responses, engine, eff, engine_settings)
-    rows = [_record_comparison(rec, res, i, alpha, window_impacts, sens[i])
-            for i, (rec, res) in enumerate(zip(campaign.records, responses, strict=True))]  # fmt: skip
+    rows = [
+        _record_comparison(rec, res, i, alpha, window_impacts, sens[i])
+        for i, (rec, res) in enumerate(zip(campaign.records, responses, strict=True))
+    ]
     gm_ok = [r for r in rows if r.kind == "ground_motion" and r.response is not None]
     dist = _distribution(
         np.array([r.theta_max_over_alpha_measured for r in gm_ok]),
@@ -490,24 +503,44 @@ def compare(
     measured = model = None
     if localise:
         measured = measured_features(campaign)
-        observed = {rec.id: observe(on_grid(r.response, rec), rec, i) for i, (rec, r) in
-                    enumerate(zip(campaign.records, rows, strict=True)) if r.response is not None}  # fmt: skip
+        observed = {
+            rec.id: observe(on_grid(r.response, rec), rec, i)
+            for i, (rec, r) in enumerate(zip(campaign.records, rows, strict=True))
+            if r.response is not None
+        }
         seen = {rec.id: rec for rec in campaign.records}
-        model = features(campaign, observed, {r.id: sees_overturn(seen[r.id], r.overturned_model) for r in rows
-                                              if r.response is not None})  # fmt: skip
+        model = features(
+            campaign,
+            observed,
+            {r.id: sees_overturn(seen[r.id], r.overturned_model) for r in rows if r.response is not None},
+        )
     floor = float(np.mean([rec.noise for rec in campaign.records])) / alpha
     return Comparison(campaign, name, eff, rows, dist, measured, model, floor)
 
 
-def _record_comparison(rec: MeasuredRecord, res: Response | str, index: int, alpha: float,
-                       window_impacts: int | None, sensitivity) -> RecordComparison:  # fmt: skip
+def _record_comparison(
+    rec: MeasuredRecord, res: Response | str, index: int, alpha: float, window_impacts: int | None, sensitivity
+) -> RecordComparison:
     """Model against measurement on one record (``index`` its position in the campaign, ``alpha`` [rad])."""
     meas_tm = math.inf if rec.overturned else rec.theta_max / alpha
     end = error_window(rec, alpha, None if rec.kind == "free_vibration" else window_impacts)
     if not isinstance(res, Response):
         failure = str(res) or "not simulated"
-        return RecordComparison(rec.id, rec.kind, math.nan, float(rec.t[end - 1]), math.nan, meas_tm, math.nan,
-                                math.nan, rec.overturned, False, rec.noise, None, failure)  # fmt: skip
+        return RecordComparison(
+            rec.id,
+            rec.kind,
+            math.nan,
+            float(rec.t[end - 1]),
+            math.nan,
+            meas_tm,
+            math.nan,
+            math.nan,
+            rec.overturned,
+            False,
+            rec.noise,
+            None,
+            failure,
+        )
     th = on_grid(res, rec)
     over = sees_overturn(rec, bool(res.overturned))
     obs_tm = math.inf if over else float(np.max(np.abs(observe(th, rec, index)))) / alpha

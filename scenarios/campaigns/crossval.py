@@ -213,16 +213,17 @@ def cross_validation(campaign: Campaign, folds: int, seed, engine_settings) -> C
     every = Scorer(search_campaign, ids, search_settings)
     subsets = _spread_subsets(every, ids)
     search = _scorer_set(rate, the_folds, every, subsets)
-    full = search if decimation == 1 else _scorer_set("full", the_folds, Scorer(campaign, ids, engine_settings),
-                                                      subsets)  # fmt: skip
+    full = (
+        search if decimation == 1 else _scorer_set("full", the_folds, Scorer(campaign, ids, engine_settings), subsets)
+    )
     measured = measured_features(campaign).metrics()
     # parameters the localisation measures directly, far better than a fit to the histories can
     # (Effect.measured_params): taken as measured, never fitted
-    pinned = {n: p for n in available_effects()
-              if (p := effect_class(n).measured_params(measured, campaign.specimen))}  # fmt: skip
+    pinned = {n: p for n in available_effects() if (p := effect_class(n).measured_params(measured, campaign.specimen))}
     noise_floor = float(np.mean([r.noise for r in campaign.records])) / campaign.specimen.alpha
-    return CrossValidation(campaign, campaign.specimen, engine_settings, the_folds, decimation, search, full,
-                           noise_floor, measured, pinned)  # fmt: skip
+    return CrossValidation(
+        campaign, campaign.specimen, engine_settings, the_folds, decimation, search, full, noise_floor, measured, pinned
+    )
 
 
 def _scorer_set(rate: str, folds: Folds, every: Scorer, subsets: tuple[list[str], list[str]]) -> Scorers:
@@ -254,8 +255,11 @@ def _spread_subsets(every: Scorer, ids: list[str]) -> tuple[list[str], list[str]
     gm_ids = [r.id for r in every.records if r.kind != "free_vibration"]
     n = min(MECHANICS_GRID_RECORDS, len(gm_ids))
     while True:
-        step = max(1, len(gm_ids) // MECHANICS_GRID_RECORDS) if n == MECHANICS_GRID_RECORDS else \
-            max(1, len(gm_ids) // max(n, 1))  # fmt: skip
+        step = (
+            max(1, len(gm_ids) // MECHANICS_GRID_RECORDS)
+            if n == MECHANICS_GRID_RECORDS
+            else max(1, len(gm_ids) // max(n, 1))
+        )
         grid = gm_ids[::step][:n]
         if n <= 4 or sum(seconds[i] for i in grid) <= MECHANICS_GRID_SECONDS:
             break
@@ -274,8 +278,13 @@ def _spread_subsets(every: Scorer, ids: list[str]) -> tuple[list[str], list[str]
 def refit_folds(cv: CrossValidation, model: CVModel, train: list[Scorer], free_from: int = 0) -> CVModel:
     """``model`` with each fold's fit refitted jointly (its effects ``free_from`` on) from where it stands,
     on ``train[k]``, fold ``k``'s training records."""
-    return CVModel(model.full, [joint_refit(model.folds[k], train[k], cv.specimen, FOLD_JOINT_FEV, free_from,
-                                            cv.pinned)[0] for k in range(cv.folds.count)])  # fmt: skip
+    return CVModel(
+        model.full,
+        [
+            joint_refit(model.folds[k], train[k], cv.specimen, FOLD_JOINT_FEV, free_from, cv.pinned)[0]
+            for k in range(cv.folds.count)
+        ],
+    )
 
 
 def add_to_folds(cv: CrossValidation, model: CVModel, name: str, params: dict, train: list[Scorer]) -> CVModel:
@@ -284,7 +293,14 @@ def add_to_folds(cv: CrossValidation, model: CVModel, name: str, params: dict, t
     per_fold = []
     for k in range(cv.folds.count):
         objective = effect_objective(train[k], build_model(model.folds[k]), [])
-        fold_params, _err, _n = fit_effect(name, objective, cv.specimen, start=params, local_only=True,
-                                           local_iterations=FOLD_ITERATIONS, pinned=cv.pinned)  # fmt: skip
+        fold_params, _err, _n = fit_effect(
+            name,
+            objective,
+            cv.specimen,
+            start=params,
+            local_only=True,
+            local_iterations=FOLD_ITERATIONS,
+            pinned=cv.pinned,
+        )
         per_fold.append([*model.folds[k], (name, fold_params)])
     return CVModel([*model.full, (name, params)], per_fold)

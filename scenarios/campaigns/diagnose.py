@@ -117,6 +117,7 @@ Hastie, T., Tibshirani, R., Friedman, J. (2009). The Elements of Statistical
 Learning, 2nd ed., ch. 7 (held-out assessment) and sec. 3.3 (forward
 stepwise selection).
 """
+
 from __future__ import annotations
 
 import math
@@ -147,8 +148,17 @@ from housner.scenarios.campaigns.sensor import assess_sensor
 from housner.scenarios.campaigns.trial import PRACTICAL, TrialSetup, fmt_params, held_text, try_candidate
 from housner.scenarios.campaigns.verdict import Verdict, decide
 
-__all__ = ["FAMILY_JUMP", "LEVEL", "MAX_EFFECTS", "Conclusion", "conclude", "diagnose", "floor_family", "probe",
-           "selection_frequency"]  # fmt: skip
+__all__ = [
+    "FAMILY_JUMP",
+    "LEVEL",
+    "MAX_EFFECTS",
+    "Conclusion",
+    "conclude",
+    "diagnose",
+    "floor_family",
+    "probe",
+    "selection_frequency",
+]
 
 #: Family-wise significance level of a round of candidates (one-sided, Bonferroni) [-].
 LEVEL = 0.05
@@ -183,9 +193,19 @@ class Conclusion:
     family_plain: str = ""
 
 
-def conclude(setup: TrialSetup, state: SearchState, search: tuple[TrialSetup, SearchState], *, library: list[str],
-             selected: list[str], compare_steps: bool, n_replicas: int, seed,
-             added: Sequence[str] = (), search_ran: str = "ran") -> Conclusion:  # fmt: skip
+def conclude(
+    setup: TrialSetup,
+    state: SearchState,
+    search: tuple[TrialSetup, SearchState],
+    *,
+    library: list[str],
+    selected: list[str],
+    compare_steps: bool,
+    n_replicas: int,
+    seed,
+    added: Sequence[str] = (),
+    search_ran: str = "ran",
+) -> Conclusion:
     """Both ends of the ladder against their measured floors: the verdict and the two floors.
 
     ``setup`` and ``state`` are on the records as measured, ``search`` the same on the search's (the
@@ -194,8 +214,11 @@ def conclude(setup: TrialSetup, state: SearchState, search: tuple[TrialSetup, Se
     """
     cv, plain, final = setup.cv, state.plain, state.current
     last = len(state.steps) - 1
-    comparisons = {i: compare(cv.campaign, "housner", build_model(list(state.steps[i].effects)), cv.engine_settings)
-                   for i in range(len(state.steps)) if compare_steps or i in (0, last)}  # fmt: skip
+    comparisons = {
+        i: compare(cv.campaign, "housner", build_model(list(state.steps[i].effects)), cv.engine_settings)
+        for i in range(len(state.steps))
+        if compare_steps or i in (0, last)
+    }
     steps = tuple(replace(s, comparison=comparisons[i]) if i in comparisons else s for i, s in enumerate(state.steps))
     seed_int = seed if isinstance(seed, int) else 0
     # Each model's family of correct integrators (housner.scenarios.campaigns.model_form): the closest to the
@@ -206,33 +229,59 @@ def conclude(setup: TrialSetup, state: SearchState, search: tuple[TrialSetup, Se
     # physics leaves another error, as chaos carries its records elsewhere).
     kinds = [r.kind for r in cv.campaign.records]
     setup.progress("measuring the correct-model floor (parametric bootstrap over correct integrators)")
-    family, floor_final = floor_family(setup, state, n_replicas, seed_int, kinds,
-                                       who="the final model" if final.model.full else "the plain model")
-    family_plain, floor_plain = (family, floor_final) if not final.model.full else floor_family(
-        setup, state, n_replicas, seed_int, kinds, model=plain, who="the plain model")  # fmt: skip
-    for what, v in (("the plain model's held-out error", plain.heldout_errors),
-                    ("the final model's held-out error", final.heldout_errors),
-                    ("the plain model's correct-model floor", floor_plain.mean),
-                    ("the final model's correct-model floor", floor_final.mean)):  # fmt: skip
+    family, floor_final = floor_family(
+        setup, state, n_replicas, seed_int, kinds, who="the final model" if final.model.full else "the plain model"
+    )
+    family_plain, floor_plain = (
+        (family, floor_final)
+        if not final.model.full
+        else floor_family(setup, state, n_replicas, seed_int, kinds, model=plain, who="the plain model")
+    )
+    for what, v in (
+        ("the plain model's held-out error", plain.heldout_errors),
+        ("the final model's held-out error", final.heldout_errors),
+        ("the plain model's correct-model floor", floor_plain.mean),
+        ("the final model's correct-model floor", floor_final.mean),
+    ):
         check_finite(what, v, cv.folds.ids)
-    setup.progress(f"floor: correct integrators of the family {family!r}"
-                   + (f" (the plain model: {family_plain!r})" if family_plain != family else ""))  # fmt: skip
+    setup.progress(
+        f"floor: correct integrators of the family {family!r}"
+        + (f" (the plain model: {family_plain!r})" if family_plain != family else "")
+    )
     probes = probe(*search)
     mf = measured_features(cv.campaign)
-    drift = order_drift([plain.heldout_errors - floor_plain.mean, final.heldout_errors - floor_final.mean],
-                        (mf.energy_record, mf.energy_amplitude, mf.energy_ratio))  # fmt: skip
+    drift = order_drift(
+        [plain.heldout_errors - floor_plain.mean, final.heldout_errors - floor_final.mean],
+        (mf.energy_record, mf.energy_amplitude, mf.energy_ratio),
+    )
     verdict = decide(
-        n_records=len(cv.folds.ids), baseline=residual_test(plain.heldout_errors, floor_plain, kinds),
-        final=residual_test(final.heldout_errors, floor_final, kinds), selected=selected,
-        params=dict(final.model.full), baseline_cmp=steps[0].comparison, final_cmp=steps[-1].comparison,
-        library=library, added=added, drift=drift, family=family, probes=probes, family_plain=family_plain,
+        n_records=len(cv.folds.ids),
+        baseline=residual_test(plain.heldout_errors, floor_plain, kinds),
+        final=residual_test(final.heldout_errors, floor_final, kinds),
+        selected=selected,
+        params=dict(final.model.full),
+        baseline_cmp=steps[0].comparison,
+        final_cmp=steps[-1].comparison,
+        library=library,
+        added=added,
+        drift=drift,
+        family=family,
+        probes=probes,
+        family_plain=family_plain,
         search=search_ran,
-    )  # fmt: skip
+    )
     return Conclusion(verdict, (floor_plain, floor_final), steps, family, family_plain)
 
 
-def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: int, kinds: list[str],
-                 model=None, who: str = "the final model") -> tuple[str, Floor]:  # fmt: skip
+def floor_family(
+    setup: TrialSetup,
+    state: SearchState,
+    n_replicas: int,
+    seed: int,
+    kinds: list[str],
+    model=None,
+    who: str = "the final model",
+) -> tuple[str, Floor]:
     """The family of correct integrators of a model's verdict, and its floor under it.
 
     ``model`` is the search's current model (default the final one, ``state.current``; the plain model,
@@ -252,8 +301,15 @@ def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: i
     def measure(family: str) -> tuple[Floor, bool, float]:
         """The final model's floor under ``family``, whether its ground motions are at it, and their ratio."""
         if family not in measured:
-            floor = measure_floor(setup.scorers.every_record, final.model.full or [], final.model.folds,
-                                  setup.cv.folds.fold_of, n_replicas=n_replicas, seed=seed, family=family)  # fmt: skip
+            floor = measure_floor(
+                setup.scorers.every_record,
+                final.model.full or [],
+                final.model.folds,
+                setup.cv.folds.fold_of,
+                n_replicas=n_replicas,
+                seed=seed,
+                family=family,
+            )
             gm = residual_test(final.heldout_errors, floor, kinds).groups.get("ground_motion")
             ratio = math.nan if gm is None else max(gm["ratio"], gm["ratio_trimmed"])
             measured[family] = (floor, gm is None or not gm["misfit"] and ratio <= RATIO_MISFIT, ratio)
@@ -269,18 +325,22 @@ def floor_family(setup: TrialSetup, state: SearchState, n_replicas: int, seed: i
                 skipped = ", ".join(repr(f) for f in families[1:-1])
                 said = "The floor's family loop stopped early"
                 if any(e.startswith(said) for e in setup.economies):  # the other model's said it at length
-                    setup.economies.append(f"{said} for {who} too: {ratio:.2f}x under {families[0]!r}, "
-                                           f"{widest_ratio:.2f}x under {families[-1]!r}.")  # fmt: skip
+                    setup.economies.append(
+                        f"{said} for {who} too: {ratio:.2f}x under {families[0]!r}, "
+                        f"{widest_ratio:.2f}x under {families[-1]!r}."
+                    )
                 else:
                     setup.economies.append(
                         f"{said}: {who}'s ground motions are {ratio:.2f}x their floor under the narrowest family "
                         f"({families[0]!r}, more than {FAMILY_JUMP:g} x {RATIO_MISFIT:g}) and {widest_ratio:.2f}x it "
                         f"under the widest ({families[-1]!r}, not at it either), so the families between "
                         f"({skipped}) were not measured: nested, their floors lie below the widest's."
-                    )  # fmt: skip
-                setup.progress(f"floor of {who}: not at it under {families[0]!r} ({ratio:.2f}x) nor under "
-                               f"{families[-1]!r} ({widest_ratio:.2f}x); the families between not "
-                               "measured")  # fmt: skip
+                    )
+                setup.progress(
+                    f"floor of {who}: not at it under {families[0]!r} ({ratio:.2f}x) nor under "
+                    f"{families[-1]!r} ({widest_ratio:.2f}x); the families between not "
+                    "measured"
+                )
                 return families[-1], widest
     return families[-1], measured[families[-1]][0]
 
@@ -307,9 +367,19 @@ def probe(setup: TrialSetup, state: SearchState) -> list[dict]:
         c = trial.candidate
         setup.progress(f"probe {name} {fmt_params(c.params)}: {held_text(c, trial.model is not None)}")
         if c.significant:
-            out.append({"probe": name, "class": class_name, "params": c.params,
-                        "error": float(final.heldout_errors.mean()), "error_with": c.heldout_error,
-                        "improvement": c.improvement, "se": c.improvement_se, "z": c.z, "p": c.pvalue})  # fmt: skip
+            out.append(
+                {
+                    "probe": name,
+                    "class": class_name,
+                    "params": c.params,
+                    "error": float(final.heldout_errors.mean()),
+                    "error_with": c.heldout_error,
+                    "improvement": c.improvement,
+                    "se": c.improvement_se,
+                    "z": c.z,
+                    "p": c.pvalue,
+                }
+            )
     return out
 
 
@@ -388,23 +458,49 @@ def diagnose(
     candidates = _checked(campaign, effects, add, folds, max_effects, level)
     n_replicas = N_REPLICAS if n_replicas is None else int(n_replicas)
     cv = cross_validation(campaign, folds, seed, engine_settings)
-    setup = TrialSetup(cv, cv.search, FreeVibrationCheck(campaign, engine_settings, cv.measured), level, [],
-                       progress or (lambda s: None))  # fmt: skip
+    setup = TrialSetup(
+        cv,
+        cv.search,
+        FreeVibrationCheck(campaign, engine_settings, cv.measured),
+        level,
+        [],
+        progress or (lambda s: None),
+    )
     state = start(setup)
     for name in add:
         state = add_by_hand(setup, state, name)
     state, found = greedy(setup, state, candidates, max_effects, pairs)
     full_setup, full_state = at_full_rate(setup, state)
     tried, search_ran = _what_the_search_did(found, candidates)
-    end = conclude(full_setup, full_state, (setup, state), library=tried, selected=found.selected,
-                   compare_steps=compare_steps, n_replicas=n_replicas, seed=seed, added=list(add),
-                   search_ran=search_ran)  # fmt: skip
-    settings = {"effects": candidates, "add": list(add), "folds": cv.folds.count,
-                "seed": seed if isinstance(seed, (int, type(None))) else str(seed), "max_effects": max_effects,
-                "level": level, "practical": PRACTICAL, "pairs": pairs, "replicas": n_replicas,
-                "engine_settings": dict(engine_settings or {}), "floor_family": end.family,
-                "floor_family_plain": end.family_plain, "search": search_ran,
-                "decimation": cv.decimation, "economies": list(setup.economies)}  # fmt: skip
+    end = conclude(
+        full_setup,
+        full_state,
+        (setup, state),
+        library=tried,
+        selected=found.selected,
+        compare_steps=compare_steps,
+        n_replicas=n_replicas,
+        seed=seed,
+        added=list(add),
+        search_ran=search_ran,
+    )
+    settings = {
+        "effects": candidates,
+        "add": list(add),
+        "folds": cv.folds.count,
+        "seed": seed if isinstance(seed, (int, type(None))) else str(seed),
+        "max_effects": max_effects,
+        "level": level,
+        "practical": PRACTICAL,
+        "pairs": pairs,
+        "replicas": n_replicas,
+        "engine_settings": dict(engine_settings or {}),
+        "floor_family": end.family,
+        "floor_family_plain": end.family_plain,
+        "search": search_ran,
+        "decimation": cv.decimation,
+        "economies": list(setup.economies),
+    }
     diag = _diagnosis(campaign, cv.folds, found, end, list(add), cv.noise_floor, settings)
     diag.elapsed = time.perf_counter() - t_start
     return diag
@@ -419,8 +515,15 @@ def _what_the_search_did(found: GreedyRounds, candidates: list[str]) -> tuple[li
     return tried, "ran" if tried else "skipped" if skipped else "off" if not candidates else "none_left"
 
 
-def _diagnosis(campaign: Campaign, folds: Folds, found: GreedyRounds, end: Conclusion, added: list[str],
-               noise_floor: float, settings: dict) -> Diagnosis:  # fmt: skip
+def _diagnosis(
+    campaign: Campaign,
+    folds: Folds,
+    found: GreedyRounds,
+    end: Conclusion,
+    added: list[str],
+    noise_floor: float,
+    settings: dict,
+) -> Diagnosis:
     """The :class:`Diagnosis` of the search and its conclusion, the verdict's text ending with how it was computed."""
     verdict = end.verdict
     if campaign.sensor is not None:
@@ -429,12 +532,23 @@ def _diagnosis(campaign: Campaign, folds: Folds, found: GreedyRounds, end: Concl
         # what ran on fewer samples or stopped early: said where the verdict is read
         verdict = replace(verdict, text=verdict.text + " How it was computed: " + " ".join(settings["economies"]))
     return Diagnosis(
-        campaign=campaign, baseline=end.steps[0], steps=list(end.steps),
-        candidates=found.rounds[0] if found.rounds else [], rounds=found.rounds, selected=found.selected,
-        added=added, noise_floor=noise_floor, test_level=found.first_level, train_ids=folds.ids,
-        heldout_ids=folds.ids, settings=settings, folds=folds.members, verdict=verdict, floors=end.floors,
+        campaign=campaign,
+        baseline=end.steps[0],
+        steps=list(end.steps),
+        candidates=found.rounds[0] if found.rounds else [],
+        rounds=found.rounds,
+        selected=found.selected,
+        added=added,
+        noise_floor=noise_floor,
+        test_level=found.first_level,
+        train_ids=folds.ids,
+        heldout_ids=folds.ids,
+        settings=settings,
+        folds=folds.members,
+        verdict=verdict,
+        floors=end.floors,
         selection_frequency=selection_frequency(folds, found.rounds),
-    )  # fmt: skip
+    )
 
 
 def _checked(campaign: Campaign, effects, add, folds, max_effects, level) -> list[str]:

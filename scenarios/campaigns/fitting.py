@@ -258,24 +258,30 @@ def _grid_best(f_u: Callable, axes: list[np.ndarray], first=None) -> tuple[np.nd
     return pts[int(np.argmin(vals))], vals.min()
 
 
-def _local_search(f_u: Callable, best_u: np.ndarray, lo: np.ndarray, hi: np.ndarray, step: np.ndarray,
-                  local_iterations: int) -> np.ndarray:  # fmt: skip
+def _local_search(
+    f_u: Callable, best_u: np.ndarray, lo: np.ndarray, hi: np.ndarray, step: np.ndarray, local_iterations: int
+) -> np.ndarray:
     """Bounded Brent (one parameter, within +-1 ``step``) or Powell search from ``best_u``; kept if no worse."""
     if len(best_u) == 1:
         a = max(lo[0], best_u[0] - step[0])
         b = min(hi[0], best_u[0] + step[0])
         if b > a:
             res = optimize.minimize_scalar(
-                lambda x: f_u([x]), bounds=(a, b), method="bounded",
+                lambda x: f_u([x]),
+                bounds=(a, b),
+                method="bounded",
                 options={"xatol": 1e-3 * step[0], "maxiter": local_iterations},
-            )  # fmt: skip
+            )
             if res.fun <= f_u(best_u):
                 best_u = np.array([res.x])
         return best_u
     res = optimize.minimize(
-        f_u, best_u, method="Powell", bounds=list(zip(lo, hi, strict=True)),
+        f_u,
+        best_u,
+        method="Powell",
+        bounds=list(zip(lo, hi, strict=True)),
         options={"maxfev": max(2, local_iterations * 10 // 14) * len(best_u), "xtol": 1e-3, "ftol": 1e-4},
-    )  # fmt: skip
+    )
     if res.fun <= f_u(best_u):
         best_u = np.asarray(res.x)
     return best_u
@@ -297,9 +303,13 @@ def effect_objective(scorer, before: list, after: list) -> Callable[[Any], float
 
 
 def joint_refit(
-    model: list[tuple[str, dict]], scorer, specimen, maxfev_per_dim: int = 15, free_from: int = 0,
+    model: list[tuple[str, dict]],
+    scorer,
+    specimen,
+    maxfev_per_dim: int = 15,
+    free_from: int = 0,
     pinned: dict[str, dict] | None = None,
-) -> tuple[list[tuple[str, dict]], float]:  # fmt: skip
+) -> tuple[list[tuple[str, dict]], float]:
     """Local search over the parameters of the model's effects ``free_from`` on, from their current values.
 
     Bounded Nelder-Mead; the effects before ``free_from`` keep their parameters, and so do the
@@ -342,10 +352,17 @@ def joint_refit(
         v[k] = v[k] + h[k] if v[k] + h[k] <= hi[k] else v[k] - h[k]
         simplex.append(v)
     res = optimize.minimize(
-        f, u0, method="Nelder-Mead", bounds=list(zip(lo, hi, strict=True)),
-        options={"maxfev": maxfev_per_dim * len(dims), "initial_simplex": np.array(simplex), "xatol": 1e-3 * h.min(),
-                 "fatol": 1e-5},
-    )  # fmt: skip
+        f,
+        u0,
+        method="Nelder-Mead",
+        bounds=list(zip(lo, hi, strict=True)),
+        options={
+            "maxfev": maxfev_per_dim * len(dims),
+            "initial_simplex": np.array(simplex),
+            "xatol": 1e-3 * h.min(),
+            "fatol": 1e-5,
+        },
+    )
     if res.fun < f0:
         return build(res.x), float(res.fun)
     return model, f0

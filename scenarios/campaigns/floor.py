@@ -153,8 +153,9 @@ def measure_floor(
     pert = {k: v for k, v in sd.items() if v > 0}
     pert["substeps"] = model_settings["substeps"]
     pert["model_form"] = {"family": family, "replicas": [f.describe() for f in forms], "acc_noise": acc_noise}
-    return Floor(errs.mean(axis=0), errs.std(axis=0, ddof=1) if n_replicas > 1 else np.zeros(len(recs)), n_replicas,
-                 pert)  # fmt: skip
+    return Floor(
+        errs.mean(axis=0), errs.std(axis=0, ddof=1) if n_replicas > 1 else np.zeros(len(recs)), n_replicas, pert
+    )
 
 
 def _fold_spread(model_full, model_folds) -> tuple[dict[str, float], dict[str, tuple[float, float]]]:
@@ -194,8 +195,10 @@ class _FoldModels:
             idx = np.flatnonzero(fold_of == k)
             if idx.size == 0:
                 continue
-            eff = [make_effect(n, **_perturbed(n, model_folds[k][j][1], sd, rng, spec, hull))
-                   for j, (n, _p) in enumerate(model_full)]  # fmt: skip
+            eff = [
+                make_effect(n, **_perturbed(n, model_folds[k][j][1], sd, rng, spec, hull))
+                for j, (n, _p) in enumerate(model_full)
+            ]
             effects[k] = eff
             sub = [recs[i] for i in idx]
             res = simulate_records(spec, sub, "housner", eff, settings)
@@ -206,8 +209,9 @@ class _FoldModels:
         return cls(response, sensitivity, effects)
 
 
-def _replica_errors(scorer, b: int, truth: list, truth_eff: list, scoring: _FoldModels, fold_of, rng,
-                    settings: dict) -> np.ndarray:  # fmt: skip
+def _replica_errors(
+    scorer, b: int, truth: list, truth_eff: list, scoring: _FoldModels, fold_of, rng, settings: dict
+) -> np.ndarray:
     """The error of each record [alpha] in replica ``b``: the truth read through the record's sensor, scored by
     its fold's model with the real error and window (1 where either run failed). NonFiniteHistory when the
     truth or the scoring model gives a non-finite theta history."""
@@ -217,14 +221,17 @@ def _replica_errors(scorer, b: int, truth: list, truth_eff: list, scoring: _Fold
     errs = np.empty(len(recs))
     for i, rec in enumerate(recs):
         tr, mo = truth[i], scoring.response[i]
-        for what, res, eff in (("truth", tr, truth_eff),
-                               ("scoring model", mo, scoring.effects.get(int(fold_of[i]), []))):  # fmt: skip
+        for what, res, eff in (
+            ("truth", tr, truth_eff),
+            ("scoring model", mo, scoring.effects.get(int(fold_of[i]), [])),
+        ):
             if non_finite(res):
                 raise NonFiniteHistory(
                     f"the correct-model floor: replica {b + 1}'s {what}, {model_text(eff)}, gives a non-finite "
                     f"theta history on record {rec.id!r}",
-                    [getattr(e, "name", str(e)) for e in eff], rec.id,
-                )  # fmt: skip
+                    [getattr(e, "name", str(e)) for e in eff],
+                    rec.id,
+                )
         if isinstance(tr, str) or isinstance(mo, str) or mo is None:
             errs[i] = 1.0
             continue
@@ -236,9 +243,16 @@ def _replica_errors(scorer, b: int, truth: list, truth_eff: list, scoring: _Fold
             # (records.estimate_release), off the true one by its standard error: so here
             mo, g = _from_estimated_release(spec, rec, meas, mo, g, scoring.effects[int(fold_of[i])], settings)
         th_mod = np.asarray(mo.theta, dtype=float)[: rec.theta.size]
-        errs[i] = record_error(th_mod, meas, scorer.ends[i], alpha, align=release_shift_samples(rec),
-                               sensitivity=None if g is None else g[: rec.theta.size],
-                               max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise, valid=rec.valid)  # fmt: skip
+        errs[i] = record_error(
+            th_mod,
+            meas,
+            scorer.ends[i],
+            alpha,
+            align=release_shift_samples(rec),
+            sensitivity=None if g is None else g[: rec.theta.size],
+            max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise,
+            valid=rec.valid,
+        )
     return errs
 
 

@@ -81,6 +81,8 @@ class FreeVibrationCheck:
         for k, v in self.z(model_effects).items():
             if abs(v) > FV_Z and abs(v) > abs(self.plain_z.get(k, 0.0)):
                 m = self.measured[k]
-                return (f"contradicts the free vibrations: {k} is {v:+.1f} standard errors from the measured "
-                        f"{m.value:.4g} +- {m.se:.2g}")  # fmt: skip
+                return (
+                    f"contradicts the free vibrations: {k} is {v:+.1f} standard errors from the measured "
+                    f"{m.value:.4g} +- {m.se:.2g}"
+                )
         return ""

@@ -113,7 +113,14 @@ def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | Non
 
 
 def record_error(
-    theta_model, theta_measured, end: int, alpha: float, *, align: int = 0, sensitivity=None, max_dtheta0: float = 0.0,
+    theta_model,
+    theta_measured,
+    end: int,
+    alpha: float,
+    *,
+    align: int = 0,
+    sensitivity=None,
+    max_dtheta0: float = 0.0,
     valid=None,
 ) -> float:
     """RMS of min(|theta_model - theta_measured| / alpha, 1) over the first ``end`` samples [-].
@@ -134,8 +141,16 @@ def record_error(
     return float(math.sqrt(float(np.mean(d * d))))
 
 
-def release_error(theta_model, theta_measured, end: int, alpha: float, max_shift: int, sensitivity=None,
-                  max_dtheta0: float = 0.0, keep=None) -> float:  # fmt: skip
+def release_error(
+    theta_model,
+    theta_measured,
+    end: int,
+    alpha: float,
+    max_shift: int,
+    sensitivity=None,
+    max_dtheta0: float = 0.0,
+    keep=None,
+) -> float:
     """:func:`record_error` of a free vibration, minimised over its release instant and angle [-].
 
     A free-vibration record's time axis starts at the release its own theta channel shows and its
@@ -201,8 +216,16 @@ def release_shift_samples(rec: MeasuredRecord) -> int:
 
 def scored_error(theta_model, rec: MeasuredRecord, end: int, alpha: float, sensitivity=None) -> float:
     """The time-history error of one record as the comparison and the diagnosis score it [-]."""
-    return record_error(theta_model, rec.theta, end, alpha, align=release_shift_samples(rec), sensitivity=sensitivity,
-                        max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise, valid=rec.valid)  # fmt: skip
+    return record_error(
+        theta_model,
+        rec.theta,
+        end,
+        alpha,
+        align=release_shift_samples(rec),
+        sensitivity=sensitivity,
+        max_dtheta0=RELEASE_DTHETA0_SIGMAS * rec.noise,
+        valid=rec.valid,
+    )
 
 
 def divergence_time(theta_model, theta_measured, t, noise: float, alpha: float) -> float:

@@ -197,16 +197,26 @@ class ModelForm:
             x = np.asarray(x, dtype=float)
             return self.scale * (x[k] if self.convention == "held" else np.interp(tf, np.arange(n) * dt, x))
 
-        return GroundMotion(fine(a), dt / UPSAMPLE, motion.name, motion.provenance, motion.theta0, motion.theta_dot0,
-                            {key: fine(c) for key, c in motion.channels.items()})  # fmt: skip
+        return GroundMotion(
+            fine(a),
+            dt / UPSAMPLE,
+            motion.name,
+            motion.provenance,
+            motion.theta0,
+            motion.theta_dot0,
+            {key: fine(c) for key, c in motion.channels.items()},
+        )
 
     def simulate(self, specimen, records: Sequence, effects: Sequence, settings: dict) -> list[np.ndarray | str]:
         """theta [rad] of each record on its own sample grid as this integrator produces it (or an error text)."""
         rng = np.random.default_rng(self.noise_seed)
         fine = [replace(r, motion=self.felt(r.motion, rng)) for r in records]
         sub = settings.get("substeps")
-        base = default_substeps(specimen.frequency_parameter, records[0].dt / UPSAMPLE) if not sub else \
-            max(1, math.ceil(int(sub) / UPSAMPLE))  # fmt: skip
+        base = (
+            default_substeps(specimen.frequency_parameter, records[0].dt / UPSAMPLE)
+            if not sub
+            else max(1, math.ceil(int(sub) / UPSAMPLE))
+        )
         run = {**settings, "rest_tol": self.rest_tol, "substeps": self.substep_factor * int(base)}
         out: list[np.ndarray | str] = []
         for rec, res in zip(records, simulate_records(specimen, fine, "housner", effects, run), strict=True):
@@ -215,4 +225,3 @@ class ModelForm:
             else:
                 out.append(np.asarray(res.theta, dtype=float)[::UPSAMPLE][: rec.theta.size])
         return out
-

@@ -49,8 +49,14 @@ class OutcomeStep:
     p_value: float = math.nan
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "params": self.params, "scores": self.scores, "improvement": self.improvement,
-                "improvement_se": self.improvement_se, "p_value": _nan_none(self.p_value)}  # fmt: skip
+        return {
+            "name": self.name,
+            "params": self.params,
+            "scores": self.scores,
+            "improvement": self.improvement,
+            "improvement_se": self.improvement_se,
+            "p_value": _nan_none(self.p_value),
+        }
 
 
 @dataclass
@@ -141,8 +147,14 @@ class OutcomeDiagnosis:
     def to_dict(self) -> dict:
         f = self.final
         outcomes = {k: f.scores[k] for k in f.scores}
-        outcomes.update(model=f.name, effect=self._effect(), baselines=self.baselines, floor=self.floor.to_dict(),
-                        at_floor=self.floor.at_floor, calibration=self.calibration)  # fmt: skip
+        outcomes.update(
+            model=f.name,
+            effect=self._effect(),
+            baselines=self.baselines,
+            floor=self.floor.to_dict(),
+            at_floor=self.floor.at_floor,
+            calibration=self.calibration,
+        )
         return {
             "kind": "outcomes",
             "campaign": self.campaign,

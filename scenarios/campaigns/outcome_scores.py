@@ -175,8 +175,16 @@ def calibration_table(p, y, bins: int = 5) -> list[dict]:
             continue
         k = int(y[sel].sum())
         lo, hi = wilson_interval(k, n)
-        rows.append({"lo": float(edges[b]), "hi": float(edges[b + 1]), "n": n, "mean_p": float(p[sel].mean()),
-                     "observed": k / n, "observed_ci": [float(lo), float(hi)]})  # fmt: skip
+        rows.append(
+            {
+                "lo": float(edges[b]),
+                "hi": float(edges[b + 1]),
+                "n": n,
+                "mean_p": float(p[sel].mean()),
+                "observed": k / n,
+                "observed_ci": [float(lo), float(hi)],
+            }
+        )
     return rows
 
 
@@ -252,9 +260,15 @@ class OutcomeFloor:
     at_floor: bool
 
     def to_dict(self) -> dict:
-        return {"log_loss": self.log_loss, "log_loss_ci": list(self.log_loss_ci), "accuracy": self.accuracy,
-                "accuracy_ci": list(self.accuracy_ci), "measured_log_loss": self.measured_log_loss, "z": self.z,
-                "at_floor": self.at_floor}  # fmt: skip
+        return {
+            "log_loss": self.log_loss,
+            "log_loss_ci": list(self.log_loss_ci),
+            "accuracy": self.accuracy,
+            "accuracy_ci": list(self.accuracy_ci),
+            "measured_log_loss": self.measured_log_loss,
+            "z": self.z,
+            "at_floor": self.at_floor,
+        }
 
 
 def outcome_floor(p, y, *, seed=0, n_sim: int = 2000) -> OutcomeFloor:

@@ -211,8 +211,10 @@ def _tables(accs, dts, geo: Geometry, specimen, say: Callable) -> _Tables:
     bs = geo.h * np.tan(alphas)
     contact = _overturns(accs, dts, geo, specimen, [(b, b, r, 1.0) for b in bs for r in (None, *R_GRID)])
     contact = contact.reshape(len(accs), ALPHA_GRID, 1 + len(R_GRID))
-    say(f"effect tables: {len(pts) * len(R_GRID) + contact.shape[1] * contact.shape[2]} runs of "
-        f"{len(accs)} records, {time.perf_counter() - t0:.1f} s in all")  # fmt: skip
+    say(
+        f"effect tables: {len(pts) * len(R_GRID) + contact.shape[1] * contact.shape[2]} runs of "
+        f"{len(accs)} records, {time.perf_counter() - t0:.1f} s in all"
+    )
     return _Tables(plain, rest, contact, np.log(alphas))
 
 
@@ -264,7 +266,7 @@ def _fit_contact(with_r: bool):
     def fit(t: _Tables, idx, y) -> dict:
         mus = np.linspace(t.log_alpha[0], t.log_alpha[-1], _MU_POINTS)
         best, best_v = None, math.inf
-        for r in ((None, *R_GRID) if with_r else (None,)):
+        for r in (None, *R_GRID) if with_r else (None,):
             j = 0 if r is None else 1 + R_GRID.index(r)
             table = t.contact[idx, :, j]
             for sigma in SPREADS:
@@ -326,9 +328,16 @@ def _misses(step: OutcomeStep, ids, y, pga, pgv) -> list[dict]:
     pred = step.p >= 0.5
     out = []
     for i in np.flatnonzero(pred != y):
-        out.append({"model": step.name, "id": ids[i], "observed": "overturned" if y[i] else "stood",
-                    "predicted_p": float(step.p[i]), "pga_g": float(pga[i] / G), "pgv_over_pga_s":
-                    float(pgv[i] / pga[i])})  # fmt: skip
+        out.append(
+            {
+                "model": step.name,
+                "id": ids[i],
+                "observed": "overturned" if y[i] else "stood",
+                "predicted_p": float(step.p[i]),
+                "pga_g": float(pga[i] / G),
+                "pgv_over_pga_s": float(pgv[i] / pga[i]),
+            }
+        )
     return out
 
 
@@ -346,11 +355,15 @@ def _pointer(step: OutcomeStep, y, pga, pgv) -> str:
     )
     n_fn, n_fp = int(fn.sum()), int(fp.sum())
     if n_fn > 2 * max(n_fp, 1):
-        what = ("the rock overturns under motions that the model's footprint survives: its contact sits inside the "
-                "footprint (a convex or uneven base, a smaller effective alpha), or its impacts dissipate less")
+        what = (
+            "the rock overturns under motions that the model's footprint survives: its contact sits inside the "
+            "footprint (a convex or uneven base, a smaller effective alpha), or its impacts dissipate less"
+        )
     elif n_fp > 2 * max(n_fn, 1):
-        what = ("the model overturns where the rock stood: a wider effective contact or more dissipation at impact "
-                "(a smaller r)")
+        what = (
+            "the model overturns where the rock stood: a wider effective contact or more dissipation at impact "
+            "(a smaller r)"
+        )
     else:
         what = "misses in both directions: the effective geometry is uncertain rather than biased"
     return f"{n_fn} overturns missed and {n_fp} predicted that did not happen ({where}): {what}"
@@ -397,8 +410,10 @@ def diagnose_outcomes(
     dts = np.array([r.dt for r in recs])
     geo = Geometry.of(campaign)
     fold = stratified_folds(y, folds, seed)
-    say(f"{len(recs)} outcome records ({int(y.sum())} overturned), {folds} stratified folds; block h "
-        f"{geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad")  # fmt: skip
+    say(
+        f"{len(recs)} outcome records ({int(y.sum())} overturned), {folds} stratified folds; block h "
+        f"{geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad"
+    )
     tables = _tables(accs, dts, geo, campaign.specimen, say)
     plain = _step("plain", None, tables, y, fold, seed)
     say(f"plain model: held-out log loss {plain.scores['log_loss']:.3f}, accuracy {plain.scores['accuracy']:.3f}")
@@ -414,10 +429,24 @@ def diagnose_outcomes(
         status = "partly_explained" if len(steps) > 1 else "unexplained"
     misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
     diag = OutcomeDiagnosis(
-        campaign=campaign.name, ids=ids, observed=y, pga=pga, pgv=pgv, steps=steps, candidates=candidates,
-        baselines=baselines, baseline_p=baseline_p, floor=floor, pointer=pointer, misses=misses, status=status,
-        geometry=_geometry_summary(geo), folds=folds, seed=seed, calibration=calibration_table(final.p, y),
-    )  # fmt: skip
+        campaign=campaign.name,
+        ids=ids,
+        observed=y,
+        pga=pga,
+        pgv=pgv,
+        steps=steps,
+        candidates=candidates,
+        baselines=baselines,
+        baseline_p=baseline_p,
+        floor=floor,
+        pointer=pointer,
+        misses=misses,
+        status=status,
+        geometry=_geometry_summary(geo),
+        folds=folds,
+        seed=seed,
+        calibration=calibration_table(final.p, y),
+    )
     diag.elapsed = time.perf_counter() - t_start
     return diag
 
@@ -430,12 +459,16 @@ def _checked_outcomes(campaign: Campaign, folds: int) -> tuple[list[OutcomeRecor
     if len(recs) < 10:
         raise ValueError(f"campaign {campaign.name!r}: {len(recs)} outcome records; scoring outcomes needs 10")
     if y.all() or not y.any():
-        raise ValueError(f"campaign {campaign.name!r}: every record {'overturned' if y.all() else 'stood'}; "
-                         "scores of outcomes need both")  # fmt: skip
+        raise ValueError(
+            f"campaign {campaign.name!r}: every record {'overturned' if y.all() else 'stood'}; "
+            "scores of outcomes need both"
+        )
     folds = int(folds)
     if folds < 2 or folds > min(int(y.sum()), int((~y).sum())):
-        raise ValueError(f"`folds` must lie in 2 .. {min(int(y.sum()), int((~y).sum()))} (records of the smaller "
-                         f"outcome), got {folds}")  # fmt: skip
+        raise ValueError(
+            f"`folds` must lie in 2 .. {min(int(y.sum()), int((~y).sum()))} (records of the smaller "
+            f"outcome), got {folds}"
+        )
     return recs, y, folds
 
 
@@ -462,11 +495,21 @@ def _add_effects(plain: OutcomeStep, tables, y, fold, seed: int, say) -> tuple[l
         tried = [_step(n, cur, tables, y, fold, seed) for n in pool]
         level = LEVEL / max(len(tried), 1)
         for c in tried:
-            candidates.append({"name": c.name, "log_loss": c.scores["log_loss"], "improvement": c.improvement,
-                               "improvement_se": c.improvement_se, "p_value": c.p_value, "added": False,
-                               "params": c.params})  # fmt: skip
-            say(f"  {c.name}: held-out log loss {c.scores['log_loss']:.3f} ({c.improvement:+.3f} "
-                f"+- {c.improvement_se:.3f}, p {c.p_value:.2g}) {params_text(c.params)}")  # fmt: skip
+            candidates.append(
+                {
+                    "name": c.name,
+                    "log_loss": c.scores["log_loss"],
+                    "improvement": c.improvement,
+                    "improvement_se": c.improvement_se,
+                    "p_value": c.p_value,
+                    "added": False,
+                    "params": c.params,
+                }
+            )
+            say(
+                f"  {c.name}: held-out log loss {c.scores['log_loss']:.3f} ({c.improvement:+.3f} "
+                f"+- {c.improvement_se:.3f}, p {c.p_value:.2g}) {params_text(c.params)}"
+            )
         good = [c for c in tried if c.improvement > 0 and c.p_value < level]
         if not good:
             break
@@ -480,8 +523,11 @@ def _baselines(pga, pgv, y, fold, seed: int) -> tuple[dict, dict]:
     """The logistic baselines on log PGA, log PGV and both, cross-validated on the same folds: their scores and
     their held-out probabilities, by name."""
     baselines, baseline_p = {}, {}
-    for name, X in (("logistic_pga", np.log(pga)), ("logistic_pgv", np.log(pgv)),
-                    ("logistic_pga_pgv", np.column_stack((np.log(pga), np.log(pgv))))):  # fmt: skip
+    for name, X in (
+        ("logistic_pga", np.log(pga)),
+        ("logistic_pgv", np.log(pgv)),
+        ("logistic_pga_pgv", np.column_stack((np.log(pga), np.log(pgv)))),
+    ):
         baseline_p[name] = logistic_oof(X, y, fold)
         baselines[name] = outcome_scores(baseline_p[name], y, seed=seed)
     return baselines, baseline_p
@@ -489,9 +535,16 @@ def _baselines(pga, pgv, y, fold, seed: int) -> tuple[dict, dict]:
 
 def _geometry_summary(geo: Geometry) -> dict:
     """The block's geometry as the diagnosis reports it, in SI (m, rad, kg m^2, kg)."""
-    return {"h_m": geo.h, "b_pos_m": geo.b_pos, "b_neg_m": geo.b_neg, "alpha_pos_rad": geo.alpha_pos,
-            "alpha_neg_rad": geo.alpha_neg, "centroidal_inertia_kgm2": geo.ic, "mass_kg": geo.mass,
-            "b_bracket_m": {k: list(v) for k, v in geo.bracket.items()}}  # fmt: skip
+    return {
+        "h_m": geo.h,
+        "b_pos_m": geo.b_pos,
+        "b_neg_m": geo.b_neg,
+        "alpha_pos_rad": geo.alpha_pos,
+        "alpha_neg_rad": geo.alpha_neg,
+        "centroidal_inertia_kgm2": geo.ic,
+        "mass_kg": geo.mass,
+        "b_bracket_m": {k: list(v) for k, v in geo.bracket.items()},
+    }
 
 
 def _extends(name: str, current: str) -> bool:

@@ -104,12 +104,18 @@ def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
         entry = by.setdefault(c, {"class": c, "meaning": CLASSES[c], "z": 0.0, "evidence": []})
         entry["z"] = max(entry["z"], abs(zz))
         if key == "energy_ratio" and share is not None:
-            entry["evidence"].append({
-                "metric": "flight_share", "label": "share of the extra loss per half-cycle that the energy kept "
-                "between impacts puts between them (1: all of it, 0: none, at the impact)",
-                "measured": share[0], "measured_se": share[1], "model": 0.0, "model_se": 0.0,
-                "z": share[0] / share[1] if share[1] > 0 else math.inf,
-            })  # fmt: skip
+            entry["evidence"].append(
+                {
+                    "metric": "flight_share",
+                    "label": "share of the extra loss per half-cycle that the energy kept "
+                    "between impacts puts between them (1: all of it, 0: none, at the impact)",
+                    "measured": share[0],
+                    "measured_se": share[1],
+                    "model": 0.0,
+                    "model_se": 0.0,
+                    "z": share[0] / share[1] if share[1] > 0 else math.inf,
+                }
+            )
         entry["evidence"].append(
             {
                 "metric": key,
@@ -119,7 +125,7 @@ def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
                 "model": x.value,
                 "model_se": x.se,
                 "z": zz,
-            }  # fmt: skip
+            }
         )
     return sorted(by.values(), key=lambda d: -d["z"])
 
@@ -215,20 +221,32 @@ def order_drift(excess: Sequence[np.ndarray], energy=None) -> dict | None:
     if best is not None:
         tau, z, se = best
         trend = "grows" if tau > 0 else "falls"
-        evidence.append({
-            "metric": "error_order",
-            "label": f"the model's excess error {trend} along the recording order (Kendall's tau)",
-            "measured": tau, "measured_se": se, "model": 0.0, "model_se": 0.0, "z": z,
-        })  # fmt: skip
+        evidence.append(
+            {
+                "metric": "error_order",
+                "label": f"the model's excess error {trend} along the recording order (Kendall's tau)",
+                "measured": tau,
+                "measured_se": se,
+                "model": 0.0,
+                "model_se": 0.0,
+                "z": z,
+            }
+        )
     ed = _energy_drift(energy)
     if ed is not None:
         slope, se, z = ed
-        evidence.append({
-            "metric": "energy_ratio_order",
-            "label": "energy ratio per impact of the free vibrations against their record's position in the "
-                     "recording order, amplitude held out (slope per record)",
-            "measured": slope, "measured_se": se, "model": 0.0, "model_se": 0.0, "z": z,
-        })  # fmt: skip
+        evidence.append(
+            {
+                "metric": "energy_ratio_order",
+                "label": "energy ratio per impact of the free vibrations against their record's position in the "
+                "recording order, amplitude held out (slope per record)",
+                "measured": slope,
+                "measured_se": se,
+                "model": 0.0,
+                "model_se": 0.0,
+                "z": z,
+            }
+        )
     evidence = sorted((ev for ev in evidence if abs(ev["z"]) > Z_DRIFT), key=lambda ev: -abs(ev["z"]))
     if not evidence:
         return None

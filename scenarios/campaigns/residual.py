@@ -145,9 +145,17 @@ def residual_test(errors: np.ndarray, floor: Floor, kinds: Sequence[str]) -> Res
             det_k = 1.0 + zz * float(np.mean(s)) / math.sqrt(n) / fm if fm > 0 else math.inf
             z_t, ratio_t, mis_t = z, ratio, False
         mis = bool(z > Z_MISFIT and ratio > RATIO_MISFIT) or mis_t
-        groups[kind] = {"n": n, "error": float(e[m].mean()), "floor": fm, "ratio": ratio, "z": z, "misfit": mis,
-                        "ratio_trimmed": ratio_t, "z_trimmed": z_t,
-                        "detectable_ratio": max(det_k, RATIO_MISFIT)}  # fmt: skip
+        groups[kind] = {
+            "n": n,
+            "error": float(e[m].mean()),
+            "floor": fm,
+            "ratio": ratio,
+            "z": z,
+            "misfit": mis,
+            "ratio_trimmed": ratio_t,
+            "z_trimmed": z_t,
+            "detectable_ratio": max(det_k, RATIO_MISFIT),
+        }
         z_all = max(z_all, z, z_t)
         misfit = misfit or mis
         det = min(det, max(det_k, RATIO_MISFIT))

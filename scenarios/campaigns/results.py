@@ -274,8 +274,9 @@ class Diagnosis:
         if sensor is not None and sensor.noise.white and not sensor.faults:
             parts.append(f"Sensor noise: {sensor.noise.describe()}.")  # else the verdict's text says it
         k = self.settings.get("folds", "?")
-        parts.append(f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha "
-                     f"{self.noise_floor:.2g}.)")  # fmt: skip
+        parts.append(
+            f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha {self.noise_floor:.2g}.)"
+        )
         return " ".join(p for p in parts if p)
 
     def to_dict(self) -> dict:
@@ -435,8 +436,10 @@ def _step_params(name: str, params: dict, final: dict | None) -> str:
     text = params_text(name, params)
     if final is None or params_text(name, final) == text:
         return text
-    return (f"{text} as fitted at this step; {params_text(name, final)} in the final model, refitted with the "
-            "effects after it")
+    return (
+        f"{text} as fitted at this step; {params_text(name, final)} in the final model, refitted with the "
+        "effects after it"
+    )
 
 
 def params_text(name: str, params: dict, *, digits: int = 4) -> str:
@@ -471,8 +474,10 @@ def at_bound(name: str, key: str, value) -> str:
     near = 1e-6 * (hi - lo)
     for end, word, more in ((hi, "top", "larger"), (lo, "bottom", "smaller")):
         if math.isfinite(end) and abs(v - end) <= near and end != neutral:
-            return (f" (at the {word} of its search range {lo:g} to {hi:g}: the fit may want a {more} value, so this "
-                    "fit does not rule the effect out; widen its bounds to test it)")
+            return (
+                f" (at the {word} of its search range {lo:g} to {hi:g}: the fit may want a {more} value, so this "
+                "fit does not rule the effect out; widen its bounds to test it)"
+            )
     return ""
 
 

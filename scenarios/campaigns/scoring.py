@@ -319,10 +319,14 @@ class Scorer:
                 raise NonFiniteHistory(
                     f"{model_text(effects)} gives a non-finite theta history on record {rec.id!r}: "
                     "it is refused before any score",
-                    names, rec.id,
-                )  # fmt: skip
-        sens = (release_sensitivities(spec, records, res, "housner", effects, self.engine_settings)
-                if self.release_angle else [None] * len(res))  # fmt: skip
+                    names,
+                    rec.id,
+                )
+        sens = (
+            release_sensitivities(spec, records, res, "housner", effects, self.engine_settings)
+            if self.release_angle
+            else [None] * len(res)
+        )
         out = np.empty(len(records))
         for k, (rec, r, end) in enumerate(zip(records, res, ends, strict=True)):
             out[k] = ERROR_CLIP if isinstance(r, str) else scored_error(r.theta, rec, end, alpha, sens[k])
@@ -365,8 +369,13 @@ def _truncated(rec: MeasuredRecord, end: int) -> MeasuredRecord:
     n = min(rec.theta.size, end + int(math.ceil(_WINDOW_SLACK / rec.dt)))
     if n >= rec.theta.size:
         return rec
-    return replace(rec, motion=rec.motion.sliced(0, n), t=rec.t[:n], theta=rec.theta[:n],
-                   valid=None if rec.valid is None else rec.valid[:n])
+    return replace(
+        rec,
+        motion=rec.motion.sliced(0, n),
+        t=rec.t[:n],
+        theta=rec.theta[:n],
+        valid=None if rec.valid is None else rec.valid[:n],
+    )
 
 
 def decimation_factor(campaign: Campaign, rate: float = SEARCH_RATE) -> int:
@@ -410,8 +419,9 @@ def _decimated_record(rec: MeasuredRecord, q: int) -> MeasuredRecord:
 
     m = rec.motion
     motion = replace(m, acc=low(m.acc), dt=m.dt * q, channels={k: low(c) for k, c in m.channels.items()})
-    return replace(rec, motion=motion, t=rec.t[::q], theta=rec.theta[::q],
-                   valid=None if rec.valid is None else rec.valid[::q])  # fmt: skip
+    return replace(
+        rec, motion=motion, t=rec.t[::q], theta=rec.theta[::q], valid=None if rec.valid is None else rec.valid[::q]
+    )
 
 
 def cv_folds(campaign: Campaign, folds: int = DEFAULT_FOLDS, seed=0) -> list[list[str]]:

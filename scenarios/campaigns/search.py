@@ -69,8 +69,13 @@ class SearchState:
 
     def with_step(self, step: Step, model: CVModel, level: float, current: CurrentModel) -> SearchState:
         """The state with ``step`` (its fit ``model``, judged at ``level``) on the ladder and ``current`` now."""
-        return replace(self, current=current, steps=(*self.steps, step), step_models=(*self.step_models, model),
-                       step_levels=(*self.step_levels, level))  # fmt: skip
+        return replace(
+            self,
+            current=current,
+            steps=(*self.steps, step),
+            step_models=(*self.step_models, model),
+            step_levels=(*self.step_levels, level),
+        )
 
 
 @dataclass(frozen=True)
@@ -99,13 +104,30 @@ def start(setup: TrialSetup) -> SearchState:
     # the loss of these errors: not simulated again; no fitted parameter: out-of-fold errors are the plain errors
     plain = CurrentModel(CVModel([], [[] for _ in range(folds.count)]), plain_errors.copy(), every.weigh(plain_errors))
     held = plain.heldout_errors
-    baseline = Step(effects=(), added_effects=(), by_hand=False, train_error=plain.train_loss,
-                    heldout_error=float(held.mean()), heldout_se=sem(held), improvement=math.nan,
-                    improvement_se=math.nan, significant=False, heldout_errors=held)  # fmt: skip
-    setup.progress(f"baseline: held-out error {baseline.heldout_error:.4f} +- {baseline.heldout_se:.4f} alpha "
-                   f"(sigma/alpha {setup.cv.noise_floor:.4f}); {folds.count}-fold cross-validation")  # fmt: skip
-    return SearchState(current=plain, plain=plain, noise_loss=every.noise_loss(), steps=(baseline,),
-                       step_models=(plain.model,), step_levels=(math.nan,))  # fmt: skip
+    baseline = Step(
+        effects=(),
+        added_effects=(),
+        by_hand=False,
+        train_error=plain.train_loss,
+        heldout_error=float(held.mean()),
+        heldout_se=sem(held),
+        improvement=math.nan,
+        improvement_se=math.nan,
+        significant=False,
+        heldout_errors=held,
+    )
+    setup.progress(
+        f"baseline: held-out error {baseline.heldout_error:.4f} +- {baseline.heldout_se:.4f} alpha "
+        f"(sigma/alpha {setup.cv.noise_floor:.4f}); {folds.count}-fold cross-validation"
+    )
+    return SearchState(
+        current=plain,
+        plain=plain,
+        noise_loss=every.noise_loss(),
+        steps=(baseline,),
+        step_models=(plain.model,),
+        step_levels=(math.nan,),
+    )
 
 
 def add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchState:
@@ -125,16 +147,18 @@ def add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchState
         raise NonFiniteHistory(
             f"effect {name!r}, added by hand{on}, gives a non-finite theta history on record {e.record!r}: "
             "the model is refused before any score",
-            e.effects, e.record,
-        ) from e  # fmt: skip
+            e.effects,
+            e.record,
+        ) from e
 
 
 def _add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchState:
     """:func:`add_by_hand`'s work: the fit, the joint refit, the fold refits and the step."""
     cv, every, model = setup.cv, setup.scorers.every_record, state.current.model
     fit_scorer, fit_train = fit_records(setup, [*model.names, name])
-    params, _train, _n = fit_effect(name, effect_objective(fit_scorer, build_model(model.full), []), cv.specimen,
-                                    pinned=cv.pinned)  # fmt: skip
+    params, _train, _n = fit_effect(
+        name, effect_objective(fit_scorer, build_model(model.full), []), cv.specimen, pinned=cv.pinned
+    )
     with_it = add_to_folds(cv, model, name, params, fit_train)
     full, train_loss = joint_refit(with_it.full, fit_scorer, cv.specimen, pinned=cv.pinned)
     if fit_scorer is not every:
@@ -143,15 +167,25 @@ def _add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchStat
     held = setup.scorers.out_of_fold(with_it)
     level = setup.level_for(1)
     judged = judge(state.current.heldout_errors, held, level, cv.noise_floor)
-    step = Step(effects=tuple(with_it.full), added_effects=(name,), by_hand=True, train_error=train_loss,
-                heldout_error=float(held.mean()), heldout_se=sem(held), improvement=judged.improvement,
-                improvement_se=judged.improvement_se, significant=judged.significant, heldout_errors=held)  # fmt: skip
+    step = Step(
+        effects=tuple(with_it.full),
+        added_effects=(name,),
+        by_hand=True,
+        train_error=train_loss,
+        heldout_error=float(held.mean()),
+        heldout_se=sem(held),
+        improvement=judged.improvement,
+        improvement_se=judged.improvement_se,
+        significant=judged.significant,
+        heldout_errors=held,
+    )
     setup.progress(f"+ {name} (by hand) {fmt_params(params)}: held-out error {held.mean():.4f}")
     return state.with_step(step, with_it, level, CurrentModel(with_it, held, train_loss))
 
 
-def greedy(setup: TrialSetup, state: SearchState, candidates: list[str], max_effects: int,
-           pairs: bool) -> tuple[SearchState, GreedyRounds]:  # fmt: skip
+def greedy(
+    setup: TrialSetup, state: SearchState, candidates: list[str], max_effects: int, pairs: bool
+) -> tuple[SearchState, GreedyRounds]:
     """The greedy rounds (:mod:`housner.scenarios.campaigns.diagnose`'s module docstring, step 5): the state
     they end in, and what they found."""
     rounds: list[list[Candidate]] = []
@@ -160,8 +194,11 @@ def greedy(setup: TrialSetup, state: SearchState, candidates: list[str], max_eff
     margin = PRACTICAL * setup.cv.noise_floor
     for round_no in range(1, max_effects + 1):
         model = state.current.model
-        pool = [n for n in candidates
-                if n not in model.names and not compatible(setup.cv.campaign, build_model(model.full), n)]  # fmt: skip
+        pool = [
+            n
+            for n in candidates
+            if n not in model.names and not compatible(setup.cv.campaign, build_model(model.full), n)
+        ]
         if not pool:
             break
         test_level = setup.level_for(len(pool))
@@ -169,11 +206,17 @@ def greedy(setup: TrialSetup, state: SearchState, candidates: list[str], max_eff
             first_level = test_level
         train_loss = state.current.train_loss
         if train_loss - state.noise_loss <= margin:
-            why = (f"the training error {train_loss:.4f} alpha is within {margin:.4f} of "
-                   f"the sensor noise ({state.noise_loss:.4f}): nothing is left for an effect to lower by a "
-                   "tenth of the noise; not searched")  # fmt: skip
-            rounds.append([judged_candidate(setup, state.current, (n,), {}, round_no, math.nan, test_level,
-                                            reason=why) for n in pool])  # fmt: skip
+            why = (
+                f"the training error {train_loss:.4f} alpha is within {margin:.4f} of "
+                f"the sensor noise ({state.noise_loss:.4f}): nothing is left for an effect to lower by a "
+                "tenth of the noise; not searched"
+            )
+            rounds.append(
+                [
+                    judged_candidate(setup, state.current, (n,), {}, round_no, math.nan, test_level, reason=why)
+                    for n in pool
+                ]
+            )
             setup.progress(f"round {round_no}: {why}")
             break
         results, chosen = run_round(setup, state, round_no, pool, test_level, pairs)
@@ -185,8 +228,9 @@ def greedy(setup: TrialSetup, state: SearchState, candidates: list[str], max_eff
     return state, GreedyRounds(rounds, selected, first_level)
 
 
-def run_round(setup: TrialSetup, state: SearchState, round_no: int, pool: list[str], test_level: float,
-              pairs: bool) -> tuple[list[Candidate], Trial | None]:  # fmt: skip
+def run_round(
+    setup: TrialSetup, state: SearchState, round_no: int, pool: list[str], test_level: float, pairs: bool
+) -> tuple[list[Candidate], Trial | None]:
     """Every candidate of ``pool`` tried (then pairs, when none passes): the round, best first, and its choice."""
     trials: list[Trial] = []
     for name in pool:
@@ -195,8 +239,9 @@ def run_round(setup: TrialSetup, state: SearchState, round_no: int, pool: list[s
         trials.append(trial)
         c = trial.candidate
         held = held_text(c, trial.model is not None)
-        setup.progress(f"round {round_no}: {name:32s} {fmt_params(c.params):40s} {held} "
-                       f"({time.perf_counter() - t0:.1f} s)")  # fmt: skip
+        setup.progress(
+            f"round {round_no}: {name:32s} {fmt_params(c.params):40s} {held} ({time.perf_counter() - t0:.1f} s)"
+        )
     trials.sort(key=lambda t: rank_key(t.candidate))
     if trials[0].candidate.significant:
         return [t.candidate for t in trials], trials[0]
@@ -222,9 +267,18 @@ def accept(setup: TrialSetup, state: SearchState, trial: Trial, test_level: floa
     held = setup.scorers.out_of_fold(with_it)
     judged = judge(state.current.heldout_errors, held, test_level, cv.noise_floor)
     label = names_label(trial.effects)
-    step = Step(effects=tuple(with_it.full), added_effects=tuple(trial.effects), by_hand=False, train_error=train_loss,
-                heldout_error=float(held.mean()), heldout_se=sem(held), improvement=judged.improvement,
-                improvement_se=judged.improvement_se, significant=True, heldout_errors=held)  # fmt: skip
+    step = Step(
+        effects=tuple(with_it.full),
+        added_effects=tuple(trial.effects),
+        by_hand=False,
+        train_error=train_loss,
+        heldout_error=float(held.mean()),
+        heldout_se=sem(held),
+        improvement=judged.improvement,
+        improvement_se=judged.improvement_se,
+        significant=True,
+        heldout_errors=held,
+    )
     setup.progress(f"+ {label}: held-out error {held.mean():.4f} +- {sem(held):.4f} alpha")
     return state.with_step(step, with_it, test_level, CurrentModel(with_it, held, train_loss))
 
@@ -246,16 +300,21 @@ def at_full_rate(setup: TrialSetup, state: SearchState) -> tuple[TrialSetup, Sea
     full_setup = replace(setup, scorers=cv.full)
     noise_loss = cv.full.every_record.noise_loss()
     steps = _steps_at_full_rate(full_setup, state)
-    setup.economies.insert(0, (
-        f"The search ran on every {cv.decimation}th sample ({rate} thinned to {rates[0] / cv.decimation:g} Hz; "
-        f"{SEARCH_RATE:g} Hz is what the physics needs: the fits' ranges are set for it, the fastest, a 100 Hz "
-        "foundation, has 5 samples a period): theta as sampled (its noise stays white of the same sigma, so a "
-        "record's error is the same mean over fewer samples), the table acceleration through an anti-alias filter "
-        "(zero-phase, below the new Nyquist frequency). The candidates' fits, held-out errors and tests, the pairs "
-        "and the probes are on those samples; the ladder's errors, the floors and the verdict on every sample."
-    ))  # fmt: skip
-    setup.progress(f"the ladder on every sample ({rate}): held-out error {steps[0].heldout_error:.4f} -> "
-                   f"{steps[-1].heldout_error:.4f} alpha")  # fmt: skip
+    setup.economies.insert(
+        0,
+        (
+            f"The search ran on every {cv.decimation}th sample ({rate} thinned to {rates[0] / cv.decimation:g} Hz; "
+            f"{SEARCH_RATE:g} Hz is what the physics needs: the fits' ranges are set for it, the fastest, a 100 Hz "
+            "foundation, has 5 samples a period): theta as sampled (its noise stays white of the same sigma, so a "
+            "record's error is the same mean over fewer samples), the table acceleration through an anti-alias filter "
+            "(zero-phase, below the new Nyquist frequency). The candidates' fits, held-out errors and tests, the pairs "
+            "and the probes are on those samples; the ladder's errors, the floors and the verdict on every sample."
+        ),
+    )
+    setup.progress(
+        f"the ladder on every sample ({rate}): held-out error {steps[0].heldout_error:.4f} -> "
+        f"{steps[-1].heldout_error:.4f} alpha"
+    )
     plain = replace(state.plain, heldout_errors=steps[0].heldout_errors, train_loss=steps[0].train_error)
     current = replace(state.current, heldout_errors=steps[-1].heldout_errors, train_loss=steps[-1].train_error)
     return full_setup, replace(state, current=current, plain=plain, noise_loss=noise_loss, steps=steps)
@@ -270,8 +329,15 @@ def _steps_at_full_rate(full_setup: TrialSetup, state: SearchState) -> tuple[Ste
     for i, (step, model, level) in enumerate(zip(state.steps, state.step_models, state.step_levels, strict=True)):
         if i == 0:
             held, train_loss = plain_errors.copy(), every.weigh(plain_errors)
-            steps.append(replace(step, train_error=train_loss, heldout_error=float(held.mean()), heldout_se=sem(held),
-                                 heldout_errors=held))  # fmt: skip
+            steps.append(
+                replace(
+                    step,
+                    train_error=train_loss,
+                    heldout_error=float(held.mean()),
+                    heldout_se=sem(held),
+                    heldout_errors=held,
+                )
+            )
         else:
             held, train_loss = full_setup.scorers.out_of_fold(model), every.loss(build_model(model.full))
             judged = judge(previous, held, level, full_setup.cv.noise_floor)
@@ -280,10 +346,18 @@ def _steps_at_full_rate(full_setup: TrialSetup, state: SearchState) -> tuple[Ste
                     f"On every sample the fall of step {i} (+ {step.added}) is {judged.improvement:+.4f} +- "
                     f"{judged.improvement_se:.4f} alpha, p = {judged.pvalue:.2g}: not significant at its round's level "
                     f"{level:.2g}, as it was on every {full_setup.cv.decimation}th sample; it stays in the ladder."
-                )  # fmt: skip
-            steps.append(replace(step, train_error=train_loss, heldout_error=float(held.mean()), heldout_se=sem(held),
-                                 improvement=judged.improvement, improvement_se=judged.improvement_se,
-                                 significant=judged.significant if step.by_hand else step.significant,
-                                 heldout_errors=held))  # fmt: skip
+                )
+            steps.append(
+                replace(
+                    step,
+                    train_error=train_loss,
+                    heldout_error=float(held.mean()),
+                    heldout_se=sem(held),
+                    improvement=judged.improvement,
+                    improvement_se=judged.improvement_se,
+                    significant=judged.significant if step.by_hand else step.significant,
+                    heldout_errors=held,
+                )
+            )
         previous = held
     return tuple(steps)

@@ -112,8 +112,13 @@ class SensorFault:
     text: str
 
     def to_dict(self) -> dict:
-        return {"kind": self.kind, "records": list(self.records), "samples": self.samples,
-                "figures": dict(self.figures), "text": self.text}  # fmt: skip
+        return {
+            "kind": self.kind,
+            "records": list(self.records),
+            "samples": self.samples,
+            "figures": dict(self.figures),
+            "text": self.text,
+        }
 
 
 @dataclass(frozen=True)
@@ -134,9 +139,11 @@ class SensorReport:
         """One paragraph: the noise, then each fault and what was done."""
         out = f"Sensor noise: {self.noise.describe()}."
         if not self.noise.white and math.isfinite(self.sigma_before):
-            out += (f" Each record's sigma is the difference-based estimate times {self.noise.diff_ratio:.2f} "
-                    f"(mean {self.sigma_before * 1e3:.3g} -> {self.sigma_after * 1e3:.3g} mrad), and the floor's "
-                    "replicas draw noise of this correlation.")  # fmt: skip
+            out += (
+                f" Each record's sigma is the difference-based estimate times {self.noise.diff_ratio:.2f} "
+                f"(mean {self.sigma_before * 1e3:.3g} -> {self.sigma_after * 1e3:.3g} mrad), and the floor's "
+                "replicas draw noise of this correlation."
+            )
         for f in self.faults:
             out += " Sensor fault: " + f.text
         for n in self.notes:
@@ -148,8 +155,10 @@ class SensorReport:
         ('' when the sensor is white and faultless)."""
         bits = [f.text for f in self.faults]
         if not self.noise.white:
-            bits.append(f"the sensor's noise is correlated in time ({self.noise.describe()}); the floor was measured "
-                        "with noise of that correlation")  # fmt: skip
+            bits.append(
+                f"the sensor's noise is correlated in time ({self.noise.describe()}); the floor was measured "
+                "with noise of that correlation"
+            )
         bits += list(self.notes)
         if not bits:
             return ""
@@ -158,9 +167,14 @@ class SensorReport:
         return head + " " + " ".join(b[0].upper() + b[1:] + ("" if b.endswith(".") else ".") for b in bits)
 
     def to_dict(self) -> dict:
-        return {"noise": self.noise.to_dict(), "faults": [f.to_dict() for f in self.faults],
-                "sigma_before": self.sigma_before, "sigma_after": self.sigma_after, "notes": list(self.notes),
-                "text": self.text()}  # fmt: skip
+        return {
+            "noise": self.noise.to_dict(),
+            "faults": [f.to_dict() for f in self.faults],
+            "sigma_before": self.sigma_before,
+            "sigma_after": self.sigma_after,
+            "notes": list(self.notes),
+            "text": self.text(),
+        }
 
 
 # ----------------------------------------------------------------------------
@@ -201,8 +215,15 @@ def _spikes(theta: np.ndarray, skip: np.ndarray | None = None, alpha: float = ma
     # a spike at i leaves its neighbours' differences at about -d_i / 2: opposite signs
     left = np.concatenate(([0.0], d[:-1]))
     right = np.concatenate((d[1:], [0.0]))
-    spike = (big & use & (np.sign(left) == -np.sign(d)) & (np.sign(right) == -np.sign(d))
-             & (np.abs(d) >= np.abs(left)) & (np.abs(d) >= np.abs(right)) & (np.abs(theta[1:-1]) < alpha))  # fmt: skip
+    spike = (
+        big
+        & use
+        & (np.sign(left) == -np.sign(d))
+        & (np.sign(right) == -np.sign(d))
+        & (np.abs(d) >= np.abs(left))
+        & (np.abs(d) >= np.abs(right))
+        & (np.abs(theta[1:-1]) < alpha)
+    )
     out[1:-1] = spike
     return out
 
@@ -307,8 +328,10 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
     recs, skipped, notes = _unseen_releases(recs, list(campaign.skipped))
     # 2. the plain model: where the block is surely still, and each first excursion
     res = simulate_records(campaign.specimen, recs, "housner", (), engine_settings)
-    models = [None if isinstance(r, str) else np.asarray(on_grid(r, rec), dtype=float)
-              for r, rec in zip(res, recs, strict=True)]  # fmt: skip
+    models = [
+        None if isinstance(r, str) else np.asarray(on_grid(r, rec), dtype=float)
+        for r, rec in zip(res, recs, strict=True)
+    ]
     # the recording order: each record's place among the [[record]] tables, those that could not be read counted
     order = np.array([r.position if r.position >= 0 else i for i, r in enumerate(recs)], dtype=float)
     tails, level_of = _rest_tails(recs, models, alpha)
@@ -355,22 +378,45 @@ def _sample_faults(recs: list[MeasuredRecord], alpha: float) -> tuple[list[Measu
         lo = [v for v in sat_levels if v < 0]
         clip = (max(lo) if lo else -math.inf, min(hi) if hi else math.inf)
         rng_txt = " and ".join(f"{v:+.4g} rad ({v / alpha:+.2f} alpha)" for v in (clip[0], clip[1]) if math.isfinite(v))
-        faults.append(SensorFault("saturation", tuple(sat_ids), sat_n, {"low": clip[0], "high": clip[1]},
-                                  f"saturation: {len(sat_ids)} record(s) flat-topped at {rng_txt}, the sensor's "
-                                  f"range; their {sat_n} samples at it are left out of every error, and models "
-                                  "are read through the same range."))  # fmt: skip
+        faults.append(
+            SensorFault(
+                "saturation",
+                tuple(sat_ids),
+                sat_n,
+                {"low": clip[0], "high": clip[1]},
+                f"saturation: {len(sat_ids)} record(s) flat-topped at {rng_txt}, the sensor's "
+                f"range; their {sat_n} samples at it are left out of every error, and models "
+                "are read through the same range.",
+            )
+        )
     if spk_ids:
-        faults.append(SensorFault("spikes", tuple(spk_ids), spk_n, {"sigmas": SPIKE_SIGMAS},
-                                  f"spikes: {spk_n} single samples in {len(spk_ids)} record(s) lie more than "
-                                  f"{SPIKE_SIGMAS:g} robust sigmas off both neighbours; they are left out of the "
-                                  "errors and bridged for the impact and peak detections."))  # fmt: skip
+        faults.append(
+            SensorFault(
+                "spikes",
+                tuple(spk_ids),
+                spk_n,
+                {"sigmas": SPIKE_SIGMAS},
+                f"spikes: {spk_n} single samples in {len(spk_ids)} record(s) lie more than "
+                f"{SPIKE_SIGMAS:g} robust sigmas off both neighbours; they are left out of the "
+                "errors and bridged for the impact and peak detections.",
+            )
+        )
     if drop_ids:
-        faults.append(SensorFault("dropouts", tuple(drop_ids), drop_n, {"run": DROPOUT_RUN},
-                                  f"dropouts: {drop_n} samples in {len(drop_ids)} record(s) repeat the value before "
-                                  f"them {DROPOUT_RUN} or more times in a row, which noise cannot do; they are left "
-                                  "out of the errors and bridged."))  # fmt: skip
-    recs = [replace(r, theta=th, valid=None if m.all() else m, clip=clip)
-            for r, th, m in zip(recs, thetas, masks, strict=True)]  # fmt: skip
+        faults.append(
+            SensorFault(
+                "dropouts",
+                tuple(drop_ids),
+                drop_n,
+                {"run": DROPOUT_RUN},
+                f"dropouts: {drop_n} samples in {len(drop_ids)} record(s) repeat the value before "
+                f"them {DROPOUT_RUN} or more times in a row, which noise cannot do; they are left "
+                "out of the errors and bridged.",
+            )
+        )
+    recs = [
+        replace(r, theta=th, valid=None if m.all() else m, clip=clip)
+        for r, th, m in zip(recs, thetas, masks, strict=True)
+    ]
     return recs, faults
 
 
@@ -378,13 +424,21 @@ def _unseen_releases(recs: list[MeasuredRecord], skipped: list) -> tuple[list[Me
     """A free vibration released beyond the sensor's range has no measured release angle: left out, and said so."""
     lost = [r for r in recs if r.kind == "free_vibration" and r.valid is not None and not r.valid[:3].all()]
     for r in lost:
-        skipped.append((r.id, str(r.file), f"{r.file}: the free vibration starts beyond the sensor's range "
-                        f"(flat at {r.theta[0]:+.4g} rad): its release angle was not measured, so it cannot pin p "
-                        "or r; left out"))  # fmt: skip
+        skipped.append(
+            (
+                r.id,
+                str(r.file),
+                f"{r.file}: the free vibration starts beyond the sensor's range "
+                f"(flat at {r.theta[0]:+.4g} rad): its release angle was not measured, so it cannot pin p "
+                "or r; left out",
+            )
+        )
     if not lost:
         return recs, skipped, []
-    note = (f"{len(lost)} free vibration(s) ({', '.join(r.id for r in lost)}) start beyond the sensor's range, so "
-            "their release angle was not measured: left out.")  # fmt: skip
+    note = (
+        f"{len(lost)} free vibration(s) ({', '.join(r.id for r in lost)}) start beyond the sensor's range, so "
+        "their release angle was not measured: left out."
+    )
     return [r for r in recs if r not in lost], skipped, [note]
 
 
@@ -415,10 +469,15 @@ def _offset_drift(recs, models, order, tails, level_of):
         return recs, level_of, None
     change = b * (order[-1] - order[0])
     offsets = b * (order - order[0])  # relative to the first record
-    fault = SensorFault("offset_drift", tuple(r.id for r in recs), 0, {"slope_per_record": b, "change": change, "t": t},
-                        f"offset drift: the rest level after each record's motion moves by {change * 1e3:+.3g} mrad "
-                        f"from the first record to the last (t = {t:+.1f} over {len(tails)} records); theta is "
-                        "corrected to the first record's offset.")  # fmt: skip
+    fault = SensorFault(
+        "offset_drift",
+        tuple(r.id for r in recs),
+        0,
+        {"slope_per_record": b, "change": change, "t": t},
+        f"offset drift: the rest level after each record's motion moves by {change * 1e3:+.3g} mrad "
+        f"from the first record to the last (t = {t:+.1f} over {len(tails)} records); theta is "
+        "corrected to the first record's offset.",
+    )
     recs = [_corrected(r, lambda x, i=i: x - offsets[i]) for i, r in enumerate(recs)]
     return recs, {i: v - offsets[i] for i, v in level_of.items()}, fault
 
@@ -447,12 +506,16 @@ def _gain_drift(recs, models, order, tails, level_of):
         return recs, level_of, None
     rel = (a + b * order) / g0  # the gain relative to the first record's
     change = float(rel[-1] - 1.0)
-    fault = SensorFault("gain_drift", tuple(r.id for r in recs), 0,
-                        {"gain_first": g0, "slope_per_record": b, "relative_change": change, "t": t},
-                        f"gain drift: the first large excursion of each ground motion against the plain model's "
-                        f"reads {change * 100:+.1f} % more from the first record to the last (t = {t:+.1f} over "
-                        f"{len(gains)} ground motions, each before any impact large enough for an impact law to "
-                        "matter); theta is corrected to the first record's gain.")  # fmt: skip
+    fault = SensorFault(
+        "gain_drift",
+        tuple(r.id for r in recs),
+        0,
+        {"gain_first": g0, "slope_per_record": b, "relative_change": change, "t": t},
+        f"gain drift: the first large excursion of each ground motion against the plain model's "
+        f"reads {change * 100:+.1f} % more from the first record to the last (t = {t:+.1f} over "
+        f"{len(gains)} ground motions, each before any impact large enough for an impact law to "
+        "matter); theta is corrected to the first record's gain.",
+    )
     recs = [_corrected(r, lambda x, i=i: x / rel[i], rel[i]) for i, r in enumerate(recs)]
     return recs, {i: v / rel[i] for i, v in level_of.items()}, fault
 
@@ -480,6 +543,12 @@ def _measured_noise(recs, tails, level_of) -> tuple[list[MeasuredRecord], Sensor
     if not same_rate:
         notes.append("The records have different sample rates: the noise is treated as white.")
     if not noise.white and math.isfinite(noise.diff_ratio) and noise.diff_ratio > 0:
-        recs = [replace(r, noise=float(noise.diff_ratio * estimate_noise(r.theta)) if r.noise > 0 else r.noise,
-                        noise_model=noise) for r in recs]  # fmt: skip
+        recs = [
+            replace(
+                r,
+                noise=float(noise.diff_ratio * estimate_noise(r.theta)) if r.noise > 0 else r.noise,
+                noise_model=noise,
+            )
+            for r in recs
+        ]
     return recs, noise, notes

@@ -158,11 +158,15 @@ class SensorNoise:
         if self.n_samples == 0:
             return "not measured (no quiet part of the records): white noise of the difference-based sigma assumed"
         if self.white:
-            return (f"white (Ljung-Box p = {self.pvalue:.2g} on {self.n_samples} quiet samples), sigma "
-                    f"{self.sigma * 1e3:.3g} mrad")  # fmt: skip
-        return (f"correlated in time: sigma {self.sigma * 1e3:.3g} mrad, {self.diff_ratio:.2f}x the estimate from "
-                f"differences, correlation time {self.correlation_time * 1e3:.3g} ms (measured on "
-                f"{self.n_samples} quiet samples; Ljung-Box p = {self.pvalue:.2g})")  # fmt: skip
+            return (
+                f"white (Ljung-Box p = {self.pvalue:.2g} on {self.n_samples} quiet samples), sigma "
+                f"{self.sigma * 1e3:.3g} mrad"
+            )
+        return (
+            f"correlated in time: sigma {self.sigma * 1e3:.3g} mrad, {self.diff_ratio:.2f}x the estimate from "
+            f"differences, correlation time {self.correlation_time * 1e3:.3g} ms (measured on "
+            f"{self.n_samples} quiet samples; Ljung-Box p = {self.pvalue:.2g})"
+        )
 
     def to_dict(self) -> dict:
         return {
@@ -243,4 +247,3 @@ def estimate_sensor_noise(segments: Sequence[tuple[str, np.ndarray]], dt: float,
     parzen = np.where(u <= 0.5, 1 - 6 * u**2 + 6 * u**3, 2 * (1 - u) ** 3)
     r = rho[: last + 1] * parzen
     return SensorNoise(sigma, r, False, dt, n, pvalue, ratio, sources)
-

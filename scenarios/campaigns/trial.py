@@ -188,8 +188,9 @@ def judge(before: np.ndarray, after: np.ndarray, test_level: float, noise_floor:
     nonzero = diffs[diffs != 0.0]
     if nonzero.size == 0:
         return Judgement(False, d, se, z, 1.0, "changes nothing")
-    pval = float(sps.wilcoxon(nonzero, alternative="greater", zero_method="wilcox").pvalue) if nonzero.size >= 2 \
-        else 1.0  # fmt: skip
+    pval = (
+        float(sps.wilcoxon(nonzero, alternative="greater", zero_method="wilcox").pvalue) if nonzero.size >= 2 else 1.0
+    )
     need = PRACTICAL * noise_floor
     if not d > 0:
         return Judgement(False, d, se, z, pval, "no improvement")
@@ -242,8 +243,10 @@ def held_text(c: Candidate, held_out: bool = True) -> str:
     """A candidate's held-out result in a line of progress (its reason when it was not held out)."""
     if not held_out:
         return c.reason
-    return f"held-out {c.heldout_error:.4f} improvement {c.improvement:+.4f} +- {c.improvement_se:.4f} " \
-           f"{'*' if c.significant else ' '}"  # fmt: skip
+    return (
+        f"held-out {c.heldout_error:.4f} improvement {c.improvement:+.4f} +- {c.improvement_se:.4f} "
+        f"{'*' if c.significant else ' '}"
+    )
 
 
 def rejected_text(e: NonFiniteHistory) -> str:
@@ -251,22 +254,49 @@ def rejected_text(e: NonFiniteHistory) -> str:
     return f"rejected: its theta history is not finite on record {e.record!r} (no score is made of NaN)"
 
 
-def judged_candidate(setup: TrialSetup, current: CurrentModel, effects: tuple[str, ...], params: dict,
-                     round_no: int, train_error: float, test_level: float, heldout: np.ndarray | None = None,
-                     reason: str = "") -> Candidate:  # fmt: skip
+def judged_candidate(
+    setup: TrialSetup,
+    current: CurrentModel,
+    effects: tuple[str, ...],
+    params: dict,
+    round_no: int,
+    train_error: float,
+    test_level: float,
+    heldout: np.ndarray | None = None,
+    reason: str = "",
+) -> Candidate:
     """The candidate ``effects`` of round ``round_no``, judged on its out-of-fold errors ``heldout`` against
     the current model's (None: not held out, for ``reason``)."""
-    common = dict(effects=tuple(effects), params=params, base=current.model.names, round=round_no,
-                  train_error=train_error)  # fmt: skip
+    common = dict(
+        effects=tuple(effects), params=params, base=current.model.names, round=round_no, train_error=train_error
+    )
     if heldout is None:
-        return Candidate(**common, heldout_error=math.nan, heldout_se=math.nan, improvement=math.nan,
-                         improvement_se=math.nan, z=math.nan, pvalue=1.0, significant=False, reason=reason,
-                         heldout_errors=None)  # fmt: skip
+        return Candidate(
+            **common,
+            heldout_error=math.nan,
+            heldout_se=math.nan,
+            improvement=math.nan,
+            improvement_se=math.nan,
+            z=math.nan,
+            pvalue=1.0,
+            significant=False,
+            reason=reason,
+            heldout_errors=None,
+        )
     judged = judge(current.heldout_errors, heldout, test_level, setup.cv.noise_floor)
-    return Candidate(**common, heldout_error=float(heldout.mean()), heldout_se=sem(heldout),
-                     improvement=judged.improvement, improvement_se=judged.improvement_se, z=judged.z,
-                     pvalue=judged.pvalue, significant=judged.significant, reason=judged.reason, heldout_errors=heldout,
-                     fold_wins=setup.cv.folds.means(current.heldout_errors - heldout))  # fmt: skip
+    return Candidate(
+        **common,
+        heldout_error=float(heldout.mean()),
+        heldout_se=sem(heldout),
+        improvement=judged.improvement,
+        improvement_se=judged.improvement_se,
+        z=judged.z,
+        pvalue=judged.pvalue,
+        significant=judged.significant,
+        reason=judged.reason,
+        heldout_errors=heldout,
+        fold_wins=setup.cv.folds.means(current.heldout_errors - heldout),
+    )
 
 
 def _has_mechanics(names: Sequence[str]) -> bool:
@@ -295,7 +325,7 @@ def fit_records(setup: TrialSetup, names: Sequence[str]) -> tuple[Scorer, list[S
             f"{note} {m_gm} of the {n_gm} ground motions, spread over the campaign ({fsecs:.0f} of "
             f"{secs:.0f} s of error windows; their grids on {len(sc.mechanics_grid.records)} records); their "
             "training errors, screens, held-out errors and tests are on every record."
-        )  # fmt: skip
+        )
     return sc.fit, sc.fit_fold_train
 
 
@@ -315,8 +345,9 @@ def try_candidate(setup: TrialSetup, current: CurrentModel, name: str, round_no:
     try:
         return _fit_candidate(setup, current, name, round_no, test_level)
     except NonFiniteHistory as e:
-        rejected = judged_candidate(setup, current, (name,), {}, round_no, math.nan, test_level,
-                                    reason=rejected_text(e))  # fmt: skip
+        rejected = judged_candidate(
+            setup, current, (name,), {}, round_no, math.nan, test_level, reason=rejected_text(e)
+        )
         return Trial(rejected, None, (name,))
 
 
@@ -330,29 +361,46 @@ def _fit_candidate(setup: TrialSetup, current: CurrentModel, name: str, round_no
         start, stopped = _mechanics_start(setup, current, name, fixed, round_no, test_level, fit_scorer)
         if stopped is not None:
             return stopped
-        params, train_error, _nev = fit_effect(name, effect_objective(fit_scorer, fixed, []), cv.specimen,
-                                               start=start, local_only=True, local_iterations=FOLD_ITERATIONS,
-                                               pinned=cv.pinned)  # fmt: skip
+        params, train_error, _nev = fit_effect(
+            name,
+            effect_objective(fit_scorer, fixed, []),
+            cv.specimen,
+            start=start,
+            local_only=True,
+            local_iterations=FOLD_ITERATIONS,
+            pinned=cv.pinned,
+        )
     else:
         # a parameter the localisation measures directly (a sensor offset: the rotation at rest, to
         # microradians) is taken as measured (cv.pinned): a grid over its bounds can find a basin
         # of the wrong sign, a local search a value off by its own tolerance
-        params, train_error, _nev = fit_effect(name, effect_objective(fit_scorer, fixed, []), cv.specimen,
-                                               pinned=cv.pinned)  # fmt: skip
+        params, train_error, _nev = fit_effect(
+            name, effect_objective(fit_scorer, fixed, []), cv.specimen, pinned=cv.pinned
+        )
     if fit_scorer is not every:
         train_error = every.loss([*fixed, make_effect(name, **params)])  # the training error on every record
     why = _not_held_out(setup, current, name, params, fixed, train_error)
     if why:
-        return Trial(judged_candidate(setup, current, (name,), params, round_no, train_error, test_level,
-                                      reason=why), None, (name,))  # fmt: skip
+        return Trial(
+            judged_candidate(setup, current, (name,), params, round_no, train_error, test_level, reason=why),
+            None,
+            (name,),
+        )
     with_it = add_to_folds(cv, current.model, name, params, fit_train)
     heldout = setup.scorers.out_of_fold(with_it)
     cand = judged_candidate(setup, current, (name,), params, round_no, train_error, test_level, heldout)
     return Trial(_beyond_kernel(setup, cand, fixed, [(name, params)], heldout, test_level), with_it, (name,))
 
 
-def _mechanics_start(setup: TrialSetup, current: CurrentModel, name: str, fixed: list, round_no: int,
-                     test_level: float, fit_scorer: Scorer) -> tuple[dict, Trial | None]:  # fmt: skip
+def _mechanics_start(
+    setup: TrialSetup,
+    current: CurrentModel,
+    name: str,
+    fixed: list,
+    round_no: int,
+    test_level: float,
+    fit_scorer: Scorer,
+) -> tuple[dict, Trial | None]:
     """Where a mechanics effect's fit starts, or the trial it stays when its basin does not pay.
 
     10-100x slower kernels: the grid finds the basin on a spread subset of the records, the local
@@ -364,8 +412,10 @@ def _mechanics_start(setup: TrialSetup, current: CurrentModel, name: str, fixed:
     start, err_grid, _n = fit_effect(name, effect_objective(grid, fixed, []), cv.specimen, pinned=cv.pinned)
     gain_grid = grid.loss(fixed) - err_grid
     if not gain_grid > margin:
-        why = f"error on {len(grid.records)} records falls by {gain_grid:+.4f} < " \
-              f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"  # fmt: skip
+        why = (
+            f"error on {len(grid.records)} records falls by {gain_grid:+.4f} < "
+            f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"
+        )
         cand = judged_candidate(setup, current, (name,), start, round_no, err_grid, test_level, reason=why)
         return start, Trial(cand, None, (name,), subset_only=True)
     # the basin found on the subset must carry over to every record before the (costly) local fit
@@ -374,15 +424,18 @@ def _mechanics_start(setup: TrialSetup, current: CurrentModel, name: str, fixed:
     before = current.train_loss if on_all else fit_scorer.loss(fixed)
     if not before - err_fit > margin:
         on = "all records" if on_all else f"the {len(fit_scorer.records)} records it is fitted on"
-        why = f"the subset's best point lowers the error on {on} by {before - err_fit:+.4f} < " \
-              f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"  # fmt: skip
+        why = (
+            f"the subset's best point lowers the error on {on} by {before - err_fit:+.4f} < "
+            f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"
+        )
         cand = judged_candidate(setup, current, (name,), start, round_no, err_fit, test_level, reason=why)
         return start, Trial(cand, None, (name,), subset_only=not on_all)
     return start, None
 
 
-def _beyond_kernel(setup: TrialSetup, cand: Candidate, fixed: list, members: list, heldout: np.ndarray,
-                   test_level: float) -> Candidate:  # fmt: skip
+def _beyond_kernel(
+    setup: TrialSetup, cand: Candidate, fixed: list, members: list, heldout: np.ndarray, test_level: float
+) -> Candidate:
     """``cand``, not significant when its gain is its kernel's numerics rather than its physics.
 
     An effect that brings its own equation of motion (sliding, a flexible foundation) is solved by
@@ -428,19 +481,21 @@ def _kernel_control(setup: TrialSetup, fixed: list, members: list, heldout: np.n
         control = [*fixed, *[make_effect(m, **(faded if i == k else p)) for i, (m, p) in enumerate(members)]]
         judged = judge(setup.scorers.every_record.errors(control), heldout, test_level, setup.cv.noise_floor)
         if not judged.significant:
-            return (f"its kernel's numerics, not its physics: the same kernel with {name} faded out "
-                    f"({fmt_params(faded)}) does as well (p = {judged.pvalue:.2g})")  # fmt: skip
+            return (
+                f"its kernel's numerics, not its physics: the same kernel with {name} faded out "
+                f"({fmt_params(faded)}) does as well (p = {judged.pvalue:.2g})"
+            )
     return ""
 
 
-def _not_held_out(setup: TrialSetup, current: CurrentModel, name: str, params: dict, fixed: list,
-                  train_error: float) -> str:  # fmt: skip
+def _not_held_out(
+    setup: TrialSetup, current: CurrentModel, name: str, params: dict, fixed: list, train_error: float
+) -> str:
     """Why a candidate fitted on all records is not held out ('' when it is)."""
     margin = PRACTICAL * setup.cv.noise_floor
     gain = current.train_loss - train_error
     if not gain > margin:
-        return f"training error falls by {gain:+.4f} < {margin:.4f} alpha (a tenth of the sensor noise): " \
-               "not held out"  # fmt: skip
+        return f"training error falls by {gain:+.4f} < {margin:.4f} alpha (a tenth of the sensor noise): not held out"
     bad = setup.free_vibrations.reason([*fixed, make_effect(name, **params)])
     if bad:
         return bad
@@ -452,13 +507,17 @@ def _not_held_out(setup: TrialSetup, current: CurrentModel, name: str, params: d
     falls = current.heldout_errors - setup.scorers.every_record.errors([*fixed, make_effect(name, **params)])
     mean_fall = float(np.mean(falls))
     if not mean_fall > margin:
-        return f"even on the records it was fitted to, the mean error per record falls by {mean_fall:+.4f} < " \
-               f"{margin:.4f} alpha (a tenth of the sensor noise): not held out"  # fmt: skip
+        return (
+            f"even on the records it was fitted to, the mean error per record falls by {mean_fall:+.4f} < "
+            f"{margin:.4f} alpha (a tenth of the sensor noise): not held out"
+        )
     nonzero = falls[falls != 0.0]
     p_fitted = float(sps.wilcoxon(nonzero, alternative="greater").pvalue) if nonzero.size >= 2 else 1.0
     if p_fitted > SCREEN_LEVEL:
-        return f"even on the records it was fitted to, its fall is within its uncertainty (p = {p_fitted:.2g} > " \
-               f"{SCREEN_LEVEL}): not held out"  # fmt: skip
+        return (
+            f"even on the records it was fitted to, its fall is within its uncertainty (p = {p_fitted:.2g} > "
+            f"{SCREEN_LEVEL}): not held out"
+        )
     return ""
 
 
@@ -469,8 +528,10 @@ def try_pairs(setup: TrialSetup, current: CurrentModel, trials: Sequence[Trial],
     # subset of records did not (its fall there was below the margin); its error there is on other
     # records than the current model's, so it is not compared with it.
     limit = current.train_loss - PRACTICAL * setup.cv.noise_floor
-    helped = sorted((t.candidate for t in trials if t.candidate.train_error < limit and not t.subset_only),
-                    key=lambda c: c.train_error)  # fmt: skip
+    helped = sorted(
+        (t.candidate for t in trials if t.candidate.train_error < limit and not t.subset_only),
+        key=lambda c: c.train_error,
+    )
     fixed = build_model(current.model.full)
     out = []
     for first, second in ((0, 1), (0, 2), (1, 2)):
@@ -495,10 +556,18 @@ def _fit_given(setup: TrialSetup, name: str, before: list, after: list, fit_scor
     cv = setup.cv
     if fit_scorer is setup.scorers.every_record:
         return fit_effect(name, effect_objective(fit_scorer, before, after), cv.specimen, pinned=cv.pinned)[0]
-    start, _e, _n = fit_effect(name, effect_objective(setup.scorers.mechanics_grid, before, after), cv.specimen,
-                               pinned=cv.pinned)  # fmt: skip
-    return fit_effect(name, effect_objective(fit_scorer, before, after), cv.specimen, start=start, local_only=True,
-                      local_iterations=FOLD_ITERATIONS, pinned=cv.pinned)[0]  # fmt: skip
+    start, _e, _n = fit_effect(
+        name, effect_objective(setup.scorers.mechanics_grid, before, after), cv.specimen, pinned=cv.pinned
+    )
+    return fit_effect(
+        name,
+        effect_objective(fit_scorer, before, after),
+        cv.specimen,
+        start=start,
+        local_only=True,
+        local_iterations=FOLD_ITERATIONS,
+        pinned=cv.pinned,
+    )[0]
 
 
 def _pair(setup: TrialSetup, current: CurrentModel, a: Candidate, b: Candidate, test_level: float) -> Trial:
@@ -514,18 +583,22 @@ def _pair(setup: TrialSetup, current: CurrentModel, a: Candidate, b: Candidate, 
     params_b = _fit_given(setup, b.effect, [*fixed, make_effect(a.effect, **a.params)], [], fit_scorer)
     params_a = _fit_given(setup, a.effect, fixed, [make_effect(b.effect, **b.params)], fit_scorer)
     starts = ([(a.effect, a.params), (b.effect, params_b)], [(a.effect, params_a), (b.effect, b.params)])
-    tries = [joint_refit([*current.model.full, *s], fit_scorer, cv.specimen, 30, free_from=n_before,
-                         pinned=cv.pinned) for s in starts]  # fmt: skip
+    tries = [
+        joint_refit([*current.model.full, *s], fit_scorer, cv.specimen, 30, free_from=n_before, pinned=cv.pinned)
+        for s in starts
+    ]
     both, train_error = min(tries, key=lambda x: x[1])
     if fit_scorer is not every:
         train_error = every.loss(build_model(both))  # the training error on every record
     params = {f"{n}.{k}": v for n, p in both[n_before:] for k, v in p.items()}
     bad = setup.free_vibrations.reason(build_model(both))
     if bad:
-        return Trial(judged_candidate(setup, current, pair, params, a.round, train_error, test_level, reason=bad),
-                     None, pair)  # fmt: skip
-    with_both = refit_folds(cv, CVModel(both, [[*f, *both[n_before:]] for f in current.model.folds]), fit_train,
-                            free_from=n_before)  # fmt: skip
+        return Trial(
+            judged_candidate(setup, current, pair, params, a.round, train_error, test_level, reason=bad), None, pair
+        )
+    with_both = refit_folds(
+        cv, CVModel(both, [[*f, *both[n_before:]] for f in current.model.folds]), fit_train, free_from=n_before
+    )
     heldout = setup.scorers.out_of_fold(with_both)
     cand = judged_candidate(setup, current, pair, params, a.round, train_error, test_level, heldout)
     cand = _beyond_kernel(setup, cand, fixed, both[n_before:], heldout, test_level)

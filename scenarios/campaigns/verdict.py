@@ -77,16 +77,19 @@ def _groups_text(r: Residual, legend: bool = False) -> str:
         if k != "ground_motion":
             return f"{names[k]} {g['ratio']:.2f}x, {z_text(g['z'])}"
         # the typical record first (10 %-trimmed); the mean, when the few records chaos carries off weigh on it
-        out = (f"{names[k]} {g['ratio_trimmed']:.2f}x for the typical record (10 %-trimmed mean), "
-               f"{z_text(g['z_trimmed'])}")
+        out = (
+            f"{names[k]} {g['ratio_trimmed']:.2f}x for the typical record (10 %-trimmed mean), {z_text(g['z_trimmed'])}"
+        )
         if abs(g.get("ratio_trimmed", g["ratio"]) - g["ratio"]) > 0.05:
             out += f", {g['ratio']:.2f}x on the plain mean, {z_text(g['z'])}"
         return out
 
     text = "; ".join(one(k, g) for k, g in r.groups.items())
     if legend:
-        text += (f"; {Z_LEGEND}; a group is a misfit when z > {Z_MISFIT:g} and its error is more than "
-                 f"{RATIO_MISFIT}x its floor")  # fmt: skip
+        text += (
+            f"; {Z_LEGEND}; a group is a misfit when z > {Z_MISFIT:g} and its error is more than "
+            f"{RATIO_MISFIT}x its floor"
+        )
     return text
 
 
@@ -97,8 +100,10 @@ def distribution_checks(cmp: Comparison | None) -> list[str]:
         return out
     d = cmp.distribution
     if d.ks.pvalue < DIST_LEVEL:
-        out.append(f"the theta_max/alpha distributions differ (Kolmogorov-Smirnov D = {d.ks.distance:.3f}, the "
-                   f"largest gap between the two cumulative distributions; p = {d.ks.pvalue:.2g})")
+        out.append(
+            f"the theta_max/alpha distributions differ (Kolmogorov-Smirnov D = {d.ks.distance:.3f}, the "
+            f"largest gap between the two cumulative distributions; p = {d.ks.pvalue:.2g})"
+        )
     n = d.measured.size
     k1, k2 = int(np.isinf(d.measured).sum()), int(np.isinf(d.model).sum())
     pool = (k1 + k2) / (2 * n)
@@ -126,9 +131,11 @@ def pointer_text(classes: Sequence[dict], model: Sequence[str] = ()) -> str:
     who = f"the model with {names}" if src == "final" and model else "the plain model" if src == "plain" else "model"
     ev = "; ".join(evidence_text(e, who) for e in top["evidence"][:2])
     if src == "plain" and model:
-        why = (f"Where to look first (what the plain model gets wrong, with the plain model's figures: the model "
-               f"with {names} no longer departs here by more than 3 standard errors, so the added effect may cover "
-               f"it in part): ")  # fmt: skip
+        why = (
+            f"Where to look first (what the plain model gets wrong, with the plain model's figures: the model "
+            f"with {names} no longer departs here by more than 3 standard errors, so the added effect may cover "
+            f"it in part): "
+        )
     elif model:
         why = f"Where to look first, from what the model with {names} still gets wrong: "
     else:
@@ -305,24 +312,51 @@ def decide(
     # significant: it never turns a residual at the floor into a misfit
     residual_tests = drift is not None or bool(probes)
     facts = VerdictFacts(
-        n_records=n_records, baseline=baseline, final=final, selected=selected, added=added,
-        model=model, params=params, library=library, drift=drift,
-        family=family, classes=classes, final_classes=final_classes, local_plain=local_plain,
-        local_final=local_final, dist_plain=distribution_checks(baseline_cmp),
+        n_records=n_records,
+        baseline=baseline,
+        final=final,
+        selected=selected,
+        added=added,
+        model=model,
+        params=params,
+        library=library,
+        drift=drift,
+        family=family,
+        classes=classes,
+        final_classes=final_classes,
+        local_plain=local_plain,
+        local_final=local_final,
+        dist_plain=distribution_checks(baseline_cmp),
         dist_final=distribution_checks(final_cmp),
         plain_misfit=baseline.misfit or residual_tests or (bool(local_plain) and baseline.ratio > RATIO_MISFIT),
         final_misfit=final.misfit or residual_tests or (bool(local_final) and final.ratio > RATIO_MISFIT),
-        powered=final.detectable_ratio <= DETECTABLE_RATIO, probed=bool(probes),
-        family_plain=family_plain or family, search=search or ("ran" if library else "off"),
-    )  # fmt: skip
-    status = status_rule(n_records >= MIN_RECORDS, bool(facts.model), facts.plain_misfit, facts.final_misfit,
-                         facts.powered)  # fmt: skip
-    return Verdict(status, final, baseline, verdict_text(facts, status), where, classes, facts.dist_final,
-                   facts.records_needed if status == "inconclusive" else 0)  # fmt: skip
+        powered=final.detectable_ratio <= DETECTABLE_RATIO,
+        probed=bool(probes),
+        family_plain=family_plain or family,
+        search=search or ("ran" if library else "off"),
+    )
+    status = status_rule(
+        n_records >= MIN_RECORDS, bool(facts.model), facts.plain_misfit, facts.final_misfit, facts.powered
+    )
+    return Verdict(
+        status,
+        final,
+        baseline,
+        verdict_text(facts, status),
+        where,
+        classes,
+        facts.dist_final,
+        facts.records_needed if status == "inconclusive" else 0,
+    )
 
 
-def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes: Sequence[dict],
-                    drift: dict | None, has_effects: bool = False) -> list[dict]:  # fmt: skip
+def pointer_classes(
+    base_classes: list[dict],
+    final_classes: list[dict],
+    probes: Sequence[dict],
+    drift: dict | None,
+    has_effects: bool = False,
+) -> list[dict]:
     """The physical classes to look at, strongest first: a drift along the recording order, then the probes'
     classes, then what the localisation points to: the plain model's classes in their order (what differs from
     Housner's physics names the family: on the independent generator's pivot-friction campaign the plain model
@@ -334,8 +368,9 @@ def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes:
     :func:`pointer_text` says.
     """
     final = {c["class"]: c for c in final_classes} if has_effects else {}
-    classes = [{**final[c["class"]], "from": "final"} if c["class"] in final else {**c, "from": "plain"}
-               for c in base_classes]  # fmt: skip
+    classes = [
+        {**final[c["class"]], "from": "final"} if c["class"] in final else {**c, "from": "plain"} for c in base_classes
+    ]
     have = {c["class"] for c in classes}
     classes += [{**c, "from": "final"} for c in final_classes if has_effects and c["class"] not in have]
     # a probe of physics outside the library that lowers the error significantly is the most direct
@@ -344,15 +379,24 @@ def pointer_classes(base_classes: list[dict], final_classes: list[dict], probes:
         evidence = {
             "metric": f"probe:{found['probe']}",
             "label": f"a trial of physics outside the library (the probe {found['probe']}: "
-                     + probe_words(found["probe"]) + "; "
-                     + ", ".join(f"{k} = {v:.3g}" for k, v in found["params"].items())
-                     + "), fitted on top of the final model and held out as a candidate is: held-out error "
-                     + f"{found['error_with']:.4g} alpha against {found['error']:.4g} without it",
-            "measured": found["error_with"], "measured_se": found["se"], "model": found["error"], "model_se": 0.0,
+            + probe_words(found["probe"])
+            + "; "
+            + ", ".join(f"{k} = {v:.3g}" for k, v in found["params"].items())
+            + "), fitted on top of the final model and held out as a candidate is: held-out error "
+            + f"{found['error_with']:.4g} alpha against {found['error']:.4g} without it",
+            "measured": found["error_with"],
+            "measured_se": found["se"],
+            "model": found["error"],
+            "model_se": 0.0,
             "z": found["z"],
-        }  # fmt: skip
-        entry = {"class": found["class"], "meaning": CLASSES[found["class"]], "z": abs(found["z"]),
-                 "evidence": [evidence], "from": "final" if has_effects else "plain"}  # fmt: skip
+        }
+        entry = {
+            "class": found["class"],
+            "meaning": CLASSES[found["class"]],
+            "z": abs(found["z"]),
+            "evidence": [evidence],
+            "from": "final" if has_effects else "plain",
+        }
         old = [c for c in classes if c["class"] == found["class"]]
         if old:
             entry["evidence"] += old[0]["evidence"]
@@ -375,17 +419,21 @@ def verdict_text(facts: VerdictFacts, status: str) -> str:
         who = "the model with " + " + ".join(facts.model) if facts.model else "the plain model"
         bits = [evidence_text(e, who) for c in local for e in c["evidence"][:1]] + dist
         if bits:
-            text += (f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
-                     f" ({Z_LOCAL_LEGEND}). It says where a model with more physics would differ first, not that "
-                     "this one fails.")  # fmt: skip
+            text += (
+                f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
+                f" ({Z_LOCAL_LEGEND}). It says where a model with more physics would differ first, not that "
+                "this one fails."
+            )
     if status in ("partly_explained", "unexplained"):
         if facts.dist_final:
             text += " The distributions disagree too: " + "; ".join(facts.dist_final) + "."
         if facts.classes:
             text += " " + pointer_text(facts.classes, facts.model)
         else:
-            text += f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is " \
-                    "in the time histories only."  # fmt: skip
+            text += (
+                f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is "
+                "in the time histories only."
+            )
     return text
 
 
@@ -402,7 +450,7 @@ def _figures(facts: VerdictFacts) -> tuple[str, str]:
         f"alpha (the error a correct model leaves on these same records: their noise, and rocking's sensitivity "
         f"to small differences{fam}), residual ratio {baseline.ratio:.2f} (the worse group's error over its "
         f"floor; a correct model: 1; {_groups_text(baseline, legend=True)})"
-    )  # fmt: skip
+    )
     # figs follow the fall's text ("... falls from 0.1752 to 0.0055 alpha"), which gives the final model's error
     figs = f"against its own correct-model floor of {final.floor:.4f} alpha"
     if facts.model:
@@ -417,13 +465,17 @@ def _floors_note(facts: VerdictFacts) -> str:
     """Why the plain and the final model have two floors ('' when they have one)."""
     fam_plain = facts.family_plain or facts.family
     if facts.family and facts.family != fam_plain:
-        return (f" (each model is judged against its own floor, measured over the narrowest family of correct "
-                f"integrators whose floor its ground motions reach, the widest ('any') when they reach none: "
-                f"'{fam_plain}' for the plain model, '{facts.family}' for this one; the plain model's floor is the "
-                f"same whatever is added)")  # fmt: skip
+        return (
+            f" (each model is judged against its own floor, measured over the narrowest family of correct "
+            f"integrators whose floor its ground motions reach, the widest ('any') when they reach none: "
+            f"'{fam_plain}' for the plain model, '{facts.family}' for this one; the plain model's floor is the "
+            f"same whatever is added)"
+        )
     if abs(facts.final.floor - facts.baseline.floor) > 1e-12:
-        return (" (each model is judged against its own floor: a correct model of other physics leaves another "
-                "error, as the records' chaos carries it elsewhere)")  # fmt: skip
+        return (
+            " (each model is judged against its own floor: a correct model of other physics leaves another "
+            "error, as the records' chaos carries it elsewhere)"
+        )
     return ""
 
 
@@ -441,8 +493,13 @@ def _fall_text(facts: VerdictFacts) -> str:
         return ""
     before, after = facts.baseline.error, facts.final.error
     change = "falls" if after < before else "rises"
-    how = "added by hand" if not facts.selected else "found by the search" if not facts.added else \
-        "added by hand and found"  # fmt: skip
+    how = (
+        "added by hand"
+        if not facts.selected
+        else "found by the search"
+        if not facts.added
+        else "added by hand and found"
+    )
     return f"with {_effects_text(facts)} ({how}) the held-out error {change} from {before:.4f} to {after:.4f} alpha"
 
 
@@ -452,21 +509,28 @@ def _search_text(facts: VerdictFacts, other: bool) -> str:
         what = "none of the other effects" if other else "none of the effects"
         return f"{what} the search tried ({', '.join(facts.library)}) lowers it significantly"
     if facts.search == "skipped":
-        return ("the search tried no effect: the training error was already within a tenth of the sensor noise "
-                "of the error the noise alone leaves, so nothing was left for an effect to take")  # fmt: skip
+        return (
+            "the search tried no effect: the training error was already within a tenth of the sensor noise "
+            "of the error the noise alone leaves, so nothing was left for an effect to take"
+        )
     if facts.search == "none_left":
-        return ("the search tried no effect: no candidate was left to try (--max-effects 0, or each candidate "
-                "already in the model or incompatible with it)")  # fmt: skip
-    return ("no library search ran (no candidate effects were given: --effects none, or effects=[])"
-            + ("; only the effects added by hand were tried" if other else ", and no effect was added by hand"))
+        return (
+            "the search tried no effect: no candidate was left to try (--max-effects 0, or each candidate "
+            "already in the model or incompatible with it)"
+        )
+    return "no library search ran (no candidate effects were given: --effects none, or effects=[])" + (
+        "; only the effects added by hand were tried" if other else ", and no effect was added by hand"
+    )
 
 
 def _status_sentence(facts: VerdictFacts, status: str) -> str:
     """The status in words, with the figures it rests on."""
     figs, base_figs = _figures(facts)
     if status == "inconclusive" and facts.n_records < MIN_RECORDS:
-        return (f"Inconclusive: {facts.n_records} usable records are too few to tell a misfit from chance (at least "
-                f"{MIN_RECORDS} are needed, with free vibrations among them); {base_figs}.")  # fmt: skip
+        return (
+            f"Inconclusive: {facts.n_records} usable records are too few to tell a misfit from chance (at least "
+            f"{MIN_RECORDS} are needed, with free vibrations among them); {base_figs}."
+        )
     if not facts.model and not facts.plain_misfit:
         return _unless_underpowered(
             facts.powered,
@@ -476,7 +540,7 @@ def _status_sentence(facts: VerdictFacts, status: str) -> str:
             f"Inconclusive: {base_figs}, not significantly above it, but with these records only a misfit of "
             f"{facts.final.detectable_ratio:.2f}x the floor or more would show; about {facts.records_needed} more "
             f"ground-motion records are needed to see one of {DETECTABLE_RATIO}x.",
-        )  # fmt: skip
+        )
     if not facts.model:
         return f"Unexplained: {base_figs}: a misfit; {_search_text(facts, other=False)}."
     if not facts.final_misfit:
@@ -487,11 +551,22 @@ def _status_sentence(facts: VerdictFacts, status: str) -> str:
 def _explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
     """The verdict of a final model at its floor (``explained``, or ``inconclusive`` when underpowered)."""
     final, fall = facts.final, _fall_text(facts)
-    small = "" if facts.plain_misfit else (" The plain model was already within the floor's band, yet the fall is "
-                                       "significant on the held-out records: a small effect that many records prove.")
-    doubt = "" if final.ratio <= RATIO_MISFIT else (
-        f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
-        f"({z_text(final.z)} <= {Z_MISFIT:g}): these records cannot tell it from the floor.")  # fmt: skip
+    small = (
+        ""
+        if facts.plain_misfit
+        else (
+            " The plain model was already within the floor's band, yet the fall is "
+            "significant on the held-out records: a small effect that many records prove."
+        )
+    )
+    doubt = (
+        ""
+        if final.ratio <= RATIO_MISFIT
+        else (
+            f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
+            f"({z_text(final.z)} <= {Z_MISFIT:g}): these records cannot tell it from the floor."
+        )
+    )
     return _unless_underpowered(
         facts.powered,
         f"Explained: {base_figs}; {fall}, {figs}: no group more than {RATIO_MISFIT}x above its floor with "
@@ -499,7 +574,7 @@ def _explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
         f"Inconclusive: {base_figs}; {fall}, {figs}, but these records would only show a remaining misfit "
         f"of {final.detectable_ratio:.2f}x or more; about {facts.records_needed} more ground-motion records are "
         "needed.",
-    )  # fmt: skip
+    )
 
 
 def _partly_explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
@@ -507,15 +582,22 @@ def _partly_explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -
     fall = _fall_text(facts)
     searched = _search_text(facts, other=True)
     if facts.final.misfit or not (facts.drift or facts.probed or facts.local_final):
-        return (f"Partly explained: {base_figs}; {fall}, {figs}. A misfit of {facts.final.ratio:.2f}x the floor "
-                f"(the worse group of records) remains; {searched}.")  # fmt: skip
+        return (
+            f"Partly explained: {base_figs}; {fall}, {figs}. A misfit of {facts.final.ratio:.2f}x the floor "
+            f"(the worse group of records) remains; {searched}."
+        )
     probed = [c for c in facts.classes if any(e["metric"].startswith("probe:") for e in c["evidence"])]
     who = "the model with " + " + ".join(facts.model)
-    ev = "; ".join(evidence_text(e, who) for c in ([facts.drift] if facts.drift else []) + probed + facts.local_final
-                   for e in c["evidence"][:2])  # fmt: skip
-    return (f"Partly explained: {base_figs}; {fall}, {figs}: above the floor's {RATIO_MISFIT}x band, "
-            f"and the recording order, a probe of physics outside the library or the localisation (beyond "
-            f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}; {Z_LOCAL_LEGEND}); {searched}.")  # fmt: skip
+    ev = "; ".join(
+        evidence_text(e, who)
+        for c in ([facts.drift] if facts.drift else []) + probed + facts.local_final
+        for e in c["evidence"][:2]
+    )
+    return (
+        f"Partly explained: {base_figs}; {fall}, {figs}: above the floor's {RATIO_MISFIT}x band, "
+        f"and the recording order, a probe of physics outside the library or the localisation (beyond "
+        f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}; {Z_LOCAL_LEGEND}); {searched}."
+    )
 
 
 #: The status rule (docs/explanation/verdict.md): (enough records, an effect in the final model, the plain
@@ -532,8 +614,7 @@ STATUS_RULE: tuple[tuple[tuple, str], ...] = (
 )
 
 
-def status_rule(enough_records: bool, has_effects: bool, plain_misfit: bool, final_misfit: bool,
-                powered: bool) -> str:  # fmt: skip
+def status_rule(enough_records: bool, has_effects: bool, plain_misfit: bool, final_misfit: bool, powered: bool) -> str:
     """The status from the residual's tests alone (:data:`STATUS_RULE`, one truth table).
 
     ``plain_misfit`` / ``final_misfit``: the plain / final model's held-out error is significantly (z >

@@ -10,11 +10,15 @@ __all__ = ["Z_LEGEND", "Z_LOCAL_LEGEND", "Z_SHOWN", "evidence_text", "family_tex
 #: Beyond this |z| the text says "z > 100": more digits say nothing more about a misfit [-].
 Z_SHOWN = 100.0
 #: The residual's z, said once where it first appears in the verdict.
-Z_LEGEND = ("z: the held-out error's excess over the floor, record by record, in standard errors of that excess; "
-            "about 0 for a correct model")  # fmt: skip
+Z_LEGEND = (
+    "z: the held-out error's excess over the floor, record by record, in standard errors of that excess; "
+    "about 0 for a correct model"
+)
 #: The localisation's z, said once where the pointer first gives one.
-Z_LOCAL_LEGEND = ("z: how many standard errors of their difference separate the model's value from the measured "
-                  "one; beyond 3 it points here")  # fmt: skip
+Z_LOCAL_LEGEND = (
+    "z: how many standard errors of their difference separate the model's value from the measured "
+    "one; beyond 3 it points here"
+)
 
 
 def z_text(z: float) -> str:
@@ -52,12 +56,14 @@ def family_text(family: str) -> str:
         "exact": "integrated as this library integrates, with the table acceleration's measured noise",
         "solver": "another integrator step and rest rule on the same table motion",
         "any": "any integrator step and rest rule, and the table motion's timing and scale anywhere in their "
-               "uncertainty (up to half a sample; about 0.1 %), held or linear between samples",
-    }  # fmt: skip
+        "uncertainty (up to half a sample; about 0.1 %), held or linear between samples",
+    }
     if family.startswith("input-"):
         share = family.split("-", 1)[1]
-        return (f"family '{family}': another integrator step and rest rule, and the table motion's timing and "
-                f"scale within {share} of their uncertainty")  # fmt: skip
+        return (
+            f"family '{family}': another integrator step and rest rule, and the table motion's timing and "
+            f"scale within {share} of their uncertainty"
+        )
     return f"family '{family}': {words[family]}" if family in words else f"family '{family}'"
 
 

@@ -241,10 +241,18 @@ def check_motions(f: ScenarioFile, mot: dict) -> None:
     if "units" in mot:  # the acceleration unit of record files whose header names none
         u = parse_unit(mot["units"])
         if u is None or u[0] != "acceleration":
-            raise f.error("motions", "units", f"[motions] 'units' must be an acceleration unit (g, cm/s^2, m/s^2, "
-                          f"mm/s^2, in/s^2, ft/s^2), got {mot['units']!r}")  # fmt: skip
-    for key, sources in (("record", ("rdk", "record")), ("records", ("records",)), ("model", ("rdk",)),
-                         ("units", ("rdk", "record", "records"))):  # fmt: skip
+            raise f.error(
+                "motions",
+                "units",
+                f"[motions] 'units' must be an acceleration unit (g, cm/s^2, m/s^2, "
+                f"mm/s^2, in/s^2, ft/s^2), got {mot['units']!r}",
+            )
+    for key, sources in (
+        ("record", ("rdk", "record")),
+        ("records", ("records",)),
+        ("model", ("rdk",)),
+        ("units", ("rdk", "record", "records")),
+    ):
         if key in mot and src not in sources:
             use = " or ".join(f"source = {s!r}" for s in sources)
             raise f.error("motions", key, f"[motions] {key!r} applies to {use}, not to source {src!r}")
@@ -369,7 +377,7 @@ def read_effects(f: ScenarioFile, entries: list, specimen: Specimen) -> tuple:
         name = params.pop("name", None)
         if not isinstance(name, str):
             choices = ", ".join(available_effects())
-            raise ScenarioError(f"{at}: [[effects]] needs name = \"<effect>\" (choices: {choices})")
+            raise ScenarioError(f'{at}: [[effects]] needs name = "<effect>" (choices: {choices})')
         try:
             out.append(make_effect(name, specimen, **params))
         except (TypeError, ValueError) as e:

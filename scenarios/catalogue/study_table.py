@@ -25,6 +25,7 @@ INTENSITIES = {
 #: Motion sources a study can scale (ground motions; not free vibration or pulse grids).
 _SOURCES = ("rdk", "record", "records")
 
+
 @dataclass(frozen=True)
 class Study:
     """The ``[study]`` table of a scenario.
@@ -89,8 +90,10 @@ class Study:
 
 def _positive_list(f, key: str, value: Any, *, increasing: bool = True) -> tuple[float, ...]:
     """A non-empty list of positive finite numbers (sorted, distinct when ``increasing``), or a ScenarioError."""
-    ok = isinstance(value, list) and value and all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in value
+    ok = (
+        isinstance(value, list)
+        and value
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in value)
     )
     if not ok:
         raise f.error("study", key, f"[study] {key!r} must be a non-empty list of positive numbers, got {value!r}")
@@ -118,8 +121,11 @@ def read_study(f, table: dict, motions: dict, specimen, S0: float) -> Study:
     """
     src = motions.get("source")
     if src not in _SOURCES:
-        raise f.error("motions", "source", f"a [study] scales ground motions: [motions] source must be one of "
-                      f"{', '.join(_SOURCES)}, got {src!r}")  # fmt: skip
+        raise f.error(
+            "motions",
+            "source",
+            f"a [study] scales ground motions: [motions] source must be one of {', '.join(_SOURCES)}, got {src!r}",
+        )
     intensity = table.get("intensity", "amplitude")
     if intensity not in INTENSITIES:
         raise f.error("study", "intensity", f"[study] {unknown_choice('intensity', intensity, INTENSITIES)}")
@@ -133,7 +139,7 @@ def read_study(f, table: dict, motions: dict, specimen, S0: float) -> Study:
             raise f.error("study", "period" if period is not None else None, msg)
         period = float(period)
     elif period is not None:
-        raise f.error("study", "period", f"[study] `period` belongs to intensity \"sa\", not {intensity!r}")
+        raise f.error("study", "period", f'[study] `period` belongs to intensity "sa", not {intensity!r}')
     if "prototype_heights" in table and "S" in table:
         raise f.error("study", "S", "[study] give the sizes as `prototype_heights` or as `S`, not both")
     if "prototype_heights" in table:

@@ -145,5 +145,12 @@ def store_text(path: str | Path, text: str) -> None:
 # written and read in housner.scenarios.execution.chunks (which the worker processes load by its path).
 runner_logger = logging.getLogger("housner.runner")
 
-__all__ = ["cache_key", "cache_keys", "code_version", "content_key", "default_cache_dir", "effect_code_hash",
-           "store_text"]  # fmt: skip
+__all__ = [
+    "cache_key",
+    "cache_keys",
+    "code_version",
+    "content_key",
+    "default_cache_dir",
+    "effect_code_hash",
+    "store_text",
+]

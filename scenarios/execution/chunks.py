@@ -61,6 +61,7 @@ _ENGINE_CACHE: dict[str, Any] = {}
 #: repaired meanwhile (never stored in the cache; the runner adds it to the engine's info).
 REPAIRS = "kernel_cache_repairs"
 
+
 def _entry_checksum(key: str, meta: dict, theta: np.ndarray) -> str:
     """SHA-256 of an entry's payload: its key, its row fields (canonical JSON) and theta's bytes."""
     h = hashlib.sha256()
@@ -143,16 +144,52 @@ def _zip_stored(members: list[tuple[str, bytes]]) -> bytes:
     for name, data in members:
         n = name.encode()
         crc, size = zlib.crc32(data), len(data)
-        head = struct.pack(zipfile.structFileHeader, zipfile.stringFileHeader, 20, 0, 0, zipfile.ZIP_STORED, 0,
-                           _ZIP_DATE, crc, size, size, len(n), 0)  # fmt: skip
-        central.append(struct.pack(zipfile.structCentralDir, zipfile.stringCentralDir, 20, 3, 20, 0, 0,
-                                   zipfile.ZIP_STORED, 0, _ZIP_DATE, crc, size, size, len(n), 0, 0, 0, 0,
-                                   0o600 << 16, offset) + n)  # fmt: skip
+        head = struct.pack(
+            zipfile.structFileHeader,
+            zipfile.stringFileHeader,
+            20,
+            0,
+            0,
+            zipfile.ZIP_STORED,
+            0,
+            _ZIP_DATE,
+            crc,
+            size,
+            size,
+            len(n),
+            0,
+        )
+        central.append(
+            struct.pack(
+                zipfile.structCentralDir,
+                zipfile.stringCentralDir,
+                20,
+                3,
+                20,
+                0,
+                0,
+                zipfile.ZIP_STORED,
+                0,
+                _ZIP_DATE,
+                crc,
+                size,
+                size,
+                len(n),
+                0,
+                0,
+                0,
+                0,
+                0o600 << 16,
+                offset,
+            )
+            + n
+        )
         parts += [head, n, data]
         offset += len(head) + len(n) + size
     cd = b"".join(central)
-    end = struct.pack(zipfile.structEndArchive, zipfile.stringEndArchive, 0, 0, len(members), len(members), len(cd),
-                      offset, 0)  # fmt: skip
+    end = struct.pack(
+        zipfile.structEndArchive, zipfile.stringEndArchive, 0, 0, len(members), len(members), len(cd), offset, 0
+    )
     return b"".join([*parts, cd, end])
 
 
@@ -339,8 +376,10 @@ def _simulate_batch(eng: Any, specimen: Any, items: list, effects: tuple) -> lis
     except Exception:
         return [_simulate_one(eng, specimen, i, m, effects) for i, m in items]
     share = (time.perf_counter() - t0) / len(items)
-    return [_failed_row(i, r, share) if isinstance(r, BaseException) else _ok_row(i, r, share)
-            for (i, _), r in zip(items, out, strict=True)]  # fmt: skip
+    return [
+        _failed_row(i, r, share) if isinstance(r, BaseException) else _ok_row(i, r, share)
+        for (i, _), r in zip(items, out, strict=True)
+    ]
 
 
 def iter_chunk(
@@ -456,9 +495,15 @@ def unpack(packed: dict) -> list[dict]:
         if not packed["ok"][j]:
             rows.append({"motion_id": i, "status": "failed", "error": packed["error"][j], "wall_s": wall, **extra})
             continue
-        r = {"motion_id": i, "status": "ok", "error": "", "wall_s": wall,
-             "theta_max_over_alpha": float(packed["theta_max_over_alpha"][j]),
-             "overturned": bool(packed["overturned"][j]), "n_impacts": int(packed["n_impacts"][j])}  # fmt: skip
+        r = {
+            "motion_id": i,
+            "status": "ok",
+            "error": "",
+            "wall_s": wall,
+            "theta_max_over_alpha": float(packed["theta_max_over_alpha"][j]),
+            "overturned": bool(packed["overturned"][j]),
+            "n_impacts": int(packed["n_impacts"][j]),
+        }
         if th is not None:
             r["theta"] = th[off[j] : off[j + 1]]
         rows.append({**r, **extra})
@@ -501,8 +546,9 @@ def worker_main(conn: Any) -> None:
                 return
             chunk_id, name, settings, specimen, items, effects, batched, cache_dir, keys, thetas = msg
             conn.send(("start", chunk_id, None))
-            for rows in iter_chunk(name, settings, specimen, items, effects, batched=batched, cache_dir=cache_dir,
-                                   keys=keys):  # fmt: skip
+            for rows in iter_chunk(
+                name, settings, specimen, items, effects, batched=batched, cache_dir=cache_dir, keys=keys
+            ):
                 conn.send(("rec", chunk_id, pack(rows, thetas)))
             conn.send(("done", chunk_id, None))
     except (BrokenPipeError, ConnectionResetError, EOFError):

@@ -128,8 +128,9 @@ def run_dask(chunks: list[Chunk], specimen: Specimen, scheduler: Any, on_record:
     futs: dict[Any, Chunk] = {}
     try:
         for c in chunks:
-            f = client.submit(run_chunk, c.engine, c.settings, specimen, c.items, c.effects, c.batched, pure=False,
-                              retries=1)  # fmt: skip
+            f = client.submit(
+                run_chunk, c.engine, c.settings, specimen, c.items, c.effects, c.batched, pure=False, retries=1
+            )
             futs[f] = c
         # Without a loop, as_completed takes the default client's, and a command-line run has no default client.
         for f in as_completed(futs, loop=client.loop):
@@ -138,8 +139,10 @@ def run_dask(chunks: list[Chunk], specimen: Specimen, scheduler: Any, on_record:
                 res = unpack(f.result())
             except KilledWorker as e:  # the workers running it died, as often as the scheduler allows
                 n = e.allowed_failures
-                msg = (f"KilledWorker: the Dask workers running it died {n + 1} time(s), all that the scheduler "
-                       f"allows (distributed.scheduler.allowed-failures = {n}); see the workers' logs")  # fmt: skip
+                msg = (
+                    f"KilledWorker: the Dask workers running it died {n + 1} time(s), all that the scheduler "
+                    f"allows (distributed.scheduler.allowed-failures = {n}); see the workers' logs"
+                )
                 res = [failed_record(i, msg) for i, _ in c.items]
             except Exception as e:  # the task raised, or could not run, twice
                 res = [failed_record(i, f"Dask task failed twice: {type(e).__name__}: {e}") for i, _ in c.items]

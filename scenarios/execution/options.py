@@ -117,7 +117,9 @@ class RunOptions:
             raise TypeError(f"{where}(): `options` must be a RunOptions, got {type(options).__name__}")
         unknown = [k for k in keywords if k not in cls.fields()]
         if unknown:
-            raise TypeError(f"{where}() got an unexpected keyword argument {unknown[0]!r} "
-                            f"(execution options: {', '.join(cls.fields())})")  # fmt: skip
+            raise TypeError(
+                f"{where}() got an unexpected keyword argument {unknown[0]!r} "
+                f"(execution options: {', '.join(cls.fields())})"
+            )
         base = options if options is not None else cls()
         return base.replace(**keywords) if keywords else base

@@ -176,8 +176,18 @@ class RunMeta:
     extra: dict = field(default_factory=dict)
 
     #: Keys written whatever their value, in this order; then the optional ones, when set.
-    _ALWAYS = ("scenario", "specimen", "motions", "n_motions", "engines", "analysis", "failures", "engine_errors",
-               "wall_s", "provenance")  # fmt: skip
+    _ALWAYS = (
+        "scenario",
+        "specimen",
+        "motions",
+        "n_motions",
+        "engines",
+        "analysis",
+        "failures",
+        "engine_errors",
+        "wall_s",
+        "provenance",
+    )
     _OPTIONAL = ("table2_spread", "effects", "campaign", "complete", "content")
     _MARKERS = 2  # the last optional keys: the completion marker and the content key, written last
 
@@ -186,8 +196,10 @@ class RunMeta:
         """The metadata of a run.json's contents (a missing or null table becomes an empty one)."""
         data = data if isinstance(data, dict) else {}
         empty = {"failures": []}
-        known = {**{k: data.get(k) or empty.get(k, {}) for k in cls._ALWAYS if k != "n_motions"},
-                 **{k: data.get(k) for k in (*cls._OPTIONAL, "n_motions")}}  # fmt: skip
+        known = {
+            **{k: data.get(k) or empty.get(k, {}) for k in cls._ALWAYS if k != "n_motions"},
+            **{k: data.get(k) for k in (*cls._OPTIONAL, "n_motions")},
+        }
         extra = {k: v for k, v in data.items() if k not in cls._ALWAYS and k not in cls._OPTIONAL}
         return cls(**known, extra=extra)
 
@@ -217,8 +229,11 @@ class RunMeta:
     @property
     def effect_series(self) -> dict[str, str]:
         """Series that are an engine with the scenario's [[effects]]: series -> the engine without them."""
-        return {n: str(v["engine"]) for n, v in self.engines.items()
-                if isinstance(v, dict) and v.get("effects") and "engine" in v}  # fmt: skip
+        return {
+            n: str(v["engine"])
+            for n, v in self.engines.items()
+            if isinstance(v, dict) and v.get("effects") and "engine" in v
+        }
 
     @property
     def is_campaign(self) -> bool:

@@ -119,8 +119,9 @@ def run_engines(
     opts = RunOptions.merged(options, execution, "run_engines")
     jobs, scheduler = opts.local_jobs(), opts.scheduler
     n_workers, per_worker = _workers_and_chunks(scheduler, jobs)
-    plan = _plan(specimen, motions, engines, effects, opts.cache_folder(), n_workers,
-                 opts.chunk_size, per_worker, histories)  # fmt: skip
+    plan = _plan(
+        specimen, motions, engines, effects, opts.cache_folder(), n_workers, opts.chunk_size, per_worker, histories
+    )
     if plan.rows and opts.progress:
         _say_reused(plan, len(engines) * len(motions))
     elapsed = _execute(plan, specimen, jobs, scheduler, opts.progress)
@@ -178,8 +179,17 @@ def _cluster_threads(scheduler, default: int) -> int:
         return default
 
 
-def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | None, n_workers: int,
-          chunk_size: int | None, per_worker: int = 4, histories: bool = True) -> _Plan:  # fmt: skip
+def _plan(
+    specimen,
+    motions,
+    engines: dict,
+    effects: tuple,
+    cache_dir: Path | None,
+    n_workers: int,
+    chunk_size: int | None,
+    per_worker: int = 4,
+    histories: bool = True,
+) -> _Plan:
     """Probe each engine (settings, version), take what the cache holds, cut the rest into chunks."""
     plan = _Plan({}, {}, {}, [], cache_dir, histories)
     per_engine: list[list[Chunk]] = []
@@ -187,8 +197,15 @@ def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | No
         repaired = repairs_so_far()  # a damaged kernel found while planning (the cache keys load the effects' kernels)
         probe = engine_class(name)(**settings)
         full_settings, version = probe.settings(), probe.version()
-        plan.info[name] = {"settings": full_settings, "version": version, "wall_s": 0.0, "cached": 0,
-                           "cache_rejected": 0, "worker_deaths": 0, REPAIRS: 0}  # fmt: skip
+        plan.info[name] = {
+            "settings": full_settings,
+            "version": version,
+            "wall_s": 0.0,
+            "cached": 0,
+            "cache_rejected": 0,
+            "worker_deaths": 0,
+            REPAIRS: 0,
+        }
         todo = []
         keys = cache_keys(specimen, motions, name, full_settings, version, effects)
         plan.info[name][REPAIRS] += repairs_so_far() - repaired
@@ -202,10 +219,12 @@ def _plan(specimen, motions, engines: dict, effects: tuple, cache_dir: Path | No
         batched = engine_batches(probe)
         cap = BATCH_CAP if batched else CHUNK_CAP
         size = chunk_size or max(1, min(cap, math.ceil(len(todo) / (per_worker * n_workers))))
-        per_engine.append([
-            Chunk(0, name, settings, part, effects, batched, {i: plan.keys[(name, i)] for i, _ in part})
-            for part in _parts(todo, size, n_workers, guided=not (chunk_size or batched))
-        ])  # fmt: skip
+        per_engine.append(
+            [
+                Chunk(0, name, settings, part, effects, batched, {i: plan.keys[(name, i)] for i, _ in part})
+                for part in _parts(todo, size, n_workers, guided=not (chunk_size or batched))
+            ]
+        )
     # Engines interleaved, chunk by chunk: the progress bar's rate (and time left) then mixes fast
     # and slow engines from the start instead of extrapolating the fastest one.
     for k in range(max((len(p) for p in per_engine), default=0)):
@@ -286,15 +305,32 @@ def _execute(plan: _Plan, specimen, jobs: int, scheduler, progress) -> float:
             elif jobs == 1:
                 plan.store_here = False
                 for c in chunks:
-                    for rows in iter_chunk(c.engine, c.settings, specimen, c.items, c.effects, batched=c.batched,
-                                           cache_dir=cache_dir, keys=c.keys):  # fmt: skip
+                    for rows in iter_chunk(
+                        c.engine,
+                        c.settings,
+                        specimen,
+                        c.items,
+                        c.effects,
+                        batched=c.batched,
+                        cache_dir=cache_dir,
+                        keys=c.keys,
+                    ):
                         for r in rows:
                             on_record(c.engine, r)
             else:
                 plan.store_here = False
                 pool = None if own_bar else bar.pool_for(jobs)
-                run_pool(chunks, specimen, jobs, on_record, deaths, worker_deaths=worker_deaths, pool=pool,
-                          cache_dir=cache_dir, thetas=plan.histories)  # fmt: skip
+                run_pool(
+                    chunks,
+                    specimen,
+                    jobs,
+                    on_record,
+                    deaths,
+                    worker_deaths=worker_deaths,
+                    pool=pool,
+                    cache_dir=cache_dir,
+                    thetas=plan.histories,
+                )
     except KeyboardInterrupt:
         bar.close()
         raise RunInterrupted(bar.done, total if own_bar else bar.total, cached=plan.cache_dir is not None) from None

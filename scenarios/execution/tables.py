@@ -177,8 +177,9 @@ def compare_engines(
     return pd.DataFrame(rows).set_index("engine")
 
 
-def _distribution_columns(v: np.ndarray, qa: np.ndarray, ci: float, p_ci: float, p_method: str, n_boot: int,
-                          seed) -> dict[str, float]:  # fmt: skip
+def _distribution_columns(
+    v: np.ndarray, qa: np.ndarray, ci: float, p_ci: float, p_method: str, n_boot: int, seed
+) -> dict[str, float]:
     """One engine's percentiles ``q25``, ``q25_low``, ``q25_high``... and P[overturn] with its interval, from its
     usable theta_max/alpha ``v`` (NaN without one)."""
     if v.size:
@@ -195,8 +196,9 @@ def _distribution_columns(v: np.ndarray, qa: np.ndarray, ci: float, p_ci: float,
     return row
 
 
-def _versus_reference(ok: pd.DataFrame, name: str, reference: str, v: np.ndarray, ref_ok: np.ndarray, rtol: float,
-                      atol: float) -> dict[str, float]:  # fmt: skip
+def _versus_reference(
+    ok: pd.DataFrame, name: str, reference: str, v: np.ndarray, ref_ok: np.ndarray, rtol: float, atol: float
+) -> dict[str, float]:
     """The :data:`_VERSUS_COLUMNS` of engine ``name`` (usable values ``v``) against the reference's ``ref_ok``."""
     cmp: dict[str, float] = {}
     cmp["ks_distance"], cmp["ks_pvalue"] = ks_2samp(v, ref_ok)

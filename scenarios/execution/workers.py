@@ -179,8 +179,18 @@ class _Worker:
         """Queue ``chunk`` for it. The message is pickled here (an object that cannot be raises here, as
         ``Connection.send`` would) and sent by the sender thread, as ``send`` sends it."""
         keys = chunk.keys if cache_dir is not None else None
-        msg = (chunk.id, chunk.engine, chunk.settings, specimen, chunk.items, chunk.effects, chunk.batched, cache_dir,
-               keys, thetas)  # fmt: skip
+        msg = (
+            chunk.id,
+            chunk.engine,
+            chunk.settings,
+            specimen,
+            chunk.items,
+            chunk.effects,
+            chunk.batched,
+            cache_dir,
+            keys,
+            thetas,
+        )
         data = ForkingPickler.dumps(msg)
         self.chunks.append(chunk)
         self._outbox.put(data)
@@ -243,9 +253,18 @@ class _PoolRun:
     """The state of one :func:`run_pool` call: the chunks left to give out, the deaths so far, and the
     steps of its loop (give work out, take a message, account for a worker that died, give up)."""
 
-    def __init__(self, pool: _Pool, chunks: list[Chunk], specimen: Specimen, jobs: int, on_record: Any,
-                 deaths: dict[tuple[str, int], list[str]], worker_deaths: dict[str, int], cache_dir: str | None,
-                 thetas: bool):  # fmt: skip
+    def __init__(
+        self,
+        pool: _Pool,
+        chunks: list[Chunk],
+        specimen: Specimen,
+        jobs: int,
+        on_record: Any,
+        deaths: dict[tuple[str, int], list[str]],
+        worker_deaths: dict[str, int],
+        cache_dir: str | None,
+        thetas: bool,
+    ):
         self.pool = pool
         self.specimen, self.jobs, self.on_record = specimen, jobs, on_record
         self.deaths, self.worker_deaths = deaths, worker_deaths

@@ -111,8 +111,7 @@ def _free_vibration_motions(scenario, meta: dict) -> list[GroundMotion]:
     dur = float(m.get("duration", 10.0))
     dt = float(m.get("dt", 0.002))
     motions = [
-        GroundMotion.free_vibration(a * alpha, dur, dt, name=f"release {a:.2f} alpha")
-        for a in m["theta0_over_alpha"]
+        GroundMotion.free_vibration(a * alpha, dur, dt, name=f"release {a:.2f} alpha") for a in m["theta0_over_alpha"]
     ]
     meta["theta0_over_alpha"] = list(m["theta0_over_alpha"])
     return motions

@@ -76,9 +76,15 @@ from housner.scenarios.motions.rdk_params import DEFAULT_OMEGA_C, RDKParams
 from housner.scenarios.motions.records import arias_intensity, husid_time, pmnm_count, upcrossing_count
 
 __all__ = [
-    "DEFAULT_COUNT_LOWPASS", "DEFAULT_FIT_SEED", "fit", "highpass", "modulated_noise", "seed_sequence", "simulate",
+    "DEFAULT_COUNT_LOWPASS",
+    "DEFAULT_FIT_SEED",
+    "fit",
+    "highpass",
+    "modulated_noise",
+    "seed_sequence",
+    "simulate",
     "white_noise",
-]  # fmt: skip
+]
 
 #: Default low-pass corner [Hz] applied to record and simulations alike before
 #: positive minima and negative maxima are counted in :func:`fit`: the PEER
@@ -94,6 +100,7 @@ DEFAULT_FIT_SEED = 20100101
 #: below this fraction of its start [-]; the normalisation uses the same
 #: truncated sums, so the process keeps unit variance exactly.
 _KERNEL_TOL = 1e-10
+
 
 # ----------------------------------------------------------------------
 # Simulation

@@ -451,14 +451,23 @@ def fit_matched(
     rec_psa = _psa_batch(record.acc[:, None], plan)[0]
     n_taps = MatchedRDK(params, tuple(centres), tuple(np.exp(np.zeros(centres.size))), fir_length).n_taps
     x = rdk.modulated_noise(params, rdk.white_noise(ss.spawn(n_fit), params.n_warm + params.n_noise))
-    log_g, psa, done, history = _iterate_gain(x, params, centres, per_band, plan, rec_psa, n_taps,
-                                              iterations, beta, tol, bounds)  # fmt: skip
+    log_g, psa, done, history = _iterate_gain(
+        x, params, centres, per_band, plan, rec_psa, n_taps, iterations, beta, tol, bounds
+    )
     tables = _in_sample_tables(centres, periods, per_band, psa, rec_psa)
     return MatchedRDK(
-        params, tuple(centres), tuple(np.exp(log_g)), fir_length, record=record.name, n_fit=n_fit,
-        iterations=done, beta=beta, fit_seed=seed, history=tuple(history),
+        params,
+        tuple(centres),
+        tuple(np.exp(log_g)),
+        fir_length,
+        record=record.name,
+        n_fit=n_fit,
+        iterations=done,
+        beta=beta,
+        fit_seed=seed,
+        history=tuple(history),
         achieved=BandCheck(*tables, record=record.name, damping=damping),
-    )  # fmt: skip
+    )
 
 
 def _check_fit_args(record, n_fit, iterations, beta, tol, gain_bounds, damping, fir_length) -> tuple:

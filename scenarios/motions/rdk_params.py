@@ -37,7 +37,6 @@ def settle_time(omega_c: float) -> float:
     return _SETTLE_OMEGA_T / omega_c
 
 
-
 _UNITS = {
     "Ia": "Ia_m_s",
     "D5_95": "D5_95_s",

@@ -150,8 +150,12 @@ def campaign_input(campaign: Campaign) -> CampaignInput:
         specimen = scan.specimen()
         e = 0.5 * (scan.neg.b - scan.pos.b)
         geometry = (AsymmetricPivots(e=e),) if e != 0.0 else ()
-        mesh = {"mesh": str(Path(scan.path).resolve()), "azimuth": float(scan.azimuth), "density": float(scan.density),
-                "contact": str(scan.contact)}  # fmt: skip
+        mesh = {
+            "mesh": str(Path(scan.path).resolve()),
+            "azimuth": float(scan.azimuth),
+            "density": float(scan.density),
+            "contact": str(scan.contact),
+        }
     return CampaignInput(
         campaign=campaign,
         specimen=specimen,
@@ -200,8 +204,9 @@ def check_campaign_engines(inp: CampaignInput, names: list[str]) -> dict[str, di
             try:
                 eff.check(inp.specimen)
             except ValueError as e:
-                raise ValueError(f"{where}: the scan specimen's geometry {effects_label(inp.geometry)} is refused: "
-                                 f"{e}") from None  # fmt: skip
+                raise ValueError(
+                    f"{where}: the scan specimen's geometry {effects_label(inp.geometry)} is refused: {e}"
+                ) from None
         why = cls().effect_refusal(inp.specimen, inp.geometry) if inp.geometry else None
         if why:
             raise ValueError(f"{where}: {why}")
@@ -277,7 +282,7 @@ def run_campaign(
             "campaign": campaign.name,
             "n_ground_motion": inp.n_ground_motion,
             "n_free_vibration": len(inp.motions) - inp.n_ground_motion,
-        },  # fmt: skip
+        },
         n_motions=len(inp.motions),
         engines={n: info[n] for n in engines},
         analysis={"reference": REFERENCE},
@@ -312,8 +317,12 @@ def campaign_results(
             info.update(inf)
     order = {n: k for k, n in enumerate(engines)}
     results = pd.concat(parts, ignore_index=True)
-    results = results.sort_values(["engine", "motion_id"], key=lambda s: s.map(order) if s.name == "engine" else s,
-                                  kind="stable", ignore_index=True)  # fmt: skip
+    results = results.sort_values(
+        ["engine", "motion_id"],
+        key=lambda s: s.map(order) if s.name == "engine" else s,
+        kind="stable",
+        ignore_index=True,
+    )
     return with_records(results, inp), histories, info
 
 
@@ -346,8 +355,14 @@ def campaign_facts(inp: CampaignInput) -> dict:
     }
     if c.scan is not None:
         s = c.scan
-        facts["scan"] = {"b_pos_m": s.pos.b, "b_neg_m": s.neg.b, "h_m": s.h, "alpha_pos_rad": math.atan2(s.pos.b, s.h),
-                         "alpha_neg_rad": math.atan2(s.neg.b, s.h), "mass_kg": s.mass}  # fmt: skip
+        facts["scan"] = {
+            "b_pos_m": s.pos.b,
+            "b_neg_m": s.neg.b,
+            "h_m": s.h,
+            "alpha_pos_rad": math.atan2(s.pos.b, s.h),
+            "alpha_neg_rad": math.atan2(s.neg.b, s.h),
+            "mass_kg": s.mass,
+        }
     return facts
 
 

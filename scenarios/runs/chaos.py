@@ -210,8 +210,11 @@ def run_engine_errors(
             out[name] = {"error": f"{type(e).__name__}: {e}"}
             continue
         # as plain JSON data (lists of floats), the same whether measured now or read back from the cache
-        out[name] = json.loads(json.dumps({**asdict(err), "eps_r": err.eps_r, "eps_p": err.eps_p,
-                                           "r_reference": float(r_ref)}, default=float))  # fmt: skip
+        out[name] = json.loads(
+            json.dumps(
+                {**asdict(err), "eps_r": err.eps_r, "eps_p": err.eps_p, "r_reference": float(r_ref)}, default=float
+            )
+        )
         if path is not None:
             store_text(path, json.dumps(out[name], allow_nan=True))
     return out
@@ -247,9 +250,17 @@ def run_engine_errors_meanwhile(*args, **kwargs) -> Callable[[], dict[str, dict]
 
 def _errors_path(cache_dir: str | Path, specimen: Specimen, engine: Engine, r_ref: float, dt: float) -> Path:
     """The cache file of an engine's free-rocking errors: a hash of everything that determines them."""
-    content = {"what": "engine errors", "specimen": specimen.describe(), "engine": engine.name,
-               "settings": engine.settings(), "engine_version": engine.version(), "code": code_version(),
-               "r_reference": r_ref, "dt": dt, "amplitudes": list(RELEASE_AMPLITUDES)}  # fmt: skip
+    content = {
+        "what": "engine errors",
+        "specimen": specimen.describe(),
+        "engine": engine.name,
+        "settings": engine.settings(),
+        "engine_version": engine.version(),
+        "code": code_version(),
+        "r_reference": r_ref,
+        "dt": dt,
+        "amplitudes": list(RELEASE_AMPLITUDES),
+    }
     return Path(cache_dir) / "engine-errors" / f"{content_key(content)[:32]}.json"
 
 
@@ -300,8 +311,14 @@ class AgreementShares:
     def summarised(shares: dict, verdict_shares: dict, n: int) -> dict:
         """The fields of the class from the per-perturbation shares (no perturbation: agreement 1)."""
         vals = list(shares.values()) or [1.0]
-        return {"shares": shares, "verdict_shares": verdict_shares, "share": float(np.mean(vals)),
-                "share_min": float(min(vals)), "share_max": float(max(vals)), "n": int(n)}  # fmt: skip
+        return {
+            "shares": shares,
+            "verdict_shares": verdict_shares,
+            "share": float(np.mean(vals)),
+            "share_min": float(min(vals)),
+            "share_max": float(max(vals)),
+            "n": int(n),
+        }
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -367,8 +384,12 @@ def chaos_floor(
             ag = per_record_agreement(got, base, rtol=rtol, atol=atol)
             shares[label + tag] = ag.share
             verdicts[label + tag] = ag.verdict_share
-    return ChaosFloor(engine=errors.engine, eps_r=errors.eps_r, eps_p=errors.eps_p,
-                      **AgreementShares.summarised(shares, verdicts, base.size))  # fmt: skip
+    return ChaosFloor(
+        engine=errors.engine,
+        eps_r=errors.eps_r,
+        eps_p=errors.eps_p,
+        **AgreementShares.summarised(shares, verdicts, base.size),
+    )
 
 
 def floor_check(n_agree: int, n: int, floor: ChaosFloor, *, ci: float = 0.95) -> tuple[float, float, bool]:

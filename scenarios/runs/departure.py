@@ -30,8 +30,18 @@ from housner.impacts import impact_times
 from housner.scenarios.runs.chaos import RECORD_RTOL
 from housner.stats import ks_2samp, per_record_agreement
 
-__all__ = ["DEPART_TOL", "SMALL_ROCKING", "Departure", "departure", "departures", "disagreeing", "record_agreement",
-           "record_ks", "record_thetas", "summarise"]  # fmt: skip
+__all__ = [
+    "DEPART_TOL",
+    "SMALL_ROCKING",
+    "Departure",
+    "departure",
+    "departures",
+    "disagreeing",
+    "record_agreement",
+    "record_ks",
+    "record_thetas",
+    "summarise",
+]
 
 #: |theta_engine - theta_model| at which the two have parted [alpha]. Ten times the shared rocking threshold
 #: (:data:`housner.engines._planar.ROCKING_TOL`, 5e-3 alpha, below which a block counts as at rest), so that
@@ -154,16 +164,31 @@ def summarise(deps: list[Departure], max_named: int = 8) -> dict:
     phases = ("uplift", "small rocking", "rocking", "never")
     by = {ph: [d for d in deps if d.phase == ph] for ph in phases}
     after = np.array([d.impacts_before for d in deps if d.impacts_before > 0], dtype=float)
-    q = {k: (float(np.percentile(after, p)) if after.size else math.nan)
-         for k, p in (("q25", 25), ("median", 50), ("q75", 75))}  # fmt: skip
+    q = {
+        k: (float(np.percentile(after, p)) if after.size else math.nan)
+        for k, p in (("q25", 25), ("median", 50), ("q75", 75))
+    }
     n = len(deps)
     parts = [f"{len(by[ph])} {'part' if len(by[ph]) != 1 else 'parts'} {_where[ph]}" for ph in phases[:3] if by[ph]]
     if by["never"]:
-        parts.append(f"{len(by['never'])} never part by {DEPART_TOL:g} alpha (they differ only in the peak's "
-                     "last few per cent)")  # fmt: skip
-    text = (f"Of the {n} records where they disagree, " + "; ".join(parts) + "."
-            + (f" Those that part after an impact do so after a median {q['median']:.0f} impacts "
-               f"(quartiles {q['q25']:.0f}-{q['q75']:.0f})." if after.size else "")) if n else ""  # fmt: skip
+        parts.append(
+            f"{len(by['never'])} never part by {DEPART_TOL:g} alpha (they differ only in the peak's last few per cent)"
+        )
+    text = (
+        (
+            f"Of the {n} records where they disagree, "
+            + "; ".join(parts)
+            + "."
+            + (
+                f" Those that part after an impact do so after a median {q['median']:.0f} impacts "
+                f"(quartiles {q['q25']:.0f}-{q['q75']:.0f})."
+                if after.size
+                else ""
+            )
+        )
+        if n
+        else ""
+    )
     return {
         "n": n,
         "by_phase": {ph: len(by[ph]) for ph in phases},

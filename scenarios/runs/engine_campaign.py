@@ -33,8 +33,17 @@ from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import build_motions
 
-__all__ = ["AMPLITUDES", "FV_DURATION", "EngineRuns", "check_engine", "check_sigma", "export_engine_campaign",
-           "ground_motion_scenario", "run_engine_records", "write_engine_campaign"]  # fmt: skip
+__all__ = [
+    "AMPLITUDES",
+    "FV_DURATION",
+    "EngineRuns",
+    "check_engine",
+    "check_sigma",
+    "export_engine_campaign",
+    "ground_motion_scenario",
+    "run_engine_records",
+    "write_engine_campaign",
+]
 
 #: Release amplitudes theta0 / alpha of the free vibrations [-]: from the small rocking where contact
 #: conventions weigh most to the large ones near the overturning angle.
@@ -63,11 +72,14 @@ def ground_motion_scenario(scenario: Scenario | str | Path, n_motions: int | Non
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     if sc.source == "free_vibration" or sc.study is not None:
         what = "free-vibration releases" if sc.source == "free_vibration" else "a fragility study"
-        raise ValueError(f"`scenario` {sc.name!r} is {what}; explain needs a scenario of ground motions "
-                         "(e.g. 'elcentro')")  # fmt: skip
+        raise ValueError(
+            f"`scenario` {sc.name!r} is {what}; explain needs a scenario of ground motions (e.g. 'elcentro')"
+        )
     if n_motions is not None and sc.source != "rdk":
-        raise ValueError(f"`n_motions` applies to RDK ensembles; scenario {sc.name!r} has a fixed set of "
-                         f"{sc.n_motions} motions (source {sc.source!r})")  # fmt: skip
+        raise ValueError(
+            f"`n_motions` applies to RDK ensembles; scenario {sc.name!r} has a fixed set of "
+            f"{sc.n_motions} motions (source {sc.source!r})"
+        )
     return sc
 
 
@@ -112,8 +124,9 @@ def run_engine_records(
     settings = {n: dict(scenario.engine_settings.get(n, {})) for n in dict.fromkeys((engine, "housner"))}
     res, hist, _info = run_engines(scenario.specimen, releases + motions, {engine: settings[engine]}, options)
     if engine != "housner":
-        res_h, _h, _i = run_engines(scenario.specimen, motions, {"housner": settings["housner"]}, options,
-                                    histories=False)  # fmt: skip
+        res_h, _h, _i = run_engines(
+            scenario.specimen, motions, {"housner": settings["housner"]}, options, histories=False
+        )
         res = pd.concat([res, res_h.assign(motion_id=res_h["motion_id"] + len(releases))], ignore_index=True)
     return EngineRuns(engine, scenario, releases, motions, res, hist, settings, time.perf_counter() - t0)
 
@@ -128,8 +141,13 @@ def _record_order(n_fv: int, n_gm: int) -> list[tuple[str, int]]:
     groups = [list(range(k, n_fv, 3)) for k in range(3)]
     half = n_gm // 2
     gm = [("ground_motion", i) for i in range(n_gm)]
-    return [*(("free_vibration", j) for j in groups[0]), *gm[:half], *(("free_vibration", j) for j in groups[1]),
-            *gm[half:], *(("free_vibration", j) for j in groups[2])]  # fmt: skip
+    return [
+        *(("free_vibration", j) for j in groups[0]),
+        *gm[:half],
+        *(("free_vibration", j) for j in groups[1]),
+        *gm[half:],
+        *(("free_vibration", j) for j in groups[2]),
+    ]
 
 
 def write_engine_campaign(runs: EngineRuns, out_dir: Path, sigma: float, seed: int) -> Path:
@@ -155,10 +173,17 @@ def write_engine_campaign(runs: EngineRuns, out_dir: Path, sigma: float, seed: i
     n_fv = len(runs.releases)
     (out_dir / "records").mkdir(parents=True, exist_ok=True)
     sp = sc.specimen
-    lines = [f"name = {_toml_str(f'{eng} on {sc.name}')}",
-             f"description = {_toml_str(_description(runs, sigma, seed))}", "", "[specimen]",
-             f"height = {sp.height!r}", f"width = {sp.width!r}", f"depth = {sp.depth!r}", f"mass = {sp.mass!r}",
-             f"p = {sp.p!r}"]  # fmt: skip
+    lines = [
+        f"name = {_toml_str(f'{eng} on {sc.name}')}",
+        f"description = {_toml_str(_description(runs, sigma, seed))}",
+        "",
+        "[specimen]",
+        f"height = {sp.height!r}",
+        f"width = {sp.width!r}",
+        f"depth = {sp.depth!r}",
+        f"mass = {sp.mass!r}",
+        f"p = {sp.p!r}",
+    ]
     fv_k = 0
     for kind, i in _record_order(n_fv, len(runs.motions)):
         mid = i if kind == "free_vibration" else n_fv + i
@@ -188,8 +213,14 @@ def _write_record(path: Path, motion: GroundMotion, theta: np.ndarray) -> None:
     (rocking is chaotic: a part in 1e10 of the input moves a record's peak)."""
     n = min(motion.n, theta.size)
     t = np.arange(n) * motion.dt
-    np.savetxt(path, np.column_stack((t, motion.acc[:n], theta[:n])), fmt=["%.17g", "%.17g", "%.9g"],
-               delimiter=",", header="time,ground_acc,theta", comments="")  # fmt: skip
+    np.savetxt(
+        path,
+        np.column_stack((t, motion.acc[:n], theta[:n])),
+        fmt=["%.17g", "%.17g", "%.9g"],
+        delimiter=",",
+        header="time,ground_acc,theta",
+        comments="",
+    )
 
 
 def _toml_str(s: str) -> str:
@@ -200,9 +231,11 @@ def _description(runs: EngineRuns, sigma: float, seed: int) -> str:
     eng = runs.engine
     failed = runs.results[(runs.results["engine"] == eng) & (runs.results["status"] != "ok")]
     names = [(runs.releases + runs.motions)[int(i)].name for i in failed["motion_id"]]
-    text = (f"responses of engine {eng} (settings {runs.settings[eng] or 'default'}) to scenario "
-            f"{runs.scenario.name!r}: {len(runs.releases)} free vibrations and {len(runs.motions)} ground motions; "
-            f"theta noise {sigma:g} rad (seed {seed})")  # fmt: skip
+    text = (
+        f"responses of engine {eng} (settings {runs.settings[eng] or 'default'}) to scenario "
+        f"{runs.scenario.name!r}: {len(runs.releases)} free vibrations and {len(runs.motions)} ground motions; "
+        f"theta noise {sigma:g} rad (seed {seed})"
+    )
     if names:
         text += f"; {len(names)} record(s) the engine failed left out: {', '.join(names[:5])}"
     return text

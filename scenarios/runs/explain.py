@@ -148,24 +148,30 @@ class Explanation:
 
     def summary(self) -> str:
         """A few lines: effects, agreement before and after beside the floor, reaching it, what remains."""
-        eff = "; ".join(f"{e['name']} ({', '.join(f'{k} = {v:.4g}' for k, v in e['params'].items())})"
-                        for e in self.effects) or "none"  # fmt: skip
+        eff = (
+            "; ".join(
+                f"{e['name']} ({', '.join(f'{k} = {v:.4g}' for k, v in e['params'].items())})" for e in self.effects
+            )
+            or "none"
+        )
         fp = self.floor_parts
         d = self.diagnosis
-        return "\n".join([
-            f"{self.engine} on {self.scenario} ({self.n_records} ground motions): diagnosis {d['status']}",
-            f"effects: {eff}",
-            f"agreement with {self.engine}: plain Housner {self.agreement_plain:.0%} -> with the effects "
-            f"{self.agreement:.0%}; floor {self.floor:.0%} (the lower of chaos {fp['chaos']:.0%} and model form "
-            f"{fp['model_form']:.0%})",
-            f"reaches the floor (within {REACH_MARGIN:.0%}): {'yes' if self.reaches_floor else 'no'}",
-            f"KS distance from {self.engine}: plain {self.ks.get('plain', math.nan):.3f} -> with the effects "
-            f"{self.ks.get('with_effects', math.nan):.3f}",
-            f"held-out error {d['heldout_error']['before']:.4f} -> {d['heldout_error']['after']:.4f} alpha, "
-            f"residual ratio {d['residual_ratio']:.2f}",
-            f"remains: {self.remains}",
-            *self._maps_lines(),
-        ])  # fmt: skip
+        return "\n".join(
+            [
+                f"{self.engine} on {self.scenario} ({self.n_records} ground motions): diagnosis {d['status']}",
+                f"effects: {eff}",
+                f"agreement with {self.engine}: plain Housner {self.agreement_plain:.0%} -> with the effects "
+                f"{self.agreement:.0%}; floor {self.floor:.0%} (the lower of chaos {fp['chaos']:.0%} and model form "
+                f"{fp['model_form']:.0%})",
+                f"reaches the floor (within {REACH_MARGIN:.0%}): {'yes' if self.reaches_floor else 'no'}",
+                f"KS distance from {self.engine}: plain {self.ks.get('plain', math.nan):.3f} -> with the effects "
+                f"{self.ks.get('with_effects', math.nan):.3f}",
+                f"held-out error {d['heldout_error']['before']:.4f} -> {d['heldout_error']['after']:.4f} alpha, "
+                f"residual ratio {d['residual_ratio']:.2f}",
+                f"remains: {self.remains}",
+                *self._maps_lines(),
+            ]
+        )
 
     def _maps_lines(self) -> list[str]:
         m = self.maps
@@ -177,7 +183,6 @@ class Explanation:
             f"reaches the floor: {'yes' if m['reaches_floor'] else 'no'}",
             f"remains with the maps: {m['remains']}",
         ]
-
 
 
 def _where(verdict) -> str:
@@ -197,14 +202,20 @@ def _remains(engine: str, names: list[str], agreement: float, floor: float, reac
     head = f"{model} agrees with {engine} on {agreement:.0%} of the records"
     v = diag.verdict
     if reaches and v.status in _DONE:
-        return (f"Nothing beyond the floor: {head}, against a floor of {floor:.0%}, and the diagnosis finds "
-                f"{v.status.replace('_', ' ')} in the time histories.")  # fmt: skip
+        return (
+            f"Nothing beyond the floor: {head}, against a floor of {floor:.0%}, and the diagnosis finds "
+            f"{v.status.replace('_', ' ')} in the time histories."
+        )
     gap = f"{floor - agreement:.0%} below the floor of {floor:.0%}" if not reaches else f"at the floor of {floor:.0%}"
     if v.status in _DONE:
-        return (f"{head}, {gap}, though the diagnosis finds {v.status.replace('_', ' ')} in the time histories: "
-                "what remains shows in the records' peaks and overturns, not in the errors a correct model leaves.")
-    return (f"{head}, {gap}; the diagnosis is {v.status.replace('_', ' ')} (residual ratio "
-            f"{v.residual.ratio:.2f} against the correct-model floor). {_where(v)}").strip()
+        return (
+            f"{head}, {gap}, though the diagnosis finds {v.status.replace('_', ' ')} in the time histories: "
+            "what remains shows in the records' peaks and overturns, not in the errors a correct model leaves."
+        )
+    return (
+        f"{head}, {gap}; the diagnosis is {v.status.replace('_', ' ')} (residual ratio "
+        f"{v.residual.ratio:.2f} against the correct-model floor). {_where(v)}"
+    ).strip()
 
 
 def explain_engine(
@@ -269,16 +280,18 @@ def explain_engine(
     return _explain(engine, sc, n_motions, sig, int(seed), effects, options, Path(workdir), say, t0, True, maps)
 
 
-def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say, t0, keep: bool,
-             with_maps: bool) -> Explanation:  # fmt: skip
+def _explain(
+    engine, sc, n_motions, sigma, seed, effects, options, workdir, say, t0, keep: bool, with_maps: bool
+) -> Explanation:
     out = check_output_dir(workdir / f"{engine}-{sc.name}", "`workdir`", files=("campaign.toml",))
     say(f"running {engine} and the analytic model on {sc.name}")
     runs = run_engine_records(engine, sc, n_motions, AMPLITUDES, options)
     camp = load_campaign(write_engine_campaign(runs, out, sigma, seed))
     say(f"diagnosing {camp!r}")
     t1 = time.perf_counter()
-    d = diagnose(camp, effects=effects, seed=seed, engine_settings=runs.settings["housner"], compare_steps=False,
-                 progress=say)  # fmt: skip
+    d = diagnose(
+        camp, effects=effects, seed=seed, engine_settings=runs.settings["housner"], compare_steps=False, progress=say
+    )
     t2 = time.perf_counter()
     final = [(n, dict(p)) for n, p in d.final.effects]
     n_fv = len(runs.releases)
@@ -289,8 +302,9 @@ def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say,
     if final:
         say(f"running the analytic model with {', '.join(n for n, _ in final)}")
         effs = tuple(make_effect(nm, **p) for nm, p in final)
-        res_e, _h, _i = run_engines(sc.specimen, runs.motions, {"housner": runs.settings["housner"]}, options,
-                                    effects=effs, histories=False)  # fmt: skip
+        res_e, _h, _i = run_engines(
+            sc.specimen, runs.motions, {"housner": runs.settings["housner"]}, options, effects=effs, histories=False
+        )
         eff_theta = record_thetas(res_e, "housner")
         with_eff, n = record_agreement(eng_theta, eff_theta)
     t3 = time.perf_counter()
@@ -314,27 +328,46 @@ def _explain(engine, sc, n_motions, sigma, seed, effects, options, workdir, say,
         floor=floor,
         floor_parts={"chaos": chaos.share, "model_form": mform.share},
         reaches_floor=reaches,
-        diagnosis={"status": v.status, "text": v.text,
-                   "heldout_error": {"before": d.baseline.heldout_error, "after": d.final.heldout_error},
-                   "residual_ratio": v.residual.ratio},  # fmt: skip
+        diagnosis={
+            "status": v.status,
+            "text": v.text,
+            "heldout_error": {"before": d.baseline.heldout_error, "after": d.final.heldout_error},
+            "residual_ratio": v.residual.ratio,
+        },
         remains=_remains(engine, names, with_eff, floor, reaches, d),
         n_records=int(n),
-        ks={"plain": record_ks(eng_theta, plain_theta), "with_effects": record_ks(eng_theta, eff_theta),
-            **({"with_maps": record_ks(eng_theta, mp.theta)} if mp else {})},
+        ks={
+            "plain": record_ks(eng_theta, plain_theta),
+            "with_effects": record_ks(eng_theta, eff_theta),
+            **({"with_maps": record_ks(eng_theta, mp.theta)} if mp else {}),
+        },
         maps=_maps_part(engine, mp, floor),
         details={
             "chaos_floor": chaos.to_dict(),
             "model_form_floor": mform.to_dict(),
-            "overturned": {"engine": int(np.isinf(eng_theta).sum()), "housner": int(np.isinf(plain_theta).sum()),
-                           "housner_with_effects": int(np.isinf(eff_theta).sum()), "records": int(eng_theta.size)},
+            "overturned": {
+                "engine": int(np.isinf(eng_theta).sum()),
+                "housner": int(np.isinf(plain_theta).sum()),
+                "housner_with_effects": int(np.isinf(eff_theta).sum()),
+                "records": int(eng_theta.size),
+            },
             "settings": runs.settings,
             "campaign": str(out) if keep else None,
-            "campaign_records": {"free_vibration": len(camp.free_vibration), "ground_motion": len(camp.ground_motion),
-                                 "skipped": [list(s) for s in camp.skipped]},  # fmt: skip
+            "campaign_records": {
+                "free_vibration": len(camp.free_vibration),
+                "ground_motion": len(camp.ground_motion),
+                "skipped": [list(s) for s in camp.skipped],
+            },
             "diagnosis_seconds": d.elapsed,
         },
-        wall_s={"engine_runs": runs.wall_s, "diagnosis": t2 - t1, "with_effects": t3 - t2,
-                "floors": t4 - t3, "maps": mp.wall_s if mp else 0.0, "total": time.perf_counter() - t0},  # fmt: skip
+        wall_s={
+            "engine_runs": runs.wall_s,
+            "diagnosis": t2 - t1,
+            "with_effects": t3 - t2,
+            "floors": t4 - t3,
+            "maps": mp.wall_s if mp else 0.0,
+            "total": time.perf_counter() - t0,
+        },
     )
 
 
@@ -348,8 +381,10 @@ def _maps_part(engine: str, mp, floor: float) -> dict:
     reaches_scatter = bool(mp.agreement >= sf - REACH_MARGIN)
     head = f"Housner + {engine}'s measured maps agrees with {engine} on {mp.agreement:.0%} of the records"
     small, large = mp.maps.at(0.05), mp.maps.at(0.5)
-    spread = (f"standard deviation of r/r_housner {small['ratio_spread']:.3f} at x = 0.05 and "
-              f"{large['ratio_spread']:.3f} at x = 0.5, the band of the maps' figure")  # fmt: skip
+    spread = (
+        f"standard deviation of r/r_housner {small['ratio_spread']:.3f} at x = 0.05 and "
+        f"{large['ratio_spread']:.3f} at x = 0.5, the band of the maps' figure"
+    )
     if reaches:
         remains = f"{head}, at the floor of {floor:.0%}: the departure is explained by what was measured."
     elif reaches_scatter:
@@ -365,5 +400,10 @@ def _maps_part(engine: str, mp, floor: float) -> dict:
             f"mean keeps with an engine whose impacts scatter as measured ({spread}): something else departs. "
             f"{mp.departures['text']}"
         )
-    return {**mp.to_dict(), "reaches_floor": reaches, "reaches_scatter_floor": reaches_scatter,
-            "remains": remains.strip(), "maps": mp.maps.to_dict()}  # fmt: skip
+    return {
+        **mp.to_dict(),
+        "reaches_floor": reaches,
+        "reaches_scatter_floor": reaches_scatter,
+        "remains": remains.strip(),
+        "maps": mp.maps.to_dict(),
+    }

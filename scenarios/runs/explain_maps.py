@@ -67,9 +67,15 @@ class MapsComparison:
 
     def to_dict(self) -> dict:
         """Plain data: the figures and the departures (the maps themselves are written on their own)."""
-        return {"agreement": self.agreement, "n_records": self.n_records, "departures": self.departures,
-                "departures_plain": self.departures_plain, "scatter_floor": self.scatter, "wall_s": self.wall_s,
-                "overturned": int(np.isinf(self.theta).sum())}  # fmt: skip
+        return {
+            "agreement": self.agreement,
+            "n_records": self.n_records,
+            "departures": self.departures,
+            "departures_plain": self.departures_plain,
+            "scatter_floor": self.scatter,
+            "wall_s": self.wall_s,
+            "overturned": int(np.isinf(self.theta).sum()),
+        }
 
 
 def maps_effect(maps: EngineMaps, seed: int | None = None) -> MeasuredMaps:
@@ -95,8 +101,9 @@ def scatter_floor(sc, motions, settings: dict, maps: EngineMaps, theta: pd.Serie
     record by record, of an engine that does exactly what was measured. ``{"share", "shares", "seeds"}``."""
     shares = []
     for seed in SCATTER_SEEDS:
-        res, _h, _i = run_engines(sc.specimen, motions, settings, options, effects=(maps_effect(maps, seed),),
-                                  histories=False)  # fmt: skip
+        res, _h, _i = run_engines(
+            sc.specimen, motions, settings, options, effects=(maps_effect(maps, seed),), histories=False
+        )
         share, _n = record_agreement(record_thetas(res, "housner"), theta)
         shares.append(float(share))
     return {"share": float(np.mean(shares)), "shares": shares, "seeds": list(SCATTER_SEEDS)}
@@ -139,5 +146,6 @@ def compare_with_maps(
     deps_plain = _departures(disagreeing(engine_theta, plain_theta), engine, runs, plain_hist, alpha)
     progress(f"Housner + the maps' mean against {len(SCATTER_SEEDS)} realisations of their measured impact scatter")
     scatter = scatter_floor(sc, runs.motions, settings, maps, theta, options)
-    return MapsComparison(maps, float(agreement) if n else math.nan, int(n), theta, deps, deps_plain, scatter,
-                          time.perf_counter() - t0)  # fmt: skip
+    return MapsComparison(
+        maps, float(agreement) if n else math.nan, int(n), theta, deps, deps_plain, scatter, time.perf_counter() - t0
+    )

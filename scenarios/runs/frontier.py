@@ -46,8 +46,20 @@ from housner.scenarios.runs.engine_campaign import check_engine, ground_motion_s
 from housner.scenarios.runs.explain_floor import engine_chaos_floor, extended_floor, model_form_floor
 from housner.stats import KS_MAX, ks_2samp
 
-__all__ = ["KNEE_Z", "TIMESTEP_FACTORS", "Frontier", "FrontierPoint", "admissible", "engine_frontier", "frontier_axes",
-           "knee", "knee_reason", "not_worse_checked", "same_setting", "unmet_everywhere"]  # fmt: skip
+__all__ = [
+    "KNEE_Z",
+    "TIMESTEP_FACTORS",
+    "Frontier",
+    "FrontierPoint",
+    "admissible",
+    "engine_frontier",
+    "frontier_axes",
+    "knee",
+    "knee_reason",
+    "not_worse_checked",
+    "same_setting",
+    "unmet_everywhere",
+]
 
 #: Time steps swept for an engine that declares no ``FRONTIER``: its default times these [-].
 TIMESTEP_FACTORS = (0.5, 1.0, 2.0, 4.0)
@@ -119,8 +131,23 @@ class Frontier:
     @classmethod
     def from_dict(cls, d: Mapping) -> Frontier:
         pts = [FrontierPoint(**{k: _num(v) for k, v in p.items() if k != "label"}) for p in d["points"]]
-        keep = {k: d[k] for k in ("engine", "scenario", "n_motions", "defaults", "axes", "knee", "default",
-                                  "model_form_floor", "version", "date", "wall_s") if k in d}  # fmt: skip
+        keep = {
+            k: d[k]
+            for k in (
+                "engine",
+                "scenario",
+                "n_motions",
+                "defaults",
+                "axes",
+                "knee",
+                "default",
+                "model_form_floor",
+                "version",
+                "date",
+                "wall_s",
+            )
+            if k in d
+        }
         return cls(points=pts, **{k: _num(v) for k, v in keep.items()})
 
     def knee_settings(self) -> dict:
@@ -129,17 +156,21 @@ class Frontier:
 
     def summary(self) -> str:
         """The frontier as a text table, the default and the knee marked."""
-        head = (f"{'point':32s} {'r err':>7s} {'small':>7s} {'decay':>7s} {'pulse':>7s} {'checks':>6s} "
-                f"{'agree':>6s} {'floor':>6s} {'KS':>6s} {'cpu/s':>8s}")  # fmt: skip
+        head = (
+            f"{'point':32s} {'r err':>7s} {'small':>7s} {'decay':>7s} {'pulse':>7s} {'checks':>6s} "
+            f"{'agree':>6s} {'floor':>6s} {'KS':>6s} {'cpu/s':>8s}"
+        )
         lines = [f"{self.engine} on {self.scenario} ({self.n_motions} motions): accuracy against cost", head]
         for i, p in enumerate(self.points):
             mark = ("*" if i == self.knee else " ") + ("d" if i == self.default else " ")
             if p.error:
                 lines.append(f"{mark}{p.label[:30]:30s} failed: {p.error}")
                 continue
-            lines.append(f"{mark}{p.label[:30]:30s} {p.r_error:+7.2%} {p.small_error:+7.2%} {p.decay_error:+7.1%} "
-                         f"{p.pulse_error:+7.2%} {'met' if p.checks_met else 'NOT':>6s} {p.agreement:6.0%} "
-                         f"{p.floor:6.0%} {p.ks:6.3f} {p.cpu_per_sim_second:8.4f}")  # fmt: skip
+            lines.append(
+                f"{mark}{p.label[:30]:30s} {p.r_error:+7.2%} {p.small_error:+7.2%} {p.decay_error:+7.1%} "
+                f"{p.pulse_error:+7.2%} {'met' if p.checks_met else 'NOT':>6s} {p.agreement:6.0%} "
+                f"{p.floor:6.0%} {p.ks:6.3f} {p.cpu_per_sim_second:8.4f}"
+            )
         k, d = self.points[self.knee], self.points[self.default]
         lines.append(f"d: the defaults; *: the knee ({k.label}): {knee_reason(self)}")
         if self.knee != self.default and math.isfinite(k.cpu_per_sim_second) and d.cpu_per_sim_second > 0:
@@ -162,8 +193,7 @@ def frontier_axes(engine: str) -> dict[str, tuple]:
         return {str(k): tuple(v) for k, v in axes.items()}
     dt = (getattr(cls, "DEFAULTS", None) or {}).get("timestep")
     if not dt:
-        raise ValueError(f"engine {engine!r} has no `timestep` setting and declares no FRONTIER axes: "
-                         "nothing to sweep")  # fmt: skip
+        raise ValueError(f"engine {engine!r} has no `timestep` setting and declares no FRONTIER axes: nothing to sweep")
     return {"timestep": tuple(float(dt) * f for f in TIMESTEP_FACTORS)}
 
 
@@ -172,8 +202,9 @@ def _points(defaults: Mapping, axes: Mapping[str, Sequence]) -> list[FrontierPoi
     pts = [FrontierPoint("", {})]
     for name, values in axes.items():
         if name not in defaults:
-            raise ValueError(f"frontier axis {name!r} is not a setting of the engine; its settings: "
-                             f"{', '.join(sorted(defaults))}")  # fmt: skip
+            raise ValueError(
+                f"frontier axis {name!r} is not a setting of the engine; its settings: {', '.join(sorted(defaults))}"
+            )
         pts += [FrontierPoint(name, {name: v}) for v in values if not same_setting(v, defaults[name])]
     return pts
 
@@ -261,8 +292,17 @@ def _take_checks(p: FrontierPoint, row) -> None:
     p.error = str(row["error"] or "")
 
 
-def _measure_on_motions(p: FrontierPoint, engine: str, settings: dict, specimen, motions: list, ref, mform, href: dict,
-                        options: RunOptions | None) -> None:  # fmt: skip
+def _measure_on_motions(
+    p: FrontierPoint,
+    engine: str,
+    settings: dict,
+    specimen,
+    motions: list,
+    ref,
+    mform,
+    href: dict,
+    options: RunOptions | None,
+) -> None:
     """Run ``engine`` with the point's ``settings`` on the ground motions and set the point's agreement with the
     analytic model's theta_max/alpha ``ref``, KS distance, overturns and extended floor (``mform``: the
     model-form floor; ``href``: the analytic model's settings)."""
@@ -377,19 +417,26 @@ def knee_reason(f: Frontier) -> str:
     ok = keeps_the_verdict(pts, checked)
     best = max((pts[i] for i in ok), key=lambda p: p.agreement, default=k)
     never = unmet_everywhere(pts, _ran(pts))
-    lead = ("it meets every tuner check" if k.checks_met else
-            f"no point meets the {', '.join(sorted(never))} check; it meets every other")  # fmt: skip
+    lead = (
+        "it meets every tuner check"
+        if k.checks_met
+        else f"no point meets the {', '.join(sorted(never))} check; it meets every other"
+    )
     lead += f", scores {k.score:.2f} on them (the defaults {pts[0].score:.2f})"
     held = [pts[i] for i in checked if i not in ok and pts[i].cpu_per_sim_second < k.cpu_per_sim_second]
     tail = ""
     if held:
         verb = "checks" if len(held) == 1 else "check"
-        tail = (". " + ", ".join(f"{p.label} (KS {p.ks:.2f})" for p in held) + f" {verb} as well for less CPU "
-                f"time but would fail the run report's KS criterion ({KS_MAX})")  # fmt: skip
-    return (f"{lead}, its agreement ({k.agreement:.0%}) is within {KNEE_Z:g} standard errors of the best "
-            f"({best.agreement:.0%}, {best.label}), and it costs the least CPU time of those "
-            f"({k.cpu_per_sim_second:.4g} s per simulated second; within {COST_TIE:.0%} counts as equal, and then "
-            f"the defaults stay){tail}")  # fmt: skip
+        tail = (
+            ". " + ", ".join(f"{p.label} (KS {p.ks:.2f})" for p in held) + f" {verb} as well for less CPU "
+            f"time but would fail the run report's KS criterion ({KS_MAX})"
+        )
+    return (
+        f"{lead}, its agreement ({k.agreement:.0%}) is within {KNEE_Z:g} standard errors of the best "
+        f"({best.agreement:.0%}, {best.label}), and it costs the least CPU time of those "
+        f"({k.cpu_per_sim_second:.4g} s per simulated second; within {COST_TIE:.0%} counts as equal, and then "
+        f"the defaults stay){tail}"
+    )
 
 
 def same_setting(a, b) -> bool:

@@ -134,13 +134,29 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 _GL_X, _GL_W = 0.5 * (_GL_X + 1.0), 0.5 * _GL_W
 
 _IMPACT_COLUMNS = (
-    "release", "k", "t_s", "w_pre_rad_s", "w_post_rad_s", "x", "r", "ratio_to_housner", "contact_s",
+    "release",
+    "k",
+    "t_s",
+    "w_pre_rad_s",
+    "w_post_rad_s",
+    "x",
+    "r",
+    "ratio_to_housner",
+    "contact_s",
     "contact_delay_s",
-)  # fmt: skip
+)
 _FLIGHT_COLUMNS = (
-    "release", "k", "x", "e_start_rad2_s2", "e_end_rad2_s2", "energy_change", "c_per_s", "half_period_s",
-    "housner_half_period_s", "period_drift",
-)  # fmt: skip
+    "release",
+    "k",
+    "x",
+    "e_start_rad2_s2",
+    "e_end_rad2_s2",
+    "energy_change",
+    "c_per_s",
+    "half_period_s",
+    "housner_half_period_s",
+    "period_drift",
+)
 
 
 def engine_registry_name(name: str) -> str:
@@ -209,9 +225,13 @@ class EngineMaps:
 
     def at(self, x: float) -> dict:
         """The tables read at x [-] (log-linear interpolation, end values held): ratio, its spread, c, contact."""
-        columns = {"ratio": (self.impacts, "ratio_median"), "ratio_spread": (self.impacts, "ratio_spread"),
-                   "contact_s": (self.impacts, "contact_median_s"), "c_per_s": (self.flights, "c_median_per_s"),
-                   "period_drift": (self.flights, "period_drift_median")}  # fmt: skip
+        columns = {
+            "ratio": (self.impacts, "ratio_median"),
+            "ratio_spread": (self.impacts, "ratio_spread"),
+            "contact_s": (self.impacts, "contact_median_s"),
+            "c_per_s": (self.flights, "c_median_per_s"),
+            "period_drift": (self.flights, "period_drift_median"),
+        }
         out = {}
         for key, (table, col) in columns.items():
             xs, ys = np.asarray(table["x"], float), np.asarray(table[col], float)
@@ -249,13 +269,17 @@ class EngineMaps:
 
     def summary(self, xs: Sequence[float] = (0.05, 0.3, 0.9)) -> str:
         """A short table: the maps read at ``xs``, and the counts."""
-        lines = [f"{self.label} ({self.engine} {self.version}): {len(self.impact_points['x'])} impacts, "
-                 f"{len(self.flight_points['x'])} flights, {self.wall_s:.1f} s"]  # fmt: skip
+        lines = [
+            f"{self.label} ({self.engine} {self.version}): {len(self.impact_points['x'])} impacts, "
+            f"{len(self.flight_points['x'])} flights, {self.wall_s:.1f} s"
+        ]
         lines.append("      x   r/r_housner  spread     c [1/s]   drift/half-period  contact [ms]")
         for x in xs:
             v = self.at(x)
-            lines.append(f"  {x:5.2f}   {v['ratio']:9.4f}  {v['ratio_spread']:7.4f}  {v['c_per_s']:+10.2e}"
-                         f"   {v['period_drift']:+10.2e}        {1e3 * v['contact_s']:5.1f}")  # fmt: skip
+            lines.append(
+                f"  {x:5.2f}   {v['ratio']:9.4f}  {v['ratio_spread']:7.4f}  {v['c_per_s']:+10.2e}"
+                f"   {v['period_drift']:+10.2e}        {1e3 * v['contact_s']:5.1f}"
+            )
         return "\n".join(lines)
 
 
@@ -418,8 +442,9 @@ def _release(engine, specimen: Specimen, amplitude: float, sign: float, dt: floa
         w_pre, w_post = math.sqrt(2.0 * e_pre), math.sqrt(2.0 * e_post)
         r = e_post / e_pre
         contact = (post.edge - pre.edge - 1) * dt
-        impacts.append((release, k + 1, t_c, w_pre, w_post, w_pre / (p * alpha), r, r / r_h, contact,
-                        post.t_zero - pre.t_zero))  # fmt: skip
+        impacts.append(
+            (release, k + 1, t_c, w_pre, w_post, w_pre / (p * alpha), r, r / r_h, contact, post.t_zero - pre.t_zero)
+        )
     flights = []
     for k in range(len(sides) - 1):
         post, pre = sides[k][1], sides[k + 1][0]
@@ -430,9 +455,20 @@ def _release(engine, specimen: Specimen, amplitude: float, sign: float, dt: floa
         half = pre.t_zero - post.t_zero
         arg = math.cos(alpha) + 0.5 * (e_start + e_end) / (p * p)
         t_h = float(half_cycle_time(alpha - math.acos(arg), alpha, p)) if -1.0 < arg < 1.0 else math.nan
-        flights.append((release, k + 1, math.sqrt(2.0 * e_start) / (p * alpha), e_start, e_end,
-                        (e_end - e_start) / e_start, -(e_end - e_start) / (j1 - j0), half, t_h,
-                        half / t_h - 1.0))  # fmt: skip
+        flights.append(
+            (
+                release,
+                k + 1,
+                math.sqrt(2.0 * e_start) / (p * alpha),
+                e_start,
+                e_end,
+                (e_end - e_start) / e_start,
+                -(e_end - e_start) / (j1 - j0),
+                half,
+                t_h,
+                half / t_h - 1.0,
+            )
+        )
     return impacts, flights
 
 
@@ -471,20 +507,43 @@ def _binned(x: np.ndarray, columns: Mapping[str, np.ndarray]) -> dict:
 
 def _tables(impacts: dict, flights: dict) -> tuple[dict, dict]:
     ix = np.asarray(impacts["x"], float)
-    bi = _binned(ix, {"ratio": np.asarray(impacts["ratio_to_housner"], float),
-                      "contact": np.asarray(impacts["contact_s"], float),
-                      "delay": np.asarray(impacts["contact_delay_s"], float)})  # fmt: skip
-    imp = {"x": bi["x"], "x_low": bi["x_low"], "x_high": bi["x_high"], "n": bi["n"],
-           "ratio_median": bi["ratio_median"], "ratio_spread": bi["ratio_spread"],
-           "contact_median_s": bi["contact_median"], "contact_delay_median_s": bi["delay_median"]}  # fmt: skip
+    bi = _binned(
+        ix,
+        {
+            "ratio": np.asarray(impacts["ratio_to_housner"], float),
+            "contact": np.asarray(impacts["contact_s"], float),
+            "delay": np.asarray(impacts["contact_delay_s"], float),
+        },
+    )
+    imp = {
+        "x": bi["x"],
+        "x_low": bi["x_low"],
+        "x_high": bi["x_high"],
+        "n": bi["n"],
+        "ratio_median": bi["ratio_median"],
+        "ratio_spread": bi["ratio_spread"],
+        "contact_median_s": bi["contact_median"],
+        "contact_delay_median_s": bi["delay_median"],
+    }
     fx = np.asarray(flights["x"], float)
-    bf = _binned(fx, {"c": np.asarray(flights["c_per_s"], float),
-                      "energy_change": np.asarray(flights["energy_change"], float),
-                      "period_drift": np.asarray(flights["period_drift"], float)})  # fmt: skip
-    fl = {"x": bf["x"], "x_low": bf["x_low"], "x_high": bf["x_high"], "n": bf["n"],
-          "c_median_per_s": bf["c_median"], "c_spread_per_s": bf["c_spread"],
-          "energy_change_median": bf["energy_change_median"],
-          "period_drift_median": bf["period_drift_median"]}  # fmt: skip
+    bf = _binned(
+        fx,
+        {
+            "c": np.asarray(flights["c_per_s"], float),
+            "energy_change": np.asarray(flights["energy_change"], float),
+            "period_drift": np.asarray(flights["period_drift"], float),
+        },
+    )
+    fl = {
+        "x": bf["x"],
+        "x_low": bf["x_low"],
+        "x_high": bf["x_high"],
+        "n": bf["n"],
+        "c_median_per_s": bf["c_median"],
+        "c_spread_per_s": bf["c_spread"],
+        "energy_change_median": bf["energy_change_median"],
+        "period_drift_median": bf["period_drift_median"],
+    }
     return imp, fl
 
 
@@ -504,8 +563,10 @@ def _measured_points(engine, name: str, specimen: Specimen, amps: tuple, dt: flo
         fl_rows += fls
         if progress is not None:
             rat = np.median([row[7] for row in imps]) if imps else math.nan
-            progress(f"{name}: release {i + 1}/{len(amps)} at {sign * a:+.4g} alpha: {len(imps)} impacts, "
-                     f"median r/r_housner {rat:.4f}")  # fmt: skip
+            progress(
+                f"{name}: release {i + 1}/{len(amps)} at {sign * a:+.4g} alpha: {len(imps)} impacts, "
+                f"median r/r_housner {rat:.4f}"
+            )
     impacts = {c: [row[j] for row in imp_rows] for j, c in enumerate(_IMPACT_COLUMNS)}
     flights = {c: [row[j] for row in fl_rows] for j, c in enumerate(_FLIGHT_COLUMNS)}
     return impacts, flights

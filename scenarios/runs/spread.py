@@ -199,8 +199,16 @@ def _record_rank(eng, specimen, rec, motions: list, S: float, ensemble_values) -
     return x, v, pct
 
 
-def _record_spectra(specimen, rec, motions: list, S: float, band: tuple[float, float], short: tuple[float, float],
-                    damping: float, n_periods: int) -> dict:  # fmt: skip
+def _record_spectra(
+    specimen,
+    rec,
+    motions: list,
+    S: float,
+    band: tuple[float, float],
+    short: tuple[float, float],
+    damping: float,
+    n_periods: int,
+) -> dict:
     """The spectral and energy part of :func:`record_against_ensemble` (its keys from ``damping`` on): the
     ensemble's mean PSa over the record's at prototype scale in ``band`` and at ``short`` periods, the
     prototype's omega_p/p at the band's ends, and the Arias intensities [m/s]."""

@@ -45,8 +45,11 @@ MIN_RECORDS = math.ceil(3 / KS_MAX)
 #: The verdict's kinds: (badge, the page's badge class, what the engine is good for). Best first.
 KINDS = {
     "agrees": ("AGREES", "pass", "good for ensembles and for single records"),
-    "ensemble": ("ENSEMBLE ONLY", "warn", "good for ensemble statistics (P[overturn], fragility, percentiles), "
-                 "not for one record's response"),
+    "ensemble": (
+        "ENSEMBLE ONLY",
+        "warn",
+        "good for ensemble statistics (P[overturn], fragility, percentiles), not for one record's response",
+    ),
     "fails": ("FAILS", "fail", "good for neither"),
     "inconclusive": ("INCONCLUSIVE", "na", "too few records to tell"),
     "no data": ("NO DATA", "na", "no usable records"),
@@ -170,8 +173,14 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
     n = int(row["n_ok"])
     if n < MIN_RECORDS and nf == 0:  # a failed record fails at any size; the two statistics need records
         status = "inconclusive"
-        checks = ((False, f"only {n} record{'s' if n != 1 else ''}; a distribution verdict needs {MIN_RECORDS}: one "
-                   f"record moves the KS distance by 1/n = {1 / max(n, 1):.2f}"), *checks)  # fmt: skip
+        checks = (
+            (
+                False,
+                f"only {n} record{'s' if n != 1 else ''}; a distribution verdict needs {MIN_RECORDS}: one "
+                f"record moves the KS distance by 1/n = {1 / max(n, 1):.2f}",
+            ),
+            *checks,
+        )
     else:
         status = "PASS" if all(c for c, _ in checks) else "FAIL"
     paired = float(row.get("n_paired", 0) or 0)

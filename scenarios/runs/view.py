@@ -295,8 +295,14 @@ class Run:
             ids = sorted(ref_ok & set(self.ok.loc[self.ok["engine"] == e, "motion_id"].to_numpy(int)))
             ms = [motions[i] for i in ids if i < len(motions)]
             if ms:
-                out[e] = chaos_floor(self.specimen_obj, ms, errors_from_dict(d), r=json_number(r) if r else None,
-                                     rtol=RECORD_RTOL, atol=0.0)  # fmt: skip
+                out[e] = chaos_floor(
+                    self.specimen_obj,
+                    ms,
+                    errors_from_dict(d),
+                    r=json_number(r) if r else None,
+                    rtol=RECORD_RTOL,
+                    atol=0.0,
+                )
         return out
 
     @cached_property

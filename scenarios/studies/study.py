@@ -92,13 +92,34 @@ __all__ = [
 ]
 
 #: The files of a study directory, owned by this module (the report is written by housner.reports.study.page).
-STUDY_FILES = ("results.parquet", "fragility.parquet", "exceedance.parquet", "fragility.json", "study.json",
-               "report.html")  # fmt: skip
+STUDY_FILES = (
+    "results.parquet",
+    "fragility.parquet",
+    "exceedance.parquet",
+    "fragility.json",
+    "study.json",
+    "report.html",
+)
 RESULTS_FILE, FRAGILITY_FILE, EXCEEDANCE_FILE, FITS_FILE, STUDY_FILE, REPORT_FILE = STUDY_FILES
 
 #: Columns of results.parquet.
-RESULT_COLUMNS = ["engine", "size", "S", "stripe", "intensity", "motion_id", "motion_name", "amplitude_factor",
-                  "theta_max_over_alpha", "overturned", "n_impacts", "wall_s", "status", "error", "cached"]  # fmt: skip
+RESULT_COLUMNS = [
+    "engine",
+    "size",
+    "S",
+    "stripe",
+    "intensity",
+    "motion_id",
+    "motion_name",
+    "amplitude_factor",
+    "theta_max_over_alpha",
+    "overturned",
+    "n_impacts",
+    "wall_s",
+    "status",
+    "error",
+    "cached",
+]
 
 
 # --------------------------------------------------------------------------
@@ -225,9 +246,11 @@ class StudyMeta:
         """The metadata of a study.json's contents (a missing or null table becomes an empty one)."""
         data = data if isinstance(data, dict) else {}
         known = (*cls._TABLES, *cls._COUNTS, "provenance")
-        return cls(**{k: data.get(k) or {} for k in (*cls._TABLES, "provenance")},
-                   **{k: data.get(k) for k in cls._COUNTS},
-                   extra={k: v for k, v in data.items() if k not in known})  # fmt: skip
+        return cls(
+            **{k: data.get(k) or {} for k in (*cls._TABLES, "provenance")},
+            **{k: data.get(k) for k in cls._COUNTS},
+            extra={k: v for k, v in data.items() if k not in known},
+        )
 
     def to_json(self) -> dict:
         """study.json's keys and values, in its order (the counts only when stated), then ``extra``."""
@@ -350,8 +373,16 @@ def run_study(
         wall_s=time.perf_counter() - t0,
         provenance=provenance(),
     )
-    result = StudyResult(results, analysis["fragility"], analysis["exceedance"], analysis["fits"],
-                         analysis["comparisons"], meta, out, hist)  # fmt: skip
+    result = StudyResult(
+        results,
+        analysis["fragility"],
+        analysis["exceedance"],
+        analysis["fits"],
+        analysis["comparisons"],
+        meta,
+        out,
+        hist,
+    )
     write_study(out, result)
     return result
 
@@ -377,8 +408,14 @@ def _run_sizes(scenario: Scenario, base: list[GroundMotion], eng_settings: dict,
     try:
         for k, S in enumerate(study.S):
             motions, factors = study_motions(study, base, scenario.S, k, scenario.specimen)
-            res, h, inf = run_engines(scenario.specimen, motions, eng_settings, opts.replace(progress=bar),
-                                      effects=scenario.effects, histories=study.histories)  # fmt: skip
+            res, h, inf = run_engines(
+                scenario.specimen,
+                motions,
+                eng_settings,
+                opts.replace(progress=bar),
+                effects=scenario.effects,
+                histories=study.histories,
+            )
             idx = res["motion_id"].to_numpy()
             stripe, motion_id = idx // n, idx % n
             parts.append(
@@ -404,8 +441,9 @@ def _run_sizes(scenario: Scenario, base: list[GroundMotion], eng_settings: dict,
 def _add_engine_info(info: dict, size_info: dict) -> None:
     """Add one size's engine facts (the runner's) to the study's: settings and version, times and counts summed."""
     for e, v in size_info.items():
-        tot = info.setdefault(e, {"settings": v["settings"], "version": v["version"], "wall_s": 0.0,
-                                  "cached": 0, "worker_deaths": 0})  # fmt: skip
+        tot = info.setdefault(
+            e, {"settings": v["settings"], "version": v["version"], "wall_s": 0.0, "cached": 0, "worker_deaths": 0}
+        )
         tot["wall_s"] += v["wall_s"]
         tot["cached"] += v["cached"]
         tot["worker_deaths"] += v.get("worker_deaths", 0)
@@ -432,8 +470,10 @@ def _caveat(fit, im: np.ndarray) -> str:
         return ""
     if fit.median > im.max() or fit.median < im.min():
         side = "above the highest" if fit.median > im.max() else "below the lowest"
-        return (f"the median {fit.median:.3g} lies {side} stripe ({im.min():g}-{im.max():g}): it is extrapolated "
-                "by the lognormal shape, not bracketed by data; add stripes there")  # fmt: skip
+        return (
+            f"the median {fit.median:.3g} lies {side} stripe ({im.min():g}-{im.max():g}): it is extrapolated "
+            "by the lognormal shape, not bracketed by data; add stripes there"
+        )
     return ""
 
 
@@ -459,21 +499,57 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
             over = np.isinf(th)
             n, k = stripe_counts(over, valid)
             p, lo, hi = proportion_intervals(k, n, study.ci)
-            frag.append(pd.DataFrame({"engine": e, "size": size, "S": S, "stripe": np.arange(len(im)), "intensity": im,
-                                      "n": n, "n_overturned": k, "p": p, "p_low": lo, "p_high": hi}))  # fmt: skip
+            frag.append(
+                pd.DataFrame(
+                    {
+                        "engine": e,
+                        "size": size,
+                        "S": S,
+                        "stripe": np.arange(len(im)),
+                        "intensity": im,
+                        "n": n,
+                        "n_overturned": k,
+                        "p": p,
+                        "p_low": lo,
+                        "p_high": hi,
+                    }
+                )
+            )
             ex = exceedance(th, study.thresholds, valid, study.ci)
             exc.append(ex.assign(engine=e, size=size, S=S, intensity=im[ex["stripe"].to_numpy()]))
             if not valid.any():  # every record of this engine and size failed: nothing to fit
-                fits.append({"engine": e, "size": size, "S": S, **dict.fromkeys(_FIT_NUMBERS, math.nan),
-                             "status": "no_data", "message": "no valid record at any stripe (every record failed)",
-                             "n_boot": 0, "n_failed": 0})  # fmt: skip
+                fits.append(
+                    {
+                        "engine": e,
+                        "size": size,
+                        "S": S,
+                        **dict.fromkeys(_FIT_NUMBERS, math.nan),
+                        "status": "no_data",
+                        "message": "no valid record at any stripe (every record failed)",
+                        "n_boot": 0,
+                        "n_failed": 0,
+                    }
+                )
                 continue
             b = bootstrap_fit(im, over, valid, n_boot=study.n_boot, seed=study.seed, ci=study.ci)
-            fits.append({"engine": e, "size": size, "S": S, "median": b.fit.median, "median_low": b.median_low,
-                         "median_high": b.median_high, "beta": b.fit.beta, "beta_low": b.beta_low,
-                         "beta_high": b.beta_high, "status": b.fit.status, "message": b.fit.message,
-                         "n_boot": b.n_boot, "n_failed": b.n_failed,
-                         "caveat": _caveat(b.fit, im)})  # fmt: skip
+            fits.append(
+                {
+                    "engine": e,
+                    "size": size,
+                    "S": S,
+                    "median": b.fit.median,
+                    "median_low": b.median_low,
+                    "median_high": b.median_high,
+                    "beta": b.fit.beta,
+                    "beta_low": b.beta_low,
+                    "beta_high": b.beta_high,
+                    "status": b.fit.status,
+                    "message": b.fit.message,
+                    "n_boot": b.n_boot,
+                    "n_failed": b.n_failed,
+                    "caveat": _caveat(b.fit, im),
+                }
+            )
         if reference in mats:
             th_r, valid_r = mats[reference]
             for e in engines:
@@ -484,12 +560,31 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
                     continue  # no records on one side (or not the same motions): no paired comparison
                 # two intervals decide "disagree": each at 1 - (1 - ci) / 2 (Bonferroni), so that agreeing
                 # engines are called different at most 1 - ci of the time (at ci each: 14 % measured, not 5 %)
-                c = compare_fits(im, np.isinf(th), np.isinf(th_r), valid, valid_r, n_boot=study.n_boot,
-                                 seed=study.seed, ci=compare_ci(study.ci))  # fmt: skip
-                comps.append({"engine": e, "reference": reference, "size": size, "S": S,
-                              "median_ratio": c.median_ratio, "ratio_low": c.ratio_low, "ratio_high": c.ratio_high,
-                              "beta_diff": c.beta_diff, "diff_low": c.diff_low, "diff_high": c.diff_high,
-                              "disagree": bool(c.disagree)})  # fmt: skip
+                c = compare_fits(
+                    im,
+                    np.isinf(th),
+                    np.isinf(th_r),
+                    valid,
+                    valid_r,
+                    n_boot=study.n_boot,
+                    seed=study.seed,
+                    ci=compare_ci(study.ci),
+                )
+                comps.append(
+                    {
+                        "engine": e,
+                        "reference": reference,
+                        "size": size,
+                        "S": S,
+                        "median_ratio": c.median_ratio,
+                        "ratio_low": c.ratio_low,
+                        "ratio_high": c.ratio_high,
+                        "beta_diff": c.beta_diff,
+                        "diff_low": c.diff_low,
+                        "diff_high": c.diff_high,
+                        "disagree": bool(c.disagree),
+                    }
+                )
     ex_cols = ["engine", "size", "S", "stripe", "intensity", "threshold", "n", "k", "p", "p_low", "p_high"]
     return {
         "fragility": pd.concat(frag, ignore_index=True),
@@ -512,8 +607,7 @@ def write_study(out: Path, result: StudyResult) -> None:
     result.results.to_parquet(out / RESULTS_FILE, index=False)
     result.fragility.to_parquet(out / FRAGILITY_FILE, index=False)
     result.exceedance.to_parquet(out / EXCEEDANCE_FILE, index=False)
-    (out / FITS_FILE).write_text(json.dumps(_plain({"fits": result.fits, "comparisons": result.comparisons}),
-                                            indent=1))  # fmt: skip
+    (out / FITS_FILE).write_text(json.dumps(_plain({"fits": result.fits, "comparisons": result.comparisons}), indent=1))
     (out / STUDY_FILE).write_text(json.dumps(_plain(result.meta.to_json()), indent=1))
 
 

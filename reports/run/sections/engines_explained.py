@@ -77,9 +77,12 @@ def _decomposition(run: Run, found: dict) -> str:
                 f"{_pct(d.get('floor'))} <small>(chaos floor {_pct(parts.get('chaos'))}, "
                 f"model-form limit {_pct(parts.get('model_form'))})</small>",
                 status_badge(bool(reaches), "reaches it", "below it") if reaches is not None else "&ndash;",
-                esc(plain_remains(d.get("remains", ""))) + (
+                esc(plain_remains(d.get("remains", "")))
+                + (
                     f"<br><small>With its maps: {esc(plain_remains(maps['remains']))}</small>"
-                    if maps.get("remains") else ""),
+                    if maps.get("remains")
+                    else ""
+                ),
             ]
         )
     return html_table(
@@ -92,7 +95,7 @@ def _decomposition(run: Run, found: dict) -> str:
             "reachable agreement",
             "reaches it (within 5 points)",
             "what remains",
-        ],  # fmt: skip
+        ],
         rows,
         caption="Per-record agreement: the share of ground motions on which the analytic model and the engine both "
         "overturn, or both rock with &theta;<sub>max</sub>/&alpha; within 3 % (the rule of the verdict above, "
@@ -112,8 +115,9 @@ def plain_remains(text: str) -> str:
     the page does not explain) left out; its figures in words are kept."""
     text = re.sub(r" \(residual ratio [0-9.]+ against the correct-model floor\)", "", text)
     text = re.sub(r"(\d+)% below the floor of", r"\1 points below the floor of", text)
-    text = text.replace("the floor of", "the reachable agreement of").replace("Nothing beyond the floor",
-                                                                               "Nothing beyond the reachable agreement")
+    text = text.replace("the floor of", "the reachable agreement of").replace(
+        "Nothing beyond the floor", "Nothing beyond the reachable agreement"
+    )
     out, depth, start = [], 0, 0
     for i, c in enumerate(text):  # drop each outermost bracket that holds a z-score
         if c == "(":
@@ -137,9 +141,11 @@ def _maps_cell(maps: dict, ks) -> str:
     badge = status_badge(reached, "reaches it", "below both")
     ks_m = (ks or {}).get("with_maps")
     sf = (maps.get("scatter_floor") or {}).get("share")
-    return (f"{_pct(maps.get('agreement'))} {badge}"
-            + (f"<br><small>scatter limit {_pct(sf)}</small>" if sf is not None else "")
-            + (f"<br><small>KS {fmt_g(ks_m, 3)}</small>" if ks_m is not None else ""))  # fmt: skip
+    return (
+        f"{_pct(maps.get('agreement'))} {badge}"
+        + (f"<br><small>scatter limit {_pct(sf)}</small>" if sf is not None else "")
+        + (f"<br><small>KS {fmt_g(ks_m, 3)}</small>" if ks_m is not None else "")
+    )
 
 
 def _maps_figure(found: dict) -> str:
@@ -148,10 +154,15 @@ def _maps_figure(found: dict) -> str:
     if not data:
         return ""
     maps = [EngineMaps.from_json(json.dumps(m)) for m in data.values()]
-    return html_stored_figure(maps_figure, (maps,), data, "Each engine's measured impact map (the kinetic-energy "
-                              "ratio of an impact over Housner's, against the impact speed) and flight map (the "
-                              "equivalent viscous loss between impacts), with Housner's constants",
-                              "impact and flight maps")  # fmt: skip
+    return html_stored_figure(
+        maps_figure,
+        (maps,),
+        data,
+        "Each engine's measured impact map (the kinetic-energy "
+        "ratio of an impact over Housner's, against the impact speed) and flight map (the "
+        "equivalent viscous loss between impacts), with Housner's constants",
+        "impact and flight maps",
+    )
 
 
 def current_point(fr: Frontier, defaults: dict) -> int | None:
@@ -174,8 +185,11 @@ def _score_html(p) -> str:
 def _frontier_rows(fr: Frontier, now: int | None) -> list[list[str]]:
     rows = []
     for i, p in enumerate(fr.points):
-        marks = (("swept from", i == fr.default and now != fr.default), ("knee", i == fr.knee),
-                 ("the defaults now", i == now))  # fmt: skip
+        marks = (
+            ("swept from", i == fr.default and now != fr.default),
+            ("knee", i == fr.knee),
+            ("the defaults now", i == now),
+        )
         mark = ", ".join(m for m, on in marks if on)
         if p.error:
             rows.append([esc(p.label), f"failed: {esc(p.error)}", *[""] * 8])
@@ -215,7 +229,7 @@ def _frontier(run: Run, name: str, d: dict) -> str:
             "reachable agreement",
             "KS",
             "CPU s per sim. s",
-        ],  # fmt: skip
+        ],
         _frontier_rows(fr, current_point(fr, engine_defaults(name))),
         caption=f"{engine_tag(name, run)} on <code>{esc(fr.scenario)}</code> ({fr.n_motions} motions), measured "
         f"{esc(fr.date)}, version {esc(fr.version)}; errors are the worst by magnitude. Knee: "
@@ -248,8 +262,10 @@ def engines_explained(run: Run) -> str:
     if expl:
         out.append("<h3>The departure, decomposed</h3>" + _decomposition(run, expl) + _maps_figure(expl))
     if front:
-        out.append("<h3>Accuracy against cost</h3><p>Each engine's time step and main contact setting swept, the "
-                   "other settings at their defaults: the tuner's checks, per-record agreement with the analytic "
-                   "model and KS on the scenario's ground motions, and the CPU time.</p>")  # fmt: skip
+        out.append(
+            "<h3>Accuracy against cost</h3><p>Each engine's time step and main contact setting swept, the "
+            "other settings at their defaults: the tuner's checks, per-record agreement with the analytic "
+            "model and KS on the scenario's ground motions, and the CPU time.</p>"
+        )
         out += [_frontier(run, name, d) for name, (_f, d) in front.items()]
     return "".join(out)

@@ -82,8 +82,11 @@ def headline_section(run: Run) -> str:
     parts.append(_verdict_lines(run, verdicts, caveats))
     parts.append(_headline_table(run, verdicts))
     parts.append(html_note(_rule_text(run)))
-    parts.extend(f'<div class="caveat"><strong>{engine_tag(n, run)}</strong>: {caveats[n]}</div>'
-                 for n in run.others if n in caveats and n in verdicts)  # fmt: skip
+    parts.extend(
+        f'<div class="caveat"><strong>{engine_tag(n, run)}</strong>: {caveats[n]}</div>'
+        for n in run.others
+        if n in caveats and n in verdicts
+    )
     return "".join(parts)
 
 
@@ -105,9 +108,11 @@ def _verdict_lines(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[s
             )
             continue
         if name not in verdicts:  # a 3D engine: its theta is not the planar block's (Run.mesh_engines)
-            lines.append(f'<li><span class="badge na">3D</span> {engine_tag(name, run)}: no distribution verdict '
-                         "against the planar block (its &theta;<sub>max</sub> is the tilt of the scan's 3D body, not "
-                         "the block's rotation); judged by the measured outcomes</li>")  # fmt: skip
+            lines.append(
+                f'<li><span class="badge na">3D</span> {engine_tag(name, run)}: no distribution verdict '
+                "against the planar block (its &theta;<sub>max</sub> is the tilt of the scan's 3D body, not "
+                "the block's rotation); judged by the measured outcomes</li>"
+            )
             continue
         v = verdicts[name]
         head, figure, good = v.parts()
@@ -164,8 +169,11 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict]) -> str:
             verdict = verdict_badge(v)
         else:
             verdict = "3D: outcomes only" if name in run.mesh_engines else "effect"
-        records = "&ndash;" if v is None or v.records_short is None else _html_figures(
-            v.records_short.replace(" of records agree, chaos floor", " /"))
+        records = (
+            "&ndash;"
+            if v is None or v.records_short is None
+            else _html_figures(v.records_short.replace(" of records agree, chaos floor", " /"))
+        )
         rows.append(
             [
                 engine_tag(name, run) + (" <small>(reference)</small>" if is_ref else ""),
@@ -223,8 +231,9 @@ def _floors(run: Run, parts: list[str]) -> dict:
     try:
         return run.chaos_floors
     except Exception as e:
-        parts.append(html_note(f"The chaos floors could not be computed: <code>{esc(type(e).__name__)}: {esc(e)}"
-                               "</code>", "warn"))  # fmt: skip
+        parts.append(
+            html_note(f"The chaos floors could not be computed: <code>{esc(type(e).__name__)}: {esc(e)}</code>", "warn")
+        )
         return {}
 
 
@@ -257,10 +266,14 @@ def specimen_section(run: Run) -> str:
     parts = []
     geometry = ((run.campaign or {}).get("geometry") or {}).get("label")
     if geometry:
-        parts.append(html_note(
-            "The planar engines ran this symmetric block with <code>" + esc(geometry) + "</code>, the scan's two "
-            "pivots (see <a href='#outcomes'>What the campaign gave the engines</a>); &theta;<sub>max</sub>/&alpha; "
-            "in this report is taken with the &alpha; below, that of the mean pivot."))  # fmt: skip
+        parts.append(
+            html_note(
+                "The planar engines ran this symmetric block with <code>" + esc(geometry) + "</code>, the scan's two "
+                "pivots (see <a href='#outcomes'>What the campaign gave the engines</a>); "
+                "&theta;<sub>max</sub>/&alpha; "
+                "in this report is taken with the &alpha; below, that of the mean pivot."
+            )
+        )
     if spec:
         rows = []
         for key, value in spec.items():

@@ -19,8 +19,9 @@ def outcomes_section(run: Run) -> str:
     """The outcome table of a campaign run (a note when its records carry no outcome)."""
     rows = run.outcome_scores
     if not rows:
-        return html_note("This campaign's records carry no measured outcome: there is nothing to score the engines "
-                         "against.")  # fmt: skip
+        return html_note(
+            "This campaign's records carry no measured outcome: there is nothing to score the engines against."
+        )
     header = [
         "engine",
         "records scored<br>(failed, left out)",
@@ -98,18 +99,34 @@ def _given(run: Run) -> str:
     c = run.campaign or {}
     facts = [
         ["campaign", f"{esc(c.get('name', ''))}<br><code>{esc(c.get('path', ''))}</code>"],
-        ["records", f"{esc(c.get('n_records', ''))} ({esc(c.get('n_outcomes', ''))} with a measured outcome, "
-                    f"{esc(c.get('n_overturned', ''))} overturned; {esc(c.get('skipped', 0))} unreadable, left out)"],
-    ]  # fmt: skip
+        [
+            "records",
+            f"{esc(c.get('n_records', ''))} ({esc(c.get('n_outcomes', ''))} with a measured outcome, "
+            f"{esc(c.get('n_overturned', ''))} overturned; {esc(c.get('skipped', 0))} unreadable, left out)",
+        ],
+    ]
     geo = (c.get("geometry") or {}).get("label")
     scan = c.get("scan")
     if scan:
-        facts.append(["scan pivots", f"b+ {fmt_g(scan.get('b_pos_m'))} m, b&minus; {fmt_g(scan.get('b_neg_m'))} m, "
-                      f"h {fmt_g(scan.get('h_m'))} m (&alpha;+ {fmt_g(scan.get('alpha_pos_rad'))}, &alpha;&minus; "
-                      f"{fmt_g(scan.get('alpha_neg_rad'))} rad)"])  # fmt: skip
-    facts.append(["planar engines", "the symmetric block of the specimen" + (
-        f" with <code>{esc(geo)}</code> always applied: the scan's own asymmetry, not a studied effect"
-        if geo else " (a plain block: no effect)")])  # fmt: skip
+        facts.append(
+            [
+                "scan pivots",
+                f"b+ {fmt_g(scan.get('b_pos_m'))} m, b&minus; {fmt_g(scan.get('b_neg_m'))} m, "
+                f"h {fmt_g(scan.get('h_m'))} m (&alpha;+ {fmt_g(scan.get('alpha_pos_rad'))}, &alpha;&minus; "
+                f"{fmt_g(scan.get('alpha_neg_rad'))} rad)",
+            ]
+        )
+    facts.append(
+        [
+            "planar engines",
+            "the symmetric block of the specimen"
+            + (
+                f" with <code>{esc(geo)}</code> always applied: the scan's own asymmetry, not a studied effect"
+                if geo
+                else " (a plain block: no effect)"
+            ),
+        ]
+    )
     mesh = c.get("mesh")
     if mesh:
         given = "<br>".join(f"{esc(k)} = <code>{esc(v)}</code>" for k, v in mesh.items())

@@ -32,8 +32,15 @@ VOLT = 5.9797e-4 * 0.0254  # [m/V]
 SIGNALS = {11: (1.0, 0.012, 2.0), 12: (1.5, 0.018, 1.0), 17: (0.5, 0.015, 1.0)}
 HEADER = "".join(f"Time [s] - Plot {i}\tAmplitude - Plot {i}\t" for i in range(4))
 #: test, outcome (overturn_SP1), present, where its file is.
-INDEX = [(12, "1", 1, "."), (11, "0", 1, "."), (13, "1", 0, None), (14, "", 1, "."), (15, "0", 1, None),
-         (16, "1", 1, "."), (17, "0", 1, "data/Shake_Table_Response")]  # fmt: skip
+INDEX = [
+    (12, "1", 1, "."),
+    (11, "0", 1, "."),
+    (13, "1", 0, None),
+    (14, "", 1, "."),
+    (15, "0", 1, None),
+    (16, "1", 1, "."),
+    (17, "0", 1, "data/Shake_Table_Response"),
+]
 
 
 def signals(k: float, bias: float, duration: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
