@@ -49,8 +49,8 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 import campaign_generators as cg  # noqa: E402
 
 from housner.scenarios.campaigns.campaign import load_campaign  # noqa: E402
-from housner.scenarios.campaigns.compare import compare  # noqa: E402
-from housner.scenarios.campaigns.diagnose import diagnose  # noqa: E402
+from housner.scenarios.diagnosis.comparison.record_comparison import compare  # noqa: E402
+from housner.scenarios.diagnosis.diagnose import diagnose  # noqa: E402
 
 TARGET_S = 60.0
 #: The default campaign and the slowest kind (module docstring).

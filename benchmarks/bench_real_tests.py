@@ -11,7 +11,8 @@ whole diagnosis in < 60 s together. Timed stages, each in this process:
 1. ``specimen``: :func:`housner.scan.specimen_from_mesh` on SP1.obj (its bracket and azimuth sweep included);
 2. ``import``: :func:`housner.scenarios.campaigns.asu.import_asu` into a temporary folder (490 record files);
 3. ``load``: :func:`housner.scenarios.campaigns.campaign.load_campaign` of that campaign;
-4. ``diagnose``: :func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes` (every ensemble, the folds,
+4. ``diagnose``: :func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes` (every ensemble, the
+folds,
    the baselines, the floor).
 
 Baseline in the same run: one pass of the plain analytic model over the 490 records
@@ -47,7 +48,7 @@ def main(argv=None) -> int:
     from housner.scan import specimen_from_mesh
     from housner.scenarios.campaigns.asu import import_asu
     from housner.scenarios.campaigns.campaign import load_campaign
-    from housner.scenarios.campaigns.outcomes import diagnose_outcomes
+    from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import diagnose_outcomes
 
     times = {}
     t = time.perf_counter()

@@ -7,7 +7,8 @@ The public entry points of the layer; each sub-package's ``__init__`` is its own
 - :mod:`~housner.scenarios.execution`: ``run_engines`` (plan, execute, table), workers, cache, run directory;
 - :mod:`~housner.scenarios.runs`: a scenario's run and its analyses (Table 2 spread, chaos floor);
 - :mod:`~housner.scenarios.studies`: stripes x sizes x engines -> fragility with intervals;
-- :mod:`~housner.scenarios.campaigns`: measured data, comparison, localisation, diagnosis, verdict.
+- :mod:`~housner.scenarios.campaigns`: measured data: the format, the records, the ASU importer;
+- :mod:`~housner.scenarios.diagnosis`: comparison, localisation, forward selection, verdict, outcome scoring.
 """
 
 if __name__ != "housner.scenarios":  # this folder imported by its own name, from a checkout's root
@@ -17,11 +18,11 @@ from housner._lazy import lazy_exports
 
 #: Each public name -> the sub-package that defines it. They are imported when first used (PEP 562), not
 #: with the package: a worker process that runs records needs ``execution`` only, and importing
-#: ``campaigns`` (the diagnosis) with it cost each worker 1.4 of its 1.5 s of imports.
+#: ``diagnosis`` with it cost each worker 1.4 of its 1.5 s of imports.
 _EXPORTS = {
     "Campaign": "campaigns",
-    "compare": "campaigns",
-    "diagnose": "campaigns",
+    "compare": "diagnosis",
+    "diagnose": "diagnosis",
     "load_campaign": "campaigns",
     "Scenario": "catalogue",
     "list_scenarios": "catalogue",
@@ -38,7 +39,10 @@ _EXPORTS = {
 
 
 __getattr__, __dir__ = lazy_exports(
-    __name__, _EXPORTS, globals(), submodules=("campaigns", "catalogue", "execution", "motions", "runs", "studies")
+    __name__,
+    _EXPORTS,
+    globals(),
+    submodules=("campaigns", "catalogue", "diagnosis", "execution", "motions", "runs", "studies"),
 )
 
 __all__ = [

@@ -55,7 +55,7 @@ def main(argv=None) -> int:
     from matrix import judge
 
     from housner.scenarios.campaigns.campaign import load_campaign
-    from housner.scenarios.campaigns.diagnose import diagnose
+    from housner.scenarios.diagnosis.diagnose import diagnose
 
     gen, cases = _generator(args.generator)
     names = args.cases or list(cases)

@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     import independent_campaigns
 
     from housner.scenarios.campaigns.campaign import load_campaign
-    from housner.scenarios.campaigns.diagnose import diagnose
+    from housner.scenarios.diagnosis.diagnose import diagnose
 
     gens = {"a": campaign_generators, "b": independent_campaigns}
     rows = []

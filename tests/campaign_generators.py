@@ -81,7 +81,8 @@ HIDDEN: dict[str, tuple[dict, tuple[str, ...]]] = {
 
 
 #: Hidden effects that the effect library does NOT have (the diagnosis must say so): the generator's
-#: parameters, and the localisation class (housner.scenarios.campaigns.pointers.CLASSES) that should come first.
+#: parameters, and the localisation class (housner.scenarios.diagnosis.comparison.pointers.CLASSES) that should come
+# first.
 OUTSIDE: dict[str, tuple[dict, str]] = {
     # quadratic air drag: theta'' gains -cd theta' |theta'| [cd in 1/rad]; the loss grows with the speed
     "air_drag": ({"cd": 2.0}, "dissipation"),

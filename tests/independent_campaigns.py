@@ -110,7 +110,8 @@ is byte-identical to one written before they existed.
   The ground_acc column is not affected.
 
 Cases: :data:`CASES` maps a name to (the generator's own truth parameters, the expected diagnosis): a tuple
-of registry effect names, or the localisation class (``housner.scenarios.campaigns.pointers.CLASSES``, "drift" and
+of registry effect names, or the localisation class (``housner.scenarios.diagnosis.comparison.pointers.CLASSES``,
+"drift" and
 "vertical_input" among them) that should come first for an effect the library does not have. :func:`library_parameters`
 gives the library's parameterisation of each case the library can represent. :data:`EXAMPLE_CASES` are the
 campaigns of the effects shipped as plugins in ``examples/effects`` (pivot friction with asymmetric pivots, an

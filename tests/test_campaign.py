@@ -18,16 +18,16 @@ from housner.free_rocking import half_cycle_integral
 from housner.model import simulate
 from housner.readers import uniform_step
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.compare import compare
-from housner.scenarios.campaigns.history_error import (
+from housner.scenarios.campaigns.campaign_records import OVERTURN_ANGLE, estimate_release
+from housner.scenarios.diagnosis.comparison.history_error import (
     ERROR_CLIP,
     divergence_time,
     error_window,
     measured_impacts,
     record_error,
 )
-from housner.scenarios.campaigns.localise import features
-from housner.scenarios.campaigns.records import OVERTURN_ANGLE, estimate_release
+from housner.scenarios.diagnosis.comparison.localise import features
+from housner.scenarios.diagnosis.comparison.record_comparison import compare
 
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha

@@ -18,7 +18,7 @@ from housner.effects import AsymmetricPivots
 from housner.engines import ENGINES, register_engine
 from housner.engines.analytic import HousnerEngine
 from housner.scenarios.campaigns import load_campaign
-from housner.scenarios.campaigns.outcome_scores import outcome_scores
+from housner.scenarios.diagnosis.outcomes.outcome_scores import outcome_scores
 from housner.scenarios.runs.campaign_run import P_CLIP, campaign_input, run_campaign
 from housner.scenarios.runs.view import Run
 

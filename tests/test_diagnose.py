@@ -25,10 +25,10 @@ from housner import Specimen
 from housner.effects import available_effects, effect_class
 from housner.reports.diagnosis import write_diagnosis_report
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
-from housner.scenarios.campaigns.fitting import fit_effect
-from housner.scenarios.campaigns.scoring import split_records
-from housner.scenarios.campaigns.trial import PRACTICAL, judge
+from housner.scenarios.diagnosis.diagnose import diagnose
+from housner.scenarios.diagnosis.selection.candidate_trial import PRACTICAL, judge
+from housner.scenarios.diagnosis.selection.fitting import fit_effect
+from housner.scenarios.diagnosis.selection.record_scoring import split_records
 
 DEFAULT_CASES = ("none", "rotational_damping", "sensor_offset")
 _RESULTS: dict[str, tuple] = {}

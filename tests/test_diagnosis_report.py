@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 from shared import page_section, page_text
 
-import housner.scenarios.campaigns.residual as residual_mod
-import housner.scenarios.campaigns.verdict as verdict_mod
+import housner.scenarios.diagnosis.verdict.decision as verdict_mod
+import housner.scenarios.diagnosis.verdict.residual_test as residual_mod
 from housner.reports.diagnosis import history_records, render_diagnosis
 from housner.reports.diagnosis.figures import histories_figure
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
-from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
+from housner.scenarios.diagnosis.diagnose import diagnose
+from housner.scenarios.diagnosis.results import change_text, fmt_pm, params_text, signed_words
 
 #: The documentation page that explains the verdict (it was the README's "Measurements" section).
 DIAGNOSIS_DOC = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "diagnosis.md"

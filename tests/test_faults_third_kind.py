@@ -25,8 +25,8 @@ from housner import Specimen
 from housner.cli import main
 from housner.effects import EFFECTS, load_plugin, make_effect
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
-from housner.scenarios.campaigns.scoring import NonFiniteHistory, NonFiniteScore, Scorer, check_finite
+from housner.scenarios.diagnosis.diagnose import diagnose
+from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteHistory, NonFiniteScore, Scorer, check_finite
 from housner.scenarios.execution.rundir import (
     IncompleteRunError,
     RunMeta,
@@ -125,7 +125,7 @@ def test_a_non_finite_score_or_floor_stops_with_one_line(monkeypatch):
         check_finite("the correct-model floor", [0.1, math.nan], ["a", "b"])
     check_finite("x", [0.0, 1.0])
     # a score that comes out NaN from finite histories: stopped, not judged
-    import housner.scenarios.campaigns.scoring as scoring
+    import housner.scenarios.diagnosis.selection.record_scoring as scoring
 
     camp = load_campaign(CAMPAIGN)
     sc = Scorer(camp, [r.id for r in camp.records][:4])

@@ -17,7 +17,7 @@ import pytest
 from matrix import judge
 
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.diagnosis.diagnose import diagnose
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,5 @@
-"""The model-form part of the diagnosis' floor (housner.scenarios.campaigns.model_form) and the verdict's new pointers.
+"""The model-form part of the diagnosis' floor (housner.scenarios.diagnosis.verdict.integrator_families) and the
+verdict's new pointers.
 
 Closed forms first: the input a correct integrator feels under each
 convention, the acceleration channel's noise read off still records, the
@@ -18,9 +19,10 @@ from housner import GroundMotion, Specimen
 from housner.effects import SensorOffset
 from housner.engines import get_engine
 from housner.model import REST_TOL
-from housner.scenarios.campaigns.fitting import fit_effect, joint_refit
-from housner.scenarios.campaigns.localise import Metric
-from housner.scenarios.campaigns.model_form import (
+from housner.scenarios.diagnosis.comparison.localise import Metric
+from housner.scenarios.diagnosis.comparison.pointers import Z_DRIFT, _flight_share, order_drift, physical_classes
+from housner.scenarios.diagnosis.selection.fitting import fit_effect, joint_refit
+from housner.scenarios.diagnosis.verdict.integrator_families import (
     FAMILIES,
     SCALE_SD,
     SHIFT_SAMPLES,
@@ -28,7 +30,6 @@ from housner.scenarios.campaigns.model_form import (
     ModelForm,
     acc_channel_noise,
 )
-from housner.scenarios.campaigns.pointers import Z_DRIFT, _flight_share, order_drift, physical_classes
 
 DT = 0.002
 

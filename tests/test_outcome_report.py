@@ -25,9 +25,9 @@ from housner.reports.diagnosis import render_outcome_report, write_outcome_repor
 from housner.reports.diagnosis.outcome_figures import GRID, baseline_label, fit_soft_logistic, level_lines
 from housner.reports.diagnosis.outcomes import MISSES_SHOWN, STATUS, step_label
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS
-from housner.scenarios.campaigns.outcomes import diagnose_outcomes
-from housner.scenarios.campaigns.records import OutcomeRecord
+from housner.scenarios.campaigns.campaign_records import OutcomeRecord
+from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import diagnose_outcomes
+from housner.scenarios.diagnosis.outcomes.outcome_scores import SCORE_KEYS
 from housner.specimen import Specimen
 
 #: Records of the synthetic campaign [-], their duration [s] and sample step [s].

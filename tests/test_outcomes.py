@@ -13,14 +13,14 @@ from housner import GroundMotion, Specimen
 from housner.cli import main
 from housner.model import theta_max_many
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
-from housner.scenarios.campaigns.outcome_scores import (
+from housner.scenarios.campaigns.campaign_records import OutcomeRecord
+from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import Geometry, diagnose_outcomes
+from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     logistic_oof,
     outcome_floor,
     outcome_scores,
     stratified_folds,
 )
-from housner.scenarios.campaigns.outcomes import Geometry, diagnose_outcomes
-from housner.scenarios.campaigns.records import OutcomeRecord
 
 # A slender block like a small rock: 2H = 0.6 m, 2B = 0.06 m (alpha = 0.0997 rad), solid.
 SPEC = Specimen(height=0.6, width=0.06, depth=0.3, mass=50.0)

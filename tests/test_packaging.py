@@ -83,7 +83,7 @@ def test_a_worker_imports_its_chunks_without_the_diagnosis():
     code = (
         "import sys, housner.scenarios.execution.chunks; "
         "print(sorted(m for m in sys.modules if m.startswith(('housner.scenarios.campaigns', "
-        "'housner.scenarios.execution.runner', 'housner.reports', 'matplotlib'))))"
+        "'housner.scenarios.diagnosis', 'housner.scenarios.execution.runner', 'housner.reports', 'matplotlib'))))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"

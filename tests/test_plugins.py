@@ -19,7 +19,7 @@ import pytest
 from housner import GroundMotion, Specimen
 from housner.effects import effect_class, load_plugin
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
+from housner.scenarios.diagnosis.diagnose import diagnose
 from housner.scenarios.execution.cache import cache_key, effect_code_hash
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -11,10 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from housner.scenarios.campaigns.history_error import record_error
-from housner.scenarios.campaigns.sensor import _dropouts, _saturation, _spikes, _trend
 from housner.scenarios.campaigns.sensor_noise import WHITE, estimate_sensor_noise
-from housner.scenarios.campaigns.verdict import STATUS_RULE, status_rule
+from housner.scenarios.diagnosis.comparison.history_error import record_error
+from housner.scenarios.diagnosis.sensor_assessment import _dropouts, _saturation, _spikes, _trend
+from housner.scenarios.diagnosis.verdict.decision import STATUS_RULE, status_rule
 
 DT = 0.002
 
@@ -136,7 +136,7 @@ def indep(tmp_path_factory):
 
     base = tmp_path_factory.getbasetemp() / "independent"
     from housner.scenarios.campaigns.campaign import load_campaign
-    from housner.scenarios.campaigns.sensor import assess_sensor
+    from housner.scenarios.diagnosis.sensor_assessment import assess_sensor
 
     def get(case):
         raw = load_campaign(ic.cached_campaign(base, case)["root"])
@@ -162,7 +162,7 @@ def test_the_noise_is_measured_as_the_independent_generator_made_it(indep, case)
 
 
 def test_the_block_is_seen_at_rest_under_noise_that_wanders(indep):
-    from housner.scenarios.campaigns.compare import compare
+    from housner.scenarios.diagnosis.comparison.record_comparison import compare
 
     _ic, raw, c = indep("colored_tau0.2")
     # the largest acceleration the block stood at rest, over g tan(alpha): read off the measurement with white
@@ -193,8 +193,8 @@ def test_sensor_faults_are_named_where_they_are_and_only_there(indep, case):
 
 
 def test_a_model_is_read_through_the_saturating_sensor_as_the_block_was(indep):
-    from housner.scenarios.campaigns.compare import compare
-    from housner.scenarios.campaigns.verdict import distribution_checks
+    from housner.scenarios.diagnosis.comparison.record_comparison import compare
+    from housner.scenarios.diagnosis.verdict.decision import distribution_checks
 
     _ic, _raw, c = indep("saturation")
     cm = compare(c)
@@ -207,7 +207,7 @@ def test_a_model_is_read_through_the_saturating_sensor_as_the_block_was(indep):
 
 def test_the_report_shows_the_sensor(indep, tmp_path):
     from housner.reports.diagnosis import render_diagnosis
-    from housner.scenarios.campaigns.diagnose import diagnose
+    from housner.scenarios.diagnosis.diagnose import diagnose
 
     _ic, _raw, c = indep("gain_drift")
     page = render_diagnosis(diagnose(c, compare_steps=True, effects=[]))

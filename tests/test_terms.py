@@ -38,9 +38,9 @@ from housner.effects.parameters import damping_moment, restitution_law
 from housner.model import simulate
 from housner.rocking_params import RockingParams
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.compare import simulate_records
-from housner.scenarios.campaigns.fitting import fit_effect
-from housner.scenarios.campaigns.history_error import error_window, scored_error
+from housner.scenarios.diagnosis.comparison.history_error import error_window, scored_error
+from housner.scenarios.diagnosis.comparison.record_comparison import simulate_records
+from housner.scenarios.diagnosis.selection.fitting import fit_effect
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples" / "effects"

@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     the JSON and the report asked for. Returns the exit status."""
     from housner.reports.diagnosis import write_diagnosis_report
     from housner.scenarios.campaigns.campaign import load_campaign
-    from housner.scenarios.campaigns.diagnose import diagnose
+    from housner.scenarios.diagnosis.diagnose import diagnose
 
     check_campaign(args.campaign)  # inputs and outputs checked before the work
     check_effects(args.effects, "--effects")
@@ -144,9 +144,10 @@ def _folds(args: argparse.Namespace) -> int:
 
 
 def _diagnose_outcomes(args: argparse.Namespace, campaign):
-    """The outcome records' diagnosis (:func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes`), printed."""
-    from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS
-    from housner.scenarios.campaigns.outcomes import diagnose_outcomes
+    """The outcome records' diagnosis
+    (:func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes`), printed."""
+    from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import diagnose_outcomes
+    from housner.scenarios.diagnosis.outcomes.outcome_scores import SCORE_KEYS
 
     d = diagnose_outcomes(
         campaign,

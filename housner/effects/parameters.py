@@ -252,7 +252,7 @@ class AsymmetricPivots(Effect):
         Any |e| < B (B the half width) is accepted, so that both pivots stay
         on their side of the centre of mass (b+ and b- > 0: the block stands
         upright); the parameter's bounds, +-B/2, are the range the diagnosis
-        searches (:func:`housner.scenarios.campaigns.fitting.param_dims`), not
+        searches (:func:`housner.scenarios.diagnosis.selection.fitting.param_dims`), not
         a physical limit (a scanned rock's equivalent block may need more:
         e / B = 0.70 for the ASU granite SP1).
 

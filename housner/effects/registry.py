@@ -257,7 +257,7 @@ class Effect:
         """Parameters a campaign's localisation measures directly, better than a fit to the histories can.
 
         ``metrics`` maps the localisation quantities of
-        :data:`housner.scenarios.campaigns.localise.METRICS` (for example ``"tilt_offset"``, the rotation
+        :data:`housner.scenarios.diagnosis.comparison.localise.METRICS` (for example ``"tilt_offset"``, the rotation
         read at rest [alpha]) to objects with ``value`` and ``se``.
         The diagnosis takes the parameters returned as measured and fits only the others. Default:
         None (every parameter is fitted within its bounds).

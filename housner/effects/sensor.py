@@ -101,7 +101,8 @@ class TimeLag(Effect):
     name = "time_lag"
     stage = STAGE_SENSOR
     # a free vibration has no ground channel to lag behind, and a measured one starts at the release
-    # its theta channel shows (housner.scenarios.campaigns.records.estimate_release), which already carries the lag
+    # its theta channel shows (housner.scenarios.campaigns.campaign_records.estimate_release), which already carries
+    # the lag
     seen_in_free_vibration = False
     tau: float = param("s", (-0.1, 0.1), neutral=0.0, default=0.0, doc="lag of the theta channel behind ground_acc")
 

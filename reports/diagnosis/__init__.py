@@ -1,6 +1,6 @@
 """The diagnosis report: which effect the Housner model misses, and the error falling as it is added.
 
-:func:`render_diagnosis` turns a :class:`housner.scenarios.campaigns.results.Diagnosis` into
+:func:`render_diagnosis` turns a :class:`housner.scenarios.diagnosis.results.Diagnosis` into
 one self-contained HTML page (figures are base64 PNGs, the style sheet is
 inline, no script, no network); :func:`write_diagnosis_report` writes it.
 The page is :mod:`housner.reports.diagnosis.page`'s, its sections

@@ -1,6 +1,6 @@
 """The figures of the diagnosis page: the error ladder, the measured and modelled theta(t), the localisation.
 
-Each takes a :class:`housner.scenarios.campaigns.results.Diagnosis` whose steps carry their comparisons and
+Each takes a :class:`housner.scenarios.diagnosis.results.Diagnosis` whose steps carry their comparisons and
 returns a matplotlib Figure; the measurement is drawn black, each step of the ladder in its own colour.
 """
 
@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 
 from housner.free_rocking import half_cycle_integral
 from housner.reports import figures
-from housner.scenarios.campaigns.compare import on_grid
+from housner.scenarios.diagnosis.comparison.record_comparison import on_grid
 
 __all__ = [
     "bars_figure",

@@ -204,7 +204,7 @@ def outcome_map_figure(diag, best: str) -> Figure:
 
 def calibration_figure(final_rows: list, baseline_rows: list, final_label: str, baseline_label_: str) -> Figure:
     """Observed share of overturns against the mean P of each bin, with 95 % Wilson intervals, for the final
-    model and a baseline (rows of :func:`housner.scenarios.campaigns.outcome_scores.calibration_table`)."""
+    model and a baseline (rows of :func:`housner.scenarios.diagnosis.outcomes.outcome_scores.calibration_table`)."""
     fig = Figure(figsize=(6.4, 5.0))
     ax = fig.add_subplot()
     ax.plot([0, 1], [0, 1], color="#555555", lw=1, ls=":", label="calibrated (observed = P)")

@@ -1,6 +1,7 @@
 """The outcome report: the mission loop on records whose only measurement is whether the block overturned.
 
-:func:`render_outcome_report` turns a :class:`housner.scenarios.campaigns.outcome_results.OutcomeDiagnosis` into one
+:func:`render_outcome_report` turns a :class:`housner.scenarios.diagnosis.outcomes.outcome_results.OutcomeDiagnosis`
+into one
 self-contained HTML page (the page pieces of :mod:`housner.reports.page`: inline style sheet, base64 PNG
 figures of :mod:`housner.reports.diagnosis.outcome_figures`, no script, no network);
 :func:`write_outcome_report` writes it.
@@ -36,8 +37,8 @@ from housner.reports.page import (
     html_table,
     write_page,
 )
-from housner.scenarios.campaigns.outcome_scores import SCORE_KEYS, calibration_table, per_record_log_loss
-from housner.scenarios.campaigns.outcomes import AMPLITUDE_SPREAD, LEVEL
+from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import AMPLITUDE_SPREAD, LEVEL
+from housner.scenarios.diagnosis.outcomes.outcome_scores import SCORE_KEYS, calibration_table, per_record_log_loss
 
 __all__ = ["MISSES_SHOWN", "STATUS", "render_outcome_report", "step_label", "write_outcome_report"]
 
@@ -109,8 +110,8 @@ def render_outcome_report(diag) -> str:
 
     Parameters
     ----------
-    diag : housner.scenarios.campaigns.outcome_results.OutcomeDiagnosis
-        From :func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes`.
+    diag : housner.scenarios.diagnosis.outcomes.outcome_results.OutcomeDiagnosis
+        From :func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes`.
     """
     if not diag.steps or not diag.baselines:
         raise ValueError("`diag` has no ladder or no baselines; pass the result of diagnose_outcomes")

@@ -24,8 +24,8 @@ def render_diagnosis(diag) -> str:
 
     Parameters
     ----------
-    diag : housner.scenarios.campaigns.results.Diagnosis
-        From :func:`housner.scenarios.campaigns.diagnose.diagnose` with ``compare_steps=True``
+    diag : housner.scenarios.diagnosis.results.Diagnosis
+        From :func:`housner.scenarios.diagnosis.diagnose.diagnose` with ``compare_steps=True``
         (every step carries its comparison with the campaign).
     """
     if any(s.comparison is None for s in diag.steps):

@@ -23,9 +23,11 @@ from housner.reports.diagnosis.figures import (
     tilt_figure,
 )
 from housner.reports.page import esc, html_figure, html_table
-from housner.scenarios.campaigns import residual, verdict, verdict_words
-from housner.scenarios.campaigns.localise import METRICS
-from housner.scenarios.campaigns.results import change_text, fmt_pm, params_text, signed_words
+from housner.scenarios.diagnosis.comparison.localise import METRICS
+from housner.scenarios.diagnosis.results import change_text, fmt_pm, params_text, signed_words
+from housner.scenarios.diagnosis.verdict import decision as verdict
+from housner.scenarios.diagnosis.verdict import residual_test as residual
+from housner.scenarios.diagnosis.verdict import verdict_words
 
 
 def _f(x: Any, digits: int = 4) -> str:
@@ -41,7 +43,7 @@ def _f(x: Any, digits: int = 4) -> str:
 
 
 def _pm(value: Any, se: Any) -> str:
-    """A value with its standard error on the page (:func:`housner.scenarios.campaigns.results.fmt_pm`)."""
+    """A value with its standard error on the page (:func:`housner.scenarios.diagnosis.results.fmt_pm`)."""
     return fmt_pm(value, se, sep=" &plusmn; ", nan="&ndash;")  # digits, the separator and fixed words: no escaping
 
 
@@ -198,7 +200,7 @@ def _verdict_detail(diag) -> str:
         rows,
         caption=(
             "Held-out (out-of-fold) time-history error against the floor a correct model shows on the same records, "
-            "measured by a parametric bootstrap of the fitted model (housner.scenarios.campaigns.verdict). "
+            "measured by a parametric bootstrap of the fitted model (housner.scenarios.diagnosis.verdict.decision). "
             "A misfit is z > "
             f"{residual.Z_MISFIT:g} and ratio > {residual.RATIO_MISFIT:g}, or a ratio above {residual.RATIO_MISFIT:g} "
             f"with a localisation quantity more than {verdict.Z_LOCAL:g} "
@@ -298,8 +300,8 @@ def ladder_section(diag) -> str:
         ],
         rows,
         caption=(
-            "Time-history error over the measured window (see housner.scenarios.campaigns.compare), mean over every "
-            "record held "
+            "Time-history error over the measured window (see "
+            "housner.scenarios.diagnosis.comparison.record_comparison), mean over every record held "
             "out once (out-of-fold) with its standard error; its change is the mean paired difference to the "
             f"previous step. The sensor noise alone (sigma/alpha) is {diag.noise_floor:.2g}; the correct-model floor "
             "the verdict uses is in the table above."
@@ -442,7 +444,7 @@ def _metric_table(diag) -> str:
         caption=f"Localisation quantities with standard errors; a model value more than {z_local:g} combined "
         "standard errors from the measurement is marked, with its z: beyond that the verdict counts the quantity "
         "as a misfit when the model's errors lie above the floor's band, and calls it unusual when they are within "
-        "it (housner.scenarios.campaigns.verdict.Z_LOCAL, the status rule).",
+        "it (housner.scenarios.diagnosis.verdict.decision.Z_LOCAL, the status rule).",
     )
 
 
@@ -489,7 +491,7 @@ def sensor_section(diag) -> str:
         rows,
         cls="kv",
         caption="What the records say the theta sensor did, before any physics "
-        "was fitted (housner.scenarios.campaigns.sensor): faults' samples are left out of every error, "
+        "was fitted (housner.scenarios.diagnosis.sensor_assessment): faults' samples are left out of every error, "
         "drifts are corrected, and the floor draws noise of the measured correlation.",
     )
     fig = sensor_figure(diag)

@@ -1,23 +1,9 @@
-"""Measured campaigns: reading them, comparing a model with them, locating the misfit, diagnosis and verdict;
-outcome records (overturned or not) and their diagnosis; the importer of the ASU granite shake-table tests."""
+"""Measured campaigns: the format, its reader, the records (theta histories or outcomes), the sensor's noise, and
+the importer of the ASU granite shake-table tests; the method that compares a model with them is
+:mod:`housner.scenarios.diagnosis`."""
 
 from housner.scenarios.campaigns.asu import import_asu
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
-from housner.scenarios.campaigns.compare import compare
-from housner.scenarios.campaigns.diagnose import diagnose
-from housner.scenarios.campaigns.outcome_results import OutcomeDiagnosis
-from housner.scenarios.campaigns.outcomes import diagnose_outcomes
-from housner.scenarios.campaigns.records import OutcomeRecord
-from housner.scenarios.campaigns.results import Diagnosis
+from housner.scenarios.campaigns.campaign_records import MeasuredRecord, OutcomeRecord
 
-__all__ = [
-    "Campaign",
-    "Diagnosis",
-    "OutcomeDiagnosis",
-    "OutcomeRecord",
-    "compare",
-    "diagnose",
-    "diagnose_outcomes",
-    "import_asu",
-    "load_campaign",
-]
+__all__ = ["Campaign", "MeasuredRecord", "OutcomeRecord", "import_asu", "load_campaign"]

@@ -3,7 +3,7 @@
 A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one
 ``[[record]]`` per test; read and checked by
 :mod:`housner.scenarios.campaigns.campaign_toml`) and one CSV per record
-(:mod:`housner.scenarios.campaigns.records`: ``time`` [s], ``ground_acc``
+(:mod:`housner.scenarios.campaigns.campaign_records`: ``time`` [s], ``ground_acc``
 [m/s^2], ``theta`` [rad] and optional channels, units in the header converted
 once to SI; see docs/reference/campaign-format.md).
 :func:`load_campaign` reads it into a :class:`Campaign` whose records carry
@@ -37,8 +37,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from housner.errors import DataFileError, unknown_choice
+from housner.scenarios.campaigns.campaign_records import MeasuredRecord, OutcomeRecord, read_record
 from housner.scenarios.campaigns.campaign_toml import key_line, path_outside, read_campaign_toml
-from housner.scenarios.campaigns.records import MeasuredRecord, OutcomeRecord, read_record
 from housner.specimen import Specimen
 
 __all__ = ["Campaign", "load_campaign"]
@@ -64,9 +64,9 @@ class Campaign:
     scan : housner.scan.ScanSpecimen or None
         The specimen's scan-mesh derivation (per-side alpha, p, its alpha bracket) when ``[specimen]`` names a
         ``mesh``; ``specimen`` is then its equivalent block.
-    sensor : housner.scenarios.campaigns.sensor.SensorReport or None
+    sensor : housner.scenarios.diagnosis.sensor_assessment.SensorReport or None
         What the assessment of the theta sensor found (its noise, its faults and what was done about them);
-        None until :func:`housner.scenarios.campaigns.sensor.assess_sensor` ran.
+        None until :func:`housner.scenarios.diagnosis.sensor_assessment.assess_sensor` ran.
     """
 
     name: str
@@ -139,7 +139,7 @@ def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
     -----
     A free-vibration record starts at the release: its initial angle is
     fitted to the first samples
-    (:func:`housner.scenarios.campaigns.records.estimate_release`) and becomes the
+    (:func:`housner.scenarios.campaigns.campaign_records.estimate_release`) and becomes the
     motion's ``theta0`` (with ``theta_dot0`` = 0); samples of a hold before
     the release are dropped. A record file whose time column does not start
     at 0 is taken as starting at its first sample.

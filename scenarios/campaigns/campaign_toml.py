@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from housner.errors import DataFileError
-from housner.scenarios.campaigns.records import KINDS
+from housner.scenarios.campaigns.campaign_records import KINDS
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):

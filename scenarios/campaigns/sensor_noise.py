@@ -10,7 +10,7 @@ correct-model floor and every test that counts samples as independent.
 :class:`SensorNoise` is the noise of one campaign's theta channel, measured
 on the samples where the block is known to be still (the hold before a
 free vibration's release and the rest after the last motion, chosen by
-:mod:`housner.scenarios.campaigns.sensor`):
+:mod:`housner.scenarios.diagnosis.sensor_assessment`):
 
 * its standard deviation about the campaign's rest level (:attr:`SensorNoise.sigma`);
 * its autocorrelation up to :attr:`SensorNoise.max_lag` samples, pooled over the quiet segments;

@@ -35,8 +35,8 @@ from housner.engines.base import ENGINES, engine_class
 from housner.errors import unknown_choice
 from housner.motion import GroundMotion
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
-from housner.scenarios.campaigns.outcome_scores import outcome_scores
 from housner.scenarios.catalogue.schema import effects_label
+from housner.scenarios.diagnosis.outcomes.outcome_scores import outcome_scores
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import RUN_FILES, RunMeta, effect_data, provenance, write_run

@@ -10,7 +10,7 @@ analytic model lacks is the question :func:`explain_engine` answers:
    (:mod:`housner.scenarios.runs.engine_campaign`), with a little white noise
    on theta (:data:`EXPLAIN_SIGMA`) for the diagnosis' noise model.
 2. **Diagnosis.** The campaign is diagnosed like a measured one
-   (:func:`housner.scenarios.campaigns.diagnose.diagnose`): the effects of the
+   (:func:`housner.scenarios.diagnosis.diagnose.diagnose`): the effects of the
    library the engine's responses need, fitted, with the verdict's words.
 3. **Agreement.** The analytic model with those effects runs on the same
    ground motions; its per-record agreement with the engine (both overturned,
@@ -41,9 +41,9 @@ import numpy as np
 from housner.effects import available_effects, make_effect
 from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import load_campaign
-from housner.scenarios.campaigns.diagnose import diagnose
-from housner.scenarios.campaigns.verdict import pointer_text
 from housner.scenarios.catalogue.scenario import Scenario
+from housner.scenarios.diagnosis.diagnose import diagnose
+from housner.scenarios.diagnosis.verdict.decision import pointer_text
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import jsonable
@@ -186,7 +186,7 @@ class Explanation:
 
 
 def _where(verdict) -> str:
-    """The verdict's pointer (:func:`~housner.scenarios.campaigns.verdict.pointer_text`), else the sentence
+    """The verdict's pointer (:func:`~housner.scenarios.diagnosis.verdict.decision.pointer_text`), else the sentence
     that names the misfit, else its first localisation item."""
     if verdict.next:
         return pointer_text(verdict.next)

@@ -13,11 +13,11 @@ Two parts bound what a correct model could show:
   (:data:`PERTURBATIONS`): the input held over each sample instead of linear,
   a timing of the input up to half a sample early or late, its amplitude a
   part in a thousand up or down, the integrator's substeps doubled. Each is
-  one :class:`housner.scenarios.campaigns.model_form.ModelForm`, the family
+  one :class:`housner.scenarios.diagnosis.verdict.integrator_families.ModelForm`, the family
   the diagnosis' own floor draws from, at the edge of its range.
 
 The timing is :data:`SHIFT` = 3/8 of a sample, not 1/2: every run feeds the
-block its input on a grid :data:`~housner.scenarios.campaigns.model_form.UPSAMPLE`
+block its input on a grid :data:`~housner.scenarios.diagnosis.verdict.integrator_families.UPSAMPLE`
 = 4 times finer than the record's, where half a sample is two whole steps of
 the integrator, a pure delay that changes no peak (on 40 ``elcentro`` motions:
 100 % and 97.5 % agreement). 3/8 is the largest shift within half a sample
@@ -44,7 +44,7 @@ import numpy as np
 from housner.engines.base import get_engine
 from housner.model import default_substeps
 from housner.motion import GroundMotion
-from housner.scenarios.campaigns.model_form import SCALE_SD, SHIFT_SAMPLES, UPSAMPLE, ModelForm
+from housner.scenarios.diagnosis.verdict.integrator_families import SCALE_SD, SHIFT_SAMPLES, UPSAMPLE, ModelForm
 from housner.scenarios.runs.chaos import RECORD_RTOL, AgreementShares, ChaosFloor, chaos_floor, measure_engine_errors
 from housner.specimen import Specimen
 from housner.stats import per_record_agreement
@@ -63,7 +63,8 @@ __all__ = [
 SHIFT = SHIFT_SAMPLES - 0.5 / UPSAMPLE
 
 #: The conventions two correct integrators of Housner's equation differ in, each at the edge of the
-#: range the diagnosis' floor draws from (:mod:`housner.scenarios.campaigns.model_form`): label -> form.
+#: range the diagnosis' floor draws from (:mod:`housner.scenarios.diagnosis.verdict.integrator_families`): label ->
+# form.
 PERTURBATIONS: dict[str, ModelForm] = {
     "held": ModelForm(convention="held"),
     "shift+": ModelForm(shift=SHIFT),
@@ -95,7 +96,7 @@ def model_form_floor(
     """The analytic model's record-by-record agreement with itself under :data:`PERTURBATIONS`.
 
     Every run, the unperturbed one included, feeds the block the input on a grid
-    :data:`~housner.scenarios.campaigns.model_form.UPSAMPLE` times finer than the record's
+    :data:`~housner.scenarios.diagnosis.verdict.integrator_families.UPSAMPLE` times finer than the record's
     (:meth:`ModelForm.felt`), so that each perturbation differs from the reference in itself alone.
 
     Parameters

@@ -1,7 +1,8 @@
 """Report section of a measured campaign's run: how well each engine predicts the measured outcomes.
 
 One table, the engines in the run's order: accuracy, F1 and log loss with 95 % bootstrap intervals over the
-records (:func:`housner.scenarios.campaigns.outcome_scores.outcome_scores`), the predicted and measured overturns,
+records (:func:`housner.scenarios.diagnosis.outcomes.outcome_scores.outcome_scores`), the predicted and measured
+overturns,
 the 2x2 confusion matrix and the records each engine failed on (left out); then, where one is known, a published
 figure of another model on the same specimen, marked as reported elsewhere. And what the campaign gave the
 engines: its specimen's geometry, the 3D engines' mesh settings.

@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 
 from housner.scenarios.studies.fragility.bootstrap import percentile_interval, resampled_fits
-from housner.scenarios.studies.fragility.checks import check_im, check_n_boot, outcomes
+from housner.scenarios.studies.fragility.input_checks import check_im, check_n_boot, outcomes
 from housner.scenarios.studies.fragility.lognormal import LognormalFit
 from housner.stats import check_ci
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from housner.proportions import wilson_interval
-from housner.scenarios.studies.fragility.checks import check_counts, outcomes
+from housner.scenarios.studies.fragility.input_checks import check_counts, outcomes
 from housner.stats import check_ci
 
 __all__ = ["proportion_intervals", "stripe_counts"]

@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy import optimize, special
 
-from housner.scenarios.studies.fragility.checks import check_counts, check_im
+from housner.scenarios.studies.fragility.input_checks import check_counts, check_im
 from housner.scenarios.studies.fragility.newton import LOG_SQRT_2PI, newton_rows
 
 __all__ = ["BETA_BOUNDS", "LognormalFit", "fit_lognormal", "fragility_curve"]

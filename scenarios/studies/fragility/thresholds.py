@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from housner.scenarios.studies.fragility.checks import check_matrix, valid_mask
 from housner.scenarios.studies.fragility.counts import proportion_intervals
+from housner.scenarios.studies.fragility.input_checks import check_matrix, valid_mask
 
 __all__ = ["exceedance"]
 

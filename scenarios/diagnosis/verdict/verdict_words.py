@@ -1,5 +1,5 @@
 """The diagnosis' verdict in words: its z-scores, its evidence and the floors' families, said so that a reader needs
-nothing else (:mod:`housner.scenarios.campaigns.verdict` writes the paragraph with them)."""
+nothing else (:mod:`housner.scenarios.diagnosis.verdict.decision` writes the paragraph with them)."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ def z_text(z: float) -> str:
 
 
 def probe_words(name: str) -> str:
-    """What a probe (:mod:`housner.scenarios.campaigns.probes`) adds, in words: its docstring's first line."""
+    """What a probe (:mod:`housner.scenarios.diagnosis.selection.probes`) adds, in words: its docstring's first line."""
     try:
         from housner.effects import effect_class
 
@@ -50,7 +50,8 @@ def evidence_text(ev: dict, model: str = "model") -> str:
 
 
 def family_text(family: str) -> str:
-    """The correct integrators a floor was measured over, in words (:data:`housner.scenarios.campaigns.model_form.
+    """The correct integrators a floor was measured over, in words
+    (:data:`housner.scenarios.diagnosis.verdict.integrator_families.
     FAMILIES`)."""
     words = {
         "exact": "integrated as this library integrates, with the table acceleration's measured noise",

@@ -5,8 +5,8 @@ engine) on every record of a :class:`housner.scenarios.campaigns.campaign.Campai
 the measured ground acceleration (a free-vibration record is released at its
 measured initial angle), and compares the simulated rotation with the
 measured one. This module runs the engine and gathers the result; the
-time-history error is :mod:`housner.scenarios.campaigns.history_error`'s, the localisation
-quantities :mod:`housner.scenarios.campaigns.localise`'s (their names are importable from here too).
+time-history error is :mod:`housner.scenarios.diagnosis.comparison.history_error`'s, the localisation
+quantities :mod:`housner.scenarios.diagnosis.comparison.localise`'s (their names are importable from here too).
 
 Per record
 ----------
@@ -35,7 +35,7 @@ follows the measurement.
 
 *Peak and verdict.* theta_max/alpha of model and measurement (+inf when
 overturned; the measured block has overturned when |theta| reached
-:data:`housner.scenarios.campaigns.records.OVERTURN_ANGLE` or the campaign says so).
+:data:`housner.scenarios.campaigns.campaign_records.OVERTURN_ANGLE` or the campaign says so).
 
 *The model seen through the sensor.* A measured peak carries the noise (the
 largest of many noisy samples lies ~2-3 sigma above the true peak, which
@@ -86,14 +86,21 @@ from housner.effects import make_effects
 from housner.engines.base import Engine, get_engine
 from housner.response import Response
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.history_error import (
+from housner.scenarios.campaigns.campaign_records import OVERTURN_ANGLE, MeasuredRecord
+from housner.scenarios.diagnosis.comparison.history_error import (
     RELEASE_DTHETA0_SIGMAS,
     divergence_time,
     error_window,
     scored_error,
 )
-from housner.scenarios.campaigns.localise import METRICS, Features, Metric, features, mean_se, measured_features
-from housner.scenarios.campaigns.records import OVERTURN_ANGLE, MeasuredRecord
+from housner.scenarios.diagnosis.comparison.localise import (
+    METRICS,
+    Features,
+    Metric,
+    features,
+    mean_se,
+    measured_features,
+)
 
 __all__ = [
     "OBSERVATION_SEED",

@@ -1,7 +1,7 @@
 """Localisation probes: physics outside the effect library, tried to say where a misfit lies.
 
 When no effect of the library explains a campaign, the localisation quantities
-(:mod:`housner.scenarios.campaigns.localise`) say where the model departs from the
+(:mod:`housner.scenarios.diagnosis.comparison.localise`) say where the model departs from the
 measurement. Some physics leaves no mark on them that a campaign resolves: a
 vertical table acceleration that the CSV does not carry changes the
 effective gravity, and so the restoring moment and the uplift threshold,
@@ -76,5 +76,5 @@ class VerticalCoupling(Effect):
         return (MomentTerm(_vertical_moment, ()),) if self.k else ()
 
 
-#: Probe name -> the physical class of housner.scenarios.campaigns.pointers.CLASSES it stands for.
+#: Probe name -> the physical class of housner.scenarios.diagnosis.comparison.pointers.CLASSES it stands for.
 PROBES: dict[str, str] = {"vertical_coupling": "vertical_input"}

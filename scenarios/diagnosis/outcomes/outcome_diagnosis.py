@@ -38,8 +38,8 @@ The ensembles are computed once, as tables of overturns over a grid of the
 effects' parameters (:func:`housner.model.theta_max_many`, every record in one
 compiled call per grid point); fitting reweights these tables, so the
 cross-validation costs no further simulation. The scores are
-:mod:`housner.scenarios.campaigns.outcome_scores`', the result classes
-:mod:`housner.scenarios.campaigns.outcome_results`'.
+:mod:`housner.scenarios.diagnosis.outcomes.outcome_scores`', the result classes
+:mod:`housner.scenarios.diagnosis.outcomes.outcome_results`'.
 
 References
 ----------
@@ -68,8 +68,9 @@ from scipy import stats as sps
 from housner.model import theta_max_many
 from housner.rocking_params import RockingParams
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.outcome_results import OutcomeDiagnosis, OutcomeStep, params_text
-from housner.scenarios.campaigns.outcome_scores import (
+from housner.scenarios.campaigns.campaign_records import OutcomeRecord
+from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosis, OutcomeStep, params_text
+from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     calibration_table,
     logistic_oof,
     outcome_floor,
@@ -77,7 +78,6 @@ from housner.scenarios.campaigns.outcome_scores import (
     per_record_log_loss,
     stratified_folds,
 )
-from housner.scenarios.campaigns.records import OutcomeRecord
 from housner.units import G
 
 __all__ = [

@@ -1,6 +1,6 @@
 """The time-history error of a model on one measured record, and how long it follows the measurement.
 
-The definitions are those of :mod:`housner.scenarios.campaigns.compare` (module docstring,
+The definitions are those of :mod:`housner.scenarios.diagnosis.comparison.record_comparison` (module docstring,
 "Per record"): the error window fixed by the measurement alone
 (:func:`error_window`), the clipped RMS error over it in units of alpha
 (:func:`record_error`), for a free vibration minimised over its release
@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from housner.impacts import HYSTERESIS_SIGMAS, noise_crossings
-from housner.scenarios.campaigns.records import MeasuredRecord
+from housner.scenarios.campaigns.campaign_records import MeasuredRecord
 
 __all__ = [
     "DIVERGENCE_SUSTAIN",
@@ -86,7 +86,7 @@ def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | Non
     impact, the measured block passing alpha, or the end (ground motion); up
     to the ``window_impacts``-th impact or the last one above 10 noise sigmas
     (free vibration). The impacts are the record's own (:attr:`MeasuredRecord.impacts
-    <housner.scenarios.campaigns.records.MeasuredRecord.impacts>`, :func:`measured_impacts` derived once).
+    <housner.scenarios.campaigns.campaign_records.MeasuredRecord.impacts>`, :func:`measured_impacts` derived once).
     """
     th = record.theta
     n = th.size
@@ -154,7 +154,8 @@ def release_error(
     """:func:`record_error` of a free vibration, minimised over its release instant and angle [-].
 
     A free-vibration record's time axis starts at the release its own theta channel shows and its
-    initial angle is fitted there (:func:`housner.scenarios.campaigns.records.estimate_release`). Near the release
+    initial angle is fitted there (:func:`housner.scenarios.campaigns.campaign_records.estimate_release`). Near the
+    release
     theta falls only as c (t - t_r)^2, so with 0.8 mrad noise the instant is known to about +-20 ms,
     and a hold too short to be told from the fall (measured on the seed specimen: 10 samples, half of
     the time) biases the angle by 0.3-0.45 noise sigmas; either alone costs 2-5 noise sigmas of error

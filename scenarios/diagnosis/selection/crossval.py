@@ -1,13 +1,13 @@
 """The diagnosis' cross-validation: the folds, their scorers, and a model fitted on all records and in every fold.
 
 Every record of the campaign is dealt into one of K folds (:class:`Folds`,
-:func:`housner.scenarios.campaigns.scoring.cv_folds`); a model is held as its fit on all records and
+:func:`housner.scenarios.diagnosis.selection.record_scoring.cv_folds`); a model is held as its fit on all records and
 its K refits without each fold (:class:`CVModel`), and each record is scored out of fold: by the model
-fitted without it (:meth:`Scorers.out_of_fold`). The search of :mod:`housner.scenarios.campaigns.diagnose`
+fitted without it (:meth:`Scorers.out_of_fold`). The search of :mod:`housner.scenarios.diagnosis.diagnose`
 builds on it. Everything here is an immutable value, built once by :func:`cross_validation`.
 
 A campaign sampled far above what the physics needs is searched on its records decimated
-(:func:`housner.scenarios.campaigns.scoring.decimated`, factor ``decimation``): the search's scorers
+(:func:`housner.scenarios.diagnosis.selection.record_scoring.decimated`, factor ``decimation``): the search's scorers
 (:attr:`CrossValidation.search`) run on them, and the scorers of the records as measured
 (:attr:`CrossValidation.full`) score what the verdict judges.
 
@@ -28,9 +28,9 @@ import numpy as np
 
 from housner.effects import available_effects, effect_class
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit
-from housner.scenarios.campaigns.localise import measured_features
-from housner.scenarios.campaigns.scoring import Scorer, cv_folds, decimated
+from housner.scenarios.diagnosis.comparison.localise import measured_features
+from housner.scenarios.diagnosis.selection.fitting import build_model, effect_objective, fit_effect, joint_refit
+from housner.scenarios.diagnosis.selection.record_scoring import Scorer, cv_folds, decimated
 
 __all__ = [
     "FIT_SECONDS",
@@ -166,7 +166,8 @@ class CrossValidation:
     noise_floor : float
         Mean sensor noise sigma / alpha of the records [-].
     measured : dict
-        The measured localisation quantities (:func:`housner.scenarios.campaigns.localise.measured_features`).
+        The measured localisation quantities
+        (:func:`housner.scenarios.diagnosis.comparison.localise.measured_features`).
     pinned : dict
         Effect name -> the parameters the localisation measures directly (``Effect.measured_params``).
     """

@@ -18,7 +18,7 @@ Rocking under a ground motion is chaotic: on the ``elcentro`` motions a
 shift of the input by 20 us, or a scale of 1.001, moves half the records'
 theta_max by more than 3 %. So these differences are not small next to the
 sensor noise; they are what a correct model scores on a record. The floor of
-:func:`housner.scenarios.campaigns.floor.measure_floor` draws one :class:`ModelForm` per
+:func:`housner.scenarios.diagnosis.verdict.correct_model_floor.measure_floor` draws one :class:`ModelForm` per
 replica and produces its "measurement" with it.
 
 The ranges are conventions, not fits: half a sample is the most that a
@@ -41,7 +41,7 @@ import numpy as np
 from housner.calibration import estimate_noise
 from housner.model import REST_TOL, default_substeps
 from housner.motion import GroundMotion
-from housner.scenarios.campaigns.compare import simulate_records
+from housner.scenarios.diagnosis.comparison.record_comparison import simulate_records
 
 __all__ = [
     "CONVENTIONS",

@@ -50,10 +50,10 @@ import numpy as np
 
 from housner.calibration import estimate_noise
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.compare import on_grid, simulate_records
-from housner.scenarios.campaigns.localise import line_fit
-from housner.scenarios.campaigns.records import MeasuredRecord
+from housner.scenarios.campaigns.campaign_records import MeasuredRecord
 from housner.scenarios.campaigns.sensor_noise import WHITE, SensorNoise, estimate_sensor_noise
+from housner.scenarios.diagnosis.comparison.localise import line_fit
+from housner.scenarios.diagnosis.comparison.record_comparison import on_grid, simulate_records
 
 __all__ = [
     "DROPOUT_RUN",
@@ -249,7 +249,8 @@ def _bridge(theta: np.ndarray, bad: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------
 # trends along the order
 def _trend(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
-    """Least-squares line y = a + b x (:func:`housner.scenarios.campaigns.localise.line_fit`): (a, b, t of b);
+    """Least-squares line y = a + b x (:func:`housner.scenarios.diagnosis.comparison.localise.line_fit`): (a, b, t of
+    b);
     (mean of y, 0, 0) where no line can be fitted."""
     off, slope = line_fit(x, y)
     a, b, se = off.value, slope.value, slope.se

@@ -2,12 +2,12 @@
 
 :func:`start` makes the plain model the first step; :func:`add_by_hand` adds an effect whatever its
 significance; :func:`greedy` runs the rounds (each :func:`run_round`: every candidate tried by
-:func:`housner.scenarios.campaigns.trial.try_candidate`, then pairs when none passes) and
+:func:`housner.scenarios.diagnosis.selection.candidate_trial.try_candidate`, then pairs when none passes) and
 :func:`accept` adds the chosen one; :func:`at_full_rate` scores the ladder again on the records as
 measured when the search ran on decimated ones. Each returns a new state; what it did is said
-through the :class:`housner.scenarios.campaigns.trial.TrialSetup`'s ``progress`` and, where a
+through the :class:`housner.scenarios.diagnosis.selection.candidate_trial.TrialSetup`'s ``progress`` and, where a
 figure was computed on fewer samples, its ``economies``. The steps of the search are those of
-:mod:`housner.scenarios.campaigns.diagnose`'s module docstring.
+:mod:`housner.scenarios.diagnosis.diagnose`'s module docstring.
 """
 
 from __future__ import annotations
@@ -16,11 +16,8 @@ import math
 import time
 from dataclasses import dataclass, replace
 
-from housner.scenarios.campaigns.crossval import CVModel, add_to_folds, refit_folds
-from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit
-from housner.scenarios.campaigns.results import Candidate, Step, names_label
-from housner.scenarios.campaigns.scoring import SEARCH_RATE, NonFiniteHistory
-from housner.scenarios.campaigns.trial import (
+from housner.scenarios.diagnosis.results import Candidate, Step, names_label
+from housner.scenarios.diagnosis.selection.candidate_trial import (
     PRACTICAL,
     CurrentModel,
     Trial,
@@ -36,6 +33,9 @@ from housner.scenarios.campaigns.trial import (
     try_candidate,
     try_pairs,
 )
+from housner.scenarios.diagnosis.selection.crossval import CVModel, add_to_folds, refit_folds
+from housner.scenarios.diagnosis.selection.fitting import build_model, effect_objective, fit_effect, joint_refit
+from housner.scenarios.diagnosis.selection.record_scoring import SEARCH_RATE, NonFiniteHistory
 
 __all__ = ["GreedyRounds", "SearchState", "accept", "add_by_hand", "at_full_rate", "greedy", "run_round", "start"]
 
@@ -186,7 +186,7 @@ def _add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchStat
 def greedy(
     setup: TrialSetup, state: SearchState, candidates: list[str], max_effects: int, pairs: bool
 ) -> tuple[SearchState, GreedyRounds]:
-    """The greedy rounds (:mod:`housner.scenarios.campaigns.diagnose`'s module docstring, step 5): the state
+    """The greedy rounds (:mod:`housner.scenarios.diagnosis.diagnose`'s module docstring, step 5): the state
     they end in, and what they found."""
     rounds: list[list[Candidate]] = []
     selected: list[str] = []

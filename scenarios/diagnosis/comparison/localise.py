@@ -1,10 +1,10 @@
 """Where a model fails: the localisation quantities of the measurement and of a model, with standard errors.
 
 The same quantities are computed from the measured histories and from a
-model's (observed through the same sensor, see :func:`housner.scenarios.campaigns.compare.compare`)
+model's (observed through the same sensor, see :func:`housner.scenarios.diagnosis.comparison.record_comparison.compare`)
 by :func:`features`, and :meth:`Features.metrics` gives each
 (:data:`METRICS`) with its standard error, so that a difference between the two
-is a difference of the physics (see :mod:`housner.scenarios.campaigns.compare`, "Where the model
+is a difference of the physics (see :mod:`housner.scenarios.diagnosis.comparison.record_comparison`, "Where the model
 fails").
 """
 
@@ -20,8 +20,8 @@ import numpy as np
 
 from housner.calibration import FreeVibrationCalibration, calibrate_free_vibration
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.history_error import FV_FLOOR_SIGMAS, measured_impacts
-from housner.scenarios.campaigns.records import MeasuredRecord
+from housner.scenarios.campaigns.campaign_records import MeasuredRecord
+from housner.scenarios.diagnosis.comparison.history_error import FV_FLOOR_SIGMAS, measured_impacts
 from housner.units import G
 
 __all__ = ["METRICS", "Features", "Metric", "features", "line_fit", "mean_se", "measured_features"]
@@ -265,7 +265,8 @@ def _scatter_se(x: np.ndarray, y: np.ndarray) -> Metric:
     """Standard deviation of y about its straight-line fit on x, with the standard error of a normal sample's s.
 
     Model and measurement are observed through the same sensor noise (see
-    :func:`housner.scenarios.campaigns.compare.compare`), so the noise's share of the scatter is the same on both
+    :func:`housner.scenarios.diagnosis.comparison.record_comparison.compare`), so the noise's share of the scatter is
+    the same on both
     sides and a difference is impact-to-impact physics.
     """
     ok = np.isfinite(x) & np.isfinite(y)

@@ -4,7 +4,7 @@
 cross-validation), :func:`split_records` makes the older single split, and
 :class:`Scorer` runs the analytic engine on a fixed set of records (each cut
 to its error window) and scores a list of effects by the time-history error
-of :mod:`housner.scenarios.campaigns.history_error` [alpha].
+of :mod:`housner.scenarios.diagnosis.comparison.history_error` [alpha].
 
 No score is made of a non-finite number: a model whose theta history is not finite on a record
 is refused by name, with the record, before any score (:class:`NonFiniteHistory`), and a score
@@ -29,9 +29,9 @@ import numpy as np
 from scipy import signal
 
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.compare import release_sensitivities, simulate_records
-from housner.scenarios.campaigns.history_error import ERROR_CLIP, error_window, scored_error
-from housner.scenarios.campaigns.records import MeasuredRecord
+from housner.scenarios.campaigns.campaign_records import MeasuredRecord
+from housner.scenarios.diagnosis.comparison.history_error import ERROR_CLIP, error_window, scored_error
+from housner.scenarios.diagnosis.comparison.record_comparison import release_sensitivities, simulate_records
 
 __all__ = [
     "DEFAULT_FOLDS",
@@ -49,7 +49,7 @@ __all__ = [
 ]
 
 #: The lowest sample rate the diagnosis' search decimates a campaign to [Hz]. The library's fit ranges
-#: are set for it (:data:`housner.scenarios.campaigns.fitting.FIT_BOUNDS`: the fastest physics it fits,
+#: are set for it (:data:`housner.scenarios.diagnosis.selection.fitting.FIT_BOUNDS`: the fastest physics it fits,
 #: a 100 Hz foundation, has 5 samples a period; an impact is instantaneous), and so are the seed
 #: campaigns (500 Hz). A campaign sampled at q >= 2 times it is searched on every q-th sample.
 SEARCH_RATE = 500.0
@@ -59,7 +59,8 @@ _MIN_DECIMATED = 50
 #: and depends far less on the assignment than one random split does.
 DEFAULT_FOLDS = 5
 #: What :func:`housner.engines.base.check_response` says of a response that is not finite (its message
-#: reaches the scorer as text, through :func:`housner.scenarios.campaigns.compare.simulate_records`).
+#: reaches the scorer as text, through
+# :func:`housner.scenarios.diagnosis.comparison.record_comparison.simulate_records`).
 _NON_FINITE_MARKS = ("non-finite", "no theta_max")
 
 

@@ -1,4 +1,5 @@
-"""The result of an outcome diagnosis (:func:`housner.scenarios.campaigns.outcomes.diagnose_outcomes`): its
+"""The result of an outcome diagnosis
+(:func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes`): its
 ladder of models and the whole diagnosis, as values with their summary in words and their JSON form."""
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from housner.scenarios.campaigns.outcome_scores import OutcomeFloor
+from housner.scenarios.diagnosis.outcomes.outcome_scores import OutcomeFloor
 from housner.scenarios.execution.rundir import jsonable
 
 __all__ = ["OutcomeDiagnosis", "OutcomeStep", "params_text"]

@@ -32,11 +32,12 @@ measured here from the campaign itself, by a parametric bootstrap
 4. each record is scored with the same error and window as the real one.
 
 The real held-out errors are tested against it by
-:func:`housner.scenarios.campaigns.residual.residual_test`.
+:func:`housner.scenarios.diagnosis.verdict.residual_test.residual_test`.
 
 A replica whose truth or scoring model gives a non-finite theta history stops the measurement
-(:class:`housner.scenarios.campaigns.scoring.NonFiniteHistory`, naming the model and the record),
-and so does a floor that comes out non-finite (:class:`~housner.scenarios.campaigns.scoring.NonFiniteScore`):
+(:class:`housner.scenarios.diagnosis.selection.record_scoring.NonFiniteHistory`, naming the model and the record),
+and so does a floor that comes out non-finite
+(:class:`~housner.scenarios.diagnosis.selection.record_scoring.NonFiniteScore`):
 a floor made of clipped errors would pass for a measured one.
 """
 
@@ -49,12 +50,20 @@ import numpy as np
 
 from housner.effects import make_effect
 from housner.model import default_substeps
-from housner.scenarios.campaigns.compare import release_sensitivities, sensor_reading, simulate_records
-from housner.scenarios.campaigns.fitting import param_dims
-from housner.scenarios.campaigns.history_error import RELEASE_DTHETA0_SIGMAS, record_error, release_shift_samples
-from housner.scenarios.campaigns.model_form import ModelForm, acc_channel_noise
-from housner.scenarios.campaigns.records import estimate_release
-from housner.scenarios.campaigns.scoring import NonFiniteHistory, check_finite, model_text, non_finite
+from housner.scenarios.campaigns.campaign_records import estimate_release
+from housner.scenarios.diagnosis.comparison.history_error import (
+    RELEASE_DTHETA0_SIGMAS,
+    record_error,
+    release_shift_samples,
+)
+from housner.scenarios.diagnosis.comparison.record_comparison import (
+    release_sensitivities,
+    sensor_reading,
+    simulate_records,
+)
+from housner.scenarios.diagnosis.selection.fitting import param_dims
+from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteHistory, check_finite, model_text, non_finite
+from housner.scenarios.diagnosis.verdict.integrator_families import ModelForm, acc_channel_noise
 
 __all__ = ["N_REPLICAS", "Floor", "measure_floor"]
 
@@ -109,7 +118,7 @@ def measure_floor(
 
     Parameters
     ----------
-    scorer : housner.scenarios.campaigns.scoring.Scorer
+    scorer : housner.scenarios.diagnosis.selection.record_scoring.Scorer
         All records of the campaign (truncated to their error windows), in campaign order.
     model_full : list of (name, params)
         The model fitted on every record: the bootstrap's truth.
@@ -121,7 +130,7 @@ def measure_floor(
     seed : int
     family : str
         The family of correct integrators each replica's truth is drawn from
-        (:data:`housner.scenarios.campaigns.model_form.FAMILIES`).
+        (:data:`housner.scenarios.diagnosis.verdict.integrator_families.FAMILIES`).
 
     Returns
     -------

@@ -3,13 +3,13 @@
 A held-out time-history error is only meaningful against the error that a
 *correct* model would show on the same records. That floor is measured from
 the campaign itself by a parametric bootstrap
-(:func:`housner.scenarios.campaigns.floor.measure_floor`), and the real
+(:func:`housner.scenarios.diagnosis.verdict.correct_model_floor.measure_floor`), and the real
 held-out errors are tested against it record by record
-(:func:`housner.scenarios.campaigns.residual.residual_test`): a misfit is
+(:func:`housner.scenarios.diagnosis.verdict.residual_test.residual_test`): a misfit is
 *significant* when z > :data:`Z_MISFIT` and its size *matters* when the
 error is more than :data:`RATIO_MISFIT` times the floor. The localisation
-says where to look (:func:`housner.scenarios.campaigns.pointers.physical_classes`,
-:func:`housner.scenarios.campaigns.pointers.order_drift`).
+says where to look (:func:`housner.scenarios.diagnosis.comparison.pointers.physical_classes`,
+:func:`housner.scenarios.diagnosis.comparison.pointers.order_drift`).
 
 :func:`decide` turns the residual of the plain model and of the final model,
 the effects selected and the distributions into one of five statuses:
@@ -28,15 +28,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import norm
 
-from housner.scenarios.campaigns.compare import Comparison
-from housner.scenarios.campaigns.pointers import (
+from housner.scenarios.diagnosis.comparison.pointers import (
     CLASSES,
     MIN_RECORDS,
     evidence_beyond,
     physical_classes,
 )
-from housner.scenarios.campaigns.residual import DETECTABLE_RATIO, RATIO_MISFIT, Z_MISFIT, Residual
-from housner.scenarios.campaigns.verdict_words import (
+from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
+from housner.scenarios.diagnosis.verdict.residual_test import DETECTABLE_RATIO, RATIO_MISFIT, Z_MISFIT, Residual
+from housner.scenarios.diagnosis.verdict.verdict_words import (
     Z_LEGEND,
     Z_LOCAL_LEGEND,
     evidence_text,
@@ -62,7 +62,8 @@ __all__ = [
 
 STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconclusive")
 #: |z| beyond which a localisation quantity of a model says it misses something even when its errors
-#: are at the floor [-]: with the 17 quantities of housner.scenarios.campaigns.localise.METRICS tested at once, a
+#: are at the floor [-]: with the 17 quantities of housner.scenarios.diagnosis.comparison.localise.METRICS tested at
+# once, a
 #: two-sided 6e-5 each keeps the chance of a false alarm per model near 0.1 % (Bonferroni).
 Z_LOCAL = 4.0
 #: Significance level of each distribution check (KS of theta_max/alpha, overturn fraction) [-].
@@ -292,7 +293,8 @@ def decide(
     ``selected`` are the effects the search added, ``added`` those added by hand (both in the final
     model, which is the one judged); ``drift`` is :func:`order_drift`'s class, if any; ``family`` the
     correct integrators the final model's floor was measured over
-    (:data:`housner.scenarios.campaigns.model_form.FAMILIES`), ``family_plain`` the plain model's; ``search``
+    (:data:`housner.scenarios.diagnosis.verdict.integrator_families.FAMILIES`), ``family_plain`` the plain model's;
+    ``search``
     what the search did (:class:`VerdictFacts`; default ``"ran"`` when ``library`` is given, else ``"off"``).
     """
     model = [*added, *[n for n in selected if n not in added]]
@@ -374,7 +376,7 @@ def pointer_classes(
     have = {c["class"] for c in classes}
     classes += [{**c, "from": "final"} for c in final_classes if has_effects and c["class"] not in have]
     # a probe of physics outside the library that lowers the error significantly is the most direct
-    # pointer there is: its class first (housner.scenarios.campaigns.probes)
+    # pointer there is: its class first (housner.scenarios.diagnosis.selection.probes)
     for found in sorted(probes, key=lambda p: p["z"]):
         evidence = {
             "metric": f"probe:{found['probe']}",
@@ -481,7 +483,7 @@ def _floors_note(facts: VerdictFacts) -> str:
 
 def _effects_text(facts: VerdictFacts) -> str:
     """The final model's effects with their parameters as the final model holds them (fitted together)."""
-    from housner.scenarios.campaigns.results import params_text
+    from housner.scenarios.diagnosis.results import params_text
 
     eff = " and ".join(f"{n} ({params_text(n, facts.params.get(n, {}))})" for n in facts.model)
     return eff + (", all parameters fitted together in the final model" if len(facts.model) > 1 else "")

@@ -1,11 +1,11 @@
 """Where to look next: the physical classes that the localisation and the recording order point to.
 
 :func:`physical_classes` maps the localisation quantities in which a model
-differs from the measurement (:meth:`housner.scenarios.campaigns.compare.Comparison.discrepancies`)
+differs from the measurement (:meth:`housner.scenarios.diagnosis.comparison.record_comparison.Comparison.discrepancies`)
 to the physical classes of :data:`CLASSES`, strongest first, each with its
 supporting figures; :func:`order_drift` adds the ``drift`` class when the
 records' excess errors, or the free vibrations' energy ratios, change along
-the recording order. The verdict (:mod:`housner.scenarios.campaigns.verdict`)
+the recording order. The verdict (:mod:`housner.scenarios.diagnosis.verdict.decision`)
 names them.
 """
 
@@ -17,8 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.stats import kendalltau, norm
 
-from housner.scenarios.campaigns.compare import Comparison
-from housner.scenarios.campaigns.localise import METRICS
+from housner.scenarios.diagnosis.comparison.localise import METRICS
+from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
 
 __all__ = ["CLASSES", "MIN_RECORDS", "Z_DRIFT", "evidence_beyond", "order_drift", "physical_classes"]
 
@@ -189,7 +189,7 @@ def order_drift(excess: Sequence[np.ndarray], energy=None) -> dict | None:
         for each model judged (the plain model, the final one).
     energy : tuple of ndarray, optional
         The measured free vibrations' (record position, amplitude [alpha], energy ratio [-]) per
-        impact (:class:`housner.scenarios.campaigns.localise.Features`).
+        impact (:class:`housner.scenarios.diagnosis.comparison.localise.Features`).
 
     Returns
     -------

@@ -1,14 +1,14 @@
 """Fitting an effect's parameters to measured records: grids over the bounds, then a local search.
 
-Used by the diagnosis (:mod:`housner.scenarios.campaigns.diagnose`, step 2 "Fit" of its module
-docstring) and by the verdict's floor (:mod:`housner.scenarios.campaigns.verdict`, which
+Used by the diagnosis (:mod:`housner.scenarios.diagnosis.diagnose`, step 2 "Fit" of its module
+docstring) and by the verdict's floor (:mod:`housner.scenarios.diagnosis.verdict.decision`, which
 perturbs fitted parameters within the same bounds). The objective is any
 function of an effect instance, in practice the training loss of
-:class:`housner.scenarios.campaigns.scoring.Scorer` [alpha]; parameters are searched in log
+:class:`housner.scenarios.diagnosis.selection.record_scoring.Scorer` [alpha]; parameters are searched in log
 space where their bounds span more than a factor 20.
 
 A parameter value the effect refuses (a ``ValueError``) is a point the search avoids; a model whose
-histories are not finite (:class:`housner.scenarios.campaigns.scoring.NonFiniteScore`) is not: it
+histories are not finite (:class:`housner.scenarios.diagnosis.selection.record_scoring.NonFiniteScore`) is not: it
 stops the fit, and the caller refuses the effect by name.
 """
 
@@ -23,7 +23,7 @@ import numpy as np
 from scipy import optimize
 
 from housner.effects import effect_class, make_effect
-from housner.scenarios.campaigns.scoring import NonFiniteScore
+from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteScore
 
 __all__ = [
     "FIT_BOUNDS",

@@ -5,12 +5,12 @@ when it does not, "what is missing?". :func:`diagnose` answers it with the
 effect library (:data:`housner.effects.EFFECTS`) and the analytic engine:
 
 1. **Split.** Every record is dealt at random (seeded) into one of K folds
-   (:mod:`housner.scenarios.campaigns.crossval`), the free vibrations first so that
+   (:mod:`housner.scenarios.diagnosis.selection.crossval`), the free vibrations first so that
    they spread over the folds (they pin p and r, seed section 3.2); each model is
    fitted without each fold in turn and scored on it.
 2. **Fit.** Each candidate effect's parameters are fitted to the training
    records by minimising the mean time-history error of
-   :mod:`housner.scenarios.campaigns.compare` (the error over the measured window, in units of
+   :mod:`housner.scenarios.diagnosis.comparison.record_comparison` (the error over the measured window, in units of
    alpha) within the effect's bounds: a grid over the bounds (logarithmic
    where they span more than a factor 20), a finer grid around the best
    point, then a bounded local search (Brent in one dimension, Powell in
@@ -63,15 +63,15 @@ bad input, as the model handed in is at fault and the same command can only
 fail again).
 
 The cross-validation (folds, scorers, out-of-fold errors) is
-:mod:`housner.scenarios.campaigns.crossval`'s, a candidate's trial (fit,
-screen, fold refits, judgement, pairs) :mod:`housner.scenarios.campaigns.trial`'s
-with the free-vibration check of :mod:`housner.scenarios.campaigns.fv_check`,
-the greedy search and its ladder :mod:`housner.scenarios.campaigns.search`'s,
-the fitting :mod:`housner.scenarios.campaigns.fitting`'s, the folds and the
-per-record errors :mod:`housner.scenarios.campaigns.scoring`'s, the result
-classes :mod:`housner.scenarios.campaigns.results`' and the verdict
-:mod:`housner.scenarios.campaigns.verdict`'s (its floor
-:mod:`housner.scenarios.campaigns.floor`'s); this module runs them in turn and
+:mod:`housner.scenarios.diagnosis.selection.crossval`'s, a candidate's trial (fit,
+screen, fold refits, judgement, pairs) :mod:`housner.scenarios.diagnosis.selection.candidate_trial`'s
+with the free-vibration check of :mod:`housner.scenarios.diagnosis.selection.free_vibration_check`,
+the greedy search and its ladder :mod:`housner.scenarios.diagnosis.selection.forward_selection`'s,
+the fitting :mod:`housner.scenarios.diagnosis.selection.fitting`'s, the folds and the
+per-record errors :mod:`housner.scenarios.diagnosis.selection.record_scoring`'s, the result
+classes :mod:`housner.scenarios.diagnosis.results`' and the verdict
+:mod:`housner.scenarios.diagnosis.verdict.decision`'s (its floor
+:mod:`housner.scenarios.diagnosis.verdict.correct_model_floor`'s); this module runs them in turn and
 draws the conclusion: the floors, the probes and the verdict.
 
 Cost, and where it is saved
@@ -89,13 +89,14 @@ docs/explanation/diagnosis.md#what-a-diagnosis-costs.
 
 The economies, each said in ``Diagnosis.settings["economies"]`` when it applies:
 
-* a campaign sampled at q >= 2 times :data:`housner.scenarios.campaigns.scoring.SEARCH_RATE` is
-  searched on every q-th sample (:func:`housner.scenarios.campaigns.scoring.decimated`: theta as
+* a campaign sampled at q >= 2 times :data:`housner.scenarios.diagnosis.selection.record_scoring.SEARCH_RATE` is
+  searched on every q-th sample (:func:`housner.scenarios.diagnosis.selection.record_scoring.decimated`: theta as
   sampled, the table acceleration through an anti-alias filter); the ladder is scored again on every
-  sample (:func:`housner.scenarios.campaigns.search.at_full_rate`), and the floors and the verdict are
+  sample (:func:`housner.scenarios.diagnosis.selection.forward_selection.at_full_rate`), and the floors and the verdict
+  are
   on every sample;
 * on a campaign whose ground motions' windows last more than
-  :data:`housner.scenarios.campaigns.crossval.FIT_SECONDS`, models with an effect that replaces the
+  :data:`housner.scenarios.diagnosis.selection.crossval.FIT_SECONDS`, models with an effect that replaces the
   equation of motion are fitted on the free vibrations and a spread subset of the ground motions
   (their screens, held-out errors and tests on all records);
 * the floor's family loop measures the widest family second when the narrowest puts the final
@@ -104,7 +105,7 @@ The economies, each said in ``Diagnosis.settings["economies"]`` when it applies:
 
 Two more save time without changing any number: a grid point whose records scored first (the free
 vibrations, then the shortest windows) already put its loss above the grid's best so far is not
-scored further (:meth:`housner.scenarios.campaigns.scoring.Scorer.loss_below`; a non-finite history on
+scored further (:meth:`housner.scenarios.diagnosis.selection.record_scoring.Scorer.loss_below`; a non-finite history on
 the records it skips goes unseen there, as a point is abandoned only when it cannot be the best), and
 a scorer keeps the errors of the last models it scored. The records are already simulated on both
 cores (numba threads over the records, and threads for the mechanics kernels).
@@ -131,22 +132,35 @@ from scipy import stats as sps
 from housner.effects import available_effects
 from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
-from housner.scenarios.campaigns.compare import compare
-from housner.scenarios.campaigns.crossval import Folds, cross_validation
-from housner.scenarios.campaigns.fitting import build_model
-from housner.scenarios.campaigns.floor import N_REPLICAS, Floor, measure_floor
-from housner.scenarios.campaigns.fv_check import FreeVibrationCheck
-from housner.scenarios.campaigns.localise import measured_features
-from housner.scenarios.campaigns.model_form import FAMILIES
-from housner.scenarios.campaigns.pointers import order_drift
-from housner.scenarios.campaigns.probes import PROBES
-from housner.scenarios.campaigns.residual import RATIO_MISFIT, Z_MISFIT, residual_test
-from housner.scenarios.campaigns.results import Candidate, Diagnosis, Step
-from housner.scenarios.campaigns.scoring import DEFAULT_FOLDS, check_finite
-from housner.scenarios.campaigns.search import GreedyRounds, SearchState, add_by_hand, at_full_rate, greedy, start
-from housner.scenarios.campaigns.sensor import assess_sensor
-from housner.scenarios.campaigns.trial import PRACTICAL, TrialSetup, fmt_params, held_text, try_candidate
-from housner.scenarios.campaigns.verdict import Verdict, decide
+from housner.scenarios.diagnosis.comparison.localise import measured_features
+from housner.scenarios.diagnosis.comparison.pointers import order_drift
+from housner.scenarios.diagnosis.comparison.record_comparison import compare
+from housner.scenarios.diagnosis.results import Candidate, Diagnosis, Step
+from housner.scenarios.diagnosis.selection.candidate_trial import (
+    PRACTICAL,
+    TrialSetup,
+    fmt_params,
+    held_text,
+    try_candidate,
+)
+from housner.scenarios.diagnosis.selection.crossval import Folds, cross_validation
+from housner.scenarios.diagnosis.selection.fitting import build_model
+from housner.scenarios.diagnosis.selection.forward_selection import (
+    GreedyRounds,
+    SearchState,
+    add_by_hand,
+    at_full_rate,
+    greedy,
+    start,
+)
+from housner.scenarios.diagnosis.selection.free_vibration_check import FreeVibrationCheck
+from housner.scenarios.diagnosis.selection.probes import PROBES
+from housner.scenarios.diagnosis.selection.record_scoring import DEFAULT_FOLDS, check_finite
+from housner.scenarios.diagnosis.sensor_assessment import assess_sensor
+from housner.scenarios.diagnosis.verdict.correct_model_floor import N_REPLICAS, Floor, measure_floor
+from housner.scenarios.diagnosis.verdict.decision import Verdict, decide
+from housner.scenarios.diagnosis.verdict.integrator_families import FAMILIES
+from housner.scenarios.diagnosis.verdict.residual_test import RATIO_MISFIT, Z_MISFIT, residual_test
 
 __all__ = [
     "FAMILY_JUMP",
@@ -221,7 +235,8 @@ def conclude(
     }
     steps = tuple(replace(s, comparison=comparisons[i]) if i in comparisons else s for i, s in enumerate(state.steps))
     seed_int = seed if isinstance(seed, int) else 0
-    # Each model's family of correct integrators (housner.scenarios.campaigns.model_form): the closest to the
+    # Each model's family of correct integrators (housner.scenarios.diagnosis.verdict.integrator_families): the closest
+    # to the
     # library's conventions at which its ground motions are at the floor (not a misfit, and within RATIO_MISFIT
     # of it both on the mean, which counts the records chaos carries off, and on the 10 %-trimmed mean, the
     # typical record), the widest when none is. The plain model runs its own loop, so that it gets the same
@@ -346,7 +361,8 @@ def floor_family(
 
 
 def probe(setup: TrialSetup, state: SearchState) -> list[dict]:
-    """Physics outside the library tried on top of the final model (:mod:`housner.scenarios.campaigns.probes`).
+    """Physics outside the library tried on top of the final model
+    (:mod:`housner.scenarios.diagnosis.selection.probes`).
 
     Each probe is fitted on top of the final model and judged on its out-of-fold errors like a
     candidate, at the verdict's level (Bonferroni over the probes), and against its kernel with
@@ -434,26 +450,30 @@ def diagnose(
     engine_settings : dict, optional
         Settings of the analytic engine (``r``, ``substeps``).
     compare_steps : bool
-        Also run the full :func:`housner.scenarios.campaigns.compare.compare` for the intermediate steps of the ladder
+        Also run the full :func:`housner.scenarios.diagnosis.comparison.record_comparison.compare` for the intermediate
+        steps of the ladder
         (the baseline's and the final model's are always run: the verdict needs their localisation).
     pairs : bool
         When no single effect helps significantly, also try the pairs among the three that lowered
         the training error most, fitted jointly.
     n_replicas : int, optional
-        Replicas of the floor's parametric bootstrap (default :data:`housner.scenarios.campaigns.floor.N_REPLICAS`).
+        Replicas of the floor's parametric bootstrap (default
+        :data:`housner.scenarios.diagnosis.verdict.correct_model_floor.N_REPLICAS`).
     progress : callable, optional
         Called with a line of text as the search goes.
 
     Returns
     -------
     Diagnosis
-        With its :class:`housner.scenarios.campaigns.verdict.Verdict` (see the module docstrings of this module and
-        of :mod:`housner.scenarios.campaigns.verdict`).
+        With its :class:`housner.scenarios.diagnosis.verdict.decision.Verdict` (see the module docstrings of this
+        module and
+        of :mod:`housner.scenarios.diagnosis.verdict.decision`).
     """
     t_start = time.perf_counter()
     if not isinstance(campaign, Campaign):
         campaign = load_campaign(campaign)
-    # the sensor first: its noise as measured, its faults masked or corrected (housner.scenarios.campaigns.sensor)
+    # the sensor first: its noise as measured, its faults masked or corrected
+    # (housner.scenarios.diagnosis.sensor_assessment)
     campaign = assess_sensor(campaign, engine_settings)
     candidates = _checked(campaign, effects, add, folds, max_effects, level)
     n_replicas = N_REPLICAS if n_replicas is None else int(n_replicas)
@@ -507,7 +527,8 @@ def diagnose(
 
 
 def _what_the_search_did(found: GreedyRounds, candidates: list[str]) -> tuple[list[str], str]:
-    """The effects the search tried, and what it did (:class:`housner.scenarios.campaigns.verdict.VerdictFacts`'s
+    """The effects the search tried, and what it did
+    (:class:`housner.scenarios.diagnosis.verdict.decision.VerdictFacts`'s
     ``search``). The library is claimed only where the search tried it: a first round skipped (the training error
     already at the sensor noise) tried no effect, and no round (no candidate: effects=[], or max_effects=0) none."""
     skipped = bool(found.rounds) and all("not searched" in c.reason for c in found.rounds[0])

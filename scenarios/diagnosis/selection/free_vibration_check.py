@@ -2,7 +2,8 @@
 
 The free vibrations pin p and r (seed section 3.2). A candidate whose free-vibration localisation
 (:data:`FV_CHECK`, observed through the campaign's sensor as in
-:func:`housner.scenarios.campaigns.compare.compare`) lies more than :data:`FV_Z` standard errors from
+:func:`housner.scenarios.diagnosis.comparison.record_comparison.compare`) lies more than :data:`FV_Z` standard errors
+from
 the measured one, and further than the plain model's, is not held out
 (:meth:`FreeVibrationCheck.reason`).
 """
@@ -12,8 +13,8 @@ from __future__ import annotations
 import math
 
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.compare import observe, on_grid, simulate_records
-from housner.scenarios.campaigns.localise import features
+from housner.scenarios.diagnosis.comparison.localise import features
+from housner.scenarios.diagnosis.comparison.record_comparison import observe, on_grid, simulate_records
 
 __all__ = ["FV_CHECK", "FV_Z", "FreeVibrationCheck", "fv_metrics"]
 

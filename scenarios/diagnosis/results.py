@@ -1,8 +1,8 @@
 """The diagnosis' results: candidates, the error ladder and the whole diagnosis, as text and JSON.
 
-:class:`Diagnosis` is what :func:`housner.scenarios.campaigns.diagnose.diagnose` returns; its
+:class:`Diagnosis` is what :func:`housner.scenarios.diagnosis.diagnose.diagnose` returns; its
 :meth:`Diagnosis.to_json` is strict JSON (NaN and infinities written as null).
-Errors are time-history errors in units of alpha (see :mod:`housner.scenarios.campaigns.compare`).
+Errors are time-history errors in units of alpha (see :mod:`housner.scenarios.diagnosis.comparison.record_comparison`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import numpy as np
 
 from housner.effects import effect_class
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.compare import Comparison
+from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
 from housner.scenarios.execution.rundir import jsonable
 
 __all__ = ["Candidate", "Diagnosis", "Step", "change_text", "fmt_pm", "names_label", "params_text", "signed_words"]
@@ -194,7 +194,7 @@ class Diagnosis:
     settings : dict
     folds : list of list of str
         Record ids of each fold.
-    verdict : housner.scenarios.campaigns.verdict.Verdict
+    verdict : housner.scenarios.diagnosis.verdict.decision.Verdict
     floors : (Floor, Floor)
         The measured correct-model floor of the plain and of the final model.
     selection_frequency : dict
@@ -223,7 +223,7 @@ class Diagnosis:
 
     @property
     def status(self) -> str:
-        """The verdict's status (see :data:`housner.scenarios.campaigns.verdict.STATUSES`)."""
+        """The verdict's status (see :data:`housner.scenarios.diagnosis.verdict.decision.STATUSES`)."""
         return self.verdict.status if self.verdict is not None else "inconclusive"
 
     @property
@@ -416,7 +416,7 @@ _LOWERS = re.compile(r"\blowers (the [\w ]+?) by ([-+])" + _NUM)
 def signed_words(text: str) -> str:
     """Rewrite signed changes in words: "falls by -0.05" -> "rises by 0.05", "falls by +0.05" -> "falls by 0.05".
 
-    For the reasons the search gives (:mod:`housner.scenarios.campaigns.diagnose`), written with a sign.
+    For the reasons the search gives (:mod:`housner.scenarios.diagnosis.diagnose`), written with a sign.
     """
     text = _FALLS.sub(lambda m: f"{'rises' if m.group(1) == '-' else 'falls'} by {m.group(2)}", text)
     return _LOWERS.sub(lambda m: f"{'raises' if m.group(2) == '-' else 'lowers'} {m.group(1)} by {m.group(3)}", text)
@@ -460,7 +460,7 @@ def at_bound(name: str, key: str, value) -> str:
     at the bottom is a fit that found no effect, not a range too narrow) may be held back by the range: an
     effect that fails so is not shown to be wrong. Ranges that depend on the specimen are not checked here.
     """
-    from housner.scenarios.campaigns.fitting import search_bounds
+    from housner.scenarios.diagnosis.selection.fitting import search_bounds
 
     try:
         bounds = search_bounds(name, key)

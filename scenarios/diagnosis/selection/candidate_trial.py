@@ -1,19 +1,19 @@
 """Candidate effects tried on top of the current model: fitted, screened, refitted in every fold and judged.
 
-A candidate is fitted to all records (:func:`housner.scenarios.campaigns.fitting.fit_effect`), then
+A candidate is fitted to all records (:func:`housner.scenarios.diagnosis.selection.fitting.fit_effect`), then
 held out only when its training error falls by more than :data:`PRACTICAL` of the sensor noise, it
-does not contradict the free vibrations (:mod:`housner.scenarios.campaigns.fv_check`) and, on the
+does not contradict the free vibrations (:mod:`housner.scenarios.diagnosis.selection.free_vibration_check`) and, on the
 records it was fitted to, its fall per record passes the screen (:data:`SCREEN_LEVEL`). Held out, it
 is refitted in every fold and judged on its out-of-fold errors against the current model's
 (:func:`judge`, a :class:`Judgement`: a one-sided Wilcoxon signed-rank test and the practical margin);
 an effect that brings its own kernel must also beat that kernel with its physics faded out. When no
 single effect helps, pairs are fitted together (:func:`try_pairs`). A candidate (or pair) whose model
 gives a non-finite theta history anywhere in its fit is rejected, with the record named in its
-reason (:class:`housner.scenarios.campaigns.scoring.NonFiniteHistory`).
+reason (:class:`housner.scenarios.diagnosis.selection.record_scoring.NonFiniteHistory`).
 
 Every trial is a plain function of a :class:`TrialSetup` (the cross-validation and the scorers in use)
 and the :class:`CurrentModel` it is tried on; it returns a :class:`Trial`. The greedy search that uses
-them is :mod:`housner.scenarios.campaigns.diagnose`'s.
+them is :mod:`housner.scenarios.diagnosis.diagnose`'s.
 """
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ from scipy import stats as sps
 
 from housner.effects import Effect, apply_effects, effect_class, make_effect
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.campaigns.crossval import (
+from housner.scenarios.diagnosis.results import Candidate, names_label
+from housner.scenarios.diagnosis.selection.crossval import (
     FOLD_ITERATIONS,
     CrossValidation,
     CVModel,
@@ -35,10 +36,15 @@ from housner.scenarios.campaigns.crossval import (
     add_to_folds,
     refit_folds,
 )
-from housner.scenarios.campaigns.fitting import build_model, effect_objective, fit_effect, joint_refit, param_dims
-from housner.scenarios.campaigns.fv_check import FreeVibrationCheck
-from housner.scenarios.campaigns.results import Candidate, names_label
-from housner.scenarios.campaigns.scoring import NonFiniteHistory, Scorer
+from housner.scenarios.diagnosis.selection.fitting import (
+    build_model,
+    effect_objective,
+    fit_effect,
+    joint_refit,
+    param_dims,
+)
+from housner.scenarios.diagnosis.selection.free_vibration_check import FreeVibrationCheck
+from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteHistory, Scorer
 
 __all__ = [
     "PRACTICAL",
@@ -307,7 +313,7 @@ def fit_records(setup: TrialSetup, names: Sequence[str]) -> tuple[Scorer, list[S
     """The records a model of effects ``names`` is fitted on: (all, each fold's training records).
 
     Every record, unless the campaign is ``thinned`` and the model has an effect that replaces the
-    equation of motion (:mod:`housner.scenarios.campaigns.crossval`): then the free vibrations and a
+    equation of motion (:mod:`housner.scenarios.diagnosis.selection.crossval`): then the free vibrations and a
     spread subset of the ground motions (said once in ``economies``).
     """
     sc = setup.scorers

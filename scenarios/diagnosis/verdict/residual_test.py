@@ -1,7 +1,7 @@
 """The residual test: the held-out errors against the correct-model floor, record by record.
 
 The real held-out errors are tested against the floor
-(:func:`housner.scenarios.campaigns.floor.measure_floor`) record by record
+(:func:`housner.scenarios.diagnosis.verdict.correct_model_floor.measure_floor`) record by record
 (:func:`residual_test`), separately for ground motions (paired differences,
 their mean over its standard error, and the same on 10 %-trimmed means,
 Yuen's test: chaos makes them heavy-tailed and independent from record to
@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from housner.scenarios.campaigns.floor import Floor
+from housner.scenarios.diagnosis.verdict.correct_model_floor import Floor
 
 __all__ = ["DETECTABLE_RATIO", "RATIO_MISFIT", "Z_MISFIT", "Residual", "residual_test"]
 

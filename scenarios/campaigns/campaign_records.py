@@ -92,7 +92,8 @@ class MeasuredRecord:
         ``theta0``: a quiet part for the sensor's noise); empty when the record starts at the release.
     noise_model : SensorNoise
         The correlation in time of the sensor's noise (:mod:`housner.scenarios.campaigns.sensor_noise`):
-        white until the campaign's sensor is assessed (:func:`housner.scenarios.campaigns.sensor.assess_sensor`).
+        white until the campaign's sensor is assessed
+        (:func:`housner.scenarios.diagnosis.sensor_assessment.assess_sensor`).
     valid : ndarray of bool or None
         Samples the sensor recorded truly (None: all). A sensor fault's samples (saturation, a spike, a
         dropout) are False: no error is taken on them.
