@@ -105,7 +105,7 @@ def test_the_verdict_is_stated_once_at_the_top(diag, page):
 def test_every_status_is_stated_once_and_alone(diag, status):
     """The page of each status (the diagnosis edited to it): its words once, no other status's words, and for a
     floor missed, the distance to it in words."""
-    at_floor = status in ("no_effect_needed", "explained")
+    at_floor = status in ("no_misfit", "explained")
     steps = diag.steps if status in ("explained", "partly_explained") else diag.steps[:1]
     d = replace(
         diag,

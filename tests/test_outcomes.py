@@ -144,7 +144,7 @@ def test_diagnosis_of_a_right_model_adds_nothing():
     _, y, _ = theta_max_many(SPEC, accs, DT)
     d = diagnose_outcomes(_campaign(accs, y), folds=4, seed=1)
     # the plain model is the model that made the outcomes: no effect may lower its held-out log loss
-    assert d.status == "no_effect_needed", d.summary()
+    assert d.status == "no_misfit", d.summary()
     assert d.steps[0].scores["accuracy"] == 1.0
 
 

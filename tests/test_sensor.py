@@ -14,7 +14,7 @@ import pytest
 from housner.scenarios.campaigns.sensor_noise import WHITE, estimate_sensor_noise
 from housner.scenarios.diagnosis.comparison.history_error import record_error
 from housner.scenarios.diagnosis.sensor_assessment import _dropouts, _saturation, _spikes, _trend
-from housner.scenarios.diagnosis.verdict.decision import STATUS_RULE, status_rule
+from housner.scenarios.diagnosis.verdict.status import STATUS_RULE, status_rule
 
 DT = 0.002
 

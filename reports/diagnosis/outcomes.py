@@ -47,8 +47,8 @@ MISSES_SHOWN = 30
 
 #: Status -> (the verdict's words, its style class, its sentence; ``{effects}`` is the effects added).
 STATUS = {
-    "no_effect_needed": (
-        "NO EFFECT NEEDED",
+    "no_misfit": (
+        "NO MISFIT",
         "ok",
         "The plain model's held-out log loss is at the floor that a correct model with its "
         "probabilities reaches; no candidate effect lowered it significantly.",

@@ -66,7 +66,8 @@ The cross-validation (folds, scorers, out-of-fold errors) is
 :mod:`housner.scenarios.diagnosis.selection.crossval`'s, a candidate's trial (fit,
 screen, fold refits, judgement, pairs) :mod:`housner.scenarios.diagnosis.selection.candidate_trial`'s
 with the free-vibration check of :mod:`housner.scenarios.diagnosis.selection.free_vibration_check`,
-the greedy search and its ladder :mod:`housner.scenarios.diagnosis.selection.forward_selection`'s,
+the search and its ladder :mod:`housner.scenarios.diagnosis.selection.history_search`'s (through the one
+:mod:`housner.scenarios.diagnosis.selection.forward_selection`),
 the fitting :mod:`housner.scenarios.diagnosis.selection.fitting`'s, the folds and the
 per-record errors :mod:`housner.scenarios.diagnosis.selection.record_scoring`'s, the result
 classes :mod:`housner.scenarios.diagnosis.results`' and the verdict
@@ -92,7 +93,7 @@ The economies, each said in ``Diagnosis.settings["economies"]`` when it applies:
 * a campaign sampled at q >= 2 times :data:`housner.scenarios.diagnosis.selection.record_scoring.SEARCH_RATE` is
   searched on every q-th sample (:func:`housner.scenarios.diagnosis.selection.record_scoring.decimated`: theta as
   sampled, the table acceleration through an anti-alias filter); the ladder is scored again on every
-  sample (:func:`housner.scenarios.diagnosis.selection.forward_selection.at_full_rate`), and the floors and the verdict
+  sample (:func:`housner.scenarios.diagnosis.selection.history_search.at_full_rate`), and the floors and the verdict
   are
   on every sample;
 * on a campaign whose ground motions' windows last more than
@@ -145,7 +146,8 @@ from housner.scenarios.diagnosis.selection.candidate_trial import (
 )
 from housner.scenarios.diagnosis.selection.crossval import Folds, cross_validation
 from housner.scenarios.diagnosis.selection.fitting import build_model
-from housner.scenarios.diagnosis.selection.forward_selection import (
+from housner.scenarios.diagnosis.selection.free_vibration_check import FreeVibrationCheck
+from housner.scenarios.diagnosis.selection.history_search import (
     GreedyRounds,
     SearchState,
     add_by_hand,
@@ -153,7 +155,6 @@ from housner.scenarios.diagnosis.selection.forward_selection import (
     greedy,
     start,
 )
-from housner.scenarios.diagnosis.selection.free_vibration_check import FreeVibrationCheck
 from housner.scenarios.diagnosis.selection.probes import PROBES
 from housner.scenarios.diagnosis.selection.record_scoring import DEFAULT_FOLDS, check_finite
 from housner.scenarios.diagnosis.sensor_assessment import assess_sensor

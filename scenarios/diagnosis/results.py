@@ -223,7 +223,7 @@ class Diagnosis:
 
     @property
     def status(self) -> str:
-        """The verdict's status (see :data:`housner.scenarios.diagnosis.verdict.decision.STATUSES`)."""
+        """The verdict's status (see :data:`housner.scenarios.diagnosis.verdict.status.STATUSES`)."""
         return self.verdict.status if self.verdict is not None else "inconclusive"
 
     @property

@@ -78,14 +78,18 @@ from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     per_record_log_loss,
     stratified_folds,
 )
+from housner.scenarios.diagnosis.selection.forward_selection import Round, forward_selection
+from housner.scenarios.diagnosis.verdict.status import status_rule
 from housner.units import G
 
 __all__ = [
     "ALPHA_GRID",
     "AMPLITUDE_SPREAD",
     "OUTCOME_EFFECTS",
+    "ROUNDS",
     "R_GRID",
     "Geometry",
+    "OutcomeEvidence",
     "diagnose_outcomes",
 ]
 
@@ -423,10 +427,10 @@ def diagnose_outcomes(
     final = steps[-1]
     baselines, baseline_p = _baselines(pga, pgv, y, fold, seed)
     floor = outcome_floor(final.p, y, seed=seed)
-    if floor.at_floor:
-        status = "explained" if len(steps) > 1 else "no_effect_needed"
-    else:
-        status = "partly_explained" if len(steps) > 1 else "unexplained"
+    # the one status rule of the diagnosis: the outcome floor is the evidence's misfit test (of the final model,
+    # which is the plain one when nothing was added); at least 10 records are checked above
+    misfit = not floor.at_floor
+    status = status_rule(True, len(steps) > 1, misfit, misfit, True)
     misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
     diag = OutcomeDiagnosis(
         campaign=campaign.name,
@@ -482,41 +486,73 @@ def _step(name: str, prev: OutcomeStep | None, tables, y, fold, seed: int) -> Ou
     return OutcomeStep(name, params, fold_params, p, outcome_scores(p, y, seed=seed), *fall)
 
 
-def _add_effects(plain: OutcomeStep, tables, y, fold, seed: int, say) -> tuple[list[OutcomeStep], list[dict]]:
-    """Forward selection from the plain model: each round tries the effects that extend the current model and adds
-    the one of lowest held-out log loss among those whose fall is significant (at :data:`LEVEL` over the number
-    tried); stops when none is. Returns the models kept (the plain one first) and every candidate tried."""
-    steps = [plain]
-    candidates = []
-    rounds = (("contact_inside", "restitution"), ("contact_inside+restitution",))
-    for pool in rounds:
-        cur = steps[-1]
-        pool = [n for n in pool if _extends(n, cur.name)]
-        tried = [_step(n, cur, tables, y, fold, seed) for n in pool]
+#: The outcome candidates of each round: single effects first, then their pair on top of the one added.
+ROUNDS = (("contact_inside", "restitution"), ("contact_inside+restitution",))
+
+
+@dataclass(frozen=True)
+class OutcomeEvidence:
+    """Outcomes (overturned or not) as the evidence of the forward selection
+    (:func:`housner.scenarios.diagnosis.selection.forward_selection.forward_selection`): each candidate
+    cross-validated on the overturn tables, its paired fall of the held-out log loss tested at :data:`LEVEL` over
+    the candidates of its round (Bonferroni); the state is the ladder of :class:`OutcomeStep`, the plain model
+    first."""
+
+    tables: _Tables
+    y: np.ndarray
+    fold: np.ndarray
+    seed: int
+    say: Callable[[str], None]
+
+    def pool(self, state: tuple[OutcomeStep, ...], number: int) -> tuple[str, ...]:
+        """Round ``number``'s candidates that extend the current model (never re-tries what is in)."""
+        if number > len(ROUNDS):
+            return ()
+        return tuple(n for n in ROUNDS[number - 1] if _extends(n, state[-1].name))
+
+    def not_searched(self, state, rnd: Round) -> None:
+        return None  # outcomes always leave a log loss to lower
+
+    def run(self, state: tuple[OutcomeStep, ...], rnd: Round) -> tuple[list[OutcomeStep], OutcomeStep | None]:
+        """Every candidate of the round cross-validated; the chosen one is the lowest held-out log loss among
+        those whose fall is significant."""
+        cur = state[-1]
+        tried = [_step(n, cur, self.tables, self.y, self.fold, self.seed) for n in rnd.pool]
         level = LEVEL / max(len(tried), 1)
         for c in tried:
-            candidates.append(
-                {
-                    "name": c.name,
-                    "log_loss": c.scores["log_loss"],
-                    "improvement": c.improvement,
-                    "improvement_se": c.improvement_se,
-                    "p_value": c.p_value,
-                    "added": False,
-                    "params": c.params,
-                }
-            )
-            say(
+            self.say(
                 f"  {c.name}: held-out log loss {c.scores['log_loss']:.3f} ({c.improvement:+.3f} "
                 f"+- {c.improvement_se:.3f}, p {c.p_value:.2g}) {params_text(c.params)}"
             )
         good = [c for c in tried if c.improvement > 0 and c.p_value < level]
-        if not good:
-            break
-        best = min(good, key=lambda c: c.scores["log_loss"])
-        next(d for d in candidates if d["name"] == best.name)["added"] = True
-        steps.append(best)
-    return steps, candidates
+        return tried, min(good, key=lambda c: c.scores["log_loss"]) if good else None
+
+    def accept(self, state: tuple[OutcomeStep, ...], rnd: Round, chosen: OutcomeStep) -> tuple[OutcomeStep, ...]:
+        return (*state, chosen)
+
+    def effects(self, chosen: OutcomeStep) -> tuple[str, ...]:
+        return (chosen.name,)
+
+
+def _add_effects(plain: OutcomeStep, tables, y, fold, seed: int, say) -> tuple[list[OutcomeStep], list[dict]]:
+    """Forward selection from the plain model through the one selection of the diagnosis, with
+    :class:`OutcomeEvidence`. Returns the models kept (the plain one first) and every candidate tried."""
+    evidence = OutcomeEvidence(tables, y, fold, seed, say)
+    steps, found = forward_selection(evidence, (plain,), len(ROUNDS))
+    candidates = [
+        {
+            "name": c.name,
+            "log_loss": c.scores["log_loss"],
+            "improvement": c.improvement,
+            "improvement_se": c.improvement_se,
+            "p_value": c.p_value,
+            "added": c.name in found.selected,
+            "params": c.params,
+        }
+        for tried in found.rounds
+        for c in tried
+    ]
+    return list(steps), candidates
 
 
 def _baselines(pga, pgv, y, fold, seed: int) -> tuple[dict, dict]:

@@ -86,7 +86,8 @@ class OutcomeDiagnosis:
     misses : list of dict
         The plain and the final model's misses, record by record.
     status : str
-        ``no_effect_needed``, ``explained``, ``partly_explained`` or ``unexplained``.
+        ``no_misfit``, ``explained``, ``partly_explained`` or ``unexplained`` (the one vocabulary:
+        :data:`housner.scenarios.diagnosis.verdict.status.STATUSES`).
     geometry : dict
     folds : int
     seed : int

@@ -36,6 +36,7 @@ from housner.scenarios.diagnosis.comparison.pointers import (
 )
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
 from housner.scenarios.diagnosis.verdict.residual_test import DETECTABLE_RATIO, RATIO_MISFIT, Z_MISFIT, Residual
+from housner.scenarios.diagnosis.verdict.status import status_rule
 from housner.scenarios.diagnosis.verdict.verdict_words import (
     Z_LEGEND,
     Z_LOCAL_LEGEND,
@@ -47,8 +48,6 @@ from housner.scenarios.diagnosis.verdict.verdict_words import (
 
 __all__ = [
     "DIST_LEVEL",
-    "STATUSES",
-    "STATUS_RULE",
     "Z_LOCAL",
     "Verdict",
     "VerdictFacts",
@@ -56,11 +55,9 @@ __all__ = [
     "distribution_checks",
     "pointer_classes",
     "pointer_text",
-    "status_rule",
     "verdict_text",
 ]
 
-STATUSES = ("no_misfit", "explained", "partly_explained", "unexplained", "inconclusive")
 #: |z| beyond which a localisation quantity of a model says it misses something even when its errors
 #: are at the floor [-]: with the 17 quantities of housner.scenarios.diagnosis.comparison.localise.METRICS tested at
 # once, a
@@ -156,7 +153,7 @@ class Verdict:
     Attributes
     ----------
     status : str
-        One of :data:`STATUSES`.
+        One of :data:`housner.scenarios.diagnosis.verdict.status.STATUSES`.
     residual : Residual
         The final model's held-out error against its floor.
     baseline : Residual
@@ -600,38 +597,6 @@ def _partly_explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -
         f"and the recording order, a probe of physics outside the library or the localisation (beyond "
         f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}; {Z_LOCAL_LEGEND}); {searched}."
     )
-
-
-#: The status rule (docs/explanation/verdict.md): (enough records, an effect in the final model, the plain
-#: model's residual a misfit, the final model's a misfit, powered) -> status; None: any. A residual is a misfit
-#: when its tests say so (:func:`status_rule`).
-STATUS_RULE: tuple[tuple[tuple, str], ...] = (
-    ((False, None, None, None, None), "inconclusive"),
-    ((True, False, False, None, True), "no_misfit"),
-    ((True, False, False, None, False), "inconclusive"),
-    ((True, False, True, None, None), "unexplained"),
-    ((True, True, None, False, True), "explained"),
-    ((True, True, None, False, False), "inconclusive"),
-    ((True, True, None, True, None), "partly_explained"),
-)
-
-
-def status_rule(enough_records: bool, has_effects: bool, plain_misfit: bool, final_misfit: bool, powered: bool) -> str:
-    """The status from the residual's tests alone (:data:`STATUS_RULE`, one truth table).
-
-    ``plain_misfit`` / ``final_misfit``: the plain / final model's held-out error is significantly (z >
-    :data:`Z_MISFIT`) and materially (> :data:`RATIO_MISFIT` x) above its correct-model floor in a group of records,
-    or drifts along the recording order, or a probe of physics outside the library lowers it significantly, or it
-    lies above the floor's band (ratio > :data:`RATIO_MISFIT`) and a localisation quantity differs by more than
-    :data:`Z_LOCAL` standard errors;
-    ``powered``: the records would show a misfit of :data:`DETECTABLE_RATIO` x the floor. A residual within the
-    band is never a misfit, whatever a localisation quantity or a distribution test says: they say where to look.
-    """
-    got = (bool(enough_records), bool(has_effects), bool(plain_misfit), bool(final_misfit), bool(powered))
-    for row, status in STATUS_RULE:
-        if all(r is None or r == g for r, g in zip(row, got, strict=True)):
-            return status
-    raise AssertionError(f"the status rule has no row for {got}")  # the table covers every case
 
 
 def _unless_underpowered(powered: bool, text: str, weak: str) -> str:
