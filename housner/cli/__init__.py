@@ -14,8 +14,8 @@ Modules: one per subcommand, each with its ``SUMMARY``, its ``add_parser`` and i
 :mod:`~housner.cli.tune`, :mod:`~housner.cli.diagnose`, :mod:`~housner.cli.explain`,
 :mod:`~housner.cli.frontier`, :mod:`~housner.cli.specimen`, :mod:`~housner.cli.campaign`);
 what they share: :mod:`~housner.cli.args` (argument types, input checks, exit statuses),
-:mod:`~housner.cli.command` (a subcommand's parser, the exit-status help, ``--plugin``),
-:mod:`~housner.cli.engine_command` (what ``explain`` and ``frontier`` share);
+:mod:`~housner.cli.command` (a subcommand's parser, the exit-status help, ``--plugin``, and what ``explain``
+and ``frontier`` share);
 :mod:`~housner.cli.parser` (the parser, assembling the subcommands in order),
 :mod:`~housner.cli.app` (``main``: plugins, signals, errors).
 

@@ -9,8 +9,7 @@ import math
 from pathlib import Path
 
 from housner.cli.args import EXIT_OK, UsageError, check_effects, float_within, names_arg, nonneg_int
-from housner.cli.command import plugin_option
-from housner.cli.engine_command import add_engine_command, add_engine_command_tail, engine_scenario, engine_work
+from housner.cli.command import add_engine_command, add_engine_command_tail, engine_scenario, engine_work, plugin_option
 from housner.scenarios.execution.outputs import check_output_dir, check_output_file
 from housner.scenarios.runs.explain import EXPLAIN_SIGMA
 

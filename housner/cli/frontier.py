@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from housner.cli.args import EXIT_OK, UsageError
-from housner.cli.engine_command import add_engine_command, add_engine_command_tail, engine_scenario, engine_work
+from housner.cli.command import add_engine_command, add_engine_command_tail, engine_scenario, engine_work
 from housner.scenarios.execution.outputs import check_output_file
 
 SUMMARY = "sweep an engine's time step and contact setting: accuracy against cost, and the knee"
