@@ -52,7 +52,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from housner import GroundMotion, Specimen  # noqa: E402
 from housner.engines import ENGINES, get_engine  # noqa: E402
 from housner.errors import EngineUnavailable  # noqa: E402
-from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count  # noqa: E402
+from housner.free_vibration.impacts import IMPACT_RESOLUTION, resolved_impact_count  # noqa: E402
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs.chaos import measure_engine_errors, rms  # noqa: E402
 

@@ -38,7 +38,7 @@ class ImpactLaw:
     modelled by this law, the same in every adapter. The engine still does
     everything else: the flight, the uplift, the impact itself and the overturn.
 
-    1. An impact is detected as :func:`housner.impacts.impact_times` counts
+    1. An impact is detected as :func:`housner.free_vibration.impacts.impact_times` counts
        one: theta changes sign after |theta| exceeded :data:`IMPACT_LAW_TOL`
        alpha since the previous sign change.
     2. :data:`IMPACT_LAW_DELAY` later, when the contact has finished the

@@ -24,7 +24,7 @@ import numpy as np
 from housner.engines._impact_law import ImpactLaw
 from housner.engines.base import Engine, SpecAttribute
 from housner.errors import EngineError, EngineUnavailable, unknown_choice
-from housner.impacts import impact_times, uplift_time
+from housner.free_vibration.impacts import impact_times, uplift_time
 from housner.response import Response
 from housner.rocking_params import RockingParams, pivot_impact_ratios
 
@@ -52,7 +52,7 @@ __all__ = [
 ]
 
 #: |theta| above ROCKING_TOL * alpha counts as rocking [-] for the shared impact and uplift detector
-#: (:mod:`housner.impacts`), the same for every adapter so that counts mean the same; below it the
+#: (:mod:`housner.free_vibration.impacts`), the same for every adapter so that counts mean the same; below it the
 #: block is at rest. The contacts tilt a block at rest by far less: DART's rigid contact by less than
 #: 1e-6 alpha; Drake's default contact by 6e-6 alpha and OpenSees' penalty contact by about 2e-4 alpha
 #: under 0.9 g tan(alpha); PyBullet's rigid contact lets each pivot sink about 10 um into the ground,
@@ -278,7 +278,7 @@ def sampled_response(
         The engine's own information (settings, steps, wall time).
     rocking_tol : float
         |theta| / alpha [-] above which the block rocks, for the shared impact and uplift detector
-        (:mod:`housner.impacts`); the same for every adapter, so that counts mean the same.
+        (:mod:`housner.free_vibration.impacts`); the same for every adapter, so that counts mean the same.
     quiet : float
         Fraction of the rocking threshold taken as "still at rest" when dating the uplift [-].
     """

@@ -189,11 +189,14 @@ ENGINES = EngineRegistry(
         ),
         # The 3D scan-mesh engines (a rock's mesh as a free rigid body), after the planar six whose order tests pin.
         EngineSpec(
-            "mujoco-3d", "housner.engines.mujoco_mesh_engine:MujocoMeshEngine", distribution="mujoco", label="MuJoCo 3D"
+            "mujoco-3d",
+            "housner.engines.scan_mesh.mujoco_mesh_engine:MujocoMeshEngine",
+            distribution="mujoco",
+            label="MuJoCo 3D",
         ),
         EngineSpec(
             "pybullet-3d",
-            "housner.engines.pybullet_mesh_engine:PybulletMeshEngine",
+            "housner.engines.scan_mesh.pybullet_mesh_engine:PybulletMeshEngine",
             distribution="pybullet",
             label="PyBullet 3D",
         ),

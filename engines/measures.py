@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from housner.free_rocking import energy_ratios, half_cycle_integral
+from housner.free_vibration.closed_forms import energy_ratios, half_cycle_integral
 from housner.response import Response
 from housner.rocking_params import RockingParams
 from housner.specimen import Specimen
@@ -49,7 +49,7 @@ def free_rocking_quarter_period(specimen: Specimen, theta0: float, params: Rocki
         T/4 = int_0^theta0 dtheta / sqrt(2 p^2 (cos(alpha - theta0) - cos(alpha - theta))).
 
     That integral is F(theta0, alpha) / p with F from
-    :func:`housner.free_rocking.half_cycle_integral`; a free half-cycle (impact
+    :func:`housner.free_vibration.closed_forms.half_cycle_integral`; a free half-cycle (impact
     to impact) lasts twice as long, since its rise and fall are symmetric.
 
     Parameters

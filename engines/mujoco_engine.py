@@ -123,7 +123,7 @@ from housner.engines.mujoco_terms import (
     terms_of,
 )
 from housner.errors import EngineError, unknown_choice
-from housner.impacts import impact_times
+from housner.free_vibration.impacts import impact_times
 from housner.motion import GroundMotion
 from housner.response import Response
 from housner.specimen import Specimen

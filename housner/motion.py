@@ -1,6 +1,6 @@
 """Ground motions: uniformly sampled horizontal ground acceleration [m/s^2], and optional extra channels.
 
-Accelerations are stored in m/s^2 (SI inside); the readers (:mod:`housner.readers`) convert
+Accelerations are stored in m/s^2 (SI inside); the readers (:mod:`housner.readers.measured_data`) convert
 once, from the units a file's header names. Between samples the acceleration is taken as
 linear in time.
 """
@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from housner.motion_readers import read_at2, read_csv_motion
-from housner.readers import CHANNEL_PREFIX
+from housner.readers.measured_data import CHANNEL_PREFIX
+from housner.readers.motion_files import read_at2, read_csv_motion
 
 __all__ = ["VERTICAL", "GroundMotion"]
 
@@ -274,7 +274,7 @@ class GroundMotion:
 
     @classmethod
     def from_at2(cls, path: str | Path, name: str | None = None, *, units: str | None = None) -> GroundMotion:
-        """Read a PEER AT2 record in the units its header names (:func:`housner.motion_readers.read_at2`).
+        """Read a PEER AT2 record in the units its header names (:func:`housner.readers.motion_files.read_at2`).
 
         ``units``: the acceleration unit when the header names none (e.g. ``"g"``); if the header
         names one, it must agree. ``name`` defaults to the file's stem.
@@ -293,7 +293,8 @@ class GroundMotion:
         name: str | None = None,
     ) -> GroundMotion:
         """Read a CSV record: time and acceleration columns, units in the header, extra ``ground_acc_<what>``
-        columns as channels (:func:`housner.motion_readers.read_csv_motion`). ``name`` defaults to the file's stem."""
+        columns as channels (:func:`housner.readers.motion_files.read_csv_motion`). ``name`` defaults to the file's
+        stem."""
         acc, dt, provenance, channels = read_csv_motion(
             path, time_column=time_column, acc_column=acc_column, units=units
         )

@@ -4,7 +4,7 @@ Every function returns a :class:`matplotlib.figure.Figure`; :func:`to_png_base64
 turns one into the base64 PNG that the HTML report embeds. The quantity
 plotted throughout is the peak rotation normalised by the slenderness,
 theta_max / alpha [-], with an overturned block written as ``+inf`` (as in
-:mod:`housner.stats`); overturns are drawn at a marked edge of each plot
+:mod:`housner.statistics.ensemble_stats`); overturns are drawn at a marked edge of each plot
 rather than dropped.
 
 References
@@ -25,8 +25,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from housner import stats
 from housner.spectra import draw_spectrum
+from housner.statistics import ensemble_stats as stats
 
 __all__ = [
     "engine_colors",

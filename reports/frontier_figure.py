@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 from housner.engines.tuning import DECAY_RTOL, RTOL
-from housner.proportions import wilson_interval
 from housner.scenarios.runs.frontier import Frontier
+from housner.statistics.proportions import wilson_interval
 
 __all__ = ["frontier_figure"]
 

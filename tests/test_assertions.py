@@ -11,7 +11,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from housner import proportions, stats
 from housner.errors import DataFileError
 from housner.reports.assertions import (
     AgreementReport,
@@ -21,6 +20,8 @@ from housner.reports.assertions import (
     assert_record_agreement,
     load_results,
 )
+from housner.statistics import ensemble_stats as stats
+from housner.statistics import proportions
 
 pytest_plugins = ["pytester"]
 

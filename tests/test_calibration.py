@@ -9,13 +9,13 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from housner import GroundMotion, Specimen
-from housner.calibration import (
+from housner.free_vibration.calibration import (
     calibrate_free_vibration,
     estimate_noise,
     free_vibration_peaks,
     half_cycle_durations,
 )
-from housner.free_rocking import (
+from housner.free_vibration.closed_forms import (
     amplitude_from_state,
     energy_ratios,
     half_cycle_integral,

@@ -14,9 +14,9 @@ import pytest
 from housner import GroundMotion, Specimen
 from housner.cli import main
 from housner.errors import DataFileError
-from housner.free_rocking import half_cycle_integral
+from housner.free_vibration.closed_forms import half_cycle_integral
 from housner.model import simulate
-from housner.readers import uniform_step
+from housner.readers.measured_data import uniform_step
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.campaigns.campaign_records import OVERTURN_ANGLE, estimate_release
 from housner.scenarios.diagnosis.comparison.history_error import (

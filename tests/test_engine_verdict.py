@@ -16,7 +16,7 @@ import pytest
 
 from housner.scenarios.runs.chaos import ChaosFloor
 from housner.scenarios.runs.verdicts import MIN_RECORDS, engine_verdict
-from housner.stats import KS_MAX
+from housner.statistics.ensemble_stats import KS_MAX
 
 
 def _row(ks, dp, n_ok, n_failed=0, share=0.5, n_paired=None):

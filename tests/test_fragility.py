@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from scipy import stats as sps
 
-from housner.proportions import overturn_probability
 from housner.scenarios.studies.fragility import (
     BETA_BOUNDS,
     bootstrap_fit,
@@ -22,6 +21,7 @@ from housner.scenarios.studies.fragility import (
 )
 from housner.scenarios.studies.fragility import bootstrap as fragility_bootstrap
 from housner.scenarios.studies.fragility import lognormal as fragility_lognormal
+from housner.statistics.proportions import overturn_probability
 
 MEDIAN, BETA = 1.3, 0.4
 STRIPES = np.geomspace(0.3, 3.0, 20)

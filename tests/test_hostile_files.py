@@ -17,7 +17,7 @@ from housner.cli import main
 from housner.cli.parser import build_parser
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
-from housner.readers import DECLARED_ACC_CEILING, MIN_RECORD_SAMPLES, PLAUSIBLE_ACC, read_csv_si
+from housner.readers.measured_data import DECLARED_ACC_CEILING, MIN_RECORD_SAMPLES, PLAUSIBLE_ACC, read_csv_si
 from housner.scenarios.campaigns import campaign as campaign_module
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.catalogue import ScenarioError

@@ -14,7 +14,7 @@ from housner.engines import get_engine
 from housner.engines._impact_law import IMPACT_LAW_DELAY, IMPACT_LAW_TOL, ImpactLaw
 from housner.engines.measures import decay_peaks, first_impact_ratio, half_cycle_peaks
 from housner.engines.tuning import DECAY_IMPACTS, _best, check_suite, tune
-from housner.impacts import impact_times
+from housner.free_vibration.impacts import impact_times
 
 SPEC = Specimen.bachmann2017()
 ALPHA = SPEC.alpha
@@ -36,7 +36,7 @@ def _energy(law_specimen: Specimen, theta: float, omega: float) -> float:
 
 def test_law_detects_the_impacts_the_shared_detector_counts():
     # Rocking-like signals whose swings range from far below to far above the law's threshold:
-    # with a one-step delay, the law scales one step after each sign change housner.impacts counts.
+    # with a one-step delay, the law scales one step after each sign change housner.free_vibration.impacts counts.
     rng = np.random.default_rng(7)
     t = np.arange(0.0, 4.0, 1e-3)
     for _ in range(20):

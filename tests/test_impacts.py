@@ -1,11 +1,12 @@
-"""housner.impacts: the one detector of impacts in a sampled theta, for measured and simulated histories."""
+"""housner.free_vibration.impacts: the one detector of impacts in a sampled theta, for measured and simulated
+histories."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from housner.impacts import HYSTERESIS_SIGMAS, hysteresis_crossings, impact_times, noise_crossings
+from housner.free_vibration.impacts import HYSTERESIS_SIGMAS, hysteresis_crossings, impact_times, noise_crossings
 
 
 def test_impact_times_of_a_sine_are_its_zeros():
@@ -64,7 +65,7 @@ def test_resolved_impact_count_leaves_out_the_small_tail():
     """
     from housner import GroundMotion, Specimen, simulate
     from housner.engines.measures import half_cycle_peaks
-    from housner.impacts import IMPACT_RESOLUTION, resolved_impact_count
+    from housner.free_vibration.impacts import IMPACT_RESOLUTION, resolved_impact_count
 
     spec = Specimen.bachmann2017()
     res = simulate(spec, GroundMotion.free_vibration(0.1 * spec.alpha, 8.0, dt=1e-3))

@@ -17,12 +17,12 @@ import pybullet as pb
 import pytest
 
 from housner import G, GroundMotion, Specimen
-from housner.calibration import free_vibration_peaks
 from housner.engines._planar import OVERTURN_ANGLE, ROCKING_TOL
 from housner.engines.pybullet_engine import PybulletEngine
 from housner.engines.urdf import ETH_SPECIMEN_PATH, JOINTS, urdf_from_specimen, write_urdf
 from housner.errors import EngineError
-from housner.free_rocking import energy_ratios, half_cycle_integral
+from housner.free_vibration.calibration import free_vibration_peaks
+from housner.free_vibration.closed_forms import energy_ratios, half_cycle_integral
 from housner.model import simulate as housner_simulate
 from housner.pulses import one_sine
 

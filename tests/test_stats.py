@@ -1,4 +1,4 @@
-"""housner.stats against scipy, closed forms and independent computations."""
+"""housner.statistics.ensemble_stats against scipy, closed forms and independent computations."""
 
 from __future__ import annotations
 
@@ -11,8 +11,9 @@ import pandas as pd
 import pytest
 from scipy import stats as sps
 
-from housner import proportions, stats
 from housner.scenarios.execution import tables
+from housner.statistics import ensemble_stats as stats
+from housner.statistics import proportions
 
 INF = np.inf
 

@@ -31,7 +31,7 @@ from housner.engines.tuning import (
     pulse_motions,
     tune,
 )
-from housner.free_rocking import half_cycle_time
+from housner.free_vibration.closed_forms import half_cycle_time
 from housner.model import simulate as housner_simulate
 from housner.reports.tuning_figure import tuning_report_figure
 

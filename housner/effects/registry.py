@@ -20,7 +20,7 @@ from weakref import WeakKeyDictionary
 import numpy as np
 
 from housner.motion import GroundMotion
-from housner.readers import CHANNEL_PREFIX
+from housner.readers.measured_data import CHANNEL_PREFIX
 from housner.response import Response
 from housner.specimen import Specimen
 

@@ -12,7 +12,7 @@ with both engines' figures, the threshold and the margin, and points to the
 HTML report of the run when there is one next to the results.
 
 Figures are theta_max/alpha [-] (+inf for an overturn), probabilities [-] and
-distances in units of alpha; see :mod:`housner.stats` for the definitions.
+distances in units of alpha; see :mod:`housner.statistics.ensemble_stats` for the definitions.
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from housner import proportions, stats
 from housner.errors import unknown_choice
 from housner.reports.assertions.criteria import (
     SHOW_FAILED,
@@ -43,7 +42,9 @@ from housner.reports.assertions.criteria import (
 )
 from housner.scenarios.execution.rundir import REPORT_FILE, RESULTS_FILE, load_results
 from housner.scenarios.execution.tables import split_failed
-from housner.stats import KS_MAX, OVERTURN_TOL
+from housner.statistics import ensemble_stats as stats
+from housner.statistics import proportions
+from housner.statistics.ensemble_stats import KS_MAX, OVERTURN_TOL
 
 __all__ = ["assert_cdf_agreement", "assert_record_agreement"]
 
@@ -192,7 +193,7 @@ def assert_cdf_agreement(
     ks_max : float or None
         Largest allowed Kolmogorov-Smirnov distance between the two CDFs of
         theta_max/alpha [-], overturns included as +inf (see
-        :func:`housner.stats.ks_2samp`). None skips the criterion.
+        :func:`housner.statistics.ensemble_stats.ks_2samp`). None skips the criterion.
     overturn_tol : float or None
         Largest allowed |P_engine[overturn] - P_reference[overturn]| [-].
     percentiles : mapping of float to float, optional
@@ -201,7 +202,7 @@ def assert_cdf_agreement(
         level passes; only one side overturning fails.
     wasserstein_max : float or None
         Largest allowed W1 distance between the non-overturned parts [alpha]
-        (see :func:`housner.stats.wasserstein`).
+        (see :func:`housner.statistics.ensemble_stats.wasserstein`).
     min_records : int or None
         Fewest usable (non-failed) records each side must have.
     max_failed : int or None

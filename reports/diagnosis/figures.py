@@ -11,7 +11,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
-from housner.free_rocking import half_cycle_integral
+from housner.free_vibration.closed_forms import half_cycle_integral
 from housner.reports import figures
 from housner.scenarios.diagnosis.comparison.record_comparison import on_grid
 

@@ -12,7 +12,7 @@ settings, the ground motions, the distribution of theta_max/alpha (seed Fig. 10
 and Table 2), record-by-record agreement, rocking spectra for pulse scenarios,
 free rocking for release scenarios, failed records and provenance.
 
-All statistics come from :mod:`housner.stats`; theta_max/alpha is +inf for an
+All statistics come from :mod:`housner.statistics.ensemble_stats`; theta_max/alpha is +inf for an
 overturned block and failed records are left out of every statistic (and
 listed).
 

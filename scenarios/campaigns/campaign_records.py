@@ -26,11 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
-from housner.calibration import estimate_noise
 from housner.errors import DataFileError
-from housner.impacts import noise_crossings
+from housner.free_vibration.calibration import estimate_noise
+from housner.free_vibration.impacts import noise_crossings
 from housner.motion import GroundMotion
-from housner.readers import (
+from housner.readers.measured_data import (
     CHANNEL_PREFIX,
     QUANTITIES,
     read_csv_header,
@@ -80,7 +80,7 @@ class MeasuredRecord:
         Measured rotation [rad] at ``t``.
     noise : float
         Standard deviation of the measurement noise on theta [rad], estimated
-        from the record (:func:`housner.calibration.estimate_noise`).
+        from the record (:func:`housner.free_vibration.calibration.estimate_noise`).
     overturned : bool
         The block overturned: |theta| reached :data:`OVERTURN_ANGLE`, or the
         campaign says so (``overturned = true`` in the record's table).
@@ -136,7 +136,8 @@ class MeasuredRecord:
     @cached_property
     def impacts(self) -> np.ndarray:
         """Indices of the measured impacts (read-only), derived once per record: zero crossings of theta with a
-        hysteresis of 4 noise sigmas (:func:`housner.impacts.noise_crossings`; for each, the first sample beyond
+        hysteresis of 4 noise sigmas (:func:`housner.free_vibration.impacts.noise_crossings`; for each, the first
+        sample beyond
         the band on the new side). The error window of every comparison and every scorer counts them."""
         imp = noise_crossings(self.theta, self.noise)
         imp.flags.writeable = False

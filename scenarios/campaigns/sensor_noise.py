@@ -3,7 +3,7 @@
 Real rotation sensors do not give white noise. Their noise wanders slowly
 (drift of a bridge, a temperature, an integrator) and carries the mains
 hum at 50 or 60 Hz. Differences of such noise are much smaller than the
-noise itself, so an estimate from differences (:func:`housner.calibration.estimate_noise`,
+noise itself, so an estimate from differences (:func:`housner.free_vibration.calibration.estimate_noise`,
 exact for white noise) can be several times too small, and with it the
 correct-model floor and every test that counts samples as independent.
 
@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from housner.calibration import estimate_noise
+from housner.free_vibration.calibration import estimate_noise
 
 __all__ = [
     "LB_LAGS",

@@ -11,7 +11,7 @@ record files are read, and refused with a one-line error, when the scenario
 is loaded. A record path must resolve (symbolic links and ``..`` followed)
 inside the scenario file's folder, unless ``load_scenario(...,
 allow_outside=True)``; a record needs at least 16 samples, as a campaign's does
-(:data:`housner.readers.MIN_RECORD_SAMPLES`).
+(:data:`housner.readers.measured_data.MIN_RECORD_SAMPLES`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np
 from housner.engines.base import ENGINES, engine_class
 from housner.errors import one_line, unknown_choice
 from housner.motion import GroundMotion
-from housner.readers import require_samples
+from housner.readers.measured_data import require_samples
 from housner.specimen import Specimen
 
 if sys.version_info >= (3, 11):

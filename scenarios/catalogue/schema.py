@@ -19,7 +19,7 @@ import numpy as np
 from housner.effects import available_effects, load_plugin, make_effect
 from housner.engines.base import ENGINES
 from housner.errors import one_line, unknown_choice
-from housner.readers import parse_unit
+from housner.readers.measured_data import parse_unit
 from housner.scenarios.motions.build import DEFAULT_RDK_MODEL, RDK_MODELS
 from housner.scenarios.motions.records import RECORDS
 from housner.specimen import Specimen

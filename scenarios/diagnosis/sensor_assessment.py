@@ -48,7 +48,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from housner.calibration import estimate_noise
+from housner.free_vibration.calibration import estimate_noise
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.campaign_records import MeasuredRecord
 from housner.scenarios.campaigns.sensor_noise import WHITE, SensorNoise, estimate_sensor_noise

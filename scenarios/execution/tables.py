@@ -4,7 +4,7 @@ The results table has one row per engine (or series "ENGINE + EFFECTS") and
 motion; the columns these helpers read are :data:`REQUIRED_COLUMNS`. Failed
 rows (status not "ok", or a NaN peak) are left out of every statistic and
 counted; an overturned row's theta_max/alpha is +inf. The statistics are those
-of :mod:`housner.stats` on the rows of each engine.
+of :mod:`housner.statistics.ensemble_stats` on the rows of each engine.
 
 References
 ----------
@@ -22,8 +22,7 @@ import numpy as np
 import pandas as pd
 
 from housner.errors import unknown_choice
-from housner.proportions import ProportionCI, overturn_probability
-from housner.stats import (
+from housner.statistics.ensemble_stats import (
     PercentileEstimate,
     ks_2samp,
     per_record_agreement,
@@ -31,6 +30,7 @@ from housner.stats import (
     percentiles,
     wasserstein,
 )
+from housner.statistics.proportions import ProportionCI, overturn_probability
 
 __all__ = ["REQUIRED_COLUMNS", "compare_engines", "percentile_table", "split_failed"]
 

@@ -7,7 +7,7 @@ agreement with the analytic model cannot be judged against 100 %. The chaos
 floor is the agreement to expect from chaos alone: the analytic model run on
 the same motions with its r perturbed by the engine's *measured* r error, and
 its p by the engine's measured p error, each in both directions, and compared
-with itself by the same rule (:func:`housner.stats.per_record_agreement`).
+with itself by the same rule (:func:`housner.statistics.ensemble_stats.per_record_agreement`).
 
 An engine whose agreement reaches the floor (within the binomial uncertainty
 of its own share) disagrees record by record no more than its measured
@@ -42,10 +42,10 @@ import numpy as np
 from housner.engines.base import RECORD_ERRORS, Engine, get_engine
 from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
-from housner.proportions import wilson_interval
 from housner.scenarios.execution.cache import code_version, content_key, store_text
 from housner.specimen import Specimen
-from housner.stats import per_record_agreement
+from housner.statistics.ensemble_stats import per_record_agreement
+from housner.statistics.proportions import wilson_interval
 
 #: Record-by-record agreement: both overturned, or both rocked with theta_max/alpha within this relative
 #: tolerance of the reference's [-] (the run report's rule, and housner explain's).
@@ -357,7 +357,7 @@ def chaos_floor(
     r : float, optional
         The analytic model's r [-] (default: Housner's).
     rtol, atol : float
-        Agreement tolerances of :func:`housner.stats.per_record_agreement`
+        Agreement tolerances of :func:`housner.statistics.ensemble_stats.per_record_agreement`
         (use the same as for the engine's own agreement).
 
     Returns

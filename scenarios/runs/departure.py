@@ -26,9 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from housner.impacts import impact_times
+from housner.free_vibration.impacts import impact_times
 from housner.scenarios.runs.chaos import RECORD_RTOL
-from housner.stats import ks_2samp, per_record_agreement
+from housner.statistics.ensemble_stats import ks_2samp, per_record_agreement
 
 __all__ = [
     "DEPART_TOL",

@@ -68,7 +68,7 @@ __all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "Explanation", "explain_engine"]
 
 #: Noise added to the engine's theta before the diagnosis [rad]. The diagnosis takes a record as signal plus
 #: white noise of the level it estimates from the record (third differences,
-#: :func:`housner.calibration.estimate_noise`); on an engine's noise-free samples that estimate reads the
+#: :func:`housner.free_vibration.calibration.estimate_noise`); on an engine's noise-free samples that estimate reads the
 #: signal's own third differences and the float32 rounding (1e-8 to 1e-7 rad), not a white noise, and the
 #: floor and the localisation built on it fail (the analytic engine explained by itself came out
 #: "unexplained", z = +24 on the scatter of its energy ratio).

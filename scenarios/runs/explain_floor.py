@@ -47,7 +47,7 @@ from housner.motion import GroundMotion
 from housner.scenarios.diagnosis.verdict.integrator_families import SCALE_SD, SHIFT_SAMPLES, UPSAMPLE, ModelForm
 from housner.scenarios.runs.chaos import RECORD_RTOL, AgreementShares, ChaosFloor, chaos_floor, measure_engine_errors
 from housner.specimen import Specimen
-from housner.stats import per_record_agreement
+from housner.statistics.ensemble_stats import per_record_agreement
 
 __all__ = [
     "PERTURBATIONS",
@@ -107,7 +107,7 @@ def model_form_floor(
     settings : mapping, optional
         Settings of the analytic engine (``r``; ``substeps`` per sample of the records).
     rtol, atol : float
-        Tolerances of :func:`housner.stats.per_record_agreement` [-].
+        Tolerances of :func:`housner.statistics.ensemble_stats.per_record_agreement` [-].
 
     Returns
     -------
@@ -162,7 +162,7 @@ def engine_chaos_floor(
     r : float, optional
         The analytic model's r [-] (default: Housner's).
     rtol, atol : float
-        Tolerances of :func:`housner.stats.per_record_agreement` [-].
+        Tolerances of :func:`housner.statistics.ensemble_stats.per_record_agreement` [-].
 
     Returns
     -------

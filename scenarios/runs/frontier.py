@@ -17,7 +17,8 @@ settings at their defaults; :func:`frontier_axes`) and measures, at every point:
 :func:`knee` picks the point where accuracy stops improving: the cheapest point that meets
 every tuner check some point meets (:func:`admissible`), scores no worse on them than the
 defaults (no accuracy the checks see is traded for time), keeps the run report's distribution
-verdict where the defaults pass it (KS at most :data:`~housner.stats.KS_MAX`, :func:`keeps_the_verdict`)
+verdict where the defaults pass it (KS at most :data:`~housner.statistics.ensemble_stats.KS_MAX`,
+:func:`keeps_the_verdict`)
 and whose per-record agreement is not significantly below the best point's (a two-proportion z-test at
 95 %, :data:`KNEE_Z`). ``housner frontier ENGINE`` runs it from the shell and stores the result that the
 run report draws (``engines/models/frontier-<engine>.json``).
@@ -44,7 +45,7 @@ from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs.departure import record_agreement, record_thetas
 from housner.scenarios.runs.engine_campaign import check_engine, ground_motion_scenario
 from housner.scenarios.runs.explain_floor import engine_chaos_floor, extended_floor, model_form_floor
-from housner.stats import KS_MAX, ks_2samp
+from housner.statistics.ensemble_stats import KS_MAX, ks_2samp
 
 __all__ = [
     "KNEE_Z",
@@ -367,7 +368,8 @@ def _candidates(points: Sequence[FrontierPoint]) -> list[int]:
 
 
 def keeps_the_verdict(points: Sequence[FrontierPoint], idx: Sequence[int]) -> list[int]:
-    """The points of ``idx`` whose KS distance is within the run report's criterion (:data:`~housner.stats.KS_MAX`)
+    """The points of ``idx`` whose KS distance is within the run report's criterion
+    (:data:`~housner.statistics.ensemble_stats.KS_MAX`)
     or, where the defaults' is not, no larger than theirs: a default never makes its engine fail a report it
     passed (an example: docs/results.md#defaults-frontier). A point without a KS (not measured) is not held
     back by it."""

@@ -60,7 +60,7 @@ sample interval (0: shorter than the sampling interval, the resolution). It incl
 position correction after the impact. The contact delay, t_0 (after) - t_0 (before), is a sub-sample
 measure of how long the contact holds the block at theta = 0. The half-period drift of a flight is
 (t_0 before impact k + 1 - t_0 after impact k) / T_half(E_mean) - 1, T_half Housner's closed form
-(:func:`housner.free_rocking.half_cycle_time`) for the flight's mean energy. Interpenetration is not
+(:func:`housner.free_vibration.closed_forms.half_cycle_time`) for the flight's mean energy. Interpenetration is not
 measured: no adapter reports it in its response.
 
 The sample interval defaults to 1 ms, which keeps every adapter's default step exactly (each step is
@@ -85,7 +85,7 @@ import numpy as np
 from scipy import optimize
 
 from housner.engines.base import engine_spec, get_engine
-from housner.free_rocking import half_cycle_time
+from housner.free_vibration.closed_forms import half_cycle_time
 from housner.motion import GroundMotion
 from housner.specimen import Specimen
 

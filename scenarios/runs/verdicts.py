@@ -5,8 +5,8 @@ The rule (docs/explanation/verdict.md), for an engine against the analytic model
 
 1. **Distribution.** The engine's distribution of peak rotations theta_max/alpha passes when the
    Kolmogorov-Smirnov (KS) distance to the reference's (the largest gap between the two cumulative
-   distributions) is at most :data:`housner.stats.KS_MAX`, its probability of overturning is within
-   :data:`housner.stats.OVERTURN_TOL` of the reference's, and no record failed; on at least
+   distributions) is at most :data:`housner.statistics.ensemble_stats.KS_MAX`, its probability of overturning is within
+   :data:`housner.statistics.ensemble_stats.OVERTURN_TOL` of the reference's, and no record failed; on at least
    :data:`MIN_RECORDS` records (fewer: inconclusive). These are the defaults of
    :func:`housner.reports.assertions.runs.assert_cdf_agreement`.
 2. **Record by record.** The share of records on which the engine agrees with the reference (both
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import pandas as pd
 
 from housner.scenarios.runs.chaos import floor_check, floor_verdict
-from housner.stats import KS_MAX, OVERTURN_TOL
+from housner.statistics.ensemble_stats import KS_MAX, OVERTURN_TOL
 
 __all__ = ["KINDS", "MIN_RECORDS", "EngineVerdict", "engine_verdict"]
 

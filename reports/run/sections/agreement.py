@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from housner import calibration
+from housner.free_vibration import calibration
 from housner.reports import figures
 from housner.reports.page import (
     engine_tag,
@@ -314,7 +314,8 @@ def free_vibration_section(run: Run) -> str:
             ["&theta;<sub>0</sub>/&alpha;"] + [engine_tag(e, run) for e in run.engines],
             cal_rows,
             caption="r fitted over all impacts of each release (energy-decay line, &plusmn; one standard error) and "
-            "p from the exact half-cycle durations (<code>housner.calibration.calibrate_free_vibration</code>). "
+            "p from the exact half-cycle durations "
+            "(<code>housner.free_vibration.calibration.calibrate_free_vibration</code>). "
             f"The specimen has r = {fmt_g(r_h, 5)} and p = {fmt_g(p_spec, 5)} 1/s.",
         )
     )

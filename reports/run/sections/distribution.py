@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 
-from housner import stats
 from housner.reports import figures
 from housner.reports.page import (
     ci_cell,
@@ -31,6 +30,7 @@ from housner.reports.page import (
 from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.execution.tables import percentile_table
 from housner.scenarios.runs.view import QUARTILES, Run, source_record
+from housner.statistics import ensemble_stats as stats
 
 
 def distribution_section(run: Run) -> str:

@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 
-from housner import stats
 from housner.reports.page import (
     ci_cell,
     engine_tag,
@@ -30,7 +29,8 @@ from housner.reports.run.sections.tuning import settings_html, tuning_caveats, t
 from housner.scenarios.runs.chaos import RECORD_RTOL
 from housner.scenarios.runs.verdicts import KINDS, MIN_RECORDS, EngineVerdict
 from housner.scenarios.runs.view import BOOT_SEED, N_BOOT, Run
-from housner.stats import KS_MAX, OVERTURN_TOL
+from housner.statistics import ensemble_stats as stats
+from housner.statistics.ensemble_stats import KS_MAX, OVERTURN_TOL
 from housner.units import G
 
 

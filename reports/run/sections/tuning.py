@@ -34,7 +34,7 @@ from housner.reports.page import (
 from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.runs.verdicts import engine_verdict
 from housner.scenarios.runs.view import Run
-from housner.stats import KS_MAX
+from housner.statistics.ensemble_stats import KS_MAX
 
 #: Folder of the tuning results ``tuning-<engine>.json`` written by ``housner tune``;
 #: None means ``engines/models`` of the installed package.

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from housner.impacts import HYSTERESIS_SIGMAS, noise_crossings
+from housner.free_vibration.impacts import HYSTERESIS_SIGMAS, noise_crossings
 from housner.scenarios.campaigns.campaign_records import MeasuredRecord
 
 __all__ = [
@@ -61,7 +61,7 @@ RELEASE_DTHETA0_SIGMAS = 1.0
 def measured_impacts(theta, noise: float) -> np.ndarray:
     """Indices of the measured impacts: zero crossings of theta with a hysteresis of 4 noise sigmas.
 
-    :func:`housner.impacts.noise_crossings`, the detector the free-vibration
+    :func:`housner.free_vibration.impacts.noise_crossings`, the detector the free-vibration
     calibration uses too.
 
     Parameters

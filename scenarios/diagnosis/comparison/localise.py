@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from housner.calibration import FreeVibrationCalibration, calibrate_free_vibration
+from housner.free_vibration.calibration import FreeVibrationCalibration, calibrate_free_vibration
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.campaign_records import MeasuredRecord
 from housner.scenarios.diagnosis.comparison.history_error import FV_FLOOR_SIGMAS, measured_impacts

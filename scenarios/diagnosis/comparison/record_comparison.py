@@ -48,7 +48,7 @@ uses the model's own history.
 
 As distributions (ground-motion records)
 ----------------------------------------
-The statistics of :mod:`housner.stats`: Kolmogorov-Smirnov distance and
+The statistics of :mod:`housner.statistics.ensemble_stats`: Kolmogorov-Smirnov distance and
 p-value, Wasserstein distance, overturn probability with a Wilson interval
 for each side, percentiles with bootstrap intervals, record-by-record
 agreement.
@@ -81,7 +81,6 @@ from typing import Any
 
 import numpy as np
 
-from housner import proportions, stats
 from housner.effects import make_effects
 from housner.engines.base import Engine, get_engine
 from housner.response import Response
@@ -101,6 +100,8 @@ from housner.scenarios.diagnosis.comparison.localise import (
     mean_se,
     measured_features,
 )
+from housner.statistics import ensemble_stats as stats
+from housner.statistics import proportions
 
 __all__ = [
     "OBSERVATION_SEED",
@@ -282,14 +283,14 @@ class DistributionComparison:
     ----------
     measured, model : ndarray
         theta_max/alpha per record [-] (+inf overturned).
-    ks : housner.stats.KSResult
+    ks : housner.statistics.ensemble_stats.KSResult
     wasserstein : float
         [alpha], rocking records only.
-    overturn_measured, overturn_model : housner.proportions.ProportionCI
+    overturn_measured, overturn_model : housner.statistics.proportions.ProportionCI
         Wilson 95 % intervals.
-    percentiles_measured, percentiles_model : housner.stats.PercentileEstimate
+    percentiles_measured, percentiles_model : housner.statistics.ensemble_stats.PercentileEstimate
         25/50/75 % with 90 % bootstrap intervals.
-    agreement : housner.stats.RecordAgreement
+    agreement : housner.statistics.ensemble_stats.RecordAgreement
         rtol 0.1, atol 0.05 alpha.
     """
 

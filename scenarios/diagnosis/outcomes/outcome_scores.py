@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, special
 
-from housner.proportions import wilson_interval
+from housner.statistics.proportions import wilson_interval
 
 __all__ = [
     "P_MIN",

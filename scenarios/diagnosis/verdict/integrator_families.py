@@ -38,7 +38,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from housner.calibration import estimate_noise
+from housner.free_vibration.calibration import estimate_noise
 from housner.model import REST_TOL, default_substeps
 from housner.motion import GroundMotion
 from housner.scenarios.diagnosis.comparison.record_comparison import simulate_records
@@ -90,7 +90,7 @@ def acc_channel_noise(campaign) -> float:
 
     The root mean square about its mean of the free vibrations' ``ground_acc`` when it was recorded
     (not all zeros). Otherwise, per ground motion, the robust third-difference estimate
-    (:func:`housner.calibration.estimate_noise`) on its first and on its last :data:`QUIET_SHARE`
+    (:func:`housner.free_vibration.calibration.estimate_noise`) on its first and on its last :data:`QUIET_SHARE`
     of samples, the smaller of the two (a record starts or ends with the table at rest), and the
     median over the records; 0 when nothing is still. Derived once per campaign (kept in its cache): every
     floor a diagnosis measures reads it.

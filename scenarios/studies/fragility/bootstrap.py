@@ -18,7 +18,7 @@ import numpy as np
 from housner.scenarios.studies.fragility.input_checks import check_im, check_n_boot, outcomes
 from housner.scenarios.studies.fragility.lognormal import BETA_BOUNDS, LognormalFit, fit_counts, fit_lognormal
 from housner.scenarios.studies.fragility.newton import newton_rows
-from housner.stats import check_ci
+from housner.statistics.ensemble_stats import check_ci
 
 __all__ = ["BootstrapFit", "bootstrap_fit"]
 

@@ -16,7 +16,7 @@ import numpy as np
 from housner.scenarios.studies.fragility.bootstrap import percentile_interval, resampled_fits
 from housner.scenarios.studies.fragility.input_checks import check_im, check_n_boot, outcomes
 from housner.scenarios.studies.fragility.lognormal import LognormalFit
-from housner.stats import check_ci
+from housner.statistics.ensemble_stats import check_ci
 
 __all__ = ["FitComparison", "compare_fits", "interval_disagreement"]
 

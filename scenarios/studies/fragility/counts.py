@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from housner.proportions import wilson_interval
 from housner.scenarios.studies.fragility.input_checks import check_counts, outcomes
-from housner.stats import check_ci
+from housner.statistics.ensemble_stats import check_ci
+from housner.statistics.proportions import wilson_interval
 
 __all__ = ["proportion_intervals", "stripe_counts"]
 
@@ -58,7 +58,7 @@ def proportion_intervals(k, n, ci: float = 0.95) -> tuple[np.ndarray, np.ndarray
     -----
     With z = Phi^-1((1 + ci)/2) the interval is (k + z^2/2)/(n + z^2) -+
     z/(n + z^2) sqrt(k (n - k)/n + z^2/4), the same as
-    :func:`housner.proportions.overturn_probability`, here vectorised over stripes.
+    :func:`housner.statistics.proportions.overturn_probability`, here vectorised over stripes.
     It stays in [0, 1] and is not empty at k = 0 or k = n, where the Wald
     interval collapses.
 

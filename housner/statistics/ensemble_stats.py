@@ -11,7 +11,7 @@ and count them.
 Array functions: :func:`ecdf` (+ :func:`dkw_band`), :func:`percentiles` (with
 percentile-bootstrap intervals), :func:`ks_2samp`, :func:`wasserstein`,
 :func:`per_record_agreement`; the probability of overturning, with Wilson or
-Clopper-Pearson intervals, is :func:`housner.proportions.overturn_probability`.
+Clopper-Pearson intervals, is :func:`housner.statistics.proportions.overturn_probability`.
 Their use on the runner's results table (one row per engine and motion) is
 :mod:`housner.scenarios.execution.tables`'.
 

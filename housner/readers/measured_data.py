@@ -2,7 +2,7 @@
 every reader of a record applies.
 
 Every file the suite reads (records, campaigns) goes through these functions, or through the readers of
-ground-motion record files built on them (:mod:`housner.motion_readers`: PEER AT2, motion CSV); SI inside
+ground-motion record files built on them (:mod:`housner.readers.motion_files`: PEER AT2, motion CSV); SI inside
 after them.
 
 Accelerations are stored in m/s^2 (SI inside). A CSV column is converted once, from the unit written
@@ -71,7 +71,7 @@ _ROUNDING_SHARE = 0.01
 PLAUSIBLE_STEP = (1e-5, 0.1)
 
 #: The fewest samples a measured or user-given record may have [-]: the calibration's noise estimate and
-#: impact detection need 16 (:mod:`housner.calibration`); a shorter file is a stub or a truncated export.
+#: impact detection need 16 (:mod:`housner.free_vibration.calibration`); a shorter file is a stub or a truncated export.
 #: One rule for every reader of records: campaigns and the records of a scenario.
 MIN_RECORD_SAMPLES = 16
 

@@ -1,6 +1,7 @@
 """The probability of overturning: a binomial proportion over the records, with a confidence interval.
 
-Overturning is an outcome of its own (:mod:`housner.stats`): each record either overturned or not, and
+Overturning is an outcome of its own (:mod:`housner.statistics.ensemble_stats`): each record either overturned or not,
+and
 the share that did is a binomial proportion k/n. :func:`overturn_probability` gives it with a Wilson
 score or a Clopper-Pearson interval; :func:`wilson_interval` is the score interval elementwise, for
 tables of counts.
@@ -21,7 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from housner.errors import unknown_choice
-from housner.stats import check_ci
+from housner.statistics.ensemble_stats import check_ci
 
 __all__ = ["ProportionCI", "overturn_probability", "wilson_interval"]
 

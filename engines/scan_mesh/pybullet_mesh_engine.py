@@ -13,7 +13,7 @@ Ground motion. The table is fixed; the table acceleration ug'' enters as the exa
 -m ug''(t) along x at the COM. It is applied by tilting gravity to (-ug'', 0, -g) before each step
 (the rock is the only dynamic body, and gravity acts at its COM), with the mean of the linear ug''
 over the step. The rock settles for 1 s before the record starts; theta, the overturn criterion and
-the response are the shared ones of :class:`housner.engines.mesh3d.MeshEngine`.
+the response are the shared ones of :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`.
 
 Settings and their defaults (``DEFAULTS``):
 
@@ -46,7 +46,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from housner.engines._planar import optional_package
-from housner.engines.mesh3d import DROP_GAP, MESH_DEFAULTS, MeshEngine
+from housner.engines.scan_mesh.mesh3d import DROP_GAP, MESH_DEFAULTS, MeshEngine
 from housner.units import G
 
 __all__ = ["PybulletMeshEngine"]

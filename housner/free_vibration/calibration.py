@@ -19,7 +19,7 @@ Angles in rad, times in s, p in 1/s, r dimensionless.
 
 References
 ----------
-Those of :mod:`housner.free_rocking` (Housner 1963; Bachmann et al. 2017,
+Those of :mod:`housner.free_vibration.closed_forms` (Housner 1963; Bachmann et al. 2017,
 section 3.2, eqs. 7 and 8), whose closed forms the fits invert.
 """
 
@@ -30,14 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from housner.free_rocking import (
+from housner.free_vibration.closed_forms import (
     check_alpha,
     energy_ratios,
     half_cycle_integral,
     p_from_half_cycle,
     potential,
 )
-from housner.impacts import HYSTERESIS_SIGMAS, MIN_SAMPLES, fit_crossing, fit_peak, hysteresis_crossings
+from housner.free_vibration.impacts import HYSTERESIS_SIGMAS, MIN_SAMPLES, fit_crossing, fit_peak, hysteresis_crossings
 
 __all__ = [
     "FreeVibrationCalibration",

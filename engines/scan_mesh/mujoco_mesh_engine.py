@@ -1,15 +1,15 @@
 """A real rock's scan mesh as a free rigid body on a shaken table, in MuJoCo (engine ``mujoco-3d``).
 
 Model. One body with a free joint (six degrees of freedom) whose frame is the rock's centre of mass
-(COM), axes the shaking frame of :mod:`housner.engines.mesh3d` (x along the shaking direction, z up);
+(COM), axes the shaking frame of :mod:`housner.engines.scan_mesh.mesh3d` (x along the shaking direction, z up);
 its mass and full inertia tensor are the mesh's at the set density (``<inertial>``, not MuJoCo's
 estimate from the collision geometry). Its collision geometry is a mesh geom of the hull's vertices,
 which MuJoCo convexifies (the convex hull). The table is MuJoCo's infinite plane z = 0, fixed.
 
 Ground motion. The table is fixed; the table acceleration ug'' enters as the exact d'Alembert force
 -m ug''(t) along x at the COM (``xfrc_applied``, at the middle of each step), the same as shaking the
-table (:mod:`housner.engines.mesh3d`). The rock settles for 1 s before the record starts; theta, the
-overturn criterion and the response are the shared ones of :class:`housner.engines.mesh3d.MeshEngine`.
+table (:mod:`housner.engines.scan_mesh.mesh3d`). The rock settles for 1 s before the record starts; theta, the
+overturn criterion and the response are the shared ones of :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`.
 
 Settings and their defaults (``DEFAULTS``):
 
@@ -41,7 +41,7 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
-from housner.engines.mesh3d import MESH_DEFAULTS, MeshEngine, hull_drop_height
+from housner.engines.scan_mesh.mesh3d import MESH_DEFAULTS, MeshEngine, hull_drop_height
 from housner.units import G
 
 __all__ = ["MujocoMeshEngine"]

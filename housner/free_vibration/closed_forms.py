@@ -4,7 +4,7 @@ A rigid block released at theta0 rocks freely about its corners; between
 impacts its energy is conserved, so the duration of a half-cycle and the
 potential energy at its peaks follow in closed form (up to one quadrature).
 These are the relations the free-vibration calibration
-(:mod:`housner.calibration`) and the engines' contact tuning
+(:mod:`housner.free_vibration.calibration`) and the engines' contact tuning
 (:mod:`housner.engines.tuning`) are built on.
 
 Angles in rad, times in s, p in 1/s, r dimensionless.
@@ -249,7 +249,9 @@ def energy_ratios(peaks, alpha: float) -> np.ndarray:
     Bachmann et al. (2017), eq. 8.
     """
     alpha = check_alpha(alpha)
-    amp = getattr(peaks, "amplitude", peaks)  # a FreeVibrationPeaks (housner.calibration) or the amplitudes
+    amp = getattr(
+        peaks, "amplitude", peaks
+    )  # a FreeVibrationPeaks (housner.free_vibration.calibration) or the amplitudes
     amp = np.abs(np.asarray(amp, dtype=float))
     if amp.ndim != 1:
         raise ValueError(f"`peaks` must be one-dimensional, got shape {amp.shape}")

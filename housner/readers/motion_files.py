@@ -2,8 +2,8 @@
 
 A PEER AT2 file is read in the acceleration unit its header names (g, cm/s^2, m/s^2, in/s^2, ...); a
 motion CSV in the units its header writes in brackets (``time [ms]``, ``ground_acc [g]``; SI when none is
-written), through the CSV parser of :mod:`housner.readers`. Accelerations come out in m/s^2, steps in s.
-Both apply the input rules of :mod:`housner.readers` (units understood, acceleration bounds), and their
+written), through the CSV parser of :mod:`housner.readers.measured_data`. Accelerations come out in m/s^2, steps in s.
+Both apply the input rules of :mod:`housner.readers.measured_data` (units understood, acceleration bounds), and their
 errors name the file, line and column.
 """
 
@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from housner.errors import DataFileError
-from housner.readers import (
+from housner.readers.measured_data import (
     CHANNEL_PREFIX,
     UNIT_CHOICES,
     check_declared_acceleration,
@@ -47,7 +47,7 @@ def read_at2(path: str | Path, *, units: str | None = None) -> tuple[np.ndarray,
     line: a phrase ``UNITS OF <unit>`` / ``units are (<unit>)`` /
     ``UNITS: <unit>``, or an acceleration unit written out (``CM/SEC/SEC``,
     ``GAL``, ...); g, cm/s^2, m/s^2, mm/s^2, in/s^2 and ft/s^2 are understood
-    (:func:`~housner.readers.parse_unit`). A header that names no unit, names one that is not
+    (:func:`~housner.readers.measured_data.parse_unit`). A header that names no unit, names one that is not
     an acceleration (a velocity file in ``CM/SEC``), or names two different
     ones is refused with an error naming the file and the line.
 
@@ -123,7 +123,7 @@ def read_csv_motion(
     provenance and extra channels [m/s^2].
 
     The header may give each column's unit in brackets: ``time [ms]``,
-    ``ground_acc [g]`` (see :func:`~housner.readers.parse_unit` for the units understood);
+    ``ground_acc [g]`` (see :func:`~housner.readers.measured_data.parse_unit` for the units understood);
     the values are converted once, here, to s and m/s^2. Without a unit the
     time column is read in seconds (a step outside 1e-5 .. 0.1 s is then
     refused as implausible) and the acceleration in ``units``.
