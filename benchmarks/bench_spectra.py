@@ -5,7 +5,7 @@ Target: the 100 x 100 grid in under 10 s on 2 cores.
 The naive baseline is what one would write without this module: a Python loop
 over :func:`housner.simulate`, one call per grid point, each pulse padded with
 30/p of free rocking so that theta_max has been reached (the default of
-:func:`housner.pulses.ricker` when p is given). It is timed on a random
+:func:`housner.pulse_response.pulses.ricker` when p is given). It is timed on a random
 subset of the grid and extrapolated; its results are also compared with the
 spectrum's on that subset.
 
@@ -38,9 +38,10 @@ def main(argv: list[str] | None = None) -> int:
     matplotlib.use("Agg")
     import numba
 
-    from housner import G, Specimen, pulses
+    from housner import G, Specimen
     from housner.model import simulate
-    from housner.spectra import PULSES, pulse_motion, rocking_spectrum
+    from housner.pulse_response import pulses
+    from housner.pulse_response.spectra import PULSES, pulse_motion, rocking_spectrum
 
     spec = Specimen.bachmann2017()
     W = np.linspace(1.0, 12.0, args.n)

@@ -25,7 +25,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from housner.spectra import draw_spectrum
+from housner.pulse_response.spectra import draw_spectrum
 from housner.statistics import ensemble_stats as stats
 
 __all__ = [

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from shared import OTHER_ENGINES, installed_engines
 
-from housner import Specimen, pulses, simulate
+from housner import Specimen, simulate
 from housner.engines.base import get_engine
+from housner.pulse_response import pulses
 from housner.reports.assertions.runs import assert_cdf_agreement
 
 SPEC = Specimen.bachmann2017()

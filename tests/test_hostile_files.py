@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from housner.cli import main
-from housner.cli.parser import build_parser
+from housner.cli.app import build_parser
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
 from housner.readers.measured_data import DECLARED_ACC_CEILING, MIN_RECORD_SAMPLES, PLAUSIBLE_ACC, read_csv_si

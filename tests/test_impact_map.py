@@ -13,7 +13,7 @@ from shared import optional_engine
 
 from housner.cli import app
 from housner.cli import impact_map as impact_map_cli
-from housner.cli.parser import build_parser
+from housner.cli.app import build_parser
 from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
 
 

@@ -42,9 +42,10 @@ import math
 import numpy as np
 import pytest
 
-from housner import G, GroundMotion, Specimen, pulses
+from housner import G, GroundMotion, Specimen
 from housner.model import simulate
-from housner.spectra import rocking_spectrum
+from housner.pulse_response import pulses
+from housner.pulse_response.spectra import rocking_spectrum
 
 ALPHA = 0.01  # rad: slender enough that the nonlinear terms shift the boundaries by < 1e-4 (module docstring)
 P = 2.0  # 1/s; any p gives the same boundaries (they depend only on omega_p/p and a_p/(g tan alpha))
@@ -68,7 +69,8 @@ def _half_sine(a: float, w: float) -> GroundMotion:
 
 
 def _one_sine(a: float, w: float, phase: float = 0.0) -> GroundMotion:
-    """The suite's one-sine pulse (housner.pulses.one_sine) at a = a_p / (g tan alpha), w = omega_p / p."""
+    """The suite's one-sine pulse (housner.pulse_response.pulses.one_sine) at a = a_p / (g tan alpha), w = omega_p /
+    p."""
     wp = w * P
     tp = 2.0 * math.pi / wp
     return pulses.one_sine(a * G * BLOCK.tan_alpha, wp, dt=tp / N_PER_PERIOD, duration=tp + FREE / P, phase=phase)
@@ -128,7 +130,7 @@ def test_one_sine_safe_band_and_the_verdict_around_it():
     over = [1.003 * lo, 3.5, 4.5, 5.5, 6.2, 0.997 * mid, 1.003 * hi, 7.5, 9.0]
     assert [a for a in safe if _overturns(_one_sine(a, 5.0))] == []
     assert [a for a in over if not _overturns(_one_sine(a, 5.0))] == []
-    # the rocking spectrum (closed-form free rocking after the pulse, housner.spectra) says the same
+    # the rocking spectrum (closed-form free rocking after the pulse, housner.pulse_response.spectra) says the same
     A = np.array(safe + over)
     s = rocking_spectrum(BLOCK, "one_sine", [5.0], A, r=R_ZM)
     np.testing.assert_array_equal(s.overturned[:, 0], [False] * len(safe) + [True] * len(over))

@@ -1,4 +1,4 @@
-"""Pulse ground motions (housner.pulses) and rocking spectra (housner.spectra)."""
+"""Pulse ground motions (housner.pulse_response.pulses) and rocking spectra (housner.pulse_response.spectra)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from housner import G, GroundMotion, Specimen, pulses
+from housner import G, GroundMotion, Specimen
 from housner.model import simulate
-from housner.pulses import ricker_half_width, ricker_shape
-from housner.spectra import (
+from housner.pulse_response import pulses
+from housner.pulse_response.pulses import ricker_half_width, ricker_shape
+from housner.pulse_response.spectra import (
     PULSES,
     free_rocking_peak,
     pulse_motion,
@@ -169,7 +170,7 @@ def test_no_rocking_below_uplift(pulse):
     ],
 )
 def test_spectrum_point_against_direct_simulation(pulse, w, a):
-    # Direct simulation of the same pulse from housner.pulses, padded with 40/p of free rocking,
+    # Direct simulation of the same pulse from housner.pulse_response.pulses, padded with 40/p of free rocking,
     # against the spectrum (forcing window + closed-form free rocking). Same samples, same RK4:
     # they differ only by the closed form vs RK4 over the free part (~1e-8 alpha).
     s = rocking_spectrum(SPEC, pulse, [w], [a])

@@ -24,7 +24,7 @@ from housner.errors import EngineError
 from housner.free_vibration.calibration import free_vibration_peaks
 from housner.free_vibration.closed_forms import energy_ratios, half_cycle_integral
 from housner.model import simulate as housner_simulate
-from housner.pulses import one_sine
+from housner.pulse_response.pulses import one_sine
 
 SPEC = Specimen.bachmann2017()
 AMPLITUDES = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)

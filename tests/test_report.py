@@ -331,7 +331,7 @@ def test_free_vibration_report_measures_each_engines_r(tmp_path):
 
 
 def test_pulse_report_draws_rocking_spectra(tmp_path):
-    from housner import pulses
+    from housner.pulse_response import pulses
 
     w, a = np.meshgrid([2.0, 4.0, 8.0], [1.5, 3.0, 5.0], indexing="ij")
     motions = []

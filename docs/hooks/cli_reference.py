@@ -2,7 +2,7 @@
 
 ``docs/reference/cli.md`` holds the marker ``<!-- cli-reference -->``; this hook replaces it with the
 usage, description, arguments and epilog of ``housner`` and of each subcommand, read from
-:func:`housner.cli.parser.build_parser`, so that the page cannot drift from the command.
+:func:`housner.cli.app.build_parser`, so that the page cannot drift from the command.
 
 The parser is built in a fresh interpreter (this file run as a script): the registries it lists
 (engines, effects, scenarios) are then the installed ones, not those that a page executed earlier in
@@ -73,7 +73,7 @@ def _section(parser: argparse.ArgumentParser, title: str, summary: str | None) -
 
 def render() -> str:
     """The CLI reference as Markdown: ``housner`` itself, then each subcommand in the parser's order."""
-    from housner.cli.parser import build_parser
+    from housner.cli.app import build_parser
 
     parser = build_parser(full_help=True)
     lines = _section(parser, parser.prog, None)

@@ -39,7 +39,7 @@ import numpy as np
 from housner.engines.measures import decay_peaks, first_peak, free_rocking_quarter_period
 from housner.model import simulate
 from housner.motion import GroundMotion
-from housner.pulses import one_sine
+from housner.pulse_response.pulses import one_sine
 from housner.specimen import Specimen
 
 #: Release amplitudes theta0 / alpha [-] at which r is measured (check 1): 0.20

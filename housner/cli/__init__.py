@@ -16,8 +16,8 @@ Modules: one per subcommand, each with its ``SUMMARY``, its ``add_parser`` and i
 what they share: :mod:`~housner.cli.args` (argument types, input checks, exit statuses),
 :mod:`~housner.cli.command` (a subcommand's parser, the exit-status help, ``--plugin``, and what ``explain``
 and ``frontier`` share);
-:mod:`~housner.cli.parser` (the parser, assembling the subcommands in order),
-:mod:`~housner.cli.app` (``main``: plugins, signals, errors).
+:mod:`~housner.cli.app` (the parser, assembling the subcommands in order, and ``main``: plugins, signals,
+errors).
 
 This package's own import is light on purpose: the ``housner`` script imports :func:`main` from
 here, and every worker process that a run spawns imports the script again (Python's spawn start

@@ -13,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from housner import pulses
 from housner.errors import one_line, unknown_choice
 from housner.motion import GroundMotion
+from housner.pulse_response import pulses
 from housner.scenarios.motions import bands, rdk, rdk_match
 from housner.scenarios.motions.records import load_record
 

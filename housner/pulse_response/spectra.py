@@ -35,7 +35,7 @@ import numpy as np
 from housner.errors import unknown_choice
 from housner.model import simulate_many
 from housner.motion import GroundMotion
-from housner.pulses import one_sine, ricker, ricker_half_width
+from housner.pulse_response.pulses import one_sine, ricker, ricker_half_width
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -47,7 +47,7 @@ __all__ = [
     "rocking_spectrum",
 ]
 
-#: Pulse shapes of a spectrum (:mod:`housner.pulses` makes the motions, for the
+#: Pulse shapes of a spectrum (:mod:`housner.pulse_response.pulses` makes the motions, for the
 #: spectrum and for the engines): name -> Ricker kind, or None for the one-sine pulse.
 PULSES: dict[str, str | None] = {
     "symmetric_ricker": "symmetric",
@@ -149,13 +149,13 @@ def pulse_motion(pulse: str, a_p: float, omega_p: float, p: float, *, duration: 
     Returns
     -------
     GroundMotion
-        :func:`housner.pulses.ricker` (centre t0 at the default half-width)
-        or :func:`housner.pulses.one_sine` (phase 0) with this step.
+        :func:`housner.pulse_response.pulses.ricker` (centre t0 at the default half-width)
+        or :func:`housner.pulse_response.pulses.one_sine` (phase 0) with this step.
         The one-sine pulse is a_p sin(omega_p t) for 0 <= t <= 2 pi / omega_p,
         phase 0 as in Zhang & Makris (2001): the block waits at rest until
         a_p sin(omega_p t) reaches g tan(alpha). (Their psi =
         asin(g tan(alpha) / a_p) is the phase at that uplift, not a shift of
-        the pulse; see :func:`housner.pulses.one_sine`.)
+        the pulse; see :func:`housner.pulse_response.pulses.one_sine`.)
     """
     if pulse not in PULSES:
         raise unknown_choice("pulse", pulse, PULSES)
@@ -174,7 +174,7 @@ def pulse_motion(pulse: str, a_p: float, omega_p: float, p: float, *, duration: 
     else:
         acc = ricker(a_p, omega_p, kind=kind, dt=dt, duration=total, t0=0.5 * window).acc
     name = f"{pulse} a_p={a_p:.4g} omega_p={omega_p:.4g}"
-    return GroundMotion(acc, dt, name, f"housner.spectra.pulse_motion({pulse!r}, dt={dt!r})")
+    return GroundMotion(acc, dt, name, f"housner.pulse_response.spectra.pulse_motion({pulse!r}, dt={dt!r})")
 
 
 @dataclass(frozen=True, eq=False)
@@ -358,7 +358,7 @@ def rocking_spectrum(
     specimen : Specimen
         The block (alpha [rad], p [1/s]).
     pulse : {"symmetric_ricker", "antisymmetric_ricker", "one_sine"}
-        Pulse shape; see :mod:`housner.pulses`.
+        Pulse shape; see :mod:`housner.pulse_response.pulses`.
     omega_ratio : array_like, optional
         omega_p / p [-], positive; default 100 values from 1 to 12.
     accel_ratio : array_like, optional

@@ -138,7 +138,7 @@ def ricker(
         dt=dt,
         name=f"{kind} Ricker a_p={a_p:.4g} m/s^2 omega_p={omega_p:.4g} rad/s",
         provenance=(
-            f"housner.pulses.ricker(a_p={a_p!r}, omega_p={omega_p!r}, kind={kind!r}, dt={dt!r}, "
+            f"housner.pulse_response.pulses.ricker(a_p={a_p!r}, omega_p={omega_p!r}, kind={kind!r}, dt={dt!r}, "
             f"duration={total!r}, t0={t0!r}); Vassiliou & Makris (2011) wavelet, peak |ug''| = |a_p|"
         ),
     )
@@ -218,7 +218,7 @@ def one_sine(
         dt=dt,
         name=f"one-sine a_p={a_p:.4g} m/s^2 omega_p={omega_p:.4g} rad/s",
         provenance=(
-            f"housner.pulses.one_sine(a_p={a_p!r}, omega_p={omega_p!r}, dt={dt!r}, duration={total!r}, "
+            f"housner.pulse_response.pulses.one_sine(a_p={a_p!r}, omega_p={omega_p!r}, dt={dt!r}, duration={total!r}, "
             f"phase={phase!r}); one cycle of a_p sin(omega_p t + phase), then zero"
         ),
     )
