@@ -29,7 +29,7 @@ Baseline in the same run: one plain comparison of the campaign with the
 Housner model (every record simulated once, errors and localisation). The
 ratio says how many such comparisons the search costs. Each progress line
 carries the time since the diagnosis began; after the summary come the
-economies the diagnosis took (``Diagnosis.settings["economies"]``), and its
+economies the diagnosis took (``Diagnosis.settings.economies``), and its
 CPU time with the machine's load average (on a shared machine the wall time
 is not the diagnosis' alone).
 """
@@ -137,7 +137,7 @@ def main(argv=None) -> int:
         f"motions ({gm_dur:g} s) at {rate:g} Hz, {n_samples} samples, hidden effect {hidden!r}, named "
         f"{diag.selected or 'none'}, verdict {diag.status}"
     )
-    for line in diag.settings.get("economies", []):
+    for line in diag.settings.economies:
         print(f"economy: {line}")
     print(f"generate {t_gen:6.1f} s   load {t_load:6.1f} s")
     print(f"baseline: one comparison of the campaign         {t_base:7.2f} s")

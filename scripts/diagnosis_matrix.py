@@ -87,10 +87,10 @@ def main(argv=None) -> int:
                     "ratio": v.residual.ratio,
                     "z": v.residual.z,
                     "baseline_ratio": v.baseline.ratio,
-                    "next": [c["class"] for c in v.next],
+                    "next": [c.name for c in v.next],
                     "right": ok,
                     "why": why,
-                    "family": diag.settings.get("floor_family"),
+                    "family": diag.settings.floor_family,
                     "seconds": el,
                 }
             )

@@ -57,7 +57,7 @@ def main(argv=None) -> int:
                 t0 = time.perf_counter()
                 d = diagnose(load_campaign(info["root"]), effects=[], compare_steps=False)
                 v = d.verdict
-                gm = v.residual.groups.get("ground_motion", {}).get("ratio", float("nan"))
+                gm = v.residual.groups["ground_motion"].ratio if "ground_motion" in v.residual.groups else float("nan")
                 row = {
                     "generator": g,
                     "case": case,
@@ -66,7 +66,7 @@ def main(argv=None) -> int:
                     "ratio": v.residual.ratio,
                     "gm_ratio": gm,
                     "z": v.residual.z,
-                    "family": d.settings["floor_family"],
+                    "family": d.settings.floor_family,
                 }
                 rows.append(row)
                 print(

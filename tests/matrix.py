@@ -21,7 +21,7 @@ def judge(expected, diag, faults: tuple[str, ...] | None = None) -> tuple[bool, 
             return False, f"sensor faults {sorted(named)} (expected {sorted(faults)})"
     v = diag.verdict
     if isinstance(expected, str):
-        first = v.next[0]["class"] if v.next else "none"
+        first = v.next[0].name if v.next else "none"
         ok = v.status in ("partly_explained", "unexplained") and first == expected
         return ok, "" if ok else f"status {v.status}, first class {first} (expected {expected})"
     if not expected:

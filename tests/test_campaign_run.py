@@ -118,7 +118,7 @@ def test_block_campaign_run_scores_the_analytic_model(block, tmp_path, capsys):
     # the scores are outcome_scores' on the same arrays: the 0/1 predictions clipped to [0.01, 0.99]
     y = res["observed_overturned"].to_numpy(bool)
     p = np.clip(res["overturned"].to_numpy(float), P_CLIP, 1 - P_CLIP)
-    want = outcome_scores(p, y, seed=0)
+    want = outcome_scores(p, y, seed=0).to_dict()
     (row,) = Run.load(out).outcome_scores
     for k in ("accuracy", "f1", "log_loss", "tp", "fp", "fn", "tn", "n_predicted", "n_overturned"):
         assert row[k] == want[k], k
@@ -250,7 +250,7 @@ def test_failed_records_are_counted_and_left_out(block, tmp_path):
     ok = res[res.status == "ok"]
     want = outcome_scores(
         np.clip(ok["overturned"].to_numpy(float), P_CLIP, 1 - P_CLIP), ok["observed_overturned"].to_numpy(bool), seed=0
-    )
+    ).to_dict()
     assert row["n_failed"] == 1 and row["n"] == N - 1 and row["accuracy"] == want["accuracy"]
     assert math.isfinite(row["log_loss"])
 

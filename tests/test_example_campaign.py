@@ -43,7 +43,7 @@ def test_the_plain_model_misses_it_and_points_to_dissipation(campaign):
     v = d.verdict
     assert v.status != "no_misfit", v.text
     assert v.baseline.ratio > 5  # far beyond the 1.25 band of a correct model
-    assert v.next and v.next[0]["class"] == "dissipation", v.text
+    assert v.next and v.next[0].name == "dissipation", v.text
 
 
 def test_the_example_effect_added_by_hand_explains_it(campaign):
@@ -55,3 +55,18 @@ def test_the_example_effect_added_by_hand_explains_it(campaign):
     assert dict(d.final.effects)[name]["moment"] == pytest.approx(MOMENT, abs=TOL)
     assert d.final.heldout_error < 0.2 * d.baseline.heldout_error  # the error falls by 80 % or more
     assert "added by hand" in v.text and "falls from" in v.text
+
+
+def test_the_diagnosis_json_is_written_from_a_typed_value_and_read_back_whole(campaign):
+    from housner.scenarios.diagnosis.results import DiagnosisResult
+
+    d = diagnose(campaign, effects=["restitution"], max_effects=1, n_replicas=4)
+    fresh = d.result()
+    assert fresh.to_json() == d.to_json()  # the file is the value's
+    read = DiagnosisResult.from_json(fresh.to_json())
+    # the JSON holds every figure: read back, the value writes the same text, and reads back equal to itself
+    # (a number without a finite value is written null and read as NaN: only a value read once is a fixed point)
+    assert read.to_json() == fresh.to_json()
+    assert DiagnosisResult.from_json(read.to_json()) == read
+    assert read.verdict.status == d.status and read.verdict.next == d.verdict.next
+    assert read.ladder[-1].names == d.final.names and read.settings == d.settings

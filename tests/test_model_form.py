@@ -130,8 +130,8 @@ def test_a_drift_along_the_recording_order_is_found_and_exchangeable_errors_are_
     assert order_drift([flat]) is None
     trend = flat + np.linspace(0, 0.03, n)
     d = order_drift([flat, trend])
-    assert d is not None and d["class"] == "drift" and d["evidence"][0]["z"] > Z_DRIFT
-    assert "recording order" in d["meaning"] and "grows" in d["evidence"][0]["label"]
+    assert d is not None and d.name == "drift" and d.evidence[0].z > Z_DRIFT
+    assert "recording order" in d.meaning and "grows" in d.evidence[0].label
     # its level: on 400 campaigns of exchangeable heavy-tailed errors, two models each, at most 1 %
     # false alarms (nominal 2 x 4.7e-4; 1 % allows a binomial count of 4 where ~0.4 are expected)
     alarms = sum(
@@ -170,20 +170,20 @@ def test_an_energy_loss_between_impacts_points_to_dissipation_and_one_at_the_imp
     }
     s, se = _flight_share(between)
     assert s == pytest.approx(1.0, abs=0.05) and se > 0.3
-    assert physical_classes(_Cmp(between))[0]["class"] == "dissipation"
+    assert physical_classes(_Cmp(between))[0].name == "dissipation"
     at_impact = {
         "energy_ratio": (_m(0.9026, 0.0013), _m(0.9461, 0.001)),
         "flight_ratio": (_m(1.0, 0.029), _m(1.002, 0.02)),
     }
     assert _flight_share(at_impact)[0] == pytest.approx(0.04, abs=0.05)
-    assert physical_classes(_Cmp(at_impact))[0]["class"] == "impact"
+    assert physical_classes(_Cmp(at_impact))[0].name == "impact"
 
 
 def test_uplift_thresholds_that_move_alike_point_to_the_input_and_opposite_ones_to_asymmetry():
     alike = {"onset_pos": (_m(1.13, 0.02), _m(0.99, 0.02)), "onset_neg": (_m(1.124, 0.02), _m(0.97, 0.02))}
-    assert physical_classes(_Cmp(alike))[0]["class"] == "vertical_input"
+    assert physical_classes(_Cmp(alike))[0].name == "vertical_input"
     opposite = {"onset_pos": (_m(1.13, 0.02), _m(0.99, 0.02)), "onset_neg": (_m(0.85, 0.02), _m(0.97, 0.02))}
-    assert physical_classes(_Cmp(opposite))[0]["class"] == "asymmetry"
+    assert physical_classes(_Cmp(opposite))[0].name == "asymmetry"
 
 
 def test_a_sensor_offset_starts_from_the_rotation_measured_at_rest():
@@ -209,8 +209,8 @@ def test_a_restitution_that_wears_shows_in_the_free_vibrations_energy_ratio_alon
     assert order_drift([], (pos, amp, law + noise)) is None
     worn = law - 0.0015 * pos + noise  # 0.947 -> 0.852 over the campaign, as in the brief
     d = order_drift([], (pos, amp, worn))
-    assert d is not None and d["evidence"][0]["metric"] == "energy_ratio_order"
-    assert d["evidence"][0]["measured"] == pytest.approx(-0.0015, rel=0.1)  # 60 impacts of 0.005 scatter
+    assert d is not None and d.evidence[0].metric == "energy_ratio_order"
+    assert d.evidence[0].measured == pytest.approx(-0.0015, rel=0.1)  # 60 impacts of 0.005 scatter
 
 
 def test_a_measured_parameter_is_kept_by_the_fits():

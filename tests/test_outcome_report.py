@@ -112,7 +112,7 @@ def test_every_status_is_stated_once_and_alone(diag, status):
         status=status,
         steps=steps,
         floor=replace(diag.floor, at_floor=at_floor),
-        misses=[m for m in diag.misses if m["model"] in {s.name for s in steps}],
+        misses=[m for m in diag.misses if m.model in {s.name for s in steps}],
     )
     text = page_text(render_outcome_report(d))
     assert text.count(STATUS[status][0]) == 1
@@ -123,15 +123,15 @@ def test_every_status_is_stated_once_and_alone(diag, status):
 def test_the_verdict_gives_the_model_its_scores_the_floor_and_the_baseline(diag, page):
     v = page_text(page_section(page, "verdict"))
     s = diag.final.scores
-    assert f"log loss {s['log_loss']:.3f} [{s['log_loss_ci'][0]:.3f}, {s['log_loss_ci'][1]:.3f}]" in v
-    assert f"accuracy {s['accuracy']:.3f} [{s['accuracy_ci'][0]:.3f}, {s['accuracy_ci'][1]:.3f}]" in v
-    assert f"F1 {s['f1']:.3f}" in v
+    assert f"log loss {s.log_loss:.3f} [{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]" in v
+    assert f"accuracy {s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}]" in v
+    assert f"F1 {s.f1:.3f}" in v
     assert f"{diag.floor.log_loss:.3f} [{diag.floor.log_loss_ci[0]:.3f}, {diag.floor.log_loss_ci[1]:.3f}]" in v
     assert f"measured {diag.floor.measured_log_loss:.3f}" in v
-    best = min(diag.baselines, key=lambda k: diag.baselines[k]["log_loss"])
-    ahead = s["log_loss"] < diag.baselines[best]["log_loss"]
+    best = min(diag.baselines, key=lambda k: diag.baselines[k].log_loss)
+    ahead = s.log_loss < diag.baselines[best].log_loss
     assert baseline_label(best) in v and ("the model is ahead" if ahead else "the model is NOT ahead") in v
-    n_miss = s["fn"] + s["fp"]
+    n_miss = s.fn + s.fp
     assert f"{n_miss} of {len(diag.ids)} records {'is' if n_miss == 1 else 'are'} missed" in v
     if diag.final.name != "plain":
         assert "alpha_eff" in v and "rad" in v
@@ -153,33 +153,33 @@ def test_the_confusion_matrices_add_up(diag, page):
     c = page_text(page_section(page, "confusion"))
     for st in {id(s): s for s in (diag.steps[0], diag.final)}.values():
         sc = st.scores
-        assert sc["tp"] + sc["fp"] + sc["fn"] + sc["tn"] == len(diag.ids)
+        assert sc.tp + sc.fp + sc.fn + sc.tn == len(diag.ids)
         assert step_label(st.name) in c
 
 
 def test_the_misses_table_lists_each_models_misses(diag, page):
     w = page_section(page, "where")
     assert html.escape(diag.pointer[:40]) in w
-    models = {m["model"] for m in diag.misses}
-    assert models == {s.name for s in (diag.steps[0], diag.final) if s.scores["fn"] + s.scores["fp"]}
+    models = {m.model for m in diag.misses}
+    assert models == {s.name for s in (diag.steps[0], diag.final) if s.scores.fn + s.scores.fp}
     for m in diag.misses:  # fewer than MISSES_SHOWN per model here: every one is listed
-        assert f"<code>{m['id']}</code>" in w
+        assert f"<code>{m.id}</code>" in w
 
 
 def test_the_misses_table_stops_at_its_rows_per_model_and_counts_the_rest(diag):
-    many = [dict(diag.misses[0], id=f"extra{i:03d}", predicted_p=0.5 + 0.001 * i) for i in range(MISSES_SHOWN + 7)]
+    many = [replace(diag.misses[0], id=f"extra{i:03d}", predicted_p=0.5 + 0.001 * i) for i in range(MISSES_SHOWN + 7)]
     w = page_section(render_outcome_report(replace(diag, misses=many)), "where")
     assert w.count("<code>extra") == MISSES_SHOWN
     assert "<code>extra036</code>" in w and "<code>extra006</code>" not in w  # the most confident first
-    assert f"7 more of {step_label(many[0]['model'])} not listed" in w
+    assert f"7 more of {step_label(many[0].model)} not listed" in w
 
 
 def test_the_candidates_and_the_settings_are_shown(diag, page):
     c = page_section(page, "candidates")
     for cand in diag.candidates:
-        assert f"<code>{cand['name'].split('+')[0]}</code>" in c
+        assert f"<code>{cand.name.split('+')[0]}</code>" in c
     s = page_text(page_section(page, "settings"))
-    assert f"{diag.geometry['h_m']:.5g} m" in s and f"{diag.folds} (stratified)" in s
+    assert f"{diag.geometry.h_m:.5g} m" in s and f"{diag.folds} (stratified)" in s
 
 
 def test_write_outcome_report_writes_the_page(diag, tmp_path):

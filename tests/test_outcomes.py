@@ -68,14 +68,14 @@ def test_scores_match_hand_counts_and_pairwise_auc():
     p = np.array([0.9, 0.6, 0.4, 0.2, 0.7, 0.1, 0.5, 0.8])
     s = outcome_scores(p, y, seed=0, n_boot=50)
     pred = p >= 0.5  # tp 3 (0.9, 0.6, 0.8), fp 2 (0.7, 0.5), fn 1 (0.4), tn 2
-    assert (s["tp"], s["fp"], s["fn"], s["tn"]) == (3, 2, 1, 2)
-    assert s["accuracy"] == pytest.approx(np.mean(pred == y))
-    assert s["f1"] == pytest.approx(2 * 3 / (5 + 4))
-    assert s["log_loss"] == pytest.approx(-np.mean(np.where(y, np.log(p), np.log(1 - p))))
+    assert (s.tp, s.fp, s.fn, s.tn) == (3, 2, 1, 2)
+    assert s.accuracy == pytest.approx(np.mean(pred == y))
+    assert s.f1 == pytest.approx(2 * 3 / (5 + 4))
+    assert s.log_loss == pytest.approx(-np.mean(np.where(y, np.log(p), np.log(1 - p))))
     pairs = [(a > b) + 0.5 * (a == b) for a in p[y] for b in p[~y]]  # AUC as P(score_pos > score_neg)
-    assert s["roc_auc"] == pytest.approx(np.mean(pairs))
-    lo, hi = s["accuracy_ci"]
-    assert lo <= s["accuracy"] <= hi
+    assert s.roc_auc == pytest.approx(np.mean(pairs))
+    lo, hi = s.accuracy_ci
+    assert lo <= s.accuracy <= hi
 
 
 def test_stratified_folds_keep_the_share_of_overturns():
@@ -126,8 +126,8 @@ def test_diagnosis_finds_a_contact_inside_the_footprint(inside_contact):
     # the fitted alpha_eff within two steps of the alpha grid (28 points over a factor 4 in alpha: 5 % each)
     # of the truth, 0.06 rad
     assert d.final.params["alpha_eff"] == pytest.approx(0.06, rel=0.11)
-    assert d.final.scores["log_loss"] < d.steps[0].scores["log_loss"] - 0.1
-    assert d.final.scores["accuracy"] > 0.9
+    assert d.final.scores.log_loss < d.steps[0].scores.log_loss - 0.1
+    assert d.final.scores.accuracy > 0.9
     # the plain model misses overturns (its footprint is wider than the contact): the pointer says so
     assert "inside the footprint" in d.pointer
     assert d.status in ("explained", "partly_explained")
@@ -145,7 +145,7 @@ def test_diagnosis_of_a_right_model_adds_nothing():
     d = diagnose_outcomes(_campaign(accs, y), folds=4, seed=1)
     # the plain model is the model that made the outcomes: no effect may lower its held-out log loss
     assert d.status == "no_misfit", d.summary()
-    assert d.steps[0].scores["accuracy"] == 1.0
+    assert d.steps[0].scores.accuracy == 1.0
 
 
 def test_diagnosis_refuses_too_few_or_one_sided_outcomes():
@@ -288,3 +288,16 @@ def test_a_campaign_of_both_kinds_gets_both_diagnoses(tmp_path, capsys):
     # two verdicts, each line saying which records it judges: `verdict:` (the theta records') once
     lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("verdict")]
     assert len(lines) == 2 and lines[0].startswith("verdict (outcome records): ") and lines[1].startswith("verdict: ")
+
+
+def test_the_outcome_diagnosis_json_is_written_from_a_typed_value_and_read_back_whole(inside_contact):
+    from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosisResult
+
+    _, _, d = inside_contact
+    fresh = d.result()
+    assert fresh.to_json() == d.to_json()  # the file is the value's
+    read = OutcomeDiagnosisResult.from_json(fresh.to_json())
+    # every figure survives: the value read back writes the same text and reads back equal to itself
+    assert read.to_json() == fresh.to_json()
+    assert OutcomeDiagnosisResult.from_json(read.to_json()) == read
+    assert read.final.scores == d.final.scores and read.baselines == d.baselines and read.misses == tuple(d.misses)

@@ -112,7 +112,7 @@ def test_one_record_carried_off_by_chaos_does_not_hide_the_power_of_sixty():
     assert not r.misfit and r.detectable_ratio <= 2.0 and r.records_needed == 0
     # a broad misfit (every record 2x) still shows, with or without the outlier
     r2 = residual_test(2 * e, fl, ["ground_motion"] * n)
-    assert r2.misfit and r2.groups["ground_motion"]["ratio_trimmed"] == pytest.approx(2, rel=0.15)
+    assert r2.misfit and r2.groups["ground_motion"].ratio_trimmed == pytest.approx(2, rel=0.15)
 
 
 def test_too_few_records_is_inconclusive():
@@ -188,7 +188,7 @@ def test_an_effect_outside_the_library_is_not_called_explained(base):
     assert "the search tried (" in v.text and "explains it" not in v.text
     # what remains shows in the errors (above the floor) or in the localisation (beyond Z_LOCAL)
     assert (v.residual.misfit and v.residual.ratio > RATIO_MISFIT) or "still points to a misfit" in v.text
-    assert v.next and v.next[0]["class"] == info["expected"], v.next
+    assert v.next and v.next[0].name == info["expected"], v.next
     assert "explains it" not in diag.summary()
 
 
@@ -228,7 +228,7 @@ def test_effects_outside_the_library_at_both_split_seeds(base, hidden):
     for s in (0, 1):
         info, diag = _diag(base, hidden, s)
         assert diag.status in ("partly_explained", "unexplained"), diag.summary()
-        assert diag.verdict.next[0]["class"] == info["expected"], diag.verdict.next
+        assert diag.verdict.next[0].name == info["expected"], diag.verdict.next
         got.append(diag.status)
     assert got[0] == got[1]
 

@@ -164,7 +164,7 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign):
     rows = [(s.name if i == 0 else f"+ {s.name}", s.scores) for i, s in enumerate(d.steps)]
     rows += [(name, sc) for name, sc in d.baselines.items()]
     for name, sc in rows:
-        cells = "".join(f"{sc[k]:>9.3f} [{sc[k + '_ci'][0]:.3f},{sc[k + '_ci'][1]:.3f}]" for k in keys)
+        cells = "".join(f"{sc.score(k):>9.3f} [{sc.interval(k)[0]:.3f},{sc.interval(k)[1]:.3f}]" for k in keys)
         print(f"{name[:34]:34s}{cells}")
     print(f"{d.elapsed:.1f} s")
     return d

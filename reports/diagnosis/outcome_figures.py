@@ -214,17 +214,17 @@ def calibration_figure(final_rows: list, baseline_rows: list, final_label: str, 
     ):
         if not rows:
             continue
-        mp = np.array([r["mean_p"] for r in rows])
-        ob = np.array([r["observed"] for r in rows])
-        lo = np.array([r["observed_ci"][0] for r in rows])
-        hi = np.array([r["observed_ci"][1] for r in rows])
+        mp = np.array([r.mean_p for r in rows])
+        ob = np.array([r.observed for r in rows])
+        lo = np.array([r.observed_ci[0] for r in rows])
+        hi = np.array([r.observed_ci[1] for r in rows])
         ax.errorbar(
             mp + dx, ob, yerr=[ob - lo, hi - ob], fmt=marker + "-", color=color, capsize=3, lw=1.3, ms=6, label=label
         )
         for r, xx in zip(rows, mp + dx, strict=True):
             ax.annotate(
-                f"n={r['n']}",
-                (xx, r["observed"]),
+                f"n={r.n}",
+                (xx, r.observed),
                 textcoords="offset points",
                 xytext=(6, -11 if dx < 0 else 5),
                 fontsize=7,

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
@@ -38,7 +39,13 @@ from housner.reports.page import (
     write_page,
 )
 from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import AMPLITUDE_SPREAD, LEVEL
-from housner.scenarios.diagnosis.outcomes.outcome_scores import SCORE_KEYS, calibration_table, per_record_log_loss
+from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeGeometry
+from housner.scenarios.diagnosis.outcomes.outcome_scores import (
+    SCORE_KEYS,
+    OutcomeScores,
+    calibration_table,
+    per_record_log_loss,
+)
 
 __all__ = ["MISSES_SHOWN", "STATUS", "render_outcome_report", "step_label", "write_outcome_report"]
 
@@ -154,25 +161,25 @@ def step_label(name: str) -> str:
 
 def _best_baseline(diag) -> str:
     """The baseline with the lowest held-out log loss (the one the verdict compares with)."""
-    return min(diag.baselines, key=lambda k: diag.baselines[k]["log_loss"])
+    return min(diag.baselines, key=lambda k: diag.baselines[k].log_loss)
 
 
-def _ci(scores: dict, key: str, digits: int = 3) -> str:
+def _ci(scores: OutcomeScores, key: str, digits: int = 3) -> str:
     """'value [lo, hi]' of a score; the value alone where it has no interval."""
-    ci = scores.get(f"{key}_ci")
+    ci = scores.interval(key)
     if not ci:
-        return fmt_num(scores.get(key, math.nan), digits)
-    return ci_cell(scores[key], ci[0], ci[1], digits)
+        return fmt_num(scores.score(key), digits)
+    return ci_cell(scores.score(key), ci[0], ci[1], digits)
 
 
-def _param(key: str, value, geometry: dict, *, long: bool) -> str:
+def _param(key: str, value, geometry: OutcomeGeometry, *, long: bool) -> str:
     """A fitted parameter with its unit; ``long`` says what it is (the verdict), else only its symbol (tables)."""
     what, sym, unit = _PARAMS.get(key, (key, key, "?"))
     if value is None:
         return f"{esc(sym)}: Housner's impact law" + (" (from the geometry)" if long else "")
     text = (f"{esc(what)} " if long else "") + f"{esc(sym)} = {float(value):.4g} " + ("[-]" if unit == "-" else unit)
     if key == "alpha_eff":
-        a = [geometry.get("alpha_pos_rad"), geometry.get("alpha_neg_rad")]
+        a = [geometry.alpha_pos_rad, geometry.alpha_neg_rad]
         if all(isinstance(v, (int, float)) and v > 0 for v in a):
             if math.isclose(a[0], a[1]):
                 share = f"{100 * float(value) / a[0]:.0f} % of the footprint's alpha, {a[0]:.4f} rad"
@@ -183,7 +190,7 @@ def _param(key: str, value, geometry: dict, *, long: bool) -> str:
     return text
 
 
-def _params(params: dict, geometry: dict, *, long: bool = False) -> str:
+def _params(params: dict, geometry: OutcomeGeometry, *, long: bool = False) -> str:
     return "; ".join(_param(k, v, geometry, long=long) for k, v in params.items()) or "&ndash;"
 
 
@@ -250,7 +257,7 @@ def _verdict(diag, best: str) -> str:
 def _against_baseline(diag, best: str) -> str:
     """The final model against the best baseline in log loss, with the paired difference and its doubt."""
     b = diag.baselines[best]
-    ahead = diag.final.scores["log_loss"] < b["log_loss"]
+    ahead = diag.final.scores.log_loss < b.log_loss
     d = per_record_log_loss(diag.baseline_p[best], diag.observed) - per_record_log_loss(diag.final.p, diag.observed)
     se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else math.nan
     mean = float(np.mean(d))
@@ -272,7 +279,7 @@ def _against_baseline(diag, best: str) -> str:
 def _remains(diag) -> str:
     """What the final model leaves unexplained, in words: its misses against what its own probabilities allow."""
     s, n, fl = diag.final.scores, len(diag.ids), diag.floor
-    fn, fp = int(s["fn"]), int(s["fp"])
+    fn, fp = s.fn, s.fp
     lo, hi = n * (1 - fl.accuracy_ci[1]), n * (1 - fl.accuracy_ci[0])
     expect = (
         f"a correct model with these probabilities would miss about {n * (1 - fl.accuracy):.0f} "
@@ -338,8 +345,8 @@ def _confusion(diag) -> str:
             + html_table(
                 ["observed \\ predicted", "overturn", "stand"],
                 [
-                    ["<b>overturned</b>", f"{c['tp']}", f"<span class=bad>{c['fn']}</span>" if c["fn"] else "0"],
-                    ["<b>stood</b>", f"<span class=bad>{c['fp']}</span>" if c["fp"] else "0", f"{c['tn']}"],
+                    ["<b>overturned</b>", f"{c.tp}", f"<span class=bad>{c.fn}</span>" if c.fn else "0"],
+                    ["<b>stood</b>", f"<span class=bad>{c.fp}</span>" if c.fp else "0", f"{c.tn}"],
                 ],
             )
             + "</div>"
@@ -375,21 +382,21 @@ def _where(diag) -> str:
     pointer = f"<p>The plain model's misses: {esc(diag.pointer)}.</p>"
     by_model: dict[str, list] = {}
     for m in diag.misses:
-        by_model.setdefault(m["model"], []).append(m)
+        by_model.setdefault(m.model, []).append(m)
     if not by_model:
         return pointer + "<p>No record is missed by the plain or the final model.</p>"
     rows, more = [], []
     for model, ms in by_model.items():
-        ms = sorted(ms, key=lambda m: -abs(m["predicted_p"] - 0.5))
+        ms = sorted(ms, key=lambda m: -abs(m.predicted_p - 0.5))
         for m in ms[:MISSES_SHOWN]:
             rows.append(
                 [
                     esc(step_label(model)),
-                    f"<code>{esc(m['id'])}</code>",
-                    esc(m["observed"]),
-                    fmt_num(m["predicted_p"]),
-                    fmt_num(m["pga_g"]),
-                    fmt_num(m["pgv_over_pga_s"]),
+                    f"<code>{esc(m.id)}</code>",
+                    esc(m.observed),
+                    fmt_num(m.predicted_p),
+                    fmt_num(m.pga_g),
+                    fmt_num(m.pgv_over_pga_s),
                 ]
             )
         if len(ms) > MISSES_SHOWN:
@@ -411,12 +418,12 @@ def _candidates(diag) -> str:
         return "<p>No candidate effect was tried.</p>"
     rows = [
         [
-            _effects(c["name"]),
-            _params(c.get("params", {}), diag.geometry),
-            fmt_num(c["log_loss"]),
-            f"{fmt_signed(c['improvement'], 3)} &plusmn; {fmt_num(c['improvement_se'])}",
-            fmt_p(c["p_value"]),
-            '<span class="ok">yes</span>' if c["added"] else "no",
+            _effects(c.name),
+            _params(c.params, diag.geometry),
+            fmt_num(c.log_loss),
+            f"{fmt_signed(c.improvement, 3)} &plusmn; {fmt_num(c.improvement_se)}",
+            fmt_p(c.p_value),
+            '<span class="ok">yes</span>' if c.added else "no",
         ]
         for c in diag.candidates
     ]
@@ -441,7 +448,7 @@ def _candidates(diag) -> str:
 
 def _settings(diag) -> str:
     rows = []
-    for key, value in diag.geometry.items():
+    for key, value in ((f.name, getattr(diag.geometry, f.name)) for f in fields(diag.geometry)):
         if key in _GEOMETRY:
             label, unit = _GEOMETRY[key]
             rows.append([esc(label), f"{float(value):.5g} {esc(unit)}"])

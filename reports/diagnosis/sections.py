@@ -5,6 +5,7 @@ the records and the settings, each an HTML fragment (:mod:`housner.reports.diagn
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
@@ -166,17 +167,17 @@ def _verdict_detail(diag) -> str:
                 [
                     esc(label),
                     esc(kind.replace("_", " ")),
-                    str(g["n"]),
-                    _f(g["error"]),
-                    _f(g["floor"]),
-                    f"{g['ratio']:.2f}",
-                    esc(verdict_words.z_text(g["z"])),
-                    '<span class="bad">yes</span>' if g["misfit"] else "no",
-                    f"{g.get('detectable_ratio', float('nan')):.2f}",
+                    str(g.n),
+                    _f(g.error),
+                    _f(g.floor),
+                    f"{g.ratio:.2f}",
+                    esc(verdict_words.z_text(g.z)),
+                    '<span class="bad">yes</span>' if g.misfit else "no",
+                    f"{g.detectable_ratio:.2f}",
                 ]
             )
     # the constants are read from the verdict's module when the page is built (they are its, never copied)
-    fam, fam_plain = diag.settings.get("floor_family", ""), diag.settings.get("floor_family_plain", "")
+    fam, fam_plain = diag.settings.floor_family, diag.settings.floor_family_plain
     fams = ""
     if fam:
         plain_fam = fam_plain or fam
@@ -214,18 +215,16 @@ def _verdict_detail(diag) -> str:
         items = []
         names = diag.final.names if len(diag.steps) > 1 else []
         for c in v.next:
-            who = "the model with " + " + ".join(names) if names and c.get("from") != "plain" else "the plain model"
+            who = "the model with " + " + ".join(names) if names and c.source != "plain" else "the plain model"
             ev = "; ".join(
                 esc(verdict_words.evidence_text(e))
-                if e["metric"].startswith("probe:")
-                else f"{esc(e['label'])}: measured {_pm(e['measured'], e['measured_se'])}, {esc(who)} "
-                f"{_pm(e['model'], e['model_se'])} ({esc(verdict_words.z_text(e['z']))})"
-                for e in c["evidence"]
+                if e.is_probe
+                else f"{esc(e.label)}: measured {_pm(e.measured, e.measured_se)}, {esc(who)} "
+                f"{_pm(e.model, e.model_se)} ({esc(verdict_words.z_text(e.z))})"
+                for e in c.evidence
             )
-            items.append(
-                f"<li><b>{esc(c['class'])}</b> &mdash; {esc(c['meaning'])}<br><span class=sub>{ev}</span></li>"
-            )
-        src = {c.get("from") for c in v.next}
+            items.append(f"<li><b>{esc(c.name)}</b> &mdash; {esc(c.meaning)}<br><span class=sub>{ev}</span></li>")
+        src = {c.source for c in v.next}
         if names and src == {"final"}:
             whose = f"what the model with {' + '.join(names)} still gets wrong"
         elif names:
@@ -243,7 +242,7 @@ def _verdict_detail(diag) -> str:
         )
     freq = ""
     if diag.selection_frequency:
-        k = diag.settings.get("folds", "?")
+        k = diag.settings.folds
         cells = ", ".join(
             f"<code>{esc(n)}</code> {100 * f:.0f} %"
             for n, f in sorted(diag.selection_frequency.items(), key=lambda kv: -kv[1])
@@ -269,7 +268,7 @@ def summary_section(diag) -> str:
         + f'<p class="sub">Specimen: 2H = {spec.height:g} m, 2B = {spec.width:g} m, m = {spec.mass:g} kg, '
         f"alpha = {spec.alpha:.4f} rad, p = {spec.p:.4f} 1/s, Housner r = {spec.r_housner:.4f}. "
         f"{len(c.free_vibration)} free-vibration and {len(c.ground_motion)} ground-motion records, "
-        f"{diag.settings.get('folds', '?')}-fold cross-validation (seed {esc(diag.settings.get('seed'))}): every "
+        f"{diag.settings.folds}-fold cross-validation (seed {esc(diag.settings.seed)}): every "
         f"record is fitted on in the other folds and held out once; sensor noise sigma/alpha "
         f"{diag.noise_floor:.2g}.</p>{skipped}"
     )
@@ -505,8 +504,15 @@ def sensor_section(diag) -> str:
     return out
 
 
+def _settings_items(settings) -> list[tuple[str, Any]]:
+    """The diagnosis' settings, field by field (a tuple shown as the list the JSON holds)."""
+    return [
+        (f.name, list(v) if isinstance(v, tuple) else v) for f in fields(settings) for v in (getattr(settings, f.name),)
+    ]
+
+
 def settings_section(diag) -> str:
-    rows = [[esc(k), f"<code>{esc(v)}</code>"] for k, v in diag.settings.items()]
+    rows = [[esc(k), f"<code>{esc(v)}</code>"] for k, v in _settings_items(diag.settings)]
     rows.append(["elapsed", f"{diag.elapsed:.1f} s"])
     rows.append(["campaign", f"<code>{esc(diag.campaign.path)}</code>"])
     return html_table(["setting", "value"], rows, cls="kv")

@@ -88,7 +88,7 @@ fold refits of up to 9-10 points each on (K - 1)/K of the records; pairs, probes
 refits add their own. The measured constants, and what a search costs at 500 and 2000 Hz: see
 docs/explanation/diagnosis.md#what-a-diagnosis-costs.
 
-The economies, each said in ``Diagnosis.settings["economies"]`` when it applies:
+The economies, each said in ``Diagnosis.settings.economies`` when it applies:
 
 * a campaign sampled at q >= 2 times :data:`housner.scenarios.diagnosis.selection.record_scoring.SEARCH_RATE` is
   searched on every q-th sample (:func:`housner.scenarios.diagnosis.selection.record_scoring.decimated`: theta as
@@ -136,7 +136,7 @@ from housner.scenarios.campaigns.campaign import Campaign, load_campaign
 from housner.scenarios.diagnosis.comparison.localise import measured_features
 from housner.scenarios.diagnosis.comparison.pointers import order_drift
 from housner.scenarios.diagnosis.comparison.record_comparison import compare
-from housner.scenarios.diagnosis.results import Candidate, Diagnosis, Step
+from housner.scenarios.diagnosis.results import Candidate, Diagnosis, DiagnosisSettings, Step
 from housner.scenarios.diagnosis.selection.candidate_trial import (
     PRACTICAL,
     TrialSetup,
@@ -155,7 +155,7 @@ from housner.scenarios.diagnosis.selection.history_search import (
     greedy,
     start,
 )
-from housner.scenarios.diagnosis.selection.probes import PROBES
+from housner.scenarios.diagnosis.selection.probes import PROBES, ProbeFinding
 from housner.scenarios.diagnosis.selection.record_scoring import DEFAULT_FOLDS, check_finite
 from housner.scenarios.diagnosis.sensor_assessment import assess_sensor
 from housner.scenarios.diagnosis.verdict.correct_model_floor import N_REPLICAS, Floor, measure_floor
@@ -327,8 +327,8 @@ def floor_family(
                 family=family,
             )
             gm = residual_test(final.heldout_errors, floor, kinds).groups.get("ground_motion")
-            ratio = math.nan if gm is None else max(gm["ratio"], gm["ratio_trimmed"])
-            measured[family] = (floor, gm is None or not gm["misfit"] and ratio <= RATIO_MISFIT, ratio)
+            ratio = math.nan if gm is None else gm.robust_ratio
+            measured[family] = (floor, gm is None or not gm.misfit and ratio <= RATIO_MISFIT, ratio)
         return measured[family]
 
     for i, family in enumerate(families):
@@ -361,15 +361,14 @@ def floor_family(
     return families[-1], measured[families[-1]][0]
 
 
-def probe(setup: TrialSetup, state: SearchState) -> list[dict]:
+def probe(setup: TrialSetup, state: SearchState) -> list[ProbeFinding]:
     """Physics outside the library tried on top of the final model
     (:mod:`housner.scenarios.diagnosis.selection.probes`).
 
     Each probe is fitted on top of the final model and judged on its out-of-fold errors like a
     candidate, at the verdict's level (Bonferroni over the probes), and against its kernel with
-    its physics faded out; on the search's records (``setup`` and ``state`` at its rate). Returns,
-    for each that lowers the error significantly: {probe, class, params, error, error_with,
-    improvement, se, z, p}.
+    its physics faded out; on the search's records (``setup`` and ``state`` at its rate). Returns
+    those that lower the error significantly.
     """
     final = state.current
     if final.train_loss - state.noise_loss <= PRACTICAL * setup.cv.noise_floor:
@@ -385,17 +384,17 @@ def probe(setup: TrialSetup, state: SearchState) -> list[dict]:
         setup.progress(f"probe {name} {fmt_params(c.params)}: {held_text(c, trial.model is not None)}")
         if c.significant:
             out.append(
-                {
-                    "probe": name,
-                    "class": class_name,
-                    "params": c.params,
-                    "error": float(final.heldout_errors.mean()),
-                    "error_with": c.heldout_error,
-                    "improvement": c.improvement,
-                    "se": c.improvement_se,
-                    "z": c.z,
-                    "p": c.pvalue,
-                }
+                ProbeFinding(
+                    probe=name,
+                    class_name=class_name,
+                    params=c.params,
+                    error=float(final.heldout_errors.mean()),
+                    error_with=c.heldout_error,
+                    improvement=c.improvement,
+                    se=c.improvement_se,
+                    z=c.z,
+                    p=c.pvalue,
+                )
             )
     return out
 
@@ -505,23 +504,23 @@ def diagnose(
         added=list(add),
         search_ran=search_ran,
     )
-    settings = {
-        "effects": candidates,
-        "add": list(add),
-        "folds": cv.folds.count,
-        "seed": seed if isinstance(seed, (int, type(None))) else str(seed),
-        "max_effects": max_effects,
-        "level": level,
-        "practical": PRACTICAL,
-        "pairs": pairs,
-        "replicas": n_replicas,
-        "engine_settings": dict(engine_settings or {}),
-        "floor_family": end.family,
-        "floor_family_plain": end.family_plain,
-        "search": search_ran,
-        "decimation": cv.decimation,
-        "economies": list(setup.economies),
-    }
+    settings = DiagnosisSettings(
+        effects=tuple(candidates),
+        add=tuple(add),
+        folds=cv.folds.count,
+        seed=seed if isinstance(seed, (int, type(None))) else str(seed),
+        max_effects=max_effects,
+        level=level,
+        practical=PRACTICAL,
+        pairs=pairs,
+        replicas=n_replicas,
+        engine_settings=dict(engine_settings or {}),
+        floor_family=end.family,
+        floor_family_plain=end.family_plain,
+        search=search_ran,
+        decimation=cv.decimation,
+        economies=tuple(setup.economies),
+    )
     diag = _diagnosis(campaign, cv.folds, found, end, list(add), cv.noise_floor, settings)
     diag.elapsed = time.perf_counter() - t_start
     return diag
@@ -544,15 +543,15 @@ def _diagnosis(
     end: Conclusion,
     added: list[str],
     noise_floor: float,
-    settings: dict,
+    settings: DiagnosisSettings,
 ) -> Diagnosis:
     """The :class:`Diagnosis` of the search and its conclusion, the verdict's text ending with how it was computed."""
     verdict = end.verdict
     if campaign.sensor is not None:
         verdict = replace(verdict, text=verdict.text + campaign.sensor.verdict_sentence())
-    if settings["economies"]:
+    if settings.economies:
         # what ran on fewer samples or stopped early: said where the verdict is read
-        verdict = replace(verdict, text=verdict.text + " How it was computed: " + " ".join(settings["economies"]))
+        verdict = replace(verdict, text=verdict.text + " How it was computed: " + " ".join(settings.economies))
     return Diagnosis(
         campaign=campaign,
         baseline=end.steps[0],

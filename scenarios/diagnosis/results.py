@@ -7,7 +7,6 @@ Errors are time-history errors in units of alpha (see :mod:`housner.scenarios.di
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from dataclasses import dataclass, field
@@ -19,9 +18,21 @@ import numpy as np
 from housner.effects import effect_class
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
-from housner.scenarios.execution.rundir import jsonable
+from housner.scenarios.execution.typed_json import JsonValue, from_data, to_data
 
-__all__ = ["Candidate", "Diagnosis", "Step", "change_text", "fmt_pm", "names_label", "params_text", "signed_words"]
+__all__ = [
+    "Candidate",
+    "Diagnosis",
+    "DiagnosisResult",
+    "DiagnosisSettings",
+    "FloorSummary",
+    "Step",
+    "change_text",
+    "fmt_pm",
+    "names_label",
+    "params_text",
+    "signed_words",
+]
 
 
 def names_label(names) -> str:
@@ -102,6 +113,27 @@ class Candidate:
             "fold_improvements": None if self.fold_wins is None else [float(x) for x in self.fold_wins],
         }
 
+    @classmethod
+    def from_dict(cls, data: dict) -> Candidate:
+        """The candidate a diagnosis JSON holds (its per-record held-out errors are not written there)."""
+        folds = data.get("fold_improvements")
+        return cls(
+            effects=tuple(data["effect"].split(" + ")),
+            params=_params_from(data["params"]),
+            base=tuple(data["base"]),
+            round=int(data["round"]),
+            train_error=from_data(float, data["train_error"]),
+            heldout_error=from_data(float, data["heldout_error"]),
+            heldout_se=from_data(float, data["heldout_se"]),
+            improvement=from_data(float, data["improvement"]),
+            improvement_se=from_data(float, data["improvement_se"]),
+            z=from_data(float, data["z"]),
+            pvalue=from_data(float, data["pvalue"]),
+            significant=bool(data["significant"]),
+            reason=data["reason"],
+            fold_wins=None if folds is None else np.array([from_data(float, x) for x in folds]),
+        )
+
 
 @dataclass(frozen=True)
 class Step:
@@ -164,6 +196,217 @@ class Step:
             "significant": self.significant,
         }
 
+    @classmethod
+    def from_dict(cls, data: dict) -> Step:
+        """The rung a diagnosis JSON's ladder holds (its per-record errors and comparison are not written there)."""
+        return cls(
+            effects=tuple((e["name"], _params_from(e["params"])) for e in data["effects"]),
+            added_effects=tuple(data["added"].split(" + ")) if data["added"] else (),
+            by_hand=bool(data["by_hand"]),
+            train_error=from_data(float, data["train_error"]),
+            heldout_error=from_data(float, data["heldout_error"]),
+            heldout_se=from_data(float, data["heldout_se"]),
+            improvement=from_data(float, data["improvement"]),
+            improvement_se=from_data(float, data["improvement_se"]),
+            significant=bool(data["significant"]),
+        )
+
+
+@dataclass(frozen=True)
+class DiagnosisSettings:
+    """What a diagnosis ran with, and how it was computed.
+
+    Attributes
+    ----------
+    effects, add : tuple of str
+        The candidate effects and those added by hand.
+    folds : int
+        Cross-validation folds K [-].
+    seed : Any
+        The seed as given (an int, None or its text).
+    max_effects : int
+    level, practical : float
+        The family-wise level of a round [-] and the practical share of the sensor noise a fall must reach [-].
+    pairs : bool
+    replicas : int
+        Replicas of the floor's parametric bootstrap.
+    engine_settings : dict
+        The analytic engine's settings.
+    floor_family, floor_family_plain : str
+        The families of correct integrators of the final and of the plain model's floor.
+    search : str
+        What the search did (``ran``, ``off``, ``none_left``, ``skipped``).
+    decimation : int
+        The search ran on every ``decimation``-th sample [-].
+    economies : tuple of str
+        What ran on fewer samples or stopped early, in words.
+    """
+
+    effects: tuple[str, ...]
+    add: tuple[str, ...]
+    folds: int
+    seed: Any
+    max_effects: int
+    level: float
+    practical: float
+    pairs: bool
+    replicas: int
+    engine_settings: dict
+    floor_family: str
+    floor_family_plain: str
+    search: str
+    decimation: int
+    economies: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class FloorSummary:
+    """A correct-model floor as a diagnosis JSON holds it.
+
+    Attributes
+    ----------
+    per_record : tuple of float
+        The floor of each record, campaign order [alpha].
+    perturbation : dict
+        What the bootstrap perturbed, and by how much.
+    replicas : int
+    """
+
+    per_record: tuple[float, ...]
+    perturbation: dict
+    replicas: int
+
+    @classmethod
+    def of(cls, floor) -> FloorSummary:
+        """The summary of a measured :class:`housner.scenarios.diagnosis.verdict.correct_model_floor.Floor`."""
+        return cls(tuple(float(x) for x in floor.mean), dict(floor.perturbation), int(floor.n_replicas))
+
+
+@dataclass(frozen=True)
+class DiagnosisResult(JsonValue):
+    """What a diagnosis JSON holds, as a value: :meth:`Diagnosis.result` makes it, :meth:`to_json` writes the file and
+    :meth:`from_json` reads it back (:meth:`to_dict` adds the baseline's and the final model's error summaries, which
+    follow from the ladder).
+
+    Attributes
+    ----------
+    campaign : str
+    ladder : tuple of Step
+    candidates : tuple of Candidate
+        The first round.
+    rounds : tuple of tuple of Candidate
+    selected, added : tuple of str
+    noise_floor, test_level : float
+    train_ids, heldout_ids : tuple of str
+    skipped : tuple of tuple of str
+        The campaign's records left out, each (record, file, why).
+    settings : DiagnosisSettings
+    folds : tuple of tuple of str
+    selection_frequency : dict of str to float
+    verdict : Verdict or None
+    sensor : dict or None
+        The sensor's assessment as plain data.
+    floors : (FloorSummary, FloorSummary) or None
+        The plain and the final model's floors.
+    localisation : dict
+        ``baseline`` and ``final``: each model's comparison summary as plain data (None where not run).
+    summary : str
+    elapsed_s : float
+    """
+
+    campaign: str
+    ladder: tuple[Step, ...]
+    candidates: tuple[Candidate, ...]
+    rounds: tuple[tuple[Candidate, ...], ...]
+    selected: tuple[str, ...]
+    added: tuple[str, ...]
+    noise_floor: float
+    test_level: float
+    train_ids: tuple[str, ...]
+    heldout_ids: tuple[str, ...]
+    skipped: tuple[tuple[str, ...], ...]
+    settings: DiagnosisSettings
+    folds: tuple[tuple[str, ...], ...]
+    selection_frequency: dict
+    verdict: Any
+    sensor: dict | None
+    floors: tuple[FloorSummary, FloorSummary] | None
+    localisation: dict
+    summary: str
+    elapsed_s: float
+
+    def to_dict(self) -> dict:
+        """The diagnosis JSON's keys, in its order."""
+        base, final = self.ladder[0], self.ladder[-1]
+        b = base.heldout_error
+        reduction = (b - final.heldout_error) / b if b > 0 else 0.0
+        return to_data(
+            {
+                "campaign": self.campaign,
+                "baseline": self._errors(base),
+                "candidates": [c.to_dict() for c in self.candidates],
+                "selected": list(self.selected),
+                "added": list(self.added),
+                "final": {**self._errors(final), "reduction": reduction},
+                "ladder": [st.to_dict() for st in self.ladder],
+                "rounds": [[c.to_dict() for c in r] for r in self.rounds],
+                "test_level": self.test_level,
+                "train_ids": list(self.train_ids),
+                "heldout_ids": list(self.heldout_ids),
+                "skipped": [list(x) for x in self.skipped],
+                "settings": to_data(self.settings),
+                "folds": [list(f) for f in self.folds],
+                "selection_frequency": dict(self.selection_frequency),
+                "verdict": None if self.verdict is None else self.verdict.to_dict(),
+                "sensor": self.sensor,
+                "floor": None
+                if self.floors is None
+                else {"baseline": to_data(self.floors[0]), "final": to_data(self.floors[1])},
+                "localisation": self.localisation,
+                "summary": self.summary,
+                "elapsed_s": self.elapsed_s,
+            }
+        )
+
+    def _errors(self, step: Step) -> dict:
+        return {
+            "heldout_error": step.heldout_error,
+            "heldout_se": step.heldout_se,
+            "train_error": step.train_error,
+            "noise_floor": self.noise_floor,
+            "effects": [{"name": n, "params": _clean(p)} for n, p in step.effects],
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> DiagnosisResult:
+        from housner.scenarios.diagnosis.verdict.decision import Verdict  # the verdict reads the results' classes
+
+        floor = data.get("floor")
+        return cls(
+            campaign=data["campaign"],
+            ladder=tuple(Step.from_dict(x) for x in data["ladder"]),
+            candidates=tuple(Candidate.from_dict(c) for c in data["candidates"]),
+            rounds=tuple(tuple(Candidate.from_dict(c) for c in r) for r in data["rounds"]),
+            selected=tuple(data["selected"]),
+            added=tuple(data["added"]),
+            noise_floor=from_data(float, data["baseline"]["noise_floor"]),
+            test_level=from_data(float, data["test_level"]),
+            train_ids=tuple(data["train_ids"]),
+            heldout_ids=tuple(data["heldout_ids"]),
+            skipped=tuple(tuple(x) for x in data["skipped"]),
+            settings=from_data(DiagnosisSettings, data["settings"]),
+            folds=tuple(tuple(f) for f in data["folds"]),
+            selection_frequency={k: from_data(float, v) for k, v in data["selection_frequency"].items()},
+            verdict=None if data.get("verdict") is None else Verdict.from_dict(data["verdict"]),
+            sensor=data.get("sensor"),
+            floors=None
+            if floor is None
+            else (from_data(FloorSummary, floor["baseline"]), from_data(FloorSummary, floor["final"])),
+            localisation=data["localisation"],
+            summary=data["summary"],
+            elapsed_s=from_data(float, data["elapsed_s"]),
+        )
+
 
 @dataclass(eq=False)
 class Diagnosis:
@@ -214,7 +457,7 @@ class Diagnosis:
     test_level: float
     train_ids: list[str]
     heldout_ids: list[str]
-    settings: dict
+    settings: DiagnosisSettings
     folds: list = field(default_factory=list)
     verdict: Any = None
     floors: tuple = ()
@@ -273,62 +516,49 @@ class Diagnosis:
         sensor = getattr(self.campaign, "sensor", None)
         if sensor is not None and sensor.noise.white and not sensor.faults:
             parts.append(f"Sensor noise: {sensor.noise.describe()}.")  # else the verdict's text says it
-        k = self.settings.get("folds", "?")
+        k = self.settings.folds
         parts.append(
             f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha {self.noise_floor:.2g}.)"
         )
         return " ".join(p for p in parts if p)
 
-    def to_dict(self) -> dict:
-        """Plain data for JSON: baseline, candidates, selected, final, ladder, rounds, settings."""
-
-        def err(step: Step) -> dict:
-            return {
-                "heldout_error": step.heldout_error,
-                "heldout_se": step.heldout_se,
-                "train_error": step.train_error,
-                "noise_floor": self.noise_floor,
-                "effects": [{"name": n, "params": _clean(p)} for n, p in step.effects],
-            }
-
-        return {
-            "campaign": self.campaign.name,
-            "baseline": err(self.baseline),
-            "candidates": [c.to_dict() for c in self.candidates],
-            "selected": list(self.selected),
-            "added": list(self.added),
-            "final": {**err(self.final), "reduction": self.reduction},
-            "ladder": [s.to_dict() for s in self.steps],
-            "rounds": [[c.to_dict() for c in r] for r in self.rounds],
-            "test_level": self.test_level,
-            "train_ids": list(self.train_ids),
-            "heldout_ids": list(self.heldout_ids),
-            "skipped": [list(s) for s in self.campaign.skipped],
-            "settings": self.settings,
-            "folds": [list(f) for f in self.folds],
-            "selection_frequency": dict(self.selection_frequency),
-            "verdict": None if self.verdict is None else self.verdict.to_dict(),
-            "sensor": None if getattr(self.campaign, "sensor", None) is None else self.campaign.sensor.to_dict(),
-            "floor": None if not self.floors else {"baseline": _floor(self.floors[0]), "final": _floor(self.floors[1])},
-            "localisation": {
-                "baseline": self.baseline.comparison.summary() if self.baseline.comparison is not None else None,
-                "final": self.final.comparison.summary() if self.final.comparison is not None else None,
+    def result(self) -> DiagnosisResult:
+        """The diagnosis as the value its JSON holds."""
+        cmp0, cmp1 = self.baseline.comparison, self.final.comparison
+        sensor = getattr(self.campaign, "sensor", None)
+        return DiagnosisResult(
+            campaign=self.campaign.name,
+            ladder=tuple(self.steps),
+            candidates=tuple(self.candidates),
+            rounds=tuple(tuple(r) for r in self.rounds),
+            selected=tuple(self.selected),
+            added=tuple(self.added),
+            noise_floor=self.noise_floor,
+            test_level=self.test_level,
+            train_ids=tuple(self.train_ids),
+            heldout_ids=tuple(self.heldout_ids),
+            skipped=tuple(tuple(x) for x in self.campaign.skipped),
+            settings=self.settings,
+            folds=tuple(tuple(f) for f in self.folds),
+            selection_frequency=dict(self.selection_frequency),
+            verdict=self.verdict,
+            sensor=None if sensor is None else to_data(sensor.to_dict()),
+            floors=None if not self.floors else (FloorSummary.of(self.floors[0]), FloorSummary.of(self.floors[1])),
+            localisation={
+                "baseline": None if cmp0 is None else to_data(cmp0.summary()),
+                "final": None if cmp1 is None else to_data(cmp1.summary()),
             },
-            "summary": self.summary(),
-            "elapsed_s": self.elapsed,
-        }
+            summary=self.summary(),
+            elapsed_s=self.elapsed,
+        )
+
+    def to_dict(self) -> dict:
+        """The diagnosis JSON's data (:meth:`DiagnosisResult.to_dict`)."""
+        return self.result().to_dict()
 
     def to_json(self, path: str | Path | None = None) -> str:
-        """The JSON text of :meth:`to_dict`; also written to ``path`` when given."""
-        text = json.dumps(jsonable(self.to_dict(), nonfinite="null"), indent=2, allow_nan=False)
-        if path is not None:
-            Path(path).write_text(text + "\n")
-        return text
-
-
-def _floor(f) -> dict:
-    """A verdict ``Floor`` as plain data: per-record floor [alpha], perturbation, replicas."""
-    return {"per_record": [float(x) for x in f.mean], "perturbation": f.perturbation, "replicas": f.n_replicas}
+        """The diagnosis JSON's text; also written to ``path`` when given."""
+        return self.result().to_json(path)
 
 
 def _fmt_num(v: float) -> str:
@@ -487,3 +717,8 @@ def _nan_none(v: float):
 
 def _clean(params: dict) -> dict:
     return {k: _nan_none(float(v)) for k, v in params.items()}
+
+
+def _params_from(data: dict) -> dict:
+    """Fitted parameters as a diagnosis JSON holds them (null: no finite value)."""
+    return {k: from_data(float, v) for k, v in data.items()}

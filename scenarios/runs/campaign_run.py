@@ -398,7 +398,7 @@ def outcome_table(results: pd.DataFrame, engines: list[str] | None = None, *, se
         row = {"engine": name, "n_failed": int(len(sub) - len(ok)), "p_clip": P_CLIP}
         if len(ok):
             p = np.clip(ok["overturned"].to_numpy(float), P_CLIP, 1.0 - P_CLIP)
-            row.update(outcome_scores(p, ok["observed_overturned"].to_numpy(bool), seed=seed))
+            row.update(outcome_scores(p, ok["observed_overturned"].to_numpy(bool), seed=seed).to_dict())
         else:
             row.update(n=0, n_predicted=0, n_overturned=int(sub["observed_overturned"].astype(bool).sum()))
         rows.append(row)

@@ -13,14 +13,25 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 from scipy.stats import kendalltau, norm
 
 from housner.scenarios.diagnosis.comparison.localise import METRICS
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
+from housner.scenarios.execution.typed_json import from_data
 
-__all__ = ["CLASSES", "MIN_RECORDS", "Z_DRIFT", "evidence_beyond", "order_drift", "physical_classes"]
+__all__ = [
+    "CLASSES",
+    "MIN_RECORDS",
+    "Z_DRIFT",
+    "Evidence",
+    "PointerClass",
+    "evidence_beyond",
+    "order_drift",
+    "physical_classes",
+]
 
 #: |z| of the rank correlation between the records' excess errors and their recording order beyond
 #: which the campaign is said to drift (two models tested, two-sided: 2 x 4.7e-4) [-].
@@ -71,15 +82,85 @@ CLASSES: dict[str, str] = {
 }
 
 
-def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
-    """Physical classes the localisation points to, strongest first, each with its supporting figures.
+@dataclass(frozen=True)
+class Evidence:
+    """One figure behind a physical class: a quantity of the measurement against the model's.
 
-    Returns a list of {``class``, ``meaning``, ``z`` (largest |z| of its metrics), ``evidence`` (list of
-    {metric, label, measured, measured_se, model, model_se, z})}.
+    Attributes
+    ----------
+    metric : str
+        The quantity's key (a localisation metric, ``error_order``, ``energy_ratio_order``, ``flight_share``,
+        or ``probe:NAME`` for a probe of physics outside the library).
+    label : str
+        What it is, in words.
+    measured, measured_se : float
+        The measurement's value and its standard error (a probe: the error with it [alpha]).
+    model, model_se : float
+        The model's (a probe: the error without it [alpha]).
+    z : float
+        Their difference over its standard error [-].
     """
+
+    metric: str
+    label: str
+    measured: float
+    measured_se: float
+    model: float
+    model_se: float
+    z: float
+
+    @property
+    def is_probe(self) -> bool:
+        return self.metric.startswith("probe:")
+
+
+@dataclass(frozen=True)
+class PointerClass:
+    """A physical class to look at (:data:`CLASSES`), with the figures that point to it.
+
+    Attributes
+    ----------
+    name : str
+        The class (a key of :data:`CLASSES`); ``"class"`` in the JSON.
+    meaning : str
+    z : float
+        The largest |z| of its evidence [-].
+    evidence : tuple of Evidence
+    source : str or None
+        Whose localisation gave its figures: ``"final"`` (the model with the added effects), ``"plain"``, or None
+        (not yet said); ``"from"`` in the JSON.
+    """
+
+    name: str
+    meaning: str
+    z: float
+    evidence: tuple[Evidence, ...] = field(default_factory=tuple)
+    source: str | None = None
+
+    def to_dict(self) -> dict:
+        out = {"class": self.name, "meaning": self.meaning, "z": self.z, "evidence": [asdict(e) for e in self.evidence]}
+        if self.source is not None:
+            out["from"] = self.source
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict) -> PointerClass:
+        return cls(
+            name=data["class"],
+            meaning=data["meaning"],
+            z=from_data(float, data["z"]),
+            evidence=from_data(tuple[Evidence, ...], data["evidence"]),
+            source=data.get("from"),
+        )
+
+
+def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[PointerClass]:
+    """Physical classes the localisation points to, strongest first, each with its supporting figures (its ``z``:
+    the largest |z| of its metrics)."""
     if cmp is None:
         return []
-    by: dict[str, dict] = {}
+    strongest: dict[str, float] = {}  # class -> the largest |z| of its evidence
+    evidence: dict[str, list[Evidence]] = {}
     found = cmp.discrepancies(z)
     zs = {k: zz for k, zz, *_ in found}
     # The energy ratio of seed eq. 8 is taken peak to peak: it holds the loss at the impact AND the loss
@@ -101,33 +182,34 @@ def physical_classes(cmp: Comparison | None, z: float = 3.0) -> list[dict]:
             c = "dissipation"
         if symmetric and key.startswith(("onset_", "withstood_")):
             c = "vertical_input"
-        entry = by.setdefault(c, {"class": c, "meaning": CLASSES[c], "z": 0.0, "evidence": []})
-        entry["z"] = max(entry["z"], abs(zz))
+        strongest[c] = max(strongest.get(c, 0.0), abs(zz))
+        found_c = evidence.setdefault(c, [])
         if key == "energy_ratio" and share is not None:
-            entry["evidence"].append(
-                {
-                    "metric": "flight_share",
-                    "label": "share of the extra loss per half-cycle that the energy kept "
+            found_c.append(
+                Evidence(
+                    metric="flight_share",
+                    label="share of the extra loss per half-cycle that the energy kept "
                     "between impacts puts between them (1: all of it, 0: none, at the impact)",
-                    "measured": share[0],
-                    "measured_se": share[1],
-                    "model": 0.0,
-                    "model_se": 0.0,
-                    "z": share[0] / share[1] if share[1] > 0 else math.inf,
-                }
+                    measured=share[0],
+                    measured_se=share[1],
+                    model=0.0,
+                    model_se=0.0,
+                    z=share[0] / share[1] if share[1] > 0 else math.inf,
+                )
             )
-        entry["evidence"].append(
-            {
-                "metric": key,
-                "label": METRICS[key][0],
-                "measured": m.value,
-                "measured_se": m.se,
-                "model": x.value,
-                "model_se": x.se,
-                "z": zz,
-            }
+        found_c.append(
+            Evidence(
+                metric=key,
+                label=METRICS[key][0],
+                measured=m.value,
+                measured_se=m.se,
+                model=x.value,
+                model_se=x.se,
+                z=zz,
+            )
         )
-    return sorted(by.values(), key=lambda d: -d["z"])
+    classes = [PointerClass(c, CLASSES[c], strongest[c], tuple(ev)) for c, ev in evidence.items()]
+    return sorted(classes, key=lambda c: -c.z)
 
 
 def _flight_share(loc: dict) -> tuple[float, float] | None:
@@ -179,7 +261,7 @@ def _energy_drift(energy) -> tuple[float, float, float] | None:
     return float(coef[3]), se, float(coef[3]) / se
 
 
-def order_drift(excess: Sequence[np.ndarray], energy=None) -> dict | None:
+def order_drift(excess: Sequence[np.ndarray], energy=None) -> PointerClass | None:
     """A drift along the recording order, as a physical class of :func:`physical_classes`, or None.
 
     Parameters
@@ -193,7 +275,7 @@ def order_drift(excess: Sequence[np.ndarray], energy=None) -> dict | None:
 
     Returns
     -------
-    dict or None
+    PointerClass or None
         The ``drift`` class, when either test's two-sided |z| exceeds :data:`Z_DRIFT`:
 
         * Kendall's tau of the excess error against the record's position, for the model where it
@@ -222,42 +304,42 @@ def order_drift(excess: Sequence[np.ndarray], energy=None) -> dict | None:
         tau, z, se = best
         trend = "grows" if tau > 0 else "falls"
         evidence.append(
-            {
-                "metric": "error_order",
-                "label": f"the model's excess error {trend} along the recording order (Kendall's tau)",
-                "measured": tau,
-                "measured_se": se,
-                "model": 0.0,
-                "model_se": 0.0,
-                "z": z,
-            }
+            Evidence(
+                metric="error_order",
+                label=f"the model's excess error {trend} along the recording order (Kendall's tau)",
+                measured=tau,
+                measured_se=se,
+                model=0.0,
+                model_se=0.0,
+                z=z,
+            )
         )
     ed = _energy_drift(energy)
     if ed is not None:
         slope, se, z = ed
         evidence.append(
-            {
-                "metric": "energy_ratio_order",
-                "label": "energy ratio per impact of the free vibrations against their record's position in the "
+            Evidence(
+                metric="energy_ratio_order",
+                label="energy ratio per impact of the free vibrations against their record's position in the "
                 "recording order, amplitude held out (slope per record)",
-                "measured": slope,
-                "measured_se": se,
-                "model": 0.0,
-                "model_se": 0.0,
-                "z": z,
-            }
+                measured=slope,
+                measured_se=se,
+                model=0.0,
+                model_se=0.0,
+                z=z,
+            )
         )
-    evidence = sorted((ev for ev in evidence if abs(ev["z"]) > Z_DRIFT), key=lambda ev: -abs(ev["z"]))
+    evidence = sorted((ev for ev in evidence if abs(ev.z) > Z_DRIFT), key=lambda ev: -abs(ev.z))
     if not evidence:
         return None
-    return {"class": "drift", "meaning": CLASSES["drift"], "z": abs(evidence[0]["z"]), "evidence": evidence}
+    return PointerClass("drift", CLASSES["drift"], abs(evidence[0].z), tuple(evidence))
 
 
-def evidence_beyond(classes: list[dict], z: float) -> list[dict]:
+def evidence_beyond(classes: list[PointerClass], z: float) -> list[PointerClass]:
     """The classes of :func:`physical_classes` with only their evidence beyond ``z`` standard errors."""
     out = []
     for c in classes:
-        ev = [e for e in c["evidence"] if abs(e["z"]) > z]
+        ev = tuple(e for e in c.evidence if abs(e.z) > z)
         if ev:
-            out.append({**c, "z": max(abs(e["z"]) for e in ev), "evidence": ev})
+            out.append(replace(c, z=max(abs(e.z) for e in ev), evidence=ev))
     return out

@@ -69,7 +69,14 @@ from housner.model import theta_max_many
 from housner.rocking_params import RockingParams
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
-from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosis, OutcomeStep, params_text
+from housner.scenarios.diagnosis.outcomes.outcome_results import (
+    Miss,
+    OutcomeCandidate,
+    OutcomeDiagnosis,
+    OutcomeGeometry,
+    OutcomeStep,
+    params_text,
+)
 from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     calibration_table,
     logistic_oof,
@@ -328,19 +335,19 @@ def _paired_fall(p_old, p_new, y) -> tuple[float, float, float]:
 
 # ----------------------------------------------------------------------------
 # where it fails
-def _misses(step: OutcomeStep, ids, y, pga, pgv) -> list[dict]:
+def _misses(step: OutcomeStep, ids, y, pga, pgv) -> list[Miss]:
     pred = step.p >= 0.5
     out = []
     for i in np.flatnonzero(pred != y):
         out.append(
-            {
-                "model": step.name,
-                "id": ids[i],
-                "observed": "overturned" if y[i] else "stood",
-                "predicted_p": float(step.p[i]),
-                "pga_g": float(pga[i] / G),
-                "pgv_over_pga_s": float(pgv[i] / pga[i]),
-            }
+            Miss(
+                model=step.name,
+                id=ids[i],
+                observed="overturned" if y[i] else "stood",
+                predicted_p=float(step.p[i]),
+                pga_g=float(pga[i] / G),
+                pgv_over_pga_s=float(pgv[i] / pga[i]),
+            )
         )
     return out
 
@@ -420,7 +427,7 @@ def diagnose_outcomes(
     )
     tables = _tables(accs, dts, geo, campaign.specimen, say)
     plain = _step("plain", None, tables, y, fold, seed)
-    say(f"plain model: held-out log loss {plain.scores['log_loss']:.3f}, accuracy {plain.scores['accuracy']:.3f}")
+    say(f"plain model: held-out log loss {plain.scores.log_loss:.3f}, accuracy {plain.scores.accuracy:.3f}")
     pointer = _pointer(plain, y, pga, pgv)
     say(f"where it fails: {pointer}")
     steps, candidates = _add_effects(plain, tables, y, fold, seed, say)
@@ -521,11 +528,11 @@ class OutcomeEvidence:
         level = LEVEL / max(len(tried), 1)
         for c in tried:
             self.say(
-                f"  {c.name}: held-out log loss {c.scores['log_loss']:.3f} ({c.improvement:+.3f} "
+                f"  {c.name}: held-out log loss {c.scores.log_loss:.3f} ({c.improvement:+.3f} "
                 f"+- {c.improvement_se:.3f}, p {c.p_value:.2g}) {params_text(c.params)}"
             )
         good = [c for c in tried if c.improvement > 0 and c.p_value < level]
-        return tried, min(good, key=lambda c: c.scores["log_loss"]) if good else None
+        return tried, min(good, key=lambda c: c.scores.log_loss) if good else None
 
     def accept(self, state: tuple[OutcomeStep, ...], rnd: Round, chosen: OutcomeStep) -> tuple[OutcomeStep, ...]:
         return (*state, chosen)
@@ -534,21 +541,23 @@ class OutcomeEvidence:
         return (chosen.name,)
 
 
-def _add_effects(plain: OutcomeStep, tables, y, fold, seed: int, say) -> tuple[list[OutcomeStep], list[dict]]:
+def _add_effects(
+    plain: OutcomeStep, tables, y, fold, seed: int, say
+) -> tuple[list[OutcomeStep], list[OutcomeCandidate]]:
     """Forward selection from the plain model through the one selection of the diagnosis, with
     :class:`OutcomeEvidence`. Returns the models kept (the plain one first) and every candidate tried."""
     evidence = OutcomeEvidence(tables, y, fold, seed, say)
     steps, found = forward_selection(evidence, (plain,), len(ROUNDS))
     candidates = [
-        {
-            "name": c.name,
-            "log_loss": c.scores["log_loss"],
-            "improvement": c.improvement,
-            "improvement_se": c.improvement_se,
-            "p_value": c.p_value,
-            "added": c.name in found.selected,
-            "params": c.params,
-        }
+        OutcomeCandidate(
+            name=c.name,
+            log_loss=c.scores.log_loss,
+            improvement=c.improvement,
+            improvement_se=c.improvement_se,
+            p_value=c.p_value,
+            added=c.name in found.selected,
+            params=c.params,
+        )
         for tried in found.rounds
         for c in tried
     ]
@@ -569,18 +578,18 @@ def _baselines(pga, pgv, y, fold, seed: int) -> tuple[dict, dict]:
     return baselines, baseline_p
 
 
-def _geometry_summary(geo: Geometry) -> dict:
+def _geometry_summary(geo: Geometry) -> OutcomeGeometry:
     """The block's geometry as the diagnosis reports it, in SI (m, rad, kg m^2, kg)."""
-    return {
-        "h_m": geo.h,
-        "b_pos_m": geo.b_pos,
-        "b_neg_m": geo.b_neg,
-        "alpha_pos_rad": geo.alpha_pos,
-        "alpha_neg_rad": geo.alpha_neg,
-        "centroidal_inertia_kgm2": geo.ic,
-        "mass_kg": geo.mass,
-        "b_bracket_m": {k: list(v) for k, v in geo.bracket.items()},
-    }
+    return OutcomeGeometry(
+        h_m=geo.h,
+        b_pos_m=geo.b_pos,
+        b_neg_m=geo.b_neg,
+        alpha_pos_rad=geo.alpha_pos,
+        alpha_neg_rad=geo.alpha_neg,
+        centroidal_inertia_kgm2=geo.ic,
+        mass_kg=geo.mass,
+        b_bracket_m={k: (float(v[0]), float(v[1])) for k, v in geo.bracket.items()},
+    )
 
 
 def _extends(name: str, current: str) -> bool:

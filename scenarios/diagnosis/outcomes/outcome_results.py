@@ -4,17 +4,25 @@ ladder of models and the whole diagnosis, as values with their summary in words 
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
-from housner.scenarios.diagnosis.outcomes.outcome_scores import OutcomeFloor
-from housner.scenarios.execution.rundir import jsonable
+from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores
+from housner.scenarios.execution.typed_json import JsonValue, from_data, to_data
 
-__all__ = ["OutcomeDiagnosis", "OutcomeStep", "params_text"]
+__all__ = [
+    "Miss",
+    "OutcomeCandidate",
+    "OutcomeDiagnosis",
+    "OutcomeDiagnosisResult",
+    "OutcomeGeometry",
+    "OutcomeStep",
+    "params_text",
+]
 
 
 @dataclass(frozen=True)
@@ -31,7 +39,7 @@ class OutcomeStep:
         Fitted without each fold (what scored it).
     p : ndarray
         Out-of-fold P(overturn) per record [-].
-    scores : dict
+    scores : OutcomeScores
         :func:`outcome_scores` of ``p``.
     improvement : float
         Mean per-record fall of the held-out log loss from the previous rung [nats] (0 for the plain model).
@@ -42,9 +50,9 @@ class OutcomeStep:
 
     name: str
     params: dict
-    fold_params: list
-    p: np.ndarray
-    scores: dict
+    fold_params: list = field(compare=False)
+    p: np.ndarray = field(compare=False)
+    scores: OutcomeScores
     improvement: float = 0.0
     improvement_se: float = 0.0
     p_value: float = math.nan
@@ -53,11 +61,91 @@ class OutcomeStep:
         return {
             "name": self.name,
             "params": self.params,
-            "scores": self.scores,
+            "scores": self.scores.to_dict(),
             "improvement": self.improvement,
             "improvement_se": self.improvement_se,
             "p_value": _nan_none(self.p_value),
         }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> OutcomeStep:
+        """The rung an outcome diagnosis JSON holds (its probabilities and fold fits are not written there)."""
+        return cls(
+            name=data["name"],
+            params=dict(data["params"]),
+            fold_params=[],
+            p=None,
+            scores=OutcomeScores.from_dict(data["scores"]),
+            improvement=from_data(float, data["improvement"]),
+            improvement_se=from_data(float, data["improvement_se"]),
+            p_value=from_data(float, data["p_value"]),
+        )
+
+
+@dataclass(frozen=True)
+class OutcomeCandidate:
+    """A candidate of the outcome diagnosis' forward selection, as tried.
+
+    Attributes
+    ----------
+    name : str
+    log_loss : float
+        Its held-out log loss [nats].
+    improvement, improvement_se : float
+        The mean paired fall from the model it was tried on [nats], and its standard error.
+    p_value : float
+    added : bool
+    params : dict
+    """
+
+    name: str
+    log_loss: float
+    improvement: float
+    improvement_se: float
+    p_value: float
+    added: bool
+    params: dict
+
+
+@dataclass(frozen=True)
+class Miss:
+    """A record a model got wrong at P = 0.5.
+
+    Attributes
+    ----------
+    model : str
+    id : str
+    observed : str
+        ``"overturned"`` or ``"stood"``.
+    predicted_p : float
+        The model's held-out P(overturn) [-].
+    pga_g : float
+        The record's PGA [g].
+    pgv_over_pga_s : float
+        Its PGV/PGA [s].
+    """
+
+    model: str
+    id: str
+    observed: str
+    predicted_p: float
+    pga_g: float
+    pgv_over_pga_s: float
+
+
+@dataclass(frozen=True)
+class OutcomeGeometry:
+    """The block behind an outcome model, in SI: centre-of-mass height, pivots, alphas, inertia, mass, and each
+    pivot's bracket of b [m] (``pos``, ``neg``)."""
+
+    h_m: float
+    b_pos_m: float
+    b_neg_m: float
+    alpha_pos_rad: float
+    alpha_neg_rad: float
+    centroidal_inertia_kgm2: float
+    mass_kg: float
+    b_bracket_m: dict[str, tuple[float, float]]
 
 
 @dataclass
@@ -73,9 +161,9 @@ class OutcomeDiagnosis:
         Measured peak table acceleration [m/s^2] and velocity [m/s] per record.
     steps : list of OutcomeStep
         The plain model, then each effect added.
-    candidates : list of dict
-        Every candidate tried: name, held-out log loss, fall, p-value, added or not.
-    baselines : dict
+    candidates : list of OutcomeCandidate
+        Every candidate tried.
+    baselines : dict of str to OutcomeScores
         Name -> :func:`outcome_scores` of the logistic regressions on the same folds.
     baseline_p : dict
         Name -> out-of-fold probabilities of each baseline.
@@ -83,12 +171,12 @@ class OutcomeDiagnosis:
         The final model against what a correct model would score.
     pointer : str
         What the plain model's misses point to.
-    misses : list of dict
+    misses : list of Miss
         The plain and the final model's misses, record by record.
     status : str
         ``no_misfit``, ``explained``, ``partly_explained`` or ``unexplained`` (the one vocabulary:
         :data:`housner.scenarios.diagnosis.verdict.status.STATUSES`).
-    geometry : dict
+    geometry : OutcomeGeometry
     folds : int
     seed : int
     elapsed : float
@@ -108,7 +196,7 @@ class OutcomeDiagnosis:
     pointer: str
     misses: list
     status: str
-    geometry: dict
+    geometry: OutcomeGeometry
     folds: int
     seed: int
     elapsed: float = 0.0
@@ -125,20 +213,20 @@ class OutcomeDiagnosis:
     def summary(self) -> str:
         """The verdict in words: the figures, their intervals, the floor, the baselines, what remains."""
         f, s = self.final, self.final.scores
-        best = min(self.baselines, key=lambda k: self.baselines[k]["log_loss"])
+        best = min(self.baselines, key=lambda k: self.baselines[k].log_loss)
         b = self.baselines[best]
         eff = "no effect added" if f.name == "plain" else f"effect {f.name} ({params_text(f.params)})"
         floor = self.floor
         lines = [
             f"{len(self.ids)} outcome records ({int(self.observed.sum())} overturned); {self.folds}-fold "
             f"cross-validation (seed {self.seed}); {eff}.",
-            f"held-out accuracy {s['accuracy']:.3f} [{s['accuracy_ci'][0]:.3f}, {s['accuracy_ci'][1]:.3f}], "
-            f"F1 {s['f1']:.3f} [{s['f1_ci'][0]:.3f}, {s['f1_ci'][1]:.3f}], log loss {s['log_loss']:.3f} "
-            f"[{s['log_loss_ci'][0]:.3f}, {s['log_loss_ci'][1]:.3f}]; plain model: accuracy "
-            f"{self.steps[0].scores['accuracy']:.3f}, F1 {self.steps[0].scores['f1']:.3f}, log loss "
-            f"{self.steps[0].scores['log_loss']:.3f}.",
-            f"best baseline ({best}): accuracy {b['accuracy']:.3f}, F1 {b['f1']:.3f}, log loss {b['log_loss']:.3f} "
-            f"on the same folds: the model is {'ahead' if s['log_loss'] < b['log_loss'] else 'NOT ahead'} "
+            f"held-out accuracy {s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}], "
+            f"F1 {s.f1:.3f} [{s.f1_ci[0]:.3f}, {s.f1_ci[1]:.3f}], log loss {s.log_loss:.3f} "
+            f"[{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]; plain model: accuracy "
+            f"{self.steps[0].scores.accuracy:.3f}, F1 {self.steps[0].scores.f1:.3f}, log loss "
+            f"{self.steps[0].scores.log_loss:.3f}.",
+            f"best baseline ({best}): accuracy {b.accuracy:.3f}, F1 {b.f1:.3f}, log loss {b.log_loss:.3f} "
+            f"on the same folds: the model is {'ahead' if s.log_loss < b.log_loss else 'NOT ahead'} "
             "in log loss.",
             f"floor (a correct model with these probabilities): log loss {floor.log_loss:.3f} "
             f"[{floor.log_loss_ci[0]:.3f}, {floor.log_loss_ci[1]:.3f}], measured {floor.measured_log_loss:.3f} "
@@ -146,47 +234,125 @@ class OutcomeDiagnosis:
         ]
         return "\n".join(lines)
 
-    def to_dict(self) -> dict:
-        f = self.final
-        outcomes = {k: f.scores[k] for k in f.scores}
-        outcomes.update(
-            model=f.name,
-            effect=self._effect(),
-            baselines=self.baselines,
-            floor=self.floor.to_dict(),
-            at_floor=self.floor.at_floor,
-            calibration=self.calibration,
+    def result(self) -> OutcomeDiagnosisResult:
+        """The outcome diagnosis as the value its JSON holds."""
+        return OutcomeDiagnosisResult(
+            campaign=self.campaign,
+            status=self.status,
+            n_records=len(self.ids),
+            n_overturned=int(self.observed.sum()),
+            folds=self.folds,
+            seed=self.seed,
+            ladder=tuple(self.steps),
+            baselines=dict(self.baselines),
+            floor=self.floor,
+            calibration=tuple(self.calibration),
+            candidates=tuple(self.candidates),
+            pointer=self.pointer,
+            misses=tuple(self.misses),
+            geometry=self.geometry,
+            summary=self.summary(),
+            elapsed_s=self.elapsed,
         )
-        return {
-            "kind": "outcomes",
-            "campaign": self.campaign,
-            "status": self.status,
-            "n_records": len(self.ids),
-            "n_overturned": int(self.observed.sum()),
-            "folds": self.folds,
-            "seed": self.seed,
-            "outcomes": outcomes,
-            "baselines": self.baselines,
-            "effect": self._effect(),
-            "ladder": [s.to_dict() for s in self.steps],
-            "candidates": self.candidates,
-            "pointer": self.pointer,
-            "misses": self.misses,
-            "geometry": self.geometry,
-            "summary": self.summary(),
-            "elapsed_s": self.elapsed,
-        }
+
+    def to_dict(self) -> dict:
+        """The outcome diagnosis JSON's data (:meth:`OutcomeDiagnosisResult.to_dict`)."""
+        return self.result().to_dict()
 
     def to_json(self, path: str | Path | None = None) -> str:
-        """The JSON text of :meth:`to_dict` (non-finite numbers as null); also written to ``path`` when given."""
-        text = json.dumps(jsonable(self.to_dict(), nonfinite="null"), indent=1, allow_nan=False)
-        if path is not None:
-            Path(path).write_text(text + "\n")
-        return text
+        """The JSON text (non-finite numbers as null); also written to ``path`` when given."""
+        return self.result().to_json(path)
+
+
+@dataclass(frozen=True)
+class OutcomeDiagnosisResult(JsonValue):
+    """What an outcome diagnosis JSON holds, as a value: :meth:`OutcomeDiagnosis.result` makes it, :meth:`to_json`
+    writes the file (its ``outcomes`` table repeats the final model's scores beside the floor and the baselines) and
+    :meth:`from_json` reads it back."""
+
+    JSON_INDENT: ClassVar[int] = 1
+
+    campaign: str
+    status: str
+    n_records: int
+    n_overturned: int
+    folds: int
+    seed: int
+    ladder: tuple[OutcomeStep, ...]
+    baselines: dict[str, OutcomeScores]
+    floor: OutcomeFloor
+    calibration: tuple[CalibrationBin, ...]
+    candidates: tuple[OutcomeCandidate, ...]
+    pointer: str
+    misses: tuple[Miss, ...]
+    geometry: OutcomeGeometry
+    summary: str
+    elapsed_s: float
+
+    @property
+    def final(self) -> OutcomeStep:
+        return self.ladder[-1]
 
     def _effect(self) -> dict | None:
         f = self.final
         return None if f.name == "plain" else {"name": f.name, "params": f.params}
+
+    def to_dict(self) -> dict:
+        """The outcome diagnosis JSON's keys, in its order."""
+        f = self.final
+        baselines = {k: v.to_dict() for k, v in self.baselines.items()}
+        outcomes = {
+            **f.scores.to_dict(),
+            "model": f.name,
+            "effect": self._effect(),
+            "baselines": baselines,
+            "floor": self.floor.to_dict(),
+            "at_floor": self.floor.at_floor,
+            "calibration": [to_data(c) for c in self.calibration],
+        }
+        return to_data(
+            {
+                "kind": "outcomes",
+                "campaign": self.campaign,
+                "status": self.status,
+                "n_records": self.n_records,
+                "n_overturned": self.n_overturned,
+                "folds": self.folds,
+                "seed": self.seed,
+                "outcomes": outcomes,
+                "baselines": baselines,
+                "effect": self._effect(),
+                "ladder": [st.to_dict() for st in self.ladder],
+                "candidates": [to_data(c) for c in self.candidates],
+                "pointer": self.pointer,
+                "misses": [to_data(m) for m in self.misses],
+                "geometry": to_data(self.geometry),
+                "summary": self.summary,
+                "elapsed_s": self.elapsed_s,
+            }
+        )
+
+    @classmethod
+    def from_dict(cls, data: dict) -> OutcomeDiagnosisResult:
+        out = data["outcomes"]
+        return cls(
+            campaign=data["campaign"],
+            status=data["status"],
+            n_records=int(data["n_records"]),
+            n_overturned=int(data["n_overturned"]),
+            folds=int(data["folds"]),
+            seed=data["seed"],
+            ladder=tuple(OutcomeStep.from_dict(x) for x in data["ladder"]),
+            baselines={k: OutcomeScores.from_dict(v) for k, v in data["baselines"].items()},
+            floor=from_data(OutcomeFloor, out["floor"]),
+            calibration=from_data(tuple[CalibrationBin, ...], out["calibration"]),
+            candidates=from_data(tuple[OutcomeCandidate, ...], data["candidates"]),
+            pointer=data["pointer"],
+            misses=from_data(tuple[Miss, ...], data["misses"]),
+            geometry=from_data(OutcomeGeometry, data["geometry"]),
+            summary=data["summary"],
+            elapsed_s=from_data(float, data["elapsed_s"]),
+        )
 
 
 def params_text(params: dict) -> str:

@@ -30,12 +30,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, special
 
+from housner.scenarios.execution.typed_json import from_data, to_data
 from housner.statistics.proportions import wilson_interval
 
 __all__ = [
     "P_MIN",
     "SCORE_KEYS",
+    "CalibrationBin",
     "OutcomeFloor",
+    "OutcomeScores",
     "calibration_table",
     "logistic_oof",
     "outcome_floor",
@@ -53,6 +56,86 @@ P_MIN = 1e-6
 N_BOOT = 1000
 #: Ridge penalty of the logistic baselines (on standardised features) [-]: keeps a separable fold finite.
 _RIDGE = 1e-3
+
+
+@dataclass(frozen=True)
+class OutcomeScores:
+    """The scores of a prediction of outcomes (:func:`outcome_scores`): each of :data:`SCORE_KEYS` with its bootstrap
+    interval (None where the resamples gave no finite value), and the counts.
+
+    Attributes
+    ----------
+    accuracy, f1, log_loss, brier, precision, recall, roc_auc : float
+        [-]; the log loss in nats.
+    accuracy_ci, ..., roc_auc_ci : (float, float) or None
+        Their percentile intervals.
+    n, n_overturned, n_predicted : int
+        Records, those that overturned, those predicted to (P >= 0.5).
+    tp, fp, fn, tn : int
+        The confusion matrix at P >= 0.5.
+    """
+
+    accuracy: float
+    f1: float
+    log_loss: float
+    brier: float
+    precision: float
+    recall: float
+    roc_auc: float
+    accuracy_ci: tuple[float, float] | None
+    f1_ci: tuple[float, float] | None
+    log_loss_ci: tuple[float, float] | None
+    brier_ci: tuple[float, float] | None
+    precision_ci: tuple[float, float] | None
+    recall_ci: tuple[float, float] | None
+    roc_auc_ci: tuple[float, float] | None
+    n: int
+    n_overturned: int
+    n_predicted: int
+    tp: int
+    fp: int
+    fn: int
+    tn: int
+
+    def score(self, key: str) -> float:
+        """The score ``key`` of :data:`SCORE_KEYS`."""
+        return getattr(self, key)
+
+    def interval(self, key: str) -> tuple[float, float] | None:
+        """The interval of score ``key`` of :data:`SCORE_KEYS`."""
+        return getattr(self, f"{key}_ci")
+
+    def to_dict(self) -> dict:
+        return to_data(self)
+
+    @classmethod
+    def from_dict(cls, data: dict) -> OutcomeScores:
+        return from_data(cls, data)
+
+
+@dataclass(frozen=True)
+class CalibrationBin:
+    """One bin of the reliability table (:func:`calibration_table`): records whose P lies in [lo, hi).
+
+    Attributes
+    ----------
+    lo, hi : float
+        The bin's edges of P [-].
+    n : int
+    mean_p : float
+        Their mean P [-].
+    observed : float
+        The share that overturned [-].
+    observed_ci : (float, float)
+        Its 95 % Wilson interval.
+    """
+
+    lo: float
+    hi: float
+    n: int
+    mean_p: float
+    observed: float
+    observed_ci: tuple[float, float]
 
 
 def stratified_folds(y, k: int, seed) -> np.ndarray:
@@ -110,7 +193,7 @@ def _point_scores(p: np.ndarray, y: np.ndarray) -> dict[str, float]:
     }
 
 
-def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> dict:
+def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> OutcomeScores:
     """Every score of :data:`SCORE_KEYS` with its bootstrap interval.
 
     Parameters
@@ -124,9 +207,7 @@ def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> d
 
     Returns
     -------
-    dict
-        ``{key: value, key + "_ci": [lo, hi], "n": records, "n_overturned": ..., "n_predicted": ...}``, with the
-        counts of the confusion matrix (``tp``, ``fp``, ``fn``, ``tn``).
+    OutcomeScores
     """
     p = np.asarray(p, dtype=float)
     y = np.asarray(y, dtype=bool)
@@ -140,7 +221,7 @@ def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> d
     lo, hi = 50.0 * (1.0 - ci), 50.0 * (1.0 + ci)
     for k in SCORE_KEYS:
         vals = boot[k][np.isfinite(boot[k])]
-        out[f"{k}_ci"] = [float(np.percentile(vals, lo)), float(np.percentile(vals, hi))] if vals.size else None
+        out[f"{k}_ci"] = (float(np.percentile(vals, lo)), float(np.percentile(vals, hi))) if vals.size else None
     pred = p >= 0.5
     out.update(
         n=int(p.size),
@@ -151,17 +232,16 @@ def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> d
         fn=int(np.sum(~pred & y)),
         tn=int(np.sum(~pred & ~y)),
     )
-    return out
+    return OutcomeScores(**out)
 
 
-def calibration_table(p, y, bins: int = 5) -> list[dict]:
+def calibration_table(p, y, bins: int = 5) -> list[CalibrationBin]:
     """Reliability of the probabilities: records binned by P, mean P against the observed share.
 
     Returns
     -------
-    list of dict
-        One per non-empty bin: ``lo``, ``hi`` (bin edges of P), ``n``, ``mean_p``, ``observed`` and its
-        95 % Wilson interval ``observed_ci``.
+    list of CalibrationBin
+        One per non-empty bin.
     """
     p = np.asarray(p, dtype=float)
     y = np.asarray(y, dtype=bool)
@@ -176,14 +256,7 @@ def calibration_table(p, y, bins: int = 5) -> list[dict]:
         k = int(y[sel].sum())
         lo, hi = wilson_interval(k, n)
         rows.append(
-            {
-                "lo": float(edges[b]),
-                "hi": float(edges[b + 1]),
-                "n": n,
-                "mean_p": float(p[sel].mean()),
-                "observed": k / n,
-                "observed_ci": [float(lo), float(hi)],
-            }
+            CalibrationBin(float(edges[b]), float(edges[b + 1]), n, float(p[sel].mean()), k / n, (float(lo), float(hi)))
         )
     return rows
 

@@ -133,7 +133,7 @@ class TrialSetup:
         Family-wise significance level of a round [-].
     economies : list of str
         Where the diagnosis subsampled or stopped early: plain sentences, appended as they happen
-        (``Diagnosis.settings["economies"]``).
+        (``Diagnosis.settings.economies``).
     progress : callable
         Called with a line of text as the search goes.
     """

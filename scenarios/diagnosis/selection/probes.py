@@ -35,7 +35,37 @@ from numba import njit
 from housner.effects import Effect, MomentTerm, ParamSpec, register_effect
 from housner.motion import VERTICAL
 
-__all__ = ["PROBES", "VerticalCoupling"]
+__all__ = ["PROBES", "ProbeFinding", "VerticalCoupling"]
+
+
+@dataclass(frozen=True)
+class ProbeFinding:
+    """A probe that lowered the final model's held-out error significantly (:func:`housner.scenarios.diagnosis.
+    diagnose.probe`).
+
+    Attributes
+    ----------
+    probe : str
+        The probe's registered name.
+    class_name : str
+        The physical class it stands for (:data:`PROBES`).
+    params : dict
+        Its fitted parameters.
+    error, error_with : float
+        The final model's mean held-out error without and with it [alpha].
+    improvement, se, z, p : float
+        The mean paired fall [alpha], its standard error, their ratio [-] and the one-sided p-value [-].
+    """
+
+    probe: str
+    class_name: str
+    params: dict
+    error: float
+    error_with: float
+    improvement: float
+    se: float
+    z: float
+    p: float
 
 
 @njit(cache=True)

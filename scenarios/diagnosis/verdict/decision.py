@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.stats import norm
@@ -31,11 +31,20 @@ from scipy.stats import norm
 from housner.scenarios.diagnosis.comparison.pointers import (
     CLASSES,
     MIN_RECORDS,
+    Evidence,
+    PointerClass,
     evidence_beyond,
     physical_classes,
 )
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
-from housner.scenarios.diagnosis.verdict.residual_test import DETECTABLE_RATIO, RATIO_MISFIT, Z_MISFIT, Residual
+from housner.scenarios.diagnosis.selection.probes import ProbeFinding
+from housner.scenarios.diagnosis.verdict.residual_test import (
+    DETECTABLE_RATIO,
+    RATIO_MISFIT,
+    Z_MISFIT,
+    GroupResidual,
+    Residual,
+)
 from housner.scenarios.diagnosis.verdict.status import status_rule
 from housner.scenarios.diagnosis.verdict.verdict_words import (
     Z_LEGEND,
@@ -71,15 +80,13 @@ def _groups_text(r: Residual, legend: bool = False) -> str:
     """Each group's error over its floor with its z; ``legend``: say once what z is (its first appearance)."""
     names = {"ground_motion": "ground motions", "free_vibration": "free vibrations"}
 
-    def one(k: str, g: dict) -> str:
+    def one(k: str, g: GroupResidual) -> str:
         if k != "ground_motion":
-            return f"{names[k]} {g['ratio']:.2f}x, {z_text(g['z'])}"
+            return f"{names[k]} {g.ratio:.2f}x, {z_text(g.z)}"
         # the typical record first (10 %-trimmed); the mean, when the few records chaos carries off weigh on it
-        out = (
-            f"{names[k]} {g['ratio_trimmed']:.2f}x for the typical record (10 %-trimmed mean), {z_text(g['z_trimmed'])}"
-        )
-        if abs(g.get("ratio_trimmed", g["ratio"]) - g["ratio"]) > 0.05:
-            out += f", {g['ratio']:.2f}x on the plain mean, {z_text(g['z'])}"
+        out = f"{names[k]} {g.ratio_trimmed:.2f}x for the typical record (10 %-trimmed mean), {z_text(g.z_trimmed)}"
+        if abs(g.ratio_trimmed - g.ratio) > 0.05:
+            out += f", {g.ratio:.2f}x on the plain mean, {z_text(g.z)}"
         return out
 
     text = "; ".join(one(k, g) for k, g in r.groups.items())
@@ -114,20 +121,20 @@ def distribution_checks(cmp: Comparison | None) -> list[str]:
 
 # ----------------------------------------------------------------------------
 # the verdict
-def pointer_text(classes: Sequence[dict], model: Sequence[str] = ()) -> str:
+def pointer_text(classes: Sequence[PointerClass], model: Sequence[str] = ()) -> str:
     """Where to look first: the strongest physical class (:func:`physical_classes`) with two pieces of its
     evidence, then the others by name; ``""`` for none. The verdict's text ends with it.
 
     ``model``: the effects of the model the classes were drawn from (:func:`pointer_classes`); a class drawn
-    from the plain model's localisation instead (``"from": "plain"``) says so.
+    from the plain model's localisation instead (``source`` ``"plain"``) says so.
     """
     if not classes:
         return ""
     top = classes[0]
-    src, names = top.get("from"), " + ".join(model)
+    src, names = top.source, " + ".join(model)
     # whose values the evidence gives: the final model's, the plain model's, or (a drift, a probe) its own
     who = f"the model with {names}" if src == "final" and model else "the plain model" if src == "plain" else "model"
-    ev = "; ".join(evidence_text(e, who) for e in top["evidence"][:2])
+    ev = "; ".join(evidence_text(e, who) for e in top.evidence[:2])
     if src == "plain" and model:
         why = (
             f"Where to look first (what the plain model gets wrong, with the plain model's figures: the model "
@@ -138,11 +145,11 @@ def pointer_text(classes: Sequence[dict], model: Sequence[str] = ()) -> str:
         why = f"Where to look first, from what the model with {names} still gets wrong: "
     else:
         why = "Where to look first: "
-    text = f"{why}{top['meaning']} ({ev}; {Z_LOCAL_LEGEND})."
+    text = f"{why}{top.meaning} ({ev}; {Z_LOCAL_LEGEND})."
     if model and src != "plain":
         text += f" (These figures are with {names} in the model, which leaves this gap.)"
     if len(classes) > 1:
-        text += " Then: " + "; ".join(c["class"] for c in classes[1:]) + "."
+        text += " Then: " + "; ".join(c.name for c in classes[1:]) + "."
     return text
 
 
@@ -163,7 +170,7 @@ class Verdict:
         the report print it without that word, which their ``verdict:`` line and badge give.
     where : list of str
         Localisation items where the final model still differs from the measurement.
-    next : list of dict
+    next : list of PointerClass
         Physical classes to look at, strongest first (:func:`physical_classes`).
     distribution : list of str
         Distribution misfits of the final model.
@@ -176,7 +183,7 @@ class Verdict:
     baseline: Residual
     text: str
     where: list[str] = field(default_factory=list)
-    next: list[dict] = field(default_factory=list)
+    next: list[PointerClass] = field(default_factory=list)
     distribution: list[str] = field(default_factory=list)
     records_needed: int = 0
 
@@ -189,10 +196,24 @@ class Verdict:
             "baseline_residual": self.baseline.to_dict(),
             "text": self.text,
             "where": list(self.where),
-            "next": list(self.next),
+            "next": [c.to_dict() for c in self.next],
             "distribution": list(self.distribution),
             "records_needed": self.records_needed,
         }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> Verdict:
+        """The verdict a diagnosis JSON holds (its ``residual`` is the head of ``residual_detail``)."""
+        return cls(
+            status=data["status"],
+            residual=Residual.from_dict(data["residual_detail"]),
+            baseline=Residual.from_dict(data["baseline_residual"]),
+            text=data["text"],
+            where=list(data["where"]),
+            next=[PointerClass.from_dict(c) for c in data["next"]],
+            distribution=list(data["distribution"]),
+            records_needed=int(data["records_needed"]),
+        )
 
 
 @dataclass(frozen=True)
@@ -212,15 +233,15 @@ class VerdictFacts:
         Effect -> its fitted parameters in the final model.
     library : sequence of str
         The effects the search tried.
-    drift : dict or None
+    drift : PointerClass or None
         :func:`order_drift`'s class, if any.
     family : str
         The correct integrators the final model's floor was measured over.
-    classes : list of dict
+    classes : list of PointerClass
         The physical classes to look at, strongest first (drift and probes first).
-    final_classes : list of dict
+    final_classes : list of PointerClass
         Those the final model's localisation points to.
-    local_plain, local_final : list of dict
+    local_plain, local_final : list of PointerClass
         The plain and final model's classes with only their evidence beyond :data:`Z_LOCAL`.
     dist_plain, dist_final : list of str
         Their distribution misfits (:func:`distribution_checks`).
@@ -246,12 +267,12 @@ class VerdictFacts:
     model: list[str]
     params: dict
     library: Sequence[str]
-    drift: dict | None
+    drift: PointerClass | None
     family: str
-    classes: list[dict]
-    final_classes: list[dict]
-    local_plain: list[dict]
-    local_final: list[dict]
+    classes: list[PointerClass]
+    final_classes: list[PointerClass]
+    local_plain: list[PointerClass]
+    local_final: list[PointerClass]
     dist_plain: list[str]
     dist_final: list[str]
     plain_misfit: bool
@@ -278,9 +299,9 @@ def decide(
     final_cmp: Comparison | None,
     library: Sequence[str],
     added: Sequence[str] = (),
-    drift: dict | None = None,
+    drift: PointerClass | None = None,
     family: str = "",
-    probes: Sequence[dict] = (),
+    probes: Sequence[ProbeFinding] = (),
     family_plain: str = "",
     search: str | None = None,
 ) -> Verdict:
@@ -298,9 +319,9 @@ def decide(
     base_classes = physical_classes(baseline_cmp)
     final_classes = physical_classes(final_cmp)
     classes = pointer_classes(base_classes, final_classes, probes, drift, has_effects=bool(model))
-    where = [evidence_text(ev) for c in final_classes for ev in c["evidence"]]
+    where = [evidence_text(ev) for c in final_classes for ev in c.evidence]
     if drift is not None:
-        where = [evidence_text(ev) for ev in drift["evidence"]] + where
+        where = [evidence_text(ev) for ev in drift.evidence] + where
     # a localisation quantity beyond Z_LOCAL standard errors points to where to look; it is no misfit by
     # itself (the status follows from the residual's tests alone: status_rule)
     local_plain = evidence_beyond(base_classes, Z_LOCAL)
@@ -350,59 +371,57 @@ def decide(
 
 
 def pointer_classes(
-    base_classes: list[dict],
-    final_classes: list[dict],
-    probes: Sequence[dict],
-    drift: dict | None,
+    base_classes: list[PointerClass],
+    final_classes: list[PointerClass],
+    probes: Sequence[ProbeFinding],
+    drift: PointerClass | None,
     has_effects: bool = False,
-) -> list[dict]:
+) -> list[PointerClass]:
     """The physical classes to look at, strongest first: a drift along the recording order, then the probes'
     classes, then what the localisation points to: the plain model's classes in their order (what differs from
     Housner's physics names the family: on the independent generator's pivot-friction campaign the plain model
     points to dissipation, the model with the restitution the search adds to impact), then those only the final
     model shows.
 
-    Each class carries whose figures it gives (``"from"``): where the model with effects (``has_effects``) still
+    Each class carries whose figures it gives (``source``): where the model with effects (``has_effects``) still
     shows a class, its own evidence (``"final"``); otherwise the plain model's (``"plain"``), which
     :func:`pointer_text` says.
     """
-    final = {c["class"]: c for c in final_classes} if has_effects else {}
+    final = {c.name: c for c in final_classes} if has_effects else {}
     classes = [
-        {**final[c["class"]], "from": "final"} if c["class"] in final else {**c, "from": "plain"} for c in base_classes
+        replace(final[c.name], source="final") if c.name in final else replace(c, source="plain") for c in base_classes
     ]
-    have = {c["class"] for c in classes}
-    classes += [{**c, "from": "final"} for c in final_classes if has_effects and c["class"] not in have]
+    have = {c.name for c in classes}
+    classes += [replace(c, source="final") for c in final_classes if has_effects and c.name not in have]
     # a probe of physics outside the library that lowers the error significantly is the most direct
     # pointer there is: its class first (housner.scenarios.diagnosis.selection.probes)
-    for found in sorted(probes, key=lambda p: p["z"]):
-        evidence = {
-            "metric": f"probe:{found['probe']}",
-            "label": f"a trial of physics outside the library (the probe {found['probe']}: "
-            + probe_words(found["probe"])
+    for found in sorted(probes, key=lambda p: p.z):
+        evidence = Evidence(
+            metric=f"probe:{found.probe}",
+            label=f"a trial of physics outside the library (the probe {found.probe}: "
+            + probe_words(found.probe)
             + "; "
-            + ", ".join(f"{k} = {v:.3g}" for k, v in found["params"].items())
+            + ", ".join(f"{k} = {v:.3g}" for k, v in found.params.items())
             + "), fitted on top of the final model and held out as a candidate is: held-out error "
-            + f"{found['error_with']:.4g} alpha against {found['error']:.4g} without it",
-            "measured": found["error_with"],
-            "measured_se": found["se"],
-            "model": found["error"],
-            "model_se": 0.0,
-            "z": found["z"],
-        }
-        entry = {
-            "class": found["class"],
-            "meaning": CLASSES[found["class"]],
-            "z": abs(found["z"]),
-            "evidence": [evidence],
-            "from": "final" if has_effects else "plain",
-        }
-        old = [c for c in classes if c["class"] == found["class"]]
-        if old:
-            entry["evidence"] += old[0]["evidence"]
-        classes = [entry, *[c for c in classes if c["class"] != found["class"]]]
+            + f"{found.error_with:.4g} alpha against {found.error:.4g} without it",
+            measured=found.error_with,
+            measured_se=found.se,
+            model=found.error,
+            model_se=0.0,
+            z=found.z,
+        )
+        old = [c for c in classes if c.name == found.class_name]
+        entry = PointerClass(
+            name=found.class_name,
+            meaning=CLASSES[found.class_name],
+            z=abs(found.z),
+            evidence=(evidence, *(old[0].evidence if old else ())),
+            source="final" if has_effects else "plain",
+        )
+        classes = [entry, *[c for c in classes if c.name != found.class_name]]
     if drift is not None:
         # a physics that changes along the recording order is what no constant effect explains: named first
-        classes = [drift, *[c for c in classes if c["class"] != "drift"]]
+        classes = [drift, *[c for c in classes if c.name != "drift"]]
     return classes
 
 
@@ -416,7 +435,7 @@ def verdict_text(facts: VerdictFacts, status: str) -> str:
         local = facts.local_final if facts.model else facts.local_plain
         dist = facts.dist_final if facts.model else facts.dist_plain
         who = "the model with " + " + ".join(facts.model) if facts.model else "the plain model"
-        bits = [evidence_text(e, who) for c in local for e in c["evidence"][:1]] + dist
+        bits = [evidence_text(e, who) for c in local for e in c.evidence[:1]] + dist
         if bits:
             text += (
                 f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
@@ -585,12 +604,12 @@ def _partly_explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -
             f"Partly explained: {base_figs}; {fall}, {figs}. A misfit of {facts.final.ratio:.2f}x the floor "
             f"(the worse group of records) remains; {searched}."
         )
-    probed = [c for c in facts.classes if any(e["metric"].startswith("probe:") for e in c["evidence"])]
+    probed = [c for c in facts.classes if any(e.is_probe for e in c.evidence)]
     who = "the model with " + " + ".join(facts.model)
     ev = "; ".join(
         evidence_text(e, who)
         for c in ([facts.drift] if facts.drift else []) + probed + facts.local_final
-        for e in c["evidence"][:2]
+        for e in c.evidence[:2]
     )
     return (
         f"Partly explained: {base_figs}; {fall}, {figs}: above the floor's {RATIO_MISFIT}x band, "

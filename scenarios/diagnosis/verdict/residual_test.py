@@ -15,13 +15,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from housner.scenarios.diagnosis.verdict.correct_model_floor import Floor
+from housner.scenarios.execution.typed_json import from_data
 
-__all__ = ["DETECTABLE_RATIO", "RATIO_MISFIT", "Z_MISFIT", "Residual", "residual_test"]
+__all__ = ["DETECTABLE_RATIO", "RATIO_MISFIT", "Z_MISFIT", "GroupResidual", "Residual", "residual_test"]
 
 #: One-sided z above which the error is significantly above the floor (p ~ 1.3e-3) [-].
 Z_MISFIT = 3.0
@@ -45,6 +46,42 @@ FV_MIN_REL_SD = 0.02
 
 
 @dataclass(frozen=True)
+class GroupResidual:
+    """One group of records (ground motions, or free vibrations) against its floor.
+
+    Attributes
+    ----------
+    n : int
+        Records in the group.
+    error, floor : float
+        Mean held-out error and mean floor of the group [alpha].
+    ratio, z : float
+        Error over floor [-] and the one-sided z of the paired differences [-].
+    misfit : bool
+        Significant (z > Z_MISFIT) and larger than RATIO_MISFIT x the floor, on the mean or on the trimmed mean.
+    ratio_trimmed, z_trimmed : float
+        The same on the 10 %-trimmed means (ground motions; the plain ones for free vibrations) [-].
+    detectable_ratio : float
+        The error / floor ratio the group detects with 80 % power (never below RATIO_MISFIT) [-].
+    """
+
+    n: int
+    error: float
+    floor: float
+    ratio: float
+    z: float
+    misfit: bool
+    ratio_trimmed: float
+    z_trimmed: float
+    detectable_ratio: float
+
+    @property
+    def robust_ratio(self) -> float:
+        """The ratio the verdict reads: the larger of the plain and the trimmed one [-]."""
+        return max(self.ratio, self.ratio_trimmed)
+
+
+@dataclass(frozen=True)
 class Residual:
     """Held-out error against the correct-model floor.
 
@@ -60,8 +97,8 @@ class Residual:
         The larger of the two groups' one-sided z (ground motion, free vibration) [-].
     misfit : bool
         Significant (z > Z_MISFIT) and larger than RATIO_MISFIT x the floor in at least one group.
-    groups : dict
-        ``ground_motion`` / ``free_vibration`` -> {n, error, floor, ratio, z, misfit}.
+    groups : dict of str to GroupResidual
+        ``ground_motion`` / ``free_vibration`` -> its residual.
     detectable_ratio : float
         The error / floor ratio this campaign detects with 80 % power in its most telling group
         (never below RATIO_MISFIT) [-].
@@ -74,7 +111,7 @@ class Residual:
     ratio: float
     z: float
     misfit: bool
-    groups: dict
+    groups: dict[str, GroupResidual]
     detectable_ratio: float
     records_needed: int
 
@@ -85,10 +122,14 @@ class Residual:
             "ratio": self.ratio,
             "z": self.z,
             "misfit": self.misfit,
-            "groups": self.groups,
+            "groups": {k: asdict(g) for k, g in self.groups.items()},
             "detectable_ratio": self.detectable_ratio,
             "records_needed": self.records_needed,
         }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> Residual:
+        return from_data(cls, data)
 
 
 def _trimmed(x: np.ndarray) -> tuple[float, float, float]:
@@ -145,22 +186,22 @@ def residual_test(errors: np.ndarray, floor: Floor, kinds: Sequence[str]) -> Res
             det_k = 1.0 + zz * float(np.mean(s)) / math.sqrt(n) / fm if fm > 0 else math.inf
             z_t, ratio_t, mis_t = z, ratio, False
         mis = bool(z > Z_MISFIT and ratio > RATIO_MISFIT) or mis_t
-        groups[kind] = {
-            "n": n,
-            "error": float(e[m].mean()),
-            "floor": fm,
-            "ratio": ratio,
-            "z": z,
-            "misfit": mis,
-            "ratio_trimmed": ratio_t,
-            "z_trimmed": z_t,
-            "detectable_ratio": max(det_k, RATIO_MISFIT),
-        }
+        groups[kind] = GroupResidual(
+            n=n,
+            error=float(e[m].mean()),
+            floor=fm,
+            ratio=ratio,
+            z=z,
+            misfit=mis,
+            ratio_trimmed=ratio_t,
+            z_trimmed=z_t,
+            detectable_ratio=max(det_k, RATIO_MISFIT),
+        )
         z_all = max(z_all, z, z_t)
         misfit = misfit or mis
         det = min(det, max(det_k, RATIO_MISFIT))
     ok = np.isfinite(e)
     err, flo = float(e[ok].mean()), float(f[ok].mean())
-    robust = [g["ratio_trimmed"] if k == "ground_motion" else g["ratio"] for k, g in groups.items()]
+    robust = [g.ratio_trimmed if k == "ground_motion" else g.ratio for k, g in groups.items()]
     ratio = max(robust) if robust else (err / flo if flo > 0 else math.inf)
     return Residual(err, flo, ratio, z_all, misfit, groups, det, need)

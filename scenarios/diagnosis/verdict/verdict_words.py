@@ -4,6 +4,10 @@ nothing else (:mod:`housner.scenarios.diagnosis.verdict.decision` writes the par
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from housner.scenarios.diagnosis.comparison.pointers import Evidence
 
 __all__ = ["Z_LEGEND", "Z_LOCAL_LEGEND", "Z_SHOWN", "evidence_text", "family_text", "g4", "probe_words", "z_text"]
 
@@ -39,13 +43,13 @@ def probe_words(name: str) -> str:
     return doc.removeprefix("Probe: ").rstrip(".")
 
 
-def evidence_text(ev: dict, model: str = "model") -> str:
+def evidence_text(ev: Evidence, model: str = "model") -> str:
     """One piece of a pointer's evidence in words: the measured value, the model's (named ``model``) and z."""
-    if ev["metric"].startswith("probe:"):
-        return f"{ev['label']} ({z_text(ev['z'])}: the fall in standard errors of the paired differences)"
+    if ev.is_probe:
+        return f"{ev.label} ({z_text(ev.z)}: the fall in standard errors of the paired differences)"
     return (
-        f"{ev['label']}: measured {g4(ev['measured'])} +- {g4(ev['measured_se'])}, {model} {g4(ev['model'])} "
-        f"+- {g4(ev['model_se'])} ({z_text(ev['z'])})"
+        f"{ev.label}: measured {g4(ev.measured)} +- {g4(ev.measured_se)}, {model} {g4(ev.model)} "
+        f"+- {g4(ev.model_se)} ({z_text(ev.z)})"
     )
 
 
