@@ -175,6 +175,8 @@ class Effect:
         The extra channels of the motion this effect reads (``GroundMotion.channels``,
         e.g. ``"ground_acc_vertical"``); a motion without one of them is refused by name
         before any simulation. ``"ground_acc_vertical"`` drives the terms' v.
+    probe_summary : str
+        A probe's physics in a few words (the verdict names the probe with them).
     fast_path : bool
         True for an effect whose ``modify_params`` realises the same physics as its
         ``terms`` (faster, batched with the plain kernel): it is the default route, and
@@ -198,6 +200,7 @@ class Effect:
     channels: ClassVar[tuple[str, ...]] = ()
     makes_channels: ClassVar[tuple[str, ...]] = ()
     probe: ClassVar[bool] = False
+    probe_summary: ClassVar[str] = ""
     fast_path: ClassVar[bool] = False
 
     def __post_init__(self) -> None:

@@ -245,13 +245,15 @@ def conclude(
     # physics leaves another error, as chaos carries its records elsewhere).
     kinds = [r.kind for r in cv.campaign.records]
     setup.progress("measuring the correct-model floor (parametric bootstrap over correct integrators)")
-    family, floor_final = floor_family(
+    family, floor_final, early = floor_family(
         setup, state, n_replicas, seed_int, kinds, who="the final model" if final.model.full else "the plain model"
     )
-    family_plain, floor_plain = (
-        (family, floor_final)
+    family_plain, floor_plain, _ = (
+        (family, floor_final, early)
         if not final.model.full
-        else floor_family(setup, state, n_replicas, seed_int, kinds, model=plain, who="the plain model")
+        else floor_family(
+            setup, state, n_replicas, seed_int, kinds, model=plain, who="the plain model", said_before=early
+        )
     )
     for what, v in (
         ("the plain model's held-out error", plain.heldout_errors),
@@ -297,11 +299,14 @@ def floor_family(
     kinds: list[str],
     model=None,
     who: str = "the final model",
-) -> tuple[str, Floor]:
-    """The family of correct integrators of a model's verdict, and its floor under it.
+    said_before: bool = False,
+) -> tuple[str, Floor, bool]:
+    """The family of correct integrators of a model's verdict, its floor under it, and whether the loop stopped
+    early.
 
     ``model`` is the search's current model (default the final one, ``state.current``; the plain model,
-    ``state.plain``, runs the same loop), ``who`` names it in ``economies``.
+    ``state.plain``, runs the same loop), ``who`` names it in ``economies``; ``said_before``: the other model's loop
+    stopped early and said why at length (this one's line is then short).
     The families of :data:`FAMILIES` narrowest first, until the model's ground motions are
     at their floor (not a misfit, and within RATIO_MISFIT of it on the mean and on the trimmed
     mean); the widest when at none. Stopped early: when the narrowest family puts them more than
@@ -334,13 +339,13 @@ def floor_family(
     for i, family in enumerate(families):
         floor, at_floor, ratio = measure(family)
         if at_floor:
-            return family, floor
+            return family, floor, False
         if i == 0 and len(families) > 2 and ratio > FAMILY_JUMP * RATIO_MISFIT:
             widest, widest_at_floor, widest_ratio = measure(families[-1])
             if not widest_at_floor:
                 skipped = ", ".join(repr(f) for f in families[1:-1])
                 said = "The floor's family loop stopped early"
-                if any(e.startswith(said) for e in setup.economies):  # the other model's said it at length
+                if said_before:
                     setup.economies.append(
                         f"{said} for {who} too: {ratio:.2f}x under {families[0]!r}, "
                         f"{widest_ratio:.2f}x under {families[-1]!r}."
@@ -357,8 +362,8 @@ def floor_family(
                     f"{families[-1]!r} ({widest_ratio:.2f}x); the families between not "
                     "measured"
                 )
-                return families[-1], widest
-    return families[-1], measured[families[-1]][0]
+                return families[-1], widest, True
+    return families[-1], measured[families[-1]][0], False
 
 
 def probe(setup: TrialSetup, state: SearchState) -> list[ProbeFinding]:

@@ -18,7 +18,7 @@ import numpy as np
 from housner.effects import effect_class
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
-from housner.scenarios.execution.typed_json import JsonValue, from_data, to_data
+from housner.scenarios.execution.typed_json import JsonValue, floats, from_data, to_data
 
 __all__ = [
     "Candidate",
@@ -33,6 +33,10 @@ __all__ = [
     "params_text",
     "signed_words",
 ]
+
+
+#: The error figures of a candidate and of a rung of the ladder [alpha].
+_ERRORS = ("train_error", "heldout_error", "heldout_se", "improvement", "improvement_se")
 
 
 def names_label(names) -> str:
@@ -122,13 +126,7 @@ class Candidate:
             params=_params_from(data["params"]),
             base=tuple(data["base"]),
             round=int(data["round"]),
-            train_error=from_data(float, data["train_error"]),
-            heldout_error=from_data(float, data["heldout_error"]),
-            heldout_se=from_data(float, data["heldout_se"]),
-            improvement=from_data(float, data["improvement"]),
-            improvement_se=from_data(float, data["improvement_se"]),
-            z=from_data(float, data["z"]),
-            pvalue=from_data(float, data["pvalue"]),
+            **floats(data, *_ERRORS, "z", "pvalue"),
             significant=bool(data["significant"]),
             reason=data["reason"],
             fold_wins=None if folds is None else np.array([from_data(float, x) for x in folds]),
@@ -203,11 +201,7 @@ class Step:
             effects=tuple((e["name"], _params_from(e["params"])) for e in data["effects"]),
             added_effects=tuple(data["added"].split(" + ")) if data["added"] else (),
             by_hand=bool(data["by_hand"]),
-            train_error=from_data(float, data["train_error"]),
-            heldout_error=from_data(float, data["heldout_error"]),
-            heldout_se=from_data(float, data["heldout_se"]),
-            improvement=from_data(float, data["improvement"]),
-            improvement_se=from_data(float, data["improvement_se"]),
+            **floats(data, *_ERRORS),
             significant=bool(data["significant"]),
         )
 

@@ -12,7 +12,7 @@ from typing import ClassVar
 import numpy as np
 
 from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores
-from housner.scenarios.execution.typed_json import JsonValue, from_data, to_data
+from housner.scenarios.execution.typed_json import JsonValue, floats, from_data, to_data
 
 __all__ = [
     "Miss",
@@ -76,9 +76,7 @@ class OutcomeStep:
             fold_params=[],
             p=None,
             scores=OutcomeScores.from_dict(data["scores"]),
-            improvement=from_data(float, data["improvement"]),
-            improvement_se=from_data(float, data["improvement_se"]),
-            p_value=from_data(float, data["p_value"]),
+            **floats(data, "improvement", "improvement_se", "p_value"),
         )
 
 

@@ -110,6 +110,23 @@ class GreedyRounds:
     first_level: float
 
 
+def _step(effects, added, *, by_hand: bool, train_error: float, held, judged=None, significant: bool) -> Step:
+    """A rung of the ladder from its out-of-fold errors ``held`` [alpha] and its paired fall ``judged`` (None: the
+    plain model, which has none)."""
+    return Step(
+        effects=tuple(effects),
+        added_effects=tuple(added),
+        by_hand=by_hand,
+        train_error=train_error,
+        heldout_error=float(held.mean()),
+        heldout_se=sem(held),
+        improvement=math.nan if judged is None else judged.improvement,
+        improvement_se=math.nan if judged is None else judged.improvement_se,
+        significant=significant,
+        heldout_errors=held,
+    )
+
+
 def start(setup: TrialSetup) -> SearchState:
     """The plain model: the baseline step, and the current model."""
     every, folds = setup.scorers.every_record, setup.cv.folds
@@ -117,18 +134,7 @@ def start(setup: TrialSetup) -> SearchState:
     # the loss of these errors: not simulated again; no fitted parameter: out-of-fold errors are the plain errors
     plain = CurrentModel(CVModel([], [[] for _ in range(folds.count)]), plain_errors.copy(), every.weigh(plain_errors))
     held = plain.heldout_errors
-    baseline = Step(
-        effects=(),
-        added_effects=(),
-        by_hand=False,
-        train_error=plain.train_loss,
-        heldout_error=float(held.mean()),
-        heldout_se=sem(held),
-        improvement=math.nan,
-        improvement_se=math.nan,
-        significant=False,
-        heldout_errors=held,
-    )
+    baseline = _step((), (), by_hand=False, train_error=plain.train_loss, held=held, significant=False)
     setup.progress(
         f"baseline: held-out error {baseline.heldout_error:.4f} +- {baseline.heldout_se:.4f} alpha "
         f"(sigma/alpha {setup.cv.noise_floor:.4f}); {folds.count}-fold cross-validation"
@@ -180,17 +186,14 @@ def _add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchStat
     held = setup.scorers.out_of_fold(with_it)
     level = setup.level_for(1)
     judged = judge(state.current.heldout_errors, held, level, cv.noise_floor)
-    step = Step(
-        effects=tuple(with_it.full),
-        added_effects=(name,),
+    step = _step(
+        with_it.full,
+        (name,),
         by_hand=True,
         train_error=train_loss,
-        heldout_error=float(held.mean()),
-        heldout_se=sem(held),
-        improvement=judged.improvement,
-        improvement_se=judged.improvement_se,
+        held=held,
+        judged=judged,
         significant=judged.significant,
-        heldout_errors=held,
     )
     setup.progress(f"+ {name} (by hand) {fmt_params(params)}: held-out error {held.mean():.4f}")
     return state.with_step(step, with_it, level, CurrentModel(with_it, held, train_loss))
@@ -301,17 +304,8 @@ def accept(setup: TrialSetup, state: SearchState, trial: Trial, test_level: floa
     held = setup.scorers.out_of_fold(with_it)
     judged = judge(state.current.heldout_errors, held, test_level, cv.noise_floor)
     label = names_label(trial.effects)
-    step = Step(
-        effects=tuple(with_it.full),
-        added_effects=tuple(trial.effects),
-        by_hand=False,
-        train_error=train_loss,
-        heldout_error=float(held.mean()),
-        heldout_se=sem(held),
-        improvement=judged.improvement,
-        improvement_se=judged.improvement_se,
-        significant=True,
-        heldout_errors=held,
+    step = _step(
+        with_it.full, trial.effects, by_hand=False, train_error=train_loss, held=held, judged=judged, significant=True
     )
     setup.progress(f"+ {label}: held-out error {held.mean():.4f} +- {sem(held):.4f} alpha")
     return state.with_step(step, with_it, test_level, CurrentModel(with_it, held, train_loss))

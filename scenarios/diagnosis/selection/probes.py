@@ -89,6 +89,7 @@ class VerticalCoupling(Effect):
 
     name = "vertical_coupling"
     probe = True
+    probe_summary = "a vertical table acceleration k ug''(t - d) that the campaign did not record"
     makes_channels = (VERTICAL,)
     params = {
         "k": ParamSpec("-", (-1.0, 1.0), 0.0, 0.0, "vertical over horizontal table acceleration"),

@@ -33,14 +33,14 @@ def z_text(z: float) -> str:
 
 
 def probe_words(name: str) -> str:
-    """What a probe (:mod:`housner.scenarios.diagnosis.selection.probes`) adds, in words: its docstring's first line."""
-    try:
-        from housner.effects import effect_class
+    """What a probe (:mod:`housner.scenarios.diagnosis.selection.probes`) adds, in words: its ``probe_summary``
+    (its name where it declares none)."""
+    from housner.effects import effect_class
 
-        doc = (effect_class(name).__doc__ or "").strip().splitlines()[0]
-    except (KeyError, ValueError, IndexError):
+    try:
+        return effect_class(name).probe_summary or name
+    except (KeyError, ValueError):
         return name
-    return doc.removeprefix("Probe: ").rstrip(".")
 
 
 def evidence_text(ev: Evidence, model: str = "model") -> str:
