@@ -1,50 +1,12 @@
 """What the 3D scan-mesh engines (``mujoco-3d``, ``pybullet-3d``) share.
 
-A real rock's scan mesh is simulated as one free rigid body (six degrees of freedom) standing on a
-fixed, flat table, instead of the equivalent planar block of :mod:`housner.scan`.
-
-Geometry and mass. :func:`load_rock` reuses :mod:`housner.scan`: the mesh is read and checked
-(watertight, metres, outward normals), its mass, centre of mass (COM) and inertia tensor come from
-the mesh at the given uniform density, and its rest pose is the facet of its convex hull under the
-COM (``specimen_from_mesh``). The body is placed in the *shaking frame*: the rest frame turned about
-the vertical by the azimuth, so that the shaking direction is world +x and the rock's rest facet is
-horizontal. The collision geometry is the mesh's convex hull (MuJoCo convexifies mesh geoms and
-PyBullet's ``GEOM_MESH`` on a dynamic body is a convex hull), so only the hull's vertices are handed
-to the engines. ``contact="hull"`` (the default, as in :mod:`housner.scan`) is the only contact a
-convex-hull collision realises.
-
-Ground motion. The table is fixed in the world and the table acceleration ug''(t) enters as the
-exact inertial (d'Alembert) force of the translating table frame: -m ug''(t) along the shaking
-direction, applied at the COM at every step. In the table's frame this is the same as shaking the
-table: the rock sees gravity and that uniform inertial force. ug'' is linear between the motion's
-samples and is evaluated at the middle of each engine step (the exact impulse of each step).
-
-Start. The rock is released in its rest pose with its lowest hull point :data:`DROP_GAP` above the
-table and settles for :data:`SETTLE_S` with no input; the record starts from the settled state
-(the Response's time 0 is the record's start). A motion with theta0 or theta_dot0 rotates the
-settled rock about the pivot edge on the side it leans to (the contact polygon's extreme point
-along +-x, at table level) and gives it that rotation rate about it.
-
-Output. theta is the rock's rotation about the horizontal axis normal to the shaking direction
-(world y), from the settled pose: with n the settled vertical body axis in its current direction,
-theta = atan2(n_x, n_z), positive when the rock leans toward +x (the planar engines' sign), 0 at
-rest. A yaw about the vertical does not change it.
-
-Overturn. :class:`OverturnCheck`: the rock has overturned at the first sample where either
-
-1. its tilt toward one side reaches ``min(2 alpha_side, pi/2)``: at theta = 2 alpha the COM,
-   having passed over the pivot, is back down at its rest height on the far side (the planar
-   block's COM height is R cos(theta - alpha)); the gravity moment m g R sin(theta - alpha)
-   drives it on and the table would have to lift it over the whole barrier m g (R - h) again to
-   bring it back; or
-2. its tilt has stayed beyond that side's alpha (its COM past the pivot it stood on) for
-   :data:`PAST_PIVOT_S` without interruption: a rock past its pivot falls or returns within a
-   fraction of a second (1/p is 0.22 s for SP1), so one that stays there lies on another facet.
-
-The run stops there (speed), the response holds theta at +-pi/2 from then on as the planar engines
-do (:func:`housner.engines._planar.sampled_response`) and reports theta_max = pi/2; the overturn time
-is that of the first criterion, or the time the rock last passed over its pivot for the second.
-alpha_side is the scan's pivot angle (``ScanSpecimen.pos.alpha`` / ``neg.alpha``).
+A real rock's scan mesh is simulated as one free rigid body (six degrees of freedom) standing on a fixed,
+flat table, instead of the equivalent planar block of :mod:`housner.scan`. Here are the rock
+(:func:`load_rock`, :class:`MeshRock`: the mesh's mass, centre of mass, inertia and convex hull, placed in
+the shaking frame), its start (settled for :data:`SETTLE_S` from :data:`DROP_GAP` above the table), theta
+from the settled pose, the overturn criterion (:class:`OverturnCheck`, with :data:`PAST_PIVOT_S`) and the
+base class :class:`MeshEngine`. The table acceleration enters as the exact d'Alembert force at the centre of
+mass. Why each is so is in ``docs/explanation/engines.md`` ("The 3D scan-mesh engines").
 """
 
 from __future__ import annotations
@@ -195,7 +157,7 @@ def rot_y(angle: float) -> np.ndarray:
 
 
 class OverturnCheck:
-    """The overturn criterion of the module docstring, fed one sample at a time."""
+    """The overturn criterion (docs/explanation/engines.md, "The 3D scan-mesh engines"), fed one sample at a time."""
 
     def __init__(self, rock: MeshRock, dt: float):
         self.limit = {s: min(2.0 * rock.alpha(s), OVERTURN_ANGLE) for s in (1.0, -1.0)}

@@ -1,37 +1,10 @@
 """A real rock's scan mesh as a free rigid body on a shaken table, in MuJoCo (engine ``mujoco-3d``).
 
-Model. One body with a free joint (six degrees of freedom) whose frame is the rock's centre of mass
-(COM), axes the shaking frame of :mod:`housner.engines.scan_mesh.mesh3d` (x along the shaking direction, z up);
-its mass and full inertia tensor are the mesh's at the set density (``<inertial>``, not MuJoCo's
-estimate from the collision geometry). Its collision geometry is a mesh geom of the hull's vertices,
-which MuJoCo convexifies (the convex hull). The table is MuJoCo's infinite plane z = 0, fixed.
-
-Ground motion. The table is fixed; the table acceleration ug'' enters as the exact d'Alembert force
--m ug''(t) along x at the COM (``xfrc_applied``, at the middle of each step), the same as shaking the
-table (:mod:`housner.engines.scan_mesh.mesh3d`). The rock settles for 1 s before the record starts; theta, the
-overturn criterion and the response are the shared ones of :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`.
-
-Settings and their defaults (``DEFAULTS``):
-
-* ``timestep`` 0.5 ms (10 steps per 5 ms sample of the ASU records). Measured: a 0.2 x 0.4 x 1 m box
-  released at 0.5 alpha gives the first impact within 0.1 % of Housner's quarter period and the next
-  three rocking peaks within 1 % of Housner's at 1, 0.5 and 0.25 ms; on 16 random ASU records
-  (SP1, azimuth 0) the predicted overturns differ in 1-2 records near the threshold between those
-  steps (the rocking of a rock whose alpha is 0.09 rad is that sensitive), with no trend; 0.5 ms
-  costs about 0.013 CPU s per simulated second, a tenth of the campaign's budget.
-* ``solref`` (2 ms, 1): four steps, critically damped (MuJoCo needs at least two steps): a stiff
-  contact (the rock sinks by a few um at rest) whose impacts are plastic, as Housner's.
-* ``friction`` 0.7: granite on the steel shake table, in the 0.6-0.8 the Virtual Shake Robot study of
-  the same rocks used (Chen et al. 2024). It is a physical value, not a numerical one: table
-  accelerations above mu g make the rock slide, as it can on the real table.
-* ``cone`` "elliptic", ``impratio`` 1: MuJoCo's physically plain Coulomb cone.
-* ``integrator`` "implicitfast", ``iterations`` 50, ``tolerance`` 1e-10.
-
-References
-----------
-MuJoCo documentation, "Computation" (soft contacts, solref/solimp) and "Modeling" (mesh geoms are
-convex hulls for collisions), https://mujoco.readthedocs.io
-Chen, Z. et al. (2024). Virtual Shake Robot. Seismica 3(1), doi:10.26443/seismica.v3i1.692.
+:class:`MujocoMeshEngine` puts the rock of :mod:`housner.engines.scan_mesh.mesh3d` on a body with a free joint at its
+centre of mass (the mesh's mass and full inertia tensor, its convex hull as collision geometry) on MuJoCo's
+fixed infinite plane, and drives it by the d'Alembert force of the table acceleration at the centre of mass
+(``xfrc_applied``, at the middle of each step). How it holds the rock is in ``docs/explanation/engines.md``
+("The 3D scan-mesh engines"); the settings, their defaults and why, in :class:`MujocoMeshEngine`.
 """
 
 from __future__ import annotations
@@ -76,7 +49,27 @@ class MujocoMeshEngine(MeshEngine):
 
     Notes
     -----
-    The defaults and why: the module docstring.
+    The defaults (``DEFAULTS``) and why:
+
+    * ``timestep`` 0.5 ms (10 steps per 5 ms sample of the ASU records). Measured: a 0.2 x 0.4 x 1 m box
+      released at 0.5 alpha gives the first impact within 0.1 % of Housner's quarter period and the next
+      three rocking peaks within 1 % of Housner's at 1, 0.5 and 0.25 ms; on 16 random ASU records
+      (SP1, azimuth 0) the predicted overturns differ in 1-2 records near the threshold between those
+      steps (the rocking of a rock whose alpha is 0.09 rad is that sensitive), with no trend; 0.5 ms
+      costs about 0.013 CPU s per simulated second, a tenth of the campaign's budget.
+    * ``solref`` (2 ms, 1): four steps, critically damped (MuJoCo needs at least two steps): a stiff
+      contact (the rock sinks by a few um at rest) whose impacts are plastic, as Housner's.
+    * ``friction`` 0.7: granite on the steel shake table, in the 0.6-0.8 the Virtual Shake Robot study of
+      the same rocks used (Chen et al. 2024). It is a physical value, not a numerical one: table
+      accelerations above mu g make the rock slide, as it can on the real table.
+    * ``cone`` "elliptic", ``impratio`` 1: MuJoCo's physically plain Coulomb cone.
+    * ``integrator`` "implicitfast", ``iterations`` 50, ``tolerance`` 1e-10.
+
+    References
+    ----------
+    MuJoCo documentation, "Computation" (soft contacts, solref/solimp) and "Modeling" (mesh geoms are
+    convex hulls for collisions), https://mujoco.readthedocs.io
+    Chen, Z. et al. (2024). Virtual Shake Robot. Seismica 3(1), doi:10.26443/seismica.v3i1.692.
     """
 
     name: ClassVar[str] = "mujoco-3d"
