@@ -24,8 +24,8 @@ from housner.scenarios.diagnosis.diagnose import diagnose
 from housner.scenarios.diagnosis.selection.record_scoring import cv_folds
 from housner.scenarios.diagnosis.verdict.correct_model_floor import Floor, _perturbed
 from housner.scenarios.diagnosis.verdict.decision import VerdictFacts, decide, verdict_text
-from housner.scenarios.diagnosis.verdict.status import STATUSES, status_rule
 from housner.scenarios.diagnosis.verdict.residual_test import RATIO_MISFIT, residual_test
+from housner.scenarios.diagnosis.verdict.status import STATUSES, status_rule
 from housner.specimen import Specimen
 
 _CACHE: dict = {}
