@@ -41,6 +41,7 @@ __all__ = [
     "contact_r",
     "gravity_x",
     "law_factor",
+    "model_number",
     "optional_package",
     "pivot_offset",
     "pivot_x",
@@ -79,6 +80,15 @@ IMPACT_LAW_RANGE = (0.0, 1.0)
 #: Ranges of the settings every rigid-pivot adapter (DART, Drake, OpenSees) takes: the step [s], the pivot's
 #: Coulomb friction coefficient [-] and the impact law's factor [-]; an adapter adds its own contact's.
 PIVOT_RANGES: dict = {"timestep": (1e-6, 1e-2), "friction": (0.0, 100.0), "impact_energy_factor": IMPACT_LAW_RANGE}
+
+
+def model_number(x: float) -> str:
+    """Shortest decimal text that reads back as the same float ("0" for zero): the numbers of the generated
+    model files (:mod:`housner.engines.mjcf`, :mod:`housner.engines.urdf`)."""
+    x = float(x)
+    if x == 0.0:
+        return "0"
+    return repr(x)
 
 
 def checked_settings(
