@@ -49,6 +49,7 @@ __all__ = [
     "release_state",
     "sampled_response",
     "start_states",
+    "step_info",
     "substeps",
 ]
 
@@ -317,6 +318,18 @@ def sampled_response(
     )
 
 
+def step_info(engine, h: float, k: int, last: int) -> dict:
+    """What a run's ``info`` opens with, for every adapter: the engine's settings and version, its step h [s], the
+    k steps per sample and the steps run to sample ``last``."""
+    return {
+        "settings": engine.settings(),
+        "version": engine.version(),
+        "step": h,
+        "steps_per_sample": k,
+        "n_steps": last * k,
+    }
+
+
 def optional_package(engine: str, package: str, module: str, install: str) -> Any:
     """The module ``module`` of an optional engine's ``package``, imported on first use, or EngineUnavailable.
 
@@ -507,13 +520,5 @@ class PlanarEngine(Engine):
         ``info`` holds the settings, the version, the step h [s], the k steps per sample, the steps
         run, ``extra`` and the wall time ``wall`` [s].
         """
-        info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": last * k,
-            **extra,
-            "wall_time_s": wall,
-        }
+        info = {**step_info(self, h, k, last), **extra, "wall_time_s": wall}
         return sampled_response(self, specimen, motion, theta, theta_dot, last, overturned, info)

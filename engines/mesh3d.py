@@ -60,7 +60,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from housner.engines._planar import OVERTURN_ANGLE, RUNAWAY_M, sampled_response
+from housner.engines._planar import OVERTURN_ANGLE, RUNAWAY_M, sampled_response, step_info
 from housner.engines.base import Engine, SpecAttribute
 from housner.errors import DataFileError, EngineError, unknown_choice
 from housner.response import Response
@@ -325,11 +325,7 @@ class MeshEngine(Engine):
                 break
         pos_end = self._state()[0]
         info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": last * k,
+            **step_info(self, h, k, last),
             "settle_steps": n_settle,
             "mesh_mass_kg": self.rock.mass,
             "mesh_com_height_m": self.rock.h,
