@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from housner.engines._planar import check_offset, pivot_x
+from housner.engines._planar import model_number as _num
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -54,14 +55,6 @@ MJCF_DEFAULTS: dict = {
 
 _CONES = ("pyramidal", "elliptic")
 _INTEGRATORS = ("Euler", "implicitfast", "implicit", "RK4")
-
-
-def _num(x: float) -> str:
-    """Shortest decimal text that reads back as the same float."""
-    x = float(x)
-    if x == 0.0:
-        return "0"
-    return repr(x)
 
 
 def _vec(xs: Sequence[float]) -> str:

@@ -17,6 +17,7 @@ import math
 from pathlib import Path
 
 from housner.engines._planar import check_offset, pivot_x
+from housner.engines._planar import model_number as _num
 from housner.specimen import Specimen
 
 __all__ = [
@@ -45,14 +46,6 @@ URDF_DEFAULTS: dict = {
 
 #: Travel of the two slide joints [m]; wide enough never to be reached.
 _SLIDE_LIMIT = 1.0e3
-
-
-def _num(x: float) -> str:
-    """Shortest decimal text that reads back as the same float."""
-    x = float(x)
-    if x == 0.0:
-        return "0"
-    return repr(x)
 
 
 def _positive(name: str, value: float) -> float:

@@ -14,7 +14,7 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
-from housner.engines.scan_mesh.mesh3d import MESH_DEFAULTS, MeshEngine, hull_drop_height
+from housner.engines.scan_mesh.mesh3d import MeshEngine, hull_drop_height
 from housner.units import G
 
 __all__ = ["MujocoMeshEngine"]
@@ -25,18 +25,6 @@ class MujocoMeshEngine(MeshEngine):
 
     Parameters
     ----------
-    mesh : str or pathlib.Path
-        The rock's scan mesh (watertight, metres, mesh z up); required.
-    azimuth : float
-        Shaking direction [deg] in [0, 360), from the mesh x axis toward +y.
-    density : float
-        Uniform density [kg/m^3].
-    contact : {"hull"}
-        The collision geometry: the mesh's convex hull.
-    timestep : float
-        Largest engine step [s]; the step used is motion.dt / ceil(motion.dt / timestep).
-    friction : float
-        Coulomb friction coefficient rock/table [-].
     solref : (float, float)
         Contact (time constant [s], damping ratio [-]) of the rock and the table.
     solimp : 5 floats
@@ -46,6 +34,8 @@ class MujocoMeshEngine(MeshEngine):
     integrator : {"Euler", "implicitfast", "implicit", "RK4"}
     iterations : int
     tolerance : float
+    mesh, azimuth, density, contact, timestep, friction
+        As :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`'s.
 
     Notes
     -----
@@ -74,9 +64,7 @@ class MujocoMeshEngine(MeshEngine):
 
     name: ClassVar[str] = "mujoco-3d"
     DEFAULTS: ClassVar[dict] = {
-        **MESH_DEFAULTS,
-        "timestep": 5e-4,
-        "friction": 0.7,
+        **MeshEngine.DEFAULTS,
         "solref": (2e-3, 1.0),
         "solimp": (0.9, 0.95, 0.001, 0.5, 2.0),
         "cone": "elliptic",
@@ -86,8 +74,7 @@ class MujocoMeshEngine(MeshEngine):
         "tolerance": 1e-10,
     }
     RANGES: ClassVar[dict] = {
-        "timestep": (0.0, 1e-2),
-        "friction": (0.0, 100.0),
+        **MeshEngine.RANGES,
         "impratio": (0.0, 1e3),
         "iterations": (1, 1000),
         "tolerance": (0.0, 1e-2),

@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from housner.engines._planar import optional_package
-from housner.engines.scan_mesh.mesh3d import DROP_GAP, MESH_DEFAULTS, MeshEngine
+from housner.engines.scan_mesh.mesh3d import DROP_GAP, MeshEngine
 from housner.units import G
 
 __all__ = ["PybulletMeshEngine"]
@@ -26,24 +26,14 @@ class PybulletMeshEngine(MeshEngine):
 
     Parameters
     ----------
-    mesh : str or pathlib.Path
-        The rock's scan mesh (watertight, metres, mesh z up); required.
-    azimuth : float
-        Shaking direction [deg] in [0, 360), from the mesh x axis toward +y.
-    density : float
-        Uniform density [kg/m^3].
-    contact : {"hull"}
-        The collision geometry: the mesh's convex hull.
-    timestep : float
-        Largest engine step [s]; the step used is motion.dt / ceil(motion.dt / timestep).
-    friction : float
-        Coulomb friction coefficient rock/table [-].
     solver_iterations : int
         Sequential-impulse iterations per step.
     erp, contact_erp : float
         Share of a joint / contact position error corrected per step [-].
     collision_margin : float
         Bullet's collision margin around the convex hull [m].
+    mesh, azimuth, density, contact, timestep, friction
+        As :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`'s.
 
     Notes
     -----
@@ -72,17 +62,14 @@ class PybulletMeshEngine(MeshEngine):
 
     name: ClassVar[str] = "pybullet-3d"
     DEFAULTS: ClassVar[dict] = {
-        **MESH_DEFAULTS,
-        "timestep": 5e-4,
-        "friction": 0.7,
+        **MeshEngine.DEFAULTS,
         "solver_iterations": 50,
         "erp": 0.2,
         "contact_erp": 0.2,
         "collision_margin": 1e-3,
     }
     RANGES: ClassVar[dict] = {
-        "timestep": (0.0, 1e-2),
-        "friction": (0.0, 100.0),
+        **MeshEngine.RANGES,
         "solver_iterations": (1, 10000),
         "erp": (0.0, 1.0),
         "contact_erp": (0.0, 1.0),

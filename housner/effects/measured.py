@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from housner._kernel_parts import clip_unit
 from housner.effects.registry import STAGE_DISSIPATION, Effect, param, register_effect
 from housner.effects.terms import ImpactTerm, MomentTerm
 
@@ -71,12 +72,7 @@ def interp_log(x, q):
 @njit(cache=True)
 def measured_impact_law(w, r, s, alpha, p2, q):
     """Energy ratio [-] of an impact at speed w > 0 [rad/s]: clip(r k(w / (p alpha)), 0, 1), k the table ``q``."""
-    r_eff = r * interp_log(w / (math.sqrt(p2) * alpha), q)
-    if r_eff > 1.0:
-        r_eff = 1.0
-    if r_eff < 0.0:
-        r_eff = 0.0
-    return r_eff
+    return clip_unit(r * interp_log(w / (math.sqrt(p2) * alpha), q))
 
 
 @njit(cache=True, inline="always")
@@ -106,12 +102,7 @@ def measured_scatter_law(w, r, s, alpha, p2, q):
     u1 = (float(h1 >> np.uint64(11)) + 0.5) / 9007199254740992.0  # (0, 1): 53 bits
     u2 = float(h2 >> np.uint64(11)) / 9007199254740992.0
     z = math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
-    r_eff = r * (k + sigma * z)
-    if r_eff > 1.0:
-        r_eff = 1.0
-    if r_eff < 0.0:
-        r_eff = 0.0
-    return r_eff
+    return clip_unit(r * (k + sigma * z))
 
 
 @njit(cache=True, inline="always")

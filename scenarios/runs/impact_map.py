@@ -443,46 +443,39 @@ def _binned(x: np.ndarray, columns: Mapping[str, np.ndarray]) -> dict:
     return out
 
 
+#: The binned impact table's columns after the bins' own: its name -> (the impacts' column, the statistic of
+#: :func:`_binned`).
+_IMPACT_TABLE = {
+    "ratio_median": ("ratio_to_housner", "median"),
+    "ratio_spread": ("ratio_to_housner", "spread"),
+    "contact_median_s": ("contact_s", "median"),
+    "contact_delay_median_s": ("contact_delay_s", "median"),
+}
+#: The binned flight table's columns after the bins' own, as :data:`_IMPACT_TABLE` for the flights.
+_FLIGHT_TABLE = {
+    "c_median_per_s": ("c_per_s", "median"),
+    "c_spread_per_s": ("c_per_s", "spread"),
+    "energy_change_median": ("energy_change", "median"),
+    "period_drift_median": ("period_drift", "median"),
+}
+
+
+def _binned_table(rows: dict, table: Mapping[str, tuple[str, str]]) -> dict:
+    """The binned table of ``rows`` (columns -> values, ``x`` among them): the bins' x, edges and n, then each
+    column of ``table`` (:data:`_IMPACT_TABLE`, :data:`_FLIGHT_TABLE`)."""
+    sources = dict.fromkeys(col for col, _ in table.values())
+    b = _binned(np.asarray(rows["x"], float), {col: np.asarray(rows[col], float) for col in sources})
+    return {
+        "x": b["x"],
+        "x_low": b["x_low"],
+        "x_high": b["x_high"],
+        "n": b["n"],
+        **{name: b[f"{col}_{stat}"] for name, (col, stat) in table.items()},
+    }
+
+
 def _tables(impacts: dict, flights: dict) -> tuple[dict, dict]:
-    ix = np.asarray(impacts["x"], float)
-    bi = _binned(
-        ix,
-        {
-            "ratio": np.asarray(impacts["ratio_to_housner"], float),
-            "contact": np.asarray(impacts["contact_s"], float),
-            "delay": np.asarray(impacts["contact_delay_s"], float),
-        },
-    )
-    imp = {
-        "x": bi["x"],
-        "x_low": bi["x_low"],
-        "x_high": bi["x_high"],
-        "n": bi["n"],
-        "ratio_median": bi["ratio_median"],
-        "ratio_spread": bi["ratio_spread"],
-        "contact_median_s": bi["contact_median"],
-        "contact_delay_median_s": bi["delay_median"],
-    }
-    fx = np.asarray(flights["x"], float)
-    bf = _binned(
-        fx,
-        {
-            "c": np.asarray(flights["c_per_s"], float),
-            "energy_change": np.asarray(flights["energy_change"], float),
-            "period_drift": np.asarray(flights["period_drift"], float),
-        },
-    )
-    fl = {
-        "x": bf["x"],
-        "x_low": bf["x_low"],
-        "x_high": bf["x_high"],
-        "n": bf["n"],
-        "c_median_per_s": bf["c_median"],
-        "c_spread_per_s": bf["c_spread"],
-        "energy_change_median": bf["energy_change_median"],
-        "period_drift_median": bf["period_drift_median"],
-    }
-    return imp, fl
+    return _binned_table(impacts, _IMPACT_TABLE), _binned_table(flights, _FLIGHT_TABLE)
 
 
 # ----------------------------------------------------------------------------
