@@ -41,6 +41,7 @@ __all__ = [
     "contact_r",
     "gravity_x",
     "law_factor",
+    "model_number",
     "optional_package",
     "pivot_offset",
     "pivot_x",
@@ -48,6 +49,7 @@ __all__ = [
     "release_state",
     "sampled_response",
     "start_states",
+    "step_info",
     "substeps",
 ]
 
@@ -79,6 +81,15 @@ IMPACT_LAW_RANGE = (0.0, 1.0)
 #: Ranges of the settings every rigid-pivot adapter (DART, Drake, OpenSees) takes: the step [s], the pivot's
 #: Coulomb friction coefficient [-] and the impact law's factor [-]; an adapter adds its own contact's.
 PIVOT_RANGES: dict = {"timestep": (1e-6, 1e-2), "friction": (0.0, 100.0), "impact_energy_factor": IMPACT_LAW_RANGE}
+
+
+def model_number(x: float) -> str:
+    """Shortest decimal text that reads back as the same float ("0" for zero): the numbers of the generated
+    model files (:mod:`housner.engines.mjcf`, :mod:`housner.engines.urdf`)."""
+    x = float(x)
+    if x == 0.0:
+        return "0"
+    return repr(x)
 
 
 def checked_settings(
@@ -307,6 +318,18 @@ def sampled_response(
     )
 
 
+def step_info(engine, h: float, k: int, last: int) -> dict:
+    """What a run's ``info`` opens with, for every adapter: the engine's settings and version, its step h [s], the
+    k steps per sample and the steps run to sample ``last``."""
+    return {
+        "settings": engine.settings(),
+        "version": engine.version(),
+        "step": h,
+        "steps_per_sample": k,
+        "n_steps": last * k,
+    }
+
+
 def optional_package(engine: str, package: str, module: str, install: str) -> Any:
     """The module ``module`` of an optional engine's ``package``, imported on first use, or EngineUnavailable.
 
@@ -497,13 +520,5 @@ class PlanarEngine(Engine):
         ``info`` holds the settings, the version, the step h [s], the k steps per sample, the steps
         run, ``extra`` and the wall time ``wall`` [s].
         """
-        info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": last * k,
-            **extra,
-            "wall_time_s": wall,
-        }
+        info = {**step_info(self, h, k, last), **extra, "wall_time_s": wall}
         return sampled_response(self, specimen, motion, theta, theta_dot, last, overturned, info)

@@ -1,48 +1,12 @@
 """The conformance check every engine passes: rest, symmetry, determinism, bounds, sign and period.
 
-``check_engine(engine)`` runs a handful of short records (a few seconds of
-simulated time in all) and returns a :class:`ConformanceReport` with one
-:class:`CheckResult` per check; it does not raise. ``assert_conforms(engine)``
-runs it and raises ``AssertionError`` with the readable list of failures, for
-tests. The records are made dimensionless with the specimen's p and
-g tan(alpha), so the check means the same for any block.
-
-Checks and tolerances
----------------------
-``at_rest``
-    Ground acceleration ramped (half-cosine over 1/p) to 0.9 g tan(alpha) and
-    held, in both directions, and a slow sine of amplitude 0.9 g tan(alpha)
-    and period 8/p: the block must stay at rest, |theta| < 1e-3 alpha. A rigid
-    block does not move at all; 1e-3 alpha allows the elastic tilt of a
-    compliant contact (about 2e-4 alpha for MuJoCo) and is 5 times below the
-    0.8 mrad = 0.0053 alpha resolution of the seed's measurements. The ramp
-    keeps a compliant contact from overshooting as it would under a step.
-``mirror_symmetry``
-    A one-sine pulse (omega_p = 8 p, a_p = 5 g tan(alpha); about 0.5 alpha of
-    rocking and two impacts, far from chaotic) and its mirror image:
-    max |theta(t) + theta_mirror(t)| <= 1 % of theta_max.
-``deterministic``
-    The same pulse twice: identical theta, theta_dot, impacts and theta_max.
-``finite_and_bounded``
-    Every response of the check is finite, on the motion's sample grid, and
-    |theta| <= pi/2.
-``sign_and_overturn``
-    Ground acceleration ramped (over 0.5/p) to -3 g tan(alpha) and held for
-    10/p: the block must lift to theta > 0 (leaning toward +x), overturn, and
-    end at theta = +pi/2 with an overturn time.
-``free_vibration_period``
-    Release at rest from 0.5 alpha: the time to the first impact within 1 %
-    of the exact quarter period of Housner's equation
-    (:func:`housner.engines.tuning.free_rocking_quarter_period`), and the next
-    half-cycle (first to second impact) within 1 % of the exact duration for
-    the peak the engine reached in it. This checks p without involving r.
-
-References
-----------
-Housner, G. W. (1963). The behavior of inverted pendulum structures during
-earthquakes. BSSA 53(2), 403-417.
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
-model. COMPDYN 2017, eqs. 2, 7 and section 3.4 (measurement resolution).
+``check_engine(engine)`` runs a handful of short records (a few seconds of simulated time in all), made
+dimensionless with the specimen's p and g tan(alpha) so that the check means the same for any block, and
+returns a :class:`ConformanceReport` with one :class:`CheckResult` per check (``at_rest``,
+``mirror_symmetry``, ``deterministic``, ``finite_and_bounded``, ``sign_and_overturn``,
+``free_vibration_period``); it does not raise. ``assert_conforms(engine)`` runs it and raises
+``AssertionError`` with the readable list of failures, for tests. Each check's record and tolerance, and
+why, are in ``docs/explanation/engines.md`` ("The conformance check").
 """
 
 from __future__ import annotations
@@ -61,7 +25,7 @@ from housner.specimen import Specimen
 
 __all__ = ["CheckResult", "ConformanceReport", "assert_conforms", "check_engine"]
 
-#: |theta| / alpha allowed at rest under 0.9 g tan(alpha) [-] (see the module docstring).
+#: |theta| / alpha allowed at rest under 0.9 g tan(alpha) [-] (docs/explanation/engines.md, "The conformance check").
 REST_TOL = 1e-3
 #: Fraction of g tan(alpha) applied in the rest check [-].
 REST_LEVEL = 0.9

@@ -1,41 +1,11 @@
 """DART (dartpy): the rocking block as a planar rigid body on a rigid ground, boxed-LCP contact.
 
-The model, built from a :class:`housner.Specimen` for every run (numbered as in
-``engines/models/README.md``, section DART):
-
-1. World: gravity -g along z (g = 9.80665 m/s^2); the ground acceleration
-   enters as the d'Alembert body force -m ug''(t), i.e. a gravity component
-   g_x = -ug''(t) along x, set before every step to the exact mean of the
-   linearly interpolated ug'' over that step. The ground itself does not move.
-2. Ground: a fixed box, its top face the pivot line z = 0.
-3. Block: one body, centre of mass at its frame origin, on a ``PlanarJoint``
-   in the ZX plane (dofs z, x and the rotation about +y, which is the suite's
-   theta: theta > 0 turns the top toward +x, rocking on the +x pivot).
-   Mass m, inertia about the centre of mass I_c = I0 - m R^2 on all three axes
-   (only the one about y enters the planar motion), so p = sqrt(m g R / I0).
-4. Pivots: the only collision shapes, two spheres of radius rho = 10 um at
-   (+-B, -H + rho) in the body frame, touching the ground at (+-B, 0) when the
-   block stands upright: one contact point per pivot, as in Housner's model.
-   Restitution 0 (Housner's plastic impact), Coulomb friction mu = 1.5. With the
-   effect ``asymmetric_pivots`` (centre of mass e toward +x of the pivots'
-   midpoint) the spheres sit at x = B - e and -(B + e), mass and I_c unchanged.
-5. Contact: DART's default rigid contact, a boxed LCP (Dantzig) solved every
-   step; impacts are velocity-level impulses, so no contact stiffness or
-   damping needs tuning. Collisions are found by DART's own detector
-   (``collision_detector`` "dart": ``DARTCollisionDetector``, which handles
-   sphere-box pairs), not DART's default FCL: the same first-impact r and
-   impact counts at less CPU time (docs/results.md#defaults-dart).
-
-With these settings and a 0.1 ms step the first impact's energy ratio after
-releases at 0.2, 0.5 and 0.8 alpha is within 0.1 % of Housner's r for the
-seed specimen (``tests/test_dart.py``), without any tuning.
-
-References
-----------
-DART: Dynamic Animation and Robotics Toolkit, https://dartsim.github.io
-(PlanarJoint, BoxedLcpConstraintSolver).
-Housner, G. W. (1963). BSSA 53(2), 403-417.
-Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
+:class:`DartEngine` builds the world for every run: the block on a ``PlanarJoint`` in the ZX plane, two
+10 um sphere pivots on a fixed box ground, DART's rigid contact (a boxed LCP solved every step, with DART's
+own collision detector), and the ground acceleration as a gravity component set before every step. The
+model step by step is in ``engines/models/README.md`` ("DART (dartpy)", whose numbers the code cites) and
+``docs/explanation/engines.md`` ("DART"); the settings and why, in :class:`DartEngine`; what they measure
+and cost, in ``docs/results.md#defaults-dart``.
 """
 
 from __future__ import annotations
@@ -60,10 +30,21 @@ class DartEngine(PlanarEngine):
     restitution : float
         Newton restitution coefficient at the pivots [-]; 0 is Housner's plastic impact.
     collision_detector : {"dart", "fcl", "bullet", "ode"}
-        The collision detector (step 5 of the module docstring): DART's own (default) or the one of
-        FCL (DART's default), Bullet or ODE.
+        The collision detector (Notes): DART's own (default) or the one of FCL (DART's default), Bullet
+        or ODE.
     timestep, friction, pivot_radius, impact_energy_factor
         As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
+
+    Notes
+    -----
+    The pivots have restitution 0 (Housner's plastic impact) and Coulomb friction mu = 1.5. The contact
+    is DART's default rigid contact, a boxed LCP (Dantzig) solved every step; impacts are velocity-level
+    impulses, so no contact stiffness or damping needs tuning. Collisions are found by DART's own detector
+    (``collision_detector`` "dart": ``DARTCollisionDetector``, which handles sphere-box pairs), not DART's
+    default FCL: the same first-impact r and impact counts at less CPU time (docs/results.md#defaults-dart).
+    With these settings and a 0.1 ms step the first impact's energy ratio after releases at 0.2, 0.5 and
+    0.8 alpha is within 0.1 % of Housner's r for the seed specimen (``tests/test_dart.py``), without any
+    tuning.
     """
 
     name = "dart"
@@ -116,8 +97,8 @@ class DartEngine(PlanarEngine):
 
     # ------------------------------------------------------------------
     def build(self, specimen: Specimen, step: float, offset: float = 0.0):
-        """The DART world of ``specimen`` (steps 1-5 of the module docstring) and the block's skeleton; the
-        pivots at x = B - e and -(B + e) of the centre of mass for ``offset`` e [m] (``asymmetric_pivots``)."""
+        """The DART world of ``specimen`` (steps 1-5 of engines/models/README.md, "DART") and the block's skeleton;
+        the pivots at x = B - e and -(B + e) of the centre of mass for ``offset`` e [m] (``asymmetric_pivots``)."""
         dart = self.require()
         H, B, m = specimen.H, specimen.B, specimen.mass
         rho = self._pivot_radius(specimen)
@@ -146,7 +127,7 @@ class DartEngine(PlanarEngine):
         world, block = self.build(specimen, h, pivot_offset(effects))
         block.setPositions(states[0, :3].tolist())
         block.setVelocities(states[0, 3:].tolist())
-        gx_rows = gravity_x(motion.acc, k)  # step 1 of the module docstring
+        gx_rows = gravity_x(motion.acc, k)  # step 1 of engines/models/README.md, "DART"
         # Gravity set before each step from its three components: dartpy's (x, y, z) overload takes 0.3 us where
         # an ndarray converted to its Eigen vector takes 1.0 us (a list 1.6 us), the same numbers.
         set_gravity, step, gz = world.setGravity, world.step, -G

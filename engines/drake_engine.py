@@ -1,75 +1,12 @@
 """Drake (pydrake): the rocking block as a planar body on a stiff point contact, TAMSI discrete solver.
 
-The model, built from a :class:`housner.Specimen` once per specimen and step and
-reused for every record (numbered as in ``engines/models/drake.md``):
-
-1. Plant: a discrete ``MultibodyPlant`` with a fixed step h (``timestep``,
-   1/8 ms: each sample interval cut into the fewest equal steps no longer than it),
-   gravity -g along z (g = 9.80665 m/s^2; Drake's default is 9.81), sampled output
-   ports off (the state is all that is read).
-2. Block: one body, centre of mass at its frame origin, mass m, inertia
-   about the centre of mass I_c = I0 - m R^2 on all three axes (only the one
-   about y enters the planar motion), so p = sqrt(m g R / I0). It moves on a
-   ``PlanarJoint``, whose plane is its frames' x-y plane and whose rotation
-   is about their z: both joint frames are turned so that their x is the
-   world's z, their y the world's x and their z the world's y. The joint's
-   coordinates are then (z, x, theta) with theta the rotation about +y, the
-   suite's theta (theta > 0 turns the top toward +x, rocking on the +x pivot).
-3. Ground: a fixed box, its top face the pivot line z = 0, 100 H wide (a
-   half-space works as well but makes Drake warn that deformable contact
-   ignores it).
-4. Pivots: the only collision shapes of the block, two spheres of radius
-   rho = 10 um at (+-B, -H + rho) in the body frame, touching the ground at
-   (+-B, 0) when the block stands: one contact point per pivot, as in
-   Housner's model. Coulomb friction mu = 1.5 (Drake combines the pair's
-   coefficients as 2 mu1 mu2 / (mu1 + mu2), so both carry mu). With the effect
-   ``asymmetric_pivots`` (centre of mass e toward +x of the pivots' midpoint)
-   the spheres sit at x = B - e and -(B + e), mass and I_c unchanged.
-5. Contact: point contact (``ContactModel.kPoint``) with the pair's
-   stiffness k (``stiffness``, 2.5e9 N/m per pivot), solved by the discrete
-   solver ``contact_approximation`` names:
-
-   * ``"tamsi"`` (default, ``DiscreteContactApproximation.kTamsi``): TAMSI,
-     Hunt-Crossley dissipation d (``dissipation``, 50 s/m: Drake's own value
-     when none is given, drake 1.51.1) and regularised Coulomb friction that
-     lets a pivot creep below ``stiction_tolerance`` (1e-4 m/s, Drake's default);
-   * ``"sap"`` (``kSap``): SAP, a convex implicit contact solver, with linear
-     (Kelvin-Voigt) dissipation time tau (``relaxation_time``, 0 s) in place of d;
-   * ``"lagged"``, ``"similar"``: SAP's convex solver on the Hunt-Crossley d.
-
-   Drake combines a pair's stiffnesses in series, k1 k2 / (k1 + k2), and
-   adds their relaxation times (and gives each geometry tau = 0.1 s when
-   unset), so the ground and the pivots each carry 2 k, d and tau / 2. With
-   k = 2.5e9 N/m, sqrt(k / m) h = 3.1 at h = 1/8 ms: the contact is far too
-   stiff for the step to resolve, the solver treats it as near-rigid and ends
-   each impact within a step or two without a rebound, Housner's plastic
-   impact. The stiffness still matters before uplift: the block's elastic
-   tilt on softer pivots starts the rocking early (5e7 N/m: first pulse
-   peaks 1-2 % high; 5e8 and 2.5e9 N/m: within 0.3 %). Under TAMSI the
-   softer 5e8 N/m also overturned the block less often than the analytic
-   model on ``elcentro-strong`` (34 of 100 motions against 42; 2.5e9 N/m: 38;
-   SAP at 5e8 N/m: 41), and checked worse on the free decay (3.5 % against 1.5 %).
-   Why TAMSI at 1/8 ms on 2.5e9 N/m is the default: docs/results.md#defaults-drake.
-6. Ground motion: the d'Alembert force -m ug''(t) on the x coordinate,
-   through the plant's applied-generalized-force input port, set before every
-   step to m times the exact mean of the linearly interpolated -ug'' over
-   that step (``housner.engines._planar.gravity_x``). The ground itself does not move.
-7. Stepping: the plant's discrete update is run directly (one
-   ``ExecuteForcedEvents`` per step, no ``Simulator``): the state lands
-   exactly on the sample times, with no event-time rounding, and a record stops
-   at the overturn.
-
-With these settings the first impact's energy ratio after releases at 0.2,
-0.5 and 0.8 alpha is within 0.2 % of Housner's r for the seed specimen
-(``tests/test_drake.py``; ``engines/models/drake.md`` has the measurements).
-
-References
-----------
-Drake: https://drake.mit.edu (MultibodyPlant, PlanarJoint, SAP: Castro, A. et
-al. (2022). An unconstrained convex formulation of compliant contact. IEEE
-Transactions on Robotics 39(2), 1301-1320).
-Housner, G. W. (1963). BSSA 53(2), 403-417.
-Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
+:class:`DrakeEngine` builds a discrete ``MultibodyPlant`` once per specimen and step and reuses it for every
+record: the block on a ``PlanarJoint`` whose coordinates are (z, x, theta), two 10 um sphere pivots on a
+fixed box ground, point contact solved by TAMSI (or SAP), the d'Alembert force of the ground acceleration
+on the x coordinate, the plant's discrete update stepped directly so that the state lands on the sample
+times. The model step by step is in ``engines/models/drake.md`` ("Derivation, step by step", whose numbers
+the code cites) and ``docs/explanation/engines.md`` ("Drake"); the contact settings and why, in
+:class:`DrakeEngine`; what they measure and cost, in ``docs/results.md#defaults-drake``.
 """
 
 from __future__ import annotations
@@ -109,11 +46,52 @@ class DrakeEngine(PlanarEngine):
         Hunt-Crossley dissipation of the pivot contact [s/m] (each side
         carries it), which ``"tamsi"``, ``"lagged"`` and ``"similar"`` use.
     contact_approximation : {"tamsi", "sap", "lagged", "similar"}
-        Drake's discrete contact solver (step 5 of the module docstring).
+        Drake's discrete contact solver (Notes).
     stiction_tolerance : float
         Sliding speed below which TAMSI's regularised friction sticks [m/s].
     timestep, friction, pivot_radius, impact_energy_factor
         As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
+
+    Notes
+    -----
+    The step h is ``timestep``, 1/8 ms: each sample interval cut into the fewest
+    equal steps no longer than it. The pivots carry Coulomb friction mu = 1.5
+    (Drake combines the pair's coefficients as 2 mu1 mu2 / (mu1 + mu2), so both
+    carry mu). The contact is point contact (``ContactModel.kPoint``) with the
+    pair's stiffness k (``stiffness``, 2.5e9 N/m per pivot), solved by the
+    discrete solver ``contact_approximation`` names:
+
+    * ``"tamsi"`` (default, ``DiscreteContactApproximation.kTamsi``): TAMSI,
+      Hunt-Crossley dissipation d (``dissipation``, 50 s/m: Drake's own value
+      when none is given, drake 1.51.1) and regularised Coulomb friction that
+      lets a pivot creep below ``stiction_tolerance`` (1e-4 m/s, Drake's default);
+    * ``"sap"`` (``kSap``): SAP, a convex implicit contact solver, with linear
+      (Kelvin-Voigt) dissipation time tau (``relaxation_time``, 0 s) in place of d;
+    * ``"lagged"``, ``"similar"``: SAP's convex solver on the Hunt-Crossley d.
+
+    Drake combines a pair's stiffnesses in series, k1 k2 / (k1 + k2), and
+    adds their relaxation times (and gives each geometry tau = 0.1 s when
+    unset), so the ground and the pivots each carry 2 k, d and tau / 2. With
+    k = 2.5e9 N/m, sqrt(k / m) h = 3.1 at h = 1/8 ms: the contact is far too
+    stiff for the step to resolve, the solver treats it as near-rigid and ends
+    each impact within a step or two without a rebound, Housner's plastic
+    impact. The stiffness still matters before uplift: the block's elastic
+    tilt on softer pivots starts the rocking early (5e7 N/m: first pulse
+    peaks 1-2 % high; 5e8 and 2.5e9 N/m: within 0.3 %). Under TAMSI the
+    softer 5e8 N/m also overturned the block less often than the analytic
+    model on ``elcentro-strong`` (34 of 100 motions against 42; 2.5e9 N/m: 38;
+    SAP at 5e8 N/m: 41), and checked worse on the free decay (3.5 % against 1.5 %).
+    Why TAMSI at 1/8 ms on 2.5e9 N/m is the default: docs/results.md#defaults-drake.
+
+    With these settings the first impact's energy ratio after releases at 0.2,
+    0.5 and 0.8 alpha is within 0.2 % of Housner's r for the seed specimen
+    (``tests/test_drake.py``; ``engines/models/drake.md`` has the measurements).
+
+    References
+    ----------
+    Drake: https://drake.mit.edu (MultibodyPlant, PlanarJoint, SAP: Castro, A. et
+    al. (2022). An unconstrained convex formulation of compliant contact. IEEE
+    Transactions on Robotics 39(2), 1301-1320).
     """
 
     name = "drake"
@@ -199,7 +177,7 @@ class DrakeEngine(PlanarEngine):
 
     # ------------------------------------------------------------------
     def build(self, specimen: Specimen, step: float, offset: float = 0.0):
-        """Drake's diagram of ``specimen`` (steps 1-5 of the module docstring) and the block's plant; the pivots
+        """Drake's diagram of ``specimen`` (steps 1-5 of ``engines/models/drake.md``) and the block's plant; the pivots
         at x = B - e and -(B + e) of the centre of mass for ``offset`` e [m] (``asymmetric_pivots``).
 
         Returns
@@ -234,7 +212,7 @@ class DrakeEngine(PlanarEngine):
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -G])  # Drake's default is 9.81
         ic = specimen.centroidal_inertia / m
         body = plant.AddRigidBody("block", SpatialInertia(m, np.zeros(3), UnitInertia(ic, ic, ic)))
-        # Joint frames: x = world z, y = world x, z = world y (step 2 of the module docstring).
+        # Joint frames: x = world z, y = world x, z = world y (step 2 of engines/models/drake.md).
         axes = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])  # columns: world z, x, y
         turn = RigidTransform(RotationMatrix(axes), np.zeros(3))
         frame_f = plant.AddFrame(FixedOffsetFrame("plane_on_world", plant.world_frame(), turn))

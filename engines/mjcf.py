@@ -1,46 +1,13 @@
 """The rocking specimen as a MuJoCo model (MJCF), generated from a :class:`housner.Specimen`.
 
-Every number in the generated XML is derived from the specimen and the contact
-settings; the XML carries the derivation in comments, and
-``engines/models/README.md`` walks through it step by step. The seed specimen's
-model is shipped as ``engines/models/eth_specimen.xml``; regenerate it with
-:func:`write_eth_specimen` (a test checks the shipped file equals the generator's
-output). Open any generated file in MuJoCo's own viewer with::
-
-    python -m mujoco.viewer --mjcf=engines/models/eth_specimen.xml
-
-Model layout (world frame: x horizontal in the plane of rocking, y out of plane,
-z up; the pivot line is z = 0):
-
-* ``ground``: an infinite plane, the only thing the pivots touch. It carries
-  the pivots' ``solref`` and ``solimp``: MuJoCo averages the two geoms' values
-  (``solmix``), so a ground left at MuJoCo's defaults would make every contact
-  softer than asked (see ``engines/models/README.md``, CHANGELOG).
-* ``block``: one body whose frame sits at the centre of mass (0, 0, H), with
-  three joints from the world in this order: ``x`` (slide along x), ``z``
-  (slide along z) and ``theta`` (hinge about +y, through the centre of mass).
-  A positive rotation about +y moves the top toward +x, so the hinge angle is
-  the suite's theta (theta > 0 leans toward +x, rocking on the +x pivot).
-* ``body``: the 2H x depth x 2B block, visual only (``contype`` =
-  ``conaffinity`` = 0, no mass: the mass is in the explicit ``<inertial>``).
-* ``pivot_pos`` / ``pivot_neg``: the block's only contact geoms, two spheres
-  of radius ``pivot_radius`` (10 um) that touch the ground at the outer
-  bottom edges of the strips, x = +B and x = -B: the rigid block's pivots.
-  One contact point per pivot, as in Housner's model.
-* ``strip_pos`` / ``strip_neg``: the specimen's two contact strips,
-  ``strip_width`` wide, drawn only (no contact, no mass). A flat strip would
-  land flat on its inner and outer edges; only the outer edge is a pivot.
-* ``dalembert``: a motor on the ``x`` slide. A generalised force on a slide
-  joint is a force along x through the joint anchor, which is the centre of
-  mass, so ``ctrl = -m ug''(t)`` is the d'Alembert force of the ground
-  acceleration in the ground's frame.
-
-References
-----------
-MuJoCo documentation, "Modeling" (MJCF reference) and "Computation"
-(soft contacts: solref, solimp), https://mujoco.readthedocs.io
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
-model. COMPDYN 2017, section 3.1 (specimen geometry, 2 mm contact strips).
+Every number in the generated XML is derived from the specimen and the contact settings, and the XML
+carries the derivation in comments: a ``block`` body at the centre of mass on slide x, slide z and a hinge
+about +y (the suite's theta), two 10 um sphere pivots at the outer bottom edges of the drawn contact
+strips, a ground plane that carries the pivots' ``solref`` and ``solimp``, and the ``dalembert`` motor on
+the x slide. ``engines/models/README.md`` ("MJCF (MuJoCo)") walks through it step by step. The seed
+specimen's model is shipped as ``engines/models/eth_specimen.xml``; regenerate it with
+:func:`write_eth_specimen` (a test checks the shipped file equals the generator's output) and open it with
+``python -m mujoco.viewer --mjcf=engines/models/eth_specimen.xml``.
 """
 
 from __future__ import annotations
@@ -50,6 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from housner.engines._planar import check_offset, pivot_x
+from housner.engines._planar import model_number as _num
 from housner.specimen import Specimen
 from housner.units import G
 
@@ -87,14 +55,6 @@ MJCF_DEFAULTS: dict = {
 
 _CONES = ("pyramidal", "elliptic")
 _INTEGRATORS = ("Euler", "implicitfast", "implicit", "RK4")
-
-
-def _num(x: float) -> str:
-    """Shortest decimal text that reads back as the same float."""
-    x = float(x)
-    if x == 0.0:
-        return "0"
-    return repr(x)
 
 
 def _vec(xs: Sequence[float]) -> str:

@@ -1,105 +1,12 @@
 """The rocking block in MuJoCo.
 
-The block is the planar model of :mod:`housner.engines.mjcf`: one body with slide x,
-slide z and a hinge about y from the world, touching the ground only at its two
-pivots, 10 um spheres at the outer bottom edges of its 2 mm contact strips,
-x = +-B. The hinge angle is theta (theta > 0 leans toward +x, rocking on the
-+x pivot).
-
-Ground motion
--------------
-The ground is fixed and the ground acceleration enters as the d'Alembert force
--m ug''(t) on the centre of mass, along x (an actuator on the x slide, whose
-anchor is the centre of mass). This is exact: in the ground's frame the block
-sees gravity and the inertial force -m ug''. ug'' is linear between the
-motion's samples and is evaluated at the middle of each engine step, which
-makes the impulse of each step exact for the linear ug''.
-
-A kinematic ground (a mocap body moved along the record) does *not* transmit
-horizontal motion properly: a mocap body has no degrees of freedom, so the
-contact solver sees it at rest at every step while it is teleported between
-steps. Friction then acts on the block's absolute velocity instead of its
-velocity relative to the ground, and a moving infinite plane is geometrically
-the same plane, so the block does not follow the ground at all.
-``tests/test_mujoco.py`` demonstrates it.
-
-Sampling and speed
-------------------
-The engine step is ``timestep`` or shorter: it is shortened to motion.dt / n
-with n = ceil(motion.dt / timestep), so that the motion's samples fall on engine
-steps and the state is sampled there exactly (no interpolation). The whole
-record runs in C through :func:`mujoco.rollout.rollout` with one control value
-per step, in chunks of about half a second; the run stops at an overturn. At
-the default 0.2 ms step (0.198 ms for the El Centro records sampled every
-3.16 ms) its cost is in docs/results.md#defaults-mujoco.
-
-Response
---------
-theta_max, impacts and the overturn are taken from every engine step, not only
-from the samples. An impact is a sign change of theta after |theta| exceeded
-``ROCKING_EPS`` alpha (1e-3 alpha) since the previous one, so the micro-radian
-jitter of the compliant contact at rest is not counted; the analytic model
-counts every impact of a block coming to rest, so impact counts differ there.
-``overturned`` once |theta| reaches pi/2; theta is then held at +-pi/2.
-``uplift_time`` is the instant the heel pivot leaves the ground before the
-block first rocks beyond 1e-3 alpha (within about 1 ms of the rigid block's:
-the contact is compliant). ``info`` holds the settings,
-the step used, the step count and the largest slip of the pivot while
-|theta| <= alpha (``max_pivot_slip_m``; ``max_pivot_slip_all_m`` includes a
-falling block). MuJoCo writes its own warnings to ``MUJOCO_LOG.TXT`` in the
-working directory; warnings that mean the simulation is unstable, and
-non-finite states, raise :class:`housner.EngineError` naming the motion.
-
-Contact settings and how they were tuned
-----------------------------------------
-MuJoCo's default contact (timestep 2 ms, solref (0.02, 1), elliptic cone,
-impratio 1) loses too much energy per impact (r 2 % low at 0.8 alpha, 7 % at
-0.2 alpha) and lets the block rock too far under a pulse. The defaults of
-:class:`MujocoEngine` come from ``housner tune mujoco``
-(:func:`housner.engines.tuning.tune` over :meth:`MujocoEngine.tuning_candidates`); the
-class notes give the measured errors and what each setting does. MuJoCo
-averages the solref and solimp of the two geoms in contact, so the ground
-carries the pivots' values: in the first tuned model it did not, and every
-contact was some 40 times softer than its settings said (``engines/models/README.md``,
-CHANGELOG).
-
-Limitations
------------
-* Each impact's energy ratio scatters with the phase of the impact within the
-  fixed engine step: standard deviation 0.14 % of r at 0.2-0.9 alpha (worst
-  -0.29 % on a 0.01 alpha grid) and 0.26 % at 0.02-0.19 alpha (worst
-  +0.66 %) at the default step; the means are within 0.05 %. The scatter
-  grows with the step.
-* Very small rocking is still slightly affected by the contact's compliance:
-  pulses that lift the block by 0.001-0.008 alpha rock it 0.2-0.8 % too far
-  (below 1e-5 alpha), and at rest under 0.9 g tan(alpha) it tilts
-  elastically by 6e-6 alpha; far below the 0.8 mrad (0.0053 alpha)
-  resolution of the seed's measurements.
-* A falling block (|theta| well past alpha) slips on its pivot (cm), so the
-  overturn time is ~1 % later than the rigid block's.
-* Physical effects: ``rotational_damping`` (the viscous moment -c I0 theta'
-  of :class:`housner.effects.RotationalDamping`) is realised as damping
-  c I0 [N m s] on the theta hinge: a generalised force on theta is a pure
-  couple, the same moment about the pivot as about the centre of mass
-  (``tests/test_mujoco.py`` checks it against the analytic engine).
-  ``restitution`` is realised by the impact law (``impact_energy_factor``).
-  ``asymmetric_pivots`` (the centre of mass e toward +x of the pivots' midpoint) by the
-  pivots' places, x = B - e and -(B + e) of the centre of mass (:mod:`housner.engines.mjcf`),
-  the mass and centroidal inertia unchanged: the uplift thresholds, each pivot's p and each
-  impact's ratio are the contact's. Refused together with ``rotational_damping`` (the hinge's
-  damping is one c I; the effect's moment takes the inertia about the pivot rocked on).
-* Term effects (:mod:`housner.effects.terms`) whose terms are all moment
-  terms that vanish at rest are realised as a couple on the theta hinge;
-  the others are refused by name (:mod:`housner.engines.mujoco_terms`).
-
-References
-----------
-Housner, G. W. (1963). The behavior of inverted pendulum structures during
-earthquakes. BSSA 53(2), 403-417.
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
-model. COMPDYN 2017, eqs. 2-4 and 8.
-MuJoCo documentation, "Computation" (soft contact model, solref/solimp) and
-"Python bindings" (rollout), https://mujoco.readthedocs.io
+:class:`MujocoEngine` runs the planar model of :mod:`housner.engines.mjcf` (one body with slide x, slide z
+and a hinge about y, touching the ground only at its two pivots), driven by the d'Alembert force of the
+ground acceleration on an actuator of the x slide, the record stepped in C by :func:`mujoco.rollout.rollout`
+(or from Python when an effect's terms act on the hinge, :mod:`housner.engines.mujoco_terms`). How it holds
+the block and reads its response, and where it departs from the rigid block, are in
+``docs/explanation/engines.md`` ("MuJoCo"); the contact settings and why, in :class:`MujocoEngine`; what
+they measure and cost, in ``docs/results.md#defaults-mujoco``.
 """
 
 from __future__ import annotations
@@ -206,9 +113,13 @@ class MujocoEngine(PlanarEngine):
 
     Notes
     -----
-    Defaults (``DEFAULTS``) came from ``housner tune mujoco`` for the seed
-    specimen and Housner's r; how the tuner chose them and what they measure,
-    on the tuner's checks and on the seed's El Centro ensemble:
+    MuJoCo's default contact (timestep 2 ms, solref (0.02, 1), elliptic cone,
+    impratio 1) loses too much energy per impact (r 2 % low at 0.8 alpha, 7 %
+    at 0.2 alpha) and lets the block rock too far under a pulse. The defaults
+    (``DEFAULTS``) came from ``housner tune mujoco``
+    (:func:`housner.engines.tuning.tune` over :meth:`tuning_candidates`) for the
+    seed specimen and Housner's r; how the tuner chose them and what they
+    measure, on the tuner's checks and on the seed's El Centro ensemble:
     docs/results.md#defaults-mujoco. What matters, and why:
 
     * The ground carries the pivots' ``solref`` and ``solimp``: MuJoCo averages
@@ -217,7 +128,9 @@ class MujocoEngine(PlanarEngine):
       ask. Such a soft contact lets the pivot sink by 2-18 um while the block
       rocks by a few mrad (its heel lifts by 2B theta = 75 um per mrad) and
       absorbs the energy of small impacts: r 3-15 % low below 0.02 alpha, the
-      small rocking of a record dies out.
+      small rocking of a record dies out. In the first tuned model the ground
+      did not carry them, and every contact was some 40 times softer than its
+      settings said (``engines/models/README.md``, CHANGELOG).
     * ``timestep`` 0.2 ms with ``solref`` (0.4 ms, 1), two steps, critically
       damped: the coarsest step whose per-impact scatter passes the tuner at
       both sample steps (0.25 ms passed at one only).

@@ -1,31 +1,11 @@
 """MuJoCo's route for the effects' terms: which effects it realises through them, and their couple on the hinge.
 
-Term effects (:mod:`housner.effects.terms`) whose terms are all moment
-terms that vanish at rest (``MomentTerm(..., at_rest=False)``: a viscous
-or aerodynamic moment, of a user's or a plugin's effect) are realised as a
-couple on the theta hinge (``data.qfrc_applied``): before each engine step
-the terms are evaluated from MuJoCo's state in the kernel's reduced
-coordinates of the pivot s = sgn(theta) (phi = s theta, w = s theta',
-a = s ug''(t)/g with ug'' at the step's start, v = 0, alpha and p^2 of that
-pivot from the rocking parameters), and the couple s I0 (sum of the terms)
-[N m] acts over the step (explicit, as MuJoCo's Euler step takes its
-forces); I0 = ``specimen.inertia``, the model's inertia about a pivot, so
-the block turns with the acceleration the terms return. The record is then
-stepped from Python (``mj_step``, bit for bit what the rollout does:
-5.8 us per step with one term against the rollout's 3.1 us). With
-eulerdamp disabled (:mod:`housner.engines.mjcf`) the hinge damping of
-``rotational_damping`` is the same explicit force: a viscous moment term
-gives its response to rounding. Refused by name: effects whose terms include a
-``CoulombTerm`` (a dry moment that holds the block: a joint
-``frictionloss`` is a regularised constraint that creeps where the rigid
-model sticks: measured 0.2 % of alpha per second at MuJoCo's default
-solreffriction, 0.004 %/s at a stiff 0.4 ms one), an ``ImpactTerm`` (the
-contact makes the impacts), or a moment that acts at rest
-(``at_rest=True``: it changes the uplift rule, which needs the pivot a
-block at rest on both corners does not have); effects that read or make
-a motion channel, or change the parameters, the input, the sensors or the
-equation of motion; and every other effect. ``tests/test_mujoco_terms.py``
-checks the realised ones against the analytic engine.
+Term effects (:mod:`housner.effects.terms`) whose terms are all moment terms that vanish at rest
+(``MomentTerm(..., at_rest=False)``) are realised as a couple s I0 (sum of the terms) on the theta hinge
+(``data.qfrc_applied``), evaluated before each engine step from MuJoCo's state in the kernel's reduced
+coordinates and stepped from Python (``mj_step``); every other effect is refused by name. How the couple is
+evaluated, and why each refused kind is refused, are in ``docs/explanation/engines.md`` ("MuJoCo's route for
+the effects' terms"); ``tests/test_mujoco_terms.py`` checks the realised ones against the analytic engine.
 """
 
 from __future__ import annotations

@@ -1,74 +1,13 @@
 """OpenSees (openseespy): the rocking block as a rigid frame on penalty contacts with Coulomb friction.
 
-The model, built from a :class:`housner.Specimen` for every run (numbered as in
-``engines/models/opensees.md``):
-
-1. Domain: 2D, three dofs per node (ndm 2, ndf 3); x horizontal, y up.
-   Gravity is a constant nodal load -m g at the centre of mass
-   (g = 9.80665 m/s^2). The ground acceleration ug''(t) enters through a
-   ``UniformExcitation`` pattern on a ``Path`` time series of the record's
-   samples (linear between them, as the suite's records are): the
-   displacements OpenSees returns are relative to the ground, as the suite's
-   theta is. OpenSees' rotation is counter-clockwise positive, so the suite's
-   theta (top toward +x) is minus the rotation of the centre-of-mass node.
-2. Block: a node at the centre of mass (0, H) carrying the mass m (both
-   translations) and the centroidal inertia I_c = I0 - m R^2 (rotation), and
-   two massless corner nodes at (+-B, 0), joined to it by elastic beams
-   (E A = 1e10 N, E I = 1e8 N m^2) with the ``Corotational`` transformation:
-   rigid for all purposes (their deformation under the block's weight is
-   below 1e-10 m) and exact for any rotation, unlike ``rigidLink``, whose
-   constraint is linearised in the rotation. With the effect
-   ``asymmetric_pivots`` (centre of mass e toward +x of the pivots' midpoint)
-   the corners, and the ground nodes under them, are at (B - e, 0) and
-   (-(B + e), 0); mass and I_c unchanged.
-3. Ground: two fixed nodes at (+-B, 0), one under each corner.
-4. Contact, per corner, two elements between the ground node and the
-   corner node, in parallel:
-
-   * a ``zeroLengthContact2D`` node-to-node contact (the corner constrained,
-     the ground retained, normal +y): penalty k_n in the normal direction,
-     released in tension (uplift), Coulomb friction mu = 1.5 on that normal
-     force with a stick (tangential penalty) stiffness of 1e9 N/m. It carries
-     no moment, so the corner is a hinge. ``contact_element =
-     "flatSliderBearing"`` puts OpenSees' friction bearing there instead
-     (the same normal spring, friction and stick stiffness, and a
-     zero-stiffness ``-Mz`` material for the hinge): the earlier model,
-     which rocks alike at more CPU time (docs/results.md#defaults-opensees);
-   * a ``zeroLength`` spring, vertical, elastic-no-tension (``ENT``) k_n, with
-     stiffness-proportional Rayleigh damping beta_K on its current stiffness
-     (``-doRayleigh``), so that it damps only while the corner presses on the
-     ground: the loss at impact that Housner's plastic impact stands for.
-
-   The static compression under the block's weight, m g / (4 k_n) =
-   0.64 um per corner for the seed specimen, is the initial state.
-5. Time integration: Newmark average acceleration (gamma 1/2, beta 1/4: no
-   numerical damping), iterations of ``algorithm`` (Krylov-Newton, which
-   forms the tangent once per step and accelerates the iterations on it;
-   or full Newton) until the unbalanced force is below ``tolerance`` (1 mN,
-   2.6e-5 of the seed's weight), fixed step ``timestep`` (each sample
-   interval cut into the fewest equal steps no longer than it).
-   A sample interval whose step fails is redone in steps ten times shorter
-   with Newton, then a hundred times shorter with Krylov-Newton, then ten
-   times shorter at a tolerance a hundred times looser (``_RETRIES``: a
-   corner touching down after a lift of nanometres; counted in
-   ``info["loose_samples"]``); if that fails too the engine raises an
-   ``EngineError`` naming the motion and the time.
-   Why Krylov-Newton is the default: docs/results.md#defaults-opensees.
-
-Why the node-to-node contact and not the bearing: docs/results.md#defaults-opensees.
-
-The beta_K and k_n were tuned (``engines/models/opensees.md``): first-impact
-r within 0.07 % of Housner's at 0.2-0.9 alpha (within 0.7 % at 0.01-0.19 alpha)
-with k_n = 1.5e7 N/m, beta_K = 3.5e-4 s and 0.2 ms steps.
-
-References
-----------
-OpenSees: McKenna, F., Scott, M. H. and Fenves, G. L. (2010). Nonlinear
-finite-element analysis software architecture using object composition.
-J. Comput. Civ. Eng. 24(1), 95-107; https://opensees.github.io/OpenSeesDocumentation
-(zeroLengthContact2D, flatSliderBearing, zeroLength, ENT, Corotational, UniformExcitation, Newmark).
-Housner, G. W. (1963). BSSA 53(2), 403-417.
-Bachmann, J. A. et al. (2017). COMPDYN 2017, section 3.1 and eq. 8.
+:class:`OpenSeesEngine` builds the model for every run: a 2D domain whose centre-of-mass node carries the
+block's mass and inertia, two massless corner nodes joined to it by corotational elastic beams, at each
+corner a node-to-node contact (a hinge with friction, released in tension) beside a damped no-tension
+spring (the loss at impact), the ground acceleration as a ``UniformExcitation``, and Newmark's average
+acceleration with Krylov-Newton iterations at a fixed step. The model step by step is in
+``engines/models/opensees.md`` ("Derivation, step by step", whose numbers the code cites) and
+``docs/explanation/engines.md`` ("OpenSees"); the contact settings, the solver and why, in
+:class:`OpenSeesEngine`; what they measure and cost, in ``docs/results.md#defaults-opensees``.
 """
 
 from __future__ import annotations
@@ -180,9 +119,9 @@ class OpenSeesEngine(PlanarEngine):
         The iterations stop when the norm of the unbalanced forces is below
         this [N, N m].
     algorithm : {"KrylovNewton", "Newton"}
-        OpenSees' solution algorithm of each step (step 5 of the module docstring).
+        OpenSees' solution algorithm of each step (Notes).
     contact_element : {"zeroLengthContact2D", "flatSliderBearing"}
-        The frictional contact element at each corner (step 4 of the module docstring).
+        The frictional contact element at each corner (Notes).
     timestep, impact_energy_factor
         As :class:`housner.engines._planar.PlanarEngine`'s, which also shows how an adapter is driven.
 
@@ -191,6 +130,42 @@ class OpenSeesEngine(PlanarEngine):
     OpenSees is one interpreter per process: the engine wipes and rebuilds the
     model for every record, so records run one after the other in a process
     (use processes, not threads, to run them in parallel).
+
+    The contact, per corner (step 4 of ``engines/models/opensees.md``), is two
+    elements between the ground node and the corner node, in parallel:
+
+    * a ``zeroLengthContact2D`` node-to-node contact (the corner constrained,
+      the ground retained, normal +y): penalty k_n in the normal direction,
+      released in tension (uplift), Coulomb friction mu = 1.5 on that normal
+      force with a stick (tangential penalty) stiffness of 1e9 N/m. It carries
+      no moment, so the corner is a hinge. ``contact_element =
+      "flatSliderBearing"`` puts OpenSees' friction bearing there instead
+      (the same normal spring, friction and stick stiffness, and a
+      zero-stiffness ``-Mz`` material for the hinge): the earlier model,
+      which rocks alike at more CPU time. Why the node-to-node contact and not
+      the bearing: docs/results.md#defaults-opensees;
+    * a ``zeroLength`` spring, vertical, elastic-no-tension (``ENT``) k_n, with
+      stiffness-proportional Rayleigh damping beta_K on its current stiffness
+      (``-doRayleigh``), so that it damps only while the corner presses on the
+      ground: the loss at impact that Housner's plastic impact stands for.
+
+    The static compression under the block's weight, m g / (4 k_n) =
+    0.64 um per corner for the seed specimen, is the initial state.
+
+    Each step (step 5) iterates ``algorithm`` (Krylov-Newton, which forms the
+    tangent once per step and accelerates the iterations on it; or full
+    Newton) until the unbalanced force is below ``tolerance`` (1 mN, 2.6e-5 of
+    the seed's weight), at the fixed step ``timestep``. A sample interval
+    whose step fails is redone in steps ten times shorter with Newton, then a
+    hundred times shorter with Krylov-Newton, then ten times shorter at a
+    tolerance a hundred times looser (``_RETRIES``: a corner touching down
+    after a lift of nanometres; counted in ``info["loose_samples"]``); if that
+    fails too the engine raises an ``EngineError`` naming the motion and the
+    time. Why Krylov-Newton is the default: docs/results.md#defaults-opensees.
+
+    The beta_K and k_n were tuned (``engines/models/opensees.md``): first-impact
+    r within 0.07 % of Housner's at 0.2-0.9 alpha (within 0.7 % at 0.01-0.19
+    alpha) with k_n = 1.5e7 N/m, beta_K = 3.5e-4 s and 0.2 ms steps.
     """
 
     name = "opensees"
@@ -247,7 +222,7 @@ class OpenSeesEngine(PlanarEngine):
 
     # ------------------------------------------------------------------
     def build(self, specimen: Specimen, motion: GroundMotion, step: float, offset: float = 0.0):
-        """The OpenSees model of ``specimen`` under ``motion`` (steps 1-5 of the module docstring), at rest.
+        """The OpenSees model of ``specimen`` under ``motion`` (steps 1-5 of ``engines/models/opensees.md``), at rest.
 
         Node tags: 1 centre of mass, 2 and 3 the corners at +B and -B (at B - e and -(B + e) for the
         ``offset`` e [m] of ``asymmetric_pivots``), 4 and 5 the ground under them. Returns the module.

@@ -1,67 +1,12 @@
 """The rocking block in PyBullet (Bullet's Featherstone multibody with a sequential-impulse contact solver).
 
-Model. The block is the URDF of :func:`housner.engines.urdf.urdf_from_specimen` (a
-massless x-slide, a massless z-slide and a hinge about +y through the centre of
-mass, two 2 mm contact strips whose outer edges are the pivots at x = +-B; at
-x = B - e and -(B + e) with the effect ``asymmetric_pivots``, the centre of mass e
-toward +x of their midpoint, mass and centroidal inertia unchanged),
-written to a private temporary folder and loaded with ``loadURDF`` (the
-inertia from the file, not from the collision boxes). The ground is PyBullet's
-infinite plane z = 0, fixed in the world. The hinge angle is the suite's theta
-(theta > 0 leans toward +x, rocking on the +x pivot).
-
-Ground motion. The ground never moves: the block sees the d'Alembert force
--m ug''(t) along x at its centre of mass. It is applied by tilting gravity to
-(-ug'', 0, -g) before each step: gravity acts at every link's centre of mass,
-which for the block is exactly the d'Alembert force (the carriages, 1e-6 kg,
-get theirs too, as they should). The value set before each step is the exact
-mean of the piecewise-linear ug'' over that step, so each step receives the
-exact impulse of the record. A kinematic ground (a plane moved by resetting
-its position each step, the "mocap" way) does not transmit horizontal motion
-properly: the contact solver sees the plane's position jump but no velocity,
-so friction cannot drag the block along and the block barely notices the
-shaking (``tests/test_pybullet.py`` shows it).
-
-Stepping. The engine step is ``motion.dt / k`` with k = ceil(motion.dt /
-timestep), so the motion's samples fall on step boundaries and the state is
-read exactly at the sample times (never interpolated). Every
-:meth:`PybulletEngine.simulate` call rebuilds the world in the engine's own
-``DIRECT`` client (``resetSimulation`` and ``loadURDF``, about 1 ms), so runs
-do not depend on what ran before: the same motion gives bit-identical results.
-
-Contact. By default the contact is rigid: Bullet's velocity-level contact
-constraint (restitution 0, friction 1.5, no allowed penetration), solved by
-sequential impulses. Only the strips' outer edges touch the ground (the URDF
-bevels the strips by 5 mrad), so the block stands on exactly its two pivots
-and rocks on one. Contact points are made only within 1 um of the ground
-(``contact_breaking_threshold``): with Bullet's default 2 cm the landing pivot
-is caught by a "speculative" contact a step early and the impact loses about
-0.5 % too much energy. The impact is then the solver's plastic impulse at the
-landing pivot, and the energy ratio scatters about Housner's
-r = (1 - 2 m R^2 / I0 sin^2 alpha)^2 by an amount that shrinks with the step:
-at the default 1e-4 s it is within 0.18 % of it at every release amplitude
-from 0.2 to 0.9 alpha (0.01 alpha grid; mean -0.02 %; 0.31 % at 2e-4 s). Below
-about 0.2 in x = |w-|/(p alpha) its impacts keep less energy than Housner's, in
-proportion to the step (4.7 % less at x = 0.05 at 1e-4 s; ``housner impact-map
-pybullet``). A compliant contact
-(``contact_stiffness`` and ``contact_damping``, both set) can reach other r
-values in free rocking but distorts the forced response, see
-:meth:`PybulletEngine.tuning_candidates`.
-
-Speed. One ``setGravity`` and one ``stepSimulation`` call per step, the
-state read once per sample: about 5 us per step on one core, 0.054 CPU
-seconds per simulated second at the default 0.1 ms step (0.030 at 0.2 ms).
-
-References
-----------
-Coumans, E. and Bai, Y. (2016-2021). PyBullet, a Python module for physics
-simulation for games, robotics and machine learning. https://pybullet.org
-(PyBullet Quickstart Guide: loadURDF, setPhysicsEngineParameter, changeDynamics).
-Featherstone, R. (2008). Rigid Body Dynamics Algorithms. Springer.
-Housner, G. W. (1963). The behavior of inverted pendulum structures during
-earthquakes. BSSA 53(2), 403-417.
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
-model. COMPDYN 2017, eqs. 2, 4 and 8.
+:class:`PybulletEngine` loads the URDF of :func:`housner.engines.urdf.urdf_from_specimen` (two carriages
+and a hinge through the centre of mass, two bevelled contact strips whose outer edges are the pivots) on
+PyBullet's fixed infinite plane, drives it by the d'Alembert force of the ground acceleration (gravity
+tilted to (-ug'', 0, -g) before each step) and rebuilds the world for every record, so that the same
+motion gives bit-identical results. How it holds the block, and where its impacts depart from Housner's,
+are in ``docs/explanation/engines.md`` ("PyBullet"); the contact settings and why, in
+:class:`PybulletEngine`; what they measure and cost, in ``docs/results.md#defaults-pybullet``.
 """
 
 from __future__ import annotations
@@ -178,6 +123,20 @@ class PybulletEngine(PlanarEngine):
     docs/results.md#defaults-pybullet. Each instance owns one PyBullet ``DIRECT`` client
     (opened on first use and reused by every :meth:`simulate` call, which
     resets the world in it); a pickled engine carries only its settings.
+
+    By default the contact is rigid: Bullet's velocity-level contact
+    constraint (restitution 0, friction 1.5, no allowed penetration), solved
+    by sequential impulses. Contact points are made only within 1 um of the
+    ground (``contact_breaking_threshold``): with Bullet's default 2 cm the
+    landing pivot is caught by a "speculative" contact a step early and the
+    impact loses about 0.5 % too much energy. The impact is then the solver's
+    plastic impulse at the landing pivot, and its energy ratio scatters about
+    Housner's r by an amount that shrinks with the step: at the default
+    1e-4 s it is within 0.18 % of it at every release amplitude from 0.2 to
+    0.9 alpha (0.01 alpha grid; mean -0.02 %; 0.31 % at 2e-4 s). A compliant
+    contact (``contact_stiffness`` and ``contact_damping``, both set) can
+    reach other r values in free rocking but distorts the forced response,
+    see :meth:`tuning_candidates`.
 
     Examples
     --------

@@ -1,71 +1,14 @@
 """The rocking specimen as a URDF robot (for PyBullet), generated from a :class:`housner.Specimen`.
 
-URDF has no planar joint, so the block hangs from the world through a chain of
-two massless carriages (world frame: x horizontal in the plane of rocking, y out
-of plane, z up; the pivot line is z = 0)::
-
-    world --x (prismatic along +x, anchor at z = H)--> carriage_x
-          --z (prismatic along +z)------------------> carriage_z
-          --theta (continuous, about +y)------------> block
-
-* ``world``: the fixed base (load with ``useFixedBase=True``); it carries no
-  geometry. The ground is a separate body (PyBullet's infinite plane).
-* ``carriage_x``, ``carriage_z``: dummy links with a tiny mass and inertia
-  (Featherstone's algorithm needs every link to have some). They move with the
-  block's centre of mass, so they add ``2 * carriage_mass`` to the translating
-  mass and ``carriage_mass * R^2``-sized terms to the rocking inertia: with the
-  default 1e-6 kg that is a relative 1e-6 of m and 1e-7 of I0, far below
-  anything measurable (``tests/test_pybullet.py`` checks I0 from PyBullet's own
-  mass matrix).
-* ``block``: its frame is the centre of mass, (0, 0, H) when the joints are at
-  zero; so the ``x`` and ``z`` joint values are the centre of mass's
-  displacement and the ``theta`` joint value is the block's rotation. A
-  positive rotation about +y moves the top toward +x, which is the suite's
-  theta (theta > 0 leans toward +x, rocking on the +x pivot).
-
-How each number follows from the specimen (m = ``specimen.mass``, 2H =
-``specimen.height``, 2B = ``specimen.width``, D = ``specimen.depth``):
-
-1. Mass: ``m``, at the block's frame origin (the centre of mass).
-2. Inertia about the centre of mass: ``I_c = I0 - m R^2``
-   (``specimen.centroidal_inertia``) about the y axis, so that the inertia
-   about either pivot is ``I_c + m R^2 = I0`` and p = sqrt(m g R / I0) is the
-   specimen's (4.8883 1/s for the seed specimen; a solid block would give
-   5.39 1/s). Only ``iyy`` enters the planar dynamics; ``ixx`` and ``izz`` are
-   set to the same value (the joints forbid those rotations).
-3. Contact strips: two boxes ``strip_width`` wide (x), D deep (y) and
-   ``strip_height`` tall (z) whose OUTER bottom edges are the pivots, at
-   x = +B and x = -B on the pivot line z = -H of the block frame, so the block
-   rocks about pivots 2B apart (75 mm for the seed specimen, whose wedges have
-   two 2 mm strips with 71 mm hollow between). Each strip is turned about its
-   outer bottom edge by ``bevel`` (5 mrad), which lifts its inner bottom edge
-   by ``strip_width * sin(bevel)`` (10 um): on flat ground only the outer
-   edges touch, as the seed's wedges were designed to, and the contact forces
-   at rest are statically determinate (two lines, not four). Flat strips
-   (``bevel=0``) rock the same but leave the sequential-impulse solver an
-   indeterminate split of the load between the two edges of a strip, which
-   it resolves in a fixed order: the block then lifts off about 0.3 % earlier
-   on one side than on the other. The strips are the only collision geometry.
-4. Visual: a box 2B x D x 2H centred on the centre of mass (drawn only in
-   PyBullet's GUI; it has no mass and no collision).
-
-Load the file with ``flags=pybullet.URDF_USE_INERTIA_FROM_FILE``: without it
-PyBullet recomputes the inertia from the collision boxes and ``p`` is wrong.
-Contact properties (friction, restitution, stiffness) are not in the file: the
-engine sets them with ``changeDynamics`` from its settings, see
-:class:`housner.engines.pybullet_engine.PybulletEngine`.
-
-The seed specimen's model is shipped as ``engines/models/eth_specimen.urdf``;
-regenerate it with :func:`write_eth_specimen` (a test checks that the shipped
-file equals the generator's output). ``engines/models/README.md`` has the
-derivation step by step.
-
-References
-----------
-ROS URDF specification, http://wiki.ros.org/urdf/XML (links, joints, inertial).
-PyBullet Quickstart Guide (loadURDF, URDF_USE_INERTIA_FROM_FILE).
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
-model. COMPDYN 2017, section 3.1 (specimen geometry, 2 mm contact strips).
+URDF has no planar joint, so the block hangs from the world through two massless carriages (prismatic
+``x`` anchored at z = H, prismatic ``z``, then the continuous ``theta`` about +y: the suite's theta) and
+touches the ground only with two contact strips, bevelled so that their outer bottom edges are the
+pivots; contact properties are not in the file (:class:`housner.engines.pybullet_engine.PybulletEngine`
+sets them). Load it with ``useFixedBase=True`` and ``flags=pybullet.URDF_USE_INERTIA_FROM_FILE`` (without
+it PyBullet recomputes the inertia from the collision boxes and ``p`` is wrong). How each number follows
+from the specimen is in ``engines/models/README.md`` ("URDF (PyBullet)"). The seed specimen's model is
+shipped as ``engines/models/eth_specimen.urdf``; regenerate it with :func:`write_eth_specimen` (a test
+checks that the shipped file equals the generator's output).
 """
 
 from __future__ import annotations
@@ -74,6 +17,7 @@ import math
 from pathlib import Path
 
 from housner.engines._planar import check_offset, pivot_x
+from housner.engines._planar import model_number as _num
 from housner.specimen import Specimen
 
 __all__ = [
@@ -102,14 +46,6 @@ URDF_DEFAULTS: dict = {
 
 #: Travel of the two slide joints [m]; wide enough never to be reached.
 _SLIDE_LIMIT = 1.0e3
-
-
-def _num(x: float) -> str:
-    """Shortest decimal text that reads back as the same float."""
-    x = float(x)
-    if x == 0.0:
-        return "0"
-    return repr(x)
 
 
 def _positive(name: str, value: float) -> float:
@@ -181,7 +117,7 @@ def urdf_from_specimen(
 
     Notes
     -----
-    See the module docstring for the layout and the derivation of each number.
+    The layout and the derivation of each number: ``engines/models/README.md``, "URDF (PyBullet)".
     The joint anchor of ``x`` is at z = H, so with all joints at zero the block
     stands upright with its strips touching the plane z = 0.
     """

@@ -134,16 +134,23 @@ def reduced_ground(s, g0, g1, dt):
     return a0, (a1 - a0) / dt
 
 
+@njit(cache=True, inline="always")
+def clip_unit(r_eff):
+    """An energy ratio [-] clipped to [0, 1] (NaN passes through): the kernel's restitution and the effects'
+    impact laws (:mod:`housner.effects.parameters`, :mod:`housner.effects.measured`)."""
+    if r_eff > 1.0:
+        r_eff = 1.0
+    if r_eff < 0.0:
+        r_eff = 0.0
+    return r_eff
+
+
 @njit(cache=True)
 def restitution(v, r, r_exp, p2, alpha):
     """Speed [rad/s] after an impact at speed v: sqrt(r_eff) v, r_eff = clip(r (v / (p alpha))^r_exp, 0, 1)."""
     r_eff = r
     if r_exp != 0.0 and v > 0.0:
-        r_eff = r * (v / (math.sqrt(p2) * alpha)) ** r_exp
-        if r_eff > 1.0:
-            r_eff = 1.0
-        if r_eff < 0.0:
-            r_eff = 0.0
+        r_eff = clip_unit(r * (v / (math.sqrt(p2) * alpha)) ** r_exp)
     return math.sqrt(r_eff) * v
 
 

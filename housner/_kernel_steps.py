@@ -1,40 +1,16 @@
 """The analytic kernel's equation of motion with the terms' hooks, its RK4 step and its events (private).
 
-Reduced coordinates on the current pivot ``s`` (+1 for the +x corner, -1 for the -x corner)::
-
-    phi = s theta >= 0,   w = s theta_dot,   a = s ug'' / g,   v = a_v / g (not mirrored)
-
-in which Housner's equation of motion (seed eq. 2, plus a viscous term) reads the same on both
-pivots, with four hooks that the effects' terms (:mod:`housner.effects.terms`) fill in::
-
-    phi'' = -p_s^2 (sin(alpha_s - phi) + a cos(alpha_s - phi)) - c w
-            + _moment(phi, w, t, a, v, s, alpha_s, p_s^2, q)          smooth moments (sum of the terms)
-            - sig * _dry(phi, t, a, v, s, alpha_s, p_s^2, q)           Coulomb moments, sig = sgn(w)
-
-    at an impact: r = impact_ratio(w_before, r, s, alpha_s, p_s^2, q)      the energy ratio, chained
-
-``q`` is every term's parameters in one array; a generated hook passes each term its own slice.
-The section between the ``hooks`` markers below is what :mod:`housner.effects.terms` replaces to
-generate the kernel of a set of terms (with :mod:`housner._kernel`, which runs the record); as
-written it holds the no-op hooks: Housner's equation, the plain kernel.
-
-Events (impact, peak, overturn, the zero of w under a dry term) are located by Newton iteration
-on the length of a single RK4 step from the start of the substep, so that the located root is a
-root of the very integrator that is being used, to machine precision. With a dry term the
-direction of motion ``sig`` is frozen over a step (so that RK4 integrates a smooth right-hand
-side); a step in which w reaches 0 is cut there, and the block sticks when the other moments at
-w = 0 stay within the dry capacity, ``|phi''(w = 0, without the dry terms)| <= _dry``; otherwise
-it turns back with ``sig`` reversed (a peak of phi is such a reversal). When a term acts at rest
-(``AT_REST``: a moment that is not zero at phi = w = 0, e.g. a vertical input, or any dry term)
-the block held still starts to move at the first instant at which ``phi''`` at w = 0 leaves the
-dry capacity (at rest on a corner: ``phi''(0, 0) > _dry`` on that corner, which is
-a < -tan(alpha)(1 + v) for a vertical input, and a threshold raised by M_f / (m g R cos(alpha))
-for pivot friction). The margin is checked at every substep boundary of the sample and its root
-located by Illinois false position to a few ulps; for inputs linear between samples and terms
-affine in them (all the library's) the margin is affine in time and the root exact to rounding.
-
-Units: time [s], angles [rad], angular velocity [rad/s], ground accelerations in units of g [-],
-the hooks' reduced angular accelerations in 1/s^2.
+Housner's equation (seed eq. 2, plus a viscous term) in reduced coordinates on the current pivot ``s``
+(phi = s theta >= 0, w = s theta_dot, a = s ug''/g, v = a_v/g not mirrored; time [s], angles [rad], angular
+velocity [rad/s], ground accelerations in units of g, the hooks' reduced angular accelerations in 1/s^2),
+with four hooks that the effects' terms (:mod:`housner.effects.terms`) fill in: ``_moment`` (smooth moments),
+``_dry`` (Coulomb capacities, times sgn(w)), ``impact_ratio`` (the energy ratio, chained) and ``AT_REST``;
+``q`` is every term's parameters in one array, a generated hook passing each term its own slice. The
+section between the ``hooks`` markers below is what :mod:`housner.effects.terms` replaces to generate the
+kernel of a set of terms (with :mod:`housner._kernel`, which runs the record); as written it holds the no-op
+hooks: Housner's equation, the plain kernel. The equation, and how the events (impact, peak, overturn, the
+zero of w under a dry term, uplift and release from a stick) are located, are in
+``docs/explanation/physics.md`` ("How the analytic model solves it").
 """
 
 from __future__ import annotations

@@ -1,69 +1,17 @@
 """The analytic Housner rocking model: the reference solver of the suite.
 
-A rigid block on a rigid base rocks on one of its two bottom corners and
-impacts when the rotation passes through zero. Between impacts it follows
-the full nonlinear equation of the seed paper (eq. 2, not linearised),
-written here with pivot-dependent parameters and an optional viscous term::
-
-    theta'' = -p_s^2 (sin(alpha_s sgn(theta) - theta)
-                      + ug''(t)/g cos(alpha_s sgn(theta) - theta)) - c theta'
-
-where ``s`` is the current pivot (+x corner when theta > 0), ug'' [m/s^2]
-is linear between the motion's samples, and ``c`` [1/s] is a rotational
-viscous damping rate (0 for Housner's model).
-
-Events are located to machine precision on the integrator's own trajectory:
-
-* **Uplift.** At rest the block stays at theta = theta' = 0 until
-  ug'' < -g tan(alpha_+) (it lifts to theta > 0, pivoting on the +x corner)
-  or ug'' > g tan(alpha_-) (theta < 0). The uplift instant is the exact root
-  of the linear interpolant of ug'' inside the sample interval.
-* **Impact.** When theta crosses zero the angular velocity is multiplied by
-  sqrt(r_eff) (r is the ratio of kinetic energies after/before, seed eq. 4)
-  and the block continues on the other corner. Impact times are recorded.
-  The ratio may depend on the corner that lands (``r_pos`` for an impact
-  after which the block rocks on the +x corner, ``r_neg`` for the converse),
-  as it does for a block whose centre of mass is off-centre.
-* **Rest rule.** The ever-faster sequence of ever-smaller impacts of a block
-  coming to rest (a Zeno sequence) is cut off as follows: after an impact,
-  the free-rocking peak theta_pk that the post-impact velocity could reach
-  (energy integral, theta'^2 / (2 p^2) = cos(alpha - theta_pk) - cos(alpha),
-  on the new pivot) is compared with ``rest_tol * alpha``; below it the block
-  is put at rest (theta = theta' = 0) and may lift off again by the uplift
-  rule above, within the same sample interval if the ground acceleration is
-  already beyond the threshold.
-* **Overturn.** Once |theta| reaches pi/2 the block has fallen: theta is held
-  at +-pi/2, theta' = 0, and integration stops.
-* **Peak.** theta_max is the largest |theta| including between samples: a
-  peak inside a substep is located as the root of theta'.
-
-Numerics: classic RK4 with ``substeps`` equal steps per sample interval (the
-steps are aligned to the samples, so the forcing is smooth inside each step);
-events split a step and are found by safeguarded Newton iteration on the
-length of one RK4 step. The kernel is compiled with numba (no fastmath) and
-computes the negative pivot with the same arithmetic as the positive one, so
-mirroring the ground motion mirrors the response exactly, bit for bit.
-With the default step (p h <= 0.01) theta_max of a pulse is converged to
-about 1e-9 alpha and impact times to about 1e-10 s (5e-8 s at slow, grazing
-impacts). Long records are another matter: near the upright position the
-equation has negative stiffness, perturbations grow like e^(p t), and the
-late response of a long record (whether a chatter sequence ends at rest, the
-phase of small free rocking) differs between any two accurate solutions:
-rocking is chaotic, so verdicts should rest on distributions over ensembles.
-
-Effects may add *terms* to this equation (an extra moment, a dry Coulomb moment
-with sticking, a change of the impact law, a vertical input read from the
-motion's ``ground_acc_vertical`` channel); :func:`simulate` and
-:func:`simulate_many` then run a kernel generated with those terms
-(:mod:`housner.effects.terms`), with the same numerics and events. Without
-terms the kernel is this module's, unchanged.
+A rigid block on a rigid base rocks on one of its two bottom corners and impacts when the rotation passes
+through zero. :func:`simulate` (and :func:`simulate_many`, :func:`theta_max_many`) integrate the full
+nonlinear equation of the seed paper (eq. 2, with pivot-dependent parameters and an optional viscous term)
+by RK4 aligned to the motion's samples, and locate uplift, impact, rest, overturn and peaks to machine
+precision on the integrator's own trajectory, in the compiled kernel of :mod:`housner._kernel` (or one
+generated with the effects' terms, :mod:`housner.effects.terms`). The equation, the events, the numerics
+and their accuracy are in ``docs/explanation/physics.md`` ("How the analytic model solves it").
 
 References
 ----------
 Housner, G. W. (1963). The behavior of inverted pendulum structures during
 earthquakes. Bulletin of the Seismological Society of America 53(2), 403-417.
-Yim, C.-S., Chopra, A. K., Penzien, J. (1980). Rocking response of rigid
-blocks to earthquakes. Earthquake Engineering & Structural Dynamics 8(6), 565-587.
 Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
 (2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
 eqs. 1-4.
@@ -219,8 +167,8 @@ def simulate(
 
     Notes
     -----
-    The physics and the event handling are described in the module
-    docstring (:mod:`housner.model`).
+    The physics and the event handling are described in ``docs/explanation/physics.md``,
+    "How the analytic model solves it".
 
     References
     ----------

@@ -1,37 +1,18 @@
 """A specimen from a scan mesh: the equivalent planar rocking block of a real, irregular rock.
 
-:func:`specimen_from_mesh` reads a watertight triangle mesh (metres), computes its mass
-properties for a uniform density, finds the facet of its convex hull on which it stands and,
-for one shaking direction, the two pivots of the equivalent planar block: their distances b
-from the centre of mass, alpha, R, the inertia about each pivot and p. The result, a
-:class:`ScanSpecimen`, gives :class:`~housner.rocking_params.RockingParams` (both sides, with
-Housner's impact law for an asymmetric block) and a :class:`~housner.specimen.Specimen`.
-
-Derivation, in order:
-
-1. Load with trimesh; refuse a mesh that is not watertight or whose size is not in metres; turn
-   inward normals outward (a negative volume).
-2. Volume, centre of mass (COM) and inertia tensor about the COM for ``density``.
-3. Rest facet: the facet of the convex hull that the COM's vertical (mesh z) projection falls
-   into, with its outward normal closest to -z. Its tilt from mesh z is ``rest_tilt``.
-4. Rest frame: the mesh turned by the smallest rotation that brings the facet's normal onto -z
-   (the axes stay within ``rest_tilt`` of the mesh's, so azimuths keep their meaning), origin
-   at the COM; the COM height h is its distance from the facet plane.
-5. Contact polygon: ``"hull"`` takes the vertices of the rest facet (a rigid, convex base);
-   ``"flat:TOL"`` the 2-D convex hull of the mesh vertices within TOL [m] of the rest plane
-   (a base that beds in; the scan resolves it to about 1 cm).
-6. For the shaking direction u = (cos az, sin az) of the rest frame: b+ = max over the
-   contact points q of q.u, b- = max of -q.u; I_c = u_perp^T I u_perp about the rocking axis
-   u_perp = (-sin az, cos az, 0); on each side alpha = atan(b/h), R = hypot(b, h),
-   I = I_c + m R^2, p = sqrt(m g R / I).
+:func:`specimen_from_mesh` reads a watertight triangle mesh (metres), computes its mass properties for a
+uniform density, finds the facet of its convex hull on which it stands (:func:`mesh_at_rest`, the rock in
+its rest frame) and, for one shaking direction, the two pivots of the equivalent planar block: their
+distances b from the centre of mass, alpha, R, the inertia about each pivot and p. The result, a
+:class:`ScanSpecimen`, gives :class:`~housner.rocking_params.RockingParams` (both sides, with Housner's impact
+law for an asymmetric block) and a :class:`~housner.specimen.Specimen`. The derivation step by step, and the
+bracket of alpha the scan cannot fix, are in ``docs/reference/campaign-format.md`` ("A specimen from a scan
+mesh").
 
 References
 ----------
 Housner, G. W. (1963). The behavior of inverted pendulum structures during earthquakes.
 BSSA 53(2), 403-417 (the planar block, the impact law).
-Chen, Z. et al. (2024). Virtual Shake Robot: simulating dynamics of precariously balanced
-rocks for overturning and large-displacement processes. Seismica 3(1) (the ASU granite PBRs
-and their scans).
 """
 
 from __future__ import annotations
@@ -263,7 +244,7 @@ def specimen_from_mesh(
     density: float = 2700.0,
     name: str | None = None,
 ) -> ScanSpecimen:
-    """The equivalent planar rocking block of a watertight scan mesh (see the module docstring).
+    """The equivalent planar rocking block of a watertight scan mesh (``docs/reference/campaign-format.md``).
 
     Parameters
     ----------
@@ -377,9 +358,9 @@ class MeshAtRest:
 
 def mesh_at_rest(path: str | Path, density: float) -> MeshAtRest:
     """The scan mesh at ``path`` standing on its rest facet, of uniform ``density`` [kg/m^3]: its mass properties
-    and geometry in the rest frame (steps 1-4 of the module docstring), the frame :func:`specimen_from_mesh` works
-    in. A bad ``density`` is a ValueError naming it; a file that is missing, not a mesh, not watertight or not in
-    metres a :class:`housner.errors.DataFileError`."""
+    and geometry in the rest frame (steps 1-4 of docs/reference/campaign-format.md, "A specimen from a scan mesh"),
+    the frame :func:`specimen_from_mesh` works in. A bad ``density`` is a ValueError naming it; a file that is
+    missing, not a mesh, not watertight or not in metres a :class:`housner.errors.DataFileError`."""
     density = positive("density", density)
     path = Path(path)
     mesh = _load(path)

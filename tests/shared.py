@@ -1,4 +1,5 @@
-"""Helpers shared by several test files: motions and engine variants built for the tests."""
+"""Helpers shared by several test files: motions and engine variants built for the tests, the command run in a
+subprocess."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import functools
 import html
 import math
 import re
+import subprocess
+import sys
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -210,3 +213,20 @@ def page_section(page: str, sid: str) -> str:
     """The HTML of a page's ``<section id="sid">``."""
     i = page.index(f'<section id="{sid}">')
     return page[i : page.index("</section>", i)]
+
+
+def housner_command(*args: str) -> list[str]:
+    """The command line of ``housner ARGS`` in a subprocess: this interpreter, ``-m housner.cli``."""
+    return [sys.executable, "-m", "housner.cli", *args]
+
+
+def run_command(out, engines: str, n_motions: int, *options: str, scenario: str = "elcentro") -> list[str]:
+    """The command line of ``housner run SCENARIO --engines ENGINES --n-motions N_MOTIONS --out OUT OPTIONS``."""
+    return housner_command(
+        "run", scenario, "--engines", engines, "--n-motions", str(n_motions), "--out", str(out), *options
+    )
+
+
+def run_housner(*args: str, timeout: float, **kwargs) -> subprocess.CompletedProcess:
+    """``housner ARGS`` run in a subprocess (``kwargs`` to :func:`subprocess.run`: env, cwd), its output as text."""
+    return subprocess.run(housner_command(*args), capture_output=True, text=True, timeout=timeout, **kwargs)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import run_housner
 
 from housner.cli import main
 from housner.scenarios.catalogue.scenario import load_scenario
@@ -430,10 +431,7 @@ def test_unbroken_campaign_passes_the_checks_before_load(tmp_path, capsys):
 
 # ---------------------------------------------------------------- the real command, in a subprocess
 def _housner(*args: str, env_extra: dict | None = None) -> subprocess.CompletedProcess:
-    env = dict(os.environ, **(env_extra or {}))
-    return subprocess.run(
-        [sys.executable, "-m", "housner.cli", *args], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
-    )
+    return run_housner(*args, cwd=ROOT, env=dict(os.environ, **(env_extra or {})), timeout=120)
 
 
 def test_subprocess_errors_are_one_line(tmp_path):

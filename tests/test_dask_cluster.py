@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from shared import run_command
 
 distributed = pytest.importorskip("distributed", reason="the Dask cluster tests need dask[distributed]")
 pytest.importorskip("distributed.cli.dask_scheduler", reason="no `dask scheduler` command (distributed.cli)")
@@ -32,8 +33,7 @@ COLUMNS = ["engine", "motion_id", "motion_name", "status", "theta_max_over_alpha
 
 
 def _cmd(out: Path, scheduler: str | None = None) -> list[str]:
-    cmd = [sys.executable, "-m", "housner.cli", "run", "elcentro", "--engines", "housner"]
-    cmd += ["--n-motions", str(N_MOTIONS), "--out", str(out), "--no-cache", "--no-report"]
+    cmd = run_command(out, "housner", N_MOTIONS, "--no-cache", "--no-report")
     return cmd + (["--scheduler", scheduler] if scheduler else [])
 
 

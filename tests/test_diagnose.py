@@ -14,12 +14,11 @@ import inspect
 import json
 import math
 import os
-import subprocess
-import sys
 
 import campaign_generators as cg
 import numpy as np
 import pytest
+from shared import run_housner
 
 from housner import Specimen
 from housner.effects import available_effects, effect_class
@@ -199,32 +198,15 @@ def test_cli_diagnose(base, tmp_path):
     root = cg.cached_campaign(base, "sensor_offset")["root"]
     out_json, out_html = tmp_path / "d.json", tmp_path / "d.html"
     env = dict(os.environ)
-    cmd = [
-        sys.executable,
-        "-m",
-        "housner.cli",
-        "diagnose",
-        str(root),
-        "--effects",
-        "sensor_offset,time_lag",
-        "--json",
-        str(out_json),
-        "--report",
-        str(out_html),
-        "-q",
-    ]
-    res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
+    outputs = ("--json", str(out_json), "--report", str(out_html))
+    res = run_housner(
+        "diagnose", str(root), "--effects", "sensor_offset,time_lag", *outputs, "-q", env=env, timeout=300
+    )
     assert res.returncode == 0, res.stderr
     assert "sensor_offset" in res.stdout and "explains it" in res.stdout
     assert json.loads(out_json.read_text())["selected"] == ["sensor_offset"]
     assert out_html.read_text().count("data:image/png;base64,") == 11  # as test_report_is_self_contained
-    bad = subprocess.run(
-        [sys.executable, "-m", "housner.cli", "diagnose", str(tmp_path / "none")],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=120,
-    )
+    bad = run_housner("diagnose", str(tmp_path / "none"), env=env, timeout=120)
     assert bad.returncode == 2 and "campaign.toml" in bad.stderr
 
 

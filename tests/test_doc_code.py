@@ -90,10 +90,17 @@ def test_snippet_is_expanded(tmp_path):
     assert "register_effect" in block.code
 
 
-def test_names_flow_between_blocks_and_a_failure_names_its_line(tmp_path):
+def _checked(tmp_path, text: str) -> dict:
+    """What :func:`check_page` finds on a page of ``text`` (git's check off)."""
     path = tmp_path / "page.md"
-    path.write_text("```python\nx = 2\n```\n\ntext\n\n```python\nassert x == 2\nprint(x)\nundefined_name\n```\n")
-    result = dc.check_page(path, git_check=False)
+    path.write_text(text)
+    return dc.check_page(path, git_check=False)
+
+
+def test_names_flow_between_blocks_and_a_failure_names_its_line(tmp_path):
+    result = _checked(
+        tmp_path, "```python\nx = 2\n```\n\ntext\n\n```python\nassert x == 2\nprint(x)\nundefined_name\n```\n"
+    )
     assert result["run"] == 2
     ((where, error),) = result["failures"]
     assert where.endswith("page.md:10")  # the failing line of the second block, in the page's numbering
@@ -101,9 +108,7 @@ def test_names_flow_between_blocks_and_a_failure_names_its_line(tmp_path):
 
 
 def test_a_failing_command_stops_the_page(tmp_path):
-    path = tmp_path / "page.md"
-    path.write_text("```console\n$ true\n$ false\n```\n\n```python\nprint('never')\n```\n")
-    result = dc.check_page(path, git_check=False)
+    result = _checked(tmp_path, "```console\n$ true\n$ false\n```\n\n```python\nprint('never')\n```\n")
     assert result["run"] == 1
     ((where, error),) = result["failures"]
     assert where.endswith("page.md:3") and "exit status 1" in error

@@ -9,10 +9,10 @@ verdict against the 0.15 tolerance needs n >= 3 / 0.15 = 20 records; a failed re
 from __future__ import annotations
 
 import subprocess
-import sys
 
 import pandas as pd
 import pytest
+from shared import run_command
 
 from housner.scenarios.runs.chaos import ChaosFloor
 from housner.scenarios.runs.verdicts import MIN_RECORDS, engine_verdict
@@ -85,24 +85,7 @@ def test_one_verdict_from_the_distribution_and_the_records():
 
 
 def test_run_prints_each_engines_verdict_and_check_passes_an_inconclusive_one(tmp_path):
-    cmd = [
-        sys.executable,
-        "-m",
-        "housner.cli",
-        "run",
-        "elcentro",
-        "--engines",
-        "housner,mujoco",
-        "--n-motions",
-        "3",
-        "--out",
-        str(tmp_path / "run"),
-        "--no-report",
-        "--check",
-        "-q",
-        "--jobs",
-        "1",
-    ]
+    cmd = run_command(tmp_path / "run", "housner,mujoco", 3, "--no-report", "--check", "-q", "--jobs", "1")
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
@@ -113,23 +96,7 @@ def test_run_prints_each_engines_verdict_and_check_passes_an_inconclusive_one(tm
 
 
 def test_a_run_with_one_engine_prints_no_verdict_heading(tmp_path):
-    cmd = [
-        sys.executable,
-        "-m",
-        "housner.cli",
-        "run",
-        "elcentro",
-        "--engines",
-        "housner",
-        "--n-motions",
-        "2",
-        "--out",
-        str(tmp_path / "run"),
-        "--no-report",
-        "-q",
-        "--jobs",
-        "1",
-    ]
+    cmd = run_command(tmp_path / "run", "housner", 2, "--no-report", "-q", "--jobs", "1")
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
     assert "verdict" not in res.stdout

@@ -12,13 +12,13 @@ import multiprocessing as mp
 import os
 import signal
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import run_command
 from test_runner import motions  # the same short pulse-like motions
 
 from housner import GroundMotion, Specimen
@@ -149,8 +149,7 @@ def test_ctrl_c_exits_fast_with_130_and_keeps_the_cache(tmp_path):
     cache = tmp_path / "cache"
     env = dict(os.environ, HOUSNER_CACHE_DIR=str(cache))
     env.pop(CRASH_ENV, None)
-    cmd = [sys.executable, "-m", "housner.cli", "run", "elcentro", "--engines", "mujoco", "--n-motions", "24"]
-    cmd += ["--out", str(tmp_path / "run"), "--jobs", "2", "--no-report"]
+    cmd = run_command(tmp_path / "run", "mujoco", 24, "--jobs", "2", "--no-report")
     # A session of its own, signalled as a whole: what a terminal does on Ctrl-C (workers get SIGINT too).
     # SIGINT back to its default in the child: a test run started in the background of a non-interactive shell
     # (`cmd &`) ignores SIGINT, and the child would inherit that and could never be interrupted.
@@ -194,22 +193,7 @@ def test_sigterm_is_handled_like_ctrl_c_with_143(tmp_path):
     cache = tmp_path / "cache"
     env = dict(os.environ, HOUSNER_CACHE_DIR=str(cache))
     env.pop(CRASH_ENV, None)
-    cmd = [
-        sys.executable,
-        "-m",
-        "housner.cli",
-        "run",
-        "elcentro",
-        "--engines",
-        "housner,mujoco",
-        "--n-motions",
-        "24",
-        "--out",
-        str(tmp_path / "run"),
-        "--jobs",
-        "2",
-        "--no-report",
-    ]
+    cmd = run_command(tmp_path / "run", "housner,mujoco", 24, "--jobs", "2", "--no-report")
     proc = subprocess.Popen(
         cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
     )

@@ -8,13 +8,12 @@ held-out error at the level a correct model leaves (residual ratio <= 1.25).
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import independent_campaigns as ic
 import numpy as np
 import pytest
+from shared import run_housner
 
 from housner import GroundMotion, Specimen
 from housner.effects import effect_class, load_plugin
@@ -54,31 +53,13 @@ def test_each_example_explains_its_campaign(base, example):
 
 def test_cli_loads_a_plugin_and_refuses_a_missing_one(base, tmp_path):
     root = ic.cached_campaign(base, "pivot_friction")["root"]
-    cmd = [
-        sys.executable,
-        "-m",
-        "housner.cli",
-        "diagnose",
-        str(root),
-        "--plugin",
-        str(EXAMPLES / "pivot_friction.py"),
-        "--add",
-        "pivot_friction",
-        "--effects",
-        "none",
-        "-q",
-    ]
-    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    plugin = ("--plugin", str(EXAMPLES / "pivot_friction.py"), "--add", "pivot_friction")
+    res = run_housner("diagnose", str(root), *plugin, "--effects", "none", "-q", timeout=300)
     assert res.returncode == 0, res.stderr
     # the status once, on its own line (the paragraph under it does not open with it again)
     assert res.stdout.startswith("verdict: explained\n") and "pivot_friction" in res.stdout
     assert "Explained:" not in res.stdout
-    bad = subprocess.run(
-        [sys.executable, "-m", "housner.cli", "diagnose", str(root), "--plugin", "nope.py"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    bad = run_housner("diagnose", str(root), "--plugin", "nope.py", timeout=120)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "nope.py" in bad.stderr
     assert "Traceback" not in bad.stderr
 

@@ -115,7 +115,8 @@ def test_one_record_carried_off_by_chaos_does_not_hide_the_power_of_sixty():
     assert r2.misfit and r2.groups["ground_motion"].ratio_trimmed == pytest.approx(2, rel=0.15)
 
 
-def test_too_few_records_is_inconclusive():
+def _five_records():
+    """The residual of five records at their floor, and the verdict decided on it."""
     r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
     v = decide(
         n_records=5,
@@ -127,11 +128,16 @@ def test_too_few_records_is_inconclusive():
         final_cmp=None,
         library=["restitution"],
     )
+    return r, v
+
+
+def test_too_few_records_is_inconclusive():
+    _, v = _five_records()
     assert v.status == "inconclusive" and "too few" in v.text
 
 
 def test_the_status_is_the_truth_table_and_the_text_is_drawn_from_it():
-    r = residual_test(np.full(5, 0.01), _floor(np.full(5, 0.01), np.full(5, 1e-3)), ["ground_motion"] * 5)
+    r, v = _five_records()
     facts = VerdictFacts(
         n_records=5,
         baseline=r,
@@ -155,16 +161,6 @@ def test_the_status_is_the_truth_table_and_the_text_is_drawn_from_it():
         probed=False,
     )
     status = status_rule(False, False, False, False, True)
-    v = decide(
-        n_records=5,
-        baseline=r,
-        final=r,
-        selected=[],
-        params={},
-        baseline_cmp=None,
-        final_cmp=None,
-        library=["restitution"],
-    )
     assert v.status == status == "inconclusive"
     assert v.text == verdict_text(facts, status) and v.text.startswith("Inconclusive: 5 usable records are too few")
     # with enough records and the plain model at its floor, the same residual reads "no misfit"

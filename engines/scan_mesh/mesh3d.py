@@ -1,50 +1,12 @@
 """What the 3D scan-mesh engines (``mujoco-3d``, ``pybullet-3d``) share.
 
-A real rock's scan mesh is simulated as one free rigid body (six degrees of freedom) standing on a
-fixed, flat table, instead of the equivalent planar block of :mod:`housner.scan`.
-
-Geometry and mass. :func:`load_rock` reuses :mod:`housner.scan`: the mesh is read and checked
-(watertight, metres, outward normals), its mass, centre of mass (COM) and inertia tensor come from
-the mesh at the given uniform density, and its rest pose is the facet of its convex hull under the
-COM (``specimen_from_mesh``). The body is placed in the *shaking frame*: the rest frame turned about
-the vertical by the azimuth, so that the shaking direction is world +x and the rock's rest facet is
-horizontal. The collision geometry is the mesh's convex hull (MuJoCo convexifies mesh geoms and
-PyBullet's ``GEOM_MESH`` on a dynamic body is a convex hull), so only the hull's vertices are handed
-to the engines. ``contact="hull"`` (the default, as in :mod:`housner.scan`) is the only contact a
-convex-hull collision realises.
-
-Ground motion. The table is fixed in the world and the table acceleration ug''(t) enters as the
-exact inertial (d'Alembert) force of the translating table frame: -m ug''(t) along the shaking
-direction, applied at the COM at every step. In the table's frame this is the same as shaking the
-table: the rock sees gravity and that uniform inertial force. ug'' is linear between the motion's
-samples and is evaluated at the middle of each engine step (the exact impulse of each step).
-
-Start. The rock is released in its rest pose with its lowest hull point :data:`DROP_GAP` above the
-table and settles for :data:`SETTLE_S` with no input; the record starts from the settled state
-(the Response's time 0 is the record's start). A motion with theta0 or theta_dot0 rotates the
-settled rock about the pivot edge on the side it leans to (the contact polygon's extreme point
-along +-x, at table level) and gives it that rotation rate about it.
-
-Output. theta is the rock's rotation about the horizontal axis normal to the shaking direction
-(world y), from the settled pose: with n the settled vertical body axis in its current direction,
-theta = atan2(n_x, n_z), positive when the rock leans toward +x (the planar engines' sign), 0 at
-rest. A yaw about the vertical does not change it.
-
-Overturn. :class:`OverturnCheck`: the rock has overturned at the first sample where either
-
-1. its tilt toward one side reaches ``min(2 alpha_side, pi/2)``: at theta = 2 alpha the COM,
-   having passed over the pivot, is back down at its rest height on the far side (the planar
-   block's COM height is R cos(theta - alpha)); the gravity moment m g R sin(theta - alpha)
-   drives it on and the table would have to lift it over the whole barrier m g (R - h) again to
-   bring it back; or
-2. its tilt has stayed beyond that side's alpha (its COM past the pivot it stood on) for
-   :data:`PAST_PIVOT_S` without interruption: a rock past its pivot falls or returns within a
-   fraction of a second (1/p is 0.22 s for SP1), so one that stays there lies on another facet.
-
-The run stops there (speed), the response holds theta at +-pi/2 from then on as the planar engines
-do (:func:`housner.engines._planar.sampled_response`) and reports theta_max = pi/2; the overturn time
-is that of the first criterion, or the time the rock last passed over its pivot for the second.
-alpha_side is the scan's pivot angle (``ScanSpecimen.pos.alpha`` / ``neg.alpha``).
+A real rock's scan mesh is simulated as one free rigid body (six degrees of freedom) standing on a fixed,
+flat table, instead of the equivalent planar block of :mod:`housner.scan`. Here are the rock
+(:func:`load_rock`, :class:`MeshRock`: the mesh's mass, centre of mass, inertia and convex hull, placed in
+the shaking frame), its start (settled for :data:`SETTLE_S` from :data:`DROP_GAP` above the table), theta
+from the settled pose, the overturn criterion (:class:`OverturnCheck`, with :data:`PAST_PIVOT_S`) and the
+base class :class:`MeshEngine`. The table acceleration enters as the exact d'Alembert force at the centre of
+mass. Why each is so is in ``docs/explanation/engines.md`` ("The 3D scan-mesh engines").
 """
 
 from __future__ import annotations
@@ -60,7 +22,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from housner.engines._planar import OVERTURN_ANGLE, RUNAWAY_M, sampled_response
+from housner.engines._planar import OVERTURN_ANGLE, RUNAWAY_M, sampled_response, step_info
 from housner.engines.base import Engine, SpecAttribute
 from housner.errors import DataFileError, EngineError, unknown_choice
 from housner.response import Response
@@ -195,7 +157,7 @@ def rot_y(angle: float) -> np.ndarray:
 
 
 class OverturnCheck:
-    """The overturn criterion of the module docstring, fed one sample at a time."""
+    """The overturn criterion (docs/explanation/engines.md, "The 3D scan-mesh engines"), fed one sample at a time."""
 
     def __init__(self, rock: MeshRock, dt: float):
         self.limit = {s: min(2.0 * rock.alpha(s), OVERTURN_ANGLE) for s in (1.0, -1.0)}
@@ -224,19 +186,36 @@ class OverturnCheck:
 class MeshEngine(Engine):
     """Base of the 3D scan-mesh engines: settings, the rock, the settling, the sample loop and the response.
 
-    A subclass sets :attr:`DEFAULTS` (its numerical settings with :data:`MESH_DEFAULTS`), :attr:`RANGES`,
+    A subclass sets :attr:`DEFAULTS` (its own settings added to these), :attr:`RANGES`,
     :attr:`STRICT` and :attr:`CHOICES`, and implements :meth:`_build` (the world), :meth:`_step`,
     :meth:`_state` and :meth:`_set_state`. The rock is the mesh of the ``mesh`` setting: the
     ``specimen`` passed to :meth:`simulate` only gives the alpha that normalises the response
     (theta_max / alpha and the rocking threshold of the impact and uplift detector), as for the
     planar engines; the campaign passes the scan's equivalent block (``ScanSpecimen.specimen()``).
     An instance pickles as its settings (the rock is reloaded, from a cache, in the receiving process).
+
+    Parameters
+    ----------
+    mesh : str or pathlib.Path
+        The rock's scan mesh (watertight, metres, mesh z up); required.
+    azimuth : float
+        Shaking direction [deg] in [0, 360), from the mesh x axis toward +y.
+    density : float
+        Uniform density [kg/m^3].
+    contact : {"hull"}
+        The collision geometry: the mesh's convex hull.
+    timestep : float
+        Largest engine step [s]; the step used is motion.dt / ceil(motion.dt / timestep). Default 0.5 ms
+        (10 steps per 5 ms sample of the ASU records; each engine's module says what it measured).
+    friction : float
+        Coulomb friction coefficient rock/table [-]. Default 0.7: granite on the steel shake table, in the
+        0.6-0.8 the Virtual Shake Robot study of the same rocks used (Chen et al. 2024).
     """
 
     #: The campaign runner passes the campaign's mesh, azimuth and density as settings to such an engine.
     mesh_engine: ClassVar[bool] = True
-    DEFAULTS: ClassVar[dict] = dict(MESH_DEFAULTS)
-    RANGES: ClassVar[dict] = {}
+    DEFAULTS: ClassVar[dict] = {**MESH_DEFAULTS, "timestep": 5e-4, "friction": 0.7}
+    RANGES: ClassVar[dict] = {"timestep": (0.0, 1e-2), "friction": (0.0, 100.0)}
     STRICT: ClassVar[tuple[str, ...]] = ("timestep", "density")
     CHOICES: ClassVar[dict] = {}
     LABEL = SpecAttribute("label")
@@ -325,11 +304,7 @@ class MeshEngine(Engine):
                 break
         pos_end = self._state()[0]
         info = {
-            "settings": self.settings(),
-            "version": self.version(),
-            "step": h,
-            "steps_per_sample": k,
-            "n_steps": last * k,
+            **step_info(self, h, k, last),
             "settle_steps": n_settle,
             "mesh_mass_kg": self.rock.mass,
             "mesh_com_height_m": self.rock.h,

@@ -1,37 +1,10 @@
 """A real rock's scan mesh as a free rigid body on a shaken table, in MuJoCo (engine ``mujoco-3d``).
 
-Model. One body with a free joint (six degrees of freedom) whose frame is the rock's centre of mass
-(COM), axes the shaking frame of :mod:`housner.engines.scan_mesh.mesh3d` (x along the shaking direction, z up);
-its mass and full inertia tensor are the mesh's at the set density (``<inertial>``, not MuJoCo's
-estimate from the collision geometry). Its collision geometry is a mesh geom of the hull's vertices,
-which MuJoCo convexifies (the convex hull). The table is MuJoCo's infinite plane z = 0, fixed.
-
-Ground motion. The table is fixed; the table acceleration ug'' enters as the exact d'Alembert force
--m ug''(t) along x at the COM (``xfrc_applied``, at the middle of each step), the same as shaking the
-table (:mod:`housner.engines.scan_mesh.mesh3d`). The rock settles for 1 s before the record starts; theta, the
-overturn criterion and the response are the shared ones of :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`.
-
-Settings and their defaults (``DEFAULTS``):
-
-* ``timestep`` 0.5 ms (10 steps per 5 ms sample of the ASU records). Measured: a 0.2 x 0.4 x 1 m box
-  released at 0.5 alpha gives the first impact within 0.1 % of Housner's quarter period and the next
-  three rocking peaks within 1 % of Housner's at 1, 0.5 and 0.25 ms; on 16 random ASU records
-  (SP1, azimuth 0) the predicted overturns differ in 1-2 records near the threshold between those
-  steps (the rocking of a rock whose alpha is 0.09 rad is that sensitive), with no trend; 0.5 ms
-  costs about 0.013 CPU s per simulated second, a tenth of the campaign's budget.
-* ``solref`` (2 ms, 1): four steps, critically damped (MuJoCo needs at least two steps): a stiff
-  contact (the rock sinks by a few um at rest) whose impacts are plastic, as Housner's.
-* ``friction`` 0.7: granite on the steel shake table, in the 0.6-0.8 the Virtual Shake Robot study of
-  the same rocks used (Chen et al. 2024). It is a physical value, not a numerical one: table
-  accelerations above mu g make the rock slide, as it can on the real table.
-* ``cone`` "elliptic", ``impratio`` 1: MuJoCo's physically plain Coulomb cone.
-* ``integrator`` "implicitfast", ``iterations`` 50, ``tolerance`` 1e-10.
-
-References
-----------
-MuJoCo documentation, "Computation" (soft contacts, solref/solimp) and "Modeling" (mesh geoms are
-convex hulls for collisions), https://mujoco.readthedocs.io
-Chen, Z. et al. (2024). Virtual Shake Robot. Seismica 3(1), doi:10.26443/seismica.v3i1.692.
+:class:`MujocoMeshEngine` puts the rock of :mod:`housner.engines.scan_mesh.mesh3d` on a body with a free joint at its
+centre of mass (the mesh's mass and full inertia tensor, its convex hull as collision geometry) on MuJoCo's
+fixed infinite plane, and drives it by the d'Alembert force of the table acceleration at the centre of mass
+(``xfrc_applied``, at the middle of each step). How it holds the rock is in ``docs/explanation/engines.md``
+("The 3D scan-mesh engines"); the settings, their defaults and why, in :class:`MujocoMeshEngine`.
 """
 
 from __future__ import annotations
@@ -41,7 +14,7 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
-from housner.engines.scan_mesh.mesh3d import MESH_DEFAULTS, MeshEngine, hull_drop_height
+from housner.engines.scan_mesh.mesh3d import MeshEngine, hull_drop_height
 from housner.units import G
 
 __all__ = ["MujocoMeshEngine"]
@@ -52,18 +25,6 @@ class MujocoMeshEngine(MeshEngine):
 
     Parameters
     ----------
-    mesh : str or pathlib.Path
-        The rock's scan mesh (watertight, metres, mesh z up); required.
-    azimuth : float
-        Shaking direction [deg] in [0, 360), from the mesh x axis toward +y.
-    density : float
-        Uniform density [kg/m^3].
-    contact : {"hull"}
-        The collision geometry: the mesh's convex hull.
-    timestep : float
-        Largest engine step [s]; the step used is motion.dt / ceil(motion.dt / timestep).
-    friction : float
-        Coulomb friction coefficient rock/table [-].
     solref : (float, float)
         Contact (time constant [s], damping ratio [-]) of the rock and the table.
     solimp : 5 floats
@@ -73,17 +34,37 @@ class MujocoMeshEngine(MeshEngine):
     integrator : {"Euler", "implicitfast", "implicit", "RK4"}
     iterations : int
     tolerance : float
+    mesh, azimuth, density, contact, timestep, friction
+        As :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`'s.
 
     Notes
     -----
-    The defaults and why: the module docstring.
+    The defaults (``DEFAULTS``) and why:
+
+    * ``timestep`` 0.5 ms (10 steps per 5 ms sample of the ASU records). Measured: a 0.2 x 0.4 x 1 m box
+      released at 0.5 alpha gives the first impact within 0.1 % of Housner's quarter period and the next
+      three rocking peaks within 1 % of Housner's at 1, 0.5 and 0.25 ms; on 16 random ASU records
+      (SP1, azimuth 0) the predicted overturns differ in 1-2 records near the threshold between those
+      steps (the rocking of a rock whose alpha is 0.09 rad is that sensitive), with no trend; 0.5 ms
+      costs about 0.013 CPU s per simulated second, a tenth of the campaign's budget.
+    * ``solref`` (2 ms, 1): four steps, critically damped (MuJoCo needs at least two steps): a stiff
+      contact (the rock sinks by a few um at rest) whose impacts are plastic, as Housner's.
+    * ``friction`` 0.7: granite on the steel shake table, in the 0.6-0.8 the Virtual Shake Robot study of
+      the same rocks used (Chen et al. 2024). It is a physical value, not a numerical one: table
+      accelerations above mu g make the rock slide, as it can on the real table.
+    * ``cone`` "elliptic", ``impratio`` 1: MuJoCo's physically plain Coulomb cone.
+    * ``integrator`` "implicitfast", ``iterations`` 50, ``tolerance`` 1e-10.
+
+    References
+    ----------
+    MuJoCo documentation, "Computation" (soft contacts, solref/solimp) and "Modeling" (mesh geoms are
+    convex hulls for collisions), https://mujoco.readthedocs.io
+    Chen, Z. et al. (2024). Virtual Shake Robot. Seismica 3(1), doi:10.26443/seismica.v3i1.692.
     """
 
     name: ClassVar[str] = "mujoco-3d"
     DEFAULTS: ClassVar[dict] = {
-        **MESH_DEFAULTS,
-        "timestep": 5e-4,
-        "friction": 0.7,
+        **MeshEngine.DEFAULTS,
         "solref": (2e-3, 1.0),
         "solimp": (0.9, 0.95, 0.001, 0.5, 2.0),
         "cone": "elliptic",
@@ -93,8 +74,7 @@ class MujocoMeshEngine(MeshEngine):
         "tolerance": 1e-10,
     }
     RANGES: ClassVar[dict] = {
-        "timestep": (0.0, 1e-2),
-        "friction": (0.0, 100.0),
+        **MeshEngine.RANGES,
         "impratio": (0.0, 1e3),
         "iterations": (1, 1000),
         "tolerance": (0.0, 1e-2),

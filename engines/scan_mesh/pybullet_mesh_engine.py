@@ -1,41 +1,10 @@
 """A real rock's scan mesh as a free rigid body on a shaken table, in PyBullet (engine ``pybullet-3d``).
 
-Model. One dynamic body whose collision shape is ``GEOM_MESH`` built from the hull's vertices
-(PyBullet makes a convex hull of them: a dynamic body's mesh is always a convex hull), with the
-mesh's mass and inertia at the set density: the inertia tensor is diagonalised and set as the body's
-inertial frame (``baseInertialFrameOrientation``, ``localInertiaDiagonal``), so PyBullet's own
-estimate from the collision shape (its bounding box) is not used. The table is PyBullet's infinite
-plane z = 0, fixed. The body is a floating-base multibody (Featherstone; PyBullet's maximal-coordinates rigid body
-drops the mass when its inertia is set); its linear and angular damping are zero (PyBullet's
-default is 0.04).
-
-Ground motion. The table is fixed; the table acceleration ug'' enters as the exact d'Alembert force
--m ug''(t) along x at the COM. It is applied by tilting gravity to (-ug'', 0, -g) before each step
-(the rock is the only dynamic body, and gravity acts at its COM), with the mean of the linear ug''
-over the step. The rock settles for 1 s before the record starts; theta, the overturn criterion and
-the response are the shared ones of :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`.
-
-Settings and their defaults (``DEFAULTS``):
-
-* ``timestep`` 0.5 ms (10 steps per 5 ms sample of the ASU records): Bullet's contact is rigid
-  (velocity-level, restitution 0), so the step sets how exactly an impact lands. Measured: a
-  0.2 x 0.4 x 1 m box released at 0.5 alpha gives the first impact within 0.1 % of Housner's
-  quarter period and the next three rocking peaks within 1 % of Housner's at 1, 0.5 and 0.25 ms;
-  on 16 random ASU records (SP1, azimuth 0) the predicted overturns differ in 1-3 records near the
-  threshold between those steps, with no trend; 0.5 ms costs about 0.016 CPU s per simulated second.
-* ``friction`` 0.7: granite on the steel shake table, in the 0.6-0.8 the Virtual Shake Robot
-  study of the same rocks used in PyBullet (Chen et al. 2024); table accelerations above mu g
-  make the rock slide, as on the real table.
-* ``solver_iterations`` 50, ``erp`` 0.2 and ``contact_erp`` 0.2
-  (Bullet's defaults: the share of a penetration corrected per step), ``collision_margin`` 1 mm:
-  the shell Bullet keeps around a convex hull; the rock stands and rocks on its hull grown by
-  that much (a pivot radius of 1 mm).
-
-References
-----------
-Coumans, E. and Bai, Y. (2016-2021). PyBullet. https://pybullet.org (Quickstart Guide:
-createCollisionShape, createMultiBody, changeDynamics, setPhysicsEngineParameter).
-Chen, Z. et al. (2024). Virtual Shake Robot. Seismica 3(1), doi:10.26443/seismica.v3i1.692.
+:class:`PybulletMeshEngine` puts the rock of :mod:`housner.engines.scan_mesh.mesh3d` on one floating-base body (its
+convex hull as ``GEOM_MESH``, the mesh's mass and diagonalised inertia, no damping) on PyBullet's fixed
+infinite plane, and drives it by the d'Alembert force of the table acceleration (gravity tilted to
+(-ug'', 0, -g) before each step). How it holds the rock is in ``docs/explanation/engines.md`` ("The 3D
+scan-mesh engines"); the settings, their defaults and why, in :class:`PybulletMeshEngine`.
 """
 
 from __future__ import annotations
@@ -46,7 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from housner.engines._planar import optional_package
-from housner.engines.scan_mesh.mesh3d import DROP_GAP, MESH_DEFAULTS, MeshEngine
+from housner.engines.scan_mesh.mesh3d import DROP_GAP, MeshEngine
 from housner.units import G
 
 __all__ = ["PybulletMeshEngine"]
@@ -57,43 +26,50 @@ class PybulletMeshEngine(MeshEngine):
 
     Parameters
     ----------
-    mesh : str or pathlib.Path
-        The rock's scan mesh (watertight, metres, mesh z up); required.
-    azimuth : float
-        Shaking direction [deg] in [0, 360), from the mesh x axis toward +y.
-    density : float
-        Uniform density [kg/m^3].
-    contact : {"hull"}
-        The collision geometry: the mesh's convex hull.
-    timestep : float
-        Largest engine step [s]; the step used is motion.dt / ceil(motion.dt / timestep).
-    friction : float
-        Coulomb friction coefficient rock/table [-].
     solver_iterations : int
         Sequential-impulse iterations per step.
     erp, contact_erp : float
         Share of a joint / contact position error corrected per step [-].
     collision_margin : float
         Bullet's collision margin around the convex hull [m].
+    mesh, azimuth, density, contact, timestep, friction
+        As :class:`housner.engines.scan_mesh.mesh3d.MeshEngine`'s.
 
     Notes
     -----
-    The defaults and why: the module docstring.
+    The defaults (``DEFAULTS``) and why:
+
+    * ``timestep`` 0.5 ms (10 steps per 5 ms sample of the ASU records): Bullet's contact is rigid
+      (velocity-level, restitution 0), so the step sets how exactly an impact lands. Measured: a
+      0.2 x 0.4 x 1 m box released at 0.5 alpha gives the first impact within 0.1 % of Housner's
+      quarter period and the next three rocking peaks within 1 % of Housner's at 1, 0.5 and 0.25 ms;
+      on 16 random ASU records (SP1, azimuth 0) the predicted overturns differ in 1-3 records near the
+      threshold between those steps, with no trend; 0.5 ms costs about 0.016 CPU s per simulated second.
+    * ``friction`` 0.7: granite on the steel shake table, in the 0.6-0.8 the Virtual Shake Robot
+      study of the same rocks used in PyBullet (Chen et al. 2024); table accelerations above mu g
+      make the rock slide, as on the real table.
+    * ``solver_iterations`` 50, ``erp`` 0.2 and ``contact_erp`` 0.2
+      (Bullet's defaults: the share of a penetration corrected per step), ``collision_margin`` 1 mm:
+      the shell Bullet keeps around a convex hull; the rock stands and rocks on its hull grown by
+      that much (a pivot radius of 1 mm).
+
+    References
+    ----------
+    Coumans, E. and Bai, Y. (2016-2021). PyBullet. https://pybullet.org (Quickstart Guide:
+    createCollisionShape, createMultiBody, changeDynamics, setPhysicsEngineParameter).
+    Chen, Z. et al. (2024). Virtual Shake Robot. Seismica 3(1), doi:10.26443/seismica.v3i1.692.
     """
 
     name: ClassVar[str] = "pybullet-3d"
     DEFAULTS: ClassVar[dict] = {
-        **MESH_DEFAULTS,
-        "timestep": 5e-4,
-        "friction": 0.7,
+        **MeshEngine.DEFAULTS,
         "solver_iterations": 50,
         "erp": 0.2,
         "contact_erp": 0.2,
         "collision_margin": 1e-3,
     }
     RANGES: ClassVar[dict] = {
-        "timestep": (0.0, 1e-2),
-        "friction": (0.0, 100.0),
+        **MeshEngine.RANGES,
         "solver_iterations": (1, 10000),
         "erp": (0.0, 1.0),
         "contact_erp": (0.0, 1.0),

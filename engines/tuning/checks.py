@@ -1,31 +1,12 @@
 """The tuner's checks: their records, tolerances and analytic references, and how a candidate scores on them.
 
-Each check compares an engine with the analytic model at r = target (Housner's r by default):
-
-1. **Energy ratio, 0.2-0.9 alpha**: the first impact's ratio after a release from rest at
-   theta0 = a alpha, measured with the seed's eq. 8 from the peaks before and after it,
-
-       c = (cos(alpha - |theta_1|) - cos alpha) / (cos(alpha - |theta_0|) - cos alpha),
-
-   within ``rtol`` (:data:`RTOL`, 0.5 %) at the 71 amplitudes of :data:`DEFAULT_AMPLITUDES`.
-2. **Energy ratio, small amplitudes** (:data:`SMALL_AMPLITUDES`, 0.02-0.19 alpha): mean error
-   within ``rtol``, worst within :data:`SMALL_WORST_FACTOR` ``rtol``.
-3. **Free decay** from :data:`DECAY_START` alpha: the peaks after :data:`DECAY_IMPACTS` impacts
-   within :data:`DECAY_RTOL` of the exact sequence
-   cos(alpha - theta_k) - cos alpha = r^k (cos(alpha - theta_0) - cos alpha).
-4. **Pulses**: the first peak (before any impact: the forcing and the uplift alone) and
-   theta_max (after the first impact) under the one-sine pulses :data:`PULSES` and
-   :data:`THRESHOLD_PULSES`.
-
-Every check runs at each of the :data:`SAMPLE_STEPS` and counts the worse. The constants' notes
-say why each tolerance is what it is.
-
-Checks 2-4 were added after the first tuned MuJoCo contact, which passed check 1 (r within
-0.45 % at 0.2-0.9 alpha) but kept 3-15 % too little energy at impacts from 0.02-0.005 alpha, let
-the block rock 4-10 % too far on the near-threshold pulses and left a quarter of the El Centro
-ensemble rocking at a fraction of the analytic amplitude (``engines/models/README.md``,
-CHANGELOG). That contact fails checks 2, 3 and 4 by far: worst small-amplitude error -2.7 % (at
-0.02 alpha), 40th decay peak -91 %, near-threshold first peaks +4 % and +10 %.
+Each check compares an engine with the analytic model at r = target (Housner's r by default): the first
+impact's energy ratio at 0.2-0.9 alpha (:data:`DEFAULT_AMPLITUDES`, within :data:`RTOL`) and at small
+amplitudes (:data:`SMALL_AMPLITUDES`), the free decay (:data:`DECAY_START`, :data:`DECAY_IMPACTS`,
+:data:`DECAY_RTOL`) and the pulses (:data:`PULSES`, :data:`THRESHOLD_PULSES`), each at every one of the
+:data:`SAMPLE_STEPS`, the worse counted. The constants' notes say why each tolerance is what it is; the
+checks' formulas, and why checks 2-4 were added, are in ``docs/explanation/engines.md`` ("The tuner's
+checks").
 """
 
 from __future__ import annotations

@@ -1,80 +1,17 @@
 """Physical effects: small pluggable additions to the analytic rocking model.
 
-An *effect* is a frozen dataclass whose fields are its parameters. Each field
-says, once, what its parameter means (:func:`param`, a field carrying a
-:class:`ParamSpec`: unit, bounds for fitting, the neutral value at which the
-effect does nothing, its default) and the class overrides only the hooks it
-needs; the others are no-ops:
-
-``modify_params(params, specimen)``
-    returns a changed :class:`housner.rocking_params.RockingParams` (restitution,
-    amplitude-dependent restitution, rotational damping, asymmetric pivots,
-    frequency parameter);
-``transform_input(motion)``
-    returns the ground motion the block really feels;
-``observe(response)``
-    returns what a sensor would record (angle offset, channel time lag);
-``terms(params, specimen)``
-    returns terms of the one compiled analytic kernel (:mod:`housner.effects.terms`):
-    an extra moment (damping, drag, a vertical input), a dry (Coulomb) moment that
-    makes the block stick and raises its uplift threshold, a change of the impact
-    law. Terms of several effects compose in one kernel;
-``solver()``
-    returns a different equation of motion, a callable
-    ``solve(specimen, motion, params, *, substeps=None, rest_tol=1e-6) -> Response``,
-    for the effects that change the mechanics beyond terms (flexible foundation,
-    sliding: other degrees of freedom); None keeps Housner's rigid block.
-
-An effect that reads an extra measured channel of the motion (``GroundMotion.channels``,
-e.g. ``"ground_acc_vertical"``) names it in its ``channels``; a motion without it is
-refused by name before any simulation.
-
-Effects live in the registry :data:`EFFECTS` (name -> class). Add your own
-with the :func:`register_effect` decorator, from a file with
-:func:`load_plugin` (``examples/effects/*.py``), or from an installed package
-through the entry-point group ``housner.effects`` (each entry point names an
-:class:`Effect` subclass, or a module that registers its effects on import)::
-
-    @register_effect
-    @dataclass(frozen=True)
-    class TableFilter(Effect):
-        name = "table_filter"
-        gain: float = param("-", (0.5, 1.5), neutral=1.0, default=1.0, doc="table gain")
-
-        def transform_input(self, motion):
-            return motion.scaled(amplitude=self.gain)
-
-An effect whose fields carry no :func:`param` may give its table instead, as a class
-attribute ``params = {"gain": ParamSpec("-", (0.5, 1.5), 1.0, 1.0, "table gain")}``
-(one :class:`ParamSpec` per field); :attr:`Effect.param_specs` reads either.
-
-Composition (:func:`apply_effects`): effects are applied in the order of
-their ``stage`` (geometry, inertia, dissipation, mechanics, sensor) and,
-within a stage, in the order given, so that the built-in effects commute:
-
-1. ``modify_params`` of every effect, starting from
-   ``RockingParams.from_specimen(specimen)``: ``asymmetric_pivots`` sets the
-   per-corner alpha, p and the impact loss from the geometry, then
-   ``frequency_parameter`` scales p, then ``restitution`` replaces r,
-   ``amplitude_dependent_restitution`` sets the exponent and
-   ``rotational_damping`` adds its rate;
-2. ``transform_input`` of every effect;
-3. ``terms`` of every effect, from the final parameters, in that order; the
-   solver: Housner's kernel with those terms (``housner.model.simulate``), or
-   the one mechanics effect's; at most one mechanics-changing effect may be
-   given, and it takes no terms (those kernels do not compose: a block that
-   both slides and sits on springs would need a third kernel). The effects
-   with a fast path (``restitution``, ``amplitude_dependent_restitution``,
-   ``rotational_damping``) change the parameters instead of adding their
-   terms, unless ``prefer_terms``;
-4. ``observe`` of every effect (``sensor_offset`` and ``time_lag`` commute).
-
-References
-----------
-Housner, G. W. (1963). The behavior of inverted pendulum structures during
-earthquakes. Bulletin of the Seismological Society of America 53(2), 403-417.
-Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
-(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017.
+An *effect* is a frozen dataclass whose fields are its parameters (:func:`param`, a field carrying a
+:class:`ParamSpec`: unit, bounds for fitting, the neutral value at which the effect does nothing, its
+default; or a class attribute ``params``, read alike by :attr:`Effect.param_specs`), and which overrides
+only the hooks it needs: ``modify_params`` (the rocking parameters), ``transform_input`` (the ground motion
+the block feels), ``observe`` (what a sensor records), ``terms`` (terms of the one compiled analytic kernel,
+:mod:`housner.effects.terms`) and ``solver`` (another equation of motion); the others are no-ops. An effect
+that reads an extra measured channel of the motion names it in its ``channels``. Effects live in the registry
+:data:`EFFECTS` (name -> class): add your own with :func:`register_effect`, from a file with
+:func:`load_plugin`, or from an installed package through the entry-point group ``housner.effects``;
+:func:`apply_effects` composes them by ``stage``. Each hook's arguments, units and signs, the order in which
+effects compose, and an effect in full are in ``docs/reference/effects-api.md``; how to write one, in
+``docs/how-to/add-effect.md``.
 """
 
 from __future__ import annotations

@@ -1,32 +1,14 @@
 """The analytic kernel of a set of terms (:mod:`housner.effects.terms`): generated code, cached on disk.
 
-Route: generated code, cached on disk
--------------------------------------
-For each *structure* (which functions, of which kind) this module writes two Python modules, the
-plain kernel's :mod:`housner._kernel_steps` with its hook section replaced by calls to the terms'
-functions (their parameters are run-time data, so a new value of M_f recompiles nothing) and
-:mod:`housner._kernel` importing that one instead, into ``$HOUSNER_CACHE_DIR/kernels`` (default
-``~/.cache/housner/kernels``; ``HOUSNER_KERNEL_DIR`` overrides), named by a SHA-256 of the hook
-section, of the kernel's sources and of every term's module source, and imports them. Numba
-compiles them with ``cache=True`` next to the files, so the machine code is reused by every later
-process, and a changed term (or kernel) gets new files instead of a stale cache. Why generated
-code and not a dispatcher argument or first-class functions (the routes measured):
-docs/results.md#defaults-terms.
-
-The cache heals itself. Every generated file is written atomically (a temporary file, then
-``os.replace``) and checked on load against its key: its content must be the text generated for
-the structure whose hash names it. A truncated or garbled file is removed and written again, and
-numba's cache files of a kernel (its ``.nbi`` index and ``.nbc`` data, read with ``pickle``) are
-read before numba reads them: one that does not load is removed, with the rest of that
-function's cache, and numba compiles again. A kernel whose cached machine code still fails to load
-at its first call is run again once without its cache files. Each repair is counted
-(:func:`kernel_cache_repairs`) and logged to ``housner.effects.codegen``.
-
-A term's function must be importable by its module and qualified name (a module-level
-``@njit`` function of an installed module or of a plugin loaded with
-:func:`housner.effects.load_plugin`), and should be written ``@njit(cache=True)``. Only the term
-function's own module source enters the file name: a helper it calls from another module that
-changes needs the kernel directory cleared (numba's own rule for cached callers).
+For each *structure* (which functions, of which kind) this module writes the plain kernel's
+:mod:`housner._kernel_steps`, its hook section replaced by calls to the terms' functions, and
+:mod:`housner._kernel` importing it, into the kernel directory (:func:`kernel_dir`), named by a SHA-256 of
+what they are made of, and imports them; numba caches their machine code next to them. The cache heals
+itself: a generated file or numba cache file that does not load is removed and made again, each repair
+counted (:func:`kernel_cache_repairs`) and logged. A term's function must be importable by its module and
+qualified name, and only its own module's source enters the file name. How the files are named, written,
+checked and repaired is in ``docs/reference/effects-api.md`` ("How the kernel of a set of terms is made");
+why generated code, in ``docs/results.md#defaults-terms``.
 """
 
 from __future__ import annotations

@@ -1,43 +1,14 @@
 """An engine's measured impact and flight maps, composed into Housner's kernel (effect ``measured_maps``).
 
-An engine is characterised, record by record, by two maps measured on its free rocking:
-
-impact map
-    the ratio k(x) by which the engine's kinetic-energy ratio at an impact differs from the ratio r in
-    force in Housner's model (Housner's r_H unless another effect sets it), as a function of the
-    pre-impact speed x = theta'_before / (p alpha) [-];
-flight map
-    the rate c(x) [1/s] of the engine's loss of rocking energy between impacts, as a viscous moment
-    -c I0 theta', as a function of the half-cycle's energy-equivalent speed x [-].
-
-:class:`MeasuredMaps` puts both into the analytic kernel as terms (:mod:`housner.effects.terms`), so
-that "Housner + the engine's measured maps" runs on the records the engine ran, and what is left of
-the difference between the two is neither an impact loss nor a flight loss of the kind measured.
-
-Both maps are tables (x_i, y_i), x_i > 0 strictly increasing, interpolated linearly in log x and held
-constant beyond the ends (y_1 below x_1, y_n above x_n). In the kernel's reduced coordinates on the
-current pivot (phi = s theta >= 0, w = s theta', alpha and p of that pivot):
-
-* at an impact with speed w > 0 before it, the energy ratio becomes r' = clip(r k(w / (p alpha)), 0, 1),
-  r the ratio in force (so a constant table k is ``restitution`` with r = k r_H);
-* in flight the equation of motion gains phi'' += -c(x_E) w [rad/s^2], with
-  x_E = sqrt(w^2 + 2 p^2 (cos(alpha - phi) - cos alpha)) / (p alpha): the speed at which the half-cycle
-  reaches (or left) theta = 0 with its present energy. In reduced coordinates this is theta'' += -c theta'
-  on either pivot, so the rocking energy per unit I0, E = theta'^2/2 + p^2 (cos(alpha - |theta|) - cos alpha)
-  [1/s^2], changes at dE/dt = -c(x_E) theta'^2 on both sides: c > 0 removes energy, c < 0 adds it (an engine
-  that gains energy in flight), a constant c is ``rotational_damping``.
-
-The tables travel in the terms' parameters ``q = (n, x_1..x_N, y_1..y_N)``: n the table's length, N >= n
-its capacity (the next power of two, at least 8; the slots past n are 0 and never read), so that tables of
-different lengths up to N share one compiled kernel (a kernel is compiled per term structure, which counts
-the parameters). The flight law and the interpolation are inlined into the kernel (numba ``inline="always"``):
-called, they cost ~1.5x more per record.
-
-The effect is built from a measurement, not fitted: it is a probe of the registry (``probe = True``: never a
-candidate of a diagnosis search, not listed by ``available_effects``; the analytic engine realises it). Its
-one registry parameter, ``digest``, is a 52-bit fingerprint of the tables read off them (0 for the empty
-maps, the neutral effect), so that everything that keys on an effect's parameters (the results cache's
-``effect_data``, equality, hashing, labels) tells two tables apart; ``describe()`` also lists the tables.
+An engine is characterised, record by record, by two maps measured on its free rocking
+(:mod:`housner.scenarios.runs.impact_map`): the impact map k(x), the ratio by which its kinetic-energy
+ratio at an impact differs from the ratio in force in Housner's model, and the flight map c(x) [1/s], the
+rate of its loss of rocking energy between impacts as a viscous moment -c I0 theta', both against the
+normalised speed x. :class:`MeasuredMaps` puts both into the analytic kernel as terms
+(:mod:`housner.effects.terms`), the tables carried in the terms' parameters, so that "Housner + the engine's
+measured maps" runs on the records the engine ran. It is a probe of the registry, built from a measurement
+and never fitted. How the maps enter the kernel, and why its parameters are laid out so, are in
+``docs/explanation/engine-maps.md`` ("The maps in Housner's kernel").
 """
 
 from __future__ import annotations
@@ -50,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from housner._kernel_parts import clip_unit
 from housner.effects.registry import STAGE_DISSIPATION, Effect, param, register_effect
 from housner.effects.terms import ImpactTerm, MomentTerm
 
@@ -100,12 +72,7 @@ def interp_log(x, q):
 @njit(cache=True)
 def measured_impact_law(w, r, s, alpha, p2, q):
     """Energy ratio [-] of an impact at speed w > 0 [rad/s]: clip(r k(w / (p alpha)), 0, 1), k the table ``q``."""
-    r_eff = r * interp_log(w / (math.sqrt(p2) * alpha), q)
-    if r_eff > 1.0:
-        r_eff = 1.0
-    if r_eff < 0.0:
-        r_eff = 0.0
-    return r_eff
+    return clip_unit(r * interp_log(w / (math.sqrt(p2) * alpha), q))
 
 
 @njit(cache=True, inline="always")
@@ -135,12 +102,7 @@ def measured_scatter_law(w, r, s, alpha, p2, q):
     u1 = (float(h1 >> np.uint64(11)) + 0.5) / 9007199254740992.0  # (0, 1): 53 bits
     u2 = float(h2 >> np.uint64(11)) / 9007199254740992.0
     z = math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
-    r_eff = r * (k + sigma * z)
-    if r_eff > 1.0:
-        r_eff = 1.0
-    if r_eff < 0.0:
-        r_eff = 0.0
-    return r_eff
+    return clip_unit(r * (k + sigma * z))
 
 
 @njit(cache=True, inline="always")
@@ -213,7 +175,7 @@ def _digest(*tables: tuple) -> float:
 @register_effect
 @dataclass(frozen=True, init=False, repr=False)
 class MeasuredMaps(Effect):
-    """An engine's measured impact and flight maps in Housner's kernel (see the module docstring).
+    """An engine's measured impact and flight maps in Housner's kernel (``docs/explanation/engine-maps.md``).
 
     Parameters
     ----------

@@ -8,6 +8,7 @@ from dataclasses import dataclass, replace
 
 from numba import njit
 
+from housner._kernel_parts import clip_unit
 from housner.effects.registry import (
     STAGE_DISSIPATION,
     STAGE_GEOMETRY,
@@ -35,11 +36,7 @@ def amplitude_law(w, r, s, alpha, p2, q):
     """r (w / (p alpha))^n clipped to [0, 1], q = (n,): :func:`housner._kernel_parts.restitution`'s arithmetic."""
     r_eff = r
     if q[0] != 0.0 and w > 0.0:
-        r_eff = r * (w / (math.sqrt(p2) * alpha)) ** q[0]
-        if r_eff > 1.0:
-            r_eff = 1.0
-        if r_eff < 0.0:
-            r_eff = 0.0
+        r_eff = clip_unit(r * (w / (math.sqrt(p2) * alpha)) ** q[0])
     return r_eff
 
 

@@ -1,43 +1,16 @@
 """Mechanics as composable terms of the one compiled analytic kernel.
 
-An effect that changes the rocking mechanics without replacing the whole equation of motion
-returns *terms* from its ``terms(params, specimen)`` hook; the analytic engine compiles one
-kernel with every term of a simulation in it, so that several compose (a Coulomb moment at the
-pivot, asymmetric pivots, viscous damping and a vertical input at once). A term is a module-level
-``@njit`` function and its parameter array ``q`` (floats). Everything is in the kernel's reduced
-coordinates on the current pivot s (+1: the +x corner): phi = s theta [rad], w = s theta'
-[rad/s], a = s ug''/g [-], v = a_v/g [-] (vertical table acceleration, positive up; 0 unless an
-effect reads the ``ground_acc_vertical`` channel), t the time [s], alpha and p2 = p^2 [1/s^2] of
-pivot s:
-
-:class:`MomentTerm` ``fn(phi, w, t, a, v, s, alpha, p2, q) -> float``
-    an extra phi'' [rad/s^2], added to Housner's -p^2 (sin(alpha - phi) + a cos(alpha - phi)):
-    a viscous or aerodynamic moment, or a vertical input, -p^2 v sin(alpha - phi) (g -> g + a_v
-    in the restoring moment). ``at_rest=False`` declares it zero at phi = w = 0 (a damping
-    moment): the uplift rule is then left as it is.
-:class:`CoulombTerm` ``fn(phi, t, a, v, s, alpha, p2, q) -> float``
-    the capacity C >= 0 [rad/s^2] of a dry moment (M_f / I0 for a Coulomb moment M_f at the
-    pivot): while the block turns it adds -C sgn(w); at w = 0 it holds the block while the other
-    moments stay within +-C (the block is then STUCK, or at REST on the ground), and it raises
-    the uplift threshold.
-:class:`ImpactTerm` ``fn(w, r, s, alpha, p2, q) -> float``
-    the impact map, w_after = sqrt(r') w_before: given the speed before the impact w > 0 and the
-    energy ratio r in force (the rocking parameters' ratio of the landing corner, then each
-    impact term's in turn), it returns the new ratio r'. A law that sets the ratio outright
-    (``replaces=True``: a restitution, an impact at an interior point) runs before those that
-    modify it (an amplitude dependence), whatever the order of the effects. s is the pivot
-    before the impact (the block lands on -s), alpha and p2 are that pivot's.
-
-The kernel is Housner's event-driven kernel (:mod:`housner._kernel`, its equation of motion and
-events in :mod:`housner._kernel_steps`) with these hooks; its states are REST, ROCKING, STUCK and
-OVERTURNED, and it locates every event (impact, overturn, the zero of w under a dry term, uplift
-and release from a stick) to the precision of the plain kernel (see those modules' docstrings).
-The plain kernel is that very code with its no-op hooks.
-
-The kernel of a set of terms is generated from the plain kernel's source and cached on disk by
-:mod:`housner.effects.codegen` (:meth:`TermSet.kernel`). A term's function must be importable by its
-module and qualified name (a module-level ``@njit`` function of an installed module or of a plugin
-loaded with :func:`housner.effects.load_plugin`), and should be written ``@njit(cache=True)``.
+An effect that changes the rocking mechanics without replacing the whole equation of motion returns *terms*
+from its ``terms(params, specimen)`` hook: a module-level ``@njit`` function (importable by its module and
+qualified name, of an installed module or of a plugin loaded with :func:`housner.effects.load_plugin`, and
+best written ``@njit(cache=True)``) and its parameter array ``q``, as a :class:`MomentTerm` (an extra
+angular acceleration), a :class:`CoulombTerm` (the capacity of a dry moment that holds the block and raises
+its uplift threshold) or an :class:`ImpactTerm` (the energy ratio of an impact). The analytic engine
+compiles one kernel with every term of a simulation in it, so that several compose: Housner's event-driven
+kernel (:mod:`housner._kernel`, :mod:`housner._kernel_steps`) with these hooks, generated from the plain
+kernel's source and cached on disk by :mod:`housner.effects.codegen` (:meth:`TermSet.kernel`). Each term's
+arguments, units and signs are in ``docs/reference/effects-api.md``; how the kernel locates its events, in
+``docs/explanation/physics.md`` ("How the analytic model solves it").
 """
 
 from __future__ import annotations

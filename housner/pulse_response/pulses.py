@@ -1,18 +1,12 @@
 """Analytical pulse ground motions: Ricker wavelets, one-sine pulses, free-vibration releases.
 
-Pulses are the excitations of rocking spectra (seed Figure 2): a block's
-theta_max / alpha depends only on alpha, omega_p / p and a_p / (g tan alpha)
-(seed eq. 6). Every function returns a :class:`housner.GroundMotion` in m/s^2
-on a uniform grid, with its parameters in ``name`` and ``provenance``.
-
-Conventions
------------
-* ``a_p`` [m/s^2] is the peak ground acceleration of the pulse: max |ug''| = |a_p|.
-  A negative ``a_p`` mirrors the pulse.
-* ``omega_p`` [rad/s] is the pulse frequency. For both Ricker wavelets it is
-  the frequency at which the Fourier amplitude spectrum peaks; for the
-  one-sine pulse the sine's own frequency (period T_p = 2 pi / omega_p).
-* Positive ground acceleration tilts the block toward -x (theta < 0).
+Pulses are the excitations of rocking spectra (seed Figure 2): a block's theta_max / alpha depends only on
+alpha, omega_p / p and a_p / (g tan alpha) (seed eq. 6). Every function returns a
+:class:`housner.GroundMotion` in m/s^2 on a uniform grid, with its parameters in ``name`` and
+``provenance``. ``a_p`` [m/s^2] is the pulse's peak ground acceleration, max |ug''| = |a_p| (a negative
+``a_p`` mirrors the pulse); ``omega_p`` [rad/s] is its frequency: for both Ricker wavelets the frequency at
+which the Fourier amplitude spectrum peaks, for the one-sine pulse the sine's own (period
+T_p = 2 pi / omega_p). A positive ground acceleration tilts the block toward -x (theta < 0).
 
 References
 ----------

@@ -2,7 +2,8 @@
 every reader of a record applies.
 
 Every file the suite reads (records, campaigns) goes through these functions, or through the readers of
-ground-motion record files built on them (:mod:`housner.readers.motion_files`: PEER AT2, motion CSV); SI inside
+ground-motion record files built on them (:mod:`housner.readers.motion_files`: PEER AT2, motion CSV); SI
+inside
 after them.
 
 Accelerations are stored in m/s^2 (SI inside). A CSV column is converted once, from the unit written

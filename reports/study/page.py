@@ -1,37 +1,13 @@
 """The HTML report of a fragility study: one self-contained page, figures embedded.
 
-A study directory, written by :func:`housner.scenarios.studies.study.run_study`, holds:
-
-- ``study.json``: scenario, specimen, the study's settings (intensity measure,
-  stripe levels, prototype heights and scale factors S, response thresholds,
-  motions, bootstrap replicates, seed, confidence level, reference engine),
-  engines with settings, versions and wall times, record counts, provenance;
-- ``fragility.parquet``: overturns per (engine, size, stripe) with Wilson intervals;
-- ``exceedance.parquet``: P[theta_max/alpha >= threshold] per (engine, size, stripe, threshold);
-- ``fragility.json``: the lognormal fits per (engine, size) with bootstrap
-  intervals and status, and each engine's comparison with the reference
-  (ratio of medians, difference of betas, paired-bootstrap intervals);
-- ``results.parquet``: one row per record (engine, size, stripe, motion).
-
-:func:`write_study_report` writes ``report.html`` next to them, having read
-them through :func:`housner.scenarios.studies.study.load_study`, the one reader
-of the format and of its errors (:mod:`~housner.reports.study.view`). What the
-page answers, top first: what was run and, per engine and size, whether its
-fragility function agrees with the reference's within the intervals (the
-study's verdict: only when the interval of the ratio of medians contains 1 and
-that of the difference of betas contains 0), and by how much it differs
-otherwise (:mod:`~housner.reports.study.verdict`); then the fits per size, the
-fragility curves, the median against size, the exceedance of response
-thresholds, the stripe counts, the failed records and provenance
-(:mod:`~housner.reports.study.sections`). A fit whose status is not "ok" (no
-overturn, all overturned, separated data ...) is not a maximum-likelihood fit:
-the page gives its message and no number as its median or beta.
-
-References
-----------
-Baker, J. W. (2015). Efficient analytical fragility function fitting using
-dynamic structural analysis. Earthquake Spectra 31(1), 579-599.
-Efron, B., Tibshirani, R. (1993). An Introduction to the Bootstrap, ch. 13.
+:func:`write_study_report` writes ``report.html`` next to the files of a study directory (written by
+:func:`housner.scenarios.studies.study.run_study`), having read them through
+:func:`housner.scenarios.studies.study.load_study`, the one reader of the format and of its errors
+(:mod:`~housner.reports.study.view`). The page answers, top first, what was run and whether each engine's
+fragility function agrees with the reference's (:mod:`~housner.reports.study.verdict`), then shows the fits,
+curves, medians against size, exceedances, stripe counts, failures and provenance
+(:mod:`~housner.reports.study.sections`); a fit whose status is not "ok" gives its message, never a number.
+The files and what the page shows are in ``docs/reference/run-directory.md`` ("A study directory").
 """
 
 from __future__ import annotations

@@ -1,37 +1,14 @@
 """The ASU granite shake-table tests (2021) as a campaign: ``housner campaign from-asu DATA OUT``.
 
-The tests of the virtual-shake-robot project shook two granite specimens, SP1 and SP2, with the same
-table motions and recorded whether each overturned. :func:`import_asu` writes one specimen's tests as
-a campaign directory (docs/reference/campaign-format.md): ``campaign.toml`` (the scan mesh as the
-specimen, one ``[[record]]`` per test in the order of testing, with its outcome and the measured
-table PGV), a copy of the mesh, and ``records/Test###.csv`` with ``time`` [s] and ``ground_acc``
-[m/s^2] at 200 Hz.
-
-``DATA`` is either
-
-1. the compact derived data set (``asu_granite_200hz.npz`` and ``index.csv``, already processed); or
-2. the project's original files: ``index.csv`` and ``Test###.txt`` (tab-separated, one header row, 8
-   columns and a trailing tab, 800 Hz, unfiltered; column 2 the table acceleration [g], column 6 the
-   table displacement [V]), in ``DATA`` or ``DATA/data/Shake_Table_Response``. They are processed as
-   the data set's README says: the whole-record mean of the acceleration (the accelerometer's DC bias)
-   removed, both channels converted to SI, then decimated 800 -> 200 Hz with
-   ``resample_poly(x, 1, 4, window=h)`` (zero phase), ``h`` the README's 161-tap Kaiser (beta 8)
-   low-pass, ``firwin(161, 85, window=("kaiser", 8.0), fs=800)``: gain within 1e-4 of 1 to 70 Hz,
-   0.87 at 80 Hz, below 8e-5 from 100 Hz. (The README's snippet omits the window; firwin's default,
-   Hamming, would differ from the stored series by 0.6 % of the PGA, the Kaiser window by 5e-8.)
-
-When both are there, the npz is read. Every unit is converted here, once; the campaign holds SI only.
-
-The table PGV of each record is taken from the displacement channel, as the README's
-``pgv_meas_disp_mps``: a 4th-order Butterworth low-pass at 20 Hz, run forward and backward, then
-central differences at 200 Hz (this reproduces the README's column to 4e-6 on all 490 tests).
-
-Bad input is refused in one line before any long work (DATA, ``index.csv`` and its columns, the
-outcome column, the mesh, OUT). A test that cannot be imported (no outcome, no file, a malformed
-file) is left out with one line naming the test, the file and the line, and the rest are imported.
-The campaign is written in a hidden folder beside OUT and moved into place at the end, so a failed
-import leaves no half campaign. OUT may be new, empty, or a previous import by this function (which
-is replaced, whole); anything else is refused.
+The tests of the virtual-shake-robot project (Chen et al. 2024) shook two granite specimens, SP1 and SP2,
+with the same table motions and recorded whether each overturned. :func:`import_asu` writes one specimen's
+tests as a campaign directory (``docs/reference/campaign-format.md``): ``campaign.toml`` (the scan mesh as
+the specimen, one ``[[record]]`` per test in the order of testing, with its outcome and the measured table
+PGV), a copy of the mesh, and ``records/Test###.csv`` with ``time`` [s] and ``ground_acc`` [m/s^2] at
+200 Hz, read from the compact derived data set or from the project's original files, which it processes as
+the data set's README says. The two forms of ``DATA``, how the original files are processed, how the PGV is
+taken and how bad input is refused are in ``docs/how-to/real-shake-table-tests.md`` ("The data", "2. Import
+the tests as a campaign").
 
 References
 ----------
@@ -167,7 +144,7 @@ def import_asu(
     ----------
     data : str or pathlib.Path
         The data folder: ``index.csv`` with ``asu_granite_200hz.npz``, or with the original
-        ``Test###.txt`` files (see the module docstring).
+        ``Test###.txt`` files (``docs/how-to/real-shake-table-tests.md``, "The data").
     out : str or pathlib.Path
         The campaign directory to write: new, empty, or a previous import (replaced).
     specimen : str
@@ -528,7 +505,8 @@ def _numbers(cells: list[str]) -> list[float] | None:
 
 
 def _table_pgv(disp: np.ndarray, dt: float) -> float:
-    """Peak table velocity [m/s] from the displacement [m] sampled at ``dt`` [s] (see the module docstring)."""
+    """Peak table velocity [m/s] from the displacement [m] sampled at ``dt`` [s] (the README's ``pgv_meas_disp_mps``:
+    docs/how-to/real-shake-table-tests.md, "The data")."""
     sos = signal.butter(PGV_ORDER, PGV_CUTOFF, fs=1.0 / dt, output="sos")
     return float(np.abs(np.gradient(signal.sosfiltfilt(sos, np.asarray(disp, dtype=np.float64)), dt)).max())
 

@@ -1,32 +1,15 @@
 """Measurement campaigns: a specimen and its measured records, read from a campaign directory.
 
-A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one
-``[[record]]`` per test; read and checked by
-:mod:`housner.scenarios.campaigns.campaign_toml`) and one CSV per record
-(:mod:`housner.scenarios.campaigns.campaign_records`: ``time`` [s], ``ground_acc``
-[m/s^2], ``theta`` [rad] and optional channels, units in the header converted
-once to SI; see docs/reference/campaign-format.md).
-:func:`load_campaign` reads it into a :class:`Campaign` whose records carry
-the measured rotation and the ground motion that drives a model of the same
-test (:class:`housner.GroundMotion`, with the initial angle of a
-free-vibration release).
-
-Paths: a record's ``file`` and ``[specimen] mesh`` are relative to the campaign folder and must resolve
-(symbolic links and ``..`` followed) inside it; a record outside is left out like an unreadable one, a
-mesh outside refuses the campaign, unless ``allow_outside=True`` (``housner diagnose --allow-outside``).
-
-Errors: a malformed ``campaign.toml`` (also a value of the wrong type) raises
-:class:`housner.errors.DataFileError` naming the key (and the line); a malformed record file is reported with its
-file, line and column in :attr:`Campaign.skipped` and left out, the other
-records are kept, unless more than half of the records cannot be read (theta
-written in degrees, say): then the campaign is refused with one line that
-gives the count and the most common cause, rather than diagnosed on the rest.
-
-References
-----------
-Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
-(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
-section 3 (specimen, free-vibration and shake-table tests, 500 Hz, 0.8 mrad).
+A campaign is a directory with ``campaign.toml`` (name, ``[specimen]``, one ``[[record]]`` per test; read
+and checked by :mod:`housner.scenarios.campaigns.campaign_toml`) and one CSV per record
+(:mod:`housner.scenarios.campaigns.campaign_records`: ``time`` [s], ``ground_acc`` [m/s^2], ``theta`` [rad]
+and optional channels, units in the header converted once to SI). :func:`load_campaign` reads it into a
+:class:`Campaign` whose records carry the measured rotation and the ground motion that drives a model of the
+same test (:class:`housner.GroundMotion`, with the initial angle of a free-vibration release). Paths must
+resolve inside the campaign folder unless ``allow_outside=True``; a malformed ``campaign.toml`` raises
+:class:`housner.errors.DataFileError` naming the key, a malformed record is left out and listed in
+:attr:`Campaign.skipped`, and the campaign is refused when more than half of its records cannot be read. The
+format, its paths and its errors are in ``docs/reference/campaign-format.md``.
 """
 
 from __future__ import annotations

@@ -1,28 +1,14 @@
 """The theta sensor's noise as measured: its variance and its correlation in time.
 
-Real rotation sensors do not give white noise. Their noise wanders slowly
-(drift of a bridge, a temperature, an integrator) and carries the mains
-hum at 50 or 60 Hz. Differences of such noise are much smaller than the
-noise itself, so an estimate from differences (:func:`housner.free_vibration.calibration.estimate_noise`,
-exact for white noise) can be several times too small, and with it the
-correct-model floor and every test that counts samples as independent.
-
-:class:`SensorNoise` is the noise of one campaign's theta channel, measured
-on the samples where the block is known to be still (the hold before a
-free vibration's release and the rest after the last motion, chosen by
-:mod:`housner.scenarios.diagnosis.sensor_assessment`):
-
-* its standard deviation about the campaign's rest level (:attr:`SensorNoise.sigma`);
-* its autocorrelation up to :attr:`SensorNoise.max_lag` samples, pooled over the quiet segments;
-* whether it is distinguishable from white noise at all (a Ljung-Box test at
-  :data:`WHITE_LEVEL` on the first :data:`LB_LAGS` lags): white noise is the
-  special case, :data:`WHITE`, whose every use reduces to the independent-sample formulas.
-
-It is used to draw noise of the same spectrum (:meth:`SensorNoise.draw`:
-circulant embedding of the autocorrelation) for the floor's replicas and the
-model seen through the sensor, and to count effective samples
-(:meth:`SensorNoise.mean_sd`): the standard deviation of a mean of m
-consecutive samples is sigma sqrt((1 + 2 sum_k (1 - k/m) rho_k) / m), not sigma / sqrt(m).
+Real rotation sensors do not give white noise, and an estimate from differences
+(:func:`housner.free_vibration.calibration.estimate_noise`, exact for white noise) can be several times too small.
+:class:`SensorNoise` is the noise of one campaign's theta channel, measured on the samples where the block
+is known to be still (chosen by :mod:`housner.scenarios.diagnosis.sensor_assessment`): its standard
+deviation, its autocorrelation, and whether it is distinguishable from white noise at all (a Ljung-Box
+test, :data:`WHITE_LEVEL`, :data:`LB_LAGS`; :data:`WHITE` is the special case). It draws noise of the same
+spectrum (:meth:`SensorNoise.draw`, circulant embedding) and counts effective samples
+(:meth:`SensorNoise.mean_sd`). Why, and how the diagnosis uses it, are in ``docs/explanation/diagnosis.md``
+("The sensor, first").
 
 References
 ----------
@@ -188,7 +174,7 @@ WHITE = SensorNoise()
 
 
 def estimate_sensor_noise(segments: Sequence[tuple[str, np.ndarray]], dt: float, level: float = 0.0) -> SensorNoise:
-    """Measure the noise on quiet segments (module docstring).
+    """Measure the noise on quiet segments (``docs/explanation/diagnosis.md``, "The sensor, first").
 
     Parameters
     ----------

@@ -1,123 +1,18 @@
 """Which physical effect is missing: fit candidate effects, score them on held-out records, add them greedily.
 
-The question a campaign asks of a model is not only "does it match?" but,
-when it does not, "what is missing?". :func:`diagnose` answers it with the
-effect library (:data:`housner.effects.EFFECTS`) and the analytic engine:
-
-1. **Split.** Every record is dealt at random (seeded) into one of K folds
-   (:mod:`housner.scenarios.diagnosis.selection.crossval`), the free vibrations first so that
-   they spread over the folds (they pin p and r, seed section 3.2); each model is
-   fitted without each fold in turn and scored on it.
-2. **Fit.** Each candidate effect's parameters are fitted to the training
-   records by minimising the mean time-history error of
-   :mod:`housner.scenarios.diagnosis.comparison.record_comparison` (the error over the measured window, in units of
-   alpha) within the effect's bounds: a grid over the bounds (logarithmic
-   where they span more than a factor 20), a finer grid around the best
-   point, then a bounded local search (Brent in one dimension, Powell in
-   more). Rocking is chaotic, so the error is not smooth in the parameters;
-   the grid keeps the search from stopping in a local dip.
-3. **Score.** Every fitted candidate is scored on the held-out records. Its
-   improvement is the mean of the paired per-record differences
-   d_i = e_i(current model) - e_i(candidate) [alpha], with the standard error
-   s_d / sqrt(n) of that mean.
-4. **Decide.** An improvement counts (``significant``) only when (a) the
-   one-sided Wilcoxon signed-rank test of the paired differences rejects "no
-   improvement" at a family-wise level of 5 % over the candidates tried in
-   the round (Bonferroni: 0.05/9 per test for 9 candidates; a rank test,
-   because the differences are heavy-tailed: most records barely change and
-   a few that part from the measurement by chaos change a lot), and (b) the
-   mean improvement is at least :data:`PRACTICAL` (a tenth) of the sensor
-   noise sigma/alpha: a fall that small is within what the model's own
-   conventions move (the significance itself is the records' business: it
-   is judged against the spread of the differences over the records, never
-   against one sensor sigma per record, so that a small effect that many
-   records prove is kept). Before the folds are refitted, a candidate must
-   pass the same two checks on its training records at a lenient 5 %
-   (:data:`SCREEN_LEVEL`): fitted there, its fall is larger than held out,
-   so a candidate the held-out test would accept passes the screen.
-5. **Greedy.** The best significant candidate is added, all parameters of
-   the model are refitted jointly (a Nelder-Mead search from the conditional
-   fits; with a single parameter its own fit stands), and the remaining
-   candidates are tried again on top of it, while the held-out error keeps
-   falling significantly. Effects that cannot be
-   combined with those already in (two mechanics effects, a foundation and a
-   restitution law) are not tried. When no single effect helps, the pairs
-   among the three that lowered the training error most (by more than the
-   noise floor) are fitted together (each given the other's own fit, then
-   both at once from these two starts; the effects already in keep their
-   parameters) and tested
-   as three more candidates of the round (Bonferroni over them all): some
-   errors need two effects at once (a mis-measured p also mis-states
-   Housner's r, seed eq. 4, which depends on the inertia).
-
-Effects may also be added by hand (``add``): they enter first, in the order
-given, fitted the same way, and the ladder shows what each one did.
-
-No verdict is made of non-finite numbers. A candidate whose model gives a
-non-finite theta history on any record is rejected, with the record, in its
-round (before any score); an effect added by hand that does so stops the
-diagnosis with :class:`NonFiniteHistory` naming it and the first record; a
-score or a floor that is not finite all the same stops it with
-:class:`NonFiniteScore` (both ``ValueError``: the command line's exit status 2,
-bad input, as the model handed in is at fault and the same command can only
-fail again).
-
-The cross-validation (folds, scorers, out-of-fold errors) is
-:mod:`housner.scenarios.diagnosis.selection.crossval`'s, a candidate's trial (fit,
-screen, fold refits, judgement, pairs) :mod:`housner.scenarios.diagnosis.selection.candidate_trial`'s
-with the free-vibration check of :mod:`housner.scenarios.diagnosis.selection.free_vibration_check`,
-the search and its ladder :mod:`housner.scenarios.diagnosis.selection.history_search`'s (through the one
-:mod:`housner.scenarios.diagnosis.selection.forward_selection`),
-the fitting :mod:`housner.scenarios.diagnosis.selection.fitting`'s, the folds and the
-per-record errors :mod:`housner.scenarios.diagnosis.selection.record_scoring`'s, the result
-classes :mod:`housner.scenarios.diagnosis.results`' and the verdict
-:mod:`housner.scenarios.diagnosis.verdict.decision`'s (its floor
-:mod:`housner.scenarios.diagnosis.verdict.correct_model_floor`'s); this module runs them in turn and
-draws the conclusion: the floors, the probes and the verdict.
-
-Cost, and where it is saved
----------------------------
-The time goes into simulations of the records, each cut to its error window::
-
-    time ~ sum over evaluations of (records x c_rec + window samples x c_smp)
-           + families x replicas x (truth on a 4x finer grid, 1-4x substeps, + K scoring runs)
-
-An evaluation is one model on the fitting records: per candidate a grid (18 + 9 points for one
-parameter, 82 + 25 for two), a local search (up to 14 and 20 points), and when it is held out K
-fold refits of up to 9-10 points each on (K - 1)/K of the records; pairs, probes and the joint
-refits add their own. The measured constants, and what a search costs at 500 and 2000 Hz: see
-docs/explanation/diagnosis.md#what-a-diagnosis-costs.
-
-The economies, each said in ``Diagnosis.settings.economies`` when it applies:
-
-* a campaign sampled at q >= 2 times :data:`housner.scenarios.diagnosis.selection.record_scoring.SEARCH_RATE` is
-  searched on every q-th sample (:func:`housner.scenarios.diagnosis.selection.record_scoring.decimated`: theta as
-  sampled, the table acceleration through an anti-alias filter); the ladder is scored again on every
-  sample (:func:`housner.scenarios.diagnosis.selection.history_search.at_full_rate`), and the floors and the verdict
-  are
-  on every sample;
-* on a campaign whose ground motions' windows last more than
-  :data:`housner.scenarios.diagnosis.selection.crossval.FIT_SECONDS`, models with an effect that replaces the
-  equation of motion are fitted on the free vibrations and a spread subset of the ground motions
-  (their screens, held-out errors and tests on all records);
-* the floor's family loop measures the widest family second when the narrowest puts the final
-  model far from its floor, and stops there when it is not at the widest's either
-  (:func:`floor_family`).
-
-Two more save time without changing any number: a grid point whose records scored first (the free
-vibrations, then the shortest windows) already put its loss above the grid's best so far is not
-scored further (:meth:`housner.scenarios.diagnosis.selection.record_scoring.Scorer.loss_below`; a non-finite history on
-the records it skips goes unseen there, as a point is abandoned only when it cannot be the best), and
-a scorer keeps the errors of the last models it scored. The records are already simulated on both
-cores (numba threads over the records, and threads for the mechanics kernels).
-
-References
-----------
-Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
-(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017.
-Hastie, T., Tibshirani, R., Friedman, J. (2009). The Elements of Statistical
-Learning, 2nd ed., ch. 7 (held-out assessment) and sec. 3.3 (forward
-stepwise selection).
+:func:`diagnose` asks a campaign "what is missing?" of a model with the effect library
+(:data:`housner.effects.EFFECTS`) and the analytic engine, running in turn the steps that live beside it
+(the folds of :mod:`~housner.scenarios.diagnosis.selection.crossval` and
+:mod:`~housner.scenarios.diagnosis.selection.record_scoring`, the fits of
+:mod:`~housner.scenarios.diagnosis.selection.fitting`, a candidate's trial in
+:mod:`~housner.scenarios.diagnosis.selection.candidate_trial` and
+:mod:`~housner.scenarios.diagnosis.selection.free_vibration_check`, the search and its ladder in
+:mod:`~housner.scenarios.diagnosis.selection.history_search` through
+:mod:`~housner.scenarios.diagnosis.selection.forward_selection`, the results of
+:mod:`housner.scenarios.diagnosis.results`), then draws the conclusion: the floors
+(:mod:`~housner.scenarios.diagnosis.verdict.correct_model_floor`), the probes and the verdict
+(:mod:`~housner.scenarios.diagnosis.verdict.decision`). The method, step by step, and what it costs are in
+``docs/explanation/diagnosis.md`` ("The search, step by step", "What a diagnosis costs").
 """
 
 from __future__ import annotations
@@ -470,9 +365,8 @@ def diagnose(
     Returns
     -------
     Diagnosis
-        With its :class:`housner.scenarios.diagnosis.verdict.decision.Verdict` (see the module docstrings of this
-        module and
-        of :mod:`housner.scenarios.diagnosis.verdict.decision`).
+        With its :class:`housner.scenarios.diagnosis.verdict.decision.Verdict` (the method:
+        ``docs/explanation/diagnosis.md``, "The search, step by step" and "The verdict").
     """
     t_start = time.perf_counter()
     if not isinstance(campaign, Campaign):

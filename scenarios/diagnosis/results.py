@@ -69,7 +69,8 @@ class Candidate:
     pvalue : float
         One-sided Wilcoxon signed-rank p-value of the paired held-out differences.
     significant : bool
-        See the module docstring (p-value below the Bonferroni level and improvement above the noise floor).
+        Step 4 of ``docs/explanation/diagnosis.md``, "The search, step by step" (p-value below the Bonferroni
+        level and improvement above the noise floor).
     reason : str
         Why it is (not) significant, in words.
     heldout_errors : ndarray

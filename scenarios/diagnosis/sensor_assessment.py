@@ -1,44 +1,14 @@
 """The theta sensor of a campaign, assessed before any physics is fitted: its noise, and its faults.
 
-A diagnosis compares a model with what a sensor recorded. Before physics is
-asked to explain a misfit, :func:`assess_sensor` asks the records what the
-sensor did, and returns the campaign with what it found:
-
-1. **Faults that touch samples** are named and their samples masked (the
-   errors leave them out: ``MeasuredRecord.valid``), instead of fitting
-   physics to them:
-
-   * *saturation*: records flat-topped at one level, the sensor's range. The
-     samples at the level are masked, and a model is seen through the same
-     range (``MeasuredRecord.clip``);
-   * *spikes*: single samples off both neighbours by more than
-     :data:`SPIKE_SIGMAS` robust standard deviations of that difference;
-   * *dropouts*: runs of at least :data:`DROPOUT_RUN` identical samples (the
-     logger repeating its last value) that noise cannot produce. Spikes and
-     dropouts are also bridged linearly, so that impact and peak detections
-     do not read them.
-
-2. **The noise as measured** (:mod:`housner.scenarios.campaigns.sensor_noise`),
-   on the samples where the block is surely still: the hold before a free
-   vibration's release, and the rest after the last motion, where the plain
-   Housner model (the stated specimen) has come to rest :data:`REST_MARGIN`
-   earlier and the table is quiet (|ug''| below :data:`QUIET_ACC` g tan alpha to the
-   end). When that noise is correlated in time, each record's sigma becomes the
-   difference-based estimate times the ratio measured on the quiet samples,
-   and the floor, the model seen through the sensor and the uplift detection
-   use its correlation.
-
-3. **Faults along the recording order**, each a linear trend tested over the
-   records (|t| > :data:`T_TREND`, two-sided p ~ 6e-5) and corrected relative to
-   the first record (the sensor as it was when the campaign began):
-
-   * *offset drift*: the rest level after each record's motion;
-   * *gain drift*: each ground motion's first large excursion (beyond
-     :data:`GAIN_MIN_SIGMAS` noise sigmas, after excursions too small for an
-     impact law to matter, before chaos has acted) against the plain model's,
-     by least squares.
-
-Every finding is in :class:`SensorReport`, as the diagnosis' text and JSON say it.
+A diagnosis compares a model with what a sensor recorded. Before physics is asked to explain a misfit,
+:func:`assess_sensor` asks the records what the sensor did and returns the campaign with what it found, in
+:class:`SensorReport`: the faults that touch samples (saturation, spikes, dropouts: named, masked in
+``MeasuredRecord.valid``, spikes and dropouts bridged), the noise as measured on the samples where the block
+is surely still (:mod:`housner.scenarios.campaigns.sensor_noise`), and the faults along the recording order
+(a drifting offset or gain, tested as a linear trend and corrected relative to the first record). What each
+test looks for, and its thresholds (:data:`SPIKE_SIGMAS`, :data:`DROPOUT_RUN`, :data:`REST_MARGIN`,
+:data:`QUIET_ACC`, :data:`T_TREND`, :data:`GAIN_MIN_SIGMAS`), are in ``docs/explanation/diagnosis.md``
+("The sensor, first").
 """
 
 from __future__ import annotations
@@ -199,8 +169,9 @@ def _saturation(theta: np.ndarray) -> tuple[np.ndarray, list[float]]:
 
 
 def _spikes(theta: np.ndarray, skip: np.ndarray | None = None, alpha: float = math.inf) -> np.ndarray:
-    """Single samples off both neighbours (module docstring), outside ``skip`` (a flat top, whose repeated samples
-    say nothing of the noise) and within alpha of rest (beyond, a toppling block stops against the table)."""
+    """Single samples off both neighbours by more than :data:`SPIKE_SIGMAS` robust standard deviations, outside
+    ``skip`` (a flat top, whose repeated samples say nothing of the noise) and within alpha of rest (beyond, a
+    toppling block stops against the table)."""
     out = np.zeros(theta.size, dtype=bool)
     if theta.size < 5:
         return out
@@ -260,7 +231,7 @@ def _trend(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
 
 
 def _quiet_start(rec: MeasuredRecord, model: np.ndarray | None, alpha: float) -> int | None:
-    """First sample of the record's final rest (module docstring), None when it has none long enough."""
+    """First sample of the record's final rest (docs/explanation/diagnosis.md), None when it has none long enough."""
     n = rec.theta.size
     if model is None or model.size < n or not np.all(np.isfinite(model[:n])):
         return None
@@ -315,7 +286,7 @@ def _corrected(rec: MeasuredRecord, fix, gain: float = 1.0) -> MeasuredRecord:
 
 
 def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Campaign:
-    """The campaign with its theta sensor assessed (module docstring); itself when already assessed.
+    """The campaign with its theta sensor assessed (``docs/explanation/diagnosis.md``); itself when already assessed.
 
     Returns a new :class:`Campaign` whose records carry the measured noise (``noise``, ``noise_model``), the
     masks of faulty samples (``valid``), the sensor's range (``clip``) and the corrections of drifts, and whose

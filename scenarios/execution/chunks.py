@@ -144,43 +144,13 @@ def _zip_stored(members: list[tuple[str, bytes]]) -> bytes:
     for name, data in members:
         n = name.encode()
         crc, size = zlib.crc32(data), len(data)
-        head = struct.pack(
-            zipfile.structFileHeader,
-            zipfile.stringFileHeader,
-            20,
-            0,
-            0,
-            zipfile.ZIP_STORED,
-            0,
-            _ZIP_DATE,
-            crc,
-            size,
-            size,
-            len(n),
-            0,
-        )
+        # What the local header and the central directory's record both give: flags, method, time, date, CRC,
+        # both sizes, the name's and the extra field's lengths.
+        common = (0, zipfile.ZIP_STORED, 0, _ZIP_DATE, crc, size, size, len(n), 0)
+        head = struct.pack(zipfile.structFileHeader, zipfile.stringFileHeader, 20, 0, *common)
         central.append(
             struct.pack(
-                zipfile.structCentralDir,
-                zipfile.stringCentralDir,
-                20,
-                3,
-                20,
-                0,
-                0,
-                zipfile.ZIP_STORED,
-                0,
-                _ZIP_DATE,
-                crc,
-                size,
-                size,
-                len(n),
-                0,
-                0,
-                0,
-                0,
-                0o600 << 16,
-                offset,
+                zipfile.structCentralDir, zipfile.stringCentralDir, 20, 3, 20, 0, *common, 0, 0, 0, 0o600 << 16, offset
             )
             + n
         )

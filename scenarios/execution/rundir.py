@@ -1,37 +1,14 @@
 """The run directory: its files, the results columns, run.json's encoding, writing and reading it, provenance.
 
-The one owner of the format: :func:`write_run` writes it, :func:`load_results`,
-:func:`read_motions` and :func:`read_histories` read it (for :mod:`housner.reports.run.page`
-and :mod:`housner.reports.assertions.runs`):
-
-- ``results.parquet``: one row per (engine, motion) with the columns of
-  :data:`RESULT_COLUMNS`: ``engine`` (or the series "ENGINE + EFFECTS" of a
-  scenario's [[effects]]), ``motion_id``, ``motion_name``,
-  ``theta_max_over_alpha`` (inf when overturned, NaN when failed),
-  ``overturned``, ``n_impacts``, ``wall_s``, ``status``, ``error``,
-  ``cached``, ``effects`` ("" for none); a campaign's run (``housner run CAMPAIGN``)
-  adds :data:`CAMPAIGN_COLUMNS`: ``record_id`` and ``observed_overturned`` (nullable
-  boolean, the campaign's measured outcome of the record; NA where it has none);
-- ``histories.parquet``: ``engine``, ``motion_id``, ``t`` [s], ``theta`` [rad];
-- ``motions.npz``: the ensemble's accelerations [m/s^2] and steps [s];
-- ``run.json``: the run's :class:`RunMeta` (scenario, specimen, motions' facts,
-  engine settings and versions, analysis, failures, the engines' free-rocking
-  errors, wall times, provenance); non-finite floats are written
-  as the strings "inf", "-inf", "nan" (:func:`jsonable`). It is the run's
-  manifest: ``"complete": true`` and ``"content"``, the size [bytes] and SHA-256
-  of each of the other files (:data:`DATA_FILES`) it was written with.
-
-A run counts only once it is written completely. :func:`write_run` writes
-every file into a temporary folder inside the run directory, marks the
-directory incomplete (a run.json with ``"complete": false`` replaces the
-previous run's), moves the files into place and moves run.json last. A run
-killed on the way leaves a directory that :func:`load_results` refuses with
-one line (:class:`IncompleteRunError`), as it refuses one whose files are not
-those run.json was written with (two runs mixed). A run.json without the
-marker, written by a version before it, is read as it is, with an
-:class:`UnverifiedRunWarning` (refusing would make every earlier run
-unreadable); a results table without any run.json beside it is a table, read
-as before.
+The one owner of the format: :func:`write_run` writes ``results.parquet`` (the columns of
+:data:`RESULT_COLUMNS`, and :data:`CAMPAIGN_COLUMNS` for a campaign's run), ``histories.parquet``,
+``motions.npz`` and ``run.json`` (the run's :class:`RunMeta`, non-finite floats as strings,
+:func:`jsonable`; the manifest of :data:`DATA_FILES`), and :func:`load_results`, :func:`read_motions` and
+:func:`read_histories` read them (for :mod:`housner.reports.run.page` and
+:mod:`housner.reports.assertions.runs`). A run counts only once it is written completely: an incomplete or
+mixed directory is refused (:class:`IncompleteRunError`), a run.json from before the marker read with an
+:class:`UnverifiedRunWarning`. The files, their columns and how a run is written are in
+``docs/reference/run-directory.md``.
 """
 
 from __future__ import annotations
@@ -328,7 +305,7 @@ def write_run(
     """Write results.parquet, histories.parquet, motions.npz and run.json into ``out``, as one run.
 
     The files are written into a temporary folder inside ``out`` and moved into place, run.json
-    last, with its completion marker and content key (module docstring); while they move, run.json
+    last, with its completion marker and content key (docs/reference/run-directory.md); while they move, run.json
     says the directory is incomplete. A previous run's files that this run does not write
     (histories.parquet when there are none, the previous report.html) are removed with it, when
     the run.json there is housner's; files of those names that no run wrote are left, and the

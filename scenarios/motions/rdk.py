@@ -1,51 +1,12 @@
 """The Rezaeian & Der Kiureghian site-based stochastic ground-motion model: fit to a record, simulate ensembles.
 
-A ground acceleration is modelled as a modulated, filtered white-noise process
-(Rezaeian & Der Kiureghian 2008, 2010):
-
-    x(t_j) = q(t_j) sum_{i < j} h(t_j - t_i, omega_f(t_i)) u_i / sigma_h(t_j)
-
-- u_i are independent standard normal pulses at the sample times t_i = i dt,
-  starting before t = 0 (``RDKParams.n_warm``: the model's integral runs from
-  -infinity, and the filter has forgotten its start once its impulse response
-  has decayed to 1e-3);
-- h(tau, omega) = omega / sqrt(1 - zeta_f^2) exp(-zeta_f omega tau)
-  sin(omega sqrt(1 - zeta_f^2) tau), tau >= 0, is the unit-impulse response of
-  a linear oscillator tuned to the filter frequency at the pulse time,
-  omega_f(t) = omega_mid + omega' (t - t_mid) [rad/s], with damping zeta_f;
-- sigma_h(t_j)^2 = sum_{i < j} h(t_j - t_i, omega_f(t_i))^2 normalises the
-  filtered noise to unit variance, so that the time-modulating function q
-  alone sets the intensity: E[x(t)^2] = q(t)^2;
-- q(t) = alpha1 (t - T0)^(alpha2 - 1) exp(-alpha3 (t - T0)) for t > T0 (a gamma
-  shape), parameterised by the Arias intensity Ia, the significant duration
-  D5-95 and t_mid (the time at 45 % of Ia) of its own Husid curve.
-
-x is then passed through the papers' high-pass filter, a critically damped
-oscillator of corner frequency omega_c: the simulated acceleration is
-ü = x - 2 omega_c u' - omega_c^2 u with u'' + 2 omega_c u' + omega_c^2 u = x, so
-its velocity and displacement are the oscillator's u' and u, which return to
-zero once the oscillator comes to rest. The noise stops at ``duration`` and the
-filter is followed for a further ``tail`` seconds until it is at rest (as
-record processing keeps its zero pads), so that every simulated motion ends
-with zero velocity and displacement.
-
-Fitting (:func:`fit`) is the papers' method of moments on one record: Ia, D5-95
-and t_mid from its Husid curve; omega_mid and omega' by least squares of the
-model's cumulative count of zero-level up-crossings, int omega_f / (2 pi) dt,
-to the record's over the strong-motion phase [t5, t95]; zeta_f by matching the
-mean cumulative count of positive minima and negative maxima of motions
-simulated with a fixed seed to the record's over the same phase (both
-low-passed alike first, see :func:`fit`). Ia is finally scaled up by the share
-of it the high-pass filter removes, so that simulated motions have the
-record's Arias intensity on average.
-
-Limitation: the single-mode filter gives one spectral peak near omega_mid. A
-record with content over a broad band (El Centro crosses zero at 5 Hz yet keeps
-strong 0.5-1 s content) is matched in Arias intensity, duration and zero
-crossings, but its 5 %-damped spectrum only on average over 0.1-2 s: the
-fitted El Centro ensemble's mean is 0.53-0.71 of the record's at 0.48-1.25 s,
-where the record lies above the ensemble's 95th percentile, and up to 1.46
-times it at 0.16 s.
+A ground acceleration is modelled as a modulated, filtered white-noise process (Rezaeian & Der Kiureghian
+2008, 2010): unit pulses through a linear oscillator whose frequency drifts in time, normalised to unit
+variance, modulated by a gamma-shaped q(t) set by the Arias intensity, D5-95 and t_mid, then through the
+papers' critically damped high-pass filter, followed until it is at rest so that every motion ends with
+zero velocity and displacement (:func:`simulate`, :class:`RDKParams`). :func:`fit` is the papers' method of
+moments on one record. The model's equations, the fit, and the limit of its single-mode filter are in
+``docs/explanation/ground-motions.md`` ("The published model").
 
 References
 ----------
@@ -55,8 +16,6 @@ Dyn. 37, 1565-1584.
 Rezaeian, S. & Der Kiureghian, A. (2010). Simulation of synthetic ground
 motions for specified earthquake and site characteristics. Earthquake Engng
 Struct. Dyn. 39, 1155-1180.
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
-model. COMPDYN 2017, sec. 4 (100 motions fitted to El Centro 1940 N-S).
 """
 
 from __future__ import annotations

@@ -1,72 +1,21 @@
 """Spectral matching of the Rezaeian & Der Kiureghian model: ensembles whose mean spectrum is the record's.
 
-The published model (:mod:`housner.scenarios.motions.rdk`) has a single-mode filter and so one
-spectral peak; fitted to El Centro 1940 N-S (PEER 1999) its ensemble-mean
-5 %-damped PSa is 0.54-0.62 of the record's in the third-octave bands at
-0.5-1 s and 1.28-1.35 times it at 0.16-0.2 s; 8 of the 19 bands of 0.05-3 s
-are within [0.8, 1.25].
-This module keeps that model as it is and adds one smooth, frequency-domain
-gain G(f), identified from the record's response spectrum, applied to the
-model's modulated noise x before the high-pass filter:
-
-    x  --(minimum-phase FIR of gain G)-->  y  --(RDK high-pass, omega_c)-->  ü
-
-- G is defined at the centres of third-octave period bands, T_k = 2^(k/3) s,
-  and interpolated linearly in log G against log f between them (held flat
-  beyond the first and last centre).
-- The filter is the minimum-phase sequence of magnitude G, computed from the
-  real cepstrum of log G (Oppenheim & Schafer 2010, ch. 13), truncated to
-  ``fir_length`` seconds with a half-cosine taper over its last quarter. It is
-  causal: nothing moves before the record starts (x = 0 for t <= T0 stays so),
-  and it adds delay rather than anticipation.
-- The motion is lengthened by the filter's length, so that y stops
-  ``fir_length`` after the noise does and the high-pass filter still has its
-  full ``tail`` to come to rest: velocity and displacement return to zero
-  exactly as in the published model.
-
-Fitting (:func:`fit_matched`) is an ensemble version of the SIMQKE iteration
-(Gasparini & Vanmarcke 1976): the ``n_fit`` motions of a fixed fit seed are
-simulated once up to x; then, a few times, G at every band centre is multiplied
-by (record PSa / ensemble-mean PSa)^beta, each ratio a geometric mean over
-periods inside the band. The same white noise serves every iteration, so the
-ratios change only through G. What is matched is the ensemble *mean* spectrum,
-as Cacciola (2010) does for a code spectrum, not each motion: the motions keep
-the model's record-to-record variability. The fit sees only the record.
-
-Acceptance (:func:`housner.scenarios.motions.bands.band_check`): in every third-octave band (centres 2^(k/3) s,
-band k spanning T_k 2^(-1/6) .. T_k 2^(1/6)) that overlaps 0.05-3 s, the
-geometric mean over ``per_band`` periods spread evenly (in log T) across the
-band of (ensemble-mean PSa / record PSa) must lie in [0.8, 1.25]; the same for
-Sd over 0.5-3 s. Since Sd = PSa / omega^2 motion by motion and for the record
-at the same periods, the Sd ratios equal the PSa ratios to round-off; they are
-computed anyway, from the Sd spectra.
-
-Out of sample (100 motions of seed 2017, not the fit's) every band of both El
-Centro variants lies within 0.89-1.16 (``benchmarks/bench_rdk_match.py``); the
-worst band of each of ten further 100-motion ensembles lay within 0.87-1.18.
-
-Limitations: matching the mean PSa raises the ensemble's mean Arias intensity
-above the record's (1.29 times for PEER 1999, 1.22 for NGA-West2, against 1.00
-for the published model: modulated Gaussian noise needs more energy than this
-record for the same peak oscillator response); the causal filter delays the
-Husid curve (t_mid +0.3 s, D5-95 +0.7 to 1.6 s on average). The gain cannot
-lower the mean peak ground acceleration, which the shortest band (PSa ~ PGA)
-measures, independently of the spectrum at 0.1-0.3 s: for the NGA-West2
-record that band stays at 1.16-1.17. The high-pass corner omega_c is not
-fitted: the gain alone brings Sd at 1.5-3.5 s to 0.89-1.06 of the record's.
+The published model (:mod:`housner.scenarios.motions.rdk`) has a single-mode filter and so one spectral
+peak. This module keeps that model as it is and adds one smooth, frequency-domain gain G(f) per third-octave
+band, identified from the record's response spectrum and applied to the model's modulated noise before the
+high-pass filter as a causal minimum-phase FIR (:func:`simulate_matched`, :class:`MatchedRDK`);
+:func:`fit_matched` updates it on the ensemble mean (the ensemble form of SIMQKE's iteration), and
+:func:`housner.scenarios.motions.bands.band_check` accepts it. The method and its limits are in
+``docs/explanation/ground-motions.md`` ("The matched model"); what it achieves on El Centro, in
+``docs/results.md`` ("Ground motions that stand for their record").
 
 References
 ----------
 Gasparini, D. A. & Vanmarcke, E. H. (1976). Simulated earthquake motions
 compatible with prescribed response spectra. MIT Dept. of Civil Engineering,
 Report R76-4 (program SIMQKE).
-Cacciola, P. (2010). A stochastic approach for generating spectrum compatible
-fully nonstationary earthquakes. Computers & Structures 88, 889-901.
 Oppenheim, A. V. & Schafer, R. W. (2010). Discrete-Time Signal Processing,
 3rd ed., ch. 13 (minimum-phase sequences from the real cepstrum).
-Rezaeian, S. & Der Kiureghian, A. (2010). Simulation of synthetic ground
-motions for specified earthquake and site characteristics. Earthquake Engng
-Struct. Dyn. 39, 1155-1180.
 """
 
 from __future__ import annotations

@@ -1,30 +1,13 @@
 """The chaos floor: how well the analytic model agrees with itself, record by record, when nudged.
 
-Rocking under a long random record is sensitive to small perturbations
-(Bachmann et al. 2017, Fig. 9): two models that differ by a tenth of a percent
-in r drift apart after a few dozen impacts. So an engine's record-by-record
-agreement with the analytic model cannot be judged against 100 %. The chaos
-floor is the agreement to expect from chaos alone: the analytic model run on
-the same motions with its r perturbed by the engine's *measured* r error, and
-its p by the engine's measured p error, each in both directions, and compared
-with itself by the same rule (:func:`housner.statistics.ensemble_stats.per_record_agreement`).
-
-An engine whose agreement reaches the floor (within the binomial uncertainty
-of its own share) disagrees record by record no more than its measured
-contact error explains; one below it has a difference beyond that error: a
-forcing, uplift or contact effect the free-rocking measurement does not see.
-
-The engine's errors are measured on free rocking (:func:`measure_engine_errors`):
-releases from rest at :data:`RELEASE_AMPLITUDES`, sampled at the ensemble's
-step; r from the first impact (seed eq. 8) against the analytic model's r
-measured from its own samples in the same way, p from the time to the first
-impact against the exact quarter period of Housner's equation.
-
-References
-----------
-Bachmann, J. A. et al. (2017). COMPDYN 2017, eq. 8 and Fig. 9.
-Yim, C.-S., Chopra, A. K. and Penzien, J. (1980). Rocking response of rigid
-blocks to earthquakes. Earthquake Engineering & Structural Dynamics 8, 565-587.
+Rocking under a long random record is sensitive to small perturbations, so an engine's record-by-record
+agreement with the analytic model cannot be judged against 100 %. The chaos floor is the agreement to expect
+from chaos alone: the analytic model run on the same motions with its r and p perturbed, each in both
+directions, by the engine's errors measured on free rocking (:func:`measure_engine_errors`, releases at
+:data:`RELEASE_AMPLITUDES`), and compared with itself by the same rule
+(:func:`housner.statistics.ensemble_stats.per_record_agreement`, :data:`RECORD_RTOL`). Why, how the errors are measured
+and what
+reaching the floor means are in ``docs/explanation/verdict.md`` ("Record by record, against the chaos floor").
 """
 
 from __future__ import annotations

@@ -1,29 +1,14 @@
 """Explain an engine: its own responses go through the comparison and the diagnosis that measurements get.
 
-An engine departs from the analytic model record by record (on the
-``elcentro`` scenario its per-record agreement is far below the chaos floor);
-how much of that is a numerical convention and how much contact physics the
-analytic model lacks is the question :func:`explain_engine` answers:
-
-1. **Campaign.** The engine's free vibrations and its responses to the
-   scenario's ground motions are written as a measurement campaign
-   (:mod:`housner.scenarios.runs.engine_campaign`), with a little white noise
-   on theta (:data:`EXPLAIN_SIGMA`) for the diagnosis' noise model.
-2. **Diagnosis.** The campaign is diagnosed like a measured one
-   (:func:`housner.scenarios.diagnosis.diagnose.diagnose`): the effects of the
-   library the engine's responses need, fitted, with the verdict's words.
-3. **Agreement.** The analytic model with those effects runs on the same
-   ground motions; its per-record agreement with the engine (both overturned,
-   or both rocked with theta_max/alpha within :data:`RECORD_RTOL` of each
-   other) is set beside the plain model's.
-4. **Floor.** Against the extended floor of
-   :mod:`housner.scenarios.runs.explain_floor`: the lower of the chaos floor
-   of the engine's measured r and p errors and the model-form floor of two
-   correct integrators. The engine is explained when the agreement reaches
-   the floor within :data:`REACH_MARGIN`.
-
-Every engine run goes through the runner (:func:`housner.scenarios.execution.runner.run_engines`),
-so its records are cached like a scenario's.
+An engine departs from the analytic model record by record (on the ``elcentro`` scenario its per-record
+agreement is far below the chaos floor); how much of that is a numerical convention and how much contact
+physics the analytic model lacks is the question :func:`explain_engine` answers: the engine's free
+vibrations and ground-motion responses written as a campaign (:mod:`housner.scenarios.runs.engine_campaign`,
+with :data:`EXPLAIN_SIGMA` of white noise), diagnosed like a measured one, the analytic model with the
+effects found run on the same motions (agreement within :data:`RECORD_RTOL`), judged against the extended
+floor of :mod:`housner.scenarios.runs.explain_floor` (within :data:`REACH_MARGIN`), then the engine's own
+maps (:mod:`housner.scenarios.runs.impact_map`). Every engine run goes through the runner, so its records
+are cached like a scenario's. The steps are in ``docs/how-to/explain-engine.md``.
 """
 
 from __future__ import annotations
@@ -231,7 +216,7 @@ def explain_engine(
     progress: Callable[[str], None] | None = None,
     maps: bool = True,
 ) -> Explanation:
-    """Explain how an engine departs from the analytic model (module docstring).
+    """Explain how an engine departs from the analytic model (``docs/how-to/explain-engine.md``).
 
     Parameters
     ----------

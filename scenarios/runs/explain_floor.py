@@ -1,36 +1,14 @@
 """The floor of ``housner explain``: the record-by-record agreement a correct model could still miss.
 
-An engine's per-record agreement with the analytic model cannot be judged
-against 100 %: rocking under a long record is chaotic (Bachmann et al. 2017,
-Fig. 9), so two correct solvers of the same equation part on some records.
-Two parts bound what a correct model could show:
-
-* the **chaos floor** (:func:`housner.scenarios.runs.chaos.chaos_floor`): the
-  analytic model against itself with r and p perturbed by the engine's
-  *measured* free-rocking errors;
-* the **model-form floor** (:func:`model_form_floor`): the analytic model
-  against itself under the conventions two correct integrators differ in
-  (:data:`PERTURBATIONS`): the input held over each sample instead of linear,
-  a timing of the input up to half a sample early or late, its amplitude a
-  part in a thousand up or down, the integrator's substeps doubled. Each is
-  one :class:`housner.scenarios.diagnosis.verdict.integrator_families.ModelForm`, the family
-  the diagnosis' own floor draws from, at the edge of its range.
-
-The timing is :data:`SHIFT` = 3/8 of a sample, not 1/2: every run feeds the
-block its input on a grid :data:`~housner.scenarios.diagnosis.verdict.integrator_families.UPSAMPLE`
-= 4 times finer than the record's, where half a sample is two whole steps of
-the integrator, a pure delay that changes no peak (on 40 ``elcentro`` motions:
-100 % and 97.5 % agreement). 3/8 is the largest shift within half a sample
-that puts the input's samples midway between two of the integrator's steps,
-which is what a timing convention changes for a solver (45 % agreement).
-
-The extended floor (:func:`extended_floor`) is the lower of the two: the
-agreement that a correct model, with the engine's measured errors or another
-integrator's conventions, could show.
-
-References
-----------
-Bachmann, J. A. et al. (2017). COMPDYN 2017, Fig. 9.
+Two parts bound what a correct model could show: the chaos floor
+(:func:`housner.scenarios.runs.chaos.chaos_floor`, the analytic model against itself with r and p perturbed
+by the engine's measured free-rocking errors) and the model-form floor (:func:`model_form_floor`, the
+analytic model against itself under the conventions two correct integrators differ in,
+:data:`PERTURBATIONS`, each one
+:class:`housner.scenarios.diagnosis.verdict.integrator_families.ModelForm` at the edge of the range the
+diagnosis' floor draws from, the input's timing shifted by :data:`SHIFT` = 3/8 of a sample).
+:func:`extended_floor` is the lower of the two. Why these conventions, and why 3/8 and not 1/2, are in
+``docs/how-to/explain-engine.md`` (step 4).
 """
 
 from __future__ import annotations
@@ -59,7 +37,8 @@ __all__ = [
 ]
 
 
-#: Sub-sample timing of the input [samples] (module docstring: 1/2 less half a step of the finer grid).
+#: Sub-sample timing of the input [samples] (docs/how-to/explain-engine.md, step 4: 1/2 less half a step of the
+#: finer grid).
 SHIFT = SHIFT_SAMPLES - 0.5 / UPSAMPLE
 
 #: The conventions two correct integrators of Housner's equation differ in, each at the edge of the

@@ -1,76 +1,14 @@
 """An engine's departure from Housner's model where it happens: at each impact and in each flight (its "maps").
 
-:func:`measure_maps` releases the block from rest at a grid of amplitudes (alternately toward +x and
--x, no ground motion), runs the engine, and measures every impact and every flight between two
-impacts against Housner's model. The result, :class:`EngineMaps`, holds the raw points and the tables
-binned by impact speed, and composes into the analytic kernel through two definitions, kept exactly:
-
-* **Impact law.** With x = |w-| / (p alpha) the normalised impact speed [-] (w- [rad/s] the angular
-  velocity just before the impact), the engine keeps the fraction
-
-      r'(x) = r_housner * ratio(x)
-
-  of the kinetic energy at the impact, r' = (w+ / w-)^2 (:meth:`EngineMaps.impact_table`: x, ratio).
-* **Flight moment.** Between impacts the engine's energy per unit I0 above the upright position,
-
-      E = w^2 / 2 + p^2 (cos(alpha - |theta|) - cos(alpha))   [rad^2/s^2],
-
-  which Housner's flight conserves, changes as dE/dt = -c w^2: a moment -c(x_E) I0 w with
-
-      x_E = sqrt(w^2 + 2 p^2 (cos(alpha - |theta|) - cos(alpha))) / (p alpha) = sqrt(2 E) / (p alpha),
-
-  the speed at which the flight reaches theta = 0 (:meth:`EngineMaps.flight_table`: x, c [1/s];
-  c > 0 is a loss). A flight is indexed by x = sqrt(2 E_start) / (p alpha), E_start just after the
-  impact that starts it. Between the tables' points, interpolate in log x; outside them, hold the
-  end values.
-
-The method
-----------
-Each impact is a sign change of the sampled theta (after a half-cycle that peaked above :data:`SWING_TOL`
-of the smallest peak the release is expected to reach); t_c, the crossing interpolated linearly between
-its two samples, dates it. On each side, the samples closer to the impact than a guard (:data:`GUARD_S`,
-widened to the contact as measured) are the contact's and are left out; the next ones, up to
-:data:`WINDOW_S` or a third of the half-cycle (the flight's fast part, well away from its peak), are the
-flight's. Through them, Housner's flight is fitted from theta alone: it meets theta = 0 at t_0 and passes
-|theta| at t_0 -+ tau(|theta|; E), tau = int_0^|theta| dth / sqrt(2 (E - U(th))), U = p^2 (cos(alpha -
-th) - cos alpha); (t_0, E) minimise the squared residuals w (t_j - t_model(theta_j)), i.e. the residuals in
-theta. At theta = 0 the potential is zero, so |w-| = sqrt(2 E_pre) and |w+| = sqrt(2 E_post).
-
-Why from the equation of motion, and from theta alone: the energy integral carries the flight exactly over
-the guard to theta = 0, where a polynomial fit of theta or w would carry its truncation error (theta ~
-cosh(p t) is strongly curved within a few ms at small amplitudes); and the engines' sampled theta' is
-not the velocity at the sample's instant for all of them: a semi-implicit Euler step (PyBullet, DART,
-MuJoCo's Euler) reports the velocity that produced the step, half a step behind theta, which makes
-w^2 / 2 + U drift in flight by (h / 2) w w' (PyBullet at 0.003 alpha: -0.08 % of E per ms, a "flight
-loss" of 4 % per half-cycle that the block's amplitudes do not show). For the analytic engine the fit
-returns r_housner and c = 0 to rounding (the test).
-
-Each fit gives the flight's energy over its window; the change between the two windows of one flight,
-carried linearly in time to the impacts, gives E_start (just after impact k) and E_end (just before
-impact k + 1), so that the impact's energy ratio holds nothing of the flights'. The flight's c =
--(E_end - E_start) / int w^2 dt, the integral over the engine's samples of theta' between the two
-impacts (trapezoid rule; the half-step lag of a semi-implicit step shifts the integrand, not its integral
-over a flight). Checked against the half-cycle peaks' energy ratios: ratio x (1 + the two neighbouring
-flights' half changes) agrees with them to 1e-5 for the rigid engines, 3e-4 for OpenSees.
-
-The contact duration is the time over which theta departs from both flights by more than the larger of
-:data:`DEPART_FRACTION` of a sample's travel at the impact speed and four times the fit's rms residual:
-between the last sample on the flight before the impact and the first on the flight after it, less one
-sample interval (0: shorter than the sampling interval, the resolution). It includes a rigid contact's
-position correction after the impact. The contact delay, t_0 (after) - t_0 (before), is a sub-sample
-measure of how long the contact holds the block at theta = 0. The half-period drift of a flight is
-(t_0 before impact k + 1 - t_0 after impact k) / T_half(E_mean) - 1, T_half Housner's closed form
-(:func:`housner.free_vibration.closed_forms.half_cycle_time`) for the flight's mean energy. Interpenetration is not
-measured: no adapter reports it in its response.
-
-The sample interval defaults to 1 ms, which keeps every adapter's default step exactly (each step is
-the sample interval over a whole number of steps: 0.5 ms would shorten PyBullet's, MuJoCo's and
-OpenSees' 0.2 ms steps to 0.167 ms).
-
-References
-----------
-Housner, G. W. (1963). The behavior of inverted pendulum structures during earthquakes. BSSA 53(2).
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017.
+:func:`measure_maps` releases the block from rest at a grid of amplitudes (alternately toward +x and -x, no
+ground motion), runs the engine, and measures every impact and every flight between two impacts against
+Housner's model, each flight fitted from theta alone with Housner's energy integral. The result,
+:class:`EngineMaps`, holds the raw points and the tables binned by the normalised impact speed
+x = |w-| / (p alpha): the impact map (the fraction of Housner's r the engine keeps,
+:meth:`EngineMaps.impact_table`) and the flight map (the loss rate c [1/s] of dE/dt = -c w^2,
+:meth:`EngineMaps.flight_table`), which the effect ``measured_maps`` (:mod:`housner.effects.measured`)
+composes into the analytic kernel. The definitions, the method and why it is so are in
+``docs/explanation/engine-maps.md``.
 """
 
 from __future__ import annotations
@@ -106,7 +44,7 @@ SEED = Specimen.bachmann2017()
 #: (a = 0.0012) to 0.995 (a = 0.9), each release's impacts then step down by sqrt(r_housner) = 0.973. Below
 #: x ~ 0.045 a half-cycle (2 sqrt(2 a) / p = 18 ms) holds too few 1 ms samples for the guards and two fits.
 AMPLITUDES = (0.0012, 0.002, 0.003, 0.006, 0.012, 0.025, 0.05, 0.1, 0.2, 0.45, 0.9)
-#: Sample interval [s] (see the module docstring).
+#: Sample interval [s] (docs/explanation/engine-maps.md, "How they are measured").
 DT = 1e-3
 #: Impacts measured per release.
 N_IMPACTS = 12
@@ -167,7 +105,7 @@ def engine_registry_name(name: str) -> str:
 
 @dataclass(frozen=True)
 class EngineMaps:
-    """An engine's impact and flight maps against Housner's model (see the module docstring).
+    """An engine's impact and flight maps against Housner's model (``docs/explanation/engine-maps.md``).
 
     Parameters
     ----------
@@ -505,46 +443,39 @@ def _binned(x: np.ndarray, columns: Mapping[str, np.ndarray]) -> dict:
     return out
 
 
+#: The binned impact table's columns after the bins' own: its name -> (the impacts' column, the statistic of
+#: :func:`_binned`).
+_IMPACT_TABLE = {
+    "ratio_median": ("ratio_to_housner", "median"),
+    "ratio_spread": ("ratio_to_housner", "spread"),
+    "contact_median_s": ("contact_s", "median"),
+    "contact_delay_median_s": ("contact_delay_s", "median"),
+}
+#: The binned flight table's columns after the bins' own, as :data:`_IMPACT_TABLE` for the flights.
+_FLIGHT_TABLE = {
+    "c_median_per_s": ("c_per_s", "median"),
+    "c_spread_per_s": ("c_per_s", "spread"),
+    "energy_change_median": ("energy_change", "median"),
+    "period_drift_median": ("period_drift", "median"),
+}
+
+
+def _binned_table(rows: dict, table: Mapping[str, tuple[str, str]]) -> dict:
+    """The binned table of ``rows`` (columns -> values, ``x`` among them): the bins' x, edges and n, then each
+    column of ``table`` (:data:`_IMPACT_TABLE`, :data:`_FLIGHT_TABLE`)."""
+    sources = dict.fromkeys(col for col, _ in table.values())
+    b = _binned(np.asarray(rows["x"], float), {col: np.asarray(rows[col], float) for col in sources})
+    return {
+        "x": b["x"],
+        "x_low": b["x_low"],
+        "x_high": b["x_high"],
+        "n": b["n"],
+        **{name: b[f"{col}_{stat}"] for name, (col, stat) in table.items()},
+    }
+
+
 def _tables(impacts: dict, flights: dict) -> tuple[dict, dict]:
-    ix = np.asarray(impacts["x"], float)
-    bi = _binned(
-        ix,
-        {
-            "ratio": np.asarray(impacts["ratio_to_housner"], float),
-            "contact": np.asarray(impacts["contact_s"], float),
-            "delay": np.asarray(impacts["contact_delay_s"], float),
-        },
-    )
-    imp = {
-        "x": bi["x"],
-        "x_low": bi["x_low"],
-        "x_high": bi["x_high"],
-        "n": bi["n"],
-        "ratio_median": bi["ratio_median"],
-        "ratio_spread": bi["ratio_spread"],
-        "contact_median_s": bi["contact_median"],
-        "contact_delay_median_s": bi["delay_median"],
-    }
-    fx = np.asarray(flights["x"], float)
-    bf = _binned(
-        fx,
-        {
-            "c": np.asarray(flights["c_per_s"], float),
-            "energy_change": np.asarray(flights["energy_change"], float),
-            "period_drift": np.asarray(flights["period_drift"], float),
-        },
-    )
-    fl = {
-        "x": bf["x"],
-        "x_low": bf["x_low"],
-        "x_high": bf["x_high"],
-        "n": bf["n"],
-        "c_median_per_s": bf["c_median"],
-        "c_spread_per_s": bf["c_spread"],
-        "energy_change_median": bf["energy_change_median"],
-        "period_drift_median": bf["period_drift_median"],
-    }
-    return imp, fl
+    return _binned_table(impacts, _IMPACT_TABLE), _binned_table(flights, _FLIGHT_TABLE)
 
 
 # ----------------------------------------------------------------------------
@@ -581,7 +512,7 @@ def measure_maps(
     settings: Mapping | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> EngineMaps:
-    """Measure an engine's impact and flight maps on free-rocking releases (see the module docstring).
+    """Measure an engine's impact and flight maps on free-rocking releases (``docs/explanation/engine-maps.md``).
 
     Parameters
     ----------

@@ -1,26 +1,13 @@
 """An engine's one verdict against the reference in a run, from one rule: the distribution test and the
 record-by-record agreement against the chaos floor, combined.
 
-The rule (docs/explanation/verdict.md), for an engine against the analytic model on the same motions:
-
-1. **Distribution.** The engine's distribution of peak rotations theta_max/alpha passes when the
-   Kolmogorov-Smirnov (KS) distance to the reference's (the largest gap between the two cumulative
-   distributions) is at most :data:`housner.statistics.ensemble_stats.KS_MAX`, its probability of overturning is within
-   :data:`housner.statistics.ensemble_stats.OVERTURN_TOL` of the reference's, and no record failed; on at least
-   :data:`MIN_RECORDS` records (fewer: inconclusive). These are the defaults of
-   :func:`housner.reports.assertions.runs.assert_cdf_agreement`.
-2. **Record by record.** The share of records on which the engine agrees with the reference (both
-   overturn, or both peak within :data:`housner.scenarios.runs.chaos.RECORD_RTOL`, 3 %) is compared
-   with the *chaos floor*: the lowest share the analytic model keeps with itself when its r and p are
-   perturbed by the engine's measured errors.
-   The engine is at the floor when the 95 % Wilson interval of its share reaches the floor.
-
-The verdict (:data:`KINDS`): ``agrees`` (1 and 2 hold: use the engine for ensembles and single records),
-``ensemble`` (1 holds, 2 does not, or the run has no floor: ensemble statistics only), ``fails`` (1 does
-not hold: neither), ``inconclusive`` (too few records), ``no data``.
-
 :func:`engine_verdict` judges one engine's row of the run's comparison table
-(:func:`housner.scenarios.execution.tables.compare_engines`); ``housner run``, the report's headline and
+(:func:`housner.scenarios.execution.tables.compare_engines`) by the rule of ``docs/explanation/verdict.md``:
+the distribution test (:data:`housner.statistics.ensemble_stats.KS_MAX`,
+:data:`housner.statistics.ensemble_stats.OVERTURN_TOL`, no failed record,
+at least :data:`MIN_RECORDS` records: the defaults of
+:func:`housner.reports.assertions.runs.assert_cdf_agreement`) and the share of agreeing records against the
+chaos floor, into one of :data:`KINDS`. ``housner run``, the report's headline and
 :func:`housner.reports.assertions.verdict.assert_verdict` all ask it through
 :meth:`housner.scenarios.runs.view.Run.verdicts`, so they say the same.
 """
@@ -100,7 +87,7 @@ class EngineVerdict:
 
     @property
     def kind(self) -> str:
-        """The one verdict (a key of :data:`KINDS`), by the rule of the module docstring."""
+        """The one verdict (a key of :data:`KINDS`), by the rule of ``docs/explanation/verdict.md``."""
         if self.status == "PASS":
             return "agrees" if self.below_floor is False else "ensemble"
         return {"FAIL": "fails", "inconclusive": "inconclusive"}.get(self.status, "no data")

@@ -1,50 +1,15 @@
 """Studies: one ensemble at intensity stripes and structure sizes, on every engine, to fragility curves.
 
-A scenario with a ``[study]`` table is a study::
-
-    [study]
-    intensity = "amplitude"          # or "pga", "pgv", "sa" (then `period`, prototype s)
-    levels = [0.5, 0.75, 1.0, 1.5]   # amplitude factors, or target values of the intensity measure
-    prototype_heights = [2.5, 5, 10] # m; or S = [...] (prototype / model size ratios)
-    thresholds = [0.5, 0.8, 1.0]     # theta_max / alpha levels of the exceedance curves
-    bootstrap = 1000                 # resamples of the motions for the intervals
-    seed = 0                         # of the bootstrap
-    histories = false                # keep theta histories (memory grows with the records)
-
-Each (size, stripe, motion) is one record, run on every engine through the shared
-runner (:func:`housner.scenarios.execution.runner.run_engines`: its cache, process pool or Dask
-cluster, fault tolerance), one size after another so that memory stays flat,
-under one progress bar. The sizes change the time scale: a prototype S times
-larger than the model is seen by the model with its time compressed by sqrt(S)
-(seed eq. 9), so the scenario's motions (built at its own S0) are stretched by
-sqrt(S0 / S). A stripe scales every motion by the same amplitude factor
-(``intensity = "amplitude"``), or each motion to the stripe's value of a
-dimensionless intensity measure at that size:
-
-* ``pga``: PGA / (g tan alpha), the uplift threshold's multiple;
-* ``pgv``: PGV p / (g tan alpha), with p the model's frequency parameter and PGV
-  that of the model-scale motion (the same number as the prototype's PGV and p);
-* ``sa``: Sa(T, 5 %) / (g tan alpha), T = ``period`` at prototype scale (T / sqrt(S)
-  at model scale; Sa is unchanged by the time scaling).
-
-The analysis (:mod:`housner.scenarios.studies.fragility`): per engine and size, P[overturn] per
-stripe with Wilson intervals, a lognormal fragility fitted by maximum likelihood
-(Baker 2015, multiple-stripe analysis) with bootstrap intervals over the motions,
-the engines' median ratio and beta difference to the reference with paired
-bootstrap intervals, and exceedance curves of theta_max / alpha.
-
-This module owns the study directory: ``results.parquet`` (every record),
-``fragility.parquet``, ``exceedance.parquet``, ``fragility.json``, ``study.json``
-(and ``report.html``, written by :mod:`housner.reports.study.page`).
-
-References
-----------
-Baker, J. W. (2015). Efficient analytical fragility function fitting using dynamic
-structural analysis. Earthquake Spectra 31(1), 579-599.
-Bachmann, J. A. et al. (2017). Probabilistic validation of the Housner rocking
-model. COMPDYN 2017, section 4 and eq. 9 (time scaling by sqrt(S)).
-Dimitrakopoulos, E. G. & DeJong, M. J. (2012). Revisiting the rocking block:
-closed-form solutions and similarity laws. Proc. R. Soc. A 468, 2294-2318.
+A scenario with a ``[study]`` table is a study: each (size, stripe, motion) is one record, run on every
+engine through the shared runner (:func:`housner.scenarios.execution.runner.run_engines`: its cache, process
+pool or Dask cluster, fault tolerance), one size after another so that memory stays flat; the sizes stretch
+the motions in time by sqrt(S0 / S), and a stripe scales them by an amplitude factor or to a dimensionless
+intensity measure (``pga``, ``pgv``, ``sa``). The analysis (lognormal fragility by maximum likelihood,
+Baker 2015, with bootstrap intervals) is :mod:`housner.scenarios.studies.fragility`'s. This module owns the
+study directory: ``results.parquet`` (every record), ``fragility.parquet``, ``exceedance.parquet``,
+``fragility.json``, ``study.json`` (and ``report.html``, written by :mod:`housner.reports.study.page`). The
+table is in ``docs/reference/scenario-file.md`` ("[study]"); how the sizes and stripes scale, and how to run
+and read a study, in ``docs/how-to/studies.md``.
 """
 
 from __future__ import annotations

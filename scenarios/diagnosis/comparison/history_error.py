@@ -1,12 +1,10 @@
 """The time-history error of a model on one measured record, and how long it follows the measurement.
 
-The definitions are those of :mod:`housner.scenarios.diagnosis.comparison.record_comparison` (module docstring,
-"Per record"): the error window fixed by the measurement alone
-(:func:`error_window`), the clipped RMS error over it in units of alpha
-(:func:`record_error`), for a free vibration minimised over its release
-instant and angle (:func:`release_error`), and the divergence time
-(:func:`divergence_time`). Impacts are the zero crossings of the measured
-theta with a hysteresis of 4 noise sigmas (:func:`measured_impacts`).
+The definitions are those of ``docs/explanation/diagnosis.md``, "A record's error": the error window
+fixed by the measurement alone (:func:`error_window`), the clipped RMS error over it in units of alpha
+(:func:`record_error`), for a free vibration minimised over its release instant and angle
+(:func:`release_error`), and the divergence time (:func:`divergence_time`). Impacts are the zero
+crossings of the measured theta with a hysteresis of 4 noise sigmas (:func:`measured_impacts`).
 """
 
 from __future__ import annotations
@@ -82,7 +80,7 @@ def measured_impacts(theta, noise: float) -> np.ndarray:
 def error_window(record: MeasuredRecord, alpha: float, window_impacts: int | None = None) -> int:
     """Number of samples (from the start) over which the time-history error of ``record`` is taken.
 
-    See the module docstring: up to the ``window_impacts``-th measured
+    See ``docs/explanation/diagnosis.md``, "A record's error": up to the ``window_impacts``-th measured
     impact, the measured block passing alpha, or the end (ground motion); up
     to the ``window_impacts``-th impact or the last one above 10 noise sigmas
     (free vibration). The impacts are the record's own (:attr:`MeasuredRecord.impacts

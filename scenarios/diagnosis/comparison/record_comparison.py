@@ -1,75 +1,15 @@
 """Model against measurement: record by record, as distributions, and where the model fails.
 
-:func:`compare` runs an engine (with physical effects, on the analytic
-engine) on every record of a :class:`housner.scenarios.campaigns.campaign.Campaign`, driven by
-the measured ground acceleration (a free-vibration record is released at its
-measured initial angle), and compares the simulated rotation with the
-measured one. This module runs the engine and gathers the result; the
-time-history error is :mod:`housner.scenarios.diagnosis.comparison.history_error`'s, the localisation
-quantities :mod:`housner.scenarios.diagnosis.comparison.localise`'s (their names are importable from here too).
-
-Per record
-----------
-*Time-history error.* Rocking is chaotic: after a few impacts two histories
-that start together part ways for reasons that no model parameter explains,
-so the error is taken over the part of the record before that happens, fixed
-by the measurement alone (the same window for every model, so that errors of
-two models are paired and comparable)::
-
-    e = sqrt( mean_{t_k <= t_end} min(|theta_model(t_k) - theta_meas(t_k)| / alpha, 1)^2 )   [-]
-
-where t_end is, for a ground-motion record, the earliest of the
-``window_impacts``-th measured impact (6 by default), the moment the
-measured block passes alpha on its way to overturning, and the end of the
-record; for a free-vibration record the ``window_impacts_fv``-th impact
-(20) or the impact after which the measured amplitude falls below 10 noise
-sigmas. Impacts are zero crossings of the measured theta detected with a
-hysteresis of 4 noise sigmas (noise never makes a spurious one). The clip at
-1 (alpha) keeps one record where model and measurement overturn differently
-from drowning the others. A perfect model scores the noise alone,
-sigma/alpha (0.0054 for 0.8 mrad on the seed specimen): :attr:`Comparison.noise_floor`.
-
-*Divergence time.* The first time |theta_model - theta_meas| exceeds
-5 sigma + 0.05 alpha for 50 ms in a row (NaN if never): how long the model
-follows the measurement.
-
-*Peak and verdict.* theta_max/alpha of model and measurement (+inf when
-overturned; the measured block has overturned when |theta| reached
-:data:`housner.scenarios.campaigns.campaign_records.OVERTURN_ANGLE` or the campaign says so).
-
-*The model seen through the sensor.* A measured peak carries the noise (the
-largest of many noisy samples lies ~2-3 sigma above the true peak, which
-matters for records that barely rock), and noisy free-vibration peaks bias
-the energy ratios a little. So that such biases cancel, the model's history
-is observed through the same sensor before peaks, distributions and
-localisation quantities are taken from it: Gaussian noise of the record's
-sigma is added (seeded, :data:`OBSERVATION_SEED`). The time-history error
-uses the model's own history.
-
-As distributions (ground-motion records)
-----------------------------------------
-The statistics of :mod:`housner.statistics.ensemble_stats`: Kolmogorov-Smirnov distance and
-p-value, Wasserstein distance, overturn probability with a Wilson interval
-for each side, percentiles with bootstrap intervals, record-by-record
-agreement.
-
-Where the model fails (localisation)
-------------------------------------
-The same quantities are computed from the measurement and from the model
-(:class:`Features`), each with its standard error, so that the report shows
-them side by side (:data:`METRICS`): energy ratio per impact against
-amplitude (seed eq. 8) and its trend; half-cycle duration against amplitude
-(p of seed eq. 7, exact form); energy kept between impacts; alternation of
-the free-vibration energy ratios (asymmetry); uplift onset per direction;
-share of excursions toward +theta; rotation before uplift; overturn fraction;
-theta_max distribution.
-
-References
-----------
-Bachmann, J. A., Strand, M., Vassiliou, M. F., Broccardo, M., Stojadinovic, B.
-(2017). Probabilistic validation of the Housner rocking model. COMPDYN 2017,
-eqs. 2, 7, 8; Figs. 9-10; Table 2 (the metrics). Housner, G. W. (1963). The
-behavior of inverted pendulum structures during earthquakes. BSSA 53(2), 403-417.
+:func:`compare` runs an engine (with physical effects, on the analytic engine) on every record of a
+:class:`housner.scenarios.campaigns.campaign.Campaign`, driven by the measured ground acceleration (a
+free-vibration record is released at its measured initial angle), sees the model through the record's
+sensor, and gathers per record the time-history error over a window fixed by the measurement, the
+divergence time, the peaks and outcomes, the distributions (:mod:`housner.statistics.ensemble_stats`) and the
+localisation
+quantities (:class:`Features`, :data:`METRICS`). The error is
+:mod:`housner.scenarios.diagnosis.comparison.history_error`'s and the localisation quantities
+:mod:`housner.scenarios.diagnosis.comparison.localise`'s (their names are importable from here too); the
+definitions, and why each is taken so, are in ``docs/explanation/diagnosis.md`` ("A record's error").
 """
 
 from __future__ import annotations
@@ -235,7 +175,8 @@ class RecordComparison:
     ----------
     id, kind : str
     error : float
-        Time-history error over the window [alpha] (see the module docstring); NaN if the engine failed.
+        Time-history error over the window [alpha] (``docs/explanation/diagnosis.md``, "A record's error"); NaN if
+        the engine failed.
     window_end : float
         End of the error window [s].
     divergence_time : float

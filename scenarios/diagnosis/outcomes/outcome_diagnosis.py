@@ -1,43 +1,13 @@
 """Outcome records: predict P(overturn) from an ensemble, find the effect the outcomes need, judge at the floor.
 
-A test whose only measurement is whether the block overturned (and the
-table motion) is scored as a probability. :func:`diagnose_outcomes` runs the
-mission loop on a campaign's outcome records:
-
-1. **The plain model.** The specimen as built: the planar block of the scan
-   mesh (:mod:`housner.scan`), both pivots, Housner's impact law. What is
-   uncertain is sampled: each pivot over the specimen's bracket of alpha
-   (the base is resolved to about a centimetre) and the table's amplitude
-   within +-:data:`AMPLITUDE_SPREAD` (a sensor's calibration, and the
-   chaos of a long record: a nearby record may end otherwise). P(overturn)
-   of a record is the share of its ensemble that overturns, kept off 0 and
-   1 by a lapse rate fitted on the training folds (the share of outcomes
-   decided by what no model here holds: how the rock was placed, a knock).
-   The lapse is the outcomes' noise model, fitted in every model alike; it
-   is not an effect.
-2. **Where it fails.** The records it misses, in which direction
-   (overturns it did not predict, or the converse), over PGA and PGV/PGA,
-   and what the direction points to: a block that overturns more readily
-   than its footprint allows rests on a contact inside the footprint (a
-   convex base: a smaller effective alpha); one that survives more
-   dissipates more at impact (a smaller r).
-3. **Effects, fitted with cross-validation.** The candidates are
-   ``contact_inside`` (an effective symmetric contact, alpha_eff with a
-   log-normal spread that the fit sets: how well the contact is known),
-   ``restitution`` (r of the impacts) and both together. Each is fitted by
-   minimising the log loss on the training folds and scored out of fold on
-   the same stratified folds as the baselines. An effect is added only when
-   the mean of its paired per-record falls of the held-out log loss passes a
-   one-sided Diebold-Mariano test at 5 % (Bonferroni over the candidates).
-4. **Verdict.** The final model's out-of-fold probabilities against the
-   floor a correct model would reach (:func:`outcome_scores.outcome_floor`),
-   beside logistic regressions on the measured PGA and PGV fitted on the same
-   folds: physics is worth running only where it beats these.
-
-The ensembles are computed once, as tables of overturns over a grid of the
-effects' parameters (:func:`housner.model.theta_max_many`, every record in one
-compiled call per grid point); fitting reweights these tables, so the
-cross-validation costs no further simulation. The scores are
+A test whose only measurement is whether the block overturned (and the table motion) is scored as a
+probability. :func:`diagnose_outcomes` runs the mission loop on a campaign's outcome records: the plain model
+(the scan's planar block, its uncertain pivots and table amplitude sampled into an ensemble per record, a
+lapse rate as the outcomes' noise model), where it fails, the effects ``contact_inside`` and ``restitution``
+fitted on the log loss with cross-validation and added by a one-sided Diebold-Mariano test, and the verdict
+against the floor and logistic baselines on PGA and PGV. The ensembles are computed once as tables of
+overturns over a grid of the effects' parameters, which the fits reweight. The method step by step is in
+``docs/explanation/diagnosis.md`` ("Outcome records"); the scores are
 :mod:`housner.scenarios.diagnosis.outcomes.outcome_scores`', the result classes
 :mod:`housner.scenarios.diagnosis.outcomes.outcome_results`'.
 
@@ -45,14 +15,6 @@ References
 ----------
 Diebold, F. X., Mariano, R. S. (1995). Comparing predictive accuracy. Journal of
 Business & Economic Statistics 13(3), 253-263.
-Housner, G. W. (1963). The behavior of inverted pendulum structures during
-earthquakes. BSSA 53(2), 403-417.
-Purvance, M. D., Abdolrasool, A., Brune, J. N. (2008). Freestanding block
-overturning fragilities: numerical simulation and experimental validation.
-EESD 37(5), 791-808 (overturning depends on alpha, p and PGV/PGA).
-Chen, Z. et al. (2024). Virtual Shake Robot: simulating dynamics of precariously
-balanced rocks for overturning and large-displacement processes. Seismica 3(1),
-doi:10.26443/seismica.v3i1.692 (the ASU granite tests).
 """
 
 from __future__ import annotations

@@ -505,11 +505,12 @@ def _not_held_out(
     bad = setup.free_vibrations.reason([*fixed, make_effect(name, **params)])
     if bad:
         return bad
-    # The screen (module docstring, step 4): on the records it was fitted to, the effect does at
-    # least as well as out of fold (in expectation); when even there its fall per record is not
-    # significant at SCREEN_LEVEL, or below the practical margin, the fold refits (5 more fits, the
-    # costliest part for a mechanics effect) cannot pass and are not run. (The training loss weighs
-    # the free vibrations as a group, so it can fall while the mean per record does not.)
+    # The screen (docs/explanation/diagnosis.md, "The search, step by step", step 4): on the records it
+    # was fitted to, the effect does at least as well as out of fold (in expectation); when even there
+    # its fall per record is not significant at SCREEN_LEVEL, or below the practical margin, the fold
+    # refits (5 more fits, the costliest part for a mechanics effect) cannot pass and are not run. (The
+    # training loss weighs the free vibrations as a group, so it can fall while the mean per record
+    # does not.)
     falls = current.heldout_errors - setup.scorers.every_record.errors([*fixed, make_effect(name, **params)])
     mean_fall = float(np.mean(falls))
     if not mean_fall > margin:

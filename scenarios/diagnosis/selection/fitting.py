@@ -1,9 +1,9 @@
 """Fitting an effect's parameters to measured records: grids over the bounds, then a local search.
 
-Used by the diagnosis (:mod:`housner.scenarios.diagnosis.diagnose`, step 2 "Fit" of its module
-docstring) and by the verdict's floor (:mod:`housner.scenarios.diagnosis.verdict.decision`, which
-perturbs fitted parameters within the same bounds). The objective is any
-function of an effect instance, in practice the training loss of
+Used by the diagnosis (:mod:`housner.scenarios.diagnosis.diagnose`, step 2 "Fit" of
+``docs/explanation/diagnosis.md``, "The search, step by step") and by the verdict's floor
+(:mod:`housner.scenarios.diagnosis.verdict.decision`, which perturbs fitted parameters within the same
+bounds). The objective is any function of an effect instance, in practice the training loss of
 :class:`housner.scenarios.diagnosis.selection.record_scoring.Scorer` [alpha]; parameters are searched in log
 space where their bounds span more than a factor 20.
 

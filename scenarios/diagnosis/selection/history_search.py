@@ -9,7 +9,7 @@ significance; :func:`greedy` runs the rounds through the one forward selection w
 measured when the search ran on decimated ones. Each returns a new state; what it did is said
 through the :class:`housner.scenarios.diagnosis.selection.candidate_trial.TrialSetup`'s ``progress`` and, where a
 figure was computed on fewer samples, its ``economies``. The steps of the search are those of
-:mod:`housner.scenarios.diagnosis.diagnose`'s module docstring.
+``docs/explanation/diagnosis.md``, "The search, step by step".
 """
 
 from __future__ import annotations
@@ -203,8 +203,8 @@ def _add_by_hand(setup: TrialSetup, state: SearchState, name: str) -> SearchStat
 class HistoryEvidence:
     """Theta histories as the evidence of the forward selection
     (:func:`housner.scenarios.diagnosis.selection.forward_selection.forward_selection`): candidates fitted on the
-    records' time-history error and judged on their out-of-fold errors (:mod:`housner.scenarios.diagnosis.diagnose`'s
-    module docstring, steps 2-5).
+    records' time-history error and judged on their out-of-fold errors (``docs/explanation/diagnosis.md``, "The
+    search, step by step", steps 2-5).
 
     Attributes
     ----------

@@ -1,44 +1,15 @@
 """The correct-model floor: the error a correct model shows on each record, measured from the campaign itself.
 
-A held-out time-history error is only meaningful against the error that a
-*correct* model would show on the same records: the sensor noise, plus what
-chaos makes of parameters that the campaign pins only so well. That floor is
-measured here from the campaign itself, by a parametric bootstrap
-(:func:`measure_floor`):
-
-1. the fitted model is taken as the truth and run on the measured table
-   motions (free vibrations released at the measured angle): the records a
-   correct model would have produced;
-2. noise of each record's measured sigma and of the sensor's measured
-   correlation in time (:mod:`housner.scenarios.campaigns.sensor_noise`; white
-   where the quiet samples cannot tell it from white) is added, a fresh draw
-   per replica, and read within the sensor's range where it saturates; the
-   samples a sensor fault touched are left out of the error, as in the real one;
-3. the model that scores them is the one the real held-out errors use: the
-   records of fold k are scored by the model fitted without fold k (its
-   parameters differ from the full fit's as they do in the real scoring,
-   a fold refit that wandered included), each parameter moved by a
-   Gaussian draw of the full fit's own uncertainty (the grouped-jackknife
-   standard error over the K fold fits: the bootstrap's truth is the full
-   fit, the real truth is within that of it), each draw kept within the
-   range the fold fits and the full fit span (the values the data chose: a
-   draw beyond them can cross into a regime the data reject, e.g. a sliding
-   block's friction coefficient across tan alpha, where the block rocks and
-   the error is tens of noise sigmas), and integrated with twice
-   the substeps (a measurement is never produced by the model's own
-   integrator, and chaos amplifies the difference like any other); the
-   stated specimen's p and r are not perturbed: a model that is right about
-   them is what "correct" means here;
-4. each record is scored with the same error and window as the real one.
-
-The real held-out errors are tested against it by
+A held-out time-history error is only meaningful against the error that a *correct* model would show on
+the same records: the sensor noise, plus what chaos makes of parameters that the campaign pins only so
+well. :func:`measure_floor` measures it by a parametric bootstrap: the fitted model, run by another
+correct integrator, as the truth; the sensor's measured noise and faults added; each record scored, with
+the same error and window as the real one, by its fold's model with parameters drawn within their
+uncertainty. A non-finite history or floor stops the measurement
+(:class:`housner.scenarios.diagnosis.selection.record_scoring.NonFiniteHistory`,
+:class:`~housner.scenarios.diagnosis.selection.record_scoring.NonFiniteScore`). The replica step by step is in
+``docs/explanation/diagnosis.md`` ("The floor"); the real held-out errors are tested against it by
 :func:`housner.scenarios.diagnosis.verdict.residual_test.residual_test`.
-
-A replica whose truth or scoring model gives a non-finite theta history stops the measurement
-(:class:`housner.scenarios.diagnosis.selection.record_scoring.NonFiniteHistory`, naming the model and the record),
-and so does a floor that comes out non-finite
-(:class:`~housner.scenarios.diagnosis.selection.record_scoring.NonFiniteScore`):
-a floor made of clipped errors would pass for a measured one.
 """
 
 from __future__ import annotations
@@ -114,7 +85,7 @@ def measure_floor(
     seed: int = 0,
     family: str = "any",
 ) -> Floor:
-    """Parametric bootstrap of the error a correct model shows on each record (module docstring).
+    """Parametric bootstrap of the error a correct model shows on each record (``docs/explanation/diagnosis.md``).
 
     Parameters
     ----------
@@ -152,7 +123,8 @@ def measure_floor(
     forms = []
     for b in range(n_replicas):
         rng = np.random.default_rng(np.random.SeedSequence([seed, 4241, b]))
-        # the replica's truth: the fitted model, produced by "another correct integrator" (module docstring)
+        # the replica's truth: the fitted model, produced by "another correct integrator"
+        # (docs/explanation/diagnosis.md, "The floor")
         form = ModelForm.draw(np.random.default_rng(np.random.SeedSequence([seed, 4242, b])), acc_noise, family)
         forms.append(form)
         truth = form.simulate(spec, recs, truth_eff, settings)

@@ -1,33 +1,14 @@
 """What two correct integrators of the same model differ in: the model-form part of the diagnosis' floor.
 
-A measurement is never produced by the model's own integrator. Two correct
-solvers of Housner's equation, fed the same recorded table acceleration,
-differ in conventions that no campaign states and none can recover:
-
-* what the table did between two samples: held over the interval, or
-  linear between the samples (:data:`CONVENTIONS`);
-* when, inside its interval, a sample was taken: acquisition chains skew the
-  channels of one recorder by a fraction of a sample (:data:`SHIFT_SAMPLES`);
-* the amplitude to a part in a thousand (:data:`SCALE_SD`);
-* the rest and re-uplift rule and its threshold (:data:`REST_TOL_RANGE`);
-* the integrator's step (:data:`SUBSTEP_FACTORS`);
-* the noise of the acceleration channel, which the model is fed and the
-  block never felt (:func:`acc_channel_noise`).
-
-Rocking under a ground motion is chaotic: on the ``elcentro`` motions a
-shift of the input by 20 us, or a scale of 1.001, moves half the records'
-theta_max by more than 3 %. So these differences are not small next to the
-sensor noise; they are what a correct model scores on a record. The floor of
-:func:`housner.scenarios.diagnosis.verdict.correct_model_floor.measure_floor` draws one :class:`ModelForm` per
-replica and produces its "measurement" with it.
-
-The ranges are conventions, not fits: half a sample is the most that a
-sample-time convention can move the input (a sample stands for its
-interval's start, middle or end); 1e-3 is the amplitude change the chaos
-already resolves; the rest rule spans the thresholds of published and our
-own test solvers (1e-9 to 1e-4 alpha of next peak, the latter the rest rule
-|theta'| < 1e-4 rad/s of a generator written apart); the step spans 1-4 x the
-library's. None was tuned on a campaign.
+A measurement is never produced by the model's own integrator. Two correct solvers of Housner's equation,
+fed the same recorded table acceleration, differ in conventions that no campaign states and none can
+recover: the table between samples (:data:`CONVENTIONS`), the samples' timing (:data:`SHIFT_SAMPLES`), the
+amplitude (:data:`SCALE_SD`), the rest rule (:data:`REST_TOL_RANGE`), the step (:data:`SUBSTEP_FACTORS`) and
+the acceleration channel's noise (:func:`acc_channel_noise`). The floor of
+:func:`housner.scenarios.diagnosis.verdict.correct_model_floor.measure_floor` draws one :class:`ModelForm`
+per replica, from nested families, and produces its "measurement" with it. Why these differences matter
+(rocking is chaotic), and why each range is a convention and not a fit, are in
+``docs/explanation/diagnosis.md`` ("The floor").
 """
 
 from __future__ import annotations
@@ -120,7 +101,7 @@ def _acc_channel_noise(campaign) -> float:
 
 @dataclass(frozen=True)
 class ModelForm:
-    """One correct integrator's conventions (module docstring).
+    """One correct integrator's conventions (``docs/explanation/diagnosis.md``, "The floor").
 
     Attributes
     ----------
