@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -18,7 +17,7 @@ import numpy as np
 from housner.effects import effect_class
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
-from housner.scenarios.execution.typed_json import JsonValue, floats, from_data, to_data
+from housner.scenarios.execution.typed_json import JsonValue, WrittenAsResult, floats, from_data, to_data
 
 __all__ = [
     "Candidate",
@@ -404,7 +403,7 @@ class DiagnosisResult(JsonValue):
 
 
 @dataclass(eq=False)
-class Diagnosis:
+class Diagnosis(WrittenAsResult):
     """The result of :func:`diagnose`.
 
     Attributes
@@ -546,14 +545,6 @@ class Diagnosis:
             summary=self.summary(),
             elapsed_s=self.elapsed,
         )
-
-    def to_dict(self) -> dict:
-        """The diagnosis JSON's data (:meth:`DiagnosisResult.to_dict`)."""
-        return self.result().to_dict()
-
-    def to_json(self, path: str | Path | None = None) -> str:
-        """The diagnosis JSON's text; also written to ``path`` when given."""
-        return self.result().to_json(path)
 
 
 def _fmt_num(v: float) -> str:

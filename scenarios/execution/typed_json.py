@@ -13,7 +13,7 @@ from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
-__all__ = ["JsonValue", "floats", "from_data", "number", "to_data"]
+__all__ = ["JsonValue", "WrittenAsResult", "floats", "from_data", "number", "to_data"]
 
 T = TypeVar("T", bound="JsonValue")
 
@@ -136,3 +136,19 @@ class JsonValue:
     @classmethod
     def from_json(cls: type[T], text: str) -> T:
         return cls.from_dict(json.loads(text))
+
+
+class WrittenAsResult:
+    """An object whose JSON is that of its value ``result()`` (a :class:`JsonValue`): a computation's outcome that
+    holds more than its file (the records, the comparisons) and writes what its file holds."""
+
+    def result(self) -> JsonValue:
+        raise NotImplementedError
+
+    def to_dict(self) -> dict:
+        """The JSON's data (:meth:`result`'s)."""
+        return self.result().to_dict()
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """The JSON's text; also written to ``path`` when given."""
+        return self.result().to_json(path)

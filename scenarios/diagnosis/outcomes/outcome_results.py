@@ -6,13 +6,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import ClassVar
 
 import numpy as np
 
 from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores
-from housner.scenarios.execution.typed_json import JsonValue, floats, from_data, to_data
+from housner.scenarios.execution.typed_json import JsonValue, WrittenAsResult, floats, from_data, to_data
 
 __all__ = [
     "Miss",
@@ -147,7 +146,7 @@ class OutcomeGeometry:
 
 
 @dataclass
-class OutcomeDiagnosis:
+class OutcomeDiagnosis(WrittenAsResult):
     """The mission loop on a campaign's outcome records (:func:`diagnose_outcomes`).
 
     Attributes
@@ -252,14 +251,6 @@ class OutcomeDiagnosis:
             summary=self.summary(),
             elapsed_s=self.elapsed,
         )
-
-    def to_dict(self) -> dict:
-        """The outcome diagnosis JSON's data (:meth:`OutcomeDiagnosisResult.to_dict`)."""
-        return self.result().to_dict()
-
-    def to_json(self, path: str | Path | None = None) -> str:
-        """The JSON text (non-finite numbers as null); also written to ``path`` when given."""
-        return self.result().to_json(path)
 
 
 @dataclass(frozen=True)

@@ -357,15 +357,7 @@ def _steps_at_full_rate(full_setup: TrialSetup, state: SearchState) -> tuple[Ste
     for i, (step, model, level) in enumerate(zip(state.steps, state.step_models, state.step_levels, strict=True)):
         if i == 0:
             held, train_loss = plain_errors.copy(), every.weigh(plain_errors)
-            steps.append(
-                replace(
-                    step,
-                    train_error=train_loss,
-                    heldout_error=float(held.mean()),
-                    heldout_se=sem(held),
-                    heldout_errors=held,
-                )
-            )
+            steps.append(_rescored(step, held, train_loss))
         else:
             held, train_loss = full_setup.scorers.out_of_fold(model), every.loss(build_model(model.full))
             judged = judge(previous, held, level, full_setup.cv.noise_floor)
@@ -376,16 +368,27 @@ def _steps_at_full_rate(full_setup: TrialSetup, state: SearchState) -> tuple[Ste
                     f"{level:.2g}, as it was on every {full_setup.cv.decimation}th sample; it stays in the ladder."
                 )
             steps.append(
-                replace(
+                _rescored(
                     step,
-                    train_error=train_loss,
-                    heldout_error=float(held.mean()),
-                    heldout_se=sem(held),
+                    held,
+                    train_loss,
                     improvement=judged.improvement,
                     improvement_se=judged.improvement_se,
                     significant=judged.significant if step.by_hand else step.significant,
-                    heldout_errors=held,
                 )
             )
         previous = held
     return tuple(steps)
+
+
+def _rescored(step: Step, held, train_loss: float, **judged) -> Step:
+    """``step`` with its training error, its out-of-fold errors ``held`` [alpha] and what ``judged`` gives taken
+    again."""
+    return replace(
+        step,
+        train_error=train_loss,
+        heldout_error=float(held.mean()),
+        heldout_se=sem(held),
+        heldout_errors=held,
+        **judged,
+    )
