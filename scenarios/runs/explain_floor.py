@@ -75,7 +75,7 @@ PERTURBATIONS: dict[str, ModelForm] = {
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ModelFormFloor(AgreementShares):
     """:class:`housner.scenarios.runs.chaos.AgreementShares` under another correct integrator's conventions
     (one share per perturbation of :data:`PERTURBATIONS`)."""

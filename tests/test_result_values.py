@@ -1,0 +1,260 @@
+"""Results as values (issue 49): every results file of a run or a study is written from a typed value, and that
+value read back from what it wrote is the value itself.
+
+Each value is built by the real code on a small input (a scenario of a few motions, a small study, a campaign
+of a few records), written as its file writes it (non-finite numbers as that file writes them) and read back:
+``T.from_json(x.to_json()) == x``, through the JSON text. A run directory also reads back byte for byte: its
+run.json written again from the value read is the file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from housner.scenarios.execution.options import RunOptions
+from housner.scenarios.execution.rundir import (
+    EngineFacts,
+    FailedRecord,
+    Provenance,
+    RunAnalysis,
+    RunMeta,
+    ScenarioCopy,
+    SpecimenFacts,
+    jsonable,
+)
+from housner.scenarios.execution.values import JsonValue, same
+from housner.scenarios.motions.build import BandCheck, MatchedGain, MotionFacts, RecordFacts
+from housner.scenarios.runs.campaign_run import CampaignFacts, OutcomeScore
+from housner.scenarios.runs.chaos import EngineErrors
+from housner.scenarios.runs.run import run_scenario
+from housner.scenarios.runs.spread import EquivalentAmplitudes, RecordGap, Table2Spread
+from housner.scenarios.runs.view import Run
+from housner.scenarios.studies.study import StudyFits, StudyMeta, StudySettings, run_study
+
+MINI = """name = "mini"
+description = "four matched El Centro motions, Table 2 and its spread"
+[specimen]
+preset = "bachmann2017"
+[motions]
+source = "rdk"
+record = "elcentro"
+model = "matched"
+n = 4
+seed = 2017
+prototype_height = 5.0
+[engines]
+names = ["housner", "mujoco"]
+[analysis]
+reference = "housner"
+paper_percentiles = { 25 = 0.37, 50 = 0.77, 75 = "overturn" }
+paper_note = "the paper's own motions are not available"
+seed_spread = 2
+EFFECTS"""
+
+STUDY = """name = "tiny-study"
+[specimen]
+preset = "bachmann2017"
+[motions]
+source = "rdk"
+record = "elcentro"
+model = "rdk2010"
+n = 4
+seed = 5
+prototype_height = 5.0
+[engines]
+names = ["housner", "pybullet"]
+[study]
+levels = [0.8, 1.6, 3.2]
+prototype_heights = [2.5, 10.0]
+thresholds = [0.5, 1.0]
+bootstrap = 100
+"""
+
+
+def round_trip(value: JsonValue, nonfinite: str = "string") -> JsonValue:
+    """``value`` written as its file writes it and read back; asserts the value read is ``value``."""
+    cls = type(value)
+    assert cls.from_json(value.to_json()) == value  # the JSON data itself
+    text = json.dumps(jsonable(value.to_json(), nonfinite=nonfinite))
+    back = cls.from_json(json.loads(text))
+    assert back == value, cls.__name__
+    assert json.dumps(jsonable(back.to_json(), nonfinite=nonfinite)) == text  # and writes the same file again
+    return back
+
+
+@pytest.fixture(scope="module")
+def options(tmp_path_factory):
+    return RunOptions(jobs=1, progress=False, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+@pytest.fixture(scope="module")
+def mini(tmp_path_factory, options):
+    """A run of the analytic model and MuJoCo on four motions: Table 2, its spread, the engines' errors."""
+    root = tmp_path_factory.mktemp("values")
+    scenario = root / "mini.toml"
+    scenario.write_text(MINI.replace("EFFECTS", ""))
+    done = run_scenario(scenario, out=root / "run", options=options)
+    return done, Run.load(root / "run")
+
+
+def test_run_json_is_its_value_written(mini):
+    done, view = mini
+    meta = done.meta
+    # every table of run.json is a value of its own, typed
+    assert isinstance(meta.scenario, ScenarioCopy) and meta.scenario.name == "mini"
+    assert isinstance(meta.specimen, SpecimenFacts) and meta.specimen.alpha_rad > 0
+    assert isinstance(meta.motions, MotionFacts) and meta.motions.source == "rdk" and meta.motions.S == 10.0
+    assert isinstance(meta.motions.record, RecordFacts) and meta.motions.record.name == "elcentro-peer1999"
+    assert isinstance(meta.motions.band_check, BandCheck) and meta.motions.band_check.psa.bands
+    assert isinstance(meta.motions.matched_gain, MatchedGain) and meta.motions.matched_gain.gain
+    assert all(isinstance(v, EngineFacts) for v in meta.engines.values()) and meta.engines["mujoco"].version
+    assert isinstance(meta.analysis, RunAnalysis) and meta.analysis.paper_targets == {25: 0.37, 50: 0.77, 75: math.inf}
+    assert isinstance(meta.engine_errors["mujoco"], EngineErrors) and len(meta.engine_errors["mujoco"].amplitudes) == 5
+    assert isinstance(meta.table2_spread, Table2Spread) and meta.table2_spread.k == 2
+    assert set(meta.table2_spread.summary) == {25, 50, 75}
+    assert isinstance(meta.provenance, Provenance) and meta.provenance.versions["housner"]
+    # the value, the file and the value read back from the file
+    round_trip(meta)
+    # what Run.load reads is what the run wrote, with the completion marker and content key of the write
+    assert view.meta.complete is True and set(view.meta.content) == {
+        "results.parquet",
+        "histories.parquet",
+        "motions.npz",
+    }
+    assert replace(view.meta, complete=None, content=None) == meta
+    text = (done.out / "run.json").read_text()
+    again = json.dumps(jsonable(RunMeta.from_json(json.loads(text)).to_json()), indent=2)
+    assert again == text  # byte for byte: the file read and written again is the file
+
+
+def test_each_table_of_run_json_reads_back_as_itself(mini):
+    done, _ = mini
+    meta = done.meta
+    for value in (
+        meta.scenario,
+        meta.specimen,
+        meta.motions,
+        meta.motions.record,
+        meta.motions.band_check,
+        meta.motions.matched_gain,
+        meta.analysis,
+        meta.table2_spread,
+        meta.provenance,
+        *meta.engines.values(),
+        *meta.engine_errors.values(),
+    ):
+        round_trip(value)
+
+
+def test_an_engine_whose_errors_could_not_be_measured_reads_back_with_its_reason():
+    failed = EngineErrors(engine="flaky", error="EngineError: solver diverged")
+    assert failed.to_json() == {"error": "EngineError: solver diverged"}
+    assert EngineErrors.from_json(failed.to_json()).error == failed.error
+
+
+def test_the_record_gap_and_the_equivalent_amplitudes_are_values(mini):
+    _, view = mini
+    gap = view.record_gap
+    assert isinstance(gap, RecordGap) and gap.n_ensemble == 4 and len(gap.band_periods_s) == 16
+    round_trip(gap)
+    factors = view.paper_factors
+    assert isinstance(factors, EquivalentAmplitudes) and set(factors.factors) == {25.0, 50.0, 75.0}
+    round_trip(factors)
+
+
+def test_a_run_with_effects_and_a_failed_record(tmp_path, options):
+    """The [[effects]] series' facts and a failed record read back as written."""
+    scenario = tmp_path / "eff.toml"
+    scenario.write_text(
+        MINI.replace("EFFECTS", '[[effects]]\nname = "restitution"\nr = 0.93\n')
+        .replace("seed_spread = 2", "seed_spread = 0")
+        .replace('names = ["housner", "mujoco"]', 'names = ["housner"]')
+    )
+    done = run_scenario(scenario, out=tmp_path / "run", options=options)
+    meta = done.meta
+    assert meta.effects is not None and meta.effects.effects[0].to_json() == {"name": "restitution", "r": 0.93}
+    assert meta.effect_series == {"housner + restitution(r=0.93)": "housner"}
+    round_trip(meta)
+    record = FailedRecord(engine="mujoco", motion_id=3, motion_name="rdk 3", error="EngineError: NaN in qpos")
+    assert round_trip(record) == record
+
+
+def test_study_json_and_fragility_json_are_their_values_written(tmp_path, options):
+    scenario = tmp_path / "study.toml"
+    scenario.write_text(STUDY)
+    res = run_study(scenario, out=tmp_path / "study", options=options)
+    assert isinstance(res.meta, StudyMeta) and isinstance(res.meta.study, StudySettings)
+    assert res.meta.study.prototype_heights == (2.5, 10.0) and res.meta.study.reference == "housner"
+    round_trip(res.meta, "null")
+    fits = StudyFits(tuple(res.fits), tuple(res.comparisons))
+    assert len(fits.fits) == 4 and len(fits.comparisons) == 2
+    assert all(isinstance(f.median, float) and isinstance(f.ok, bool) for f in fits.fits)
+    round_trip(fits, "null")
+    # the files themselves: read back, written again, the same bytes
+    for name, cls in (("study.json", StudyMeta), ("fragility.json", StudyFits)):
+        text = (tmp_path / "study" / name).read_text()
+        again = json.dumps(jsonable(cls.from_json(json.loads(text)).to_json(), nonfinite="null"), indent=1)
+        assert again == text, name
+
+
+def test_a_campaign_run_keeps_its_campaign_and_outcome_scores(tmp_path, options):
+    dt = 0.01
+    rng = np.random.default_rng(5)
+    root = tmp_path / "camp"
+    (root / "records").mkdir(parents=True)
+    records = ""
+    for i in range(6):
+        f, amp = rng.uniform(2.0, 6.0), rng.uniform(0.05, 0.35) * 9.80665
+        t = np.arange(0.0, 1.0 / f, dt)
+        a = np.concatenate((amp * np.sin(2 * np.pi * f * t), np.zeros(int(3.0 / dt))))
+        rows = "\n".join(f"{k * dt:.3f},{x:.6g}" for k, x in enumerate(a))
+        (root / "records" / f"r{i}.csv").write_text(f"time,ground_acc\n{rows}\n")
+        records += (
+            f'[[record]]\nid = "r{i}"\nkind = "ground_motion"\nfile = "records/r{i}.csv"\n'
+            f"overturned = {'true' if i % 2 else 'false'}\n"
+        )
+    (root / "campaign.toml").write_text(
+        f'name = "small"\n[specimen]\nheight = 0.6\nwidth = 0.06\ndepth = 0.3\nmass = 50.0\n{records}'
+    )
+    from housner.scenarios.runs.campaign_run import run_campaign
+
+    done = run_campaign(root, engines=["housner"], out=tmp_path / "run", options=options)
+    assert isinstance(done.meta.campaign, CampaignFacts) and done.meta.campaign.n_outcomes == 6
+    round_trip(done.meta)
+    round_trip(done.meta.campaign)
+    (score,) = Run.load(tmp_path / "run").outcome_scores
+    assert isinstance(score, OutcomeScore) and score.n == 6 and len(score.accuracy_ci) == 2
+    round_trip(score)
+
+
+def test_equality_is_the_results_not_the_objects():
+    """NaN equals NaN (a missing number), a tuple its JSON list; a different number differs."""
+    a = EngineErrors("x", (0.5,), (math.nan,), (1e-3,), 0.001)
+    assert a == EngineErrors("x", [0.5], [float("nan")], [1e-3], 0.001)
+    assert a != EngineErrors("x", (0.5,), (1e-3,), (1e-3,), 0.001)
+    assert same({"a": [1.0, math.nan]}, {"a": (1.0, math.nan)}) and not same({"a": 1}, {"b": 1})
+
+
+def test_run_json_of_an_earlier_version_still_loads(tmp_path):
+    """A run.json without the keys of later versions: the missing tables empty, the unknown keys kept."""
+    old = {
+        "scenario": {"name": "old", "description": "before typed values"},
+        "specimen": {"name": "block", "height_m": 0.5, "alpha_rad": 0.15},
+        "motions": {"source": "record", "S": 1.0, "custom": 3},
+        "engines": {"housner": {"settings": {"r": None}, "version": "0.0.9", "wall_s": "nan", "cached": 0}},
+        "analysis": {"reference": "housner"},
+        "failures": [],
+        "wall_s": {"total": 1.0},
+        "provenance": {"versions": {"housner": "0.0.9"}},
+        "something_new": {"kept": True},
+    }
+    meta = RunMeta.from_json(old)
+    assert meta.scenario.name == "old" and meta.specimen.alpha_rad == 0.15 and meta.motions.extra == {"custom": 3}
+    assert math.isnan(meta.engines["housner"].wall_s) and meta.engine_errors == {} and meta.table2_spread is None
+    assert meta.extra == {"something_new": {"kept": True}}
+    assert jsonable(meta.to_json()) == {**old, "engine_errors": {}}  # the same keys and values, and the new table
