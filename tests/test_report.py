@@ -18,6 +18,7 @@ from shared import windowed_sines
 from housner import GroundMotion, Specimen
 from housner.engines.analytic import HousnerEngine
 from housner.engines.base import ENGINES, register_engine
+from housner.engines.tuning import TuningResult
 from housner.errors import DataFileError
 from housner.reports import figures
 from housner.reports.run import page as html
@@ -565,7 +566,7 @@ def test_tuning_series_are_one_line_per_sample_step_sorted_by_amplitude(tuned_ru
 def test_real_tuning_files_give_monotone_series():
     for engine in ("mujoco", "pybullet"):
         d = json.loads((ROOT / "engines" / "models" / f"tuning-{engine}.json").read_text())
-        curves, decay = tuning_section._tuning_series(d)
+        curves, decay = tuning_section._tuning_series(TuningResult.from_json(d))
         n_steps = len(set(d["table"]["dt"]))
         assert len(curves) == n_steps and len(decay) == n_steps
         for a, _ in curves.values():

@@ -12,10 +12,17 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 
+from housner import Specimen
+from housner._values import JsonValue, same
+from housner.engines.base import get_engine
+from housner.engines.tuning import TuningResult, tune
+from housner.scan import PlanarSide, ScanSpecimenFacts, specimen_from_mesh
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.rundir import (
     EngineFacts,
@@ -27,10 +34,13 @@ from housner.scenarios.execution.rundir import (
     SpecimenFacts,
     jsonable,
 )
-from housner.scenarios.execution.values import JsonValue, same
 from housner.scenarios.motions.build import BandCheck, MatchedGain, MotionFacts, RecordFacts
 from housner.scenarios.runs.campaign_run import CampaignFacts, OutcomeScore
-from housner.scenarios.runs.chaos import EngineErrors
+from housner.scenarios.runs.chaos import ChaosFloor, EngineErrors
+from housner.scenarios.runs.explain import Explanation, MapsExplained, explain_engine
+from housner.scenarios.runs.explain_floor import FloorParts
+from housner.scenarios.runs.frontier import Frontier, FrontierPoint, engine_frontier
+from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
 from housner.scenarios.runs.run import run_scenario
 from housner.scenarios.runs.spread import EquivalentAmplitudes, RecordGap, Table2Spread
 from housner.scenarios.runs.view import Run
@@ -258,3 +268,67 @@ def test_run_json_of_an_earlier_version_still_loads(tmp_path):
     assert math.isnan(meta.engines["housner"].wall_s) and meta.engine_errors == {} and meta.table2_spread is None
     assert meta.extra == {"something_new": {"kept": True}}
     assert jsonable(meta.to_json()) == {**old, "engine_errors": {}}  # the same keys and values, and the new table
+
+
+# ----------------------------------------------------------------------------
+# the engines' stored measurements: tune, frontier, explain, impact maps; the specimen of a scan
+MODELS = Path(__file__).resolve().parents[1] / "engines" / "models"
+
+
+def test_the_tune_json_is_its_value_written():
+    tuned = tune("pybullet", Specimen.bachmann2017(), candidates=[get_engine("pybullet").settings()], progress=False)
+    assert isinstance(tuned, TuningResult) and len(tuned.candidates) == 1 and len(tuned.table)
+    text = json.dumps(tuned.to_json(), indent=2, default=str)  # as `housner tune --json` writes it
+    back = TuningResult.from_json(json.loads(text))
+    assert back == tuned and json.dumps(back.to_json(), indent=2, default=str) == text
+    # the shipped tuning files read back with the same keys and values (a derived key an old file lacks is added)
+    for f in sorted(MODELS.glob("tuning-*.json")):
+        raw = json.loads(f.read_text())
+        again = json.loads(json.dumps(TuningResult.from_json(raw).to_json(), default=str))
+        assert {k: again[k] for k in raw} == raw and set(again) - set(raw) <= {"reached_r"}, f.name
+
+
+def test_the_frontier_json_is_its_value_written(options):
+    fr = engine_frontier("pybullet", "elcentro", n_motions=3, axes={"timestep": (1 / 1000, 1 / 500)}, options=options)
+    assert isinstance(fr, Frontier) and all(isinstance(p, FrontierPoint) for p in fr.points)
+    assert all(isinstance(p.floor_parts, FloorParts) for p in fr.points if not p.error)
+    back = round_trip(fr, "null")
+    assert back.to_dict() == fr.to_dict() == json.loads(json.dumps(fr.to_dict()))
+    for f in sorted(MODELS.glob("frontier-*.json")):
+        raw = json.loads(f.read_text())
+        assert Frontier.from_dict(raw).to_dict() == raw, f.name
+
+
+def test_the_explain_json_is_its_value_written(options, tmp_path):
+    expl = explain_engine("housner", "elcentro", n_motions=4, effects=["restitution"], options=options)
+    assert isinstance(expl, Explanation) and isinstance(expl.maps, MapsExplained) and expl.details is not None
+    assert isinstance(expl.details.chaos_floor, ChaosFloor) and isinstance(expl.maps.maps, EngineMaps)
+    back = round_trip(expl, "null")
+    assert back.to_dict() == expl.to_dict()
+    round_trip(expl.maps.departures, "null")
+    round_trip(expl.details.model_form_floor, "null")
+    # the shipped explanations read back and write the very same file
+    for f in sorted(MODELS.glob("explain-*.json")):
+        text = f.read_text()
+        assert json.dumps(Explanation.from_json(json.loads(text)).to_dict(), indent=2) == text.rstrip("\n"), f.name
+
+
+def test_the_impact_maps_json_is_its_value_written():
+    maps = measure_maps("housner", Specimen.bachmann2017())
+    assert EngineMaps.from_json(maps.to_json()) == maps
+    # NaN bins (no impact fell there) equal themselves; a changed bin does not
+    ratios = list(maps.impacts["ratio_median"])
+    ratios[0] = ratios[0] + 1e-3
+    other = replace(maps, impacts={**maps.impacts, "ratio_median": ratios})
+    assert other != maps and EngineMaps.from_json(other.to_json()) == other
+
+
+def test_the_specimen_json_is_its_value_written(tmp_path):
+    base = [(x, y, 0.0) for x in (-0.1, 0.1) for y in (-0.1, 0.1)]
+    pts = base + [(x, y, 0.5) for x in (-0.1, 0.0) for y in (-0.1, 0.1)]
+    trimesh.convex.convex_hull(np.array(pts)).export(tmp_path / "rock.obj")
+    scan = specimen_from_mesh(tmp_path / "rock.obj", azimuth=30.0)
+    facts = scan.facts()
+    assert isinstance(facts, ScanSpecimenFacts) and isinstance(facts.pos, PlanarSide) and facts.pos.b > facts.neg.b
+    text = json.dumps(facts.to_json(), indent=1)  # as `housner specimen --json` writes it
+    assert ScanSpecimenFacts.from_json(json.loads(text)) == facts and facts.to_json() == scan.to_dict()

@@ -54,10 +54,10 @@ import numpy as np
 import pandas as pd
 
 import housner
+from housner._values import JsonValue, json_number, plain, read_as
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
 from housner.scenarios.execution.tables import REQUIRED_COLUMNS
-from housner.scenarios.execution.values import JsonValue, json_number, plain, read_as
 
 if TYPE_CHECKING:
     from housner.scenarios.motions.build import MotionFacts

@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.errors import one_line, unknown_choice
 from housner.motion import GroundMotion
 from housner.pulse_response import pulses
-from housner.scenarios.execution.values import JsonValue
 from housner.scenarios.motions import bands, rdk, rdk_match
 from housner.scenarios.motions.records import load_record
 

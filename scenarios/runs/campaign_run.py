@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from housner._values import JsonValue
 from housner.engines.base import ENGINES, engine_class
 from housner.errors import unknown_choice
 from housner.motion import GroundMotion
@@ -53,7 +54,6 @@ from housner.scenarios.execution.rundir import (
     write_run,
 )
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.execution.values import JsonValue
 from housner.scenarios.motions.build import MotionFacts
 from housner.scenarios.runs.run import RunResult
 from housner.specimen import Specimen

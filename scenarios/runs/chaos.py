@@ -39,11 +39,11 @@ from typing import Any
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.engines.base import RECORD_ERRORS, Engine, get_engine
 from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
 from housner.scenarios.execution.cache import code_version, content_key, store_text
-from housner.scenarios.execution.values import JsonValue
 from housner.specimen import Specimen
 from housner.statistics.ensemble_stats import per_record_agreement
 from housner.statistics.proportions import wilson_interval

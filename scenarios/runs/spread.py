@@ -9,11 +9,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.engines.base import get_engine
 from housner.scenarios.catalogue.scenario import Scenario
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.execution.values import JsonValue
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 from housner.scenarios.motions.records import arias_intensity

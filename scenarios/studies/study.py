@@ -60,6 +60,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
+from housner._values import JsonValue
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.scenario import Scenario, load_scenario
@@ -68,7 +69,6 @@ from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import EngineFacts, Provenance, ScenarioCopy, SpecimenFacts, jsonable
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.execution.values import JsonValue
 from housner.scenarios.execution.workers import Progress
 from housner.scenarios.motions.build import MotionFacts, build_motions
 from housner.scenarios.motions.elastic import response_spectrum

@@ -154,11 +154,17 @@ class JsonValue:
     Subclasses are ``@dataclass(frozen=True, eq=False)``: equality is this class's (NaN equal to NaN).
     A field named ``extra`` keeps the keys of a file this version does not know, written after the
     fields. A field whose value is None is left out of :meth:`to_json`, except those named in
-    :attr:`_ALWAYS` (written as null, as the file always held them).
+    :attr:`_ALWAYS` (written as null, as the file always held them) or in :attr:`_EMPTY_WHEN_NONE` (a table not
+    measured, written as an empty one); a field of :attr:`_NULL_IS_NAN` reads null as NaN.
     """
 
     #: Fields written even when None.
     _ALWAYS: ClassVar[tuple[str, ...]] = ()
+    #: Optional numbers (``float | None``) whose key, when present, holds a number: null there is NaN (a file that
+    #: writes a missing number as null), None only where the key is absent.
+    _NULL_IS_NAN: ClassVar[tuple[str, ...]] = ()
+    #: Tables written as an empty one (``{}``) when None (not measured), and read back as None when empty.
+    _EMPTY_WHEN_NONE: ClassVar[tuple[str, ...]] = ()
 
     def __eq__(self, other: object) -> bool:
         if type(other) is not type(self):
@@ -172,9 +178,9 @@ class JsonValue:
         out = {}
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name == "extra" or (v is None and f.name not in self._ALWAYS):
+            if f.name == "extra" or (v is None and f.name not in self._ALWAYS + self._EMPTY_WHEN_NONE):
                 continue
-            out[f.name] = plain(v)
+            out[f.name] = {} if v is None and f.name in self._EMPTY_WHEN_NONE else plain(v)
         out.update(getattr(self, "extra", None) or {})
         return out
 
@@ -182,6 +188,8 @@ class JsonValue:
     def from_json(cls, data: Any):
         """The value of JSON data written by :meth:`to_json` (or by an earlier version: a missing key takes the
         field's default, a key of no field goes to ``extra`` when the class keeps one)."""
+        if isinstance(data, cls):
+            return data
         data = data if isinstance(data, Mapping) else {}
         hints = _hints(cls)
         kwargs, known = {}, set()
@@ -190,7 +198,13 @@ class JsonValue:
                 continue
             known.add(f.name)
             if f.name in data:
-                kwargs[f.name] = read_as(hints[f.name], data[f.name])
+                v = data[f.name]
+                if f.name in cls._EMPTY_WHEN_NONE and not v:
+                    kwargs[f.name] = None
+                elif v is None and f.name in cls._NULL_IS_NAN:
+                    kwargs[f.name] = math.nan
+                else:
+                    kwargs[f.name] = read_as(hints[f.name], v)
             elif f.default is MISSING and f.default_factory is MISSING:
                 kwargs[f.name] = read_as(hints[f.name], None)
         if "extra" in {f.name for f in fields(cls)}:
