@@ -20,13 +20,13 @@ import trimesh
 
 from housner import Specimen
 from housner._values import JsonValue, same
-from housner.engines.base import get_engine
+from housner.engines.analytic import HousnerEngine
+from housner.engines.base import ENGINES, get_engine, register_engine
 from housner.engines.tuning import TuningResult, tune
 from housner.scan import PlanarSide, ScanSpecimenFacts, specimen_from_mesh
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.rundir import (
     EngineFacts,
-    FailedRecord,
     Provenance,
     RunAnalysis,
     RunMeta,
@@ -35,7 +35,14 @@ from housner.scenarios.execution.rundir import (
     jsonable,
 )
 from housner.scenarios.motions.build import BandCheck, MatchedGain, MotionFacts, RecordFacts
-from housner.scenarios.runs.campaign_run import CampaignFacts, OutcomeScore
+from housner.scenarios.runs.campaign_run import (
+    CampaignFacts,
+    OutcomeScore,
+    PublishedScore,
+    ScanPivots,
+    published_rows,
+    run_campaign,
+)
 from housner.scenarios.runs.chaos import ChaosFloor, EngineErrors
 from housner.scenarios.runs.explain import Explanation, MapsExplained, explain_engine
 from housner.scenarios.runs.explain_floor import FloorParts
@@ -177,21 +184,45 @@ def test_the_record_gap_and_the_equivalent_amplitudes_are_values(mini):
     round_trip(factors)
 
 
-def test_a_run_with_effects_and_a_failed_record(tmp_path, options):
+@register_engine("values-flaky")
+class FlakyEngine(HousnerEngine):
+    """The analytic engine, except that it fails on the second motion of an ensemble (its name ends in 001)."""
+
+    def _simulate(self, specimen, motion, effects):
+        if motion.name.endswith("001"):
+            raise RuntimeError("solver diverged on purpose")
+        return super()._simulate(specimen, motion, effects)
+
+
+@pytest.fixture
+def flaky():
+    ENGINES.setdefault("values-flaky", FlakyEngine)  # another test file's fixture may have reset the registry
+    yield
+
+
+def test_a_run_with_effects_and_a_failed_record(tmp_path, options, flaky):
     """The [[effects]] series' facts and a failed record read back as written."""
     scenario = tmp_path / "eff.toml"
     scenario.write_text(
         MINI.replace("EFFECTS", '[[effects]]\nname = "restitution"\nr = 0.93\n')
         .replace("seed_spread = 2", "seed_spread = 0")
-        .replace('names = ["housner", "mujoco"]', 'names = ["housner"]')
+        .replace('names = ["housner", "mujoco"]', 'names = ["housner", "values-flaky"]')
     )
-    done = run_scenario(scenario, out=tmp_path / "run", options=options)
+    done = run_scenario(scenario, out=tmp_path / "run", options=replace(options, use_cache=False))
     meta = done.meta
     assert meta.effects is not None and meta.effects.effects[0].to_json() == {"name": "restitution", "r": 0.93}
-    assert meta.effect_series == {"housner + restitution(r=0.93)": "housner"}
+    assert meta.effect_series == {
+        "housner + restitution(r=0.93)": "housner",
+        "values-flaky + restitution(r=0.93)": "values-flaky",
+    }
+    assert [(f.engine, f.motion_id) for f in meta.failures] == [
+        ("values-flaky", 1),
+        ("values-flaky + restitution(r=0.93)", 1),
+    ]
+    assert "solver diverged on purpose" in meta.failures[0].error
     round_trip(meta)
-    record = FailedRecord(engine="mujoco", motion_id=3, motion_name="rdk 3", error="EngineError: NaN in qpos")
-    assert round_trip(record) == record
+    for value in (meta.effects, *meta.effects.effects, *meta.failures):
+        round_trip(value)
 
 
 def test_study_json_and_fragility_json_are_their_values_written(tmp_path, options):
@@ -228,18 +259,26 @@ def test_a_campaign_run_keeps_its_campaign_and_outcome_scores(tmp_path, options)
             f'[[record]]\nid = "r{i}"\nkind = "ground_motion"\nfile = "records/r{i}.csv"\n'
             f"overturned = {'true' if i % 2 else 'false'}\n"
         )
-    (root / "campaign.toml").write_text(
-        f'name = "small"\n[specimen]\nheight = 0.6\nwidth = 0.06\ndepth = 0.3\nmass = 50.0\n{records}'
-    )
-    from housner.scenarios.runs.campaign_run import run_campaign
-
+    # a scan specimen: a prism whose centre of mass lies toward -x, so the planar engines get its two pivots
+    base = [(x, y, 0.0) for x in (-0.1, 0.1) for y in (-0.1, 0.1)]
+    pts = base + [(x, y, 0.5) for x in (-0.1, 0.0) for y in (-0.1, 0.1)]
+    trimesh.convex.convex_hull(np.array(pts)).export(root / "rock.obj")
+    (root / "campaign.toml").write_text(f'name = "small"\n[specimen]\nmesh = "rock.obj"\ndensity = 2600.0\n{records}')
     done = run_campaign(root, engines=["housner"], out=tmp_path / "run", options=options)
-    assert isinstance(done.meta.campaign, CampaignFacts) and done.meta.campaign.n_outcomes == 6
+    facts = done.meta.campaign
+    assert isinstance(facts, CampaignFacts) and facts.n_outcomes == 6
+    assert isinstance(facts.scan, ScanPivots) and facts.scan.b_pos_m > facts.scan.b_neg_m
+    assert [e.name for e in facts.geometry.effects] == ["asymmetric_pivots"] and facts.mesh["density"] == 2600.0
     round_trip(done.meta)
-    round_trip(done.meta.campaign)
+    round_trip(facts)
+    round_trip(facts.scan)
     (score,) = Run.load(tmp_path / "run").outcome_scores
     assert isinstance(score, OutcomeScore) and score.n == 6 and len(score.accuracy_ci) == 2
     round_trip(score)
+    # a published score of another model, for the campaign it was published on
+    (published,) = published_rows("ASU granite shake-table tests 2024, specimen SP1")
+    assert isinstance(published, PublishedScore) and published.n_predicted == 149
+    round_trip(published)
 
 
 def test_equality_is_the_results_not_the_objects():
