@@ -66,8 +66,8 @@ def _record_rank(record, ensembles: dict, sizes) -> None:
             g = record_against_ensemble(spec, record, model, S, ensemble_values=v)
             q = [float(np.percentile(v, x, method="inverted_cdf")) for x in (25, 50, 75)]
             print(
-                f"    {h:5.2f} m {S:6.1f}  {name:9s} {g['record_theta_max_over_alpha']:6.3f} "
-                f"{g['record_percentile']:5.0f} |  {q[0]:5.3f} / {q[1]:5.3f} / {q[2]:5.3f}      "
+                f"    {h:5.2f} m {S:6.1f}  {name:9s} {g.record_theta_max_over_alpha:6.3f} "
+                f"{g.record_percentile:5.0f} |  {q[0]:5.3f} / {q[1]:5.3f} / {q[2]:5.3f}      "
                 f"{np.mean(np.isinf(v)):.2f}"
             )
 

@@ -47,16 +47,16 @@ def scenario_page(
     Returns
     -------
     str
-        A complete HTML5 document; the scenario is named by ``meta.scenario["name"]``, or else by
+        A complete HTML5 document; the scenario is named by ``meta.scenario.name``, or else by
         the directory's name.
     """
     scen = view.meta.scenario
-    name = scen.get("name") or view.path.name
-    created = view.meta.provenance.get("created", "")
+    name = scen.name or view.path.name
+    created = view.meta.provenance.created or ""
     motions = "" if n_motions is None else f"{esc(n_motions)} motions &middot; "
     tags = ", ".join(engine_tag(e, view) for e in view.engines)
     subtitle = (
-        f'<p class="sub">{esc(scen.get("description") or "")}</p>'
+        f'<p class="sub">{esc(scen.description)}</p>'
         f'<p class="sub">{esc(specimen)} &middot; {motions}engines {tags} &middot; reference {esc(view.reference)}'
         f"{' &middot; run ' + esc(created) if created else ''}</p>"
     )

@@ -81,7 +81,7 @@ def maps_figure(maps: Sequence[EngineMaps], reference: str = "housner") -> Figur
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7.5)
     fig.suptitle(
-        f"Departure from Housner's model, free rocking of {spec.get('name', 'the specimen')}, "
+        f"Departure from Housner's model, free rocking of {spec.name or 'the specimen'}, "
         f"sampled every {1e3 * maps[0].dt_s:g} ms, engines at their settings",
         fontsize=11,
     )

@@ -42,33 +42,33 @@ def test_the_factor_undoes_a_known_weakening_of_the_ensemble():
     ms = motions()
     c = 1.02**13
     targets = {25: 0.4, 50: 0.7, 75: math.inf}
-    orig = equivalent_amplitude(SPEC, ms, targets, n_boot=200)["factors"]
-    weak = equivalent_amplitude(SPEC, [m.scaled(amplitude=1.0 / c) for m in ms], targets, n_boot=200)["factors"]
+    orig = equivalent_amplitude(SPEC, ms, targets, n_boot=200).factors
+    weak = equivalent_amplitude(SPEC, [m.scaled(amplitude=1.0 / c) for m in ms], targets, n_boot=200).factors
     for q in orig:
-        assert math.isfinite(orig[q]["factor"])
+        assert math.isfinite(orig[q].factor)
         # 1e-9: the grid points are powers of 1.02 computed separately; the factors are equal to rounding
-        assert weak[q]["factor"] == pytest.approx(c * orig[q]["factor"], rel=1e-9), q
+        assert weak[q].factor == pytest.approx(c * orig[q].factor, rel=1e-9), q
         # (the bootstrap intervals line up too where neither grid cuts them off at its lower end)
         for f in (orig[q], weak[q]):
-            assert f["low"] <= f["factor"] <= f["high"]
+            assert f.low <= f.factor <= f.high
 
 
 def test_the_factor_is_the_first_grid_point_where_the_percentile_reaches_the_target():
     ms = motions()
     for q, target in ((25, 0.3), (75, math.inf)):
         r = equivalent_amplitude(SPEC, ms, {q: target}, n_boot=100)
-        a = r["factors"][float(q)]["factor"]
+        a = r.factors[float(q)].factor
         assert math.isfinite(a)
         # independently: the percentile at the factor reaches the target, one grid step below it does not
         assert pct(ms, q, a) >= target
-        assert pct(ms, q, a / (1.0 + r["step"])) < target
-        assert a in r["grid"]
+        assert pct(ms, q, a / (1.0 + r.step)) < target
+        assert a in r.grid
 
 
 def test_a_target_out_of_reach_is_nan_not_an_error():
     weak = [m.scaled(amplitude=1e-3) for m in motions(4)]
     r = equivalent_amplitude(SPEC, weak, {50: 0.5}, max_factor=2.0, n_boot=50)
-    assert math.isnan(r["factors"][50.0]["factor"])
+    assert math.isnan(r.factors[50.0].factor)
 
 
 @pytest.mark.parametrize(
@@ -94,11 +94,11 @@ def test_seed_spread_runs_through_the_runner_and_its_cache(tmp_path):
 
     scen = load_scenario("elcentro")
     got = seed_spread(scen, 2, n=6, cache_dir=tmp_path)
-    assert got["seeds"] == ensemble_seeds(2017, 2) and got["n_failed"] == 0
-    for j, s in enumerate(got["seeds"]):
+    assert list(got.seeds) == ensemble_seeds(2017, 2) and got.n_failed == 0
+    for j, s in enumerate(got.seeds):
         ms, _ = build_motions(scen, 6, seed=s)
         v = np.array([r.theta_max_over_alpha for r in HousnerEngine().simulate_many(SPEC, ms)])
         for q in (25, 50, 75):
-            assert got["percentiles"][q][j] == float(np.percentile(v, q, method="inverted_cdf"))
+            assert got.percentiles[q][j] == float(np.percentile(v, q, method="inverted_cdf"))
     assert len(list(tmp_path.rglob("*.npz"))) == 12  # every record in the run cache
-    assert seed_spread(scen, 2, n=6, cache_dir=tmp_path)["percentiles"] == got["percentiles"]
+    assert seed_spread(scen, 2, n=6, cache_dir=tmp_path).percentiles == got.percentiles

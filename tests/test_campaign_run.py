@@ -120,9 +120,10 @@ def test_block_campaign_run_scores_the_analytic_model(block, tmp_path, capsys):
     p = np.clip(res["overturned"].to_numpy(float), P_CLIP, 1 - P_CLIP)
     want = outcome_scores(p, y, seed=0).to_dict()
     (row,) = Run.load(out).outcome_scores
+    got = row.to_json()
     for k in ("accuracy", "f1", "log_loss", "tp", "fp", "fn", "tn", "n_predicted", "n_overturned"):
-        assert row[k] == want[k], k
-    assert row["accuracy_ci"] == want["accuracy_ci"] and row["n_failed"] == 0
+        assert got[k] == want[k], k
+    assert list(row.accuracy_ci) == want["accuracy_ci"] and row.n_failed == 0
     assert f"accuracy {want['accuracy']:.3f}" in printed and "clipped to [0.01, 0.99]" in printed
 
     html = (out / "report.html").read_text()
@@ -155,8 +156,8 @@ def test_scan_campaign_gives_planar_engines_the_asymmetric_pivots(scan, tmp_path
         assert r.theta_max_over_alpha == pytest.approx(resp.theta_max_over_alpha, rel=1e-9)
     assert 0 < res["overturned"].sum() < N  # the pulses span both outcomes, so the effect is exercised
     meta = done.meta.campaign
-    assert meta["geometry"]["effects"] == [{"name": "asymmetric_pivots", "e": e}]
-    assert meta["mesh"] == {
+    assert [x.to_json() for x in meta.geometry.effects] == [{"name": "asymmetric_pivots", "e": e}]
+    assert meta.mesh == {
         "mesh": str((scan / "rock.obj").resolve()),
         "azimuth": 0.0,
         "density": 2600.0,
@@ -202,7 +203,7 @@ def test_mesh_engine_gets_the_campaign_mesh_settings(scan, tmp_path, mesh_engine
     assert set(res.loc[res.engine == "test-mesh", "effects"]) == {""}
     assert res.loc[res.engine == "housner", "effects"].str.startswith("asymmetric_pivots").all()
     view = Run.load(out)
-    assert [r["engine"] for r in view.outcome_scores] == ["housner", "test-mesh"]
+    assert [r.engine for r in view.outcome_scores] == ["housner", "test-mesh"]
     # a 3D engine's theta is not the planar block's: no distribution verdict against it, said on the report
     assert view.mesh_engines == ["test-mesh"] and "test-mesh" not in view.verdicts()
     assert "no distribution verdict against the planar block" in (out / "report.html").read_text()
@@ -251,8 +252,8 @@ def test_failed_records_are_counted_and_left_out(block, tmp_path):
     want = outcome_scores(
         np.clip(ok["overturned"].to_numpy(float), P_CLIP, 1 - P_CLIP), ok["observed_overturned"].to_numpy(bool), seed=0
     ).to_dict()
-    assert row["n_failed"] == 1 and row["n"] == N - 1 and row["accuracy"] == want["accuracy"]
-    assert math.isfinite(row["log_loss"])
+    assert row.n_failed == 1 and row.n == N - 1 and row.accuracy == want["accuracy"]
+    assert math.isfinite(row.log_loss)
 
 
 def test_free_vibrations_run_from_their_release_without_an_outcome(block, tmp_path):
@@ -265,4 +266,4 @@ def test_free_vibrations_run_from_their_release_without_an_outcome(block, tmp_pa
     assert done.motions[-1].theta0 == pytest.approx(0.5 * alpha, rel=0.01)
     assert res["status"].eq("ok").all()
     (row,) = Run.load(tmp_path / "run").outcome_scores
-    assert row["n"] == N  # the free vibration has no outcome to score
+    assert row.n == N  # the free vibration has no outcome to score

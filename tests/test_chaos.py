@@ -63,8 +63,10 @@ def test_run_errors_for_every_engine_but_the_reference(motions):
     assert set(out) == {"mujoco"}
     d = out["mujoco"]
     # MuJoCo's tuned contact: r within 0.5 % at every release amplitude (the tuner's tolerance)
-    assert max(abs(x) for x in d["r_rel_errors"]) < 5e-3 and d["r_reference"] == pytest.approx(SPEC.r_housner)
-    assert errors_from_dict(d).eps_r == pytest.approx(d["eps_r"])
+    assert max(abs(x) for x in d.r_rel_errors) < 5e-3 and d.r_reference == pytest.approx(SPEC.r_housner)
+    # run.json's entry: the errors with their RMS, read back as they were
+    stored = json.loads(json.dumps(d.to_json()))
+    assert stored["eps_r"] == pytest.approx(d.eps_r) and errors_from_dict(stored) == d
     # no floor without the analytic model as the reference
     assert run_engine_errors(SPEC, {"mujoco": {}, "pybullet": {}}, motions[:2], reference="mujoco") == {}
 
@@ -81,12 +83,12 @@ def test_errors_are_cached_and_measured_meanwhile(motions, tmp_path, monkeypatch
     assert chaos.run_engine_errors_meanwhile(SPEC, engines, motions[:2], cache_dir=tmp_path)() == first
     assert calls == []  # read back, not measured
     changed = run_engine_errors(SPEC, {"housner": {}, "mujoco": {"timestep": 1e-4}}, motions[:2], cache_dir=tmp_path)
-    assert calls == [1] and changed["mujoco"]["r_rel_errors"] != first["mujoco"]["r_rel_errors"]
+    assert calls == [1] and changed["mujoco"].r_rel_errors != first["mujoco"].r_rel_errors
     entry.write_text("{not json")  # a damaged entry: measured again, and written whole
     assert run_engine_errors(SPEC, engines, motions[:2], cache_dir=tmp_path) == first and calls == [1, 1]
-    assert json.loads(entry.read_text()) == first["mujoco"]
+    assert json.loads(entry.read_text()) == first["mujoco"].to_json()
     monkeypatch.setattr(chaos, "measure_engine_errors", lambda *a, **k: 1 / 0)  # a record error: named
-    assert "ZeroDivisionError" in chaos.run_engine_errors_meanwhile(SPEC, engines, motions[:2])()["mujoco"]["error"]
+    assert "ZeroDivisionError" in chaos.run_engine_errors_meanwhile(SPEC, engines, motions[:2])()["mujoco"].error
     monkeypatch.setattr(chaos, "measure_engine_errors", lambda *a, **k: {}[0])  # a bug: raised where it waits
     with pytest.raises(KeyError):
         chaos.run_engine_errors_meanwhile(SPEC, engines, motions[:2])()

@@ -66,12 +66,12 @@ def test_summary_counts_phases_and_names_records():
         departure(2, eng, eng, DT, ALPHA),
     ]
     s = summarise(deps)
-    assert s["n"] == 3
-    assert s["by_phase"] == {"uplift": 1, "small rocking": 0, "rocking": 1, "never": 1}
-    assert s["records"]["uplift"] == [0] and s["records"]["rocking"] == [1]
-    assert s["impacts_before"]["median"] == 2
-    assert "Of the 3 records" in s["text"] and "1 parts before the first impact" in s["text"]
-    assert summarise([])["text"] == ""
+    assert s.n == 3
+    assert s.by_phase == {"uplift": 1, "small rocking": 0, "rocking": 1, "never": 1}
+    assert s.records["uplift"] == (0,) and s.records["rocking"] == (1,)
+    assert s.impacts_before.median == 2
+    assert "Of the 3 records" in s.text and "1 parts before the first impact" in s.text
+    assert summarise([]).text == ""
 
 
 def test_disagreeing_applies_the_per_record_rule_and_agrees_with_record_agreement():

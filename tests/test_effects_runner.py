@@ -65,8 +65,8 @@ def test_the_effects_series_is_the_engine_with_the_effects_and_the_rows_say_so(t
         df[df.engine == "housner"].theta_max_over_alpha.to_numpy(), df[df.engine == series].theta_max_over_alpha
     )
     # run.json and the written table carry them too
-    assert run.meta.effects == {"label": label, "effects": [{"name": "restitution", "r": 0.9532}]}
-    assert run.meta.engines[series]["engine"] == "housner"
+    assert run.meta.effects.to_json() == {"label": label, "effects": [{"name": "restitution", "r": 0.9532}]}
+    assert run.meta.engines[series].engine == "housner"
     written = pd.read_parquet(tmp_path / "run" / "results.parquet")
     assert set(written.effects) == {"", label}
     assert {k for k, _ in run.histories} == {"housner", series}

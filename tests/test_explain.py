@@ -16,7 +16,7 @@ import pytest
 from housner.cli import main
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.execution.options import RunOptions
-from housner.scenarios.runs.explain import AMPLITUDES, REACH_MARGIN, explain_engine
+from housner.scenarios.runs.explain import AMPLITUDES, REACH_MARGIN, Explanation, explain_engine
 
 
 @pytest.fixture(scope="module")
@@ -33,35 +33,38 @@ def test_the_analytic_engine_explains_itself(control):
     # the engine and the reference are one deterministic solver on the same motions: exactly equal peaks
     assert expl.agreement_plain == 1.0
     # the same peaks give the same distribution: KS distance 0 before (and, with peaks unchanged, after)
-    assert expl.ks["plain"] == 0.0 and (expl.effects or expl.ks["with_effects"] == 0.0)
+    assert expl.ks.plain == 0.0 and (expl.effects or expl.ks.with_effects == 0.0)
     # the issue's criterion: at the floor within REACH_MARGIN (5 points)
     assert expl.agreement >= expl.floor - REACH_MARGIN and expl.reaches_floor
     # the time histories: white noise at EXPLAIN_SIGMA on the model's own samples is what a correct model leaves
-    assert expl.diagnosis["status"] == "no_misfit", expl.diagnosis["text"]
+    assert expl.diagnosis.status == "no_misfit", expl.diagnosis.text
     # the chaos floor of an engine without r and p errors is whole (its p error is the sampled crossing, ~1e-11);
     # the model-form floor is not: a 0.1 % amplitude or a held input moves most records' peaks by more than 3 %
-    assert expl.floor_parts["chaos"] == 1.0
-    assert 0.0 < expl.floor_parts["model_form"] < 1.0 and expl.floor == expl.floor_parts["model_form"]
-    assert expl.details["model_form_floor"]["shares"]["substeps x2"] == 1.0  # the analytic solver is converged
+    assert expl.floor_parts.chaos == 1.0
+    assert 0.0 < expl.floor_parts.model_form < 1.0 and expl.floor == expl.floor_parts.model_form
+    assert expl.details.model_form_floor.shares["substeps x2"] == 1.0  # the analytic solver is converged
     assert expl.n_records == 12 and "Nothing beyond the floor" in expl.remains
     d = expl.to_dict()
     assert json.loads(json.dumps(d))["effects"] == [] and set(d["floor_parts"]) == {"chaos", "model_form"}
+    # the explain JSON is the explanation written: read back, it is the explanation, and writes the same JSON
+    back = Explanation.from_json(json.loads(json.dumps(d)))
+    assert back == expl and back.to_dict() == d
     # the analytic engine's measured maps are Housner's own (ratio 1 to 1e-6, the impact-map tests' tolerance),
     # so Housner + its maps is the model itself: every record agrees, none parts
     m = expl.maps
-    assert m["agreement"] == 1.0 and m["reaches_floor"] and m["departures"]["n"] == 0
+    assert m.agreement == 1.0 and m.reaches_floor and m.departures.n == 0
     # its measured scatter (spread ~1e-11) moves no record by 3 %: the scatter floor is whole
-    assert m["scatter_floor"]["share"] == 1.0 and m["reaches_scatter_floor"]
-    ratios = np.asarray(m["maps"]["impacts"]["ratio_median"], float)
+    assert m.scatter_floor.share == 1.0 and m.reaches_scatter_floor
+    ratios = np.asarray(m.maps.impacts["ratio_median"], float)
     assert np.all(np.abs(ratios[np.isfinite(ratios)] - 1.0) < 1e-6)
     # the maps' rounding (ratios 1 +- 1e-11) moves the peaks by ~1e-10: the two-sample KS distance, a step function
     # of the ordering, then reads one record's step (1/12) where two equal samples read 0
-    assert expl.ks["with_maps"] <= 1.0 / expl.n_records + 1e-12 and "explained by what was measured" in m["remains"]
+    assert expl.ks.with_maps <= 1.0 / expl.n_records + 1e-12 and "explained by what was measured" in m.remains
 
 
 def test_the_campaign_orders_and_flags_its_records(control):
     expl, work = control
-    camp = load_campaign(expl.details["campaign"])
+    camp = load_campaign(expl.details.campaign)
     ids = [r.id for r in camp.records]
     kinds = [r.kind for r in camp.records]
     assert len(camp.free_vibration) == len(AMPLITUDES) and len(camp.ground_motion) == 12 and not camp.skipped
@@ -74,7 +77,7 @@ def test_the_campaign_orders_and_flags_its_records(control):
     assert np.allclose(got, sorted(AMPLITUDES), rtol=1e-3)
     assert {np.sign(r.motion.theta0) for r in camp.free_vibration} == {-1.0, 1.0}
     # an overturned record says so, as the campaign format asks
-    assert sum(r.overturned for r in camp.ground_motion) == expl.details["overturned"]["engine"]
+    assert sum(r.overturned for r in camp.ground_motion) == expl.details.overturned.engine
 
 
 def test_cli_on_mujoco_writes_the_figures(tmp_path, capsys):

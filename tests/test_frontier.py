@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -31,7 +32,7 @@ from housner.scenarios.runs.view import Run
 ENGINES = ("mujoco", "pybullet", "dart", "opensees", "drake")
 
 
-def point(agreement, cost, met=True, n=100, axis="timestep", error="", failed=""):
+def point(agreement, cost, met=True, n=100, axis="timestep", error="", failed="", **measured):
     return FrontierPoint(
         axis,
         {"timestep": cost},
@@ -41,6 +42,7 @@ def point(agreement, cost, met=True, n=100, axis="timestep", error="", failed=""
         failed=failed or ("" if met else "decay"),
         cpu_per_sim_second=cost,
         error=error,
+        **measured,
     )
 
 
@@ -58,18 +60,16 @@ def test_knee_is_the_cheapest_point_not_significantly_below_the_best():
 
 def test_knee_trades_no_checked_accuracy_for_time():
     # MuJoCo's sweep: 0.3 ms meets every check at 0.84x the cost, but scores 0.86 against the defaults' 0.57
-    d, coarse = point(0.28, 0.0171), point(0.28, 0.0144)
-    d.score, coarse.score = 0.571, 0.858
+    d, coarse = point(0.28, 0.0171, score=0.571), point(0.28, 0.0144, score=0.858)
     assert knee([d, coarse]) == 0
-    coarse.score = 0.5  # as well checked: the cheaper step is the knee
+    coarse = replace(coarse, score=0.5)  # as well checked: the cheaper step is the knee
     assert knee([d, coarse]) == 1
 
 
 def test_knee_keeps_the_reports_distribution_verdict():
     # DART's sweep on elcentro (2026-11-27): 1/8 ms checks as well as 1/10 ms at 0.80x the CPU time, but its
     # KS 0.19 would fail the run report's criterion (0.15) that the defaults pass at 0.13
-    d, coarse = point(0.35, 0.0707), point(0.36, 0.0564)
-    d.score, coarse.score, d.ks, coarse.ks = 0.55, 0.46, 0.13, 0.19
+    d, coarse = point(0.35, 0.0707, score=0.55, ks=0.13), point(0.36, 0.0564, score=0.46, ks=0.19)
     assert knee([d, coarse]) == 0
     f = Frontier(
         engine="dart",
@@ -83,15 +83,15 @@ def test_knee_keeps_the_reports_distribution_verdict():
         model_form_floor=0.5,
     )
     assert "fail the run report's KS criterion" in knee_reason(f)
-    coarse.ks = 0.15  # at the criterion: kept
+    coarse = replace(coarse, ks=0.15)  # at the criterion: kept
     assert knee([d, coarse]) == 1
     # defaults that already fail it: a point no worse than theirs may still be chosen
-    d.ks, coarse.ks = 0.16, 0.16
+    d, coarse = replace(d, ks=0.16), replace(coarse, ks=0.16)
     assert knee([d, coarse]) == 1
-    coarse.ks = 0.17
+    coarse = replace(coarse, ks=0.17)
     assert knee([d, coarse]) == 0
     # a sweep where no point ran still says why (it raised on an empty min() before)
-    f.points = [point(math.nan, 0.07, error="diverged")]
+    f = replace(f, points=(point(math.nan, 0.07, error="diverged"),))
     assert knee(f.points) == 0 and "within 1.96 standard errors" in knee_reason(f)
 
 
@@ -145,9 +145,9 @@ def test_a_real_sweep_marks_a_coarser_step_that_fails_the_checks(tmp_path):
     assert fr.knee == fr.default == 0
     for p in fr.points:
         assert p.n_records == 4 and 0.0 <= p.agreement <= 1.0 and 0.0 <= p.ks <= 1.0
-        assert 0.0 < p.floor <= 1.0 and p.floor == min(p.floor_parts.values())
+        assert 0.0 < p.floor <= 1.0 and p.floor == min(p.floor_parts.chaos, p.floor_parts.model_form)
     back = Frontier.from_dict(json.loads(json.dumps(fr.to_dict())))
-    assert back.to_dict() == fr.to_dict()
+    assert back.to_dict() == fr.to_dict() and back == fr
     assert "knee" in fr.summary() and "timestep=0.0005" in fr.summary()
 
 
@@ -161,8 +161,10 @@ def test_cli_refuses_the_reference_and_a_scenario_without_ground_motions(capsys)
 
 def _frontier_file() -> dict:
     pts = [point(0.30, 0.016), point(0.33, 0.03), point(0.31, 0.008, met=False)]
-    for p, r in zip(pts, (0.003, 0.002, 0.007), strict=True):
-        p.r_error, p.small_error, p.decay_error, p.pulse_error, p.ks, p.floor = r, r, 0.01, r, 0.1, 0.45
+    pts = [
+        replace(p, r_error=r, small_error=r, decay_error=0.01, pulse_error=r, ks=0.1, floor=0.45)
+        for p, r in zip(pts, (0.003, 0.002, 0.007), strict=True)
+    ]
     fr = Frontier(
         "beta-engine",
         "elcentro",

@@ -44,7 +44,7 @@ def test_the_analytic_engines_maps_are_flat(analytic_maps):
     assert np.all(np.asarray(m.impact_points["contact_s"]) == 0.0)  # a rigid impact: within one sample interval
     # x is |w-| / (p alpha): the first impact of a release from rest at theta0 lies at sqrt(2 E) / (p alpha), with
     # E = p^2 (cos(alpha - theta0) - cos(alpha)), so at sqrt(2 (cos(alpha - theta0) - cos(alpha))) / alpha
-    alpha, a0 = m.specimen["alpha_rad"], m.amplitudes[-1]
+    alpha, a0 = m.specimen.alpha_rad, m.amplitudes[-1]
     x0 = np.sqrt(2 * (np.cos(alpha - a0 * alpha) - np.cos(alpha))) / alpha
     pts = m.impact_points
     first = [

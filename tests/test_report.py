@@ -18,6 +18,7 @@ from shared import windowed_sines
 from housner import GroundMotion, Specimen
 from housner.engines.analytic import HousnerEngine
 from housner.engines.base import ENGINES, register_engine
+from housner.engines.tuning import TuningResult
 from housner.errors import DataFileError
 from housner.reports import figures
 from housner.reports.run import page as html
@@ -26,6 +27,7 @@ from housner.reports.run.sections import tuning as tuning_section
 from housner.scenarios.execution.rundir import RunMeta, provenance, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, run_engine_errors
+from housner.scenarios.runs.spread import AmplitudeFactor, EquivalentAmplitudes
 from housner.scenarios.runs.view import BOOT_SEED
 from housner.statistics import ensemble_stats as stats
 
@@ -564,7 +566,7 @@ def test_tuning_series_are_one_line_per_sample_step_sorted_by_amplitude(tuned_ru
 def test_real_tuning_files_give_monotone_series():
     for engine in ("mujoco", "pybullet"):
         d = json.loads((ROOT / "engines" / "models" / f"tuning-{engine}.json").read_text())
-        curves, decay = tuning_section._tuning_series(d)
+        curves, decay = tuning_section._tuning_series(TuningResult.from_json(d))
         n_steps = len(set(d["table"]["dt"]))
         assert len(curves) == n_steps and len(decay) == n_steps
         for a, _ in curves.values():
@@ -643,17 +645,17 @@ def test_record_against_itself_is_the_median_with_the_same_spectrum():
     same = [rec.to_model_scale(S)] * 4
     g = record_against_ensemble(SPEC, rec, same, S)
     x = Analytic().simulate(SPEC, rec.to_model_scale(S)).theta_max_over_alpha
-    assert g["record_theta_max_over_alpha"] == pytest.approx(x, rel=1e-12)
-    assert g["record_percentile"] == 50.0  # all ties, counted half
-    assert g["band_ratio_min"] == pytest.approx(1.0, rel=1e-9) and g["band_ratio_max"] == pytest.approx(1.0, rel=1e-9)
+    assert g.record_theta_max_over_alpha == pytest.approx(x, rel=1e-12)
+    assert g.record_percentile == 50.0  # all ties, counted half
+    assert g.band_ratio_min == pytest.approx(1.0, rel=1e-9) and g.band_ratio_max == pytest.approx(1.0, rel=1e-9)
     # half the amplitude: spectra are linear, and the record beats every member
     half = [m.scaled(amplitude=0.5) for m in same]
     g = record_against_ensemble(SPEC, rec, half, S)
-    assert g["band_ratio_min"] == pytest.approx(0.5, rel=1e-9) and g["short_ratio_max"] == pytest.approx(0.5, rel=1e-9)
-    assert g["arias_ensemble_mean_m_s"] == pytest.approx(0.25 * g["arias_record_m_s"], rel=1e-9)
-    assert g["record_percentile"] == (100.0 if x > 0 else 50.0)
-    assert g["p_prototype_1_s"] == pytest.approx(SPEC.p / np.sqrt(S))
-    assert g["omega_ratio_band"] == pytest.approx(
+    assert g.band_ratio_min == pytest.approx(0.5, rel=1e-9) and g.short_ratio_max == pytest.approx(0.5, rel=1e-9)
+    assert g.arias_ensemble_mean_m_s == pytest.approx(0.25 * g.arias_record_m_s, rel=1e-9)
+    assert g.record_percentile == (100.0 if x > 0 else 50.0)
+    assert g.p_prototype_1_s == pytest.approx(SPEC.p / np.sqrt(S))
+    assert g.omega_ratio_band == pytest.approx(
         [2 * np.pi / (1.25 * SPEC.p / np.sqrt(S)), 2 * np.pi / (0.5 * SPEC.p / np.sqrt(S))]
     )
 
@@ -720,10 +722,10 @@ def test_table2_gives_the_factors_that_reach_the_papers_percentiles(rdk_run):
     gap = html.render_report(out).split('id="table2-gap"')[1].split("</section>")[0]
     f = equivalent_amplitude(SPEC, model, {25: 0.37, 50: 0.77, 75: float("inf")}, seed=BOOT_SEED)
     assert "How much stronger, in effect, the paper's motions were" in gap
-    for q, d in f["factors"].items():
+    for q, d in f.factors.items():
         label = f"for the {stats.percentile_label(q)}"
-        if np.isfinite(d["factor"]):
-            assert f"&times;{d['factor']:.2f} [{d['low']:.2f}, {d['high']:.2f}] {label}" in gap
+        if np.isfinite(d.factor):
+            assert f"&times;{d.factor:.2f} [{d.low:.2f}, {d.high:.2f}] {label}" in gap
         else:  # these weak motions do not reach the paper's row within the search range
             assert f"none within &times;1/8&ndash;8 {label}" in gap
 
@@ -739,12 +741,15 @@ def test_table2_gives_the_factors_that_reach_the_papers_percentiles(rdk_run):
     ],
 )
 def test_the_factor_line_says_whether_one_factor_reaches_the_whole_row(factors, says):
-    f = {
-        "factors": {q: {"factor": a, "low": lo, "high": hi, "target": 0.5} for q, (a, lo, hi) in factors.items()},
-        "step": 0.02,
-        "ci": 0.9,
-        "n": 100,
-    }
+    f = EquivalentAmplitudes(
+        factors={q: AmplitudeFactor(a, lo, hi, 0.5) for q, (a, lo, hi) in factors.items()},
+        grid=(),
+        evaluations=0,
+        step=0.02,
+        ci=0.9,
+        engine="housner",
+        n=100,
+    )
     text = distribution_section._factor_line(SimpleNamespace(paper_factors=f))
     for s in says:
         assert s in text, text

@@ -155,8 +155,8 @@ def test_a_study_runs_every_record_and_writes_its_directory(tiny):
     back = load_study(tmp / "out")
     assert len(back.fits) == 4
     for a, b in zip(back.fits, res.fits, strict=True):
-        for key in ("median", "beta", "median_low", "beta_high"):
-            assert a[key] == pytest.approx(b[key], nan_ok=True)
+        for x, y in ((a.median, b.median), (a.beta, b.beta), (a.median_low, b.median_low), (a.beta_high, b.beta_high)):
+            assert x == pytest.approx(y, nan_ok=True)
 
 
 def test_study_records_are_the_analytic_model_of_the_scaled_motion(tiny):
@@ -208,11 +208,11 @@ def test_a_study_is_deterministic_and_cached(tiny):
 def test_fragility_assertion_reports_every_size_and_fails_honestly(tiny):
     _, tmp, res = tiny
     c = res.comparison("mujoco", 2.5)
-    fits_ok = all(f["status"] == "ok" for f in res.fits)
+    fits_ok = all(f.ok for f in res.fits)
     if fits_ok:
         # a tolerance just above / below the measured figures decides the verdict, both ways
-        rtol = max(abs(res.comparison("mujoco", h)["median_ratio"] - 1) for h in (2.5, 10.0))
-        atol = max(abs(res.comparison("mujoco", h)["beta_diff"]) for h in (2.5, 10.0))
+        rtol = max(abs(res.comparison("mujoco", h).median_ratio - 1) for h in (2.5, 10.0))
+        atol = max(abs(res.comparison("mujoco", h).beta_diff) for h in (2.5, 10.0))
         ok = assert_fragility_agreement(
             tmp / "out", "mujoco", "housner", median_rtol=rtol + 1e-9, beta_atol=atol + 1e-9
         )
@@ -223,7 +223,7 @@ def test_fragility_assertion_reports_every_size_and_fails_honestly(tiny):
     else:  # a degenerate fit never passes
         with pytest.raises(FragilityAgreementError, match="no fit"):
             assert_fragility_agreement(res, "mujoco", "housner", median_rtol=10.0, beta_atol=10.0)
-    assert math.isfinite(c["median_ratio"]) or not fits_ok
+    assert math.isfinite(c.median_ratio) or not fits_ok
     with pytest.raises(ValueError, match="engine 'drake' is not in the study"):
         assert_fragility_agreement(res, "drake", "housner")
     with pytest.raises(ValueError, match="comparisons are against 'housner'"):

@@ -28,7 +28,7 @@ from housner.reports.study.page import render_study_report, write_study_report
 from housner.reports.study.verdict import DISAGREE
 from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.studies.fragility import exceedance, proportion_intervals
-from housner.scenarios.studies.study import load_study
+from housner.scenarios.studies.study import StudyFit, load_study
 
 REF = "housner"
 LEVELS = (0.5, 0.8, 1.2, 1.8, 2.7)  # spans 5.4x: a log intensity axis
@@ -480,7 +480,7 @@ def test_fragility_figure_has_points_and_curves_per_engine(tmp_path):
         ok_fit("mujoco", 0.5, median=1.3, beta=0.3),
         degenerate_fit("pybullet", 0.5, "no_overturn", "none overturned"),
     ]
-    fig = study_figures.plot_fragility(fr, fits, 0.5, LABEL)
+    fig = study_figures.plot_fragility(fr, [StudyFit.from_json(f) for f in fits], 0.5, LABEL)
     assert isinstance(fig, Figure)
     (ax,) = fig.axes
     points, curves = _series(ax, "points"), _series(ax, "curve")
@@ -512,7 +512,7 @@ def test_fragility_figure_dashes_a_step_and_uses_a_linear_axis_for_a_narrow_rang
     fr = pd.read_parquet(make_study(tmp_path / "s").joinpath("fragility.parquet"))
     fr = fr[fr["stripe"].between(1, 3)]  # 0.8 .. 1.8: a span of 2.25, below LOG_SPAN
     fits = [ok_fit(REF, 4.0), degenerate_fit("mujoco", 4.0, "separated", "a step", median=1.5, beta=0.0)]
-    (ax,) = study_figures.plot_fragility(fr, fits, 4.0, LABEL).axes
+    (ax,) = study_figures.plot_fragility(fr, [StudyFit.from_json(f) for f in fits], 4.0, LABEL).axes
     curves = _series(ax, "curve")
     assert ax.get_xscale() == "linear"
     assert curves["mujoco"].get_linestyle() == "--" and curves[REF].get_linestyle() == "-"
@@ -526,7 +526,7 @@ def test_size_effect_figure_has_one_series_per_engine():
         degenerate_fit("pybullet", 0.5, "separated", "a step", median=1.0, beta=0.0),
         degenerate_fit("pybullet", 4.0, "no_overturn", "none"),
     ]
-    fig = study_figures.plot_size_effect(fits, label=LABEL)
+    fig = study_figures.plot_size_effect([StudyFit.from_json(f) for f in fits], label=LABEL)
     assert isinstance(fig, Figure)
     (ax,) = fig.axes
     med, steps = _series(ax, "median"), _series(ax, "not-a-fit")

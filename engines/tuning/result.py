@@ -5,10 +5,12 @@ from __future__ import annotations
 import datetime
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from housner._values import JsonValue, json_number
 from housner.engines.tuning.checks import DECAY_RTOL, RTOL, SMALL_WORST_FACTOR
 
 __all__ = ["TuningResult"]
@@ -27,9 +29,10 @@ def settings_text(settings: dict) -> str:
     return ", ".join(f"{k}={fmt(v)}" for k, v in settings.items())
 
 
-@dataclass
-class TuningResult:
-    """What :func:`housner.engines.tuning.tune` found.
+@dataclass(frozen=True, eq=False)
+class TuningResult(JsonValue):
+    """What :func:`housner.engines.tuning.tune` found; the tune JSON (``housner tune ENGINE --json``) is
+    :meth:`to_json`, read back by :meth:`from_json` (a file of an earlier version too).
 
     Attributes
     ----------
@@ -47,8 +50,8 @@ class TuningResult:
         ``r_engine``, ``r_target`` and ``rel_error`` (r_engine / r_target - 1 [-]).
     cost_per_sim_second : float
         CPU seconds per simulated second of the chosen settings [s/s].
-    met : bool
-        True if the chosen settings pass every check that was run.
+    met : bool or None
+        True if the chosen settings pass every check that was run (None: a file that does not say).
     candidates : pandas.DataFrame
         Every candidate tried: ``settings`` (text), ``worst_rel_error`` and
         ``mean_rel_error`` (signed) of r at 0.2-0.9 alpha,
@@ -86,7 +89,7 @@ class TuningResult:
     settings: dict
     table: pd.DataFrame
     cost_per_sim_second: float
-    met: bool
+    met: bool | None
     candidates: pd.DataFrame
     pulse_table: pd.DataFrame = field(default_factory=pd.DataFrame)
     small_table: pd.DataFrame = field(default_factory=pd.DataFrame)
@@ -97,20 +100,23 @@ class TuningResult:
 
     @property
     def worst_rel_error(self) -> float:
-        """Largest |r_engine / r_target - 1| of the chosen settings at 0.2-0.9 alpha [-]."""
+        """Largest |r_engine / r_target - 1| of the chosen settings at 0.2-0.9 alpha [-] (NaN without a table)."""
+        if "rel_error" not in self.table or not len(self.table):
+            return math.nan
         return float(np.max(np.abs(self.table["rel_error"])))
 
     @property
     def reached_r(self) -> tuple[float, float, float]:
         """The chosen settings' r at the amplitudes of check 1: (mean, lowest, highest) [-], over every sample step."""
-        r = self.table["r_engine"].to_numpy(float)
+        r = self.table["r_engine"].to_numpy(float) if "r_engine" in self.table else np.empty(0)
         r = r[np.isfinite(r)]
         if not r.size:
             return (math.nan, math.nan, math.nan)
         return (float(r.mean()), float(r.min()), float(r.max()))
 
-    def to_dict(self) -> dict:
-        """Plain data (JSON-serialisable) for reports and caches."""
+    def to_json(self) -> dict:
+        """The tune JSON (JSON-serialisable): the fields, the r reached and the worst error, the tables by column
+        and the candidates by row."""
         return {
             "engine": self.engine,
             "specimen": self.specimen,
@@ -118,7 +124,7 @@ class TuningResult:
             "reached_r": list(self.reached_r),
             "rtol": self.rtol,
             "settings": {k: list(v) if isinstance(v, tuple) else v for k, v in self.settings.items()},
-            "met": bool(self.met),
+            "met": None if self.met is None else bool(self.met),
             "worst_rel_error": self.worst_rel_error,
             "cost_per_sim_second": self.cost_per_sim_second,
             "table": self.table.to_dict(orient="list"),
@@ -129,6 +135,46 @@ class TuningResult:
             "date": self.date,
             "version": self.version,
         }
+
+    def to_dict(self) -> dict:
+        """Plain data (JSON-serialisable) for reports and caches: :meth:`to_json`."""
+        return self.to_json()
+
+    @classmethod
+    def from_json(cls, data: Any) -> TuningResult:
+        """The result of a tune JSON (``reached_r`` and ``worst_rel_error`` follow from the table: read, not kept).
+
+        A file of an earlier version (or one written by hand) may lack keys: a missing number is NaN, a missing
+        table empty, ``met`` None, a missing word ""; a table whose columns differ in length is unusable, empty.
+        """
+        if isinstance(data, TuningResult):
+            return data
+        d = data if isinstance(data, dict) else {}
+
+        def table(key: str, records: bool = False) -> pd.DataFrame:
+            t = d.get(key) or ([] if records else {})
+            try:
+                return pd.DataFrame(t)
+            except (ValueError, TypeError):  # columns of different lengths, or not a table: unusable
+                return pd.DataFrame()
+
+        met = d.get("met")
+        return cls(
+            engine=str(d.get("engine", "")),
+            specimen=str(d.get("specimen", "")),
+            target_r=json_number(d.get("target_r")),
+            settings=dict(d.get("settings") or {}),
+            table=table("table"),
+            cost_per_sim_second=json_number(d.get("cost_per_sim_second")),
+            met=None if met is None else bool(met),
+            candidates=table("candidates", records=True),
+            pulse_table=table("pulse_table"),
+            small_table=table("small_table"),
+            decay_table=table("decay_table"),
+            rtol=json_number(d.get("rtol")),
+            date=str(d.get("date", "")),
+            version=str(d.get("version", "")),
+        )
 
     @property
     def contact_alone(self) -> tuple[float, str] | None:

@@ -83,14 +83,12 @@ def run(args: argparse.Namespace) -> int:
     print(expl.summary())
     print(f"wall time {expl.wall_s['total']:.1f} s")
     if args.workdir:
-        print(f"campaign: {expl.details['campaign']}")
+        print(f"campaign: {expl.details.campaign}")
     if args.json:
         Path(args.json).write_text(json.dumps(expl.to_dict(), indent=2))
         print(f"json:   {args.json}")
-    if args.figure and expl.maps:
+    if args.figure and expl.maps is not None:
         from housner.reports.impact_map_figure import maps_figure, save_figure
-        from housner.scenarios.runs.impact_map import EngineMaps
 
-        maps = EngineMaps.from_json(json.dumps(expl.maps["maps"]))
-        print(f"figure: {save_figure(maps_figure([maps]), args.figure)}")
+        print(f"figure: {save_figure(maps_figure([expl.maps.maps]), args.figure)}")
     return EXIT_OK

@@ -116,14 +116,14 @@ def _print_engines(done) -> None:
         sub = res[res.engine == name]
         ok = sub[sub.status == "ok"]
         info = done.meta.engines[name]
-        rejected = f", {info['cache_rejected']} cache entries rejected" if info.get("cache_rejected") else ""
-        if info.get("kernel_cache_repairs"):
-            rejected += f", {info['kernel_cache_repairs']} damaged kernel-cache entries rebuilt"
+        rejected = f", {info.cache_rejected} cache entries rejected" if info.cache_rejected else ""
+        if info.kernel_cache_repairs:
+            rejected += f", {info.kernel_cache_repairs} damaged kernel-cache entries rebuilt"
         median = ok.theta_max_over_alpha.median() if len(ok) else math.nan
         print(
             f"  {name:9s} {len(ok)}/{len(sub)} ok, {int(ok.overturned.sum())} overturned, "
             f"median theta_max/alpha {median:.3f}, "
-            f"{info['wall_s']:.1f} s engine time ({info['cached']} cached{rejected})"
+            f"{info.wall_s:.1f} s engine time ({info.cached} cached{rejected})"
         )
 
 
@@ -191,26 +191,27 @@ def _print_outcomes(view: Run) -> None:
     rows = view.outcome_scores
     if not rows:
         return
+    clip = rows[0].p_clip
     print(
         f"outcomes against the campaign's measured ones (95 % bootstrap intervals over the records; log loss "
-        f"of 0/1 predictions with P clipped to [{rows[0]['p_clip']:g}, {1 - rows[0]['p_clip']:g}]):"
+        f"of 0/1 predictions with P clipped to [{clip:g}, {1 - clip:g}]):"
     )
     for r in rows:
-        failed = f", {r['n_failed']} failed records left out" if r["n_failed"] else ""
-        if not r["n"]:
-            print(f"  {r['engine']:9s} no record with an outcome ran{failed}")
+        failed = f", {r.n_failed} failed records left out" if r.n_failed else ""
+        if not r.n:
+            print(f"  {r.engine:9s} no record with an outcome ran{failed}")
             continue
-        ci = {k: r[f"{k}_ci"] or [math.nan, math.nan] for k in ("accuracy", "f1", "log_loss")}
+        acc, f1, loss = (ci or (math.nan, math.nan) for ci in (r.accuracy_ci, r.f1_ci, r.log_loss_ci))
         print(
-            f"  {r['engine']:9s} accuracy {r['accuracy']:.3f} [{ci['accuracy'][0]:.3f}, {ci['accuracy'][1]:.3f}], "
-            f"F1 {r['f1']:.3f} [{ci['f1'][0]:.3f}, {ci['f1'][1]:.3f}], log loss {r['log_loss']:.3f} "
-            f"[{ci['log_loss'][0]:.3f}, {ci['log_loss'][1]:.3f}], {r['n_predicted']} predicted / "
-            f"{r['n_overturned']} measured overturns of {r['n']} records{failed}"
+            f"  {r.engine:9s} accuracy {r.accuracy:.3f} [{acc[0]:.3f}, {acc[1]:.3f}], "
+            f"F1 {r.f1:.3f} [{f1[0]:.3f}, {f1[1]:.3f}], log loss {r.log_loss:.3f} "
+            f"[{loss[0]:.3f}, {loss[1]:.3f}], {r.n_predicted} predicted / "
+            f"{r.n_overturned} measured overturns of {r.n} records{failed}"
         )
     for p in view.published_outcomes:
         print(
-            f"  ({p['note']}: {p['model']}: accuracy {p['accuracy']:.3f}, F1 {p['f1']:.3f}, "
-            f"{p['n_predicted']} predicted / {p['n_overturned']} measured overturns)"
+            f"  ({p.note}: {p.model}: accuracy {p.accuracy:.3f}, F1 {p.f1:.3f}, "
+            f"{p.n_predicted} predicted / {p.n_overturned} measured overturns)"
         )
 
 
@@ -249,26 +250,26 @@ def _run_study(args: argparse.Namespace, scenario, engines: list[str], out: Path
         file=sys.stderr,
     )
     res = _call_runner(run_study, args, scenario, engines, out, client)
-    comps = {(c["engine"], c["size"]): c for c in res.comparisons}
+    comps = {(c.engine, c.size): c for c in res.comparisons}
     print(f"fragility ({st.label}; median and beta with {st.ci:.0%} bootstrap intervals):")
     for f in res.fits:
-        head = f"  {f['engine']:9s} H = {f['size']:g} m: "
-        if f["status"] != "ok":
-            print(head + f"no fit ({f['message']})")
+        head = f"  {f.engine:9s} H = {f.size:g} m: "
+        if not f.ok:
+            print(head + f"no fit ({f.message})")
             continue
         line = (
-            f"median {f['median']:.3g} [{f['median_low']:.3g}, {f['median_high']:.3g}], "
-            f"beta {f['beta']:.2f} [{f['beta_low']:.2f}, {f['beta_high']:.2f}]"
+            f"median {f.median:.3g} [{f.median_low:.3g}, {f.median_high:.3g}], "
+            f"beta {f.beta:.2f} [{f.beta_low:.2f}, {f.beta_high:.2f}]"
         )
-        if f.get("caveat"):
-            line += f" (caveat: {f['caveat']})"
-        c = comps.get((f["engine"], f["size"]))
+        if f.caveat:
+            line += f" (caveat: {f.caveat})"
+        c = comps.get((f.engine, f.size))
         if c is not None:
-            word = "DISAGREES with" if c["disagree"] else "agrees with"
+            word = "DISAGREES with" if c.disagree else "agrees with"
             line += (
-                f"; {word} {c['reference']}: median x{c['median_ratio']:.3f} "
-                f"[{c['ratio_low']:.3f}, {c['ratio_high']:.3f}], "
-                f"beta {c['beta_diff']:+.2f} [{c['diff_low']:+.2f}, {c['diff_high']:+.2f}]"
+                f"; {word} {c.reference}: median x{c.median_ratio:.3f} "
+                f"[{c.ratio_low:.3f}, {c.ratio_high:.3f}], "
+                f"beta {c.beta_diff:+.2f} [{c.diff_low:+.2f}, {c.diff_high:+.2f}]"
             )
         print(head + line)
     failed = res.results[res.results["status"] != "ok"]

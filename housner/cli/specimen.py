@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     scan = specimen_from_mesh(args.mesh, azimuth=args.azimuth, contact=args.contact, density=args.density)
     print(_table(scan))
     if json_path is not None:
-        json_path.write_text(json.dumps(scan.to_dict(), indent=1) + "\n")
+        json_path.write_text(json.dumps(scan.facts().to_json(), indent=1) + "\n")
         print(f"wrote {json_path}")
     if figure_path is not None:
         footprint_figure(scan, figure_path)

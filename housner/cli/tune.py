@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     print(result.summary())
     _print_best_candidates(result)
     if args.json:
-        Path(args.json).write_text(json.dumps(result.to_dict(), indent=2, default=str))
+        Path(args.json).write_text(json.dumps(result.to_json(), indent=2, default=str))
         print(f"written: {args.json}")
     if args.figure:
         tuning_report_figure(result).savefig(args.figure)

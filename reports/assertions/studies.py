@@ -24,7 +24,7 @@ import math
 from pathlib import Path
 
 from housner.reports.assertions.criteria import AgreementReport, CDFAgreementError, Criterion, check_count, check_tol
-from housner.scenarios.studies.study import StudyResult, load_study
+from housner.scenarios.studies.study import StudyFit, StudyResult, load_study
 
 __all__ = ["FragilityAgreementError", "assert_fragility_agreement"]
 
@@ -41,12 +41,12 @@ def _study(results):
     raise TypeError(f"`results` must be a study directory or a StudyResult, got {type(results)}")
 
 
-def _fit_words(fit: dict) -> str:
-    if fit["status"] != "ok":
-        return f"no fit ({fit['message']})"
+def _fit_words(fit: StudyFit) -> str:
+    if not fit.ok:
+        return f"no fit ({fit.message})"
     return (
-        f"median {fit['median']:.4g} [{fit['median_low']:.4g}, {fit['median_high']:.4g}], "
-        f"beta {fit['beta']:.3f} [{fit['beta_low']:.3f}, {fit['beta_high']:.3f}]"
+        f"median {fit.median:.4g} [{fit.median_low:.4g}, {fit.median_high:.4g}], "
+        f"beta {fit.beta:.3f} [{fit.beta_low:.3f}, {fit.beta_high:.3f}]"
     )
 
 
@@ -81,27 +81,27 @@ def _size_criteria(
     within ``tols`` (median_rtol, beta_atol)."""
     fe, fr = st.fit(engine, h), st.fit(reference, h)
     tag = f"H = {h:g} m"
-    if fe["status"] != "ok" or fr["status"] != "ok":
+    if not fe.ok or not fr.ok:
         detail = f"{engine}: {_fit_words(fe)}; {reference}: {_fit_words(fr)}"
         return [Criterion(f"fragility fits at {tag}", False, detail, math.nan, math.nan, math.inf)]
     c = st.comparison(engine, h)
     median_rtol, beta_atol = tols
     return [
         _criterion(
-            f"median ratio at {tag} ({engine} {fe['median']:.4g} / {reference} {fr['median']:.4g})",
-            c["median_ratio"],
-            c["ratio_low"],
-            c["ratio_high"],
+            f"median ratio at {tag} ({engine} {fe.median:.4g} / {reference} {fr.median:.4g})",
+            c.median_ratio,
+            c.ratio_low,
+            c.ratio_high,
             1.0,
             median_rtol,
             require_interval,
             level,
         ),
         _criterion(
-            f"beta difference at {tag} ({engine} {fe['beta']:.3f} - {reference} {fr['beta']:.3f})",
-            c["beta_diff"],
-            c["diff_low"],
-            c["diff_high"],
+            f"beta difference at {tag} ({engine} {fe.beta:.3f} - {reference} {fr.beta:.3f})",
+            c.beta_diff,
+            c.diff_low,
+            c.diff_high,
             0.0,
             beta_atol,
             require_interval,
@@ -164,14 +164,15 @@ def assert_fragility_agreement(
     meta_ref = st.meta.reference
     if meta_ref is not None and reference != meta_ref:
         raise ValueError(f"the study's comparisons are against {meta_ref!r}, not {reference!r}")
-    sizes = sorted({f["size"] for f in st.fits if f["engine"] == engine})
+    sizes = sorted({f.size for f in st.fits if f.engine == engine})
     if not sizes:
-        have = sorted({f["engine"] for f in st.fits})
+        have = sorted({f.engine for f in st.fits})
         raise ValueError(f"engine {engine!r} is not in the study (engines: {', '.join(have)})")
     if size is not None:
-        sizes = [st.fit(engine, size)["size"]]
+        sizes = [st.fit(engine, size).size]
     settings = st.meta.study
-    level = f"{settings.get('compare_ci', settings.get('ci', 0.95)):.1%}"
+    each = next((x for x in (settings.compare_ci, settings.ci) if x is not None), 0.95)
+    level = f"{each:.1%}"
     criteria = []
     if max_failed is not None:
         for name in (engine, reference):

@@ -162,6 +162,6 @@ def _page(run: Run, sections: list[Section], seconds: float) -> str:
         title="housner report",
         heading="Campaign" if run.meta.is_campaign else "Scenario",
         writer="housner.reports.run.write_report",
-        specimen=run.specimen.get("name", ""),
+        specimen=run.specimen.name or "",
         n_motions=n_motions,
     )

@@ -39,6 +39,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from housner.reports.figures import engine_colors
 from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.studies.fragility import fragility_curve
+from housner.scenarios.studies.study import StudyFit
 
 __all__ = ["LOG_SPAN", "plot_exceedance", "plot_fragility", "plot_size_effect"]
 
@@ -89,9 +90,9 @@ def _yerr(p: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     return np.vstack([np.clip(p - low, 0.0, None), np.clip(high - p, 0.0, None)])
 
 
-def _fit_of(fits: Sequence[Mapping], engine: str, size: float) -> Mapping | None:
+def _fit_of(fits: Sequence[StudyFit], engine: str, size: float) -> StudyFit | None:
     for f in fits:
-        if str(f.get("engine")) == engine and _same([json_number(f.get("size"))], size)[0]:
+        if str(f.engine) == engine and _same([json_number(f.size)], size)[0]:
             return f
     return None
 
@@ -140,7 +141,7 @@ def _set_intensity_axis(ax, levels, label: str) -> None:
 # fragility of one size
 def plot_fragility(
     fr: pd.DataFrame,
-    fits: Sequence[Mapping],
+    fits: Sequence[StudyFit],
     size: float,
     label: str,
     *,
@@ -156,7 +157,7 @@ def plot_fragility(
         ``fragility.parquet``: one row per (engine, size, stripe) with ``engine``,
         ``size`` [m], ``S``, ``intensity``, ``n``, ``n_overturned``, ``p``,
         ``p_low``, ``p_high``.
-    fits : sequence of mapping
+    fits : sequence of StudyFit
         The ``fits`` of ``fragility.json``: ``engine``, ``size``, ``median``,
         ``beta``, ``status`` (non-finite numbers may be the strings "nan", "inf").
     size : float
@@ -185,7 +186,7 @@ def plot_fragility(
     engines' points are shifted slightly about each stripe so that the bars
     do not overlap, while the curves are drawn at the true intensity.
     """
-    fitted = [str(f.get("engine")) for f in fits if _same([json_number(f.get("size"))], size)[0]]
+    fitted = [str(f.engine) for f in fits if _same([json_number(f.size)], size)[0]]
     sub, names, colors, levels, log, shift = _at_size(fr, size, fitted, reference, colors)
     grid = _curve_grid(levels, log)
     fig = Figure(figsize=(7.8, 4.8), layout="constrained")
@@ -233,7 +234,7 @@ def _curve_grid(levels: np.ndarray, log: bool) -> np.ndarray:
 
 
 def _fragility_series(
-    ax, d: pd.DataFrame, name: str, fit: Mapping | None, grid: np.ndarray, shift, c: str, is_reference: bool
+    ax, d: pd.DataFrame, name: str, fit: StudyFit | None, grid: np.ndarray, shift, c: str, is_reference: bool
 ) -> tuple[tuple, str] | None:
     """One engine of :func:`plot_fragility`: its stripes ``d`` (those with a valid record) as points with
     Wilson bars, and its fitted curve over ``grid`` where the fit has a median. Returns the legend's handle
@@ -241,9 +242,9 @@ def _fragility_series(
     parts = []
     if len(d):
         parts.append(_stripe_points(ax, d, shift, name, fmt="o", ms=5 if is_reference else 4, lw=1.0, color=c))
-    med = json_number(fit.get("median")) if fit else math.nan
-    beta = json_number(fit.get("beta")) if fit else math.nan
-    status = str(fit.get("status", "")) if fit else "missing"
+    med = json_number(fit.median) if fit else math.nan
+    beta = json_number(fit.beta) if fit else math.nan
+    status = str(fit.status) if fit else "missing"
     if math.isfinite(med) and med > 0 and math.isfinite(beta) and beta >= 0:
         (ln,) = ax.plot(
             grid,
@@ -269,7 +270,7 @@ def _fragility_series(
 # ----------------------------------------------------------------------------
 # median against size
 def plot_size_effect(
-    fits: Sequence[Mapping],
+    fits: Sequence[StudyFit],
     *,
     label: str = "intensity",
     reference: str | None = "housner",
@@ -280,7 +281,7 @@ def plot_size_effect(
 
     Parameters
     ----------
-    fits : sequence of mapping
+    fits : sequence of StudyFit
         The ``fits`` of ``fragility.json``: ``engine``, ``size`` [m],
         ``median``, ``median_low``, ``median_high``, ``status``.
     label : str
@@ -296,9 +297,9 @@ def plot_size_effect(
         value (a step) are open markers without bars (gid "not-a-fit:ENGINE"),
         and sizes without a median are left out.
     """
-    names = _engine_order([str(f.get("engine")) for f in fits], reference)
+    names = _engine_order([str(f.engine) for f in fits], reference)
     colors = dict(colors) if colors is not None else engine_colors(names, reference)
-    sizes = np.array(sorted({json_number(f.get("size")) for f in fits}), dtype=float)
+    sizes = np.array(sorted({json_number(f.size) for f in fits}), dtype=float)
     sizes = sizes[np.isfinite(sizes)]
     log_x = _use_log(sizes) or (sizes.size > 2 and float(sizes.max() / sizes.min()) >= 3.0)
     # Sizes are few and far apart (a factor 2 or more): a narrower spread keeps each point near its size.
@@ -335,21 +336,21 @@ def plot_size_effect(
     return fig
 
 
-def _size_series(ax, fits: Sequence[Mapping], name: str, shift, c: str, is_reference: bool) -> tuple[list, bool]:
+def _size_series(ax, fits: Sequence[StudyFit], name: str, shift, c: str, is_reference: bool) -> tuple[list, bool]:
     """One engine of :func:`plot_size_effect`: the medians of its "ok" fits with their intervals, and those of
     its other fits that report one as open markers. Returns the values drawn (for the y scale) and whether
     open markers were drawn."""
-    rows = sorted((f for f in fits if str(f.get("engine")) == name), key=lambda f: json_number(f.get("size")))
+    rows = sorted((f for f in fits if str(f.engine) == name), key=lambda f: json_number(f.size))
     x, m, lo, hi, xo, mo = [], [], [], [], [], []
     for f in rows:
-        s, med = json_number(f.get("size")), json_number(f.get("median"))
+        s, med = json_number(f.size), json_number(f.median)
         if not (math.isfinite(s) and math.isfinite(med) and med > 0):
             continue
-        if str(f.get("status")) == "ok":
+        if f.ok:
             x.append(s)
             m.append(med)
-            lo.append(json_number(f.get("median_low")))
-            hi.append(json_number(f.get("median_high")))
+            lo.append(json_number(f.median_low))
+            hi.append(json_number(f.median_high))
         else:
             xo.append(s)
             mo.append(med)

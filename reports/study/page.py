@@ -100,5 +100,5 @@ def _page(study: StudyView, sections: list[Section], seconds: float) -> str:
         title="fragility study",
         heading="Fragility study",
         writer="housner.reports.study.page.write_study_report",
-        specimen=study.meta.specimen.get("name", ""),
+        specimen=study.meta.specimen.name or "",
     )

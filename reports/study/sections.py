@@ -10,6 +10,7 @@ from housner.reports.page import ci_cell, engine_tag, esc, fmt_g, guarded, html_
 from housner.reports.run.sections.tuning import settings_html
 from housner.reports.study.figures import plot_exceedance, plot_fragility, plot_size_effect
 from housner.reports.study.view import StudyView, key
+from housner.scenarios.execution.rundir import EngineFacts
 
 __all__ = [
     "MAX_FAILURE_ROWS",
@@ -174,17 +175,16 @@ def _kv_value(v: Any) -> str:
 def provenance(study: StudyView) -> str:
     meta = study.meta
     parts = []
-    scen = meta.scenario
+    scen = meta.scenario.to_json()
     rows = [[esc(k), _kv_value(v)] for k, v in scen.items() if v not in (None, "")]
-    rows += [[f"study: {esc(k)}", _kv_value(v)] for k, v in study.settings.items()]
-    motions = meta.motions
-    if isinstance(motions, dict):
-        rows += [[f"motions: {esc(k)}", _kv_value(v)] for k, v in motions.items() if isinstance(v, (str, int, float))]
+    rows += [[f"study: {esc(k)}", _kv_value(v)] for k, v in study.settings.to_json().items()]
+    motions = meta.motions.to_json()
+    rows += [[f"motions: {esc(k)}", _kv_value(v)] for k, v in motions.items() if isinstance(v, (str, int, float))]
     for k, v in (("n_records", meta.n_records), ("n_failed", meta.n_failed), ("wall_s", meta.wall_s)):
         if v is not None:
             rows.append([esc(k), _kv_value(v)])
     parts.append(html_table(["", ""], rows, cls="kv"))
-    spec = meta.specimen
+    spec = meta.specimen.to_json()
     if spec:
         parts.append("<h3>Specimen</h3>")
         parts.append(html_table(["", ""], [[esc(k), _kv_value(v)] for k, v in spec.items()], cls="kv"))
@@ -192,15 +192,14 @@ def provenance(study: StudyView) -> str:
     info = meta.engines
     rows = []
     for name in study.engines:
-        i = info.get(name) or {}
-        settings = i.get("settings") or {}
+        i = info.get(name) or EngineFacts()
         rows.append(
             [
                 engine_tag(name, study),
-                esc(i.get("version", "")) or "&ndash;",
-                (settings_html(settings) if isinstance(settings, dict) else esc(settings)) or "defaults",
-                f"{fmt_g(i.get('wall_s'), 4)} s" if "wall_s" in i else "&ndash;",
-                esc(i["cached"]) if "cached" in i else "&ndash;",
+                esc(i.version or "") or "&ndash;",
+                settings_html(i.settings or {}) or "defaults",
+                f"{fmt_g(i.wall_s, 4)} s" if i.wall_s is not None else "&ndash;",
+                esc(i.cached) if i.cached is not None else "&ndash;",
             ]
         )
     parts.append(
@@ -211,12 +210,12 @@ def provenance(study: StudyView) -> str:
         )
     )
     prov = meta.provenance
-    if prov:
+    if prov.to_json():
         parts.append("<h3>Software and machine</h3>")
-        rows = [[esc(k), esc(v)] for k, v in (prov.get("versions") or {}).items()]
+        rows = [[esc(k), esc(v)] for k, v in (prov.versions or {}).items()]
         rows += [
             [esc(k.replace("_", " ")), f"<code>{esc(v)}</code>"]
-            for k, v in prov.items()
+            for k, v in prov.to_json().items()
             if k != "versions" and v not in (None, "")
         ]
         parts.append(html_table(["", ""], rows, cls="kv"))

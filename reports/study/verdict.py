@@ -47,6 +47,11 @@ def _end(v: float, boundary: float, *, signed: bool = False) -> str:
     return text
 
 
+def _or(value: Any, default: str) -> Any:
+    """A setting of study.json, or ``default`` where the file does not state it."""
+    return default if value is None else value
+
+
 def _badge(kind: str) -> str:
     """A verdict badge: 'agree', 'disagree', or a grey one with the given words."""
     if kind == "agree":
@@ -78,7 +83,7 @@ def _verdict(study: StudyView, engine: str, size: float) -> _Verdict:
     # knowing, but their interval is not the interval of a fit, so no number is given.
     flagged = (
         "; the bootstrap replicates that could be fitted do flag a difference from the reference"
-        if c is not None and c.get("disagree") is True
+        if c is not None and c.disagree is True
         else ""
     )
     if not is_ok(fe):
@@ -88,8 +93,8 @@ def _verdict(study: StudyView, engine: str, size: float) -> _Verdict:
         return _Verdict("not evaluated", f"no verdict: the reference's fit is degenerate ({words}, see below){flagged}")
     if c is None:
         return _Verdict("not evaluated", "no verdict: fragility.json holds no comparison with the reference")
-    r, rl, rh = (json_number(c.get(k)) for k in ("median_ratio", "ratio_low", "ratio_high"))
-    d, dl, dh = (json_number(c.get(k)) for k in ("beta_diff", "diff_low", "diff_high"))
+    r, rl, rh = (json_number(v) for v in (c.median_ratio, c.ratio_low, c.ratio_high))
+    d, dl, dh = (json_number(v) for v in (c.beta_diff, c.diff_low, c.diff_high))
     if not all(math.isfinite(v) for v in (r, rl, rh, d, dl, dh)):
         return _Verdict(
             "not evaluated",
@@ -111,7 +116,7 @@ def _verdict(study: StudyView, engine: str, size: float) -> _Verdict:
         )
     # The verdict is the study's (fragility.json's flag); the sentence names the intervals by the same rule, so
     # the two differ only in a file edited by hand or written by another rule, and the page then says so.
-    flag = c.get("disagree")
+    flag = c.disagree
     disagree = (median_differs or beta_differs) if flag is None else bool(flag)
     caveat = ""
     if disagree != (median_differs or beta_differs):
@@ -126,7 +131,7 @@ def _overview(study: StudyView) -> str:
     """What was run, in one paragraph."""
     s = study.settings
     meta = study.meta
-    levels = [json_number(v) for v in s.get("levels") or []]
+    levels = [json_number(v) for v in s.levels]
     sizes = study.sizes
     n_failed = count(meta.n_failed, len(study.failed))
     n_records = meta.n_records
@@ -139,7 +144,7 @@ def _overview(study: StudyView) -> str:
         f'<p class="lead">{len(study.engines)} engine{"s" if len(study.engines) != 1 else ""} ({engines}; reference '
         f"{esc(study.reference)}) &times; {len(sizes)} size{'s' if len(sizes) != 1 else ''} (prototype heights "
         f"{', '.join(f'{v:g}' for v in sizes)} m) &times; {len(levels)} stripes of {esc(study.label)} "
-        f"({', '.join(f'{v:g}' for v in levels)}) &times; {esc(s.get('n_motions', '?'))} ground motions: "
+        f"({', '.join(f'{v:g}' for v in levels)}) &times; {esc(_or(s.n_motions, '?'))} ground motions: "
         f"{esc(n_records)} records, {failed}"
         f"{f', wall time {fmt_g(wall, 4)} s' if math.isfinite(wall) else ''}.</p>"
     )
@@ -147,13 +152,14 @@ def _overview(study: StudyView) -> str:
 
 def _widest(study: StudyView) -> float:
     """The largest distance of a median-ratio interval's end from 1 over the comparisons [-] (0 if none)."""
-    ends = [abs(json_number(c.get(k)) - 1.0) for c in study.comparisons for k in ("ratio_low", "ratio_high")]
+    ends = [abs(json_number(v) - 1.0) for c in study.comparisons for v in (c.ratio_low, c.ratio_high)]
     ends = [e for e in ends if math.isfinite(e)]
     return max(ends, default=0.0)
 
 
 def headline(study: StudyView) -> str:
-    each = json_number(study.settings.get("compare_ci", study.ci))  # each comparison interval's level
+    compare = study.settings.compare_ci
+    each = json_number(study.ci if compare is None else compare)  # each comparison interval's level
     parts = [_overview(study)]
     ref = study.reference
     if ref not in study.engines:
@@ -203,10 +209,10 @@ def headline(study: StudyView) -> str:
         html_note(
             f"An engine agrees with the reference at a size when the {esc(f'{each:.1%}')} interval of the ratio of "
             "the fitted medians contains 1 and that of the difference of the betas contains 0: no difference beyond "
-            f"what {esc(s.get('n_motions', 'these'))} motions resolve, not proof of none (a difference smaller than "
+            f"what {esc(_or(s.n_motions, 'these'))} motions resolve, not proof of none (a difference smaller than "
             f"the interval, here up to {_widest(study):.0%} on the median, is not excluded). The intervals are "
-            f"percentile bootstraps over the motions ({esc(s.get('n_boot', '?'))} replicates, seed "
-            f"{esc(s.get('seed', '?'))}), paired: each replicate refits both engines on the same resampled motions, "
+            f"percentile bootstraps over the motions ({esc(_or(s.n_boot, '?'))} replicates, seed "
+            f"{esc(_or(s.seed, '?'))}), paired: each replicate refits both engines on the same resampled motions, "
             "so the motion-to-motion scatter common to both cancels. Two intervals are checked per size, each at "
             f"{esc(f'{each:.1%}')} (Bonferroni), so engines that agree are called in disagreement with a probability "
             f"of at most about {1 - study.ci:.0%} per size."
@@ -227,12 +233,12 @@ def _degenerate(study: StudyView) -> str:
                     rows.append(f"<li>{where}: no fit in fragility.json</li>")
                 continue
             if is_ok(f):
-                if f.get("caveat"):
+                if f.caveat:
                     caveats.append(
-                        f"<li>{engine_tag(engine, study)} at {esc(study.size_title(size))}: {esc(f['caveat'])}</li>"
+                        f"<li>{engine_tag(engine, study)} at {esc(study.size_title(size))}: {esc(f.caveat)}</li>"
                     )
                 continue
-            msg = str(f.get("message") or "no message")
+            msg = str(f.message or "no message")
             rows.append(
                 f"<li>{engine_tag(engine, study)} at {esc(study.size_title(size))}: <strong>{esc(status_words(f))}"
                 f"</strong>: {esc(msg)}</li>"
@@ -258,8 +264,8 @@ def _fit_cells(study: StudyView, engine: str, size: float) -> tuple[str, str]:
     if not is_ok(f):
         return f'<span class="bad">no fit</span> ({esc(status_words(f))})', "&ndash;"
     return (
-        _ci_g(f.get("median"), f.get("median_low"), f.get("median_high")),
-        ci_cell(f.get("beta"), f.get("beta_low"), f.get("beta_high"), 2),
+        _ci_g(f.median, f.median_low, f.median_high),
+        ci_cell(f.beta, f.beta_low, f.beta_high, 2),
     )
 
 
@@ -281,9 +287,9 @@ def fit_tables(study: StudyView) -> str:
             median, beta = _fit_cells(study, engine, size)
             f = study.fit(engine, size)
             left_out = "&ndash;"
-            if is_ok(f) and f.get("n_boot") is not None:
-                nf = count(f.get("n_failed"))
-                cell = f"{nf} of {count(f['n_boot'])}"
+            if is_ok(f) and f.n_boot is not None:
+                nf = count(f.n_failed)
+                cell = f"{nf} of {count(f.n_boot)}"
                 left_out = f'<span class="bad">{cell}</span>' if nf else cell
             if engine == ref:
                 tag = f"{engine_tag(engine, study)} <small>(reference)</small>"
@@ -292,8 +298,8 @@ def fit_tables(study: StudyView) -> str:
             v = _verdict(study, engine, size)
             c = study.comparison(engine, size)
             if v.kind in ("agree", "disagree") and c is not None:
-                ratio = _ci_g(c.get("median_ratio"), c.get("ratio_low"), c.get("ratio_high"))
-                diff = _ci_signed(c.get("beta_diff"), c.get("diff_low"), c.get("diff_high"))
+                ratio = _ci_g(c.median_ratio, c.ratio_low, c.ratio_high)
+                diff = _ci_signed(c.beta_diff, c.diff_low, c.diff_high)
             else:
                 # No comparison is shown where either fit is degenerate: its replicates are not a fit's interval.
                 ratio = diff = "&ndash;"

@@ -10,7 +10,6 @@ comparison of an (engine, size), and the usable and failed records.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -21,7 +20,7 @@ import pandas as pd
 from housner.reports.figures import engine_colors
 from housner.reports.page import esc
 from housner.scenarios.execution.rundir import json_number
-from housner.scenarios.studies.study import StudyMeta, StudyResult, load_study
+from housner.scenarios.studies.study import StudyComparison, StudyFit, StudyMeta, StudyResult, StudySettings, load_study
 
 __all__ = ["StudyView", "count", "is_ok", "key", "status_words"]
 
@@ -37,15 +36,15 @@ def count(x: Any, default: int = 0) -> int:
     return int(v) if math.isfinite(v) else default
 
 
-def is_ok(fit: Mapping | None) -> bool:
+def is_ok(fit: StudyFit | None) -> bool:
     """A maximum-likelihood fit (status "ok"): the only kind whose median and beta the page prints."""
-    return fit is not None and str(fit.get("status")) == "ok"
+    return fit is not None and fit.ok
 
 
-def status_words(fit: Mapping | None) -> str:
+def status_words(fit: StudyFit | None) -> str:
     if fit is None:
         return "no fit in fragility.json"
-    return str(fit.get("status") or "unknown").replace("_", " ")
+    return (fit.status or "unknown").replace("_", " ")
 
 
 @dataclass
@@ -79,29 +78,29 @@ class StudyView:
         return self.result.results
 
     @property
-    def fits(self) -> list[dict]:
+    def fits(self) -> list[StudyFit]:
         return self.result.fits
 
     @property
-    def comparisons(self) -> list[dict]:
+    def comparisons(self) -> list[StudyComparison]:
         return self.result.comparisons
 
     # --- the study's settings
     @property
-    def settings(self) -> dict:
+    def settings(self) -> StudySettings:
         return self.meta.study
 
     @property
     def reference(self) -> str:
-        return str(self.settings.get("reference") or "housner")
+        return str(self.settings.reference or "housner")
 
     @property
     def label(self) -> str:
-        return str(self.settings.get("intensity_label") or self.settings.get("intensity") or "intensity")
+        return str(self.settings.intensity_label or self.settings.intensity or "intensity")
 
     @property
     def ci(self) -> float:
-        c = json_number(self.settings.get("ci", 0.95))
+        c = json_number(0.95 if self.settings.ci is None else self.settings.ci)
         return c if 0.0 < c < 1.0 else 0.95
 
     @cached_property
@@ -111,7 +110,7 @@ class StudyView:
         for frame in (self.fragility, self.results):
             if "engine" in frame:
                 names.extend(str(e) for e in frame["engine"].unique())
-        names.extend(str(f.get("engine")) for f in self.fits)
+        names.extend(str(f.engine) for f in self.fits)
         names = list(dict.fromkeys(names))
         return sorted(names, key=lambda n: n != self.reference)
 
@@ -126,20 +125,20 @@ class StudyView:
     @cached_property
     def sizes(self) -> list[float]:
         """Prototype heights [m], ascending: those of study.json and any found in the tables."""
-        found = {key(s) for s in self.settings.get("prototype_heights") or []}
-        found |= {key(s) for s in self.fragility.get("size", pd.Series(dtype=float))}
-        found |= {key(f.get("size")) for f in self.fits}
+        found = {key(s) for s in self.settings.prototype_heights}
+        found |= {key(s) for s in (self.fragility["size"] if "size" in self.fragility else pd.Series(dtype=float))}
+        found |= {key(f.size) for f in self.fits}
         return sorted(s for s in found if math.isfinite(s))
 
     def scale(self, size: float) -> float:
         """The scale factor S of a size (NaN when not recorded)."""
-        heights = [key(s) for s in self.settings.get("prototype_heights") or []]
-        factors = self.settings.get("S") or []
+        heights = [key(s) for s in self.settings.prototype_heights]
+        factors = self.settings.S
         if size in heights and len(factors) == len(heights):
             return json_number(factors[heights.index(size)])
         for f in self.fits:
-            if key(f.get("size")) == size and "S" in f:
-                return json_number(f["S"])
+            if key(f.size) == size and not math.isnan(json_number(f.S)):
+                return json_number(f.S)
         rows = self.fragility[self.fragility["size"].map(key) == size] if "size" in self.fragility else []
         return float(rows["S"].iloc[0]) if len(rows) and "S" in rows else math.nan
 
@@ -153,10 +152,10 @@ class StudyView:
         return f"<h3>{esc(title[:1].upper() + title[1:])}</h3>"  # str.capitalize would lower "S = 1" to "s = 1"
 
     # --- fits and comparisons
-    def fit(self, engine: str, size: float) -> dict | None:
+    def fit(self, engine: str, size: float) -> StudyFit | None:
         return _find(self.fits, engine, size)
 
-    def comparison(self, engine: str, size: float) -> dict | None:
+    def comparison(self, engine: str, size: float) -> StudyComparison | None:
         return _find(self.comparisons, engine, size)
 
     # --- records
@@ -191,9 +190,9 @@ class StudyView:
         return int(sub["n"].sum()) if len(sub) else 0
 
 
-def _find(rows: list[dict], engine: str, size: float) -> dict | None:
-    """The row of fragility.json's fits or comparisons for an engine at a size."""
+def _find(rows: list, engine: str, size: float):
+    """The row of fragility.json's fits or comparisons for an engine at a size (None when it has none)."""
     for r in rows:
-        if str(r.get("engine")) == engine and key(r.get("size")) == size:
+        if str(r.engine) == engine and key(r.size) == size:
             return r
     return None

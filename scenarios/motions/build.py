@@ -9,22 +9,179 @@ free-vibration releases.
 from __future__ import annotations
 
 from collections import OrderedDict
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.errors import one_line, unknown_choice
 from housner.motion import GroundMotion
 from housner.pulse_response import pulses
 from housner.scenarios.motions import bands, rdk, rdk_match
 from housner.scenarios.motions.records import load_record
 
-__all__ = ["DEFAULT_RDK_MODEL", "RDK_MODELS", "build_motions"]
+__all__ = [
+    "DEFAULT_RDK_MODEL",
+    "RDK_MODELS",
+    "BandCheck",
+    "BandRow",
+    "BandTable",
+    "MatchedGain",
+    "MotionFacts",
+    "RdkParameter",
+    "RecordFacts",
+    "build_motions",
+]
 
 #: Ground-motion models of source "rdk": the published RDK model, and the spectrally
 #: matched ensemble of :mod:`housner.scenarios.motions.rdk_match`.
 RDK_MODELS = ("rdk2010", "matched")
 DEFAULT_RDK_MODEL = "rdk2010"
+
+
+@dataclass(frozen=True, eq=False)
+class RecordFacts(JsonValue):
+    """A record's facts: ``name``, ``provenance``, step ``dt`` [s], samples ``n``; for a file also ``file`` (as
+    written), ``path`` (resolved), ``sha256`` and its measured ``channels``. A fact not stated is None."""
+
+    name: str | None = None
+    provenance: str | None = None
+    dt: float | None = None
+    n: int | None = None
+    file: str | None = None
+    path: str | None = None
+    sha256: str | None = None
+    channels: tuple[str, ...] | None = None
+    extra: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class RdkParameter(JsonValue):
+    """A fitted parameter stated with its unit and meaning (``{"value", "unit", "description"}``), where a model's
+    table gives one so rather than as a plain number."""
+
+    value: float | str | None = None
+    unit: str | None = None
+    description: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class MatchedGain(JsonValue):
+    """The spectral gain of the matched RDK model (:class:`housner.scenarios.motions.rdk_match.MatchedRDK`).
+
+    ``gain`` [-] at ``gain_centres_s`` [s] (band centres, prototype scale), the FIR's length [s], the motions
+    (``n_fit``) and ``iterations`` of the fit with the worst band ratio of each, and the fit's seed.
+    """
+
+    model: str | None = None
+    gain_centres_s: tuple[float, ...] = ()
+    gain: tuple[float, ...] = ()
+    fir_length_s: float | None = None
+    n_fit: int | None = None
+    iterations: int | None = None
+    worst_band_ratio_per_iteration: tuple[float, ...] = ()
+    fit_seed: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    _ALWAYS = ("fit_seed",)
+
+
+@dataclass(frozen=True, eq=False)
+class BandRow(JsonValue):
+    """One third-octave band of a band check: its centre and edges [s], the ensemble-mean / record ratio, its
+    95 % interval and ``verdict`` (PASS or FAIL)."""
+
+    centre_s: float | None = None
+    lo_s: float | None = None
+    hi_s: float | None = None
+    ratio: float | None = None
+    ci95_lo: float | None = None
+    ci95_hi: float | None = None
+    verdict: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class BandTable(JsonValue):
+    """One quantity's bands (PSa or Sd): the period range checked [s], whether every band passed, the bands."""
+
+    range_s: tuple[float, ...] = ()
+    passed: bool | None = None
+    bands: tuple[BandRow, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class BandCheck(JsonValue):
+    """The band check of an ensemble against its record (:func:`housner.scenarios.motions.bands.band_check`).
+
+    Attributes
+    ----------
+    what : str
+        What was compared, in words.
+    record : str
+        The record's name.
+    damping : float
+        Damping ratio of the spectra [-].
+    bounds : tuple of float
+        The accepted range of a band's ratio [-].
+    passed : bool
+        Whether every band of both quantities passed.
+    psa, sd : BandTable
+    """
+
+    what: str | None = None
+    record: str | None = None
+    damping: float | None = None
+    bounds: tuple[float, ...] = ()
+    passed: bool | None = None
+    psa: BandTable | None = None
+    sd: BandTable | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class MotionFacts(JsonValue):
+    """The facts of a run's ground motions (:func:`build_motions`'s, or a campaign's), as run.json keeps them.
+
+    A fact that does not apply to the motions' source is None (and not written).
+
+    Attributes
+    ----------
+    source : str or None
+        ``rdk``, ``record``, ``records``, ``pulses``, ``free_vibration`` or ``campaign``.
+    S : float or None
+        Size ratio prototype / model [-].
+    records : tuple of RecordFacts or None
+        A suite's records, one per motion.
+    record : RecordFacts or None
+        The record (of source ``record`` or ``rdk``).
+    model, seed, rdk_params, matched_gain, band_check
+        An RDK ensemble's model, seed, fitted parameters (the model's table: name, units in it, -> value, or an
+        :class:`RdkParameter`), the matched model's gain and the band check against the record.
+    theta0_over_alpha : tuple of float or None
+        Free vibration: the release amplitudes [-].
+    pulse, omega_ratio, accel_ratio
+        Pulses: the shape and the grid of omega_p/p and a_p/(g tan alpha) [-], one point per motion.
+    campaign, n_ground_motion, n_free_vibration
+        A measured campaign's name and its records of each kind.
+    """
+
+    source: str | None = None
+    S: float | None = None
+    records: tuple[RecordFacts, ...] | None = None
+    record: RecordFacts | None = None
+    model: str | None = None
+    seed: int | None = None
+    rdk_params: dict[str, float | str | RdkParameter] | None = None
+    matched_gain: MatchedGain | None = None
+    band_check: BandCheck | None = None
+    theta0_over_alpha: tuple[float, ...] | None = None
+    pulse: str | None = None
+    omega_ratio: tuple[float, ...] | None = None
+    accel_ratio: tuple[float, ...] | None = None
+    campaign: str | None = None
+    n_ground_motion: int | None = None
+    n_free_vibration: int | None = None
+    extra: dict = field(default_factory=dict)
 
 
 def build_motions(

@@ -25,12 +25,13 @@ from __future__ import annotations
 import math
 import re
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from housner._values import JsonValue
 from housner.engines.base import ENGINES, engine_class
 from housner.errors import unknown_choice
 from housner.motion import GroundMotion
@@ -39,15 +40,32 @@ from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.diagnosis.outcomes.outcome_scores import outcome_scores
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import RUN_FILES, RunMeta, effect_data, provenance, write_run
+from housner.scenarios.execution.rundir import (
+    RUN_FILES,
+    EffectData,
+    EffectsFacts,
+    EngineFacts,
+    FailedRecord,
+    Provenance,
+    RunAnalysis,
+    RunMeta,
+    ScenarioCopy,
+    SpecimenFacts,
+    write_run,
+)
 from housner.scenarios.execution.runner import run_engines
+from housner.scenarios.motions.build import MotionFacts
 from housner.scenarios.runs.run import RunResult
 from housner.specimen import Specimen
 
 __all__ = [
     "CAMPAIGN_FILE",
     "P_CLIP",
+    "CampaignFacts",
     "CampaignInput",
+    "OutcomeScore",
+    "PublishedScore",
+    "ScanPivots",
     "campaign_input",
     "check_campaign_engines",
     "is_campaign",
@@ -82,6 +100,113 @@ _PUBLISHED = (
         },
     ),
 )
+
+
+@dataclass(frozen=True, eq=False)
+class ScanPivots(JsonValue):
+    """A scan specimen's two pivots: their distances from the centre of mass [m], its height [m], the two
+    slendernesses [rad] and its mass [kg]."""
+
+    b_pos_m: float
+    b_neg_m: float
+    h_m: float
+    alpha_pos_rad: float
+    alpha_neg_rad: float
+    mass_kg: float
+
+
+@dataclass(frozen=True, eq=False)
+class CampaignFacts(JsonValue):
+    """run.json's ``campaign`` table: what a campaign's run was given by its campaign (:func:`campaign_facts`).
+
+    Attributes
+    ----------
+    name, path : str
+        The campaign's name and folder.
+    n_records, n_outcomes, n_overturned : int
+        Its records run, those with a measured outcome, and those overturned.
+    skipped : int
+        Records that could not be read, left out.
+    geometry : EffectsFacts
+        The planar engines' geometry effects (empty for a plain block).
+    mesh : dict or None
+        The 3D engines' settings (``mesh`` [path], ``azimuth`` [deg], ``density`` [kg/m^3], ``contact``); None
+        without a scan mesh.
+    scan : ScanPivots or None
+        The scan's pivots, for a scan specimen.
+    """
+
+    name: str = ""
+    path: str = ""
+    n_records: int | None = None
+    n_outcomes: int | None = None
+    n_overturned: int | None = None
+    skipped: int | None = None
+    geometry: EffectsFacts = field(default_factory=EffectsFacts)
+    mesh: dict | None = None
+    scan: ScanPivots | None = None
+
+    _ALWAYS = ("mesh",)
+
+
+@dataclass(frozen=True, eq=False)
+class OutcomeScore(JsonValue):
+    """An engine's predicted outcomes scored against the campaign's measured ones (:func:`outcome_table`).
+
+    Attributes
+    ----------
+    engine : str
+    n_failed : int
+        Records with an outcome the engine failed on (left out).
+    p_clip : float
+        The log loss's clip of the engine's 0/1 predictions [-].
+    accuracy, f1, log_loss, brier, precision, recall, roc_auc : float or None
+        The scores (:func:`~housner.scenarios.diagnosis.outcomes.outcome_scores.outcome_scores`); None for an
+        engine without a scored record.
+    accuracy_ci, f1_ci, log_loss_ci, brier_ci, precision_ci, recall_ci, roc_auc_ci : tuple of float or None
+        Their 95 % bootstrap intervals (None: no interval).
+    n, n_overturned, n_predicted : int
+        Records scored, measured overturns, predicted overturns.
+    tp, fp, fn, tn : int or None
+        The confusion matrix (None for an engine without a scored record).
+    """
+
+    engine: str
+    n_failed: int = 0
+    p_clip: float = math.nan
+    accuracy: float | None = None
+    f1: float | None = None
+    log_loss: float | None = None
+    brier: float | None = None
+    precision: float | None = None
+    recall: float | None = None
+    roc_auc: float | None = None
+    accuracy_ci: tuple[float, float] | None = None
+    f1_ci: tuple[float, float] | None = None
+    log_loss_ci: tuple[float, float] | None = None
+    brier_ci: tuple[float, float] | None = None
+    precision_ci: tuple[float, float] | None = None
+    recall_ci: tuple[float, float] | None = None
+    roc_auc_ci: tuple[float, float] | None = None
+    n: int = 0
+    n_overturned: int = 0
+    n_predicted: int = 0
+    tp: int | None = None
+    fp: int | None = None
+    fn: int | None = None
+    tn: int | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class PublishedScore(JsonValue):
+    """A published outcome score of another model on a campaign (reported elsewhere, not recomputed)."""
+
+    model: str
+    accuracy: float
+    f1: float
+    n_predicted: int
+    n_overturned: int
+    note: str
 
 
 def is_campaign(path: str | Path) -> bool:
@@ -275,21 +400,25 @@ def run_campaign(
     results, histories, info = campaign_results(inp, settings, engines, opts)
     fails = results[results["status"] != "ok"]
     meta = RunMeta(
-        scenario={"name": campaign.name, "description": _description(campaign), "file": str(campaign.path.resolve())},
-        specimen=inp.specimen.describe(),
-        motions={
-            "source": "campaign",
-            "campaign": campaign.name,
-            "n_ground_motion": inp.n_ground_motion,
-            "n_free_vibration": len(inp.motions) - inp.n_ground_motion,
-        },
+        scenario=ScenarioCopy(
+            {"name": campaign.name, "description": _description(campaign), "file": str(campaign.path.resolve())}
+        ),
+        specimen=SpecimenFacts.from_json(inp.specimen.describe()),
+        motions=MotionFacts(
+            source="campaign",
+            campaign=campaign.name,
+            n_ground_motion=inp.n_ground_motion,
+            n_free_vibration=len(inp.motions) - inp.n_ground_motion,
+        ),
         n_motions=len(inp.motions),
-        engines={n: info[n] for n in engines},
-        analysis={"reference": REFERENCE},
-        failures=fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records"),
+        engines={n: EngineFacts.from_json(info[n]) for n in engines},
+        analysis=RunAnalysis(reference=REFERENCE),
+        failures=tuple(
+            FailedRecord.from_json(r) for r in fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records")
+        ),
         engine_errors={},
         wall_s={"load": t_load, "total": time.perf_counter() - t0},
-        provenance=provenance(),
+        provenance=Provenance.current(),
         campaign=campaign_facts(inp),
     )
     write_run(out, results, histories, inp.motions, meta)
@@ -339,36 +468,39 @@ def with_records(results: pd.DataFrame, inp: CampaignInput) -> pd.DataFrame:
     return results.assign(record_id=ids[mid], observed_overturned=obs[mid])
 
 
-def campaign_facts(inp: CampaignInput) -> dict:
+def campaign_facts(inp: CampaignInput) -> CampaignFacts:
     """run.json's ``campaign`` table: what the run was given by its campaign."""
     c = inp.campaign
     y = [o for o in inp.observed if o is not None]
-    facts = {
-        "name": c.name,
-        "path": str(c.path.resolve()),
-        "n_records": len(inp.motions),
-        "n_outcomes": len(y),
-        "n_overturned": int(sum(y)),
-        "skipped": len(c.skipped),
-        "geometry": {"label": effects_label(inp.geometry), "effects": [effect_data(e) for e in inp.geometry]},
-        "mesh": inp.mesh,
-    }
+    scan = None
     if c.scan is not None:
         s = c.scan
-        facts["scan"] = {
-            "b_pos_m": s.pos.b,
-            "b_neg_m": s.neg.b,
-            "h_m": s.h,
-            "alpha_pos_rad": math.atan2(s.pos.b, s.h),
-            "alpha_neg_rad": math.atan2(s.neg.b, s.h),
-            "mass_kg": s.mass,
-        }
-    return facts
+        scan = ScanPivots(
+            b_pos_m=s.pos.b,
+            b_neg_m=s.neg.b,
+            h_m=s.h,
+            alpha_pos_rad=math.atan2(s.pos.b, s.h),
+            alpha_neg_rad=math.atan2(s.neg.b, s.h),
+            mass_kg=s.mass,
+        )
+    return CampaignFacts(
+        name=c.name,
+        path=str(c.path.resolve()),
+        n_records=len(inp.motions),
+        n_outcomes=len(y),
+        n_overturned=int(sum(y)),
+        skipped=len(c.skipped),
+        geometry=EffectsFacts(effects_label(inp.geometry), tuple(EffectData.of(e) for e in inp.geometry)),
+        mesh=inp.mesh,
+        scan=scan,
+    )
 
 
 # ----------------------------------------------------------------------------
 # scores
-def outcome_table(results: pd.DataFrame, engines: list[str] | None = None, *, seed: int = SCORE_SEED) -> list[dict]:
+def outcome_table(
+    results: pd.DataFrame, engines: list[str] | None = None, *, seed: int = SCORE_SEED
+) -> list[OutcomeScore]:
     """Each engine's predicted outcomes scored against the measured ones (:func:`outcome_scores`).
 
     Parameters
@@ -382,7 +514,7 @@ def outcome_table(results: pd.DataFrame, engines: list[str] | None = None, *, se
 
     Returns
     -------
-    list of dict
+    list of OutcomeScore
         Per engine: ``engine``, the scores of :func:`outcome_scores` (accuracy, F1, log loss, brier, ... with
         ``_ci`` intervals, the counts ``n``, ``n_predicted``, ``n_overturned``, ``tp``, ``fp``, ``fn``, ``tn``),
         ``n_failed`` (records with an outcome the engine failed on: left out) and ``p_clip`` (the log loss's
@@ -401,10 +533,10 @@ def outcome_table(results: pd.DataFrame, engines: list[str] | None = None, *, se
             row.update(outcome_scores(p, ok["observed_overturned"].to_numpy(bool), seed=seed).to_dict())
         else:
             row.update(n=0, n_predicted=0, n_overturned=int(sub["observed_overturned"].astype(bool).sum()))
-        rows.append(row)
+        rows.append(OutcomeScore.from_json(row))
     return rows
 
 
-def published_rows(campaign_name: str) -> list[dict]:
+def published_rows(campaign_name: str) -> list[PublishedScore]:
     """Published scores of other models on this campaign (reported elsewhere, not recomputed); empty for most."""
-    return [dict(row) for pattern, row in _PUBLISHED if pattern.search(campaign_name or "")]
+    return [PublishedScore.from_json(row) for pattern, row in _PUBLISHED if pattern.search(campaign_name or "")]

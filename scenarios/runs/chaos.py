@@ -16,12 +16,13 @@ import json
 import math
 import threading
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.engines.base import RECORD_ERRORS, Engine, get_engine
 from housner.engines.measures import first_impact_ratio, free_rocking_quarter_period
 from housner.motion import GroundMotion
@@ -55,9 +56,9 @@ __all__ = [
 RELEASE_AMPLITUDES = (0.2, 0.35, 0.5, 0.65, 0.8)
 
 
-@dataclass(frozen=True)
-class EngineErrors:
-    """An engine's measured free-rocking errors against the analytic model.
+@dataclass(frozen=True, eq=False)
+class EngineErrors(JsonValue):
+    """An engine's measured free-rocking errors against the analytic model (run.json's ``engine_errors``).
 
     Attributes
     ----------
@@ -70,13 +71,19 @@ class EngineErrors:
         p_engine / p - 1 at each amplitude [-], from the time to the first impact.
     dt : float
         Sample step of the measurement [s] (the ensemble's).
+    r_reference : float or None
+        The r the engine was measured against [-] (None: not stated).
+    error : str or None
+        Why the measurement failed (then there are no errors), None when it did not.
     """
 
-    engine: str
-    amplitudes: tuple
-    r_rel_errors: tuple
-    p_rel_errors: tuple
-    dt: float
+    engine: str = ""
+    amplitudes: tuple[float, ...] = ()
+    r_rel_errors: tuple[float, ...] = ()
+    p_rel_errors: tuple[float, ...] = ()
+    dt: float = math.nan
+    r_reference: float | None = None
+    error: str | None = None
 
     @property
     def eps_r(self) -> float:
@@ -87,6 +94,31 @@ class EngineErrors:
     def eps_p(self) -> float:
         """Root mean square of the p errors [-]."""
         return rms(self.p_rel_errors)
+
+    def to_json(self) -> dict:
+        """run.json's entry: the errors with their RMS and the reference r, or ``{"error": why}``."""
+        if self.error is not None:
+            return {"error": self.error}
+        return {
+            "engine": self.engine,
+            "amplitudes": list(self.amplitudes),
+            "r_rel_errors": list(self.r_rel_errors),
+            "p_rel_errors": list(self.p_rel_errors),
+            "dt": self.dt,
+            "eps_r": self.eps_r,
+            "eps_p": self.eps_p,
+            **({} if self.r_reference is None else {"r_reference": self.r_reference}),
+        }
+
+    @classmethod
+    def from_json(cls, data: Any) -> EngineErrors:
+        """The errors of run.json's entry (``eps_r`` and ``eps_p`` follow from the errors; read, not kept)."""
+        if isinstance(data, EngineErrors):
+            return data
+        data = data if isinstance(data, dict) else {}
+        if "error" in data:
+            return cls(engine=str(data.get("engine", "")), error=str(data["error"]))
+        return super().from_json({k: v for k, v in data.items() if k not in ("eps_r", "eps_p")})
 
 
 def rms(x) -> float:
@@ -148,8 +180,8 @@ def run_engine_errors(
     reference: str = "housner",
     *,
     cache_dir: str | Path | None = None,
-) -> dict[str, dict]:
-    """Every engine's measured free-rocking errors for a run, as plain data for run.json.
+) -> dict[str, EngineErrors]:
+    """Every engine's measured free-rocking errors for a run (run.json's ``engine_errors``).
 
     Parameters
     ----------
@@ -171,14 +203,14 @@ def run_engine_errors(
     Returns
     -------
     dict
-        Engine name -> ``{"amplitudes", "r_rel_errors", "p_rel_errors", "eps_r", "eps_p", "dt", "r_reference"}``,
-        or ``{"error": message}`` for an engine that failed the measurement.
+        Engine name -> its :class:`EngineErrors` with ``r_reference``, or one with only ``error`` (the message)
+        for an engine that failed the measurement.
     """
     if reference != "housner" or reference not in engines or not motions:
         return {}
     r_ref = engines[reference].get("r") or specimen.r_housner
     dt = float(np.median([m.dt for m in motions]))
-    out: dict[str, dict] = {}
+    out: dict[str, EngineErrors] = {}
     for name, settings in engines.items():
         if name == reference:
             continue
@@ -190,20 +222,17 @@ def run_engine_errors(
                 continue
             err = measure_engine_errors(engine, specimen, r_reference=r_ref, dt=dt)
         except RECORD_ERRORS as e:
-            out[name] = {"error": f"{type(e).__name__}: {e}"}
+            out[name] = EngineErrors(engine=name, error=f"{type(e).__name__}: {e}")
             continue
-        # as plain JSON data (lists of floats), the same whether measured now or read back from the cache
-        out[name] = json.loads(
-            json.dumps(
-                {**asdict(err), "eps_r": err.eps_r, "eps_p": err.eps_p, "r_reference": float(r_ref)}, default=float
-            )
-        )
+        # through its JSON (lists of floats), the same whether measured now or read back from the cache
+        text = json.dumps(replace(err, r_reference=float(r_ref)).to_json(), default=float, allow_nan=True)
+        out[name] = EngineErrors.from_json(json.loads(text))
         if path is not None:
-            store_text(path, json.dumps(out[name], allow_nan=True))
+            store_text(path, text)
     return out
 
 
-def run_engine_errors_meanwhile(*args, **kwargs) -> Callable[[], dict[str, dict]]:
+def run_engine_errors_meanwhile(*args, **kwargs) -> Callable[[], dict[str, EngineErrors]]:
     """:func:`run_engine_errors` started in a thread of this process; call the result to wait for it.
 
     ``housner run`` measures the engines' errors while its worker processes run the records: the
@@ -222,7 +251,7 @@ def run_engine_errors_meanwhile(*args, **kwargs) -> Callable[[], dict[str, dict]
     thread = threading.Thread(target=work, name="housner-engine-errors", daemon=True)
     thread.start()
 
-    def wait() -> dict[str, dict]:
+    def wait() -> dict[str, EngineErrors]:
         thread.join()
         if "error" in box:
             raise box["error"]
@@ -247,25 +276,23 @@ def _errors_path(cache_dir: str | Path, specimen: Specimen, engine: Engine, r_re
     return Path(cache_dir) / "engine-errors" / f"{content_key(content)[:32]}.json"
 
 
-def _read_errors(path: Path) -> dict | None:
+def _read_errors(path: Path) -> EngineErrors | None:
     """A cached measurement, or None when there is none or it cannot be read (then it is measured again)."""
     try:
         d = json.loads(path.read_text())
     except (OSError, ValueError):
         return None
     keys = ("engine", "amplitudes", "r_rel_errors", "p_rel_errors", "dt", "eps_r", "eps_p", "r_reference")
-    return d if isinstance(d, dict) and all(k in d for k in keys) else None
+    return EngineErrors.from_json(d) if isinstance(d, dict) and all(k in d for k in keys) else None
 
 
 def errors_from_dict(d: dict) -> EngineErrors:
-    """The :class:`EngineErrors` stored by :func:`run_engine_errors`."""
-    return EngineErrors(
-        d["engine"], tuple(d["amplitudes"]), tuple(d["r_rel_errors"]), tuple(d["p_rel_errors"]), float(d["dt"])
-    )
+    """The :class:`EngineErrors` of run.json's entry (:meth:`EngineErrors.from_json`)."""
+    return EngineErrors.from_json(d)
 
 
-@dataclass(frozen=True)
-class AgreementShares:
+@dataclass(frozen=True, eq=False)
+class AgreementShares(JsonValue):
     """Self-agreement of the analytic model under perturbations: the share of records that still agree.
 
     Attributes
@@ -304,10 +331,11 @@ class AgreementShares:
         }
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The fields as JSON data (:meth:`to_json`)."""
+        return self.to_json()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ChaosFloor(AgreementShares):
     """:class:`AgreementShares` under an engine's measured errors: r and p perturbed ("r+", "r-", "p+", "p-")."""
 

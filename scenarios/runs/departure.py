@@ -21,11 +21,12 @@ they disagree, :func:`departures` finds the first sample where the two theta his
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
+from housner._values import JsonValue
 from housner.free_vibration.impacts import impact_times
 from housner.scenarios.runs.chaos import RECORD_RTOL
 from housner.statistics.ensemble_stats import ks_2samp, per_record_agreement
@@ -33,6 +34,8 @@ from housner.statistics.ensemble_stats import ks_2samp, per_record_agreement
 __all__ = [
     "DEPART_TOL",
     "SMALL_ROCKING",
+    "DepartureSummary",
+    "ImpactsBefore",
     "Departure",
     "departure",
     "departures",
@@ -152,14 +155,47 @@ def departures(records, engine_histories: dict, model_histories: dict, dts: dict
     return [departure(i, engine_histories[i], model_histories[i], dts[i], alpha) for i in records]
 
 
-def summarise(deps: list[Departure], max_named: int = 8) -> dict:
+@dataclass(frozen=True, eq=False)
+class ImpactsBefore(JsonValue):
+    """The impacts before departure over the records that part after an impact: quartiles and median (NaN: none)."""
+
+    q25: float = math.nan
+    median: float = math.nan
+    q75: float = math.nan
+
+
+@dataclass(frozen=True, eq=False)
+class DepartureSummary(JsonValue):
+    """Where the records that disagree part (:func:`summarise`).
+
+    Attributes
+    ----------
+    n : int
+        Records.
+    by_phase : dict
+        Phase -> records that part in it.
+    impacts_before : ImpactsBefore
+    records : dict
+        Phase -> the first records (ids) that part in it.
+    text : str
+        The summary in one sentence ("" for no record).
+    """
+
+    n: int = 0
+    by_phase: dict[str, int] = field(default_factory=dict)
+    impacts_before: ImpactsBefore = field(default_factory=ImpactsBefore)
+    records: dict[str, tuple[int, ...]] = field(default_factory=dict)
+    text: str = ""
+
+
+def summarise(deps: list[Departure], max_named: int = 8) -> DepartureSummary:
     """Counts by phase, the impacts before departure (median and quartiles), and the records by phase.
 
     Returns
     -------
-    dict
-        ``n``, ``by_phase`` {phase: count}, ``impacts_before`` {"median", "q25", "q75"} over the records that
-        part after an impact, ``records`` {phase: [ids, at most ``max_named``]}, and ``text``: one sentence.
+    DepartureSummary
+        ``n``, ``by_phase`` {phase: count}, ``impacts_before`` (``median``, ``q25``, ``q75``) over the records
+        that part after an impact, ``records`` {phase: ids, at most ``max_named``}, and ``text``: one sentence.
     """
     phases = ("uplift", "small rocking", "rocking", "never")
     by = {ph: [d for d in deps if d.phase == ph] for ph in phases}
@@ -189,13 +225,13 @@ def summarise(deps: list[Departure], max_named: int = 8) -> dict:
         if n
         else ""
     )
-    return {
-        "n": n,
-        "by_phase": {ph: len(by[ph]) for ph in phases},
-        "impacts_before": q,
-        "records": {ph: [d.record for d in by[ph][:max_named]] for ph in phases},
-        "text": text,
-    }
+    return DepartureSummary(
+        n=n,
+        by_phase={ph: len(by[ph]) for ph in phases},
+        impacts_before=ImpactsBefore(**q),
+        records={ph: tuple(d.record for d in by[ph][:max_named]) for ph in phases},
+        text=text,
+    )
 
 
 _where = {

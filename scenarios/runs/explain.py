@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.effects import available_effects, make_effect
 from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import load_campaign
@@ -33,7 +34,8 @@ from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.runs.departure import record_agreement, record_ks, record_thetas
+from housner.scenarios.runs.chaos import ChaosFloor
+from housner.scenarios.runs.departure import DepartureSummary, record_agreement, record_ks, record_thetas
 from housner.scenarios.runs.engine_campaign import (
     AMPLITUDES,
     check_engine,
@@ -43,13 +45,27 @@ from housner.scenarios.runs.engine_campaign import (
     write_engine_campaign,
 )
 from housner.scenarios.runs.explain_floor import (
+    FloorParts,
+    ModelFormFloor,
     engine_chaos_floor,
     extended_floor,
     model_form_floor,
 )
-from housner.scenarios.runs.explain_maps import compare_with_maps
+from housner.scenarios.runs.explain_maps import ScatterFloor, compare_with_maps
+from housner.scenarios.runs.impact_map import EngineMaps
 
-__all__ = ["EXPLAIN_SIGMA", "REACH_MARGIN", "Explanation", "explain_engine"]
+__all__ = [
+    "EXPLAIN_SIGMA",
+    "REACH_MARGIN",
+    "DiagnosisSummary",
+    "EffectFound",
+    "ExplainDetails",
+    "Explanation",
+    "FloorParts",
+    "KsDistances",
+    "MapsExplained",
+    "explain_engine",
+]
 
 #: Noise added to the engine's theta before the diagnosis [rad]. The diagnosis takes a record as signal plus
 #: white noise of the level it estimates from the record (third differences,
@@ -68,44 +84,172 @@ _DONE = ("explained", "no_misfit")
 
 # ----------------------------------------------------------------------------
 # the explanation
-@dataclass(frozen=True)
-class Explanation:
-    """What :func:`explain_engine` found.
+@dataclass(frozen=True, eq=False)
+class EffectFound(JsonValue):
+    """An effect of the diagnosis' final model: its registry ``name`` and fitted ``params`` (name -> value)."""
+
+    name: str = ""
+    params: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class HeldoutError(JsonValue):
+    """The diagnosis' held-out error [alpha] of the plain model (``before``) and of its final model (``after``)."""
+
+    before: float = math.nan
+    after: float = math.nan
+
+
+@dataclass(frozen=True, eq=False)
+class DiagnosisSummary(JsonValue):
+    """The diagnosis of the engine's campaign: its ``status``, its verdict's ``text``, the held-out error and the
+    residual ratio [-] (the held-out error over the correct-model floor)."""
+
+    status: str = ""
+    text: str = ""
+    heldout_error: HeldoutError = field(default_factory=HeldoutError)
+    residual_ratio: float = math.nan
+
+
+@dataclass(frozen=True, eq=False)
+class KsDistances(JsonValue):
+    """The two-sample KS distance [-] of the engine's theta_max/alpha from the analytic model's: plain, with the
+    effects found, and with the engine's measured maps (None where the maps were not measured)."""
+
+    plain: float = math.nan
+    with_effects: float = math.nan
+    with_maps: float | None = None
+
+    _NULL_IS_NAN = ("with_maps",)
+
+
+@dataclass(frozen=True, eq=False)
+class MapsExplained(JsonValue):
+    """Housner + the engine's measured impact and flight maps against the engine (:mod:`explain_maps`).
+
+    Attributes
+    ----------
+    agreement : float
+        Per-record agreement with the engine [-].
+    n_records : int
+        Records both ran.
+    departures, departures_plain : DepartureSummary
+        Where the records that disagree part, with the maps and for the plain model.
+    scatter_floor : ScatterFloor
+        The agreement the maps' mean law keeps with an engine whose impacts scatter as measured.
+    wall_s : float
+        Wall time of the step [s].
+    overturned : int
+        Ground motions on which Housner + maps overturned.
+    reaches_floor, reaches_scatter_floor : bool
+        Whether the agreement reaches the extended floor, or the scatter floor (within :data:`REACH_MARGIN`).
+    remains : str
+        What is left, in one sentence or two.
+    maps : EngineMaps
+        The measured maps.
+    """
+
+    agreement: float = math.nan
+    n_records: int = 0
+    departures: DepartureSummary = field(default_factory=DepartureSummary)
+    departures_plain: DepartureSummary = field(default_factory=DepartureSummary)
+    scatter_floor: ScatterFloor = field(default_factory=ScatterFloor)
+    wall_s: float = math.nan
+    overturned: int = 0
+    reaches_floor: bool = False
+    reaches_scatter_floor: bool = False
+    remains: str = ""
+    maps: EngineMaps | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class OverturnCounts(JsonValue):
+    """Ground motions overturned by the engine, the analytic model and the analytic model with the effects found,
+    of ``records``."""
+
+    engine: int = 0
+    housner: int = 0
+    housner_with_effects: int = 0
+    records: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class CampaignRecordCounts(JsonValue):
+    """The engine's campaign: its free-vibration and ground-motion records, and those skipped (id, file, why)."""
+
+    free_vibration: int = 0
+    ground_motion: int = 0
+    skipped: tuple[tuple[str | None, ...], ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class ExplainDetails(JsonValue):
+    """The explanation's figures in full.
+
+    Attributes
+    ----------
+    chaos_floor : ChaosFloor
+    model_form_floor : ModelFormFloor
+        The two floors, per perturbation.
+    overturned : OverturnCounts
+    settings : dict
+        Engine -> the settings it ran with.
+    campaign : str or None
+        The campaign's folder when it was kept (``workdir``), else None.
+    campaign_records : CampaignRecordCounts
+    diagnosis_seconds : float
+        Time the diagnosis took [s].
+    """
+
+    chaos_floor: ChaosFloor | None = None
+    model_form_floor: ModelFormFloor | None = None
+    overturned: OverturnCounts = field(default_factory=OverturnCounts)
+    settings: dict[str, dict] = field(default_factory=dict)
+    campaign: str | None = None
+    campaign_records: CampaignRecordCounts = field(default_factory=CampaignRecordCounts)
+    diagnosis_seconds: float = math.nan
+
+    _ALWAYS = ("campaign",)
+
+
+@dataclass(frozen=True, eq=False)
+class Explanation(JsonValue):
+    """What :func:`explain_engine` found (``housner explain ENGINE --json``: :meth:`to_dict`).
 
     Attributes
     ----------
     engine, scenario : str
-    effects : tuple of dict
-        ``{"name", "params"}`` of each effect of the diagnosis' final model, in the order added.
+    effects : tuple of EffectFound
+        ``name`` and ``params`` of each effect of the diagnosis' final model, in the order added.
     agreement : float
         Per-record agreement of the analytic model with ``effects`` with the engine [-].
     agreement_plain : float
         The same for the plain analytic model [-].
     floor : float
         The extended floor: the lower of ``floor_parts`` [-].
-    floor_parts : dict
+    floor_parts : FloorParts
         ``chaos`` and ``model_form``: the mean shares of the two floors [-].
-    reaches_floor : bool
-        ``agreement >= floor - REACH_MARGIN``.
-    diagnosis : dict
+    reaches_floor : bool or None
+        ``agreement >= floor - REACH_MARGIN`` (None: a file that does not say).
+    diagnosis : DiagnosisSummary
         ``status``, ``text``, ``heldout_error`` (``before``, ``after`` [alpha]) and ``residual_ratio`` [-].
     remains : str
         What is left and where, in one sentence or two.
-    n_records : int
+    n_records : int or None
         Ground motions on which both the engine and the analytic model ran.
-    ks : dict
+    ks : KsDistances or None
         ``plain``, ``with_effects`` and ``with_maps``: the two-sample KS distance [-] of the engine's
         theta_max/alpha distribution from the analytic model's, plain, with ``effects`` and with the engine's
         measured maps (overturns as +inf).
-    maps : dict
+    maps : MapsExplained or None
         Housner + the engine's measured impact and flight maps (:mod:`housner.scenarios.runs.explain_maps`):
         ``agreement`` [-], ``reaches_floor``, ``n_records``, ``overturned``, ``departures`` and
         ``departures_plain`` (where the records that disagree part: phase of the motion, impacts before,
-        the records), ``remains`` (one sentence) and ``maps`` (the maps, :meth:`EngineMaps.to_dict`). Empty when
-        the step did not run. Also ``scatter_floor`` (the agreement the maps' mean law keeps with an engine whose
-        impacts scatter as measured, :func:`~housner.scenarios.runs.explain_maps.scatter_floor`) and
-        ``reaches_scatter_floor``.
-    details : dict
+        the records), ``remains`` (one sentence) and ``maps`` (the maps, :class:`EngineMaps`). None when
+        the step did not run (written as an empty table). Also ``scatter_floor`` (the agreement the maps' mean
+        law keeps with an engine whose impacts scatter as measured,
+        :func:`~housner.scenarios.runs.explain_maps.scatter_floor`) and ``reaches_scatter_floor``.
+    details : ExplainDetails or None
         The two floors in full (per perturbation), overturn counts, settings and the campaign's path.
     wall_s : dict
         Wall time of the steps [s].
@@ -113,46 +257,48 @@ class Explanation:
 
     engine: str
     scenario: str
-    effects: tuple
+    effects: tuple[EffectFound, ...]
     agreement: float
     agreement_plain: float
     floor: float
-    floor_parts: dict
-    reaches_floor: bool
-    diagnosis: dict
+    floor_parts: FloorParts
+    reaches_floor: bool | None
+    diagnosis: DiagnosisSummary
     remains: str
-    n_records: int
-    ks: dict = field(default_factory=dict)
-    maps: dict = field(default_factory=dict)
-    details: dict = field(default_factory=dict)
+    n_records: int | None
+    ks: KsDistances | None = None
+    maps: MapsExplained | None = None
+    details: ExplainDetails | None = None
     wall_s: dict = field(default_factory=dict)
 
+    #: Every key is written; a table not measured as an empty one.
+    _ALWAYS = ("reaches_floor", "n_records")
+    _EMPTY_WHEN_NONE = ("ks", "maps", "details")
+
     def to_dict(self) -> dict:
-        """Plain data for JSON (NaN as None)."""
-        return jsonable({k: getattr(self, k) for k in self.__dataclass_fields__}, nonfinite="null")
+        """Plain data for JSON (NaN as None): the explain JSON."""
+        return jsonable(self.to_json(), nonfinite="null")
 
     def summary(self) -> str:
         """A few lines: effects, agreement before and after beside the floor, reaching it, what remains."""
         eff = (
-            "; ".join(
-                f"{e['name']} ({', '.join(f'{k} = {v:.4g}' for k, v in e['params'].items())})" for e in self.effects
-            )
+            "; ".join(f"{e.name} ({', '.join(f'{k} = {v:.4g}' for k, v in e.params.items())})" for e in self.effects)
             or "none"
         )
         fp = self.floor_parts
         d = self.diagnosis
+        ks = self.ks or KsDistances()
         return "\n".join(
             [
-                f"{self.engine} on {self.scenario} ({self.n_records} ground motions): diagnosis {d['status']}",
+                f"{self.engine} on {self.scenario} ({self.n_records} ground motions): diagnosis {d.status}",
                 f"effects: {eff}",
                 f"agreement with {self.engine}: plain Housner {self.agreement_plain:.0%} -> with the effects "
-                f"{self.agreement:.0%}; floor {self.floor:.0%} (the lower of chaos {fp['chaos']:.0%} and model form "
-                f"{fp['model_form']:.0%})",
+                f"{self.agreement:.0%}; floor {self.floor:.0%} (the lower of chaos {fp.chaos:.0%} and model form "
+                f"{fp.model_form:.0%})",
                 f"reaches the floor (within {REACH_MARGIN:.0%}): {'yes' if self.reaches_floor else 'no'}",
-                f"KS distance from {self.engine}: plain {self.ks.get('plain', math.nan):.3f} -> with the effects "
-                f"{self.ks.get('with_effects', math.nan):.3f}",
-                f"held-out error {d['heldout_error']['before']:.4f} -> {d['heldout_error']['after']:.4f} alpha, "
-                f"residual ratio {d['residual_ratio']:.2f}",
+                f"KS distance from {self.engine}: plain {ks.plain:.3f} -> with the effects {ks.with_effects:.3f}",
+                f"held-out error {d.heldout_error.before:.4f} -> {d.heldout_error.after:.4f} alpha, "
+                f"residual ratio {d.residual_ratio:.2f}",
                 f"remains: {self.remains}",
                 *self._maps_lines(),
             ]
@@ -160,13 +306,14 @@ class Explanation:
 
     def _maps_lines(self) -> list[str]:
         m = self.maps
-        if not m:
+        if m is None:
             return []
+        with_maps = self.ks.with_maps if self.ks is not None and self.ks.with_maps is not None else math.nan
         return [
-            f"with {self.engine}'s measured impact and flight maps: agreement {m['agreement']:.0%} "
-            f"(plain {self.agreement_plain:.0%}, floor {self.floor:.0%}), KS {self.ks.get('with_maps', math.nan):.3f}; "
-            f"reaches the floor: {'yes' if m['reaches_floor'] else 'no'}",
-            f"remains with the maps: {m['remains']}",
+            f"with {self.engine}'s measured impact and flight maps: agreement {m.agreement:.0%} "
+            f"(plain {self.agreement_plain:.0%}, floor {self.floor:.0%}), KS {with_maps:.3f}; "
+            f"reaches the floor: {'yes' if m.reaches_floor else 'no'}",
+            f"remains with the maps: {m.remains}",
         ]
 
 
@@ -307,44 +454,44 @@ def _explain(
     return Explanation(
         engine=engine,
         scenario=sc.name,
-        effects=tuple({"name": nm, "params": {k: float(x) for k, x in p.items()}} for nm, p in final),
+        effects=tuple(EffectFound(nm, {k: float(x) for k, x in p.items()}) for nm, p in final),
         agreement=float(with_eff),
         agreement_plain=float(plain),
         floor=floor,
-        floor_parts={"chaos": chaos.share, "model_form": mform.share},
+        floor_parts=FloorParts(chaos=chaos.share, model_form=mform.share),
         reaches_floor=reaches,
-        diagnosis={
-            "status": v.status,
-            "text": v.text,
-            "heldout_error": {"before": d.baseline.heldout_error, "after": d.final.heldout_error},
-            "residual_ratio": v.residual.ratio,
-        },
+        diagnosis=DiagnosisSummary(
+            status=v.status,
+            text=v.text,
+            heldout_error=HeldoutError(before=d.baseline.heldout_error, after=d.final.heldout_error),
+            residual_ratio=v.residual.ratio,
+        ),
         remains=_remains(engine, names, with_eff, floor, reaches, d),
         n_records=int(n),
-        ks={
-            "plain": record_ks(eng_theta, plain_theta),
-            "with_effects": record_ks(eng_theta, eff_theta),
-            **({"with_maps": record_ks(eng_theta, mp.theta)} if mp else {}),
-        },
+        ks=KsDistances(
+            plain=record_ks(eng_theta, plain_theta),
+            with_effects=record_ks(eng_theta, eff_theta),
+            with_maps=record_ks(eng_theta, mp.theta) if mp else None,
+        ),
         maps=_maps_part(engine, mp, floor),
-        details={
-            "chaos_floor": chaos.to_dict(),
-            "model_form_floor": mform.to_dict(),
-            "overturned": {
-                "engine": int(np.isinf(eng_theta).sum()),
-                "housner": int(np.isinf(plain_theta).sum()),
-                "housner_with_effects": int(np.isinf(eff_theta).sum()),
-                "records": int(eng_theta.size),
-            },
-            "settings": runs.settings,
-            "campaign": str(out) if keep else None,
-            "campaign_records": {
-                "free_vibration": len(camp.free_vibration),
-                "ground_motion": len(camp.ground_motion),
-                "skipped": [list(s) for s in camp.skipped],
-            },
-            "diagnosis_seconds": d.elapsed,
-        },
+        details=ExplainDetails(
+            chaos_floor=chaos,
+            model_form_floor=mform,
+            overturned=OverturnCounts(
+                engine=int(np.isinf(eng_theta).sum()),
+                housner=int(np.isinf(plain_theta).sum()),
+                housner_with_effects=int(np.isinf(eff_theta).sum()),
+                records=int(eng_theta.size),
+            ),
+            settings=runs.settings,
+            campaign=str(out) if keep else None,
+            campaign_records=CampaignRecordCounts(
+                free_vibration=len(camp.free_vibration),
+                ground_motion=len(camp.ground_motion),
+                skipped=tuple(tuple(s) for s in camp.skipped),
+            ),
+            diagnosis_seconds=d.elapsed,
+        ),
         wall_s={
             "engine_runs": runs.wall_s,
             "diagnosis": t2 - t1,
@@ -356,13 +503,13 @@ def _explain(
     )
 
 
-def _maps_part(engine: str, mp, floor: float) -> dict:
+def _maps_part(engine: str, mp, floor: float) -> MapsExplained | None:
     """The Explanation's ``maps``: the comparison's figures, whether it reaches the floor (the extended floor, or
-    the scatter floor of the maps' own measured scatter), what remains."""
+    the scatter floor of the maps' own measured scatter), what remains (None when the step did not run)."""
     if mp is None:
-        return {}
+        return None
     reaches = bool(mp.agreement >= floor - REACH_MARGIN)
-    sf = mp.scatter["share"]
+    sf = mp.scatter.share
     reaches_scatter = bool(mp.agreement >= sf - REACH_MARGIN)
     head = f"Housner + {engine}'s measured maps agrees with {engine} on {mp.agreement:.0%} of the records"
     small, large = mp.maps.at(0.05), mp.maps.at(0.5)
@@ -377,18 +524,24 @@ def _maps_part(engine: str, mp, floor: float) -> dict:
             f"{head}, {floor - mp.agreement:.0%} below the floor of {floor:.0%}, but as many as the maps' mean keeps "
             f"with an engine whose impacts scatter as {engine}'s were measured to ({spread}): {sf:.0%} (the "
             f"scatter floor). The departure is explained by what was measured, the mean impact law and its "
-            f"scatter; no model with one law per impact can follow it record by record. {mp.departures['text']}"
+            f"scatter; no model with one law per impact can follow it record by record. {mp.departures.text}"
         )
     else:
         remains = (
             f"{head}, {floor - mp.agreement:.0%} below the floor of {floor:.0%} and below the {sf:.0%} the maps' "
             f"mean keeps with an engine whose impacts scatter as measured ({spread}): something else departs. "
-            f"{mp.departures['text']}"
+            f"{mp.departures.text}"
         )
-    return {
-        **mp.to_dict(),
-        "reaches_floor": reaches,
-        "reaches_scatter_floor": reaches_scatter,
-        "remains": remains.strip(),
-        "maps": mp.maps.to_dict(),
-    }
+    return MapsExplained(
+        agreement=mp.agreement,
+        n_records=mp.n_records,
+        departures=mp.departures,
+        departures_plain=mp.departures_plain,
+        scatter_floor=mp.scatter,
+        wall_s=mp.wall_s,
+        overturned=mp.overturned,
+        reaches_floor=reaches,
+        reaches_scatter_floor=reaches_scatter,
+        remains=remains.strip(),
+        maps=mp.maps,
+    )

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.engines.base import get_engine
 from housner.model import default_substeps
 from housner.motion import GroundMotion
@@ -30,6 +31,7 @@ from housner.statistics.ensemble_stats import per_record_agreement
 __all__ = [
     "PERTURBATIONS",
     "SHIFT",
+    "FloorParts",
     "ModelFormFloor",
     "engine_chaos_floor",
     "extended_floor",
@@ -54,7 +56,16 @@ PERTURBATIONS: dict[str, ModelForm] = {
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
+class FloorParts(JsonValue):
+    """The two parts of the extended floor, their mean shares [-]: the chaos floor of the engine's errors and the
+    model-form floor of another correct integrator (:func:`extended_floor` is the lower)."""
+
+    chaos: float = math.nan
+    model_form: float = math.nan
+
+
+@dataclass(frozen=True, eq=False)
 class ModelFormFloor(AgreementShares):
     """:class:`housner.scenarios.runs.chaos.AgreementShares` under another correct integrator's conventions
     (one share per perturbation of :data:`PERTURBATIONS`)."""

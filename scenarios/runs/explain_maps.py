@@ -19,16 +19,34 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from housner._values import JsonValue
 from housner.effects.measured import MeasuredMaps
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.runs.departure import departures, disagreeing, record_agreement, record_thetas, summarise
+from housner.scenarios.runs.departure import (
+    DepartureSummary,
+    departures,
+    disagreeing,
+    record_agreement,
+    record_thetas,
+    summarise,
+)
 from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
 
-__all__ = ["SCATTER_SEEDS", "MapsComparison", "compare_with_maps", "maps_effect", "scatter_floor"]
+__all__ = ["SCATTER_SEEDS", "MapsComparison", "ScatterFloor", "compare_with_maps", "maps_effect", "scatter_floor"]
 
 #: Realisations of the measured impact scatter behind :func:`scatter_floor` (three: the floor is their mean; on
 #: 100 records one realisation's share moves by a few points).
 SCATTER_SEEDS = (1, 2, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class ScatterFloor(JsonValue):
+    """The agreement the maps' mean law keeps with realisations of an engine whose impacts scatter as measured
+    (:func:`scatter_floor`): its mean ``share`` [-], each realisation's ``shares`` and their ``seeds``."""
+
+    share: float = math.nan
+    shares: tuple[float, ...] = ()
+    seeds: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -45,11 +63,11 @@ class MapsComparison:
         Records both ran.
     theta : pandas.Series
         theta_max/alpha per ground motion of Housner + maps (+inf: overturned).
-    departures : dict
+    departures : DepartureSummary
         :func:`housner.scenarios.runs.departure.summarise` of the records where Housner + maps disagrees.
-    departures_plain : dict
+    departures_plain : DepartureSummary
         The same for the plain model.
-    scatter : dict
+    scatter : ScatterFloor
         :func:`scatter_floor`: the agreement a model of the measured mean law keeps with an engine whose impacts
         scatter as measured.
     wall_s : float
@@ -60,22 +78,15 @@ class MapsComparison:
     agreement: float
     n_records: int
     theta: pd.Series
-    departures: dict
-    departures_plain: dict
-    scatter: dict
+    departures: DepartureSummary
+    departures_plain: DepartureSummary
+    scatter: ScatterFloor
     wall_s: float
 
-    def to_dict(self) -> dict:
-        """Plain data: the figures and the departures (the maps themselves are written on their own)."""
-        return {
-            "agreement": self.agreement,
-            "n_records": self.n_records,
-            "departures": self.departures,
-            "departures_plain": self.departures_plain,
-            "scatter_floor": self.scatter,
-            "wall_s": self.wall_s,
-            "overturned": int(np.isinf(self.theta).sum()),
-        }
+    @property
+    def overturned(self) -> int:
+        """Ground motions on which Housner + maps overturned."""
+        return int(np.isinf(self.theta).sum())
 
 
 def maps_effect(maps: EngineMaps, seed: int | None = None) -> MeasuredMaps:
@@ -95,10 +106,10 @@ def maps_effect(maps: EngineMaps, seed: int | None = None) -> MeasuredMaps:
     return MeasuredMaps(ix[ok_i], ir[ok_i], fx[ok_f], fc[ok_f], impact_spread=spread, seed=int(seed))
 
 
-def scatter_floor(sc, motions, settings: dict, maps: EngineMaps, theta: pd.Series, options) -> dict:
+def scatter_floor(sc, motions, settings: dict, maps: EngineMaps, theta: pd.Series, options) -> ScatterFloor:
     """The agreement [-] of Housner + the maps' mean law (``theta``) with realisations of an engine whose impacts
     also scatter by the maps' measured spread (seeds :data:`SCATTER_SEEDS`): what the mean law must miss,
-    record by record, of an engine that does exactly what was measured. ``{"share", "shares", "seeds"}``."""
+    record by record, of an engine that does exactly what was measured (``share``, ``shares``, ``seeds``)."""
     shares = []
     for seed in SCATTER_SEEDS:
         res, _h, _i = run_engines(
@@ -106,10 +117,10 @@ def scatter_floor(sc, motions, settings: dict, maps: EngineMaps, theta: pd.Serie
         )
         share, _n = record_agreement(record_thetas(res, "housner"), theta)
         shares.append(float(share))
-    return {"share": float(np.mean(shares)), "shares": shares, "seeds": list(SCATTER_SEEDS)}
+    return ScatterFloor(share=float(np.mean(shares)), shares=tuple(shares), seeds=tuple(SCATTER_SEEDS))
 
 
-def _departures(records, engine: str, runs, model_hist: dict, alpha: float) -> dict:
+def _departures(records, engine: str, runs, model_hist: dict, alpha: float) -> DepartureSummary:
     n_fv = len(runs.releases)
     eng = {i: runs.histories[(engine, n_fv + i)] for i in records}
     mod = {i: model_hist[("housner", i)] for i in records}

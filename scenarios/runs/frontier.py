@@ -30,11 +30,13 @@ import datetime
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.engines.base import engine_class
 from housner.engines.tuning import COST_TIE, tune
 from housner.scenarios.catalogue.scenario import Scenario
@@ -44,7 +46,7 @@ from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import build_motions
 from housner.scenarios.runs.departure import record_agreement, record_thetas
 from housner.scenarios.runs.engine_campaign import check_engine, ground_motion_scenario
-from housner.scenarios.runs.explain_floor import engine_chaos_floor, extended_floor, model_form_floor
+from housner.scenarios.runs.explain_floor import FloorParts, engine_chaos_floor, extended_floor, model_form_floor
 from housner.statistics.ensemble_stats import KS_MAX, ks_2samp
 
 __all__ = [
@@ -69,17 +71,18 @@ TIMESTEP_FACTORS = (0.5, 1.0, 2.0, 4.0)
 KNEE_Z = 1.96
 
 
-@dataclass
-class FrontierPoint:
+@dataclass(frozen=True, eq=False)
+class FrontierPoint(JsonValue):
     """One point of the sweep: the settings that differ from the defaults and what they measured.
 
     Errors are relative [-] (engine / analytic - 1, the worst by magnitude); shares are of the
     records both engines ran [-]; ``cpu_per_sim_second`` is CPU seconds per simulated second
-    on the tuner's check records.
+    on the tuner's check records. ``floor_parts`` is None where the point did not run on the ground
+    motions (written as an empty table); the JSON also holds the point's :attr:`label`.
     """
 
-    axis: str  # the setting swept ("" for the defaults)
-    settings: dict  # the settings that differ from the defaults
+    axis: str = ""  # the setting swept ("" for the defaults)
+    settings: dict = field(default_factory=dict)  # the settings that differ from the defaults
     r_error: float = math.nan
     small_error: float = math.nan
     decay_error: float = math.nan
@@ -91,10 +94,22 @@ class FrontierPoint:
     n_records: int = 0
     ks: float = math.nan
     floor: float = math.nan
-    floor_parts: dict = field(default_factory=dict)
+    floor_parts: FloorParts | None = None
     overturned: int = 0
     cpu_per_sim_second: float = math.nan
     error: str = ""
+
+    _EMPTY_WHEN_NONE = ("floor_parts",)
+
+    def to_json(self) -> dict:
+        """The point's keys and values, then its label."""
+        return {**super().to_json(), "label": self.label}
+
+    @classmethod
+    def from_json(cls, data: Any) -> FrontierPoint:
+        """The point of :meth:`to_json`'s data (its label follows from the settings: read, not kept)."""
+        data = {k: v for k, v in data.items() if k != "label"} if isinstance(data, dict) else data
+        return super().from_json(data)
 
     @property
     def label(self) -> str:
@@ -107,16 +122,17 @@ class FrontierPoint:
         return math.sqrt(max(p * (1.0 - p), 0.0) / n) if n and math.isfinite(p) else math.nan
 
 
-@dataclass
-class Frontier:
-    """The sweep of one engine on one scenario (module docstring)."""
+@dataclass(frozen=True, eq=False)
+class Frontier(JsonValue):
+    """The sweep of one engine on one scenario (module docstring); ``housner frontier ENGINE --json`` writes
+    :meth:`to_dict`."""
 
     engine: str
     scenario: str
     n_motions: int
     defaults: dict
     axes: dict
-    points: list[FrontierPoint]
+    points: tuple[FrontierPoint, ...]
     knee: int  # index into points
     default: int  # index into points
     model_form_floor: float
@@ -125,31 +141,15 @@ class Frontier:
     wall_s: float = 0.0
 
     def to_dict(self) -> dict:
-        d = asdict(self)
-        d["points"] = [{**asdict(p), "label": p.label} for p in self.points]
-        return jsonable(d, nonfinite="null")
+        """The frontier JSON: :meth:`to_json` with NaN as null."""
+        return jsonable(self.to_json(), nonfinite="null")
 
     @classmethod
     def from_dict(cls, d: Mapping) -> Frontier:
-        pts = [FrontierPoint(**{k: _num(v) for k, v in p.items() if k != "label"}) for p in d["points"]]
-        keep = {
-            k: d[k]
-            for k in (
-                "engine",
-                "scenario",
-                "n_motions",
-                "defaults",
-                "axes",
-                "knee",
-                "default",
-                "model_form_floor",
-                "version",
-                "date",
-                "wall_s",
-            )
-            if k in d
-        }
-        return cls(points=pts, **{k: _num(v) for k, v in keep.items()})
+        """The frontier of a frontier JSON (:meth:`from_json`); KeyError without its points."""
+        if not isinstance(d, Mapping) or "points" not in d:
+            raise KeyError("points")
+        return cls.from_json(d)
 
     def knee_settings(self) -> dict:
         """The knee's settings, complete (the defaults with the knee's changes)."""
@@ -261,36 +261,41 @@ def engine_frontier(
     ref = record_thetas(res_h, "housner")
     mform = model_form_floor(sc.specimen, [motions[i] for i in sorted(ref.index)], href)
     for i, p in enumerate(pts):
-        _take_checks(p, table.iloc[i])
+        p = pts[i] = _take_checks(p, table.iloc[i])
         if p.error:
             continue
         say(f"{engine} {p.label} on {len(motions)} ground motions ({i + 1}/{len(pts)})")
-        _measure_on_motions(p, engine, {**base, **p.settings}, sc.specimen, motions, ref, mform, href, options)
-    out = Frontier(
+        pts[i] = _measure_on_motions(p, engine, {**base, **p.settings}, sc.specimen, motions, ref, mform, href, options)
+    return Frontier(
         engine=engine,
         scenario=sc.name,
         n_motions=len(motions),
         defaults=defaults,
         axes={k: list(v) for k, v in ax.items()},
-        points=pts,
-        knee=0,
+        points=tuple(pts),
+        knee=knee(pts),
         default=0,
         model_form_floor=float(mform.share),
         version=version,
         date=datetime.date.today().isoformat(),
+        wall_s=time.perf_counter() - t0,
     )
-    out.knee = knee(out.points)
-    out.wall_s = time.perf_counter() - t0
-    return out
 
 
-def _take_checks(p: FrontierPoint, row) -> None:
-    """Copy the tuner's checks of point ``p`` (its row of the tuner's candidates table) onto it."""
-    p.r_error, p.small_error = float(row["worst_rel_error"]), float(row["small_worst_rel_error"])
-    p.decay_error, p.pulse_error = float(row["decay_rel_error"]), float(row["pulse_rel_error"])
-    p.checks_met, p.cpu_per_sim_second = bool(row["met"]), float(row["cost_per_sim_second"])
-    p.failed, p.score = str(row.get("failed", "") or ""), float(row["score"])
-    p.error = str(row["error"] or "")
+def _take_checks(p: FrontierPoint, row) -> FrontierPoint:
+    """Point ``p`` with the tuner's checks of its row of the tuner's candidates table."""
+    return replace(
+        p,
+        r_error=float(row["worst_rel_error"]),
+        small_error=float(row["small_worst_rel_error"]),
+        decay_error=float(row["decay_rel_error"]),
+        pulse_error=float(row["pulse_rel_error"]),
+        checks_met=bool(row["met"]),
+        cpu_per_sim_second=float(row["cost_per_sim_second"]),
+        failed=str(row.get("failed", "") or ""),
+        score=float(row["score"]),
+        error=str(row["error"] or ""),
+    )
 
 
 def _measure_on_motions(
@@ -303,22 +308,25 @@ def _measure_on_motions(
     mform,
     href: dict,
     options: RunOptions | None,
-) -> None:
-    """Run ``engine`` with the point's ``settings`` on the ground motions and set the point's agreement with the
+) -> FrontierPoint:
+    """Point ``p`` run by ``engine`` with the point's ``settings`` on the ground motions: its agreement with the
     analytic model's theta_max/alpha ``ref``, KS distance, overturns and extended floor (``mform``: the
     model-form floor; ``href``: the analytic model's settings)."""
     res, _h, _i = run_engines(specimen, motions, {engine: settings}, options, histories=False)
     th = record_thetas(res, engine)
-    p.agreement, p.n_records = record_agreement(th, ref)
+    agreement, n_records = record_agreement(th, ref)
+    p = replace(p, agreement=agreement, n_records=n_records)
     both = th.index.intersection(ref.index)
     if not len(both):
-        p.error = "no record ran"
-        return
-    p.ks = float(ks_2samp(th[both].to_numpy(), ref[both].to_numpy()).distance)
-    p.overturned = int(np.isinf(th[both].to_numpy()).sum())
+        return replace(p, error="no record ran")
     chaos = engine_chaos_floor(engine, settings, specimen, [motions[j] for j in sorted(both)], href.get("r"))
-    p.floor_parts = {"chaos": float(chaos.share), "model_form": float(mform.share)}
-    p.floor = extended_floor(chaos, mform)
+    return replace(
+        p,
+        ks=float(ks_2samp(th[both].to_numpy(), ref[both].to_numpy()).distance),
+        overturned=int(np.isinf(th[both].to_numpy()).sum()),
+        floor_parts=FloorParts(chaos=float(chaos.share), model_form=float(mform.share)),
+        floor=extended_floor(chaos, mform),
+    )
 
 
 def knee(points: Sequence[FrontierPoint]) -> int:
@@ -455,7 +463,3 @@ def _fmt(v) -> str:
     if isinstance(v, (list, tuple)):
         return "(" + ", ".join(_fmt(x) for x in v) + ")"
     return f"{v:g}" if isinstance(v, float) else str(v)
-
-
-def _num(v):
-    return math.nan if v is None else v

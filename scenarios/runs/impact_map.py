@@ -22,9 +22,11 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy import optimize
 
+from housner._values import same
 from housner.engines.base import engine_spec, get_engine
 from housner.free_vibration.closed_forms import half_cycle_time
 from housner.motion import GroundMotion
+from housner.scenarios.execution.rundir import SpecimenFacts
 from housner.specimen import Specimen
 
 __all__ = [
@@ -103,7 +105,7 @@ def engine_registry_name(name: str) -> str:
     return engine_spec(name).name
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class EngineMaps:
     """An engine's impact and flight maps against Housner's model (``docs/explanation/engine-maps.md``).
 
@@ -117,7 +119,7 @@ class EngineMaps:
         The engine's settings.
     version : str
         Version of the engine's package.
-    specimen : dict
+    specimen : SpecimenFacts
         ``Specimen.describe()`` of the block.
     dt_s : float
         Sample interval [s].
@@ -142,7 +144,7 @@ class EngineMaps:
     label: str
     settings: dict
     version: str
-    specimen: dict
+    specimen: SpecimenFacts
     dt_s: float
     amplitudes: tuple
     r_housner: float
@@ -177,9 +179,18 @@ class EngineMaps:
             out[key] = float(np.interp(math.log(x), np.log(xs[ok]), ys[ok])) if ok.any() else math.nan
         return out
 
+    def __eq__(self, other: object) -> bool:
+        """Equal maps write the same data (a bin without a value, NaN, equals NaN; a tuple its JSON list)."""
+        if type(other) is not type(self):
+            return NotImplemented
+        return same(self.to_dict(), other.to_dict())
+
+    __hash__ = None  # type: ignore[assignment]
+
     def to_dict(self) -> dict:
         """Plain data (JSON-ready)."""
         d = asdict(self)
+        d["specimen"] = self.specimen.to_json()
         d["amplitudes_over_alpha"] = list(d.pop("amplitudes"))
         d["format"] = "housner-impact-maps/1"
         return _plain(d)
@@ -195,11 +206,26 @@ class EngineMaps:
             d = json.loads(text)
         except json.JSONDecodeError as e:
             raise ValueError(f"impact maps: not JSON ({e})") from None
-        if not isinstance(d, dict) or d.get("format") != "housner-impact-maps/1":
+        return cls.from_dict(d)
+
+    @classmethod
+    def from_dict(cls, d: Mapping) -> EngineMaps:
+        """Maps from :meth:`to_dict`'s data (as read from JSON); ValueError naming what is missing."""
+        if isinstance(d, EngineMaps):
+            return d
+        if not isinstance(d, Mapping) or d.get("format") != "housner-impact-maps/1":
             raise ValueError("impact maps: not a housner impact-maps file (format 'housner-impact-maps/1')")
         d = dict(d)
         d.pop("format")
         d["amplitudes"] = tuple(d.pop("amplitudes_over_alpha"))
+        d["specimen"] = SpecimenFacts.from_json(d.get("specimen"))
+        # a file that writes a missing number as null (an explanation's, housner explain --json): NaN again
+        for key in ("impacts", "flights", "impact_points", "flight_points"):
+            if isinstance(d.get(key), Mapping):
+                d[key] = {k: _nan_for_null(v) for k, v in d[key].items()}
+        for key in ("dt_s", "r_housner", "wall_s"):
+            if key in d and d[key] is None:
+                d[key] = math.nan
         try:
             return cls(**d)
         except TypeError as e:
@@ -219,6 +245,11 @@ class EngineMaps:
                 f"   {v['period_drift']:+10.2e}        {1e3 * v['contact_s']:5.1f}"
             )
         return "\n".join(lines)
+
+
+def _nan_for_null(column):
+    """A column of numbers read from JSON, null (a missing number) as NaN."""
+    return [math.nan if v is None else v for v in column] if isinstance(column, list) else column
 
 
 def _plain(v):
@@ -560,7 +591,7 @@ def measure_maps(
         label=spec.label,
         settings=_plain(eng.settings()),
         version=eng.version(),
-        specimen=_plain(specimen.describe()),
+        specimen=SpecimenFacts.from_json(_plain(specimen.describe())),
         dt_s=float(dt),
         amplitudes=amps,
         r_housner=specimen.r_housner,

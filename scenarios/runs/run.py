@@ -18,9 +18,22 @@ from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import RUN_FILES, RunMeta, effect_data, provenance, write_run
+from housner.scenarios.execution.rundir import (
+    RUN_FILES,
+    EffectData,
+    EffectsFacts,
+    EngineFacts,
+    FailedRecord,
+    Provenance,
+    RunAnalysis,
+    RunMeta,
+    ScenarioCopy,
+    SpecimenFacts,
+    effect_data,
+    write_run,
+)
 from housner.scenarios.execution.runner import run_engines
-from housner.scenarios.motions.build import build_motions
+from housner.scenarios.motions.build import MotionFacts, build_motions
 from housner.scenarios.runs.chaos import run_engine_errors, run_engine_errors_meanwhile
 from housner.scenarios.runs.spread import seed_spread
 
@@ -128,18 +141,20 @@ def run_scenario(
         spread = seed_spread(scenario, k, options=RunOptions(cache_dir=opts.cache_dir, use_cache=opts.use_cache))
     effects = None
     if scenario.effects:
-        effects = {"label": effects_label(scenario.effects), "effects": [effect_data(e) for e in scenario.effects]}
+        effects = EffectsFacts(effects_label(scenario.effects), tuple(EffectData.of(e) for e in scenario.effects))
     meta = RunMeta(
-        scenario=scenario.describe(),
-        specimen=scenario.specimen.describe(),
-        motions=mmeta,
+        scenario=ScenarioCopy(scenario.describe()),
+        specimen=SpecimenFacts.from_json(scenario.specimen.describe()),
+        motions=MotionFacts.from_json(mmeta),
         n_motions=len(motions),
-        engines=info,
-        analysis=scenario.analysis,
-        failures=fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records"),
+        engines={n: EngineFacts.from_json(v) for n, v in info.items()},
+        analysis=RunAnalysis.from_json(scenario.analysis),
+        failures=tuple(
+            FailedRecord.from_json(r) for r in fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records")
+        ),
         engine_errors=engine_errors,
         wall_s={"motions": t_motions, "total": time.perf_counter() - t0},
-        provenance=provenance(),
+        provenance=Provenance.current(),
         table2_spread=spread,
         effects=effects,
     )

@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from housner._values import JsonValue
 from housner.engines.base import get_engine
 from housner.scenarios.catalogue.scenario import Scenario
 from housner.scenarios.execution.options import RunOptions
@@ -16,11 +18,169 @@ from housner.scenarios.motions.build import build_motions
 from housner.scenarios.motions.elastic import ensemble_spectra, response_spectrum
 from housner.scenarios.motions.records import arias_intensity
 
-__all__ = ["RECORD_BAND_S", "ensemble_seeds", "equivalent_amplitude", "record_against_ensemble", "seed_spread"]
+__all__ = [
+    "RECORD_BAND_S",
+    "AmplitudeFactor",
+    "EquivalentAmplitudes",
+    "RecordGap",
+    "Table2Spread",
+    "ensemble_seeds",
+    "equivalent_amplitude",
+    "record_against_ensemble",
+    "seed_spread",
+]
 
 #: Prototype periods [s] where the rocking of the seed's 5 m prototype (p = 1.55 1/s) is decided:
 #: omega_p/p of about 3-8 (seed Fig. 2), i.e. T = 2 pi / (omega_p) = 0.5-1.25 s.
 RECORD_BAND_S = (0.5, 1.25)
+
+
+@dataclass(frozen=True, eq=False)
+class Table2Spread(JsonValue):
+    """Table 2 over independent ensembles (:func:`seed_spread`; run.json's ``table2_spread``).
+
+    Attributes
+    ----------
+    k : int or None
+        Ensembles.
+    seeds : tuple of int
+        Their seeds.
+    percentiles : dict
+        Percentile [%] -> theta_max/alpha of each ensemble [-] (inf: overturn).
+    overturn_fraction : tuple of float
+        Each ensemble's share of overturns [-].
+    overturn_fraction_range : tuple of float
+        (min, median, max) of ``overturn_fraction``.
+    summary : dict
+        Percentile [%] -> (min, median, max) over the ensembles [-].
+    inf_means : str or None
+        What an infinite value means ("overturn").
+    nan_free : bool or None
+        Whether every ensemble had a usable record.
+    n_failed : int or None
+        Records left out, over all ensembles.
+    """
+
+    k: int | None = None
+    seeds: tuple[int, ...] = ()
+    percentiles: dict[int, tuple[float, ...]] = field(default_factory=dict)
+    overturn_fraction: tuple[float, ...] = ()
+    overturn_fraction_range: tuple[float, ...] = ()
+    summary: dict[int, tuple[float, ...]] = field(default_factory=dict)
+    inf_means: str | None = None
+    nan_free: bool | None = None
+    n_failed: int | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def n_ensembles(self) -> int:
+        """Ensembles of the spread: ``k``, else as many as seeds."""
+        return self.k if self.k is not None else len(self.seeds)
+
+
+@dataclass(frozen=True, eq=False)
+class RecordGap(JsonValue):
+    """The record an ensemble was fitted to, measured as one more member of it (:func:`record_against_ensemble`).
+
+    Attributes
+    ----------
+    engine : str
+        The engine that gave the record's response.
+    amplitude : float
+        Factor on the record, as on the ensemble [-].
+    record : str
+        The record's name.
+    record_theta_max_over_alpha : float
+        The record's response [-] (inf: overturned).
+    record_percentile : float
+        Per cent of the ensemble strictly below the record, ties counted half [%].
+    n_ensemble : int
+        The ensemble's usable records.
+    damping : float
+        Damping ratio of the spectra [-].
+    band_s : tuple of float
+        The prototype period range where rocking is decided [s].
+    band_periods_s, band_psa_ratio : tuple of float
+        Periods of the band [s] and the ensemble's mean PSa over the record's at each [-].
+    band_ratio_min, band_ratio_max, band_ratio_mean : float
+        Of ``band_psa_ratio`` [-].
+    short_s : tuple of float
+        The short period range [s].
+    short_ratio_max, short_ratio_max_period_s : float
+        The largest ratio there [-] and its period [s].
+    p_prototype_1_s : float
+        The prototype's frequency parameter [1/s].
+    omega_ratio_band : tuple of float
+        omega_p/p of the prototype at the band's ends [-].
+    arias_record_m_s, arias_ensemble_mean_m_s : float
+        Arias intensities at prototype scale [m/s].
+    arias_ensemble_5_95_m_s : tuple of float
+        The ensemble's 5th and 95th percentiles of it [m/s].
+    """
+
+    engine: str
+    amplitude: float
+    record: str
+    record_theta_max_over_alpha: float
+    record_percentile: float
+    n_ensemble: int
+    damping: float
+    band_s: tuple[float, ...]
+    band_periods_s: tuple[float, ...]
+    band_psa_ratio: tuple[float, ...]
+    band_ratio_min: float
+    band_ratio_max: float
+    band_ratio_mean: float
+    short_s: tuple[float, ...]
+    short_ratio_max: float
+    short_ratio_max_period_s: float
+    p_prototype_1_s: float
+    omega_ratio_band: tuple[float, ...]
+    arias_record_m_s: float
+    arias_ensemble_mean_m_s: float
+    arias_ensemble_5_95_m_s: tuple[float, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class AmplitudeFactor(JsonValue):
+    """The factor on an ensemble at which one of its percentiles reaches a target, and its bootstrap interval.
+
+    ``factor``, ``low`` and ``high`` [-] are NaN where the target is not reached within the search range;
+    ``target`` is the percentile's target [-] (inf: overturn).
+    """
+
+    factor: float
+    low: float
+    high: float
+    target: float
+
+
+@dataclass(frozen=True, eq=False)
+class EquivalentAmplitudes(JsonValue):
+    """What :func:`equivalent_amplitude` found.
+
+    Attributes
+    ----------
+    factors : dict of AmplitudeFactor
+        Percentile [%] -> its factor.
+    grid : tuple of float
+        The factors simulated [-].
+    evaluations : int
+        Factors simulated.
+    step, ci : float
+        The grid's relative spacing [-] and the intervals' level [-].
+    engine : str
+    n : int
+        Records.
+    """
+
+    factors: dict[float, AmplitudeFactor]
+    grid: tuple[float, ...]
+    evaluations: int
+    step: float
+    ci: float
+    engine: str
+    n: int
 
 
 def ensemble_seeds(seed: int, k: int) -> list[int]:
@@ -37,7 +197,7 @@ def seed_spread(
     engine: str = "housner",
     options: RunOptions | None = None,
     **execution,
-) -> dict:
+) -> Table2Spread:
     """Percentiles of theta_max/alpha and the overturn fraction over ``k`` independent ensembles.
 
     Each ensemble has the scenario's size (or ``n``) and its own seed from
@@ -68,8 +228,8 @@ def seed_spread(
 
     Returns
     -------
-    dict
-        ``seeds``; ``percentiles`` {q: list of k values, inf = overturn};
+    Table2Spread
+        ``seeds``; ``percentiles`` {q: k values, inf = overturn};
         ``overturn_fraction`` (k values); ``summary`` {q: (min, median, max)};
         ``n_failed`` (records left out, over all ensembles).
     """
@@ -93,17 +253,17 @@ def seed_spread(
     for x, vals in pct.items():
         a = np.sort(np.asarray(vals))
         summary[x] = (float(a[0]), float(np.median(a)), float(a[-1]))
-    return {
-        "k": k,
-        "seeds": seeds,
-        "percentiles": pct,
-        "overturn_fraction": fr,
-        "overturn_fraction_range": (min(fr), float(np.median(fr)), max(fr)),
-        "summary": summary,
-        "inf_means": "overturn",
-        "nan_free": all(math.isfinite(f) for f in fr),
-        "n_failed": n_failed,
-    }
+    return Table2Spread(
+        k=k,
+        seeds=tuple(seeds),
+        percentiles={x: tuple(v) for x, v in pct.items()},
+        overturn_fraction=tuple(fr),
+        overturn_fraction_range=(min(fr), float(np.median(fr)), max(fr)),
+        summary=summary,
+        inf_means="overturn",
+        nan_free=all(math.isfinite(f) for f in fr),
+        n_failed=n_failed,
+    )
 
 
 def record_against_ensemble(
@@ -120,7 +280,7 @@ def record_against_ensemble(
     short: tuple[float, float] = (0.1, 0.5),
     damping: float = 0.05,
     n_periods: int = 16,
-) -> dict:
+) -> RecordGap:
     """The record an ensemble was fitted to, measured as one more member of it.
 
     The record (times ``amplitude``, as the ensemble) is compressed by sqrt(S)
@@ -157,7 +317,7 @@ def record_against_ensemble(
 
     Returns
     -------
-    dict
+    RecordGap
         ``record_theta_max_over_alpha``; ``record_percentile`` (per cent of the
         ensemble strictly below the record, ties counted half); ``n_ensemble``;
         ``band_s``, ``band_periods_s``, ``band_psa_ratio`` (ensemble mean PSa /
@@ -174,15 +334,15 @@ def record_against_ensemble(
         raise ValueError(f"`S` must be positive, got {S!r}")
     rec = record.scaled(amplitude=amplitude) if amplitude != 1.0 else record
     x, v, pct = _record_rank(get_engine(engine, **(settings or {})), specimen, rec, motions, S, ensemble_values)
-    return {
-        "engine": engine,
-        "amplitude": amplitude,
-        "record": rec.name,
-        "record_theta_max_over_alpha": x,
-        "record_percentile": float(pct),
-        "n_ensemble": int(v.size),
+    return RecordGap(
+        engine=engine,
+        amplitude=amplitude,
+        record=rec.name,
+        record_theta_max_over_alpha=x,
+        record_percentile=float(pct),
+        n_ensemble=int(v.size),
         **_record_spectra(specimen, rec, motions, S, band, short, damping, n_periods),
-    }
+    )
 
 
 def _record_rank(eng, specimen, rec, motions: list, S: float, ensemble_values) -> tuple[float, np.ndarray, float]:
@@ -225,20 +385,20 @@ def _record_spectra(
     ia = np.array([arias_intensity(m) for m in proto])
     return {
         "damping": damping,
-        "band_s": [float(band[0]), float(band[1])],
-        "band_periods_s": T_band.tolist(),
-        "band_psa_ratio": rb.tolist(),
+        "band_s": (float(band[0]), float(band[1])),
+        "band_periods_s": tuple(T_band.tolist()),
+        "band_psa_ratio": tuple(rb.tolist()),
         "band_ratio_min": float(rb.min()),
         "band_ratio_max": float(rb.max()),
         "band_ratio_mean": float(rb.mean()),
-        "short_s": [float(short[0]), float(short[1])],
+        "short_s": (float(short[0]), float(short[1])),
         "short_ratio_max": float(rs[k]),
         "short_ratio_max_period_s": float(T_short[k]),
         "p_prototype_1_s": p_proto,
-        "omega_ratio_band": [2 * math.pi / (band[1] * p_proto), 2 * math.pi / (band[0] * p_proto)],
+        "omega_ratio_band": (2 * math.pi / (band[1] * p_proto), 2 * math.pi / (band[0] * p_proto)),
         "arias_record_m_s": float(arias_intensity(rec)),
         "arias_ensemble_mean_m_s": float(ia.mean()),
-        "arias_ensemble_5_95_m_s": [float(np.percentile(ia, 5)), float(np.percentile(ia, 95))],
+        "arias_ensemble_5_95_m_s": (float(np.percentile(ia, 5)), float(np.percentile(ia, 95))),
     }
 
 
@@ -254,7 +414,7 @@ def equivalent_amplitude(
     ci: float = 0.90,
     n_boot: int = 1000,
     seed: int = 0,
-) -> dict:
+) -> EquivalentAmplitudes:
     """Factors on an ensemble's accelerations at which its percentiles reach another study's values.
 
     How much stronger, in effect, another study's motions were than these, one
@@ -292,8 +452,8 @@ def equivalent_amplitude(
 
     Returns
     -------
-    dict
-        ``factors`` {q: {"factor", "low", "high"}} (nan where not reached),
+    EquivalentAmplitudes
+        ``factors`` {q: AmplitudeFactor (``factor``, ``low``, ``high``, ``target``)} (nan where not reached),
         ``grid`` (the factors simulated), ``evaluations``, ``step``, ``ci``,
         ``engine``, ``n`` (records).
     """
@@ -308,15 +468,15 @@ def equivalent_amplitude(
     n = V.shape[1]
     if n == 0:
         raise ValueError("no record of `motions` gives a theta_max/alpha at every factor")
-    return {
-        "factors": _crossings(V, grid, tg, ci, n_boot, seed),
-        "grid": grid.tolist(),
-        "evaluations": len(values.cache),
-        "step": step,
-        "ci": ci,
-        "engine": engine,
-        "n": int(n),
-    }
+    return EquivalentAmplitudes(
+        factors=_crossings(V, grid, tg, ci, n_boot, seed),
+        grid=tuple(grid.tolist()),
+        evaluations=len(values.cache),
+        step=step,
+        ci=ci,
+        engine=engine,
+        n=int(n),
+    )
 
 
 class _AmplitudeSweep:
@@ -377,7 +537,9 @@ def _factor_grid(tg: dict[float, float], values, step: float, max_factor: float)
     return np.array([(1.0 + step) ** k for k in range(k0, k1 + 1)])
 
 
-def _crossings(V: np.ndarray, grid: np.ndarray, tg: dict[float, float], ci: float, n_boot: int, seed: int) -> dict:
+def _crossings(
+    V: np.ndarray, grid: np.ndarray, tg: dict[float, float], ci: float, n_boot: int, seed: int
+) -> dict[float, AmplitudeFactor]:
     """Per target percentile q: the first factor of ``grid`` where the q-th percentile of ``V`` (grid, records)
     reaches the target, and its bootstrap interval over resampled records (nan where not reached)."""
 
@@ -396,5 +558,5 @@ def _crossings(V: np.ndarray, grid: np.ndarray, tg: dict[float, float], ci: floa
         fb = np.sort(fb)  # order statistics: the interval's ends are bootstrap values, never interpolated
         lo, hi = fb[int((1 - ci) / 2 * fb.size)], fb[min(math.ceil((1 + ci) / 2 * fb.size) - 1, fb.size - 1)]
         lo, hi = (float(x) if math.isfinite(x) else math.nan for x in (lo, hi))
-        out[q] = {"factor": f, "low": float(lo), "high": float(hi), "target": t}
+        out[q] = AmplitudeFactor(factor=f, low=float(lo), high=float(hi), target=t)
     return out

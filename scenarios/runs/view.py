@@ -25,12 +25,27 @@ from housner import Specimen
 from housner.engines.base import engine_class
 from housner.errors import DataFileError, EngineError
 from housner.motion import GroundMotion
-from housner.scenarios.execution.rundir import RunMeta, json_number, load_results, read_histories, read_motions
+from housner.scenarios.execution.rundir import (
+    RunMeta,
+    SpecimenFacts,
+    StoredMotions,
+    json_number,
+    load_results,
+    read_histories,
+    read_motions,
+)
 from housner.scenarios.execution.tables import compare_engines, split_failed
+from housner.scenarios.motions.build import MotionFacts, RecordFacts
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
-from housner.scenarios.runs.campaign_run import outcome_table, published_rows
-from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict
-from housner.scenarios.runs.spread import equivalent_amplitude, record_against_ensemble
+from housner.scenarios.runs.campaign_run import (
+    CampaignFacts,
+    OutcomeScore,
+    PublishedScore,
+    outcome_table,
+    published_rows,
+)
+from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor
+from housner.scenarios.runs.spread import EquivalentAmplitudes, RecordGap, equivalent_amplitude, record_against_ensemble
 from housner.scenarios.runs.verdicts import EngineVerdict, engine_verdict
 
 __all__ = ["BOOT_SEED", "N_BOOT", "QUARTILES", "Run", "motion_list", "source_record"]
@@ -126,30 +141,30 @@ class Run:
         return [e for e in self.engines if e != self.reference]
 
     @property
-    def specimen(self) -> dict:
+    def specimen(self) -> SpecimenFacts:
         """The specimen's facts from run.json (``Specimen.describe()``; empty when not stored)."""
         return self.meta.specimen
 
     @property
     def alpha(self) -> float:
         """The specimen's slenderness alpha [rad] (NaN when not stored)."""
-        return json_number(self.specimen.get("alpha_rad"))
+        return json_number(self.specimen.alpha_rad)
 
     @property
-    def motions_meta(self) -> dict:
+    def motions_meta(self) -> MotionFacts:
         """The ground motions' facts from run.json."""
         return self.meta.motions
 
     @property
     def S(self) -> float:
         """Size ratio prototype / model of the motions (1 when not stated)."""
-        S = json_number(self.motions_meta.get("S", 1.0))
+        S = json_number(1.0 if self.motions_meta.S is None else self.motions_meta.S)
         return S if math.isfinite(S) and S > 0 else 1.0
 
     @property
     def source(self) -> str:
         """Where the motions come from: ``rdk``, ``record``, ``records``, ``pulses``, ``free_vibration`` or ""."""
-        return str(self.motions_meta.get("source", ""))
+        return str(self.motions_meta.source or "")
 
     def values(self, engine: str) -> np.ndarray:
         """theta_max/alpha of the usable records of ``engine`` [-] (+inf = overturned)."""
@@ -164,24 +179,24 @@ class Run:
         return v.where(r["status"].astype(str) == "ok", np.nan)
 
     @property
-    def campaign(self) -> dict | None:
+    def campaign(self) -> CampaignFacts | None:
         """run.json's ``campaign`` table when the run is a measured campaign's (``housner run CAMPAIGN``), else None."""
         return self.meta.campaign if self.meta.is_campaign else None
 
     @cached_property
-    def outcome_scores(self) -> list[dict]:
+    def outcome_scores(self) -> list[OutcomeScore]:
         """Each engine's predicted outcomes against the campaign's measured ones
         (:func:`housner.scenarios.runs.campaign_run.outcome_table`, seed :data:`BOOT_SEED`); empty for a
         scenario's run or a campaign without outcomes."""
         if self.campaign is None:
             return []
         rows = outcome_table(self.results, self.engines, seed=BOOT_SEED)
-        return rows if any(r["n"] or r["n_failed"] for r in rows) else []
+        return rows if any(r.n or r.n_failed for r in rows) else []
 
     @property
-    def published_outcomes(self) -> list[dict]:
+    def published_outcomes(self) -> list[PublishedScore]:
         """Published outcome scores of other models on this campaign (reported elsewhere, not recomputed)."""
-        return published_rows(self.campaign.get("name", "")) if self.campaign is not None else []
+        return published_rows(self.campaign.name) if self.campaign is not None else []
 
     def reference_ids(self) -> np.ndarray:
         """motion_id of the reference's usable records."""
@@ -229,7 +244,7 @@ class Run:
         return out
 
     @cached_property
-    def motions(self) -> dict | None:
+    def motions(self) -> StoredMotions | None:
         """The arrays of motions.npz (None when absent)."""
         return read_motions(self.path)
 
@@ -239,14 +254,14 @@ class Run:
         return [motions[i] for i in self.reference_ids() if i < len(motions)]
 
     @cached_property
-    def record_gap(self) -> dict:
+    def record_gap(self) -> RecordGap:
         """:func:`housner.scenarios.runs.spread.record_against_ensemble` for this run: the record among its ensemble."""
         record, why = source_record(self)
         if record is None:
             raise DataFileError(self.path / "run.json", why)
         if self.motions is None:
             raise DataFileError(self.path / "motions.npz", "missing: the ensemble is needed")
-        amp = json_number((self.meta.scenario.get("motions") or {}).get("amplitude", 1.0))
+        amp = self.meta.scenario.amplitude
         settings = {k: v for k, v in self.meta.engine_settings(self.reference).items() if v is not None}
         return record_against_ensemble(
             self.specimen_obj,
@@ -260,14 +275,13 @@ class Run:
         )
 
     @cached_property
-    def paper_factors(self) -> dict | None:
+    def paper_factors(self) -> EquivalentAmplitudes | None:
         """``equivalent_amplitude`` (:mod:`housner.scenarios.runs.spread`) of this ensemble for the paper's percentiles.
 
         The analytic model with the specimen's own r (the paper's numerical column is Housner's model),
         whatever the run's reference: how much stronger, in effect, the paper's motions were.
         """
-        targets = {float(k): json_number(v) for k, v in (self.meta.analysis.get("paper_percentiles") or {}).items()}
-        targets = {q: v for q, v in targets.items() if not math.isnan(v)}
+        targets = self.meta.analysis.paper_targets
         if not targets or self.motions is None:
             return None
         return equivalent_amplitude(self.specimen_obj, self.reference_motions(), targets, seed=BOOT_SEED)
@@ -290,7 +304,7 @@ class Run:
         out = {}
         for e in self.others:
             d = stored.get(e)
-            if not d or "error" in d:
+            if d is None or d.error is not None:
                 continue
             ids = sorted(ref_ok & set(self.ok.loc[self.ok["engine"] == e, "motion_id"].to_numpy(int)))
             ms = [motions[i] for i in ids if i < len(motions)]
@@ -298,7 +312,7 @@ class Run:
                 out[e] = chaos_floor(
                     self.specimen_obj,
                     ms,
-                    errors_from_dict(d),
+                    d,
                     r=json_number(r) if r else None,
                     rtol=RECORD_RTOL,
                     atol=0.0,
@@ -310,19 +324,19 @@ class Run:
         """The run's specimen as a :class:`housner.Specimen` (from run.json)."""
         sp = self.specimen
         return Specimen(
-            height=json_number(sp.get("height_m")),
-            width=json_number(sp.get("width_m")),
-            depth=json_number(sp.get("depth_m")),
-            mass=json_number(sp.get("mass_kg")),
-            I0=json_number(sp.get("I0_kgm2")),
-            name=str(sp.get("name", "specimen")),
+            height=json_number(sp.height_m),
+            width=json_number(sp.width_m),
+            depth=json_number(sp.depth_m),
+            mass=json_number(sp.mass_kg),
+            I0=json_number(sp.I0_kgm2),
+            name=str("specimen" if sp.name is None else sp.name),
         )
 
     def motion_dt(self, motion_id: int) -> float:
         """The step [s] of motion ``motion_id`` (NaN when motions.npz does not hold it)."""
         m = self.motions
-        if m is not None and "dt" in m and motion_id < len(m["dt"]):
-            return float(m["dt"][motion_id])
+        if m is not None and motion_id < len(m.dt):
+            return float(m.dt[motion_id])
         return math.nan
 
     def histories(self, motion_ids: Iterable[int]) -> dict[tuple[str, int], tuple[np.ndarray, np.ndarray]]:
@@ -335,23 +349,23 @@ def motion_list(run: Run) -> list[GroundMotion]:
     """The run's motions as stored in motions.npz (model scale), one :class:`GroundMotion` per motion_id."""
     m = run.motions
     out = []
-    names = m.get("names", [])
-    for i, (n, dt) in enumerate(zip(m["n"], m["dt"], strict=True)):
+    names = m.names if m.names is not None else []
+    for i, (n, dt) in enumerate(zip(m.n, m.dt, strict=True)):
         name = str(names[i]) if i < len(names) else f"motion {i}"
-        out.append(GroundMotion(np.asarray(m["acc"][i, : int(n)], dtype=float), float(dt), name=name))
+        out.append(GroundMotion(np.asarray(m.acc[i, : int(n)], dtype=float), float(dt), name=name))
     return out
 
 
 def source_record(run: Run) -> tuple[GroundMotion | None, str]:
     """(the record the run's motions come from, at prototype scale, "") or (None, why not, in plain text)."""
-    facts = run.motions_meta.get("record") or {}
-    key = (run.meta.scenario.get("motions") or {}).get("record") or facts.get("name")
+    facts = run.motions_meta.record or RecordFacts()
+    key = run.meta.scenario.record or facts.name
     if not key:
         return None, "run.json names no record"
-    if facts.get("path"):  # a user's file: read it again if it has not changed since the run
-        path = Path(facts["path"])
+    if facts.path:  # a user's file: read it again if it has not changed since the run
+        path = Path(facts.path)
         try:
-            same = file_sha256(path) == facts.get("sha256")
+            same = file_sha256(path) == facts.sha256
         except OSError:
             return None, f"Record file {path} is no longer there"
         if not same:

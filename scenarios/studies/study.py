@@ -25,16 +25,17 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
+from housner._values import JsonValue
 from housner.errors import DataFileError
 from housner.motion import GroundMotion
 from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.study_table import Study
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import jsonable, provenance
+from housner.scenarios.execution.rundir import EngineFacts, Provenance, ScenarioCopy, SpecimenFacts, jsonable
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.execution.workers import Progress
-from housner.scenarios.motions.build import build_motions
+from housner.scenarios.motions.build import MotionFacts, build_motions
 from housner.scenarios.motions.elastic import response_spectrum
 from housner.scenarios.studies.fragility import (
     bootstrap_fit,
@@ -47,8 +48,12 @@ from housner.units import G
 
 __all__ = [
     "STUDY_FILES",
+    "StudyComparison",
+    "StudyFit",
+    "StudyFits",
     "StudyMeta",
     "StudyResult",
+    "StudySettings",
     "intensity_measure",
     "load_study",
     "compare_ci",
@@ -157,8 +162,61 @@ def study_motions(study: Study, base: list[GroundMotion], S0: float, size: int, 
 
 
 # --------------------------------------------------------------------------
-@dataclass(frozen=True)
-class StudyMeta:
+@dataclass(frozen=True, eq=False)
+class StudySettings(JsonValue):
+    """The [study] table as run (``Study.describe()``), with the motions, the reference and the comparisons' level.
+
+    Attributes
+    ----------
+    intensity : str or None
+        ``amplitude``, ``pga``, ``pgv`` or ``sa``.
+    intensity_label : str or None
+        The intensity measure in words, with its unit.
+    levels : tuple of float
+        The stripes' intensities.
+    S, prototype_heights : tuple of float
+        The sizes: scale factors [-] and prototype heights [m].
+    thresholds : tuple of float
+        theta_max / alpha levels of the exceedance curves [-].
+    period : float or None
+        T of ``sa`` at prototype scale [s] (None for another measure).
+    n_boot : int or None
+        Bootstrap resamples.
+    seed : int or None
+        Seed of the bootstrap.
+    histories : bool or None
+        Whether theta histories were kept.
+    ci : float or None
+        Level of the fits' intervals [-].
+    n_motions : int or None
+        Ground motions per stripe.
+    reference : str or None
+        The engine the others are compared with.
+    compare_ci : float or None
+        Level of each of the two intervals of an engine comparison [-] (:func:`compare_ci`).
+    """
+
+    intensity: str | None = None
+    intensity_label: str | None = None
+    levels: tuple[float, ...] = ()
+    S: tuple[float, ...] = ()
+    prototype_heights: tuple[float, ...] = ()
+    thresholds: tuple[float, ...] = ()
+    period: float | None = None
+    n_boot: int | None = None
+    seed: int | None = None
+    histories: bool | None = None
+    ci: float | None = None
+    n_motions: int | None = None
+    reference: str | None = None
+    compare_ci: float | None = None
+    extra: dict = field(default_factory=dict)
+
+    _ALWAYS = ("period",)
+
+
+@dataclass(frozen=True, eq=False)
+class StudyMeta(JsonValue):
     """A study's metadata: what study.json holds, one field per key.
 
     :func:`write_study` writes it (:meth:`to_json`, the keys in the order of the fields) and
@@ -167,16 +225,16 @@ class StudyMeta:
 
     Attributes
     ----------
-    scenario : dict
+    scenario : ScenarioCopy
         The scenario as run (``Scenario.describe()``).
-    specimen : dict
+    specimen : SpecimenFacts
         The specimen's geometry and derived figures (``Specimen.describe()``).
-    motions : dict
+    motions : MotionFacts
         Facts of the scenario's ground motions (``build_motions``), at its own size ratio.
-    study : dict
+    study : StudySettings
         The [study] table as run (``Study.describe()``) with ``n_motions``, ``reference`` and
         ``compare_ci`` (the level of each interval of an engine comparison).
-    engines : dict
+    engines : dict of EngineFacts
         Engine -> ``settings``, ``version``, ``wall_s`` [s] summed over the sizes, ``cached``,
         ``worker_deaths``.
     n_records : int or None
@@ -185,48 +243,113 @@ class StudyMeta:
         Records failed (None: not stated).
     wall_s : float or None
         Wall time of the study [s] (None: not stated).
-    provenance : dict
+    provenance : Provenance
         Versions, git commit, platform, CPUs and the creation time.
     extra : dict
         Keys of study.json this version does not know, as read.
     """
 
-    scenario: dict = field(default_factory=dict)
-    specimen: dict = field(default_factory=dict)
-    motions: dict = field(default_factory=dict)
-    study: dict = field(default_factory=dict)
-    engines: dict = field(default_factory=dict)
+    scenario: ScenarioCopy = field(default_factory=ScenarioCopy)
+    specimen: SpecimenFacts = field(default_factory=SpecimenFacts)
+    motions: MotionFacts = field(default_factory=MotionFacts)
+    study: StudySettings = field(default_factory=StudySettings)
+    engines: dict[str, EngineFacts] = field(default_factory=dict)
     n_records: int | None = None
     n_failed: int | None = None
     wall_s: float | None = None
-    provenance: dict = field(default_factory=dict)
+    provenance: Provenance = field(default_factory=Provenance)
     extra: dict = field(default_factory=dict)
-
-    #: Tables (an empty one when absent) and counts (None when absent), in study.json's order.
-    _TABLES = ("scenario", "specimen", "motions", "study", "engines")
-    _COUNTS = ("n_records", "n_failed", "wall_s")
-
-    @classmethod
-    def from_json(cls, data: dict) -> StudyMeta:
-        """The metadata of a study.json's contents (a missing or null table becomes an empty one)."""
-        data = data if isinstance(data, dict) else {}
-        known = (*cls._TABLES, *cls._COUNTS, "provenance")
-        return cls(
-            **{k: data.get(k) or {} for k in (*cls._TABLES, "provenance")},
-            **{k: data.get(k) for k in cls._COUNTS},
-            extra={k: v for k, v in data.items() if k not in known},
-        )
-
-    def to_json(self) -> dict:
-        """study.json's keys and values, in its order (the counts only when stated), then ``extra``."""
-        out = {k: getattr(self, k) for k in self._TABLES}
-        out.update({k: getattr(self, k) for k in self._COUNTS if getattr(self, k) is not None})
-        return {**out, "provenance": self.provenance, **self.extra}
 
     @property
     def reference(self) -> str | None:
         """The engine the study compares the others with (None when study.json does not say)."""
-        return self.study.get("reference")
+        return self.study.reference
+
+
+@dataclass(frozen=True, eq=False)
+class StudyFit(JsonValue):
+    """The lognormal fragility fit of one engine at one size (a row of fragility.json's ``fits``).
+
+    Attributes
+    ----------
+    engine : str
+    size : float
+        Prototype height [m].
+    S : float
+        Its scale factor [-].
+    median, median_low, median_high : float
+        The fitted median [intensity] and its bootstrap interval (NaN where there is none).
+    beta, beta_low, beta_high : float
+        The fitted lognormal standard deviation [-] and its interval (NaN where there is none).
+    status : str
+        ``ok`` for a maximum-likelihood fit; else why there is none (``no_data``, a step, ...).
+    message : str
+        The fit's message.
+    n_boot, n_failed : int or None
+        Bootstrap replicates, and those whose own fit was degenerate.
+    caveat : str or None
+        What a reader must know of an ok fit ("" when nothing; None when the file does not say).
+    """
+
+    engine: str
+    size: float
+    S: float = math.nan
+    median: float = math.nan
+    median_low: float = math.nan
+    median_high: float = math.nan
+    beta: float = math.nan
+    beta_low: float = math.nan
+    beta_high: float = math.nan
+    status: str = ""
+    message: str = ""
+    n_boot: int | None = None
+    n_failed: int | None = None
+    caveat: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        """A maximum-likelihood fit (status "ok"): the only kind whose median and beta are reported."""
+        return self.status == "ok"
+
+
+@dataclass(frozen=True, eq=False)
+class StudyComparison(JsonValue):
+    """An engine's fit against the reference's at one size (a row of fragility.json's ``comparisons``).
+
+    Attributes
+    ----------
+    engine, reference : str
+    size : float
+        Prototype height [m].
+    S : float
+        Its scale factor [-].
+    median_ratio, ratio_low, ratio_high : float
+        The ratio of the medians [-] and its paired bootstrap interval.
+    beta_diff, diff_low, diff_high : float
+        The difference of the betas [-] and its interval.
+    disagree : bool or None
+        Whether an interval excludes 1 (ratio) or 0 (difference); None when the file does not say.
+    """
+
+    engine: str
+    reference: str = ""
+    size: float = math.nan
+    S: float = math.nan
+    median_ratio: float = math.nan
+    ratio_low: float = math.nan
+    ratio_high: float = math.nan
+    beta_diff: float = math.nan
+    diff_low: float = math.nan
+    diff_high: float = math.nan
+    disagree: bool | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class StudyFits(JsonValue):
+    """fragility.json: the fits per (engine, size) and the comparisons with the reference."""
+
+    fits: tuple[StudyFit, ...] = ()
+    comparisons: tuple[StudyComparison, ...] = ()
 
 
 @dataclass
@@ -241,9 +364,9 @@ class StudyResult:
         Per (engine, size, stripe): engine, size [m], S, stripe, intensity, n, n_overturned, p, p_low, p_high.
     exceedance : DataFrame
         Per (engine, size, stripe, threshold): ..., threshold, n, k, p, p_low, p_high.
-    fits : list of dict
+    fits : list of StudyFit
         Per (engine, size): median, beta and their intervals, status, message.
-    comparisons : list of dict
+    comparisons : list of StudyComparison
         Per (engine, size) against the reference: median ratio, beta difference, intervals, disagree.
     meta : StudyMeta
         study.json.
@@ -254,32 +377,32 @@ class StudyResult:
     results: pd.DataFrame
     fragility: pd.DataFrame
     exceedance: pd.DataFrame
-    fits: list[dict]
-    comparisons: list[dict]
+    fits: list[StudyFit]
+    comparisons: list[StudyComparison]
     meta: StudyMeta
     out: Path | None = None
     histories: dict = field(default_factory=dict, repr=False)
 
-    def fit(self, engine: str, size: float | None = None) -> dict:
+    def fit(self, engine: str, size: float | None = None) -> StudyFit:
         """The fit of ``engine`` at prototype height ``size`` [m] (the only size when omitted)."""
         return _pick(self.fits, engine, size, "fit")
 
-    def comparison(self, engine: str, size: float | None = None) -> dict:
+    def comparison(self, engine: str, size: float | None = None) -> StudyComparison:
         """The comparison of ``engine`` with the reference at prototype height ``size`` [m]."""
         return _pick(self.comparisons, engine, size, "comparison")
 
 
-def _pick(rows: list[dict], engine: str, size: float | None, what: str) -> dict:
-    mine = [r for r in rows if r["engine"] == engine]
+def _pick(rows: list, engine: str, size: float | None, what: str):
+    mine = [r for r in rows if r.engine == engine]
     if not mine:
-        have = sorted({r["engine"] for r in rows})
+        have = sorted({r.engine for r in rows})
         raise ValueError(f"no {what} for engine {engine!r} (engines: {', '.join(have) or 'none'})")
-    sizes = sorted({r["size"] for r in mine})
+    sizes = sorted({r.size for r in mine})
     if size is None:
         if len(sizes) > 1:
             raise ValueError(f"`size` is needed: the study has prototype heights {sizes} m")
         return mine[0]
-    hit = [r for r in mine if math.isclose(r["size"], float(size), rel_tol=1e-9)]
+    hit = [r for r in mine if math.isclose(r.size, float(size), rel_tol=1e-9)]
     if not hit:
         raise ValueError(f"no {what} for engine {engine!r} at size {size!r} m (sizes: {sizes})")
     return hit[0]
@@ -328,15 +451,17 @@ def run_study(
     reference = str(scenario.analysis.get("reference", "housner"))
     analysis = analyse(results, study, names, reference)
     meta = StudyMeta(
-        scenario=scenario.describe(),
-        specimen=scenario.specimen.describe(),
-        motions=mmeta,
-        study={**study.describe(), "n_motions": n, "reference": reference, "compare_ci": compare_ci(study.ci)},
-        engines=info,
+        scenario=ScenarioCopy(scenario.describe()),
+        specimen=SpecimenFacts.from_json(scenario.specimen.describe()),
+        motions=MotionFacts.from_json(mmeta),
+        study=StudySettings.from_json(
+            {**study.describe(), "n_motions": n, "reference": reference, "compare_ci": compare_ci(study.ci)}
+        ),
+        engines={e: EngineFacts.from_json(v) for e, v in info.items()},
         n_records=int(len(results)),
         n_failed=int((results["status"] != "ok").sum()),
         wall_s=time.perf_counter() - t0,
-        provenance=provenance(),
+        provenance=Provenance.current(),
     )
     result = StudyResult(
         results,
@@ -453,7 +578,8 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
     Returns
     -------
     dict
-        ``fragility`` and ``exceedance`` (DataFrames), ``fits`` and ``comparisons`` (lists of dicts).
+        ``fragility`` and ``exceedance`` (DataFrames), ``fits`` (list of :class:`StudyFit`) and ``comparisons``
+        (list of :class:`StudyComparison`).
     """
     im = np.asarray(study.levels, dtype=float)
     frag, exc, fits, comps = [], [], [], []
@@ -484,36 +610,36 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
             exc.append(ex.assign(engine=e, size=size, S=S, intensity=im[ex["stripe"].to_numpy()]))
             if not valid.any():  # every record of this engine and size failed: nothing to fit
                 fits.append(
-                    {
-                        "engine": e,
-                        "size": size,
-                        "S": S,
+                    StudyFit(
+                        engine=e,
+                        size=size,
+                        S=S,
                         **dict.fromkeys(_FIT_NUMBERS, math.nan),
-                        "status": "no_data",
-                        "message": "no valid record at any stripe (every record failed)",
-                        "n_boot": 0,
-                        "n_failed": 0,
-                    }
+                        status="no_data",
+                        message="no valid record at any stripe (every record failed)",
+                        n_boot=0,
+                        n_failed=0,
+                    )
                 )
                 continue
             b = bootstrap_fit(im, over, valid, n_boot=study.n_boot, seed=study.seed, ci=study.ci)
             fits.append(
-                {
-                    "engine": e,
-                    "size": size,
-                    "S": S,
-                    "median": b.fit.median,
-                    "median_low": b.median_low,
-                    "median_high": b.median_high,
-                    "beta": b.fit.beta,
-                    "beta_low": b.beta_low,
-                    "beta_high": b.beta_high,
-                    "status": b.fit.status,
-                    "message": b.fit.message,
-                    "n_boot": b.n_boot,
-                    "n_failed": b.n_failed,
-                    "caveat": _caveat(b.fit, im),
-                }
+                StudyFit(
+                    engine=e,
+                    size=size,
+                    S=S,
+                    median=b.fit.median,
+                    median_low=b.median_low,
+                    median_high=b.median_high,
+                    beta=b.fit.beta,
+                    beta_low=b.beta_low,
+                    beta_high=b.beta_high,
+                    status=b.fit.status,
+                    message=b.fit.message,
+                    n_boot=b.n_boot,
+                    n_failed=b.n_failed,
+                    caveat=_caveat(b.fit, im),
+                )
             )
         if reference in mats:
             th_r, valid_r = mats[reference]
@@ -536,19 +662,19 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
                     ci=compare_ci(study.ci),
                 )
                 comps.append(
-                    {
-                        "engine": e,
-                        "reference": reference,
-                        "size": size,
-                        "S": S,
-                        "median_ratio": c.median_ratio,
-                        "ratio_low": c.ratio_low,
-                        "ratio_high": c.ratio_high,
-                        "beta_diff": c.beta_diff,
-                        "diff_low": c.diff_low,
-                        "diff_high": c.diff_high,
-                        "disagree": bool(c.disagree),
-                    }
+                    StudyComparison(
+                        engine=e,
+                        reference=reference,
+                        size=size,
+                        S=S,
+                        median_ratio=c.median_ratio,
+                        ratio_low=c.ratio_low,
+                        ratio_high=c.ratio_high,
+                        beta_diff=c.beta_diff,
+                        diff_low=c.diff_low,
+                        diff_high=c.diff_high,
+                        disagree=bool(c.disagree),
+                    )
                 )
     ex_cols = ["engine", "size", "S", "stripe", "intensity", "threshold", "n", "k", "p", "p_low", "p_high"]
     return {
@@ -572,7 +698,8 @@ def write_study(out: Path, result: StudyResult) -> None:
     result.results.to_parquet(out / RESULTS_FILE, index=False)
     result.fragility.to_parquet(out / FRAGILITY_FILE, index=False)
     result.exceedance.to_parquet(out / EXCEEDANCE_FILE, index=False)
-    (out / FITS_FILE).write_text(json.dumps(_plain({"fits": result.fits, "comparisons": result.comparisons}), indent=1))
+    fits = StudyFits(tuple(result.fits), tuple(result.comparisons))
+    (out / FITS_FILE).write_text(json.dumps(_plain(fits.to_json()), indent=1))
     (out / STUDY_FILE).write_text(json.dumps(_plain(result.meta.to_json()), indent=1))
 
 
@@ -591,9 +718,6 @@ def load_study(path: str | Path) -> StudyResult:
         if not (out / name).is_file():
             raise ValueError(f"{out}: not a study directory (no {name}; run `housner run` on a scenario with [study])")
 
-    def num(rows):
-        return [{k: (math.nan if v is None else v) for k, v in r.items()} for r in rows]
-
     def read(name: str, how):
         try:
             return how(out / name)
@@ -601,15 +725,16 @@ def load_study(path: str | Path) -> StudyResult:
             first = (str(e).splitlines() or [type(e).__name__])[0]
             raise DataFileError(out / name, f"cannot read this study file ({first}); run the study again") from None
 
-    fits = read(FITS_FILE, lambda p: json.loads(p.read_text()))
-    if not (isinstance(fits, dict) and {"fits", "comparisons"} <= set(fits)):
+    data = read(FITS_FILE, lambda p: json.loads(p.read_text()))
+    if not (isinstance(data, dict) and {"fits", "comparisons"} <= set(data)):
         raise DataFileError(out / FITS_FILE, "is not a study's fits (no 'fits' and 'comparisons'); run the study again")
+    fits = StudyFits.from_json(data)
     return StudyResult(
         results=read(RESULTS_FILE, pd.read_parquet),
         fragility=read(FRAGILITY_FILE, pd.read_parquet),
         exceedance=read(EXCEEDANCE_FILE, pd.read_parquet),
-        fits=num(fits["fits"]),
-        comparisons=num(fits["comparisons"]),
+        fits=list(fits.fits),
+        comparisons=list(fits.comparisons),
         meta=StudyMeta.from_json(read(STUDY_FILE, lambda p: json.loads(p.read_text()))),
         out=out,
     )

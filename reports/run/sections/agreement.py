@@ -196,8 +196,8 @@ def _worst_records(run: Run, worst: pd.DataFrame) -> str:
 
 def spectra_section(run: Run) -> str:
     mm = run.motions_meta
-    w = np.asarray([json_number(x) for x in mm.get("omega_ratio", [])])
-    a = np.asarray([json_number(x) for x in mm.get("accel_ratio", [])])
+    w = np.asarray([json_number(x) for x in mm.omega_ratio or ()])
+    a = np.asarray([json_number(x) for x in mm.accel_ratio or ()])
     n = int(run.results["motion_id"].max()) + 1 if len(run.results) else 0
     if w.size == 0 or w.size != a.size or w.size < n:
         return html_note("run.json lacks the pulse grid (omega_ratio, accel_ratio per motion): no spectra.", "warn")
@@ -205,7 +205,7 @@ def spectra_section(run: Run) -> str:
     for e in run.engines:
         s = run.by_motion(e).reindex(range(w.size))
         values[e] = s.to_numpy(float)
-    fig = figures.plot_rocking_spectra(w, a, values, title=f"{mm.get('pulse', 'pulse')}: rocking spectra")
+    fig = figures.plot_rocking_spectra(w, a, values, title=f"{mm.pulse or 'pulse'}: rocking spectra")
     parts = [
         html_figure(
             fig,
@@ -248,14 +248,14 @@ def free_vibration_section(run: Run) -> str:
     if not hist:
         return html_note("histories.parquet is missing: no free-rocking plots.")
     m = run.motions
-    amps = run.motions_meta.get("theta0_over_alpha")
+    amps = run.motions_meta.theta0_over_alpha
     names = run.results.drop_duplicates("motion_id").set_index("motion_id")["motion_name"]
 
     def amp_of(i: int) -> float:
-        if isinstance(amps, list) and i < len(amps):
+        if amps is not None and i < len(amps):
             return json_number(amps[i])
-        if m is not None and "theta0" in m and i < len(m["theta0"]):
-            return float(m["theta0"][i]) / alpha
+        if m is not None and m.theta0 is not None and i < len(m.theta0):
+            return float(m.theta0[i]) / alpha
         return math.nan
 
     releases = []
@@ -291,7 +291,7 @@ def free_vibration_section(run: Run) -> str:
             row.append(f"r = {cal.r:.4f} &plusmn; {cal.r_std:.1g}<br><small>p = {cal.p:.4f} 1/s</small>")
         cal_rows.append(row)
     data = {e: (np.asarray(a), np.asarray(r)) for e, (a, r) in ratios.items() if a}
-    r_h = json_number(run.specimen.get("r_housner"))
+    r_h = json_number(run.specimen.r_housner)
     if data:
         parts.append(
             html_figure(
@@ -308,7 +308,7 @@ def free_vibration_section(run: Run) -> str:
                 "energy ratio per impact against amplitude",
             )
         )
-    p_spec = json_number(run.specimen.get("p_1_s"))
+    p_spec = json_number(run.specimen.p_1_s)
     parts.append(
         html_table(
             ["&theta;<sub>0</sub>/&alpha;"] + [engine_tag(e, run) for e in run.engines],

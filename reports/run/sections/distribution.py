@@ -27,8 +27,9 @@ from housner.reports.page import (
     html_table,
     view_colors,
 )
-from housner.scenarios.execution.rundir import json_number
+from housner.scenarios.execution.rundir import json_number, jsonable
 from housner.scenarios.execution.tables import percentile_table
+from housner.scenarios.runs.spread import AmplitudeFactor, RecordGap, Table2Spread
 from housner.scenarios.runs.view import QUARTILES, Run, source_record
 from housner.statistics import ensemble_stats as stats
 
@@ -38,7 +39,7 @@ def distribution_section(run: Run) -> str:
     samples = {e: run.values(e) for e in run.engines if run.values(e).size}
     if not samples:
         return html_note("No usable record: nothing to plot.", "warn")
-    paper = {float(k): json_number(v) for k, v in (run.meta.analysis.get("paper_percentiles") or {}).items()}
+    paper = {float(k): json_number(v) for k, v in (run.meta.analysis.paper_percentiles or {}).items()}
     fig = figures.plot_cdfs(samples, reference=run.reference, ci=0.95, paper=paper or None, colors=view_colors(run))
     parts = [
         html_figure(
@@ -87,7 +88,7 @@ def distribution_section(run: Run) -> str:
         parts.append("<h3>In the layout of the seed's Table 2</h3>")
         parts.append(_table2(run, paper))
     spread = run.meta.table2_spread
-    if spread:
+    if spread is not None:
         parts.append("<h3>Spread over independent ensembles</h3>")
         parts.append(guarded("The seed-spread table", lambda: _spread_table(spread)))
     if paper:
@@ -117,7 +118,7 @@ def _finite_or_inf(v: float) -> float:
     return math.inf if not math.isfinite(v) and not math.isnan(v) else v
 
 
-def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str:
+def _table2_gap(run: Run, paper: dict[float, float], spread: Table2Spread | None) -> str:
     """The gap to the paper's Table 2, and its measured cause: the record against its own ensemble."""
     cmp = run.comparison.loc[run.reference]
     ref = run.reference
@@ -133,7 +134,7 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
         )
         return "".join(parts)
     g = run.record_gap
-    x, pct = g["record_theta_max_over_alpha"], g["record_percentile"]
+    x, pct = g.record_theta_max_over_alpha, g.record_percentile
     rec_line = _record_line(run, g, cmp, paper)
     ia_line = _intensity_line(g, cmp, paper, gap)
     spec_line, lo, hi = _spectrum_line(run, g)
@@ -143,7 +144,7 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
         items.append(guarded("The equivalent amplitudes", lambda: _factor_line(run)))
     lis = "".join(f"<li>{t}</li>" for t in items)
     parts.append(f"<p>Measured cause, on this run's own motions:</p><ul class=cause>{lis}</ul><p>{verdict}</p>")
-    note = run.meta.analysis.get("paper_note")
+    note = run.meta.analysis.paper_note
     if gap and note:
         parts.append(
             "<p><strong>What this page cannot measure</strong> (from the scenario's <code>paper_note</code>): "
@@ -154,8 +155,8 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: dict | None) -> str
             "Computed by <code>housner.scenarios.runs.spread.record_against_ensemble</code> when this page was "
             "written: "
             "the "
-            f"record through {esc(ref)} with the run's settings, the ensemble's {g['n_ensemble']} usable records "
-            f"ranked against it (ties half), spectra at {len(g['band_periods_s'])} log-spaced periods per range."
+            f"record through {esc(ref)} with the run's settings, the ensemble's {g.n_ensemble} usable records "
+            f"ranked against it (ties half), spectra at {len(g.band_periods_s)} log-spaced periods per range."
         )
     )
     return "".join(parts)
@@ -187,13 +188,13 @@ def _gap_verdict(gap: list[float], pct: float, lo: float, hi: float, x: float, p
         return "The paper's percentiles are reproduced within the ensemble's sampling noise."
 
 
-def _gap_head(run: Run, cmp, paper: dict[float, float], spread: dict | None) -> tuple[str, list[float]]:
+def _gap_head(run: Run, cmp, paper: dict[float, float], spread: Table2Spread | None) -> tuple[str, list[float]]:
     """Where the paper's percentiles stand against this run's noise: the sentence, and the levels outside it."""
     qs = [q for q in QUARTILES if q in paper]
     n = int(cmp["n_ok"])
     ref = run.reference
-    summary = {json_number(k): v for k, v in ((spread or {}).get("summary") or {}).items()}
-    k_spread = (spread or {}).get("k", len((spread or {}).get("seeds", [])))
+    summary = {json_number(k): v for k, v in (spread.summary if spread is not None else {}).items()}
+    k_spread = spread.n_ensembles if spread is not None else 0
     # Is each paper value inside what another draw of motions gives: the spread when run, else the bootstrap interval?
     inside, ranges = {}, {}
     for q in qs:
@@ -212,7 +213,7 @@ def _gap_head(run: Run, cmp, paper: dict[float, float], spread: dict | None) -> 
     within = [q for q in qs if inside[q] is True]
     if summary:
         where = f"over {esc(k_spread)} independent ensembles of {n} motions (min&ndash;max) they range over {rng}"
-        fr = (spread or {}).get("overturn_fraction_range")
+        fr = spread.overturn_fraction_range if spread is not None else ()
         if fr:
             where += f", with P[overturn] {fmt_num(json_number(fr[0]), 2)}&ndash;{fmt_num(json_number(fr[-1]), 2)}"
         noise = "the spread of independent ensembles"
@@ -241,32 +242,30 @@ def _gap_head(run: Run, cmp, paper: dict[float, float], spread: dict | None) -> 
     return head, gap
 
 
-def _record_line(run: Run, g: dict, cmp, paper: dict[float, float]) -> str:
+def _record_line(run: Run, g: RecordGap, cmp, paper: dict[float, float]) -> str:
     """Where the record's own response falls in its ensemble."""
-    x, pct = g["record_theta_max_over_alpha"], g["record_percentile"]
+    x, pct = g.record_theta_max_over_alpha, g.record_percentile
     q75 = json_number(cmp["q75"])
-    amp = g.get("amplitude", 1.0)
+    amp = g.amplitude
     scaled = f" times {amp:g} as the ensemble," if amp != 1.0 else ""
     if pct >= 75:
-        rank = (
-            f"higher than {pct:.0f} % of the {g['n_ensemble']} motions, above their 75th percentile ({fmt_num(q75, 2)})"
-        )
+        rank = f"higher than {pct:.0f} % of the {g.n_ensemble} motions, above their 75th percentile ({fmt_num(q75, 2)})"
     elif pct >= 50:
-        rank = f"higher than {pct:.0f} % of the {g['n_ensemble']} motions, above their median"
+        rank = f"higher than {pct:.0f} % of the {g.n_ensemble} motions, above their median"
     else:
-        rank = f"higher than only {pct:.0f} % of the {g['n_ensemble']} motions: a typical member of the ensemble"
+        rank = f"higher than only {pct:.0f} % of the {g.n_ensemble} motions: a typical member of the ensemble"
     return (
-        f"The record itself ({esc(g['record'])}),{scaled} compressed by &radic;S = {math.sqrt(run.S):.3g} and run "
+        f"The record itself ({esc(g.record)}),{scaled} compressed by &radic;S = {math.sqrt(run.S):.3g} and run "
         f"through the same model on the same specimen exactly as every motion of the ensemble, gives "
         f"&theta;<sub>max</sub>/&alpha; = <strong>{fmt_num(x, 2)}</strong>: {rank}"
         + (f", and {_paper_position(x, paper)}." if paper else ".")
     )
 
 
-def _intensity_line(g: dict, cmp, paper: dict[float, float], gap: list[float]) -> str:
+def _intensity_line(g: RecordGap, cmp, paper: dict[float, float], gap: list[float]) -> str:
     """Whether the ensemble's Arias intensity explains the gap."""
-    ia, ia_rec = g["arias_ensemble_mean_m_s"], g["arias_record_m_s"]
-    ia_lo, ia_hi = g["arias_ensemble_5_95_m_s"]
+    ia, ia_rec = g.arias_ensemble_mean_m_s, g.arias_record_m_s
+    ia_lo, ia_hi = g.arias_ensemble_5_95_m_s
     ia_ok = ia_lo <= ia_rec <= ia_hi
     # which way the gap goes: this run's percentiles below the paper's (or above)
     below = [
@@ -291,23 +290,23 @@ def _intensity_line(g: dict, cmp, paper: dict[float, float], gap: list[float]) -
         return f"The intensity differs: {facts}, which leaves the record out)."
 
 
-def _spectrum_line(run: Run, g: dict) -> tuple[str, float, float]:
+def _spectrum_line(run: Run, g: RecordGap) -> tuple[str, float, float]:
     """The ensemble's mean PSa against the record's where rocking is decided; with the band's min and max ratio."""
-    b0, b1 = g["band_s"]
-    w0, w1 = g["omega_ratio_band"]
-    lo, hi, mean = g["band_ratio_min"], g["band_ratio_max"], g["band_ratio_mean"]
-    h_proto = fmt_g(run.S * json_number(run.specimen.get("height_m")), 3)
+    b0, b1 = g.band_s
+    w0, w1 = g.omega_ratio_band
+    lo, hi, mean = g.band_ratio_min, g.band_ratio_max, g.band_ratio_mean
+    h_proto = fmt_g(run.S * json_number(run.specimen.height_m), 3)
     band = (
         f"between {b0:g} and {b1:g} s (prototype periods; for the {h_proto} m prototype, "
-        f"p = {g['p_prototype_1_s']:.3g} 1/s, that is &omega;/p = {w0:.2g}&ndash;{w1:.2g}, where "
+        f"p = {g.p_prototype_1_s:.3g} 1/s, that is &omega;/p = {w0:.2g}&ndash;{w1:.2g}, where "
         "rocking and overturning are decided, seed Fig. 2)"
     )
-    damp = f"{100 * g['damping']:g} %-damped"
+    damp = f"{100 * g.damping:g} %-damped"
     if hi < 0.8:
         text = (
             f"The spectral shape: {band}, the ensemble's mean {damp} PSa is only <strong>{lo:.2f}&ndash;{hi:.2f}"
-            f"</strong> of the record's (mean {mean:.2f}), while at {g['short_s'][0]:g}&ndash;{g['short_s'][1]:g} s "
-            f"it reaches {g['short_ratio_max']:.2f} of it (at {g['short_ratio_max_period_s']:.2g} s): the fitted "
+            f"</strong> of the record's (mean {mean:.2f}), while at {g.short_s[0]:g}&ndash;{g.short_s[1]:g} s "
+            f"it reaches {g.short_ratio_max:.2f} of it (at {g.short_ratio_max_period_s:.2g} s): the fitted "
             "model puts the record's energy at short periods, which rock a block of this size much less."
         )
     elif lo > 1.25:
@@ -333,39 +332,40 @@ def _factor_line(run: Run) -> str:
     f = run.paper_factors
     if not f:
         return "No equivalent amplitude: the paper gives no percentile or motions.npz is missing."
-    fac = f["factors"]
-    qs = sorted(fac)
-    ci = f"{100 * f['ci']:g} %"
+    fac = f.factors
+    ci = f"{100 * f.ci:g} %"
 
-    def one(q: float) -> str:
-        d = fac[q]
-        tgt = "overturn" if math.isinf(d["target"]) else fmt_num(d["target"], 2)
-        if not math.isfinite(d["factor"]):
+    def one(q: float, d: AmplitudeFactor) -> str:
+        tgt = "overturn" if math.isinf(d.target) else fmt_num(d.target, 2)
+        if not math.isfinite(d.factor):
             return f"none within &times;1/8&ndash;8 for the {stats.percentile_label(q)} ({tgt})"
-        return f"&times;{d['factor']:.2f} [{d['low']:.2f}, {d['high']:.2f}] for the {stats.percentile_label(q)} ({tgt})"
+        return f"&times;{d.factor:.2f} [{d.low:.2f}, {d.high:.2f}] for the {stats.percentile_label(q)} ({tgt})"
 
     text = (
         "How much stronger, in effect, the paper's motions were: the analytic model reaches the paper's "
-        "percentiles with this ensemble's accelerations multiplied by " + "; ".join(one(q) for q in qs) + " ("
-        f"{100 * f['step']:g} % grid, {ci} bootstrap intervals over the {f['n']} records)."
+        "percentiles with this ensemble's accelerations multiplied by "
+        + "; ".join(one(q, d) for q, d in sorted(fac.items()))
+        + " ("
+        f"{100 * f.step:g} % grid, {ci} bootstrap intervals over the {f.n} records)."
     )
-    ok = [fac[q] for q in qs if math.isfinite(fac[q]["low"]) and math.isfinite(fac[q]["high"])]
+    ok = [d for _q, d in sorted(fac.items()) if math.isfinite(d.low) and math.isfinite(d.high)]
     if len(ok) >= 2:
-        lo, hi = max(d["low"] for d in ok), min(d["high"] for d in ok)
+        lo, hi = max(d.low for d in ok), min(d.high for d in ok)
         if lo <= hi:
             text += (
                 f" One factor, {lo:.2f}&ndash;{hi:.2f}, reaches them all: the paper's distribution has this "
                 "ensemble's shape at a higher intensity."
             )
         else:
-            a, b = min(ok, key=lambda d: d["high"]), max(ok, key=lambda d: d["low"])
+            a, b = min(ok, key=lambda d: d.high), max(ok, key=lambda d: d.low)
+            order = [d for _q, d in sorted(fac.items())]
             text += (
-                f" <strong>No single factor does</strong> (the intervals {a['low']:.2f}&ndash;{a['high']:.2f} and "
-                f"{b['low']:.2f}&ndash;{b['high']:.2f} do not overlap): the paper's distribution is not this "
+                f" <strong>No single factor does</strong> (the intervals {a.low:.2f}&ndash;{a.high:.2f} and "
+                f"{b.low:.2f}&ndash;{b.high:.2f} do not overlap): the paper's distribution is not this "
                 "ensemble's made stronger, but "
                 + (
                     "wider"
-                    if qs.index(next(q for q in qs if fac[q] is a)) < qs.index(next(q for q in qs if fac[q] is b))
+                    if next(i for i, d in enumerate(order) if d is a) < next(i for i, d in enumerate(order) if d is b)
                     else "narrower"
                 )
                 + " than it: its motions differed from these in their spread, not only in intensity."
@@ -406,19 +406,19 @@ def _table2(run: Run, paper: dict[float, float]) -> str:
     )
 
 
-def _spread_table(spread: dict) -> str:
-    summary = spread.get("summary") or {}
-    k = spread.get("k", len(spread.get("seeds", [])))
+def _spread_table(spread: Table2Spread) -> str:
+    summary = spread.summary
+    k = spread.n_ensembles
     rows = []
     for q, v in summary.items():
         lo, med, hi = (list(v) + [math.nan] * 3)[:3]
         rows.append([stats.percentile_label(json_number(q)), fmt_num(lo, 2), fmt_num(med, 2), fmt_num(hi, 2)])
-    fr = spread.get("overturn_fraction_range")
+    fr = spread.overturn_fraction_range
     if fr:
         lo, med, hi = (list(fr) + [math.nan] * 3)[:3]
         rows.append(["P[overturn]", fmt_num(lo, 2), fmt_num(med, 2), fmt_num(hi, 2)])
     if not rows:
-        return f"<pre>{esc(json.dumps(spread, indent=1)[:4000])}</pre>"
+        return f"<pre>{esc(json.dumps(jsonable(spread.to_json()), indent=1)[:4000])}</pre>"
     return html_table(
         ["", "min", "median", "max"],
         rows,

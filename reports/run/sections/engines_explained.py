@@ -17,16 +17,16 @@ Both were measured on a named scenario, not on this run; the section says which.
 
 from __future__ import annotations
 
-import json
 import math
 import re
 
 from housner.reports.frontier_figure import frontier_figure
 from housner.reports.impact_map_figure import maps_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_stored_figure, html_table, status_badge
-from housner.reports.run.sections.tuning import engine_defaults, model_data, model_file, settings_differ
+from housner.reports.run.sections.tuning import StoredFile, engine_defaults, model_data, model_file, settings_differ
+from housner.scenarios.execution.rundir import jsonable
+from housner.scenarios.runs.explain import EffectFound, Explanation, KsDistances, MapsExplained
 from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
-from housner.scenarios.runs.impact_map import EngineMaps
 from housner.scenarios.runs.view import Run
 
 __all__ = ["engines_explained", "has_engine_measurements"]
@@ -41,46 +41,49 @@ def _signed(x, fmt: str) -> str:
     return "&ndash;" if x is None or not math.isfinite(float(x)) else format(x, fmt)
 
 
-def _effects_html(effects) -> str:
+def _effects_html(effects: tuple[EffectFound, ...]) -> str:
     if not effects:
         return "none"
     return "<br>".join(
-        f"<code>{esc(e['name'])}</code> ("
-        + ", ".join(f"{esc(k)} = {fmt_g(v, 4)}" for k, v in (e.get("params") or {}).items())
-        + ")"
+        f"<code>{esc(e.name)}</code> (" + ", ".join(f"{esc(k)} = {fmt_g(v, 4)}" for k, v in e.params.items()) + ")"
         for e in effects
     )
 
 
-def _ks_html(ks) -> str:
-    if not ks or ks.get("plain") is None:
+def _measured(x: float | None) -> bool:
+    """A figure the file holds: not missing (None), not unmeasured (NaN, written as null)."""
+    return x is not None and not math.isnan(x)
+
+
+def _ks_html(ks: KsDistances | None) -> str:
+    if ks is None or not _measured(ks.plain):
         return ""
-    return f"<br><small>KS {fmt_g(ks['plain'], 3)} &rarr; {fmt_g(ks.get('with_effects'), 3)}</small>"
+    return f"<br><small>KS {fmt_g(ks.plain, 3)} &rarr; {fmt_g(ks.with_effects, 3)}</small>"
 
 
-def _decomposition(run: Run, found: dict) -> str:
+def _decomposition(run: Run, found: dict[str, StoredFile]) -> str:
     rows = []
-    for name, (f, d) in found.items():
-        if "engine" not in d:
-            rows.append([engine_tag(name, run), f"<code>{esc(f.name)}</code>: unreadable", "", "", "", "", "", ""])
+    for name, stored in found.items():
+        if not (isinstance(stored.data, dict) and "engine" in stored.data):
+            rows.append([engine_tag(name, run), f"<code>{esc(stored.path.name)}</code>: unreadable", *[""] * 6])
             continue
-        parts = d.get("floor_parts") or {}
-        reaches = d.get("reaches_floor")
-        maps = d.get("maps") or {}
+        d = Explanation.from_json(stored.data)
+        parts = d.floor_parts
+        maps = d.maps
         rows.append(
             [
                 engine_tag(name, run),
-                f"{esc(d.get('scenario', ''))}, {esc(d.get('n_records', ''))} records",
-                _effects_html(d.get("effects")),
-                f"{_pct(d.get('agreement_plain'))} &rarr; {_pct(d.get('agreement'))}" + _ks_html(d.get("ks")),
-                _maps_cell(maps, d.get("ks")),
-                f"{_pct(d.get('floor'))} <small>(chaos floor {_pct(parts.get('chaos'))}, "
-                f"model-form limit {_pct(parts.get('model_form'))})</small>",
-                status_badge(bool(reaches), "reaches it", "below it") if reaches is not None else "&ndash;",
-                esc(plain_remains(d.get("remains", "")))
+                f"{esc(d.scenario)}, {esc('' if d.n_records is None else d.n_records)} records",
+                _effects_html(d.effects),
+                f"{_pct(d.agreement_plain)} &rarr; {_pct(d.agreement)}" + _ks_html(d.ks),
+                _maps_cell(maps, d.ks),
+                f"{_pct(d.floor)} <small>(chaos floor {_pct(parts.chaos)}, "
+                f"model-form limit {_pct(parts.model_form)})</small>",
+                status_badge(d.reaches_floor, "reaches it", "below it") if d.reaches_floor is not None else "&ndash;",
+                esc(plain_remains(d.remains))
                 + (
-                    f"<br><small>With its maps: {esc(plain_remains(maps['remains']))}</small>"
-                    if maps.get("remains")
+                    f"<br><small>With its maps: {esc(plain_remains(maps.remains))}</small>"
+                    if maps is not None and maps.remains
                     else ""
                 ),
             ]
@@ -133,27 +136,29 @@ def plain_remains(text: str) -> str:
     return text
 
 
-def _maps_cell(maps: dict, ks) -> str:
+def _maps_cell(maps: MapsExplained | None, ks: KsDistances | None) -> str:
     """The agreement of Housner + the engine's measured maps, whether it reaches the floor, its KS."""
-    if not maps or maps.get("agreement") is None:
+    if maps is None or not _measured(maps.agreement):
         return "&ndash;"
-    reached = bool(maps.get("reaches_floor") or maps.get("reaches_scatter_floor"))
+    reached = bool(maps.reaches_floor or maps.reaches_scatter_floor)
     badge = status_badge(reached, "reaches it", "below both")
-    ks_m = (ks or {}).get("with_maps")
-    sf = (maps.get("scatter_floor") or {}).get("share")
+    ks_m = ks.with_maps if ks is not None else None
+    sf = maps.scatter_floor.share
     return (
-        f"{_pct(maps.get('agreement'))} {badge}"
-        + (f"<br><small>scatter limit {_pct(sf)}</small>" if sf is not None else "")
-        + (f"<br><small>KS {fmt_g(ks_m, 3)}</small>" if ks_m is not None else "")
+        f"{_pct(maps.agreement)} {badge}"
+        + (f"<br><small>scatter limit {_pct(sf)}</small>" if _measured(sf) else "")
+        + (f"<br><small>KS {fmt_g(ks_m, 3)}</small>" if _measured(ks_m) else "")
     )
 
 
-def _maps_figure(found: dict) -> str:
+def _maps_figure(found: dict[str, StoredFile]) -> str:
     """The engines' measured impact and flight maps in one figure (drawn from the stored explanations)."""
-    data = {name: d["maps"]["maps"] for name, (_f, d) in found.items() if (d.get("maps") or {}).get("maps")}
-    if not data:
+    explained = {name: Explanation.from_json(s.data) for name, s in found.items() if isinstance(s.data, dict)}
+    measured = {name: e.maps.maps for name, e in explained.items() if e.maps is not None and e.maps.maps is not None}
+    if not measured:
         return ""
-    maps = [EngineMaps.from_json(json.dumps(m)) for m in data.values()]
+    maps = list(measured.values())
+    data = {name: jsonable(m.to_dict(), nonfinite="null") for name, m in measured.items()}
     return html_stored_figure(
         maps_figure,
         (maps,),
@@ -212,9 +217,9 @@ def _frontier_rows(fr: Frontier, now: int | None) -> list[list[str]]:
     return rows
 
 
-def _frontier(run: Run, name: str, d: dict) -> str:
+def _frontier(run: Run, name: str, stored: StoredFile) -> str:
     try:
-        fr = Frontier.from_dict(d)
+        fr = Frontier.from_dict(stored.data)
     except (KeyError, TypeError, ValueError) as e:
         return html_note(f"{engine_tag(name, run)}: the frontier file cannot be read ({esc(e)})", "warn")
     table = html_table(
@@ -238,7 +243,9 @@ def _frontier(run: Run, name: str, d: dict) -> str:
     used = run.meta.engine_settings(name)
     differ = settings_differ(fr.knee_settings(), used)
     note = html_note(f"This run's {esc(', '.join(differ))} differ from the knee's.", "warn") if differ else ""
-    fig = html_stored_figure(frontier_figure, (fr,), d, f"{esc(name)}: accuracy against cost", f"{name} frontier")
+    fig = html_stored_figure(
+        frontier_figure, (fr,), fr.to_dict(), f"{esc(name)}: accuracy against cost", f"{name} frontier"
+    )
     return f"<h4>{engine_tag(name, run)}</h4>{table}{note}{fig}"
 
 
@@ -267,5 +274,5 @@ def engines_explained(run: Run) -> str:
             "other settings at their defaults: the tuner's checks, per-record agreement with the analytic "
             "model and KS on the scenario's ground motions, and the CPU time.</p>"
         )
-        out += [_frontier(run, name, d) for name, (_f, d) in front.items()]
+        out += [_frontier(run, name, stored) for name, stored in front.items()]
     return "".join(out)

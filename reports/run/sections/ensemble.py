@@ -14,6 +14,7 @@ import numpy as np
 from housner.reports.page import esc, fmt_g, fmt_num, guarded, html_figure, html_note, html_table, status_badge
 from housner.reports.run.ground_figures import plot_ensemble_spectra
 from housner.scenarios.execution.rundir import json_number
+from housner.scenarios.motions.build import BandCheck, MatchedGain, RdkParameter
 from housner.scenarios.runs.view import Run, motion_list, source_record
 from housner.units import G
 
@@ -33,72 +34,75 @@ def ensemble_section(run: Run) -> str:
         "measured release)",
     }.get(src, esc(src))
     facts = [["source", words]]
-    if "model" in mm:
+    if mm.model is not None:
         model = {"rdk2010": "published (Rezaeian &amp; Der Kiureghian 2010)", "matched": "spectrally matched"}
-        facts.append(["ground-motion model", f"<code>{esc(mm['model'])}</code>: {model.get(mm['model'], '')}"])
-    if "S" in mm:
-        S = json_number(mm["S"])
+        facts.append(["ground-motion model", f"<code>{esc(mm.model)}</code>: {model.get(mm.model, '')}"])
+    if mm.S is not None:
+        S = json_number(mm.S)
         facts.append(
             [
                 "size ratio S = R<sub>prototype</sub>/R<sub>model</sub>",
                 f"{fmt_g(S)} (time compressed by &radic;S = {fmt_g(math.sqrt(S)) if S > 0 else '&ndash;'}, seed eq. 9)",
             ]
         )
-    if "seed" in mm:
-        facts.append(["seed", esc(mm["seed"])])
+    if mm.seed is not None:
+        facts.append(["seed", esc(mm.seed)])
     facts += _stored_facts(run)
     parts.append(html_table(["", ""], facts, cls="kv"))
-    rec = mm.get("record")
-    if isinstance(rec, dict):
+    rec = mm.record
+    if rec is not None:
         rows = [
-            ["name", esc(rec.get("name", "")), ""],
-            ["provenance", esc(rec.get("provenance", "")), ""],
-            ["step dt", fmt_g(rec.get("dt")), "s"],
-            ["samples", esc(rec.get("n", "")), ""],
+            ["name", esc(_or(rec.name, "")), ""],
+            ["provenance", esc(_or(rec.provenance, "")), ""],
+            ["step dt", fmt_g(rec.dt), "s"],
+            ["samples", esc(_or(rec.n, "")), ""],
         ]
-        if rec.get("file"):
-            rows.insert(
-                1, ["file", f"<code>{esc(rec['file'])}</code> (sha256 {esc(str(rec.get('sha256', ''))[:16])})", ""]
-            )
+        if rec.file:
+            rows.insert(1, ["file", f"<code>{esc(rec.file)}</code> (sha256 {esc(str(_or(rec.sha256, ''))[:16])})", ""])
         parts.append("<h3>Record</h3>")
         parts.append(html_table(["", "value", "unit"], rows, cls="kv"))
-    suite = mm.get("records")
-    if isinstance(suite, list) and suite:
+    suite = mm.records
+    if suite:
         rows = [
-            [esc(r.get("name", "")), f"<code>{esc(r.get('file', ''))}</code>", esc(r.get("n", "")), fmt_g(r.get("dt"))]
+            [esc(_or(r.name, "")), f"<code>{esc(_or(r.file, ''))}</code>", esc(_or(r.n, "")), fmt_g(r.dt)]
             for r in suite
-            if isinstance(r, dict)
         ]
         parts.append("<h3>Records</h3>")
         parts.append(html_table(["motion", "file", "samples", "dt [s]"], rows, cls="kv"))
-    params = mm.get("rdk_params")
+    params = mm.rdk_params
     if isinstance(params, dict) and params:
         parts.append("<h3>Fitted Rezaeian &amp; Der Kiureghian parameters</h3>")
         parts.append(_rdk_table(params))
-    if isinstance(mm.get("band_check"), dict):
+    check = mm.band_check
+    if check is not None:
         parts.append("<h3>Spectral match, band by band</h3>")
-        parts.append(guarded("The band check", lambda: _band_table(mm["band_check"], mm.get("matched_gain"))))
+        parts.append(guarded("The band check", lambda: _band_table(check, mm.matched_gain)))
     if src in ("rdk", "record"):
         parts.append(guarded("The response spectra", lambda: _spectra_figure(run)))
-    if src == "pulses" and "pulse" in mm:
+    if src == "pulses" and mm.pulse is not None:
         parts.append(
             html_note(
-                f"Pulse shape: <code>{esc(mm['pulse'])}</code> on a grid of &omega;<sub>p</sub>/p and "
+                f"Pulse shape: <code>{esc(mm.pulse)}</code> on a grid of &omega;<sub>p</sub>/p and "
                 "a<sub>p</sub>/(g tan &alpha;); see <a href='#rocking-spectra'>Rocking spectra</a>."
             )
         )
     return "".join(parts)
 
 
+def _or(value, default):
+    """A fact of run.json, or ``default`` where the file does not state it."""
+    return default if value is None else value
+
+
 def _stored_facts(run: Run) -> list[list[str]]:
     """Rows on the stored motions (motions.npz): how many, their steps, durations and peak accelerations."""
     m = run.motions
-    if m is None or not len(m.get("n", [])):
+    if m is None or not len(m.n):
         return []
-    n = np.asarray(m["n"])
-    dt = np.asarray(m["dt"], dtype=float)
+    n = np.asarray(m.n)
+    dt = np.asarray(m.dt, dtype=float)
     dur = (n - 1) * dt
-    acc = np.asarray(m["acc"], dtype=float)
+    acc = np.asarray(m.acc, dtype=float)
     pga = np.max(np.abs(acc), axis=1) if acc.size else np.zeros(len(n))
     facts = [["motions", f"{len(n)}"], ["step dt", _range(dt * 1000, "ms")], ["duration", _range(dur, "s")]]
     if np.any(pga > 0):
@@ -109,35 +113,32 @@ def _stored_facts(run: Run) -> list[list[str]]:
     return facts
 
 
-def _band_table(check: dict, gain: dict | None) -> str:
+def _band_table(check: BandCheck, gain: MatchedGain | None) -> str:
     """Per third-octave band: ensemble-mean / record of PSa and Sd with PASS/FAIL (and the matched model's gain)."""
     rows: dict[float, list[str]] = {}
-    for q, col in (("psa", 1), ("sd", 2)):
-        for b in (check.get(q) or {}).get("bands", []):
-            c = round(json_number(b.get("centre_s")), 6)
+    for table, col in ((check.psa, 1), (check.sd, 2)):
+        for b in table.bands if table is not None else ():
+            c = round(json_number(b.centre_s), 6)
             row = rows.setdefault(c, [fmt_g(c, 3), "&ndash;", "&ndash;"])
-            row[col] = f"{fmt_num(b.get('ratio'), 3)} {status_badge(b.get('verdict') == 'PASS')}"
+            row[col] = f"{fmt_num(b.ratio, 3)} {status_badge(b.verdict == 'PASS')}"
     header = ["band centre [s]", "PSa ratio", "Sd ratio"]
     gain_note = ""
-    if isinstance(gain, dict) and gain.get("gain_centres_s"):
+    if gain is not None and gain.gain_centres_s:
         header.append("gain G [&ndash;]")
         gain_note = (
-            f" G: the matched model's spectral gain at the band centre, fitted in {esc(gain.get('iterations', '?'))} "
-            f"iterations on {esc(gain.get('n_fit', '?'))} motions."
+            f" G: the matched model's spectral gain at the band centre, fitted in {esc(_or(gain.iterations, '?'))} "
+            f"iterations on {esc(_or(gain.n_fit, '?'))} motions."
         )
-        g = {
-            round(json_number(c), 6): json_number(v)
-            for c, v in zip(gain["gain_centres_s"], gain.get("gain", []), strict=False)
-        }
+        g = {round(json_number(c), 6): json_number(v) for c, v in zip(gain.gain_centres_s, gain.gain, strict=False)}
         for c, row in rows.items():
             row.append(fmt_num(g.get(c, math.nan), 3))
-    lo, hi = (list(check.get("bounds") or []) + [math.nan, math.nan])[:2]
-    ranges = {q: (check.get(q) or {}).get("range_s") or ["?", "?"] for q in ("psa", "sd")}
-    verdict = status_badge(bool(check.get("passed"))) if "passed" in check else ""
+    lo, hi = (list(check.bounds) + [math.nan, math.nan])[:2]
+    psa, sd = (t.range_s if t is not None and t.range_s else ("?", "?") for t in (check.psa, check.sd))
+    verdict = status_badge(bool(check.passed)) if check.passed is not None else ""
     caption = (
-        f"{verdict} {esc(check.get('what', ''))}: ratio of the geometric mean over the band of ensemble mean / record, "
-        f"accepted within [{fmt_g(lo)}, {fmt_g(hi)}]; PSa checked over {fmt_g(ranges['psa'][0])}-"
-        f"{fmt_g(ranges['psa'][1])} s, Sd over {fmt_g(ranges['sd'][0])}-{fmt_g(ranges['sd'][1])} s "
+        f"{verdict} {esc(_or(check.what, ''))}: ratio of the geometric mean over the band of ensemble mean / record, "
+        f"accepted within [{fmt_g(lo)}, {fmt_g(hi)}]; PSa checked over {fmt_g(psa[0])}-"
+        f"{fmt_g(psa[1])} s, Sd over {fmt_g(sd[0])}-{fmt_g(sd[1])} s "
         "(housner.scenarios.motions.bands.band_check)." + gain_note
     )
     return html_table(header, [rows[c] for c in sorted(rows)], cls="kv", caption=caption)
@@ -209,8 +210,8 @@ def _rdk_table(params: dict) -> str:
     """Table of fitted RDK parameters with symbols, units and meanings (unknown keys by their unit suffix)."""
     rows = []
     for k, v in params.items():
-        if isinstance(v, dict):  # {value, unit, description}
-            value, unit, desc = v.get("value"), esc(v.get("unit", "")), esc(v.get("description", ""))
+        if isinstance(v, RdkParameter):  # {value, unit, description}
+            value, unit, desc = v.value, esc(_or(v.unit, "")), esc(_or(v.description, ""))
             symbol = f"<code>{esc(k)}</code>"
         else:
             symbol, desc, *unit = _RDK_ROWS.get(k, (f"<code>{esc(k)}</code>", ""))

@@ -262,9 +262,9 @@ _SPECIMEN_ROWS = {
 
 
 def specimen_section(run: Run) -> str:
-    spec = run.specimen
+    spec = run.specimen.to_json()
     parts = []
-    geometry = ((run.campaign or {}).get("geometry") or {}).get("label")
+    geometry = run.campaign.geometry.label if run.campaign is not None else ""
     if geometry:
         parts.append(
             html_note(
@@ -290,9 +290,8 @@ def specimen_section(run: Run) -> str:
     rows = []
     for name in run.engines:
         info = run.meta.engine(name)
-        settings = info.get("settings") or {}
-        sset = settings_html(settings) or "defaults"
-        rows.append([engine_tag(name, run), esc(info.get("version", "")) or "&ndash;", sset])
+        sset = settings_html(info.settings or {}) or "defaults"
+        rows.append([engine_tag(name, run), esc(info.version or "") or "&ndash;", sset])
     parts.append("<h3>Engines</h3>")
     parts.append(html_table(["engine", "version", "settings"], rows))
     parts.append(guarded("The tuning summary", lambda: tuning_section(run)))

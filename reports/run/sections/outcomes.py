@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 from housner.reports.page import ci_cell, engine_tag, esc, fmt_g, fmt_num, html_note, html_table
+from housner.scenarios.runs.campaign_run import CampaignFacts, OutcomeScore
 from housner.scenarios.runs.view import Run
 
 
@@ -34,35 +35,35 @@ def outcomes_section(run: Run) -> str:
     ]
     body = []
     for r in rows:
-        failed = f'<span class="bad">{r["n_failed"]}</span>' if r["n_failed"] else "0"
-        if not r["n"]:
-            body.append([engine_tag(r["engine"], run), f"0 ({failed})", *["&ndash;"] * 5])
+        failed = f'<span class="bad">{r.n_failed}</span>' if r.n_failed else "0"
+        if not r.n:
+            body.append([engine_tag(r.engine, run), f"0 ({failed})", *["&ndash;"] * 5])
             continue
         body.append(
             [
-                engine_tag(r["engine"], run),
-                f"{r['n']} ({failed})",
-                _ci(r, "accuracy"),
-                _ci(r, "f1"),
-                _ci(r, "log_loss"),
-                f"{r['n_predicted']} / {r['n_overturned']}",
+                engine_tag(r.engine, run),
+                f"{r.n} ({failed})",
+                _ci(r.accuracy, r.accuracy_ci),
+                _ci(r.f1, r.f1_ci),
+                _ci(r.log_loss, r.log_loss_ci),
+                f"{r.n_predicted} / {r.n_overturned}",
                 _confusion(r),
             ]
         )
     for p in run.published_outcomes:
         body.append(
             [
-                f"<em>{esc(p['model'])}</em><br><small>{esc(p['note'])}</small>",
+                f"<em>{esc(p.model)}</em><br><small>{esc(p.note)}</small>",
                 "&ndash;",
-                fmt_num(p["accuracy"], 3),
-                fmt_num(p["f1"], 3),
+                fmt_num(p.accuracy, 3),
+                fmt_num(p.f1, 3),
                 "&ndash;",
-                f"{p['n_predicted']} / {p['n_overturned']}",
+                f"{p.n_predicted} / {p.n_overturned}",
                 "&ndash;",
             ]
         )
-    clip = rows[0]["p_clip"]
-    n_failed = sum(r["n_failed"] for r in rows)
+    clip = rows[0].p_clip
+    n_failed = sum(r.n_failed for r in rows)
     caption = " ".join(
         [
             "Each engine's predicted outcome (overturned or not) on every record with a measured outcome, against "
@@ -83,38 +84,40 @@ def outcomes_section(run: Run) -> str:
     return html_table(header, body, cls="headline", caption=caption) + _given(run)
 
 
-def _ci(r: dict, key: str) -> str:
-    lo, hi = r.get(f"{key}_ci") or (float("nan"), float("nan"))
-    return ci_cell(r[key], lo, hi, 3)
+def _ci(value: float | None, ci: tuple[float, float] | None) -> str:
+    lo, hi = ci or (float("nan"), float("nan"))
+    return ci_cell(value, lo, hi, 3)
 
 
-def _confusion(r: dict) -> str:
-    return (
-        f'<table class="kv"><tr><td>{r["tp"]}</td><td>{r["fn"]}</td></tr>'
-        f"<tr><td>{r['fp']}</td><td>{r['tn']}</td></tr></table>"
-    )
+def _confusion(r: OutcomeScore) -> str:
+    return f'<table class="kv"><tr><td>{r.tp}</td><td>{r.fn}</td></tr><tr><td>{r.fp}</td><td>{r.tn}</td></tr></table>'
+
+
+def _or(value, default):
+    """A count of run.json's campaign table, or ``default`` where the table does not state it."""
+    return default if value is None else value
 
 
 def _given(run: Run) -> str:
     """What the campaign gave the engines: the records, the planar block's geometry effect, the mesh settings."""
-    c = run.campaign or {}
+    c = run.campaign or CampaignFacts()
     facts = [
-        ["campaign", f"{esc(c.get('name', ''))}<br><code>{esc(c.get('path', ''))}</code>"],
+        ["campaign", f"{esc(c.name)}<br><code>{esc(c.path)}</code>"],
         [
             "records",
-            f"{esc(c.get('n_records', ''))} ({esc(c.get('n_outcomes', ''))} with a measured outcome, "
-            f"{esc(c.get('n_overturned', ''))} overturned; {esc(c.get('skipped', 0))} unreadable, left out)",
+            f"{esc(_or(c.n_records, ''))} ({esc(_or(c.n_outcomes, ''))} with a measured outcome, "
+            f"{esc(_or(c.n_overturned, ''))} overturned; {esc(_or(c.skipped, 0))} unreadable, left out)",
         ],
     ]
-    geo = (c.get("geometry") or {}).get("label")
-    scan = c.get("scan")
-    if scan:
+    geo = c.geometry.label
+    scan = c.scan
+    if scan is not None:
         facts.append(
             [
                 "scan pivots",
-                f"b+ {fmt_g(scan.get('b_pos_m'))} m, b&minus; {fmt_g(scan.get('b_neg_m'))} m, "
-                f"h {fmt_g(scan.get('h_m'))} m (&alpha;+ {fmt_g(scan.get('alpha_pos_rad'))}, &alpha;&minus; "
-                f"{fmt_g(scan.get('alpha_neg_rad'))} rad)",
+                f"b+ {fmt_g(scan.b_pos_m)} m, b&minus; {fmt_g(scan.b_neg_m)} m, "
+                f"h {fmt_g(scan.h_m)} m (&alpha;+ {fmt_g(scan.alpha_pos_rad)}, &alpha;&minus; "
+                f"{fmt_g(scan.alpha_neg_rad)} rad)",
             ]
         )
     facts.append(
@@ -128,7 +131,7 @@ def _given(run: Run) -> str:
             ),
         ]
     )
-    mesh = c.get("mesh")
+    mesh = c.mesh
     if mesh:
         given = "<br>".join(f"{esc(k)} = <code>{esc(v)}</code>" for k, v in mesh.items())
         facts.append(["3D engines' settings", given])

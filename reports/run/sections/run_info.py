@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_table
+from housner.scenarios.execution.rundir import EngineFacts, ScenarioCopy
 from housner.scenarios.runs.view import Run
 
 
@@ -33,16 +34,21 @@ def provenance_section(run: Run) -> str:
     meta = run.meta
     prov = meta.provenance
     parts = []
-    rows = [[esc(k), esc(v)] for k, v in (prov.get("versions") or {}).items()]
+    rows = [[esc(k), esc(v)] for k, v in (prov.versions or {}).items()]
     for name, info in meta.engines.items():
-        if info.get("version"):
-            rows.append([f"engine {esc(name)}", esc(info["version"])])
-    for k in ("git_commit", "platform", "cpus", "created"):
-        if prov.get(k) not in (None, ""):
-            rows.append([esc(k.replace("_", " ")), f"<code>{esc(prov[k])}</code>"])
+        if info.version:
+            rows.append([f"engine {esc(name)}", esc(info.version)])
+    for label, v in (
+        ("git commit", prov.git_commit),
+        ("platform", prov.platform),
+        ("cpus", prov.cpus),
+        ("created", prov.created),
+    ):
+        if v not in (None, ""):
+            rows.append([esc(label), f"<code>{esc(v)}</code>"])
     mm = run.motions_meta
-    if "seed" in mm:
-        rows.append(["ensemble seed", esc(mm["seed"])])
+    if mm.seed is not None:
+        rows.append(["ensemble seed", esc(mm.seed)])
     wall = meta.wall_s
     if isinstance(wall, dict):
         for k, v in wall.items():
@@ -68,17 +74,17 @@ def _speed(run: Run) -> str:
         sim = math.nan
         if m is not None:
             ids = ok["motion_id"].to_numpy(int)
-            ids = ids[ids < len(m["n"])]
-            sim = float(np.sum((np.asarray(m["n"])[ids] - 1) * np.asarray(m["dt"], dtype=float)[ids]))
+            ids = ids[ids < len(m.n)]
+            sim = float(np.sum((np.asarray(m.n)[ids] - 1) * np.asarray(m.dt, dtype=float)[ids]))
         ratio = sim / wall if wall > 0 and math.isfinite(sim) else math.nan
-        i = info.get(e, {})
+        i = info.get(e) or EngineFacts()
         cached = int(sub["cached"].astype(bool).sum())
         rows.append(
             [
                 engine_tag(e, run),
                 str(len(sub)),
                 str(cached),
-                f"{fmt_g(i.get('wall_s', math.nan), 4)} s",
+                f"{fmt_g(math.nan if i.wall_s is None else i.wall_s, 4)} s",
                 f"{fmt_g(wall, 4)} s",
                 f"{fmt_g(sub['wall_s'].median() * 1000 if len(sub) else math.nan, 3)} ms",
                 fmt_g(sim, 4),
@@ -103,10 +109,10 @@ def _speed(run: Run) -> str:
     )
 
 
-def _scenario_text(scen: dict) -> str:
+def _scenario_text(scen: ScenarioCopy) -> str:
     """The scenario file as written (comments included) when it still says what the run used, else the run's copy."""
-    f = scen.get("file")
-    used = {k: v for k, v in scen.items() if k != "file"}
+    f = scen.file
+    used = {k: v for k, v in scen.table.items() if k != "file"}
     if f and Path(f).is_file():
         try:
             import tomllib
@@ -120,7 +126,7 @@ def _scenario_text(scen: dict) -> str:
         # The runner adds "name" when the file has none; everything else must be the same.
         if (
             parsed is not None
-            and all(used.get(k) == v for k, v in parsed.items())
+            and {k: v for k, v in used.items() if k in parsed} == parsed
             and set(used) - set(parsed) <= {"name"}
         ):
             return f"# {f}\n{text}"

@@ -12,13 +12,14 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from housner import engines
 from housner.engines.base import engine_class
-from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR
+from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR, TuningResult
 from housner.reports import figures
 from housner.reports.page import (
     engine_tag,
@@ -31,7 +32,6 @@ from housner.reports.page import (
     status_badge,
     view_colors,
 )
-from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.runs.verdicts import engine_verdict
 from housner.scenarios.runs.view import Run
 from housner.statistics.ensemble_stats import KS_MAX
@@ -45,18 +45,21 @@ def tuning_caveats(run: Run) -> dict[str, str]:
     """engine -> HTML: the tuning checks its tuning file did not meet, by how much, and what that means here."""
     out = {}
     cmp = run.comparison
-    for name, (f, d) in model_data(run).items():
-        if name not in run.others or d.get("met") is not False:
+    for name, stored in model_data(run).items():
+        if name not in run.others or stored.data is None:
             continue
-        failed = [c for c in _tuning_checks(d) if not c.met]
+        t = TuningResult.from_json(stored.data)
+        if t.met is not False:
+            continue
+        failed = [c for c in _tuning_checks(t) if not c.met]
         if not failed:
             continue
         row = cmp.loc[name]
         ok = engine_verdict(row).ok
         what = "; ".join(f'<span class="bad">{c.short}</span>' for c in failed)
-        text = f"Tuning not met (<code>{esc(f.name)}</code>, {esc(d.get('date', ''))}): {what}. "
+        text = f"Tuning not met (<code>{esc(stored.path.name)}</code>, {esc(t.date)}): {what}. "
         names = {c.name for c in failed}
-        first_impact_ok = all(c.met for c in _tuning_checks(d) if c.name.startswith("r of the first impact"))
+        first_impact_ok = all(c.met for c in _tuning_checks(t) if c.name.startswith("r of the first impact"))
         if any(n.startswith("free decay") for n in names) and first_impact_ok:
             text += (
                 "The first-impact r is within tolerance at every amplitude the tuner releases from, so the missing "
@@ -65,7 +68,7 @@ def tuning_caveats(run: Run) -> dict[str, str]:
                 "(<code>housner impact-map ENGINE</code>; PyBullet's: its slow impacts, "
                 "<code>docs/results.md#pybullet-verdict</code>). "
             )
-        decay = _frame(d, "decay_table")
+        decay = _frame(t.decay_table)
         small_limit = math.nan
         if {"rel_error", "peak_analytic"} <= set(decay.columns):
             bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
@@ -109,16 +112,26 @@ def model_file(kind: str, engine: str) -> Path:
     return Path(engines.__file__).resolve().parent / "models" / f"{kind}-{engine}.json"
 
 
-def model_data(run: Run, kind: str = "tuning") -> dict[str, tuple[Path, dict]]:
-    """engine -> (file, parsed ``<kind>-<engine>.json``) for the run's engines that have one."""
+@dataclass(frozen=True)
+class StoredFile:
+    """An engine's stored measurement (``<kind>-<engine>.json``): its ``path``, its JSON ``data`` (None when the
+    file cannot be read) and the ``error`` that says why not ("" when it was read)."""
+
+    path: Path
+    data: Any = None
+    error: str = ""
+
+
+def model_data(run: Run, kind: str = "tuning") -> dict[str, StoredFile]:
+    """engine -> its stored ``<kind>-<engine>.json``, read, for the run's engines that have one."""
     found = {}
     for name in run.engines:
         f = model_file(kind, name)
         if f.is_file():
             try:
-                found[name] = (f, json.loads(f.read_text(encoding="utf-8")))
+                found[name] = StoredFile(f, json.loads(f.read_text(encoding="utf-8")))
             except (OSError, json.JSONDecodeError) as e:
-                found[name] = (f, {"error": f"cannot read: {e}"})
+                found[name] = StoredFile(f, error=f"cannot read: {e}")
     return found
 
 
@@ -137,25 +150,22 @@ class _Check:
     short: str  # HTML, one phrase for the verdict line: the worst error, where, and what is accepted
 
 
-def _frame(d: dict, key: str) -> pd.DataFrame:
-    t = d.get(key) or {}
-    try:
-        df = pd.DataFrame(t)
-    except ValueError:  # columns of different lengths: unusable
-        return pd.DataFrame()
+def _frame(table: pd.DataFrame) -> pd.DataFrame:
+    """A table of a tuning file, with a ``dt`` column (NaN: a file older than the sample steps)."""
+    df = table.copy()
     if "dt" not in df.columns:
         df["dt"] = math.nan
     return df
 
 
-def _tuning_checks(d: dict) -> list[_Check]:
+def _tuning_checks(t: TuningResult) -> list[_Check]:
     """The tuner's checks (``housner.engines.tuning``) re-evaluated from the tables of a tuning file.
 
     Each check is judged with the tuner's own tolerances, so a check said "not met"
     here is the one ``housner tune`` counted; tables absent from the file give no row.
     """
-    rtol = json_number(d.get("rtol"))
-    found = (_first_impact_check(d, rtol), _small_check(d, rtol), _decay_check(d), _pulse_check(d, rtol))
+    rtol = t.rtol
+    found = (_first_impact_check(t, rtol), _small_check(t, rtol), _decay_check(t), _pulse_check(t, rtol))
     return [c for c in found if c is not None]
 
 
@@ -164,10 +174,10 @@ def _worst_row(df: pd.DataFrame, col: str) -> pd.Series:
     return df.iloc[int(np.argmax(np.abs(df[col].to_numpy(float))))]
 
 
-def _first_impact_check(d: dict, rtol: float) -> _Check | None:
+def _first_impact_check(t: TuningResult, rtol: float) -> _Check | None:
     """r of the first impact after a release at the large amplitudes (the file's ``table``), within rtol."""
-    table = _frame(d, "table")
-    target = json_number(d.get("target_r"))
+    table = _frame(t.table)
+    target = t.target_r
     if "rel_error" not in table.columns and "r_engine" in table.columns and math.isfinite(target):
         table["rel_error"] = table["r_engine"].astype(float) / target - 1.0  # files older than the error column
     if not ({"amplitude", "rel_error"} <= set(table.columns) and len(table)):
@@ -185,10 +195,10 @@ def _first_impact_check(d: dict, rtol: float) -> _Check | None:
     )
 
 
-def _small_check(d: dict, rtol: float) -> _Check | None:
+def _small_check(t: TuningResult, rtol: float) -> _Check | None:
     """r of the first impact at small amplitudes (``small_table``): the worst within a wider band, each step's mean
     within rtol."""
-    small = _frame(d, "small_table")
+    small = _frame(t.small_table)
     if not ({"amplitude", "rel_error"} <= set(small.columns) and len(small)):
         return None
     w = _worst_row(small, "rel_error")
@@ -206,9 +216,9 @@ def _small_check(d: dict, rtol: float) -> _Check | None:
     )
 
 
-def _decay_check(d: dict) -> _Check | None:
+def _decay_check(t: TuningResult) -> _Check | None:
     """A free decay's peaks after many impacts against the exact sequence (``decay_table``), within DECAY_RTOL."""
-    decay = _frame(d, "decay_table")
+    decay = _frame(t.decay_table)
     if not ({"impacts", "rel_error", "peak_engine", "peak_analytic"} <= set(decay.columns) and len(decay)):
         return None
     w = _worst_row(decay, "rel_error")
@@ -230,9 +240,9 @@ def _decay_check(d: dict) -> _Check | None:
     )
 
 
-def _pulse_check(d: dict, rtol: float) -> _Check | None:
+def _pulse_check(t: TuningResult, rtol: float) -> _Check | None:
     """One-sine pulses (``pulse_table``): the first peak within rtol and theta_max within each pulse's tolerance."""
-    pulses = _frame(d, "pulse_table")
+    pulses = _frame(t.pulse_table)
     if not ({"rel_error", "theta_max_rel_error", "theta_max_rtol"} <= set(pulses.columns) and len(pulses)):
         return None
     w = _worst_row(pulses, "rel_error")
@@ -251,9 +261,9 @@ def _pulse_check(d: dict, rtol: float) -> _Check | None:
     )
 
 
-def _tuning_series(d: dict) -> tuple[dict, dict]:
+def _tuning_series(t: TuningResult) -> tuple[dict, dict]:
     """r against amplitude per sample step (large and small amplitudes joined), and decay errors per step."""
-    parts = [t for t in (_frame(d, "small_table"), _frame(d, "table")) if {"amplitude", "r_engine"} <= set(t.columns)]
+    parts = [x for x in (_frame(t.small_table), _frame(t.table)) if {"amplitude", "r_engine"} <= set(x.columns)]
     curves: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     if parts:
         both = pd.concat(parts, ignore_index=True)
@@ -263,7 +273,7 @@ def _tuning_series(d: dict) -> tuple[dict, dict]:
                 g["amplitude"].to_numpy(float),
                 g["r_engine"].to_numpy(float),
             )
-    decay = _frame(d, "decay_table")
+    decay = _frame(t.decay_table)
     dec: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     if {"impacts", "rel_error"} <= set(decay.columns):
         for dt, g in decay.groupby("dt", dropna=False, sort=False):
@@ -305,21 +315,23 @@ def tuning_section(run: Run) -> str:
     rows = []
     curves, decays = {}, {}
     target = rtol = None
-    for name, (f, d) in found.items():
-        if "error" in d and len(d) == 1:
-            rows.append([engine_tag(name, run), f"<code>{esc(f.name)}</code>: {esc(d['error'])}", "", "", "", ""])
+    for name, stored in found.items():
+        if stored.data is None:
+            rows.append(
+                [engine_tag(name, run), f"<code>{esc(stored.path.name)}</code>: {esc(stored.error)}"] + [""] * 4
+            )
             continue
-        rows.append(_tuning_row(run, name, d))
-        c, dec = _tuning_curves(d)
+        t = TuningResult.from_json(stored.data)
+        rows.append(_tuning_row(run, name, t))
+        c, dec = _tuning_curves(t)
         if c:
             curves[name] = c
         if dec:
             decays[name] = dec
-        t = json_number(d.get("target_r"))
-        if math.isfinite(t):
-            target = t
-        if math.isfinite(json_number(d.get("rtol"))):
-            rtol = json_number(d.get("rtol"))
+        if math.isfinite(t.target_r):
+            target = t.target_r
+        if math.isfinite(t.rtol):
+            rtol = t.rtol
     parts.append(
         html_table(
             ["engine", "tuned settings", "target r", "the tuner's checks (worst case)", "verdict", "tuned on"],
@@ -336,9 +348,9 @@ def tuning_section(run: Run) -> str:
     return "".join(parts)
 
 
-def _tuning_row(run: Run, name: str, d: dict) -> list[str]:
+def _tuning_row(run: Run, name: str, t: TuningResult) -> list[str]:
     """An engine's row of the tuning table: its tuned settings against the run's, the checks, the verdict, when."""
-    tuned = d.get("settings") or {}
+    tuned = t.settings
     used = run.meta.engine_settings(name)
     # a setting the file lacks did not exist when it was written: the engine's default keeps the
     # behaviour of that time (e.g. impact_energy_factor 1)
@@ -352,31 +364,25 @@ def _tuning_row(run: Run, name: str, d: dict) -> list[str]:
         )
     else:
         same = "the run's settings (above)"
-    met = d.get("met")
+    met = t.met
     check_cells = "<br>".join(
         f'<span class="{"ok" if c.met else "bad"}">{"met" if c.met else "NOT MET"}</span>: {c.name}: '
         f"{c.measured} <span class=muted>(accepted {c.accepted})</span>"
-        for c in _tuning_checks(d)
+        for c in _tuning_checks(t)
     )
     return [
         engine_tag(name, run),
         same,
-        fmt_g(d.get("target_r"), 5),
+        fmt_g(t.target_r, 5),
         check_cells or "&ndash;",
         status_badge(bool(met), "MET", "NOT MET") if met is not None else "&ndash;",
-        f"{esc(d.get('date', ''))}, version {esc(d.get('version', ''))}",
+        f"{esc(t.date)}, version {esc(t.version)}",
     ]
 
 
-def _tuning_curves(d: dict) -> tuple[dict, dict]:
-    """:func:`_tuning_series` of a tuning file, or for an older file its one table without sample steps."""
-    c, dec = _tuning_series(d)
-    if not c:  # older files: one table without sample steps
-        table = d.get("table") or {}
-        amp, r = table.get("amplitude"), table.get("r_engine")
-        if isinstance(amp, list) and isinstance(r, list) and len(amp) == len(r) and amp:
-            c = {"": (np.array([json_number(x) for x in amp]), np.array([json_number(x) for x in r]))}
-    return c, dec
+def _tuning_curves(t: TuningResult) -> tuple[dict, dict]:
+    """:func:`_tuning_series` of a tuning file (an older file's one table without sample steps included)."""
+    return _tuning_series(t)
 
 
 def _tuning_figure(run: Run, curves: dict, decays: dict, target: float | None, rtol: float | None) -> str:
