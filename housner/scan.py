@@ -21,29 +21,18 @@ import difflib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar
 
 import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
 from housner._validate import finite, positive
-from housner._values import JsonValue
 from housner.errors import DataFileError, one_line
 from housner.rocking_params import RockingParams, pivot_impact_ratios
 from housner.specimen import Specimen
 from housner.units import G
 
-__all__ = [
-    "CONTACTS",
-    "HousnerRatios",
-    "PlanarSide",
-    "ScanSpecimen",
-    "ScanSpecimenFacts",
-    "footprint_figure",
-    "mesh_at_rest",
-    "specimen_from_mesh",
-]
+__all__ = ["CONTACTS", "PlanarSide", "ScanSpecimen", "footprint_figure", "mesh_at_rest", "specimen_from_mesh"]
 
 #: Contact models: ``"hull"`` or ``"flat:TOL"`` with TOL [m], e.g. ``"flat:0.006"``.
 CONTACTS = ("hull", "flat")
@@ -65,8 +54,8 @@ _COPLANAR_REL = 1e-6
 _OUTLINE_HEIGHT = 0.01
 
 
-@dataclass(frozen=True, eq=False)
-class PlanarSide(JsonValue):
+@dataclass(frozen=True)
+class PlanarSide:
     """One pivot of the equivalent planar block.
 
     Attributes
@@ -100,93 +89,9 @@ class PlanarSide(JsonValue):
         inertia = centroidal_inertia + mass * R * R
         return cls(b=b, h=h, alpha=math.atan2(b, h), R=R, I=inertia, p=math.sqrt(mass * G * R / inertia))
 
-    #: The specimen JSON's key of each field (SI, unit suffixes).
-    _KEYS: ClassVar[dict[str, str]] = {
-        "b": "b_m",
-        "h": "h_m",
-        "alpha": "alpha_rad",
-        "R": "R_m",
-        "I": "I_kgm2",
-        "p": "p_1_s",
-    }
-
-    def to_json(self) -> dict:
-        """JSON-ready, SI with unit suffixes."""
-        return {key: getattr(self, name) for name, key in self._KEYS.items()}
-
     def to_dict(self) -> dict:
-        """JSON-ready, SI with unit suffixes (:meth:`to_json`)."""
-        return self.to_json()
-
-    @classmethod
-    def from_json(cls, data: Any) -> PlanarSide:
-        """The side of :meth:`to_json`'s data (a missing figure is NaN)."""
-        if isinstance(data, PlanarSide):
-            return data
-        d = data if isinstance(data, dict) else {}
-        return super().from_json({name: d.get(key) for name, key in cls._KEYS.items()})
-
-
-@dataclass(frozen=True, eq=False)
-class HousnerRatios(JsonValue):
-    """Housner's kinetic-energy ratios of an asymmetric block [-]: ``r_pos`` (lands on the + pivot), ``r_neg``
-    (lands on the - pivot) and their geometric mean ``r``."""
-
-    r: float
-    r_pos: float
-    r_neg: float
-
-
-@dataclass(frozen=True, eq=False)
-class ScanSpecimenFacts(JsonValue):
-    """The specimen JSON (``housner specimen MESH --json``): a :class:`ScanSpecimen` in SI units named in the keys.
-
-    Attributes
-    ----------
-    name, path : str
-        The specimen and its mesh file.
-    mass_kg, density_kg_m3, volume_m3 : float
-    com_m : tuple of float
-        The centre of mass in mesh coordinates [m].
-    com_height_m : float
-        Its height above the rest plane [m].
-    rest_tilt_rad, azimuth_deg : float
-    contact : str
-    centroidal_inertia_kgm2, depth_m : float
-    pos, neg : PlanarSide
-    r_housner : HousnerRatios
-    alpha_bracket_rad : dict
-        ``pos`` and ``neg`` -> (lo, hi) [rad] over :data:`BRACKET_CONTACTS` and this contact.
-    alpha_bracket_contacts : tuple of str
-        Those contacts.
-    alpha_over_azimuth_rad : tuple of float
-        (min, max) of min(alpha+, alpha-) over the azimuths [rad].
-    azimuths_deg : tuple of int
-        The azimuths: first, last and step [deg].
-    footprint_m : tuple of tuple of float
-        The contact polygon (k, 2) [m].
-    """
-
-    name: str
-    path: str
-    mass_kg: float
-    density_kg_m3: float
-    volume_m3: float
-    com_m: tuple[float, ...]
-    com_height_m: float
-    rest_tilt_rad: float
-    azimuth_deg: float
-    contact: str
-    centroidal_inertia_kgm2: float
-    depth_m: float
-    pos: PlanarSide
-    neg: PlanarSide
-    r_housner: HousnerRatios
-    alpha_bracket_rad: dict[str, tuple[float, ...]]
-    alpha_bracket_contacts: tuple[str, ...]
-    alpha_over_azimuth_rad: tuple[float, ...]
-    azimuths_deg: tuple[float, ...]
-    footprint_m: tuple[tuple[float, ...], ...]
+        """JSON-ready, SI with unit suffixes."""
+        return {"b_m": self.b, "h_m": self.h, "alpha_rad": self.alpha, "R_m": self.R, "I_kgm2": self.I, "p_1_s": self.p}
 
 
 @dataclass(frozen=True)
@@ -304,35 +209,31 @@ class ScanSpecimen:
             name=self.name,
         )
 
-    def facts(self) -> ScanSpecimenFacts:
-        """The specimen as the specimen JSON holds it (SI, units in the keys)."""
-        params = self.rocking_params()
-        return ScanSpecimenFacts(
-            name=self.name,
-            path=str(self.path),
-            mass_kg=self.mass,
-            density_kg_m3=self.density,
-            volume_m3=self.volume,
-            com_m=tuple(self.com),
-            com_height_m=self.h,
-            rest_tilt_rad=self.rest_tilt,
-            azimuth_deg=self.azimuth,
-            contact=self.contact,
-            centroidal_inertia_kgm2=self.centroidal_inertia,
-            depth_m=self._depth,
-            pos=self.pos,
-            neg=self.neg,
-            r_housner=HousnerRatios(r=params.r, r_pos=params.r_pos, r_neg=params.r_neg),
-            alpha_bracket_rad={side: tuple(v) for side, v in self.alpha_bracket.items()},
-            alpha_bracket_contacts=tuple(sorted(set(BRACKET_CONTACTS) | {self.contact})),
-            alpha_over_azimuth_rad=tuple(self.alpha_over_azimuth),
-            azimuths_deg=(AZIMUTHS[0], AZIMUTHS[-1], AZIMUTHS[1] - AZIMUTHS[0]),
-            footprint_m=tuple(tuple(xy) for xy in self.footprint.tolist()),
-        )
-
     def to_dict(self) -> dict:
-        """JSON-ready description, SI with unit suffixes: the specimen JSON (:meth:`facts`)."""
-        return self.facts().to_json()
+        """JSON-ready description, SI with unit suffixes."""
+        params = self.rocking_params()
+        return {
+            "name": self.name,
+            "path": str(self.path),
+            "mass_kg": self.mass,
+            "density_kg_m3": self.density,
+            "volume_m3": self.volume,
+            "com_m": list(self.com),
+            "com_height_m": self.h,
+            "rest_tilt_rad": self.rest_tilt,
+            "azimuth_deg": self.azimuth,
+            "contact": self.contact,
+            "centroidal_inertia_kgm2": self.centroidal_inertia,
+            "depth_m": self._depth,
+            "pos": self.pos.to_dict(),
+            "neg": self.neg.to_dict(),
+            "r_housner": {"r": params.r, "r_pos": params.r_pos, "r_neg": params.r_neg},
+            "alpha_bracket_rad": {side: list(v) for side, v in self.alpha_bracket.items()},
+            "alpha_bracket_contacts": sorted(set(BRACKET_CONTACTS) | {self.contact}),
+            "alpha_over_azimuth_rad": list(self.alpha_over_azimuth),
+            "azimuths_deg": [AZIMUTHS[0], AZIMUTHS[-1], AZIMUTHS[1] - AZIMUTHS[0]],
+            "footprint_m": self.footprint.tolist(),
+        }
 
 
 def specimen_from_mesh(

@@ -21,10 +21,10 @@ from typing import Any
 
 import numpy as np
 
+from housner._values import json_number
 from housner.reports import figures
 from housner.reports.glossary import spell_out
 from housner.scenarios.execution.cache import code_version, content_key, default_cache_dir, store_text
-from housner.scenarios.execution.rundir import json_number
 
 
 def esc(x: Any) -> str:

@@ -27,9 +27,9 @@ from housner.effects import EFFECTS, load_plugin, make_effect
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
 from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteHistory, NonFiniteScore, Scorer, check_finite
+from housner.scenarios.execution.run_meta import RunMeta
 from housner.scenarios.execution.rundir import (
     IncompleteRunError,
-    RunMeta,
     UnverifiedRunWarning,
     load_results,
     provenance,

@@ -24,7 +24,8 @@ from housner.reports import figures
 from housner.reports.run import page as html
 from housner.reports.run.sections import distribution as distribution_section
 from housner.reports.run.sections import tuning as tuning_section
-from housner.scenarios.execution.rundir import RunMeta, provenance, write_run
+from housner.scenarios.execution.run_meta import RunMeta
+from housner.scenarios.execution.rundir import provenance, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.runs.chaos import RECORD_RTOL, chaos_floor, errors_from_dict, run_engine_errors
 from housner.scenarios.runs.spread import AmplitudeFactor, EquivalentAmplitudes

@@ -20,20 +20,22 @@ import trimesh
 
 from housner import Specimen
 from housner._values import JsonValue, same
+from housner.cli.specimen import SideFacts
+from housner.cli.specimen import SpecimenFacts as ScanSpecimenFacts
 from housner.engines.analytic import HousnerEngine
 from housner.engines.base import ENGINES, get_engine, register_engine
 from housner.engines.tuning import TuningResult, tune
-from housner.scan import PlanarSide, ScanSpecimenFacts, specimen_from_mesh
+from housner.scan import specimen_from_mesh
 from housner.scenarios.execution.options import RunOptions
-from housner.scenarios.execution.rundir import (
+from housner.scenarios.execution.run_meta import (
     EngineFacts,
     Provenance,
     RunAnalysis,
     RunMeta,
     ScenarioCopy,
     SpecimenFacts,
-    jsonable,
 )
+from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.motions.build import BandCheck, MatchedGain, MotionFacts, RecordFacts
 from housner.scenarios.runs.campaign_run import (
     CampaignFacts,
@@ -51,7 +53,8 @@ from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
 from housner.scenarios.runs.run import run_scenario
 from housner.scenarios.runs.spread import EquivalentAmplitudes, RecordGap, Table2Spread
 from housner.scenarios.runs.view import Run
-from housner.scenarios.studies.study import StudyFits, StudyMeta, StudySettings, run_study
+from housner.scenarios.studies.study import StudyMeta, StudySettings, run_study
+from housner.scenarios.studies.study_fits import StudyFits
 
 MINI = """name = "mini"
 description = "four matched El Centro motions, Table 2 and its spread"
@@ -367,7 +370,8 @@ def test_the_specimen_json_is_its_value_written(tmp_path):
     pts = base + [(x, y, 0.5) for x in (-0.1, 0.0) for y in (-0.1, 0.1)]
     trimesh.convex.convex_hull(np.array(pts)).export(tmp_path / "rock.obj")
     scan = specimen_from_mesh(tmp_path / "rock.obj", azimuth=30.0)
-    facts = scan.facts()
-    assert isinstance(facts, ScanSpecimenFacts) and isinstance(facts.pos, PlanarSide) and facts.pos.b > facts.neg.b
+    facts = ScanSpecimenFacts.from_json(scan.to_dict())
+    assert isinstance(facts.pos, SideFacts) and facts.pos.b_m > facts.neg.b_m and facts.pos.b_m == scan.pos.b
+    assert facts.to_json() == scan.to_dict()  # the typed value writes the specimen's data, key for key
     text = json.dumps(facts.to_json(), indent=1)  # as `housner specimen --json` writes it
-    assert ScanSpecimenFacts.from_json(json.loads(text)) == facts and facts.to_json() == scan.to_dict()
+    assert ScanSpecimenFacts.from_json(json.loads(text)) == facts

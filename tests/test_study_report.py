@@ -28,7 +28,8 @@ from housner.reports.study.page import render_study_report, write_study_report
 from housner.reports.study.verdict import DISAGREE
 from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.studies.fragility import exceedance, proportion_intervals
-from housner.scenarios.studies.study import StudyFit, load_study
+from housner.scenarios.studies.study import load_study
+from housner.scenarios.studies.study_fits import StudyFit
 
 REF = "housner"
 LEVELS = (0.5, 0.8, 1.2, 1.8, 2.7)  # spans 5.4x: a log intensity axis

@@ -5,10 +5,63 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from dataclasses import dataclass
 
+from housner._values import JsonValue
 from housner.scenarios.execution.outputs import check_output_file
 
 SUMMARY = "the equivalent planar rocking block of a scan mesh: alpha, R, I and p on each side, and its footprint"
+
+
+@dataclass(frozen=True, eq=False)
+class SideFacts(JsonValue):
+    """One pivot of the planar block (:class:`housner.scan.PlanarSide`) as the specimen JSON holds it: its distance
+    from the centre of mass [m], the centre of mass's height [m], alpha [rad], R [m], I [kg m^2] and p [1/s]."""
+
+    b_m: float
+    h_m: float
+    alpha_rad: float
+    R_m: float
+    I_kgm2: float
+    p_1_s: float
+
+
+@dataclass(frozen=True, eq=False)
+class HousnerRatios(JsonValue):
+    """Housner's kinetic-energy ratios of the asymmetric block [-]: ``r_pos`` (lands on the + pivot), ``r_neg``
+    (lands on the - pivot) and their geometric mean ``r``."""
+
+    r: float
+    r_pos: float
+    r_neg: float
+
+
+@dataclass(frozen=True, eq=False)
+class SpecimenFacts(JsonValue):
+    """The specimen JSON (``--json``): :meth:`housner.scan.ScanSpecimen.to_dict`, one field per key (SI units named
+    in the keys): the mesh, its mass properties, the shaking direction and contact, the two pivots, Housner's
+    ratios, alpha over the contacts and the azimuths, the footprint."""
+
+    name: str
+    path: str
+    mass_kg: float
+    density_kg_m3: float
+    volume_m3: float
+    com_m: tuple[float, ...]
+    com_height_m: float
+    rest_tilt_rad: float
+    azimuth_deg: float
+    contact: str
+    centroidal_inertia_kgm2: float
+    depth_m: float
+    pos: SideFacts
+    neg: SideFacts
+    r_housner: HousnerRatios
+    alpha_bracket_rad: dict[str, tuple[float, ...]]
+    alpha_bracket_contacts: tuple[str, ...]
+    alpha_over_azimuth_rad: tuple[float, ...]
+    azimuths_deg: tuple[float, ...]
+    footprint_m: tuple[tuple[float, ...], ...]
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -50,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
     scan = specimen_from_mesh(args.mesh, azimuth=args.azimuth, contact=args.contact, density=args.density)
     print(_table(scan))
     if json_path is not None:
-        json_path.write_text(json.dumps(scan.facts().to_json(), indent=1) + "\n")
+        facts = SpecimenFacts.from_json(scan.to_dict())
+        json_path.write_text(json.dumps(facts.to_json(), indent=1) + "\n")
         print(f"wrote {json_path}")
     if figure_path is not None:
         footprint_figure(scan, figure_path)

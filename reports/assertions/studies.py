@@ -24,7 +24,8 @@ import math
 from pathlib import Path
 
 from housner.reports.assertions.criteria import AgreementReport, CDFAgreementError, Criterion, check_count, check_tol
-from housner.scenarios.studies.study import StudyFit, StudyResult, load_study
+from housner.scenarios.studies.study import StudyResult, load_study
+from housner.scenarios.studies.study_fits import StudyFit
 
 __all__ = ["FragilityAgreementError", "assert_fragility_agreement"]
 

@@ -36,10 +36,10 @@ from matplotlib.figure import Figure
 from matplotlib.legend_handler import HandlerTuple
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from housner._values import json_number
 from housner.reports.figures import engine_colors
-from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.studies.fragility import fragility_curve
-from housner.scenarios.studies.study import StudyFit
+from housner.scenarios.studies.study_fits import StudyFit
 
 __all__ = ["LOG_SPAN", "plot_exceedance", "plot_fragility", "plot_size_effect"]
 

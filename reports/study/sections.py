@@ -10,7 +10,7 @@ from housner.reports.page import ci_cell, engine_tag, esc, fmt_g, guarded, html_
 from housner.reports.run.sections.tuning import settings_html
 from housner.reports.study.figures import plot_exceedance, plot_fragility, plot_size_effect
 from housner.reports.study.view import StudyView, key
-from housner.scenarios.execution.rundir import EngineFacts
+from housner.scenarios.execution.run_meta import EngineFacts
 
 __all__ = [
     "MAX_FAILURE_ROWS",

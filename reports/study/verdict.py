@@ -13,9 +13,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from housner._values import json_number
 from housner.reports.page import ci_cell, engine_tag, esc, fmt_g, fmt_signed, html_note, html_table, status_badge
 from housner.reports.study.view import StudyView, count, is_ok, status_words
-from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.studies.fragility import interval_disagreement
 
 __all__ = ["DISAGREE", "fit_tables", "headline"]

@@ -17,10 +17,11 @@ from typing import Any
 
 import pandas as pd
 
+from housner._values import json_number
 from housner.reports.figures import engine_colors
 from housner.reports.page import esc
-from housner.scenarios.execution.rundir import json_number
-from housner.scenarios.studies.study import StudyComparison, StudyFit, StudyMeta, StudyResult, StudySettings, load_study
+from housner.scenarios.studies.study import StudyMeta, StudyResult, StudySettings, load_study
+from housner.scenarios.studies.study_fits import StudyComparison, StudyFit
 
 __all__ = ["StudyView", "count", "is_ok", "key", "status_words"]
 

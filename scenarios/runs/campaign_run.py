@@ -40,8 +40,7 @@ from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.diagnosis.outcomes.outcome_scores import outcome_scores
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import (
-    RUN_FILES,
+from housner.scenarios.execution.run_meta import (
     EffectData,
     EffectsFacts,
     EngineFacts,
@@ -51,8 +50,8 @@ from housner.scenarios.execution.rundir import (
     RunMeta,
     ScenarioCopy,
     SpecimenFacts,
-    write_run,
 )
+from housner.scenarios.execution.rundir import RUN_FILES, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import MotionFacts
 from housner.scenarios.runs.run import RunResult

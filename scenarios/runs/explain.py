@@ -61,7 +61,6 @@ __all__ = [
     "EffectFound",
     "ExplainDetails",
     "Explanation",
-    "FloorParts",
     "KsDistances",
     "MapsExplained",
     "explain_engine",

@@ -26,7 +26,7 @@ from housner._values import same
 from housner.engines.base import engine_spec, get_engine
 from housner.free_vibration.closed_forms import half_cycle_time
 from housner.motion import GroundMotion
-from housner.scenarios.execution.rundir import SpecimenFacts
+from housner.scenarios.execution.run_meta import SpecimenFacts
 from housner.specimen import Specimen
 
 __all__ = [

@@ -18,8 +18,7 @@ from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import (
-    RUN_FILES,
+from housner.scenarios.execution.run_meta import (
     EffectData,
     EffectsFacts,
     EngineFacts,
@@ -29,9 +28,8 @@ from housner.scenarios.execution.rundir import (
     RunMeta,
     ScenarioCopy,
     SpecimenFacts,
-    effect_data,
-    write_run,
 )
+from housner.scenarios.execution.rundir import RUN_FILES, effect_data, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import MotionFacts, build_motions
 from housner.scenarios.runs.chaos import run_engine_errors, run_engine_errors_meanwhile

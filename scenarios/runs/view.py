@@ -22,18 +22,12 @@ import numpy as np
 import pandas as pd
 
 from housner import Specimen
+from housner._values import json_number
 from housner.engines.base import engine_class
 from housner.errors import DataFileError, EngineError
 from housner.motion import GroundMotion
-from housner.scenarios.execution.rundir import (
-    RunMeta,
-    SpecimenFacts,
-    StoredMotions,
-    json_number,
-    load_results,
-    read_histories,
-    read_motions,
-)
+from housner.scenarios.execution.run_meta import RunMeta, SpecimenFacts
+from housner.scenarios.execution.rundir import StoredMotions, load_results, read_histories, read_motions
 from housner.scenarios.execution.tables import compare_engines, split_failed
 from housner.scenarios.motions.build import MotionFacts, RecordFacts
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file

@@ -32,7 +32,8 @@ from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.study_table import Study
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.rundir import EngineFacts, Provenance, ScenarioCopy, SpecimenFacts, jsonable
+from housner.scenarios.execution.run_meta import EngineFacts, Provenance, ScenarioCopy, SpecimenFacts
+from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.execution.workers import Progress
 from housner.scenarios.motions.build import MotionFacts, build_motions
@@ -44,13 +45,11 @@ from housner.scenarios.studies.fragility import (
     proportion_intervals,
     stripe_counts,
 )
+from housner.scenarios.studies.study_fits import StudyComparison, StudyFit, StudyFits
 from housner.units import G
 
 __all__ = [
     "STUDY_FILES",
-    "StudyComparison",
-    "StudyFit",
-    "StudyFits",
     "StudyMeta",
     "StudyResult",
     "StudySettings",
@@ -264,92 +263,6 @@ class StudyMeta(JsonValue):
     def reference(self) -> str | None:
         """The engine the study compares the others with (None when study.json does not say)."""
         return self.study.reference
-
-
-@dataclass(frozen=True, eq=False)
-class StudyFit(JsonValue):
-    """The lognormal fragility fit of one engine at one size (a row of fragility.json's ``fits``).
-
-    Attributes
-    ----------
-    engine : str
-    size : float
-        Prototype height [m].
-    S : float
-        Its scale factor [-].
-    median, median_low, median_high : float
-        The fitted median [intensity] and its bootstrap interval (NaN where there is none).
-    beta, beta_low, beta_high : float
-        The fitted lognormal standard deviation [-] and its interval (NaN where there is none).
-    status : str
-        ``ok`` for a maximum-likelihood fit; else why there is none (``no_data``, a step, ...).
-    message : str
-        The fit's message.
-    n_boot, n_failed : int or None
-        Bootstrap replicates, and those whose own fit was degenerate.
-    caveat : str or None
-        What a reader must know of an ok fit ("" when nothing; None when the file does not say).
-    """
-
-    engine: str
-    size: float
-    S: float = math.nan
-    median: float = math.nan
-    median_low: float = math.nan
-    median_high: float = math.nan
-    beta: float = math.nan
-    beta_low: float = math.nan
-    beta_high: float = math.nan
-    status: str = ""
-    message: str = ""
-    n_boot: int | None = None
-    n_failed: int | None = None
-    caveat: str | None = None
-
-    @property
-    def ok(self) -> bool:
-        """A maximum-likelihood fit (status "ok"): the only kind whose median and beta are reported."""
-        return self.status == "ok"
-
-
-@dataclass(frozen=True, eq=False)
-class StudyComparison(JsonValue):
-    """An engine's fit against the reference's at one size (a row of fragility.json's ``comparisons``).
-
-    Attributes
-    ----------
-    engine, reference : str
-    size : float
-        Prototype height [m].
-    S : float
-        Its scale factor [-].
-    median_ratio, ratio_low, ratio_high : float
-        The ratio of the medians [-] and its paired bootstrap interval.
-    beta_diff, diff_low, diff_high : float
-        The difference of the betas [-] and its interval.
-    disagree : bool or None
-        Whether an interval excludes 1 (ratio) or 0 (difference); None when the file does not say.
-    """
-
-    engine: str
-    reference: str = ""
-    size: float = math.nan
-    S: float = math.nan
-    median_ratio: float = math.nan
-    ratio_low: float = math.nan
-    ratio_high: float = math.nan
-    beta_diff: float = math.nan
-    diff_low: float = math.nan
-    diff_high: float = math.nan
-    disagree: bool | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class StudyFits(JsonValue):
-    """fragility.json: the fits per (engine, size) and the comparisons with the reference."""
-
-    fits: tuple[StudyFit, ...] = ()
-    comparisons: tuple[StudyComparison, ...] = ()
 
 
 @dataclass

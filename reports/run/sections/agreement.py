@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from housner._values import json_number
 from housner.free_vibration import calibration
 from housner.reports import figures
 from housner.reports.page import (
@@ -27,7 +28,6 @@ from housner.reports.page import (
     html_table,
     view_colors,
 )
-from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.runs.chaos import RECORD_RTOL, floor_verdict
 from housner.scenarios.runs.view import Run
 

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from housner._values import json_number
 from housner.reports import figures
 from housner.reports.page import (
     ci_cell,
@@ -27,7 +28,7 @@ from housner.reports.page import (
     html_table,
     view_colors,
 )
-from housner.scenarios.execution.rundir import json_number, jsonable
+from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.execution.tables import percentile_table
 from housner.scenarios.runs.spread import AmplitudeFactor, RecordGap, Table2Spread
 from housner.scenarios.runs.view import QUARTILES, Run, source_record

@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
+from housner._values import json_number
 from housner.reports.page import esc, fmt_g, fmt_num, guarded, html_figure, html_note, html_table, status_badge
 from housner.reports.run.ground_figures import plot_ensemble_spectra
-from housner.scenarios.execution.rundir import json_number
 from housner.scenarios.motions.build import BandCheck, MatchedGain, RdkParameter
 from housner.scenarios.runs.view import Run, motion_list, source_record
 from housner.units import G

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_table
-from housner.scenarios.execution.rundir import EngineFacts, ScenarioCopy
+from housner.scenarios.execution.run_meta import EngineFacts, ScenarioCopy
 from housner.scenarios.runs.view import Run
 
 
