@@ -22,7 +22,7 @@ import pandas as pd
 from housner.scenarios.runs.chaos import floor_check, floor_verdict
 from housner.statistics.ensemble_stats import KS_MAX, OVERTURN_TOL
 
-__all__ = ["KINDS", "MIN_RECORDS", "EngineVerdict", "engine_verdict"]
+__all__ = ["KINDS", "MIN_RECORDS", "EngineVerdict", "RecordAgreement", "engine_verdict"]
 
 #: Fewest records of each engine that a distribution verdict is drawn from: one record moves the KS distance
 #: by 1/n, so below 3 / KS_MAX = 20 records a single record's difference is a third of the tolerance
@@ -54,6 +54,27 @@ _HEADS = {
 
 
 @dataclass(frozen=True)
+class RecordAgreement:
+    """An engine's record-by-record agreement with the reference against the chaos floor.
+
+    Attributes
+    ----------
+    share, low, high : float
+        The share of records that agree and its 95 % Wilson interval [-].
+    floor : float
+        The chaos floor: the lowest share the analytic model keeps with itself under the engine's errors [-].
+    """
+
+    share: float
+    low: float
+    high: float
+    floor: float
+
+    def text(self) -> str:
+        return f"{self.share:.0%} [{self.low:.0%}, {self.high:.0%}] of records agree, chaos floor {self.floor:.0%}"
+
+
+@dataclass(frozen=True)
 class EngineVerdict:
     """What a run says of one engine against the reference (the page, the command line and the assertions).
 
@@ -69,16 +90,21 @@ class EngineVerdict:
         (:func:`housner.scenarios.runs.chaos.floor_verdict`), None where the run has no floor.
     below_floor : bool or None
         Whether the record-by-record agreement lies below the chaos floor (None: no floor).
-    records_short : str or None
-        The record-by-record figures in short: "28 % [20 %, 37 %] of records agree, chaos floor 47 %"
-        (None without a floor).
+    agreement : RecordAgreement or None
+        The record-by-record figures (None without a floor).
     """
 
     status: str
     checks: tuple
     records: str | None = None
     below_floor: bool | None = None
-    records_short: str | None = None
+    agreement: RecordAgreement | None = None
+
+    @property
+    def records_short(self) -> str | None:
+        """The record-by-record figures in short: "28 % [20 %, 37 %] of records agree, chaos floor 47 %" (None
+        without a floor)."""
+        return None if self.agreement is None else self.agreement.text()
 
     @property
     def ok(self) -> bool | None:
@@ -176,5 +202,5 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
     n_pair = int(paired)
     k = int(round(float(row["agreement_share"]) * n_pair))
     lo, hi, below = floor_check(k, n_pair, floor)
-    short = f"{k / n_pair:.0%} [{lo:.0%}, {hi:.0%}] of records agree, chaos floor {floor.share_min:.0%}"
-    return EngineVerdict(status, checks, floor_verdict(k, n_pair, floor), below, short)
+    agreement = RecordAgreement(k / n_pair, float(lo), float(hi), float(floor.share_min))
+    return EngineVerdict(status, checks, floor_verdict(k, n_pair, floor), below, agreement)

@@ -169,11 +169,7 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict]) -> str:
             verdict = verdict_badge(v)
         else:
             verdict = "3D: outcomes only" if name in run.mesh_engines else "effect"
-        records = (
-            "&ndash;"
-            if v is None or v.records_short is None
-            else _html_figures(v.records_short.replace(" of records agree, chaos floor", " /"))
-        )
+        records = "&ndash;" if v is None or v.agreement is None else _html_figures(_agreement_cell(v.agreement))
         rows.append(
             [
                 engine_tag(name, run) + (" <small>(reference)</small>" if is_ref else ""),
@@ -296,3 +292,8 @@ def specimen_section(run: Run) -> str:
     parts.append(html_table(["engine", "version", "settings"], rows))
     parts.append(guarded("The tuning summary", lambda: tuning_section(run)))
     return "".join(parts)
+
+
+def _agreement_cell(a) -> str:
+    """The record-by-record figures in a table cell: "28 % [20 %, 37 %] / 47 %" (share, its interval / floor)."""
+    return f"{a.share:.0%} [{a.low:.0%}, {a.high:.0%}] / {a.floor:.0%}"
