@@ -129,7 +129,9 @@ def main(argv=None) -> int:
             write_diagnosis_report(diag, args.report)
             t_rep = time.perf_counter() - t0
     print()
-    print(diag.summary())
+    from housner.reports.diagnosis.verdict_text import diagnosis_summary
+
+    print(diagnosis_summary(diag))
     print()
     n_samples = sum(r.theta.size for r in camp.records)
     print(

@@ -23,9 +23,10 @@ import housner.scenarios.diagnosis.verdict.decision as verdict_mod
 import housner.scenarios.diagnosis.verdict.residual_test as residual_mod
 from housner.reports.diagnosis import history_records, render_diagnosis
 from housner.reports.diagnosis.figures import histories_figure
+from housner.reports.diagnosis.verdict_text import diagnosis_summary, verdict_paragraph
+from housner.reports.diagnosis.words import change_text, fmt_pm, params_text, signed_words
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
-from housner.scenarios.diagnosis.results import change_text, fmt_pm, params_text, signed_words
 
 #: The documentation page that explains the verdict (it was the README's "Measurements" section).
 DIAGNOSIS_DOC = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "diagnosis.md"
@@ -42,7 +43,7 @@ def diag(tmp_path_factory):
         n_replicas=2,
         max_effects=1,
     )
-    assert d.selected == ["rotational_damping"], d.summary()
+    assert d.selected == ["rotational_damping"], diagnosis_summary(d)
     return d
 
 
@@ -135,7 +136,7 @@ def test_headline_states_the_fall_with_standard_errors(diag, page):
     assert f"Held-out error falls by {pct} %: from {before} α (plain Housner model) to {after} α" in lead
     # and the summary text says the same
     assert f"from {fmt_pm(b.heldout_error, b.heldout_se)} to {fmt_pm(f.heldout_error, f.heldout_se)} alpha" in (
-        diag.summary()
+        diagnosis_summary(diag)
     )
 
 
@@ -143,7 +144,7 @@ def test_headline_states_the_fall_with_standard_errors(diag, page):
 # 3. the verdict once; parameters with units
 def test_verdict_is_stated_once(diag, page):
     text = page_text(page)
-    body = diag.verdict.text.split(":", 1)[1].strip()  # after "Explained:"
+    body = verdict_paragraph(diag).split(":", 1)[1].strip()  # after "Explained:"
     assert text.count(body[1:]) == 1
     assert len(re.findall(r"(?i)\bexplained\b", text)) == 1  # the status, in the headline only
     assert "Ladder:" not in text  # the summary paragraph (which opens with the verdict) is not on the page
@@ -155,7 +156,7 @@ def test_effect_parameters_carry_their_units(diag, page):
     assert want.endswith(" 1/s")
     assert want in page_text(page_section(page, "summary"))  # the headline
     assert want in page_text(page_section(page, "ladder"))
-    assert want in diag.summary()
+    assert want in diagnosis_summary(diag)
     assert re.search(r"offset = [-0-9.e]+ rad", page_text(page_section(page, "candidates")))
 
 
@@ -189,7 +190,7 @@ def _risen(diag):
 
 def test_a_rising_error_rises_and_never_falls_by_a_negative_amount(diag):
     d = _risen(diag)
-    text, summary = page_text(render_diagnosis(d)), d.summary()
+    text, summary = page_text(render_diagnosis(d)), diagnosis_summary(d)
     for t in (text, summary):
         assert not re.search(r"(falls|fell|lowers?[\w ]*) by [-−]", t), t
     assert "Held-out error rises by" in text and "rises by 0.050 ± 0.011" in text
@@ -201,7 +202,7 @@ def test_a_rising_error_rises_and_never_falls_by_a_negative_amount(diag):
 # 5. standard errors to their significant digits
 def test_no_standard_error_is_rounded_to_zero(diag, page):
     assert not re.search(r"&plusmn; 0\.0*(?![0-9])", page)
-    assert not re.search(r"\+- 0\.0*(?![0-9])", diag.summary())
+    assert not re.search(r"\+- 0\.0*(?![0-9])", diagnosis_summary(diag))
     f = diag.final
     assert fmt_pm(f.heldout_error, f.heldout_se, sep=" &plusmn; ") in page_section(page, "ladder")
 

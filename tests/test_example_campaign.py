@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from housner.effects import load_plugin
+from housner.reports.diagnosis.verdict_text import verdict_paragraph
 from housner.scenarios import diagnose, load_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,20 +42,20 @@ def test_the_example_campaign_loads_whole_and_stays_small(campaign):
 def test_the_plain_model_misses_it_and_points_to_dissipation(campaign):
     d = diagnose(campaign, effects=[], compare_steps=False)
     v = d.verdict
-    assert v.status != "no_misfit", v.text
+    assert v.status != "no_misfit", verdict_paragraph(d)
     assert v.baseline.ratio > 5  # far beyond the 1.25 band of a correct model
-    assert v.next and v.next[0].name == "dissipation", v.text
+    assert v.next and v.next[0].name == "dissipation", verdict_paragraph(d)
 
 
 def test_the_example_effect_added_by_hand_explains_it(campaign):
     (name,) = load_plugin(PLUGIN)
     d = diagnose(campaign, add=[name], effects=[], compare_steps=False)
     v = d.verdict
-    assert v.status == "explained", v.text
+    assert v.status == "explained", verdict_paragraph(d)
     assert v.residual.ratio <= 1.25  # at the correct-model floor, like the controls
     assert dict(d.final.effects)[name]["moment"] == pytest.approx(MOMENT, abs=TOL)
     assert d.final.heldout_error < 0.2 * d.baseline.heldout_error  # the error falls by 80 % or more
-    assert "added by hand" in v.text and "falls from" in v.text
+    assert "added by hand" in verdict_paragraph(d) and "falls from" in verdict_paragraph(d)
 
 
 def test_the_diagnosis_json_is_written_from_a_typed_value_and_read_back_whole(campaign):

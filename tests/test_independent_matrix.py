@@ -16,6 +16,7 @@ import independent_campaigns as ic
 import pytest
 from matrix import judge
 
+from housner.reports.diagnosis.verdict_text import verdict_paragraph
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
 
@@ -40,7 +41,7 @@ def test_real_sensors_are_diagnosed_right(base, case):
     # case the floor called a 10x misfit), and a gain that drifts along the order (named, corrected: no physics)
     diag = _run(base, case, 0)
     ok, why = judge(ic.expected_diagnosis(case), diag, ic.expected_faults(case))
-    assert ok, why + "\n" + diag.verdict.text
+    assert ok, why + "\n" + verdict_paragraph(diag)
 
 
 @pytest.mark.slow
@@ -49,14 +50,14 @@ def test_real_sensors_are_diagnosed_right(base, case):
 def test_the_whole_sensor_matrix(base, case, seed):
     diag = _run(base, case, seed)
     ok, why = judge(ic.expected_diagnosis(case), diag, ic.expected_faults(case))
-    assert ok, why + "\n" + diag.verdict.text
+    assert ok, why + "\n" + verdict_paragraph(diag)
 
 
 @pytest.mark.parametrize("case", ["none_held", "time_lag"])
 def test_the_independent_generator_is_diagnosed_right(base, case):
     diag = _run(base, case, 0)
     ok, why = judge(ic.CASES[case][1], diag)
-    assert ok, why + "\n" + diag.verdict.text
+    assert ok, why + "\n" + verdict_paragraph(diag)
     if case == "time_lag":
         tau = dict(diag.final.effects)["time_lag"]["tau"]
         assert tau == pytest.approx(0.012, abs=0.001)  # the truth, to the fit's resolution on 60 records
@@ -68,4 +69,4 @@ def test_the_independent_generator_is_diagnosed_right(base, case):
 def test_the_whole_independent_matrix(base, case, seed):
     diag = _run(base, case, seed)
     ok, why = judge(ic.CASES[case][1], diag, ic.expected_faults(case))  # and no sensor fault where there is none
-    assert ok, why + "\n" + diag.verdict.text
+    assert ok, why + "\n" + verdict_paragraph(diag)

@@ -17,6 +17,7 @@ from shared import run_housner
 
 from housner import GroundMotion, Specimen
 from housner.effects import effect_class, load_plugin
+from housner.reports.diagnosis.verdict_text import verdict_paragraph
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
 from housner.scenarios.execution.cache import cache_key, effect_code_hash
@@ -43,11 +44,11 @@ def test_each_example_explains_its_campaign(base, example):
     camp = load_campaign(ic.cached_campaign(base, case)["root"])
     d = diagnose(camp, add=[name], effects=[], compare_steps=False)
     v = d.verdict
-    assert v.status == "explained", v.text
+    assert v.status == "explained", verdict_paragraph(d)
     assert v.residual.ratio <= 1.25  # at the correct-model floor, like the controls
     assert dict(d.final.effects)[name][key] == pytest.approx(truth, abs=tol)
     assert d.final.heldout_error < 0.2 * d.baseline.heldout_error  # the error falls by 80 % or more
-    assert "added by hand" in v.text and "falls from" in v.text
+    assert "added by hand" in verdict_paragraph(d) and "falls from" in verdict_paragraph(d)
     assert len((EXAMPLES / f"{example}.py").read_text().splitlines()) <= 40
 
 

@@ -19,11 +19,13 @@ import campaign_generators as cg
 import numpy as np
 import pytest
 
+from housner.reports.diagnosis.document import write_diagnosis_json
+from housner.reports.diagnosis.verdict_text import diagnosis_summary, verdict_paragraph, verdict_text
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
 from housner.scenarios.diagnosis.selection.record_scoring import cv_folds
 from housner.scenarios.diagnosis.verdict.correct_model_floor import Floor, _perturbed
-from housner.scenarios.diagnosis.verdict.decision import VerdictFacts, decide, verdict_text
+from housner.scenarios.diagnosis.verdict.decision import VerdictFacts, decide
 from housner.scenarios.diagnosis.verdict.residual_test import RATIO_MISFIT, residual_test
 from housner.scenarios.diagnosis.verdict.status import STATUSES, status_rule
 from housner.specimen import Specimen
@@ -133,7 +135,7 @@ def _five_records():
 
 def test_too_few_records_is_inconclusive():
     _, v = _five_records()
-    assert v.status == "inconclusive" and "too few" in v.text
+    assert v.status == "inconclusive" and "too few" in verdict_text(v.facts, v.status)
 
 
 def test_the_status_is_the_truth_table_and_the_text_is_drawn_from_it():
@@ -162,7 +164,8 @@ def test_the_status_is_the_truth_table_and_the_text_is_drawn_from_it():
     )
     status = status_rule(False, False, False, False, True)
     assert v.status == status == "inconclusive"
-    assert v.text == verdict_text(facts, status) and v.text.startswith("Inconclusive: 5 usable records are too few")
+    assert verdict_text(v.facts, status) == verdict_text(facts, status)
+    assert verdict_text(v.facts, status).startswith("Inconclusive: 5 usable records are too few")
     # with enough records and the plain model at its floor, the same residual reads "no misfit"
     enough = dataclasses.replace(facts, n_records=60)
     assert verdict_text(enough, status_rule(True, False, False, False, True)).startswith("No misfit: ")
@@ -172,27 +175,30 @@ def test_a_small_campaign_with_a_wrong_p_is_not_called_fine(base):
     # 3 free vibrations + 8 ground motions with p mis-stated by 8 %: too little data is no evidence of fit
     info = cg.write_campaign(base / "small-p", "p_misstated", n_ground=8, seed=3)
     diag = diagnose(load_campaign(info["root"]), compare_steps=False)
-    assert diag.status != "no_misfit", diag.summary()
+    assert diag.status != "no_misfit", diagnosis_summary(diag)
     assert diag.verdict.baseline.misfit  # the free vibrations alone show it
 
 
 def test_an_effect_outside_the_library_is_not_called_explained(base):
     info, diag = _diag(base, "random_restitution")
     v = diag.verdict
-    assert v.status in ("partly_explained", "unexplained"), diag.summary()
+    assert v.status in ("partly_explained", "unexplained"), diagnosis_summary(diag)
     # the library claimed where the search tried it, by name (issue 40: exactly what ran)
-    assert "the search tried (" in v.text and "explains it" not in v.text
+    assert "the search tried (" in verdict_paragraph(diag) and "explains it" not in verdict_paragraph(diag)
     # what remains shows in the errors (above the floor) or in the localisation (beyond Z_LOCAL)
-    assert (v.residual.misfit and v.residual.ratio > RATIO_MISFIT) or "still points to a misfit" in v.text
+    assert (v.residual.misfit and v.residual.ratio > RATIO_MISFIT) or "still points to a misfit" in verdict_paragraph(
+        diag
+    )
     assert v.next and v.next[0].name == info["expected"], v.next
-    assert "explains it" not in diag.summary()
+    assert "explains it" not in diagnosis_summary(diag)
 
 
 def test_json_carries_the_verdict_and_the_localisation(base, tmp_path):
     _info, diag = _diag(base, "random_restitution")
-    d = json.loads(diag.to_json(tmp_path / "d.json"))
+    write_diagnosis_json(diag, tmp_path / "d.json")
+    d = json.loads((tmp_path / "d.json").read_text())
     v = d["verdict"]
-    assert v["status"] in STATUSES and v["text"] == diag.verdict.text
+    assert v["status"] in STATUSES and v["text"] == verdict_paragraph(diag)
     assert set(v["residual"]) == {"error", "floor", "ratio", "z"}
     assert all(math.isfinite(v["residual"][k]) for k in ("error", "floor", "ratio"))
     assert v["next"][0]["evidence"]  # each class with its figures
@@ -211,8 +217,8 @@ def test_library_effects_are_explained_at_both_split_seeds(base, hidden):
     out = []
     for s in (0, 1):
         info, diag = _diag(base, hidden, s)
-        assert diag.status == "explained", diag.summary()
-        assert tuple(diag.selected) == info["expected"], diag.summary()
+        assert diag.status == "explained", diagnosis_summary(diag)
+        assert tuple(diag.selected) == info["expected"], diagnosis_summary(diag)
         out.append(tuple(diag.selected))
     assert out[0] == out[1]
 
@@ -223,7 +229,7 @@ def test_effects_outside_the_library_at_both_split_seeds(base, hidden):
     got = []
     for s in (0, 1):
         info, diag = _diag(base, hidden, s)
-        assert diag.status in ("partly_explained", "unexplained"), diag.summary()
+        assert diag.status in ("partly_explained", "unexplained"), diagnosis_summary(diag)
         assert diag.verdict.next[0].name == info["expected"], diag.verdict.next
         got.append(diag.status)
     assert got[0] == got[1]
@@ -234,7 +240,7 @@ def test_effects_outside_the_library_at_both_split_seeds(base, hidden):
 def test_controls_are_no_misfit_at_both_split_seeds(base, campaign_seed):
     for s in (0, 1):
         _info, diag = _diag(base, "none", s, campaign_seed)
-        assert diag.status == "no_misfit", diag.summary()
+        assert diag.status == "no_misfit", diagnosis_summary(diag)
         assert diag.selected == []
 
 

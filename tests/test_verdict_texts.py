@@ -20,9 +20,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from housner.cli import main
 from housner.reports.diagnosis import render_diagnosis
 from housner.reports.diagnosis.figures import histories_figure
+from housner.reports.diagnosis.words import Z_LEGEND, Z_LOCAL_LEGEND, params_text
 from housner.scenarios.diagnosis.diagnose import diagnose
-from housner.scenarios.diagnosis.results import params_text
-from housner.scenarios.diagnosis.verdict.verdict_words import Z_LEGEND, Z_LOCAL_LEGEND
 
 ROOT = Path(__file__).resolve().parents[1]
 CAMPAIGN = ROOT / "examples" / "campaigns" / "pivot-friction"
@@ -162,7 +161,7 @@ def test_the_histories_legend_fits_the_figure(tmp_path):
 
 def test_a_parameter_fitted_at_an_end_of_its_range_is_said_to_be():
     """A fit stopped at the top of its range (not at its neutral value) does not rule the effect out: said so."""
-    from housner.scenarios.diagnosis.results import params_text
+    from housner.reports.diagnosis.words import params_text
 
     top = params_text("rotational_damping", {"c": 5.0})  # bounds (0, 5) 1/s
     assert "at the top of its search range 0 to 5" in top and "does not rule the effect out" in top

@@ -4,9 +4,7 @@ parser and its run)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from pathlib import Path
 
 from housner.cli.args import check_campaign, check_effects, folds_int, names_arg, nonneg_int, open_fraction
 from housner.cli.command import add_command, plugin_option
@@ -55,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
     """Diagnose the campaign (its motion records, its outcome records, or both); print the error ladder, write
     the JSON and the report asked for. Returns the exit status."""
     from housner.reports.diagnosis import write_diagnosis_report
+    from housner.reports.diagnosis.verdict_text import diagnosis_summary
     from housner.scenarios.campaigns.campaign import load_campaign
     from housner.scenarios.diagnosis.diagnose import diagnose
 
@@ -92,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
         progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
     )
     print(f"verdict: {diag.status}")
-    print(_without_status(diag.summary(), diag.status))  # the status once: on the line above
+    print(_without_status(diagnosis_summary(diag), diag.status))  # the status once: on the line above
     print()
     print(f"{'step':45s} {'held-out error [alpha]':>24s} {'improvement':>20s}")
     for s in diag.steps:
@@ -105,20 +104,15 @@ def run(args: argparse.Namespace) -> int:
         f"its floor); sensor noise sigma/alpha {diag.noise_floor:.4f}; {diag.elapsed:.1f} s"
     )
     if args.json:
+        from housner.reports.diagnosis.document import write_diagnosis_json
+
         if outcomes is None:
-            diag.to_json(args.json)
+            write_diagnosis_json(diag, args.json)
         else:  # a campaign of both kinds: the outcome diagnosis under its own key, its scores under `outcomes`
             from housner.scenarios.execution.rundir import jsonable
 
-            both = outcomes.to_dict()
-            text = json.dumps(
-                jsonable(
-                    {**diag.to_dict(), "outcomes_diagnosis": both, "outcomes": both["outcomes"]}, nonfinite="null"
-                ),
-                indent=2,
-                allow_nan=False,
-            )
-            Path(args.json).write_text(text + "\n")
+            both = jsonable(outcomes.to_dict(), nonfinite="null")
+            write_diagnosis_json(diag, args.json, {"outcomes_diagnosis": both, "outcomes": both["outcomes"]})
         print(f"json:   {args.json}")
     if want_report:
         print(f"report: {write_diagnosis_report(diag, args.report)}")

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from housner.reports.diagnosis import words
 from housner.reports.diagnosis.figures import (
     bars_figure,
     cdf_figure,
@@ -23,12 +24,12 @@ from housner.reports.diagnosis.figures import (
     step_label,
     tilt_figure,
 )
+from housner.reports.diagnosis.verdict_text import distribution_text, verdict_paragraph, verdict_text
+from housner.reports.diagnosis.words import change_text, fmt_pm, params_text, signed_words
 from housner.reports.page import esc, html_figure, html_table
 from housner.scenarios.diagnosis.comparison.localise import METRICS
-from housner.scenarios.diagnosis.results import change_text, fmt_pm, params_text, signed_words
 from housner.scenarios.diagnosis.verdict import decision as verdict
 from housner.scenarios.diagnosis.verdict import residual_test as residual
-from housner.scenarios.diagnosis.verdict import verdict_words
 
 
 def _f(x: Any, digits: int = 4) -> str:
@@ -82,18 +83,27 @@ _STATUS_CLASS = {
 }
 
 
-def _verdict_text(v) -> str:
+def _verdict_text(diag) -> str:
     """The verdict's paragraph without its leading status word (the badge before it says it), and without
     its pointer to where to look when the list under it ("Where to look next") gives every class with its
     evidence."""
+    v = diag.verdict
     head = v.status.replace("_", " ")
-    text = v.text
-    if _shows_next(v) and " Where to look first" in text:
-        text = text[: text.index(" Where to look first")] + " Where to look: see the list below."
+    text = verdict_text(v.facts, v.status, pointer=False) if _shows_next(v) else verdict_paragraph(diag)
     if text[: len(head) + 1].lower() == head + ":":
         text = text[len(head) + 1 :].lstrip()
         text = text[:1].upper() + text[1:]
     return text
+
+
+def _distributions_said(v) -> bool:
+    """Whether the verdict's paragraph gives the final model's distribution misfits already."""
+    facts = v.facts
+    if v.status in ("partly_explained", "unexplained"):
+        return True
+    if v.status in ("no_misfit", "explained"):
+        return bool(facts.model) or all(d in facts.dist_plain for d in facts.dist_final)
+    return False
 
 
 def _shows_next(v) -> bool:
@@ -107,7 +117,7 @@ def _headline(diag) -> str:
     if v is not None:
         out += (
             f'<p class="lead"><span class="{_STATUS_CLASS.get(v.status, "")}">'
-            f"{esc(v.status.replace('_', ' ').upper())}</span> &mdash; {esc(_verdict_text(v))}</p>"
+            f"{esc(v.status.replace('_', ' ').upper())}</span> &mdash; {esc(_verdict_text(diag))}</p>"
         )
     b, f = diag.baseline, diag.final
     if len(diag.steps) > 1:
@@ -171,7 +181,7 @@ def _verdict_detail(diag) -> str:
                     _f(g.error),
                     _f(g.floor),
                     f"{g.ratio:.2f}",
-                    esc(verdict_words.z_text(g.z)),
+                    esc(words.z_text(g.z)),
                     '<span class="bad">yes</span>' if g.misfit else "no",
                     f"{g.detectable_ratio:.2f}",
                 ]
@@ -182,8 +192,8 @@ def _verdict_detail(diag) -> str:
     if fam:
         plain_fam = fam_plain or fam
         fams = (
-            f" The plain model's floor is over correct models of the {verdict_words.family_text(plain_fam)}"
-            + ("" if plain_fam == fam else f"; the final model's over the {verdict_words.family_text(fam)}")
+            f" The plain model's floor is over correct models of the {words.family_text(plain_fam)}"
+            + ("" if plain_fam == fam else f"; the final model's over the {words.family_text(fam)}")
             + " (each model's narrowest family whose floor its ground motions reach; the widest when none)."
         )
     table = html_table(
@@ -207,7 +217,7 @@ def _verdict_detail(diag) -> str:
             f"with a localisation quantity more than {verdict.Z_LOCAL:g} "
             "standard errors from the measured one (never a ratio within the band: the status rule); the "
             f"detectable ratio is what these records would reveal with 80 % power. Ratio: the group's held-out "
-            f"error over its floor (a correct model: 1); {verdict_words.Z_LEGEND}." + fams
+            f"error over its floor (a correct model: 1); {words.Z_LEGEND}." + fams
         ),
     )
     nxt = ""
@@ -217,10 +227,10 @@ def _verdict_detail(diag) -> str:
         for c in v.next:
             who = "the model with " + " + ".join(names) if names and c.source != "plain" else "the plain model"
             ev = "; ".join(
-                esc(verdict_words.evidence_text(e))
+                esc(words.evidence_text(e))
                 if e.is_probe
                 else f"{esc(e.label)}: measured {_pm(e.measured, e.measured_se)}, {esc(who)} "
-                f"{_pm(e.model, e.model_se)} ({esc(verdict_words.z_text(e.z))})"
+                f"{_pm(e.model, e.model_se)} ({esc(words.z_text(e.z))})"
                 for e in c.evidence
             )
             items.append(f"<li><b>{esc(c.name)}</b> &mdash; {esc(c.meaning)}<br><span class=sub>{ev}</span></li>")
@@ -236,7 +246,7 @@ def _verdict_detail(diag) -> str:
             )
         else:
             whose = "what the plain model gets wrong"
-        legend = esc(verdict_words.Z_LOCAL_LEGEND)
+        legend = esc(words.Z_LOCAL_LEGEND)
         nxt = (
             f'<h3>Where to look next</h3><p class="sub">From {esc(whose)}; {legend}.</p><ol>' + "".join(items) + "</ol>"
         )
@@ -249,8 +259,8 @@ def _verdict_detail(diag) -> str:
         )
         freq = f'<p class="sub">Best candidate of its round, fold by fold ({k} folds): {cells}.</p>'
     dist = ""
-    if v.distribution and not all(d in v.text for d in v.distribution):
-        dist = '<p class="bad">Distributions: ' + esc("; ".join(v.distribution)) + ".</p>"
+    if v.distribution and not _distributions_said(v):
+        dist = '<p class="bad">Distributions: ' + esc("; ".join(distribution_text(d) for d in v.distribution)) + ".</p>"
     return table + dist + nxt + freq
 
 

@@ -430,7 +430,7 @@ def _what_the_search_did(found: GreedyRounds, candidates: list[str]) -> tuple[li
     (:class:`housner.scenarios.diagnosis.verdict.decision.VerdictFacts`'s
     ``search``). The library is claimed only where the search tried it: a first round skipped (the training error
     already at the sensor noise) tried no effect, and no round (no candidate: effects=[], or max_effects=0) none."""
-    skipped = bool(found.rounds) and all("not searched" in c.reason for c in found.rounds[0])
+    skipped = found.first_unsearched
     tried = candidates if found.rounds and not skipped else []
     return tried, "ran" if tried else "skipped" if skipped else "off" if not candidates else "none_left"
 
@@ -444,13 +444,8 @@ def _diagnosis(
     noise_floor: float,
     settings: DiagnosisSettings,
 ) -> Diagnosis:
-    """The :class:`Diagnosis` of the search and its conclusion, the verdict's text ending with how it was computed."""
+    """The :class:`Diagnosis` of the search and its conclusion."""
     verdict = end.verdict
-    if campaign.sensor is not None:
-        verdict = replace(verdict, text=verdict.text + campaign.sensor.verdict_sentence())
-    if settings.economies:
-        # what ran on fewer samples or stopped early: said where the verdict is read
-        verdict = replace(verdict, text=verdict.text + " How it was computed: " + " ".join(settings.economies))
     return Diagnosis(
         campaign=campaign,
         baseline=end.steps[0],

@@ -1,4 +1,5 @@
-"""The diagnosis' results: candidates, the error ladder and the whole diagnosis, as text and JSON.
+"""The diagnosis' results: candidates, the error ladder and the whole diagnosis, as values and JSON (their words are in
+:mod:`housner.reports.diagnosis.words`).
 
 :class:`Diagnosis` is what :func:`housner.scenarios.diagnosis.diagnose.diagnose` returns; its
 :meth:`Diagnosis.to_json` is strict JSON (NaN and infinities written as null).
@@ -8,13 +9,11 @@ Errors are time-history errors in units of alpha (see :mod:`housner.scenarios.di
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from housner.effects import effect_class
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
 from housner.scenarios.execution.typed_json import JsonValue, WrittenAsResult, floats, from_data, to_data
@@ -26,11 +25,7 @@ __all__ = [
     "DiagnosisSettings",
     "FloorSummary",
     "Step",
-    "change_text",
-    "fmt_pm",
     "names_label",
-    "params_text",
-    "signed_words",
 ]
 
 
@@ -278,9 +273,10 @@ class FloorSummary:
 
 @dataclass(frozen=True)
 class DiagnosisResult(JsonValue):
-    """What a diagnosis JSON holds, as a value: :meth:`Diagnosis.result` makes it, :meth:`to_json` writes the file and
+    """What a diagnosis JSON holds, as a value: :meth:`Diagnosis.result` makes it, :meth:`to_json` writes its data and
     :meth:`from_json` reads it back (:meth:`to_dict` adds the baseline's and the final model's error summaries, which
-    follow from the ladder).
+    follow from the ladder). The words the file holds besides (the verdict's text, its summary) are
+    :func:`housner.reports.diagnosis.document.diagnosis_document`'s.
 
     Attributes
     ----------
@@ -304,7 +300,6 @@ class DiagnosisResult(JsonValue):
         The plain and the final model's floors.
     localisation : dict
         ``baseline`` and ``final``: each model's comparison summary as plain data (None where not run).
-    summary : str
     elapsed_s : float
     """
 
@@ -326,7 +321,6 @@ class DiagnosisResult(JsonValue):
     sensor: dict | None
     floors: tuple[FloorSummary, FloorSummary] | None
     localisation: dict
-    summary: str
     elapsed_s: float
 
     def to_dict(self) -> dict:
@@ -357,7 +351,6 @@ class DiagnosisResult(JsonValue):
                 if self.floors is None
                 else {"baseline": to_data(self.floors[0]), "final": to_data(self.floors[1])},
                 "localisation": self.localisation,
-                "summary": self.summary,
                 "elapsed_s": self.elapsed_s,
             }
         )
@@ -397,7 +390,6 @@ class DiagnosisResult(JsonValue):
             if floor is None
             else (from_data(FloorSummary, floor["baseline"]), from_data(FloorSummary, floor["final"])),
             localisation=data["localisation"],
-            summary=data["summary"],
             elapsed_s=from_data(float, data["elapsed_s"]),
         )
 
@@ -473,49 +465,6 @@ class Diagnosis(WrittenAsResult):
         b = self.baseline.heldout_error
         return (b - self.final.heldout_error) / b if b > 0 else 0.0
 
-    def summary(self) -> str:
-        """One paragraph: the verdict in words, then the ladder with its figures.
-
-        Every error is in units of alpha with its standard error (:func:`fmt_pm`); a change is said as
-        "falls by" or "rises by" with a positive figure, and a parameter carries its unit.
-        """
-        parts = [self.verdict.text if self.verdict is not None else ""]
-        chosen = self.steps[1:]
-        if chosen:
-            ladder = []
-            final_params = dict(self.steps[-1].effects)
-            for st in chosen:
-                prm = "; ".join(_step_params(n, dict(st.effects)[n], final_params.get(n)) for n in st.added_effects)
-                how = " (by hand)" if st.by_hand else ""
-                ladder.append(
-                    f"+ {st.added}{how} ({prm}): held-out error {fmt_pm(st.heldout_error, st.heldout_se)} alpha, "
-                    f"which {change_text(st.improvement, st.improvement_se)} alpha"
-                    f"{'' if st.significant else ', not significant'}"
-                )
-            parts.append("Ladder: " + "; ".join(ladder) + ".")
-            b, f = self.baseline, self.final
-            verb = "falls" if self.reduction >= 0 else "rises"
-            parts.append(
-                f"In all the held-out error {verb} by {abs(100 * self.reduction):.0f} %, from "
-                f"{fmt_pm(b.heldout_error, b.heldout_se)} to {fmt_pm(f.heldout_error, f.heldout_se)} alpha."
-            )
-        elif self.candidates:
-            best = self.candidates[0]
-            if math.isfinite(best.improvement):
-                verb = "lower" if best.improvement >= 0 else "raise"
-                parts.append(
-                    f"The best candidate, {best.effect}, would {verb} the held-out error by "
-                    f"{fmt_pm(abs(best.improvement), best.improvement_se)} alpha ({signed_words(best.reason)})."
-                )
-        sensor = getattr(self.campaign, "sensor", None)
-        if sensor is not None and sensor.noise.white and not sensor.faults:
-            parts.append(f"Sensor noise: {sensor.noise.describe()}.")  # else the verdict's text says it
-        k = self.settings.folds
-        parts.append(
-            f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha {self.noise_floor:.2g}.)"
-        )
-        return " ".join(p for p in parts if p)
-
     def result(self) -> DiagnosisResult:
         """The diagnosis as the value its JSON holds."""
         cmp0, cmp1 = self.baseline.comparison, self.final.comparison
@@ -542,159 +491,8 @@ class Diagnosis(WrittenAsResult):
                 "baseline": None if cmp0 is None else to_data(cmp0.summary()),
                 "final": None if cmp1 is None else to_data(cmp1.summary()),
             },
-            summary=self.summary(),
             elapsed_s=self.elapsed,
         )
-
-
-def _fmt_num(v: float) -> str:
-    return f"{v:.4g}"
-
-
-# ----------------------------------------------------------------------------
-# numbers in words (the summary here, the page in housner.reports.diagnosis)
-def fmt_pm(value, se, *, sep: str = " +- ", inf: str = "overturned", nan: str = "n/a") -> str:
-    """A value with its standard error: the error to 2 significant digits, the value to the same decimal place.
-
-    ``fmt_pm(0.0031234, 0.000423)`` is ``"0.00312 +- 0.00042"``, ``fmt_pm(123.4, 15.6)`` is ``"123 +- 16"``.
-    An infinite value (a theta_max/alpha of an overturned block) is written ``inf`` (``"overturned"``, or
-    ``"-inf"`` when negative) without an uncertainty; a missing value is ``nan``; a value whose
-    standard error is missing or infinite is written to 4 significant digits alone, and one with a
-    zero standard error to 4 significant digits ``+- 0``.
-
-    Parameters
-    ----------
-    value, se : float
-    sep : str
-        Between the two (``" &plusmn; "`` on an HTML page).
-    inf, nan : str
-        What an infinite and a missing value read as.
-    """
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        return nan
-    if math.isnan(v):
-        return nan
-    if math.isinf(v):
-        return inf if v > 0 else "-inf"
-    try:
-        e = abs(float(se))
-    except (TypeError, ValueError):
-        e = math.nan
-    if not math.isfinite(e):
-        return _sig(v, 4)
-    if e == 0.0:
-        return f"{_sig(v, 4)}{sep}0"
-    decimals = 1 - math.floor(math.log10(e))  # 2 significant digits of the error
-    if math.floor(math.log10(round(e, decimals))) > math.floor(math.log10(e)):  # 0.000996 -> 0.0010
-        decimals -= 1
-    if decimals > 12:  # too small for fixed notation to stay readable
-        return f"{v:.3e}{sep}{e:.1e}"
-    return f"{_fixed(v, decimals)}{sep}{_fixed(e, decimals)}"
-
-
-def _fixed(v: float, decimals: int) -> str:
-    r = round(v, decimals)
-    if r == 0:
-        r = 0.0  # no "-0.000"
-    return f"{r:.{max(decimals, 0)}f}"
-
-
-def _sig(v: float, digits: int) -> str:
-    """``v`` to ``digits`` significant digits in fixed notation where that stays short."""
-    if v == 0:
-        return "0"
-    if not 1e-4 <= abs(v) < 1e6:
-        return f"{v:.{digits - 1}e}"
-    return _fixed(v, max(digits - 1 - math.floor(math.log10(abs(v))), 0))
-
-
-def change_text(improvement: float, se: float, *, sep: str = " +- ") -> str:
-    """A paired improvement (previous error minus this one) in words: ``"falls by X +- s"`` or ``"rises by X +- s"``.
-
-    The figure is always positive: an error that grows "rises by 0.05", never "falls by -0.05".
-    """
-    try:
-        d = float(improvement)
-    except (TypeError, ValueError):
-        d = math.nan
-    if not math.isfinite(d):
-        return "does not change measurably"
-    return f"{'falls' if d >= 0 else 'rises'} by {fmt_pm(abs(d), se, sep=sep)}"
-
-
-_NUM = r"(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)"
-_FALLS = re.compile(r"\bfalls by ([-+])" + _NUM)
-_LOWERS = re.compile(r"\blowers (the [\w ]+?) by ([-+])" + _NUM)
-
-
-def signed_words(text: str) -> str:
-    """Rewrite signed changes in words: "falls by -0.05" -> "rises by 0.05", "falls by +0.05" -> "falls by 0.05".
-
-    For the reasons the search gives (:mod:`housner.scenarios.diagnosis.diagnose`), written with a sign.
-    """
-    text = _FALLS.sub(lambda m: f"{'rises' if m.group(1) == '-' else 'falls'} by {m.group(2)}", text)
-    return _LOWERS.sub(lambda m: f"{'raises' if m.group(2) == '-' else 'lowers'} {m.group(1)} by {m.group(3)}", text)
-
-
-def param_unit(name: str, key: str) -> str:
-    """The unit of parameter ``key`` of effect ``name`` (its ParamSpec's), "" when unknown."""
-    try:
-        return effect_class(name).param_specs[key].unit
-    except (KeyError, ValueError, AttributeError):
-        return ""
-
-
-def _step_params(name: str, params: dict, final: dict | None) -> str:
-    """An effect's parameters as fitted at its step of the ladder; where the final model's joint refit moved
-    them, both, each labelled (the verdict's text gives the final model's)."""
-    text = params_text(name, params)
-    if final is None or params_text(name, final) == text:
-        return text
-    return (
-        f"{text} as fitted at this step; {params_text(name, final)} in the final model, refitted with the "
-        "effects after it"
-    )
-
-
-def params_text(name: str, params: dict, *, digits: int = 4) -> str:
-    """``"c = 0.5999 1/s"``: an effect's fitted parameters with their units ([-] when dimensionless), and where
-    one stopped at an end of its search range that is not its neutral value, that it did (:func:`at_bound`)."""
-    out = []
-    for k, v in params.items():
-        unit = param_unit(name, k)
-        unit = "[-]" if unit in ("-", "") else unit
-        out.append(f"{k} = {_sig(float(v), digits) if math.isfinite(float(v)) else v} {unit}{at_bound(name, k, v)}")
-    return ", ".join(out)
-
-
-def at_bound(name: str, key: str, value) -> str:
-    """``" (at the top of its search range 0-0.5: the fit may want a larger value ...)"``, or ``""``.
-
-    A parameter fitted to within 1e-6 of the range's span from an end that is not its neutral value (0 damping
-    at the bottom is a fit that found no effect, not a range too narrow) may be held back by the range: an
-    effect that fails so is not shown to be wrong. Ranges that depend on the specimen are not checked here.
-    """
-    from housner.scenarios.diagnosis.selection.fitting import search_bounds
-
-    try:
-        bounds = search_bounds(name, key)
-        neutral = effect_class(name).param_specs[key].neutral_for(None)
-        v = float(value)
-    except (KeyError, ValueError, TypeError, AttributeError):
-        return ""
-    if bounds is None or not math.isfinite(v):
-        return ""
-    lo, hi = float(bounds[0]), float(bounds[1])
-    near = 1e-6 * (hi - lo)
-    for end, word, more in ((hi, "top", "larger"), (lo, "bottom", "smaller")):
-        if math.isfinite(end) and abs(v - end) <= near and end != neutral:
-            return (
-                f" (at the {word} of its search range {lo:g} to {hi:g}: the fit may want a {more} value, so this "
-                "fit does not rule the effect out; widen its bounds to test it)"
-            )
-    return ""
 
 
 def _nan_none(v: float):

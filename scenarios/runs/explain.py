@@ -14,7 +14,6 @@ are cached like a scenario's. The steps are in ``docs/how-to/explain-engine.md``
 from __future__ import annotations
 
 import math
-import re
 import tempfile
 import time
 from collections.abc import Callable, Iterable
@@ -29,7 +28,6 @@ from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.catalogue.scenario import Scenario
 from housner.scenarios.diagnosis.diagnose import diagnose
-from housner.scenarios.diagnosis.verdict.decision import pointer_text
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import jsonable
@@ -317,14 +315,15 @@ class Explanation(JsonValue):
 
 
 def _where(verdict) -> str:
-    """The verdict's pointer (:func:`~housner.scenarios.diagnosis.verdict.decision.pointer_text`), else the sentence
-    that names the misfit, else its first localisation item."""
+    """The verdict's pointer (:func:`~housner.reports.diagnosis.verdict_text.pointer_text`), else the misfit that
+    remains, else the first localisation item where the model differs."""
+    from housner.reports.diagnosis.verdict_text import pointer_text, where_texts  # the diagnosis' words
+
     if verdict.next:
         return pointer_text(verdict.next)
-    text, where = verdict.text, verdict.where
-    m = re.search(r"(A misfit of [^.]*\.|a misfit that [^.]*\.)", text)
-    if m:
-        return m.group(0)
+    if verdict.status == "partly_explained":
+        return f"A misfit of {verdict.residual.ratio:.2f}x the floor (the worse group of records) remains."
+    where = where_texts(verdict)
     return f"it differs in {where[0]}." if where else ""
 
 
@@ -424,6 +423,8 @@ def _explain(
         camp, effects=effects, seed=seed, engine_settings=runs.settings["housner"], compare_steps=False, progress=say
     )
     t2 = time.perf_counter()
+    from housner.reports.diagnosis.verdict_text import verdict_paragraph  # the diagnosis' words, for explain.json
+
     final = [(n, dict(p)) for n, p in d.final.effects]
     n_fv = len(runs.releases)
     eng_theta = record_thetas(runs.results, engine, n_fv)
@@ -461,7 +462,7 @@ def _explain(
         reaches_floor=reaches,
         diagnosis=DiagnosisSummary(
             status=v.status,
-            text=v.text,
+            text=verdict_paragraph(d),
             heldout_error=HeldoutError(before=d.baseline.heldout_error, after=d.final.heldout_error),
             residual_ratio=v.residual.ratio,
         ),

@@ -57,12 +57,15 @@ class Selection(Generic[Choice]):
         The effects added, in order.
     chosen : list
         The chosen result of each round that added one.
+    stopped_unsearched : bool
+        Whether the last round was not searched: nothing was left for an effect to lower.
     """
 
     rounds: list[list[Any]]
     pools: list[tuple[str, ...]]
     selected: list[str]
     chosen: list[Choice]
+    stopped_unsearched: bool = False
 
 
 def forward_selection(evidence: Evidence[State, Choice], state: State, max_rounds: int) -> tuple[State, Selection]:
@@ -75,6 +78,7 @@ def forward_selection(evidence: Evidence[State, Choice], state: State, max_round
     pools: list[tuple[str, ...]] = []
     selected: list[str] = []
     chosen_all: list[Choice] = []
+    unsearched = False
     for number in range(1, max_rounds + 1):
         pool = tuple(evidence.pool(state, number))
         if not pool:
@@ -84,6 +88,7 @@ def forward_selection(evidence: Evidence[State, Choice], state: State, max_round
         skipped = evidence.not_searched(state, rnd)
         if skipped is not None:
             rounds.append(skipped)
+            unsearched = True
             break
         tried, chosen = evidence.run(state, rnd)
         rounds.append(tried)
@@ -92,4 +97,4 @@ def forward_selection(evidence: Evidence[State, Choice], state: State, max_round
         state = evidence.accept(state, rnd, chosen)
         selected.extend(evidence.effects(chosen))
         chosen_all.append(chosen)
-    return state, Selection(rounds, pools, selected, chosen_all)
+    return state, Selection(rounds, pools, selected, chosen_all, unsearched)

@@ -103,11 +103,14 @@ class GreedyRounds:
         The effects the search added, in order.
     first_level : float
         The per-test level of the first round [-].
+    first_unsearched : bool
+        Whether the first round was not searched: the training error was already at the sensor noise.
     """
 
     rounds: list[list[Candidate]]
     selected: list[str]
     first_level: float
+    first_unsearched: bool = False
 
 
 def _step(effects, added, *, by_hand: bool, train_error: float, held, judged=None, significant: bool) -> Step:
@@ -262,7 +265,9 @@ def greedy(
     docstring, step 5): the state they end in, and what they found."""
     state, found = forward_selection(HistoryEvidence(setup, tuple(candidates), pairs), state, max_effects)
     first_level = setup.level_for(len(found.pools[0]) if found.pools else len(candidates))
-    return state, GreedyRounds(found.rounds, found.selected, first_level)
+    return state, GreedyRounds(
+        found.rounds, found.selected, first_level, found.stopped_unsearched and len(found.rounds) == 1
+    )
 
 
 def run_round(

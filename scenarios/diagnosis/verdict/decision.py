@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from scipy.stats import norm
@@ -37,34 +37,24 @@ from housner.scenarios.diagnosis.comparison.pointers import (
     physical_classes,
 )
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
-from housner.scenarios.diagnosis.selection.probes import ProbeFinding
+from housner.scenarios.diagnosis.selection.probes import ProbeFinding, probe_words
 from housner.scenarios.diagnosis.verdict.residual_test import (
     DETECTABLE_RATIO,
     RATIO_MISFIT,
-    Z_MISFIT,
-    GroupResidual,
     Residual,
 )
 from housner.scenarios.diagnosis.verdict.status import status_rule
-from housner.scenarios.diagnosis.verdict.verdict_words import (
-    Z_LEGEND,
-    Z_LOCAL_LEGEND,
-    evidence_text,
-    family_text,
-    probe_words,
-    z_text,
-)
+from housner.scenarios.execution.typed_json import from_data, to_data
 
 __all__ = [
     "DIST_LEVEL",
+    "DistributionMisfit",
     "Z_LOCAL",
     "Verdict",
     "VerdictFacts",
     "decide",
     "distribution_checks",
     "pointer_classes",
-    "pointer_text",
-    "verdict_text",
 ]
 
 #: |z| beyond which a localisation quantity of a model says it misses something even when its errors
@@ -76,146 +66,54 @@ Z_LOCAL = 4.0
 DIST_LEVEL = 0.01
 
 
-def _groups_text(r: Residual, legend: bool = False) -> str:
-    """Each group's error over its floor with its z; ``legend``: say once what z is (its first appearance)."""
-    names = {"ground_motion": "ground motions", "free_vibration": "free vibrations"}
+@dataclass(frozen=True)
+class DistributionMisfit:
+    """A significant difference between the measured and the model's ground-motion outcomes
+    (:func:`distribution_checks`).
 
-    def one(k: str, g: GroupResidual) -> str:
-        if k != "ground_motion":
-            return f"{names[k]} {g.ratio:.2f}x, {z_text(g.z)}"
-        # the typical record first (10 %-trimmed); the mean, when the few records chaos carries off weigh on it
-        out = f"{names[k]} {g.ratio_trimmed:.2f}x for the typical record (10 %-trimmed mean), {z_text(g.z_trimmed)}"
-        if abs(g.ratio_trimmed - g.ratio) > 0.05:
-            out += f", {g.ratio:.2f}x on the plain mean, {z_text(g.z)}"
-        return out
+    Attributes
+    ----------
+    kind : str
+        ``"ks"``: the theta_max/alpha distributions differ (Kolmogorov-Smirnov); ``"overturns"``: the overturn
+        fractions differ (a two-proportion z-test).
+    distance, pvalue : float
+        For ``"ks"``: the largest gap between the two cumulative distributions [-] and its p-value [-].
+    measured, model, n : int
+        For ``"overturns"``: the records that overturned, measured and in the model, out of ``n``.
+    z : float
+        For ``"overturns"``: the difference of the fractions in standard errors [-].
+    """
 
-    text = "; ".join(one(k, g) for k, g in r.groups.items())
-    if legend:
-        text += (
-            f"; {Z_LEGEND}; a group is a misfit when z > {Z_MISFIT:g} and its error is more than "
-            f"{RATIO_MISFIT}x its floor"
-        )
-    return text
+    kind: str
+    distance: float = math.nan
+    pvalue: float = math.nan
+    measured: int = 0
+    model: int = 0
+    n: int = 0
+    z: float = math.nan
 
 
-def distribution_checks(cmp: Comparison | None) -> list[str]:
-    """Distribution misfits of the ground-motion records, in words (empty when none is significant)."""
-    out: list[str] = []
+def distribution_checks(cmp: Comparison | None) -> list[DistributionMisfit]:
+    """Distribution misfits of the ground-motion records, each significant at :data:`DIST_LEVEL` (empty when none
+    is)."""
+    out: list[DistributionMisfit] = []
     if cmp is None or cmp.distribution is None or cmp.distribution.measured.size < 5:
         return out
     d = cmp.distribution
     if d.ks.pvalue < DIST_LEVEL:
-        out.append(
-            f"the theta_max/alpha distributions differ (Kolmogorov-Smirnov D = {d.ks.distance:.3f}, the "
-            f"largest gap between the two cumulative distributions; p = {d.ks.pvalue:.2g})"
-        )
+        out.append(DistributionMisfit("ks", distance=float(d.ks.distance), pvalue=float(d.ks.pvalue)))
     n = d.measured.size
     k1, k2 = int(np.isinf(d.measured).sum()), int(np.isinf(d.model).sum())
     pool = (k1 + k2) / (2 * n)
     if 0 < pool < 1:
         zz = (k2 - k1) / n / math.sqrt(2 * pool * (1 - pool) / n)
         if 2 * norm.sf(abs(zz)) < DIST_LEVEL:
-            out.append(f"the overturn fractions differ (measured {k1}/{n}, model {k2}/{n}, z = {zz:+.1f})")
+            out.append(DistributionMisfit("overturns", measured=k1, model=k2, n=int(n), z=float(zz)))
     return out
 
 
 # ----------------------------------------------------------------------------
 # the verdict
-def pointer_text(classes: Sequence[PointerClass], model: Sequence[str] = ()) -> str:
-    """Where to look first: the strongest physical class (:func:`physical_classes`) with two pieces of its
-    evidence, then the others by name; ``""`` for none. The verdict's text ends with it.
-
-    ``model``: the effects of the model the classes were drawn from (:func:`pointer_classes`); a class drawn
-    from the plain model's localisation instead (``source`` ``"plain"``) says so.
-    """
-    if not classes:
-        return ""
-    top = classes[0]
-    src, names = top.source, " + ".join(model)
-    # whose values the evidence gives: the final model's, the plain model's, or (a drift, a probe) its own
-    who = f"the model with {names}" if src == "final" and model else "the plain model" if src == "plain" else "model"
-    ev = "; ".join(evidence_text(e, who) for e in top.evidence[:2])
-    if src == "plain" and model:
-        why = (
-            f"Where to look first (what the plain model gets wrong, with the plain model's figures: the model "
-            f"with {names} no longer departs here by more than 3 standard errors, so the added effect may cover "
-            f"it in part): "
-        )
-    elif model:
-        why = f"Where to look first, from what the model with {names} still gets wrong: "
-    else:
-        why = "Where to look first: "
-    text = f"{why}{top.meaning} ({ev}; {Z_LOCAL_LEGEND})."
-    if model and src != "plain":
-        text += f" (These figures are with {names} in the model, which leaves this gap.)"
-    if len(classes) > 1:
-        text += " Then: " + "; ".join(c.name for c in classes[1:]) + "."
-    return text
-
-
-@dataclass(frozen=True)
-class Verdict:
-    """What the diagnosis can claim.
-
-    Attributes
-    ----------
-    status : str
-        One of :data:`housner.scenarios.diagnosis.verdict.status.STATUSES`.
-    residual : Residual
-        The final model's held-out error against its floor.
-    baseline : Residual
-        The plain model's.
-    text : str
-        One paragraph in words, opening with the status ("Explained: ..."): the JSON's; the command line and
-        the report print it without that word, which their ``verdict:`` line and badge give.
-    where : list of str
-        Localisation items where the final model still differs from the measurement.
-    next : list of PointerClass
-        Physical classes to look at, strongest first (:func:`physical_classes`).
-    distribution : list of str
-        Distribution misfits of the final model.
-    records_needed : int
-        For ``inconclusive``: ground-motion records to add.
-    """
-
-    status: str
-    residual: Residual
-    baseline: Residual
-    text: str
-    where: list[str] = field(default_factory=list)
-    next: list[PointerClass] = field(default_factory=list)
-    distribution: list[str] = field(default_factory=list)
-    records_needed: int = 0
-
-    def to_dict(self) -> dict:
-        r = self.residual
-        return {
-            "status": self.status,
-            "residual": {"error": r.error, "floor": r.floor, "ratio": r.ratio, "z": r.z},
-            "residual_detail": r.to_dict(),
-            "baseline_residual": self.baseline.to_dict(),
-            "text": self.text,
-            "where": list(self.where),
-            "next": [c.to_dict() for c in self.next],
-            "distribution": list(self.distribution),
-            "records_needed": self.records_needed,
-        }
-
-    @classmethod
-    def from_dict(cls, data: dict) -> Verdict:
-        """The verdict a diagnosis JSON holds (its ``residual`` is the head of ``residual_detail``)."""
-        return cls(
-            status=data["status"],
-            residual=Residual.from_dict(data["residual_detail"]),
-            baseline=Residual.from_dict(data["baseline_residual"]),
-            text=data["text"],
-            where=list(data["where"]),
-            next=[PointerClass.from_dict(c) for c in data["next"]],
-            distribution=list(data["distribution"]),
-            records_needed=int(data["records_needed"]),
-        )
-
-
 @dataclass(frozen=True)
 class VerdictFacts:
     """What the verdict is drawn from (:func:`decide`): the residuals, the model judged, the pointers.
@@ -243,7 +141,7 @@ class VerdictFacts:
         Those the final model's localisation points to.
     local_plain, local_final : list of PointerClass
         The plain and final model's classes with only their evidence beyond :data:`Z_LOCAL`.
-    dist_plain, dist_final : list of str
+    dist_plain, dist_final : list of DistributionMisfit
         Their distribution misfits (:func:`distribution_checks`).
     plain_misfit, final_misfit : bool
         Whether each residual is a misfit (:func:`status_rule`).
@@ -273,8 +171,8 @@ class VerdictFacts:
     final_classes: list[PointerClass]
     local_plain: list[PointerClass]
     local_final: list[PointerClass]
-    dist_plain: list[str]
-    dist_final: list[str]
+    dist_plain: list[DistributionMisfit]
+    dist_final: list[DistributionMisfit]
     plain_misfit: bool
     final_misfit: bool
     powered: bool
@@ -282,10 +180,128 @@ class VerdictFacts:
     family_plain: str = ""
     search: str = "ran"
 
+    def to_dict(self) -> dict:
+        """The facts as plain data, less what the verdict's JSON holds already (the two residuals, and the classes:
+        its ``next``)."""
+        out = {}
+        for f in fields(self):
+            if f.name in ("baseline", "final", "classes"):
+                continue
+            v = getattr(self, f.name)
+            if f.name in ("drift",):
+                v = None if v is None else v.to_dict()
+            elif f.name in ("final_classes", "local_plain", "local_final"):
+                v = [c.to_dict() for c in v]
+            out[f.name] = to_data(v)
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict, *, baseline: Residual, final: Residual, classes: list[PointerClass]) -> VerdictFacts:
+        """The facts :meth:`to_dict` wrote, with what the verdict's JSON holds besides."""
+
+        def pointers(key: str) -> list[PointerClass]:
+            return [PointerClass.from_dict(c) for c in data[key]]
+
+        return cls(
+            n_records=int(data["n_records"]),
+            baseline=baseline,
+            final=final,
+            selected=tuple(data["selected"]),
+            added=tuple(data["added"]),
+            model=list(data["model"]),
+            params={n: {k: from_data(float, v) for k, v in p.items()} for n, p in data["params"].items()},
+            library=tuple(data["library"]),
+            drift=None if data["drift"] is None else PointerClass.from_dict(data["drift"]),
+            family=data["family"],
+            classes=list(classes),
+            final_classes=pointers("final_classes"),
+            local_plain=pointers("local_plain"),
+            local_final=pointers("local_final"),
+            dist_plain=from_data(list[DistributionMisfit], data["dist_plain"]),
+            dist_final=from_data(list[DistributionMisfit], data["dist_final"]),
+            plain_misfit=bool(data["plain_misfit"]),
+            final_misfit=bool(data["final_misfit"]),
+            powered=bool(data["powered"]),
+            probed=bool(data["probed"]),
+            family_plain=data["family_plain"],
+            search=data["search"],
+        )
+
     @property
     def records_needed(self) -> int:
         """Ground-motion records to add for the power the verdict promises."""
         return self.final.records_needed if self.model else self.baseline.records_needed
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the diagnosis can claim: the status and the facts it rests on
+    (:mod:`housner.reports.diagnosis.verdict_text` says it in words).
+
+    Attributes
+    ----------
+    status : str
+        One of :data:`housner.scenarios.diagnosis.verdict.status.STATUSES`.
+    residual : Residual
+        The final model's held-out error against its floor.
+    baseline : Residual
+        The plain model's.
+    facts : VerdictFacts
+        What the status was drawn from.
+    next : list of PointerClass
+        Physical classes to look at, strongest first (:func:`physical_classes`).
+    records_needed : int
+        For ``inconclusive``: ground-motion records to add.
+    """
+
+    status: str
+    residual: Residual
+    baseline: Residual
+    facts: VerdictFacts
+    next: list[PointerClass] = field(default_factory=list)
+    records_needed: int = 0
+
+    @property
+    def where(self) -> list[Evidence]:
+        """The localisation quantities where the final model still differs from the measurement (a drift along
+        the recording order first)."""
+        drift = list(self.facts.drift.evidence) if self.facts.drift is not None else []
+        return drift + [ev for c in self.facts.final_classes for ev in c.evidence]
+
+    @property
+    def distribution(self) -> list[DistributionMisfit]:
+        """The final model's distribution misfits."""
+        return list(self.facts.dist_final)
+
+    def to_dict(self) -> dict:
+        """The verdict as its JSON holds it, less its words (``text``, ``where``, ``distribution``), which
+        :func:`housner.reports.diagnosis.document.diagnosis_document` adds."""
+        r = self.residual
+        return {
+            "status": self.status,
+            "residual": {"error": r.error, "floor": r.floor, "ratio": r.ratio, "z": r.z},
+            "residual_detail": r.to_dict(),
+            "baseline_residual": self.baseline.to_dict(),
+            "next": [c.to_dict() for c in self.next],
+            "records_needed": self.records_needed,
+            "facts": self.facts.to_dict(),
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> Verdict:
+        """The verdict a diagnosis JSON holds (its ``residual`` is the head of ``residual_detail``; its words are
+        not read: they follow from the facts)."""
+        residual = Residual.from_dict(data["residual_detail"])
+        baseline = Residual.from_dict(data["baseline_residual"])
+        nxt = [PointerClass.from_dict(c) for c in data["next"]]
+        return cls(
+            status=data["status"],
+            residual=residual,
+            baseline=baseline,
+            facts=VerdictFacts.from_dict(data["facts"], baseline=baseline, final=residual, classes=nxt),
+            next=nxt,
+            records_needed=int(data["records_needed"]),
+        )
 
 
 def decide(
@@ -319,9 +335,6 @@ def decide(
     base_classes = physical_classes(baseline_cmp)
     final_classes = physical_classes(final_cmp)
     classes = pointer_classes(base_classes, final_classes, probes, drift, has_effects=bool(model))
-    where = [evidence_text(ev) for c in final_classes for ev in c.evidence]
-    if drift is not None:
-        where = [evidence_text(ev) for ev in drift.evidence] + where
     # a localisation quantity beyond Z_LOCAL standard errors points to where to look; it is no misfit by
     # itself (the status follows from the residual's tests alone: status_rule)
     local_plain = evidence_beyond(base_classes, Z_LOCAL)
@@ -362,10 +375,8 @@ def decide(
         status,
         final,
         baseline,
-        verdict_text(facts, status),
-        where,
+        facts,
         classes,
-        facts.dist_final,
         facts.records_needed if status == "inconclusive" else 0,
     )
 
@@ -423,202 +434,3 @@ def pointer_classes(
         # a physics that changes along the recording order is what no constant effect explains: named first
         classes = [drift, *[c for c in classes if c.name != "drift"]]
     return classes
-
-
-# ----------------------------------------------------------------------------
-# the verdict in words
-def verdict_text(facts: VerdictFacts, status: str) -> str:
-    """The verdict's paragraph: the status in words with its figures (each statistic said once where it first
-    appears), what is unusual and, for a misfit, where to look next."""
-    text = _status_sentence(facts, status)
-    if status in ("no_misfit", "explained"):
-        local = facts.local_final if facts.model else facts.local_plain
-        dist = facts.dist_final if facts.model else facts.dist_plain
-        who = "the model with " + " + ".join(facts.model) if facts.model else "the plain model"
-        bits = [evidence_text(e, who) for c in local for e in c.evidence[:1]] + dist
-        if bits:
-            text += (
-                f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
-                f" ({Z_LOCAL_LEGEND}). It says where a model with more physics would differ first, not that "
-                "this one fails."
-            )
-    if status in ("partly_explained", "unexplained"):
-        if facts.dist_final:
-            text += " The distributions disagree too: " + "; ".join(facts.dist_final) + "."
-        if facts.classes:
-            text += " " + pointer_text(facts.classes, facts.model)
-        else:
-            text += (
-                f" No localisation quantity differs by more than {Z_MISFIT:g} standard errors: the misfit is "
-                "in the time histories only."
-            )
-    return text
-
-
-def _figures(facts: VerdictFacts) -> tuple[str, str]:
-    """The final and the plain model's figures: held-out error, floor (with the correct integrators it was
-    measured over), residual ratio, by group. The plain model's come first in every paragraph: they say what
-    the held-out error, the floor, the residual ratio and z are."""
-    final, baseline = facts.final, facts.baseline
-    fam_plain = facts.family_plain or facts.family
-    fam = f"; correct models of the {family_text(fam_plain)}" if fam_plain else ""
-    base_figs = (
-        f"the plain Housner model's held-out error (each record predicted by the model fitted without it, mean "
-        f"over the records) is {baseline.error:.4f} alpha against a correct-model floor of {baseline.floor:.4f} "
-        f"alpha (the error a correct model leaves on these same records: their noise, and rocking's sensitivity "
-        f"to small differences{fam}), residual ratio {baseline.ratio:.2f} (the worse group's error over its "
-        f"floor; a correct model: 1; {_groups_text(baseline, legend=True)})"
-    )
-    # figs follow the fall's text ("... falls from 0.1752 to 0.0055 alpha"), which gives the final model's error
-    figs = f"against its own correct-model floor of {final.floor:.4f} alpha"
-    if facts.model:
-        if facts.family and facts.family != fam_plain:
-            figs += f" (correct models of the {family_text(facts.family)})"
-        figs += f", residual ratio {final.ratio:.2f} ({_groups_text(final)})"
-        figs += _floors_note(facts)
-    return figs, base_figs
-
-
-def _floors_note(facts: VerdictFacts) -> str:
-    """Why the plain and the final model have two floors ('' when they have one)."""
-    fam_plain = facts.family_plain or facts.family
-    if facts.family and facts.family != fam_plain:
-        return (
-            f" (each model is judged against its own floor, measured over the narrowest family of correct "
-            f"integrators whose floor its ground motions reach, the widest ('any') when they reach none: "
-            f"'{fam_plain}' for the plain model, '{facts.family}' for this one; the plain model's floor is the "
-            f"same whatever is added)"
-        )
-    if abs(facts.final.floor - facts.baseline.floor) > 1e-12:
-        return (
-            " (each model is judged against its own floor: a correct model of other physics leaves another "
-            "error, as the records' chaos carries it elsewhere)"
-        )
-    return ""
-
-
-def _effects_text(facts: VerdictFacts) -> str:
-    """The final model's effects with their parameters as the final model holds them (fitted together)."""
-    from housner.scenarios.diagnosis.results import params_text
-
-    eff = " and ".join(f"{n} ({params_text(n, facts.params.get(n, {}))})" for n in facts.model)
-    return eff + (", all parameters fitted together in the final model" if len(facts.model) > 1 else "")
-
-
-def _fall_text(facts: VerdictFacts) -> str:
-    """What the effects of the final model did to the held-out error ('' for the plain model)."""
-    if not facts.model:
-        return ""
-    before, after = facts.baseline.error, facts.final.error
-    change = "falls" if after < before else "rises"
-    how = (
-        "added by hand"
-        if not facts.selected
-        else "found by the search"
-        if not facts.added
-        else "added by hand and found"
-    )
-    return f"with {_effects_text(facts)} ({how}) the held-out error {change} from {before:.4f} to {after:.4f} alpha"
-
-
-def _search_text(facts: VerdictFacts, other: bool) -> str:
-    """What the search tried, exactly; ``other``: the final model holds effects already."""
-    if facts.search == "ran" and facts.library:
-        what = "none of the other effects" if other else "none of the effects"
-        return f"{what} the search tried ({', '.join(facts.library)}) lowers it significantly"
-    if facts.search == "skipped":
-        return (
-            "the search tried no effect: the training error was already within a tenth of the sensor noise "
-            "of the error the noise alone leaves, so nothing was left for an effect to take"
-        )
-    if facts.search == "none_left":
-        return (
-            "the search tried no effect: no candidate was left to try (--max-effects 0, or each candidate "
-            "already in the model or incompatible with it)"
-        )
-    return "no library search ran (no candidate effects were given: --effects none, or effects=[])" + (
-        "; only the effects added by hand were tried" if other else ", and no effect was added by hand"
-    )
-
-
-def _status_sentence(facts: VerdictFacts, status: str) -> str:
-    """The status in words, with the figures it rests on."""
-    figs, base_figs = _figures(facts)
-    if status == "inconclusive" and facts.n_records < MIN_RECORDS:
-        return (
-            f"Inconclusive: {facts.n_records} usable records are too few to tell a misfit from chance (at least "
-            f"{MIN_RECORDS} are needed, with free vibrations among them); {base_figs}."
-        )
-    if not facts.model and not facts.plain_misfit:
-        return _unless_underpowered(
-            facts.powered,
-            f"No misfit: {base_figs}; no group is more than {RATIO_MISFIT}x above it with significance, which is "
-            f"what a correct model shows on these records. No effect is needed. This campaign would have detected "
-            f"a misfit of {facts.final.detectable_ratio:.2f}x the floor or more.",
-            f"Inconclusive: {base_figs}, not significantly above it, but with these records only a misfit of "
-            f"{facts.final.detectable_ratio:.2f}x the floor or more would show; about {facts.records_needed} more "
-            f"ground-motion records are needed to see one of {DETECTABLE_RATIO}x.",
-        )
-    if not facts.model:
-        return f"Unexplained: {base_figs}: a misfit; {_search_text(facts, other=False)}."
-    if not facts.final_misfit:
-        return _explained_sentence(facts, figs, base_figs)
-    return _partly_explained_sentence(facts, figs, base_figs)
-
-
-def _explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
-    """The verdict of a final model at its floor (``explained``, or ``inconclusive`` when underpowered)."""
-    final, fall = facts.final, _fall_text(facts)
-    small = (
-        ""
-        if facts.plain_misfit
-        else (
-            " The plain model was already within the floor's band, yet the fall is "
-            "significant on the held-out records: a small effect that many records prove."
-        )
-    )
-    doubt = (
-        ""
-        if final.ratio <= RATIO_MISFIT
-        else (
-            f" Its residual ratio {final.ratio:.2f} lies above the {RATIO_MISFIT}x band, but not significantly "
-            f"({z_text(final.z)} <= {Z_MISFIT:g}): these records cannot tell it from the floor."
-        )
-    )
-    return _unless_underpowered(
-        facts.powered,
-        f"Explained: {base_figs}; {fall}, {figs}: no group more than {RATIO_MISFIT}x above its floor with "
-        f"significance, what a correct model shows. {' + '.join(facts.model)} explains it.{small}{doubt}",
-        f"Inconclusive: {base_figs}; {fall}, {figs}, but these records would only show a remaining misfit "
-        f"of {final.detectable_ratio:.2f}x or more; about {facts.records_needed} more ground-motion records are "
-        "needed.",
-    )
-
-
-def _partly_explained_sentence(facts: VerdictFacts, figs: str, base_figs: str) -> str:
-    """The verdict of a final model still above its floor."""
-    fall = _fall_text(facts)
-    searched = _search_text(facts, other=True)
-    if facts.final.misfit or not (facts.drift or facts.probed or facts.local_final):
-        return (
-            f"Partly explained: {base_figs}; {fall}, {figs}. A misfit of {facts.final.ratio:.2f}x the floor "
-            f"(the worse group of records) remains; {searched}."
-        )
-    probed = [c for c in facts.classes if any(e.is_probe for e in c.evidence)]
-    who = "the model with " + " + ".join(facts.model)
-    ev = "; ".join(
-        evidence_text(e, who)
-        for c in ([facts.drift] if facts.drift else []) + probed + facts.local_final
-        for e in c.evidence[:2]
-    )
-    return (
-        f"Partly explained: {base_figs}; {fall}, {figs}: above the floor's {RATIO_MISFIT}x band, "
-        f"and the recording order, a probe of physics outside the library or the localisation (beyond "
-        f"{Z_LOCAL:g} standard errors) still points to a misfit ({ev}; {Z_LOCAL_LEGEND}); {searched}."
-    )
-
-
-def _unless_underpowered(powered: bool, text: str, weak: str) -> str:
-    """``text`` when the records have the power the verdict promises (a misfit of :data:`DETECTABLE_RATIO` x the
-    floor would show), else ``weak``, which says so (the status is then ``inconclusive``: :func:`status_rule`)."""
-    return text if powered else weak

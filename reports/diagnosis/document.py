@@ -1,0 +1,39 @@
+"""The diagnosis JSON as the command line writes it: the result's data
+(:meth:`housner.scenarios.diagnosis.results.DiagnosisResult.to_dict`) with its words, the verdict's paragraph, where
+the model still differs and the one-paragraph summary (:mod:`housner.reports.diagnosis.verdict_text`)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from housner.reports.diagnosis.verdict_text import diagnosis_summary, distribution_text, verdict_paragraph, where_texts
+
+if TYPE_CHECKING:
+    from housner.scenarios.diagnosis.results import Diagnosis
+
+__all__ = ["diagnosis_document", "write_diagnosis_json"]
+
+
+def diagnosis_document(diag: Diagnosis) -> dict:
+    """The diagnosis JSON's content: the data of :meth:`Diagnosis.result`, the verdict's ``text``, ``where`` and
+    ``distribution`` in words, and the ``summary`` (before ``elapsed_s``)."""
+    data = diag.result().to_dict()
+    v = diag.verdict
+    if v is not None:
+        words = {
+            "text": verdict_paragraph(diag),
+            "where": where_texts(v),
+            "distribution": [distribution_text(d) for d in v.distribution],
+        }
+        data["verdict"] = {**data["verdict"], **words}
+    elapsed = data.pop("elapsed_s")
+    return {**data, "summary": diagnosis_summary(diag), "elapsed_s": elapsed}
+
+
+def write_diagnosis_json(diag: Diagnosis, path: str | Path, extra: dict | None = None) -> None:
+    """Write :func:`diagnosis_document` (with ``extra``'s keys added: a campaign of both kinds adds its outcome
+    diagnosis) to ``path``, strict JSON (no NaN: :meth:`DiagnosisResult.to_dict` wrote null there)."""
+    text = json.dumps({**diagnosis_document(diag), **(extra or {})}, indent=2, allow_nan=False)
+    Path(path).write_text(text + "\n")
