@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["finite", "positive"]
+import numpy as np
+
+__all__ = ["finite", "positive", "vector"]
 
 
 def finite(name: str, value) -> float:
@@ -24,3 +26,18 @@ def positive(name: str, value) -> float:
     if x <= 0.0:
         raise ValueError(f"`{name}` must be positive, got {value!r}")
     return x
+
+
+def vector(name: str, value, *, expected: str, show: bool = False, shape_note: str = "") -> np.ndarray:
+    """``value`` as a one-dimensional float64 array, or a one-line ``ValueError`` naming ``name``.
+
+    Not numbers: "`name` must be EXPECTED" (then ", got VALUE" with ``show``); another shape: "`name` must be
+    one-dimensional SHAPE_NOTE, got shape (...)". Units are the caller's.
+    """
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"`{name}` must be {expected}" + (f", got {value!r}" if show else "")) from None
+    if a.ndim != 1:
+        raise ValueError(f"`{name}` must be one-dimensional{shape_note}, got shape {a.shape}")
+    return a

@@ -95,6 +95,15 @@ def _check_initial(theta0, theta_dot0) -> tuple[float, float]:
     return th, _finite("theta_dot0", theta_dot0)
 
 
+def _record_start(motion: GroundMotion, prm: RockingParams, theta0, theta_dot0, substeps) -> tuple[tuple, int]:
+    """A prepared motion's initial state, (theta0 [rad], theta_dot0 [rad/s]) as given or else the motion's own, and
+    its substeps per sample, checked."""
+    init = _check_initial(
+        motion.theta0 if theta0 is None else theta0, motion.theta_dot0 if theta_dot0 is None else theta_dot0
+    )
+    return init, _check_substeps(substeps, prm.p_max, motion.dt)
+
+
 def _prepare_motion(motion, duration) -> GroundMotion:
     if not isinstance(motion, GroundMotion):
         raise TypeError(f"`motion` must be a housner.GroundMotion, got {type(motion).__name__}")
@@ -176,12 +185,9 @@ def simulate(
     """
     prm = _resolve_params(specimen, r, params)
     motion = _prepare_motion(motion, duration)
-    th0, thd0 = _check_initial(
-        motion.theta0 if theta0 is None else theta0, motion.theta_dot0 if theta_dot0 is None else theta_dot0
-    )
-    m = _check_substeps(substeps, prm.p_max, motion.dt)
+    init, m = _record_start(motion, prm, theta0, theta_dot0, substeps)
     tol = _check_rest_tol(rest_tol)
-    return _simulate_batch(specimen, [motion], [(th0, thd0)], prm, [m], tol, parallel=False, terms=terms or None)[0]
+    return _simulate_batch(specimen, [motion], [init], prm, [m], tol, parallel=False, terms=terms or None)[0]
 
 
 def simulate_many(
@@ -224,11 +230,10 @@ def simulate_many(
             mo = _prepare_motion(mo, duration)
         except TypeError:
             raise TypeError(f"`motions[{i}]` must be a housner.GroundMotion, got {type(mo).__name__}") from None
+        init, m = _record_start(mo, prm, theta0, theta_dot0, substeps)
         prepared.append(mo)
-        inits.append(
-            _check_initial(mo.theta0 if theta0 is None else theta0, mo.theta_dot0 if theta_dot0 is None else theta_dot0)
-        )
-        ms.append(_check_substeps(substeps, prm.p_max, mo.dt))
+        inits.append(init)
+        ms.append(m)
     if not prepared:
         return []
     return _simulate_batch(specimen, prepared, inits, prm, ms, tol, parallel=bool(parallel), terms=terms or None)

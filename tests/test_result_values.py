@@ -46,8 +46,9 @@ from housner.scenarios.runs.campaign_run import (
     run_campaign,
 )
 from housner.scenarios.runs.chaos import ChaosFloor, EngineErrors
-from housner.scenarios.runs.explain import Explanation, MapsExplained, explain_engine
+from housner.scenarios.runs.explain import Explanation, explain_engine
 from housner.scenarios.runs.explain_floor import FloorParts
+from housner.scenarios.runs.explain_maps import MapsExplained
 from housner.scenarios.runs.frontier import Frontier, FrontierPoint, engine_frontier
 from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
 from housner.scenarios.runs.run import run_scenario

@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from housner._kernel_parts import clip_unit
+from housner._validate import vector
 from housner.effects.registry import STAGE_DISSIPATION, Effect, param, register_effect
 from housner.effects.terms import ImpactTerm, MomentTerm
 
@@ -140,12 +141,7 @@ def _table(name_x: str, x, name_y: str, y, *, nonnegative: bool, allow_empty: bo
     """Validated (x, y) as tuples of floats; ValueError naming the argument."""
     arrays = []
     for name, v in ((name_x, x), (name_y, y)):
-        try:
-            a = np.asarray(v, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"`{name}` must be a sequence of numbers, got {v!r}") from None
-        if a.ndim != 1:
-            raise ValueError(f"`{name}` must be one-dimensional, got shape {a.shape}")
+        a = vector(name, v, expected="a sequence of numbers", show=True)
         if not np.all(np.isfinite(a)):
             raise ValueError(f"`{name}` must be finite, got {a.tolist()!r}")
         arrays.append(a)

@@ -40,6 +40,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from housner._validate import vector
+
 __all__ = [
     "ECDF",
     "KSResult",
@@ -70,12 +72,9 @@ _BOOT_BLOCK_VALUES = 4_000_000
 # validation
 def _theta_over_alpha(values, name: str = "values", *, allow_empty: bool = False) -> np.ndarray:
     """theta_max/alpha as a 1-D float array: finite and >= 0, or +inf for an overturn."""
-    try:
-        v = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"`{name}` must be numeric (theta_max/alpha, +inf for an overturn)") from None
-    if v.ndim != 1:
-        raise ValueError(f"`{name}` must be one-dimensional (one value per record), got shape {v.shape}")
+    v = vector(
+        name, values, expected="numeric (theta_max/alpha, +inf for an overturn)", shape_note=" (one value per record)"
+    )
     if v.size == 0 and not allow_empty:
         raise ValueError(f"`{name}` is empty")
     nan = np.flatnonzero(np.isnan(v))

@@ -126,14 +126,19 @@ def _stripe_points(ax, d: pd.DataFrame, shift, name: str, **style):
     return eb
 
 
+def _log_x_at(ax, values) -> None:
+    """A logarithmic x axis, its ticks at ``values`` themselves when they are 12 or fewer (the stripes' intensities,
+    the sizes [m]): a log axis over less than a decade has few labelled ticks."""
+    ax.set_xscale("log")
+    u = np.unique(np.asarray(values, dtype=float))
+    if u.size <= 12:
+        ax.set_xticks(u, [f"{v:g}" for v in u])
+        ax.minorticks_off()
+
+
 def _set_intensity_axis(ax, levels, label: str) -> None:
     if _use_log(levels):
-        ax.set_xscale("log")
-        # Ticks at the stripes themselves: a log axis over less than a decade has few labelled ticks.
-        u = np.unique(np.asarray(levels, dtype=float))
-        if u.size <= 12:
-            ax.set_xticks(u, [f"{v:g}" for v in u])
-            ax.minorticks_off()
+        _log_x_at(ax, levels)
     ax.set_xlabel(label)
 
 
@@ -314,10 +319,7 @@ def plot_size_effect(
         medians.extend(drawn)
         open_drawn = open_drawn or has_open
     if log_x:
-        ax.set_xscale("log")
-        if sizes.size <= 12:
-            ax.set_xticks(sizes, [f"{v:g}" for v in sizes])
-            ax.minorticks_off()
+        _log_x_at(ax, sizes)
     if _use_log(medians) or log_x:
         # a size effect is a power law: straight on log-log axes; ticks as plain numbers, not 4 x 10^0
         ax.set_yscale("log")

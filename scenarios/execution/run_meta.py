@@ -20,6 +20,8 @@ from housner._values import JsonValue, json_number, plain, read_as
 from housner.scenarios.execution.rundir import effect_data, provenance
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from housner.scenarios.motions.build import MotionFacts
     from housner.scenarios.runs.campaign_run import CampaignFacts
     from housner.scenarios.runs.chaos import EngineErrors
@@ -35,6 +37,7 @@ __all__ = [
     "RunMeta",
     "ScenarioCopy",
     "SpecimenFacts",
+    "build_run_meta",
 ]
 
 
@@ -173,6 +176,13 @@ class EffectsFacts(JsonValue):
 
     label: str = ""
     effects: tuple[EffectData, ...] = ()
+
+    @classmethod
+    def of(cls, effects: Any) -> EffectsFacts:
+        """The facts of a sequence of effect objects: their label and each one's data."""
+        from housner.scenarios.catalogue.schema import effects_label
+
+        return cls(effects_label(effects), tuple(EffectData.of(e) for e in effects))
 
 
 @dataclass(frozen=True, eq=False)
@@ -420,6 +430,68 @@ class RunMeta(JsonValue):
     def effects_label(self) -> str:
         """The scenario's [[effects]] in one label, e.g. ``restitution(r=0.95)`` ("" without effects)."""
         return self.effects.label if self.effects is not None else ""
+
+
+def build_run_meta(
+    *,
+    scenario: dict,
+    specimen: Any,
+    motions: MotionFacts,
+    n_motions: int,
+    engines: dict[str, dict],
+    analysis: dict,
+    results: pd.DataFrame,
+    wall_s: dict[str, float],
+    engine_errors: dict[str, EngineErrors] | None = None,
+    table2_spread: Table2Spread | None = None,
+    effects: tuple = (),
+    campaign: CampaignFacts | None = None,
+) -> RunMeta:
+    """The metadata of a run just computed (a scenario's or a campaign's), as :func:`write_run` writes it.
+
+    Parameters
+    ----------
+    scenario : dict
+        The scenario as run (``Scenario.describe()``, or a campaign's name, description and file).
+    specimen : Specimen
+        The specimen run (its ``describe()`` is kept).
+    motions : MotionFacts
+        Facts of the ground motions.
+    n_motions : int
+        Motions of the run.
+    engines : dict
+        Series name -> the runner's info on it (:func:`run_engines`), in run.json's order.
+    analysis : dict
+        The [analysis] table.
+    results : DataFrame
+        The run's rows: those whose ``status`` is not ``"ok"`` become its failed records.
+    wall_s : dict
+        Wall times [s] of the run's parts.
+    engine_errors, table2_spread, campaign
+        As in :class:`RunMeta` (none, when not given).
+    effects : tuple
+        The scenario's [[effects]] as effect objects (none: no ``effects`` key).
+
+    The provenance is this process's, now.
+    """
+    fails = results[results["status"] != "ok"]
+    return RunMeta(
+        scenario=ScenarioCopy(scenario),
+        specimen=SpecimenFacts.from_json(specimen.describe()),
+        motions=motions,
+        n_motions=n_motions,
+        engines={n: EngineFacts.from_json(v) for n, v in engines.items()},
+        analysis=RunAnalysis.from_json(analysis),
+        failures=tuple(
+            FailedRecord.from_json(r) for r in fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records")
+        ),
+        engine_errors=engine_errors or {},
+        wall_s=wall_s,
+        provenance=Provenance.current(),
+        table2_spread=table2_spread,
+        effects=EffectsFacts.of(effects) if effects else None,
+        campaign=campaign,
+    )
 
 
 def _motion_facts():

@@ -38,19 +38,10 @@ from housner.scenarios.execution.tables import REQUIRED_COLUMNS
 if TYPE_CHECKING:
     from housner.scenarios.execution.run_meta import RunMeta
 
-RESULT_COLUMNS = [
-    "engine",
-    "motion_id",
-    "motion_name",
-    "theta_max_over_alpha",
-    "overturned",
-    "n_impacts",
-    "wall_s",
-    "status",
-    "error",
-    "cached",
-    "effects",
-]
+#: The columns of one engine's outcome on one record, as the runner writes them (a run's and a study's table).
+OUTCOME_COLUMNS = ["theta_max_over_alpha", "overturned", "n_impacts", "wall_s", "status", "error", "cached"]
+
+RESULT_COLUMNS = ["engine", "motion_id", "motion_name", *OUTCOME_COLUMNS, "effects"]
 
 #: The columns a campaign's run adds after :data:`RESULT_COLUMNS` (:mod:`housner.scenarios.runs.campaign_run`).
 CAMPAIGN_COLUMNS = ["record_id", "observed_overturned"]

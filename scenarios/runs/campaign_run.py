@@ -40,17 +40,7 @@ from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.diagnosis.outcomes.outcome_scores import outcome_scores
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.run_meta import (
-    EffectData,
-    EffectsFacts,
-    EngineFacts,
-    FailedRecord,
-    Provenance,
-    RunAnalysis,
-    RunMeta,
-    ScenarioCopy,
-    SpecimenFacts,
-)
+from housner.scenarios.execution.run_meta import EffectsFacts, build_run_meta
 from housner.scenarios.execution.rundir import RUN_FILES, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import MotionFacts
@@ -397,12 +387,9 @@ def run_campaign(
             + (f"; planar engines with {effects_label(inp.geometry)}" if inp.geometry else "")
         )
     results, histories, info = campaign_results(inp, settings, engines, opts)
-    fails = results[results["status"] != "ok"]
-    meta = RunMeta(
-        scenario=ScenarioCopy(
-            {"name": campaign.name, "description": _description(campaign), "file": str(campaign.path.resolve())}
-        ),
-        specimen=SpecimenFacts.from_json(inp.specimen.describe()),
+    meta = build_run_meta(
+        scenario={"name": campaign.name, "description": _description(campaign), "file": str(campaign.path.resolve())},
+        specimen=inp.specimen,
         motions=MotionFacts(
             source="campaign",
             campaign=campaign.name,
@@ -410,14 +397,10 @@ def run_campaign(
             n_free_vibration=len(inp.motions) - inp.n_ground_motion,
         ),
         n_motions=len(inp.motions),
-        engines={n: EngineFacts.from_json(info[n]) for n in engines},
-        analysis=RunAnalysis(reference=REFERENCE),
-        failures=tuple(
-            FailedRecord.from_json(r) for r in fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records")
-        ),
-        engine_errors={},
+        engines={n: info[n] for n in engines},
+        analysis={"reference": REFERENCE},
+        results=results,
         wall_s={"load": t_load, "total": time.perf_counter() - t0},
-        provenance=Provenance.current(),
         campaign=campaign_facts(inp),
     )
     write_run(out, results, histories, inp.motions, meta)
@@ -489,7 +472,7 @@ def campaign_facts(inp: CampaignInput) -> CampaignFacts:
         n_outcomes=len(y),
         n_overturned=int(sum(y)),
         skipped=len(c.skipped),
-        geometry=EffectsFacts(effects_label(inp.geometry), tuple(EffectData.of(e) for e in inp.geometry)),
+        geometry=EffectsFacts.of(inp.geometry),
         mesh=inp.mesh,
         scan=scan,
     )

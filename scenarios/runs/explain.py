@@ -17,7 +17,7 @@ import math
 import tempfile
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +33,7 @@ from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.runs.chaos import ChaosFloor
-from housner.scenarios.runs.departure import DepartureSummary, record_agreement, record_ks, record_thetas
+from housner.scenarios.runs.departure import record_agreement, record_ks, record_thetas
 from housner.scenarios.runs.engine_campaign import (
     AMPLITUDES,
     check_engine,
@@ -49,8 +49,7 @@ from housner.scenarios.runs.explain_floor import (
     extended_floor,
     model_form_floor,
 )
-from housner.scenarios.runs.explain_maps import ScatterFloor, compare_with_maps
-from housner.scenarios.runs.impact_map import EngineMaps
+from housner.scenarios.runs.explain_maps import MapsExplained, compare_with_maps
 
 __all__ = [
     "EXPLAIN_SIGMA",
@@ -60,7 +59,6 @@ __all__ = [
     "ExplainDetails",
     "Explanation",
     "KsDistances",
-    "MapsExplained",
     "explain_engine",
 ]
 
@@ -118,45 +116,6 @@ class KsDistances(JsonValue):
     with_maps: float | None = None
 
     _NULL_IS_NAN = ("with_maps",)
-
-
-@dataclass(frozen=True, eq=False)
-class MapsExplained(JsonValue):
-    """Housner + the engine's measured impact and flight maps against the engine (:mod:`explain_maps`).
-
-    Attributes
-    ----------
-    agreement : float
-        Per-record agreement with the engine [-].
-    n_records : int
-        Records both ran.
-    departures, departures_plain : DepartureSummary
-        Where the records that disagree part, with the maps and for the plain model.
-    scatter_floor : ScatterFloor
-        The agreement the maps' mean law keeps with an engine whose impacts scatter as measured.
-    wall_s : float
-        Wall time of the step [s].
-    overturned : int
-        Ground motions on which Housner + maps overturned.
-    reaches_floor, reaches_scatter_floor : bool
-        Whether the agreement reaches the extended floor, or the scatter floor (within :data:`REACH_MARGIN`).
-    remains : str
-        What is left, in one sentence or two.
-    maps : EngineMaps
-        The measured maps.
-    """
-
-    agreement: float = math.nan
-    n_records: int = 0
-    departures: DepartureSummary = field(default_factory=DepartureSummary)
-    departures_plain: DepartureSummary = field(default_factory=DepartureSummary)
-    scatter_floor: ScatterFloor = field(default_factory=ScatterFloor)
-    wall_s: float = math.nan
-    overturned: int = 0
-    reaches_floor: bool = False
-    reaches_scatter_floor: bool = False
-    remains: str = ""
-    maps: EngineMaps | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -448,7 +407,7 @@ def _explain(
     floor = extended_floor(chaos, mform)
     reaches = bool(with_eff >= floor - REACH_MARGIN)
     t4 = time.perf_counter()
-    mp = compare_with_maps(engine, runs, eng_theta, options, say) if with_maps else None
+    mp, maps_theta = compare_with_maps(engine, runs, eng_theta, options, say) if with_maps else (None, None)
     v = d.verdict
     names = [nm for nm, _ in final]
     return Explanation(
@@ -471,7 +430,7 @@ def _explain(
         ks=KsDistances(
             plain=record_ks(eng_theta, plain_theta),
             with_effects=record_ks(eng_theta, eff_theta),
-            with_maps=record_ks(eng_theta, mp.theta) if mp else None,
+            with_maps=record_ks(eng_theta, maps_theta) if mp else None,
         ),
         maps=_maps_part(engine, mp, floor),
         details=ExplainDetails(
@@ -503,13 +462,14 @@ def _explain(
     )
 
 
-def _maps_part(engine: str, mp, floor: float) -> MapsExplained | None:
-    """The Explanation's ``maps``: the comparison's figures, whether it reaches the floor (the extended floor, or
-    the scatter floor of the maps' own measured scatter), what remains (None when the step did not run)."""
+def _maps_part(engine: str, mp: MapsExplained | None, floor: float) -> MapsExplained | None:
+    """The Explanation's ``maps``: the comparison with its verdict, whether it reaches the floor (the extended
+    floor, or the scatter floor of the maps' own measured scatter) and what remains (None when the step did not
+    run)."""
     if mp is None:
         return None
     reaches = bool(mp.agreement >= floor - REACH_MARGIN)
-    sf = mp.scatter.share
+    sf = mp.scatter_floor.share
     reaches_scatter = bool(mp.agreement >= sf - REACH_MARGIN)
     head = f"Housner + {engine}'s measured maps agrees with {engine} on {mp.agreement:.0%} of the records"
     small, large = mp.maps.at(0.05), mp.maps.at(0.5)
@@ -532,16 +492,4 @@ def _maps_part(engine: str, mp, floor: float) -> MapsExplained | None:
             f"mean keeps with an engine whose impacts scatter as measured ({spread}): something else departs. "
             f"{mp.departures.text}"
         )
-    return MapsExplained(
-        agreement=mp.agreement,
-        n_records=mp.n_records,
-        departures=mp.departures,
-        departures_plain=mp.departures_plain,
-        scatter_floor=mp.scatter,
-        wall_s=mp.wall_s,
-        overturned=mp.overturned,
-        reaches_floor=reaches,
-        reaches_scatter_floor=reaches_scatter,
-        remains=remains.strip(),
-        maps=mp.maps,
-    )
+    return replace(mp, reaches_floor=reaches, reaches_scatter_floor=reaches_scatter, remains=remains.strip())

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -32,7 +32,7 @@ from housner.scenarios.runs.departure import (
 )
 from housner.scenarios.runs.impact_map import EngineMaps, measure_maps
 
-__all__ = ["SCATTER_SEEDS", "MapsComparison", "ScatterFloor", "compare_with_maps", "maps_effect", "scatter_floor"]
+__all__ = ["SCATTER_SEEDS", "MapsExplained", "ScatterFloor", "compare_with_maps", "maps_effect", "scatter_floor"]
 
 #: Realisations of the measured impact scatter behind :func:`scatter_floor` (three: the floor is their mean; on
 #: 100 records one realisation's share moves by a few points).
@@ -49,44 +49,49 @@ class ScatterFloor(JsonValue):
     seeds: tuple[int, ...] = ()
 
 
-@dataclass(frozen=True)
-class MapsComparison:
-    """Housner + the engine's measured maps against the engine.
+@dataclass(frozen=True, eq=False)
+class MapsExplained(JsonValue):
+    """Housner + the engine's measured impact and flight maps against the engine (explain.json's ``maps``).
+
+    :func:`compare_with_maps` measures it; :mod:`housner.scenarios.runs.explain` sets its verdict against the
+    extended floor (``reaches_floor``, ``reaches_scatter_floor``, ``remains``).
 
     Attributes
     ----------
-    maps : EngineMaps
-        The measured maps.
     agreement : float
         Per-record agreement of Housner + maps with the engine [-].
     n_records : int
         Records both ran.
-    theta : pandas.Series
-        theta_max/alpha per ground motion of Housner + maps (+inf: overturned).
-    departures : DepartureSummary
-        :func:`housner.scenarios.runs.departure.summarise` of the records where Housner + maps disagrees.
-    departures_plain : DepartureSummary
-        The same for the plain model.
-    scatter : ScatterFloor
-        :func:`scatter_floor`: the agreement a model of the measured mean law keeps with an engine whose impacts
-        scatter as measured.
+    departures, departures_plain : DepartureSummary
+        :func:`housner.scenarios.runs.departure.summarise` of the records that disagree, with the maps and for
+        the plain model: where they part.
+    scatter_floor : ScatterFloor
+        :func:`scatter_floor`: the agreement the maps' mean law keeps with an engine whose impacts scatter as
+        measured.
     wall_s : float
         Wall time of the step (measuring the maps included) [s].
+    overturned : int
+        Ground motions on which Housner + maps overturned.
+    reaches_floor, reaches_scatter_floor : bool
+        Whether the agreement reaches the extended floor, or the scatter floor (within
+        :data:`housner.scenarios.runs.explain.REACH_MARGIN`).
+    remains : str
+        What is left, in one sentence or two.
+    maps : EngineMaps
+        The measured maps.
     """
 
-    maps: EngineMaps
-    agreement: float
-    n_records: int
-    theta: pd.Series
-    departures: DepartureSummary
-    departures_plain: DepartureSummary
-    scatter: ScatterFloor
-    wall_s: float
-
-    @property
-    def overturned(self) -> int:
-        """Ground motions on which Housner + maps overturned."""
-        return int(np.isinf(self.theta).sum())
+    agreement: float = math.nan
+    n_records: int = 0
+    departures: DepartureSummary = field(default_factory=DepartureSummary)
+    departures_plain: DepartureSummary = field(default_factory=DepartureSummary)
+    scatter_floor: ScatterFloor = field(default_factory=ScatterFloor)
+    wall_s: float = math.nan
+    overturned: int = 0
+    reaches_floor: bool = False
+    reaches_scatter_floor: bool = False
+    remains: str = ""
+    maps: EngineMaps | None = None
 
 
 def maps_effect(maps: EngineMaps, seed: int | None = None) -> MeasuredMaps:
@@ -134,8 +139,11 @@ def compare_with_maps(
     engine_theta: pd.Series,
     options,
     progress: Callable[[str], None],
-) -> MapsComparison:
+) -> tuple[MapsExplained, pd.Series]:
     """Measure the engine's maps, run Housner + maps on ``runs``' ground motions, compare record by record.
+
+    Returns the comparison, its verdict against the floor not set (the explanation sets it), and theta_max/alpha
+    per ground motion of Housner + maps (+inf: overturned).
 
     ``runs`` is the :class:`~housner.scenarios.runs.engine_campaign.EngineRuns` of the explanation (its
     engine histories are read), ``engine_theta`` the engine's theta_max/alpha per ground motion.
@@ -157,6 +165,14 @@ def compare_with_maps(
     deps_plain = _departures(disagreeing(engine_theta, plain_theta), engine, runs, plain_hist, alpha)
     progress(f"Housner + the maps' mean against {len(SCATTER_SEEDS)} realisations of their measured impact scatter")
     scatter = scatter_floor(sc, runs.motions, settings, maps, theta, options)
-    return MapsComparison(
-        maps, float(agreement) if n else math.nan, int(n), theta, deps, deps_plain, scatter, time.perf_counter() - t0
+    found = MapsExplained(
+        agreement=float(agreement) if n else math.nan,
+        n_records=int(n),
+        departures=deps,
+        departures_plain=deps_plain,
+        scatter_floor=scatter,
+        wall_s=time.perf_counter() - t0,
+        overturned=int(np.isinf(theta).sum()),
+        maps=maps,
     )
+    return found, theta

@@ -18,17 +18,7 @@ from housner.scenarios.catalogue.scenario import Scenario, load_scenario
 from housner.scenarios.catalogue.schema import effects_label
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
-from housner.scenarios.execution.run_meta import (
-    EffectData,
-    EffectsFacts,
-    EngineFacts,
-    FailedRecord,
-    Provenance,
-    RunAnalysis,
-    RunMeta,
-    ScenarioCopy,
-    SpecimenFacts,
-)
+from housner.scenarios.execution.run_meta import RunMeta, build_run_meta
 from housner.scenarios.execution.rundir import RUN_FILES, effect_data, write_run
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.motions.build import MotionFacts, build_motions
@@ -131,30 +121,23 @@ def run_scenario(
     results, histories, info = run_engines(scenario.specimen, motions, eng_settings, opts)
     if scenario.effects:
         results, histories, info = _with_effects(scenario, motions, eng_settings, results, histories, info, opts)
-    fails = results[results["status"] != "ok"]
     engine_errors = engine_errors() if in_pool else run_engine_errors(*errors_args, cache_dir=errors_cache)
     spread = None
     k = int(scenario.analysis.get("seed_spread", 0) or 0)
     if k > 1 and "housner" in names and n_motions is None and seed is None:
         spread = seed_spread(scenario, k, options=RunOptions(cache_dir=opts.cache_dir, use_cache=opts.use_cache))
-    effects = None
-    if scenario.effects:
-        effects = EffectsFacts(effects_label(scenario.effects), tuple(EffectData.of(e) for e in scenario.effects))
-    meta = RunMeta(
-        scenario=ScenarioCopy(scenario.describe()),
-        specimen=SpecimenFacts.from_json(scenario.specimen.describe()),
+    meta = build_run_meta(
+        scenario=scenario.describe(),
+        specimen=scenario.specimen,
         motions=MotionFacts.from_json(mmeta),
         n_motions=len(motions),
-        engines={n: EngineFacts.from_json(v) for n, v in info.items()},
-        analysis=RunAnalysis.from_json(scenario.analysis),
-        failures=tuple(
-            FailedRecord.from_json(r) for r in fails[["engine", "motion_id", "motion_name", "error"]].to_dict("records")
-        ),
-        engine_errors=engine_errors,
+        engines=info,
+        analysis=scenario.analysis,
+        results=results,
         wall_s={"motions": t_motions, "total": time.perf_counter() - t0},
-        provenance=Provenance.current(),
+        engine_errors=engine_errors,
         table2_spread=spread,
-        effects=effects,
+        effects=scenario.effects,
     )
     write_run(out, results, histories, motions, meta)
     return RunResult(results, histories, motions, meta, out)

@@ -33,7 +33,7 @@ from housner.scenarios.catalogue.study_table import Study
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
 from housner.scenarios.execution.run_meta import EngineFacts, Provenance, ScenarioCopy, SpecimenFacts
-from housner.scenarios.execution.rundir import jsonable
+from housner.scenarios.execution.rundir import OUTCOME_COLUMNS, jsonable
 from housner.scenarios.execution.runner import run_engines
 from housner.scenarios.execution.workers import Progress
 from housner.scenarios.motions.build import MotionFacts, build_motions
@@ -81,13 +81,7 @@ RESULT_COLUMNS = [
     "motion_id",
     "motion_name",
     "amplitude_factor",
-    "theta_max_over_alpha",
-    "overturned",
-    "n_impacts",
-    "wall_s",
-    "status",
-    "error",
-    "cached",
+    *OUTCOME_COLUMNS,
 ]
 
 

@@ -25,7 +25,8 @@ from housner.reports.impact_map_figure import maps_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_stored_figure, html_table, status_badge
 from housner.reports.run.sections.tuning import StoredFile, engine_defaults, model_data, model_file, settings_differ
 from housner.scenarios.execution.rundir import jsonable
-from housner.scenarios.runs.explain import EffectFound, Explanation, KsDistances, MapsExplained
+from housner.scenarios.runs.explain import EffectFound, Explanation, KsDistances
+from housner.scenarios.runs.explain_maps import MapsExplained
 from housner.scenarios.runs.frontier import Frontier, knee_reason, same_setting
 from housner.scenarios.runs.view import Run
 
