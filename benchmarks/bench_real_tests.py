@@ -82,7 +82,9 @@ def main(argv=None) -> int:
         f"{times['diagnose'] / times['one_pass']:.0f} passes"
     )
     print()
-    print(d.summary())
+    from housner.reports.diagnosis.outcome_text import outcome_summary
+
+    print(outcome_summary(d))
     rows = [(s.name, s.scores) for s in d.steps] + list(d.baselines.items())
     print(f"\n{'model':32s} {'accuracy':>22s} {'F1':>22s} {'log loss':>22s}")
     for name, sc in rows:

@@ -23,6 +23,7 @@ from housner.model import theta_max_many
 from housner.motion import GroundMotion
 from housner.reports.diagnosis import render_outcome_report, write_outcome_report
 from housner.reports.diagnosis.outcome_figures import GRID, baseline_label, fit_soft_logistic, level_lines
+from housner.reports.diagnosis.outcome_text import outcome_pointer_text
 from housner.reports.diagnosis.outcomes import MISSES_SHOWN, STATUS, step_label
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
@@ -159,7 +160,7 @@ def test_the_confusion_matrices_add_up(diag, page):
 
 def test_the_misses_table_lists_each_models_misses(diag, page):
     w = page_section(page, "where")
-    assert html.escape(diag.pointer[:40]) in w
+    assert html.escape(outcome_pointer_text(diag.pointer)[:40]) in w
     models = {m.model for m in diag.misses}
     assert models == {s.name for s in (diag.steps[0], diag.final) if s.scores.fn + s.scores.fp}
     for m in diag.misses:  # fewer than MISSES_SHOWN per model here: every one is listed

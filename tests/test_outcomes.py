@@ -12,6 +12,7 @@ import pytest
 from housner import GroundMotion, Specimen
 from housner.cli import main
 from housner.model import theta_max_many
+from housner.reports.diagnosis.outcome_text import outcome_pointer_text, outcome_summary
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
 from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import Geometry, diagnose_outcomes
@@ -129,7 +130,7 @@ def test_diagnosis_finds_a_contact_inside_the_footprint(inside_contact):
     assert d.final.scores.log_loss < d.steps[0].scores.log_loss - 0.1
     assert d.final.scores.accuracy > 0.9
     # the plain model misses overturns (its footprint is wider than the contact): the pointer says so
-    assert "inside the footprint" in d.pointer
+    assert d.pointer.leaning == "missed" and "inside the footprint" in outcome_pointer_text(d.pointer)
     assert d.status in ("explained", "partly_explained")
     data = json.loads(json.dumps(d.to_dict(), default=float))
     for key in ("accuracy", "f1", "log_loss"):
@@ -144,7 +145,7 @@ def test_diagnosis_of_a_right_model_adds_nothing():
     _, y, _ = theta_max_many(SPEC, accs, DT)
     d = diagnose_outcomes(_campaign(accs, y), folds=4, seed=1)
     # the plain model is the model that made the outcomes: no effect may lower its held-out log loss
-    assert d.status == "no_misfit", d.summary()
+    assert d.status == "no_misfit", outcome_summary(d)
     assert d.steps[0].scores.accuracy == 1.0
 
 

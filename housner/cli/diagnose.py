@@ -72,7 +72,9 @@ def run(args: argparse.Namespace) -> int:
     outcomes = _diagnose_outcomes(args, campaign) if campaign.outcomes else None
     if not campaign.records:  # outcome records only
         if args.json:
-            outcomes.to_json(args.json)
+            from housner.reports.diagnosis.outcome_text import write_outcome_json
+
+            write_outcome_json(outcomes, args.json)
             print(f"json:   {args.json}")
         if args.report is not None:
             from housner.reports.diagnosis import write_outcome_report
@@ -109,9 +111,10 @@ def run(args: argparse.Namespace) -> int:
         if outcomes is None:
             write_diagnosis_json(diag, args.json)
         else:  # a campaign of both kinds: the outcome diagnosis under its own key, its scores under `outcomes`
+            from housner.reports.diagnosis.outcome_text import outcome_document
             from housner.scenarios.execution.rundir import jsonable
 
-            both = jsonable(outcomes.to_dict(), nonfinite="null")
+            both = jsonable(outcome_document(outcomes), nonfinite="null")
             write_diagnosis_json(diag, args.json, {"outcomes_diagnosis": both, "outcomes": both["outcomes"]})
         print(f"json:   {args.json}")
     if want_report:
@@ -140,6 +143,7 @@ def _folds(args: argparse.Namespace) -> int:
 def _diagnose_outcomes(args: argparse.Namespace, campaign):
     """The outcome records' diagnosis
     (:func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes`), printed."""
+    from housner.reports.diagnosis.outcome_text import outcome_summary
     from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import diagnose_outcomes
     from housner.scenarios.diagnosis.outcomes.outcome_scores import SCORE_KEYS
 
@@ -151,7 +155,7 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign):
     )
     # a campaign of both kinds prints two verdicts: each line says which records it judges
     print(f"verdict{' (outcome records)' if campaign.records else ''}: {d.status}")
-    print(_without_status(d.summary(), d.status))
+    print(_without_status(outcome_summary(d), d.status))
     print()
     keys = SCORE_KEYS[:4]
     print(f"{'held out, same folds':34s}" + "".join(f"{k:>22s}" for k in keys))

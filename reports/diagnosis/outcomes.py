@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from housner.reports.diagnosis.outcome_figures import baseline_label, calibration_figure, outcome_map_figure
+from housner.reports.diagnosis.outcome_text import outcome_pointer_text
 from housner.reports.page import (
     Section,
     ci_cell,
@@ -379,7 +380,7 @@ def _calibration(diag, best: str) -> str:
 
 
 def _where(diag) -> str:
-    pointer = f"<p>The plain model's misses: {esc(diag.pointer)}.</p>"
+    pointer = f"<p>The plain model's misses: {esc(outcome_pointer_text(diag.pointer))}.</p>"
     by_model: dict[str, list] = {}
     for m in diag.misses:
         by_model.setdefault(m.model, []).append(m)

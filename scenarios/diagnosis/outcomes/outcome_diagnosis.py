@@ -33,11 +33,12 @@ from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
 from housner.scenarios.diagnosis.outcomes.outcome_results import (
     Miss,
+    MissBand,
     OutcomeCandidate,
     OutcomeDiagnosis,
     OutcomeGeometry,
+    OutcomeMisses,
     OutcomeStep,
-    params_text,
 )
 from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     calibration_table,
@@ -314,32 +315,19 @@ def _misses(step: OutcomeStep, ids, y, pga, pgv) -> list[Miss]:
     return out
 
 
-def _pointer(step: OutcomeStep, y, pga, pgv) -> str:
-    """What the plain model's misses point to, in words, with the counts over PGV/PGA."""
+def _pointer(step: OutcomeStep, y, pga, pgv) -> OutcomeMisses:
+    """The plain model's misses at P = 0.5, counted over thirds of the records' PGV/PGA."""
     pred = step.p >= 0.5
     fn = ~pred & y
     fp = pred & ~y
     ratio = pgv / pga
     edges = np.percentile(ratio, [100 / 3, 200 / 3])
     band = np.searchsorted(edges, ratio)
-    where = ", ".join(
-        f"{name} PGV/PGA: {int(np.sum(fn & (band == k)))} missed overturns, {int(np.sum(fp & (band == k)))} false"
+    bands = tuple(
+        MissBand(name, int(np.sum(fn & (band == k))), int(np.sum(fp & (band == k))))
         for k, name in enumerate(("short", "middle", "long"))
     )
-    n_fn, n_fp = int(fn.sum()), int(fp.sum())
-    if n_fn > 2 * max(n_fp, 1):
-        what = (
-            "the rock overturns under motions that the model's footprint survives: its contact sits inside the "
-            "footprint (a convex or uneven base, a smaller effective alpha), or its impacts dissipate less"
-        )
-    elif n_fp > 2 * max(n_fn, 1):
-        what = (
-            "the model overturns where the rock stood: a wider effective contact or more dissipation at impact "
-            "(a smaller r)"
-        )
-    else:
-        what = "misses in both directions: the effective geometry is uncertain rather than biased"
-    return f"{n_fn} overturns missed and {n_fp} predicted that did not happen ({where}): {what}"
+    return OutcomeMisses(int(fn.sum()), int(fp.sum()), bands)
 
 
 # ----------------------------------------------------------------------------
@@ -391,7 +379,7 @@ def diagnose_outcomes(
     plain = _step("plain", None, tables, y, fold, seed)
     say(f"plain model: held-out log loss {plain.scores.log_loss:.3f}, accuracy {plain.scores.accuracy:.3f}")
     pointer = _pointer(plain, y, pga, pgv)
-    say(f"where it fails: {pointer}")
+    say(f"where it fails: {pointer.missed} overturns missed, {pointer.false} predicted that did not happen")
     steps, candidates = _add_effects(plain, tables, y, fold, seed, say)
     final = steps[-1]
     baselines, baseline_p = _baselines(pga, pgv, y, fold, seed)
@@ -491,7 +479,7 @@ class OutcomeEvidence:
         for c in tried:
             self.say(
                 f"  {c.name}: held-out log loss {c.scores.log_loss:.3f} ({c.improvement:+.3f} "
-                f"+- {c.improvement_se:.3f}, p {c.p_value:.2g}) {params_text(c.params)}"
+                f"+- {c.improvement_se:.3f}, p {c.p_value:.2g}) {c.params}"
             )
         good = [c for c in tried if c.improvement > 0 and c.p_value < level]
         return tried, min(good, key=lambda c: c.scores.log_loss) if good else None

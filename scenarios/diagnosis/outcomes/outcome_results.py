@@ -1,6 +1,7 @@
 """The result of an outcome diagnosis
 (:func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes`): its
-ladder of models and the whole diagnosis, as values with their summary in words and their JSON form."""
+ladder of models and the whole diagnosis, as values and their JSON form (their words are in
+:mod:`housner.reports.diagnosis.outcome_text`)."""
 
 from __future__ import annotations
 
@@ -15,12 +16,13 @@ from housner.scenarios.execution.typed_json import JsonValue, WrittenAsResult, f
 
 __all__ = [
     "Miss",
+    "MissBand",
     "OutcomeCandidate",
     "OutcomeDiagnosis",
     "OutcomeDiagnosisResult",
     "OutcomeGeometry",
+    "OutcomeMisses",
     "OutcomeStep",
-    "params_text",
 ]
 
 
@@ -131,6 +133,52 @@ class Miss:
 
 
 @dataclass(frozen=True)
+class MissBand:
+    """A model's misses among the records of one third of PGV/PGA.
+
+    Attributes
+    ----------
+    name : str
+        ``"short"``, ``"middle"`` or ``"long"`` PGV/PGA.
+    missed : int
+        Overturns the model did not predict.
+    false : int
+        Overturns it predicted that did not happen.
+    """
+
+    name: str
+    missed: int
+    false: int
+
+
+@dataclass(frozen=True)
+class OutcomeMisses:
+    """What a model's misses at P = 0.5 point to: their counts, in all and over thirds of PGV/PGA.
+
+    Attributes
+    ----------
+    missed, false : int
+        Overturns missed, and overturns predicted that did not happen.
+    bands : tuple of MissBand
+        The same over the short, middle and long PGV/PGA thirds of the records.
+    """
+
+    missed: int
+    false: int
+    bands: tuple[MissBand, ...]
+
+    @property
+    def leaning(self) -> str:
+        """``"missed"`` when the misses are mostly missed overturns (more than twice the false ones), ``"false"``
+        when mostly false ones, ``"both"`` otherwise."""
+        if self.missed > 2 * max(self.false, 1):
+            return "missed"
+        if self.false > 2 * max(self.missed, 1):
+            return "false"
+        return "both"
+
+
+@dataclass(frozen=True)
 class OutcomeGeometry:
     """The block behind an outcome model, in SI: centre-of-mass height, pivots, alphas, inertia, mass, and each
     pivot's bracket of b [m] (``pos``, ``neg``)."""
@@ -166,7 +214,7 @@ class OutcomeDiagnosis(WrittenAsResult):
         Name -> out-of-fold probabilities of each baseline.
     floor : OutcomeFloor
         The final model against what a correct model would score.
-    pointer : str
+    pointer : OutcomeMisses
         What the plain model's misses point to.
     misses : list of Miss
         The plain and the final model's misses, record by record.
@@ -190,7 +238,7 @@ class OutcomeDiagnosis(WrittenAsResult):
     baselines: dict
     baseline_p: dict
     floor: OutcomeFloor
-    pointer: str
+    pointer: OutcomeMisses
     misses: list
     status: str
     geometry: OutcomeGeometry
@@ -206,30 +254,6 @@ class OutcomeDiagnosis(WrittenAsResult):
     @property
     def effects(self) -> list[str]:
         return [] if self.final.name == "plain" else self.final.name.split("+")
-
-    def summary(self) -> str:
-        """The verdict in words: the figures, their intervals, the floor, the baselines, what remains."""
-        f, s = self.final, self.final.scores
-        best = min(self.baselines, key=lambda k: self.baselines[k].log_loss)
-        b = self.baselines[best]
-        eff = "no effect added" if f.name == "plain" else f"effect {f.name} ({params_text(f.params)})"
-        floor = self.floor
-        lines = [
-            f"{len(self.ids)} outcome records ({int(self.observed.sum())} overturned); {self.folds}-fold "
-            f"cross-validation (seed {self.seed}); {eff}.",
-            f"held-out accuracy {s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}], "
-            f"F1 {s.f1:.3f} [{s.f1_ci[0]:.3f}, {s.f1_ci[1]:.3f}], log loss {s.log_loss:.3f} "
-            f"[{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]; plain model: accuracy "
-            f"{self.steps[0].scores.accuracy:.3f}, F1 {self.steps[0].scores.f1:.3f}, log loss "
-            f"{self.steps[0].scores.log_loss:.3f}.",
-            f"best baseline ({best}): accuracy {b.accuracy:.3f}, F1 {b.f1:.3f}, log loss {b.log_loss:.3f} "
-            f"on the same folds: the model is {'ahead' if s.log_loss < b.log_loss else 'NOT ahead'} "
-            "in log loss.",
-            f"floor (a correct model with these probabilities): log loss {floor.log_loss:.3f} "
-            f"[{floor.log_loss_ci[0]:.3f}, {floor.log_loss_ci[1]:.3f}], measured {floor.measured_log_loss:.3f} "
-            f"(z {floor.z:+.1f}): {'at the floor' if floor.at_floor else 'above the floor: a part is unexplained'}.",
-        ]
-        return "\n".join(lines)
 
     def result(self) -> OutcomeDiagnosisResult:
         """The outcome diagnosis as the value its JSON holds."""
@@ -248,7 +272,6 @@ class OutcomeDiagnosis(WrittenAsResult):
             pointer=self.pointer,
             misses=tuple(self.misses),
             geometry=self.geometry,
-            summary=self.summary(),
             elapsed_s=self.elapsed,
         )
 
@@ -272,10 +295,9 @@ class OutcomeDiagnosisResult(JsonValue):
     floor: OutcomeFloor
     calibration: tuple[CalibrationBin, ...]
     candidates: tuple[OutcomeCandidate, ...]
-    pointer: str
+    pointer: OutcomeMisses
     misses: tuple[Miss, ...]
     geometry: OutcomeGeometry
-    summary: str
     elapsed_s: float
 
     @property
@@ -313,10 +335,9 @@ class OutcomeDiagnosisResult(JsonValue):
                 "effect": self._effect(),
                 "ladder": [st.to_dict() for st in self.ladder],
                 "candidates": [to_data(c) for c in self.candidates],
-                "pointer": self.pointer,
+                "pointer_counts": to_data(self.pointer),
                 "misses": [to_data(m) for m in self.misses],
                 "geometry": to_data(self.geometry),
-                "summary": self.summary,
                 "elapsed_s": self.elapsed_s,
             }
         )
@@ -336,26 +357,11 @@ class OutcomeDiagnosisResult(JsonValue):
             floor=from_data(OutcomeFloor, out["floor"]),
             calibration=from_data(tuple[CalibrationBin, ...], out["calibration"]),
             candidates=from_data(tuple[OutcomeCandidate, ...], data["candidates"]),
-            pointer=data["pointer"],
+            pointer=from_data(OutcomeMisses, data["pointer_counts"]),
             misses=from_data(tuple[Miss, ...], data["misses"]),
             geometry=from_data(OutcomeGeometry, data["geometry"]),
-            summary=data["summary"],
             elapsed_s=from_data(float, data["elapsed_s"]),
         )
-
-
-def params_text(params: dict) -> str:
-    parts = []
-    for k, v in params.items():
-        if v is None:
-            parts.append(f"{k} Housner")
-        elif k == "alpha_eff":
-            parts.append(f"alpha_eff {v:.4f} rad")
-        elif k == "spread":
-            parts.append(f"spread {v:.2f} (log)")
-        else:
-            parts.append(f"{k} {v:.3g}")
-    return ", ".join(parts)
 
 
 def _nan_none(v: float):
