@@ -189,13 +189,11 @@ def tilt_figure(diag) -> Figure:
     step = max(1, n // 4000)
     ax.plot(meas.tilt_acc[::step], meas.tilt_theta[::step], ".", color="#bbbbbb", ms=2, label="measured samples")
     xs = np.array([-1.0, 1.0])
-    loc0 = diag.steps[0].comparison.localisation()
-    o, k = loc0["tilt_offset"][0], loc0["tilt_slope"][0]
+    o, k = meas.tilt_line()
     if math.isfinite(o.value):
         ax.plot(xs, o.value + k.value * xs, color=_MEASURED, lw=2.2, label="measured fit")
     for s, c in zip(diag.steps, _colors(diag.steps), strict=True):
-        loc = s.comparison.localisation()
-        o, k = loc["tilt_offset"][1], loc["tilt_slope"][1]
+        o, k = s.comparison.model.tilt_line()
         if math.isfinite(o.value):
             ax.plot(xs, o.value + k.value * xs, color=c, lw=1.4, ls="--", label=f"model: {step_label(s)}")
     sd = float(np.std(meas.tilt_theta)) if n else 0.01

@@ -136,6 +136,11 @@ class Features:
     calibrations: dict = field(default_factory=dict)
     tilt_record: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
+    def tilt_line(self) -> tuple[Metric, Metric]:
+        """The rotation before uplift against the ground acceleration, as a line: its offset [alpha] and its slope
+        [alpha per g tan(alpha)], with standard errors clustered by record."""
+        return line_fit(self.tilt_acc, self.tilt_theta, self.tilt_record)
+
     def metrics(self) -> dict[str, Metric]:
         """Every metric of :data:`METRICS` with its standard error."""
         out: dict[str, Metric] = {}
@@ -158,8 +163,7 @@ class Features:
             int(np.count_nonzero(self.onset_sign > 0)), int(np.count_nonzero(self.onset_sign))
         )
         out["share_pos"] = _share(self.excursions[0], sum(self.excursions))
-        off, slope = line_fit(self.tilt_acc, self.tilt_theta, self.tilt_record)
-        out["tilt_offset"], out["tilt_slope"] = off, slope
+        out["tilt_offset"], out["tilt_slope"] = self.tilt_line()
         out["overturn_fraction"], out["theta_max_median"] = _theta_max_metrics(self.theta_max_over_alpha)
         out["onset_scatter"] = _spread_se(self.onset_ratio)
         return out
