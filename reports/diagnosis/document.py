@@ -8,7 +8,13 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from housner.reports.diagnosis.verdict_text import diagnosis_summary, distribution_text, verdict_paragraph, where_texts
+from housner.reports.diagnosis.verdict_text import (
+    diagnosis_summary,
+    distribution_text,
+    economy_text,
+    verdict_paragraph,
+    where_texts,
+)
 
 if TYPE_CHECKING:
     from housner.scenarios.diagnosis.results import Diagnosis
@@ -18,7 +24,8 @@ __all__ = ["diagnosis_document", "write_diagnosis_json"]
 
 def diagnosis_document(diag: Diagnosis) -> dict:
     """The diagnosis JSON's content: the data of :meth:`Diagnosis.result`, the verdict's ``text``, ``where`` and
-    ``distribution`` in words, and the ``summary`` (before ``elapsed_s``)."""
+    ``distribution`` in words, the settings' ``economies`` in words (beside their ``economy_facts``), and the
+    ``summary`` (before ``elapsed_s``)."""
     data = diag.result().to_dict()
     v = diag.verdict
     if v is not None:
@@ -28,6 +35,13 @@ def diagnosis_document(diag: Diagnosis) -> dict:
             "distribution": [distribution_text(d) for d in v.distribution],
         }
         data["verdict"] = {**data["verdict"], **words}
+    settings = data["settings"]
+    facts = settings.pop("economy_facts")
+    data["settings"] = {
+        **settings,
+        "economies": [economy_text(e) for e in diag.settings.economies],
+        "economy_facts": facts,
+    }
     elapsed = data.pop("elapsed_s")
     return {**data, "summary": diagnosis_summary(diag), "elapsed_s": elapsed}
 

@@ -20,6 +20,12 @@ from housner.reports.diagnosis.words import (
     z_text,
 )
 from housner.scenarios.diagnosis.comparison.pointers import MIN_RECORDS, PointerClass
+from housner.scenarios.diagnosis.economies import (
+    Economy,
+    FloorLoopStopped,
+    MechanicsSubset,
+    ThinnedSearch,
+)
 from housner.scenarios.diagnosis.verdict.decision import Z_LOCAL, DistributionMisfit, Verdict, VerdictFacts
 from housner.scenarios.diagnosis.verdict.residual_test import (
     DETECTABLE_RATIO,
@@ -35,6 +41,7 @@ if TYPE_CHECKING:
 __all__ = [
     "diagnosis_summary",
     "distribution_text",
+    "economy_text",
     "pointer_text",
     "verdict_paragraph",
     "verdict_text",
@@ -54,8 +61,50 @@ def verdict_paragraph(diag: Diagnosis, *, pointer: bool = True) -> str:
     if sensor is not None:
         text += sensor.verdict_sentence()
     if diag.settings.economies:
-        text += " How it was computed: " + " ".join(diag.settings.economies)
+        text += " How it was computed: " + " ".join(economy_text(e) for e in diag.settings.economies)
     return text
+
+
+def economy_text(e: Economy) -> str:
+    """What a diagnosis computed on fewer samples or stopped early
+    (:mod:`housner.scenarios.diagnosis.economies`), in words."""
+    if isinstance(e, FloorLoopStopped):
+        who, first, last = f"the {e.model} model", e.families[0], e.families[-1]
+        if e.said_before:
+            return (
+                f"The floor's family loop stopped early for {who} too: {e.ratio:.2f}x under {first!r}, "
+                f"{e.widest_ratio:.2f}x under {last!r}."
+            )
+        between = ", ".join(repr(f) for f in e.families[1:-1])
+        return (
+            f"The floor's family loop stopped early: {who}'s ground motions are {e.ratio:.2f}x their floor under the "
+            f"narrowest family ({first!r}, more than {e.jump:g} x {e.band:g}) and {e.widest_ratio:.2f}x it under the "
+            f"widest ({last!r}, not at it either), so the families between ({between}) were not measured: nested, "
+            "their floors lie below the widest's."
+        )
+    if isinstance(e, MechanicsSubset):
+        return (
+            f"Models with an effect that replaces the equation of motion (its kernel 10-100x slower) were fitted on "
+            f"the free vibrations and {e.fitted} of the {e.ground_motions} ground motions, spread over the campaign "
+            f"({e.fitted_s:.0f} of {e.total_s:.0f} s of error windows; their grids on {e.grid_records} records); "
+            "their training errors, screens, held-out errors and tests are on every record."
+        )
+    if isinstance(e, ThinnedSearch):
+        low, high = e.rates[0], e.rates[-1]
+        rate = f"{low:g} Hz" if len(e.rates) == 1 else f"{low:g}-{high:g} Hz"
+        return (
+            f"The search ran on every {e.decimation}th sample ({rate} thinned to {low / e.decimation:g} Hz; "
+            f"{e.search_rate:g} Hz is what the physics needs: the fits' ranges are set for it, the fastest, a 100 Hz "
+            "foundation, has 5 samples a period): theta as sampled (its noise stays white of the same sigma, so a "
+            "record's error is the same mean over fewer samples), the table acceleration through an anti-alias filter "
+            "(zero-phase, below the new Nyquist frequency). The candidates' fits, held-out errors and tests, the pairs "
+            "and the probes are on those samples; the ladder's errors, the floors and the verdict on every sample."
+        )
+    return (
+        f"On every sample the fall of step {e.step} (+ {e.added}) is {e.improvement:+.4f} +- "
+        f"{e.improvement_se:.4f} alpha, p = {e.pvalue:.2g}: not significant at its round's level "
+        f"{e.level:.2g}, as it was on every {e.decimation}th sample; it stays in the ladder."
+    )
 
 
 def where_texts(verdict: Verdict) -> list[str]:

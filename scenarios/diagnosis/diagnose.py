@@ -31,6 +31,7 @@ from housner.scenarios.campaigns.campaign import Campaign, load_campaign
 from housner.scenarios.diagnosis.comparison.localise import measured_features
 from housner.scenarios.diagnosis.comparison.pointers import order_drift
 from housner.scenarios.diagnosis.comparison.record_comparison import compare
+from housner.scenarios.diagnosis.economies import FloorLoopStopped
 from housner.scenarios.diagnosis.results import Candidate, Diagnosis, DiagnosisSettings, Step
 from housner.scenarios.diagnosis.selection.candidate_trial import (
     PRACTICAL,
@@ -238,20 +239,17 @@ def floor_family(
         if i == 0 and len(families) > 2 and ratio > FAMILY_JUMP * RATIO_MISFIT:
             widest, widest_at_floor, widest_ratio = measure(families[-1])
             if not widest_at_floor:
-                skipped = ", ".join(repr(f) for f in families[1:-1])
-                said = "The floor's family loop stopped early"
-                if said_before:
-                    setup.economies.append(
-                        f"{said} for {who} too: {ratio:.2f}x under {families[0]!r}, "
-                        f"{widest_ratio:.2f}x under {families[-1]!r}."
+                setup.economies.append(
+                    FloorLoopStopped(
+                        "final" if who == "the final model" else "plain",
+                        said_before,
+                        float(ratio),
+                        float(widest_ratio),
+                        tuple(families),
+                        FAMILY_JUMP,
+                        RATIO_MISFIT,
                     )
-                else:
-                    setup.economies.append(
-                        f"{said}: {who}'s ground motions are {ratio:.2f}x their floor under the narrowest family "
-                        f"({families[0]!r}, more than {FAMILY_JUMP:g} x {RATIO_MISFIT:g}) and {widest_ratio:.2f}x it "
-                        f"under the widest ({families[-1]!r}, not at it either), so the families between "
-                        f"({skipped}) were not measured: nested, their floors lie below the widest's."
-                    )
+                )
                 setup.progress(
                     f"floor of {who}: not at it under {families[0]!r} ({ratio:.2f}x) nor under "
                     f"{families[-1]!r} ({widest_ratio:.2f}x); the families between not "

@@ -9,13 +9,14 @@ Errors are time-history errors in units of alpha (see :mod:`housner.scenarios.di
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
 
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
+from housner.scenarios.diagnosis.economies import Economy, economy_data, economy_from_data
 from housner.scenarios.execution.typed_json import JsonValue, WrittenAsResult, floats, from_data, to_data
 
 __all__ = [
@@ -227,8 +228,8 @@ class DiagnosisSettings:
         What the search did (``ran``, ``off``, ``none_left``, ``skipped``).
     decimation : int
         The search ran on every ``decimation``-th sample [-].
-    economies : tuple of str
-        What ran on fewer samples or stopped early, in words.
+    economies : tuple of Economy
+        What ran on fewer samples or stopped early (:mod:`housner.scenarios.diagnosis.economies`).
     """
 
     effects: tuple[str, ...]
@@ -245,7 +246,20 @@ class DiagnosisSettings:
     floor_family_plain: str
     search: str
     decimation: int
-    economies: tuple[str, ...]
+    economies: tuple[Economy, ...]
+
+    def to_dict(self) -> dict:
+        """The settings as plain data, the economies as theirs (``economy_facts``: the JSON's ``economies`` are their
+        words, :func:`housner.reports.diagnosis.document.diagnosis_document`'s)."""
+        out = to_data({f.name: getattr(self, f.name) for f in fields(self) if f.name != "economies"})
+        return {**out, "economy_facts": [to_data(economy_data(e)) for e in self.economies]}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> DiagnosisSettings:
+        """The settings :meth:`to_dict` wrote."""
+        plain = {k: v for k, v in data.items() if k not in ("economies", "economy_facts")}
+        economies = tuple(economy_from_data(e) for e in data["economy_facts"])
+        return replace(from_data(cls, {**plain, "economies": []}), economies=economies)
 
 
 @dataclass(frozen=True)
@@ -342,7 +356,7 @@ class DiagnosisResult(JsonValue):
                 "train_ids": list(self.train_ids),
                 "heldout_ids": list(self.heldout_ids),
                 "skipped": [list(x) for x in self.skipped],
-                "settings": to_data(self.settings),
+                "settings": self.settings.to_dict(),
                 "folds": [list(f) for f in self.folds],
                 "selection_frequency": dict(self.selection_frequency),
                 "verdict": None if self.verdict is None else self.verdict.to_dict(),
@@ -381,7 +395,7 @@ class DiagnosisResult(JsonValue):
             train_ids=tuple(data["train_ids"]),
             heldout_ids=tuple(data["heldout_ids"]),
             skipped=tuple(tuple(x) for x in data["skipped"]),
-            settings=from_data(DiagnosisSettings, data["settings"]),
+            settings=DiagnosisSettings.from_dict(data["settings"]),
             folds=tuple(tuple(f) for f in data["folds"]),
             selection_frequency={k: from_data(float, v) for k, v in data["selection_frequency"].items()},
             verdict=None if data.get("verdict") is None else Verdict.from_dict(data["verdict"]),

@@ -27,6 +27,7 @@ from scipy import stats as sps
 
 from housner.effects import Effect, apply_effects, effect_class, make_effect
 from housner.scenarios.campaigns.campaign import Campaign
+from housner.scenarios.diagnosis.economies import Economy, MechanicsSubset
 from housner.scenarios.diagnosis.results import Candidate, names_label
 from housner.scenarios.diagnosis.selection.crossval import (
     FOLD_ITERATIONS,
@@ -131,7 +132,7 @@ class TrialSetup:
         The check a candidate must pass before it is held out.
     level : float
         Family-wise significance level of a round [-].
-    economies : list of str
+    economies : list of Economy
         Where the diagnosis subsampled or stopped early: plain sentences, appended as they happen
         (``Diagnosis.settings.economies``).
     progress : callable
@@ -142,7 +143,7 @@ class TrialSetup:
     scorers: Scorers
     free_vibrations: FreeVibrationCheck
     level: float
-    economies: list[str]
+    economies: list[Economy]
     progress: Callable[[str], None]
 
     def level_for(self, tests: int) -> float:
@@ -319,18 +320,16 @@ def fit_records(setup: TrialSetup, names: Sequence[str]) -> tuple[Scorer, list[S
     sc = setup.scorers
     if not (sc.thinned and _has_mechanics(names)):
         return sc.every_record, sc.fold_train
-    note = "fitted on the free vibrations and"
-    if not any(note in e for e in setup.economies):
+    if not any(isinstance(e, MechanicsSubset) for e in setup.economies):
         recs, fit = sc.every_record.records, sc.fit.records
-        n_gm = sum(r.kind != "free_vibration" for r in recs)
-        m_gm = sum(r.kind != "free_vibration" for r in fit)
-        secs = sum(r.theta.size * r.dt for r in recs if r.kind != "free_vibration")
-        fsecs = sum(r.theta.size * r.dt for r in fit if r.kind != "free_vibration")
         setup.economies.append(
-            f"Models with an effect that replaces the equation of motion (its kernel 10-100x slower) were "
-            f"{note} {m_gm} of the {n_gm} ground motions, spread over the campaign ({fsecs:.0f} of "
-            f"{secs:.0f} s of error windows; their grids on {len(sc.mechanics_grid.records)} records); their "
-            "training errors, screens, held-out errors and tests are on every record."
+            MechanicsSubset(
+                fitted=sum(r.kind != "free_vibration" for r in fit),
+                ground_motions=sum(r.kind != "free_vibration" for r in recs),
+                fitted_s=float(sum(r.theta.size * r.dt for r in fit if r.kind != "free_vibration")),
+                total_s=float(sum(r.theta.size * r.dt for r in recs if r.kind != "free_vibration")),
+                grid_records=len(sc.mechanics_grid.records),
+            )
         )
     return sc.fit, sc.fit_fold_train
 

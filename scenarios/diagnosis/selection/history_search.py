@@ -18,6 +18,7 @@ import math
 import time
 from dataclasses import dataclass, replace
 
+from housner.scenarios.diagnosis.economies import StepNotSignificant, ThinnedSearch
 from housner.scenarios.diagnosis.results import Candidate, Step, names_label
 from housner.scenarios.diagnosis.selection.candidate_trial import (
     PRACTICAL,
@@ -333,17 +334,7 @@ def at_full_rate(setup: TrialSetup, state: SearchState) -> tuple[TrialSetup, Sea
     full_setup = replace(setup, scorers=cv.full)
     noise_loss = cv.full.every_record.noise_loss()
     steps = _steps_at_full_rate(full_setup, state)
-    setup.economies.insert(
-        0,
-        (
-            f"The search ran on every {cv.decimation}th sample ({rate} thinned to {rates[0] / cv.decimation:g} Hz; "
-            f"{SEARCH_RATE:g} Hz is what the physics needs: the fits' ranges are set for it, the fastest, a 100 Hz "
-            "foundation, has 5 samples a period): theta as sampled (its noise stays white of the same sigma, so a "
-            "record's error is the same mean over fewer samples), the table acceleration through an anti-alias filter "
-            "(zero-phase, below the new Nyquist frequency). The candidates' fits, held-out errors and tests, the pairs "
-            "and the probes are on those samples; the ladder's errors, the floors and the verdict on every sample."
-        ),
-    )
+    setup.economies.insert(0, ThinnedSearch(cv.decimation, tuple(float(r) for r in rates), SEARCH_RATE))
     setup.progress(
         f"the ladder on every sample ({rate}): held-out error {steps[0].heldout_error:.4f} -> "
         f"{steps[-1].heldout_error:.4f} alpha"
@@ -368,9 +359,15 @@ def _steps_at_full_rate(full_setup: TrialSetup, state: SearchState) -> tuple[Ste
             judged = judge(previous, held, level, full_setup.cv.noise_floor)
             if step.significant and not judged.significant and not step.by_hand:
                 full_setup.economies.append(
-                    f"On every sample the fall of step {i} (+ {step.added}) is {judged.improvement:+.4f} +- "
-                    f"{judged.improvement_se:.4f} alpha, p = {judged.pvalue:.2g}: not significant at its round's level "
-                    f"{level:.2g}, as it was on every {full_setup.cv.decimation}th sample; it stays in the ladder."
+                    StepNotSignificant(
+                        step=i,
+                        added=str(step.added),
+                        improvement=float(judged.improvement),
+                        improvement_se=float(judged.improvement_se),
+                        pvalue=float(judged.pvalue),
+                        level=float(level),
+                        decimation=full_setup.cv.decimation,
+                    )
                 )
             steps.append(
                 _rescored(
