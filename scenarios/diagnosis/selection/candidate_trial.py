@@ -274,27 +274,19 @@ def judged_candidate(
 ) -> Candidate:
     """The candidate ``effects`` of round ``round_no``, judged on its out-of-fold errors ``heldout`` against
     the current model's (None: not held out, for ``reason``)."""
-    common = dict(
-        effects=tuple(effects), params=params, base=current.model.names, round=round_no, train_error=train_error
-    )
-    if heldout is None:
-        return Candidate(
-            **common,
-            heldout_error=math.nan,
-            heldout_se=math.nan,
-            improvement=math.nan,
-            improvement_se=math.nan,
-            z=math.nan,
-            pvalue=1.0,
-            significant=False,
-            reason=reason,
-            heldout_errors=None,
-        )
-    judged = judge(current.heldout_errors, heldout, test_level, setup.cv.noise_floor)
+    if heldout is None:  # not held out: no figures, and ``reason`` says why
+        judged, wins, error, se = Judgement(False, math.nan, math.nan, math.nan, 1.0, reason), None, math.nan, math.nan
+    else:
+        judged = judge(current.heldout_errors, heldout, test_level, setup.cv.noise_floor)
+        wins, error, se = setup.cv.folds.means(current.heldout_errors - heldout), float(heldout.mean()), sem(heldout)
     return Candidate(
-        **common,
-        heldout_error=float(heldout.mean()),
-        heldout_se=sem(heldout),
+        effects=tuple(effects),
+        params=params,
+        base=current.model.names,
+        round=round_no,
+        train_error=train_error,
+        heldout_error=error,
+        heldout_se=se,
         improvement=judged.improvement,
         improvement_se=judged.improvement_se,
         z=judged.z,
@@ -302,7 +294,7 @@ def judged_candidate(
         significant=judged.significant,
         reason=judged.reason,
         heldout_errors=heldout,
-        fold_wins=setup.cv.folds.means(current.heldout_errors - heldout),
+        fold_wins=wins,
     )
 
 
