@@ -44,7 +44,6 @@ TUNING_DIR: Path | None = None
 def tuning_caveats(run: Run) -> dict[str, str]:
     """engine -> HTML: the tuning checks its tuning file did not meet, by how much, and what that means here."""
     out = {}
-    cmp = run.comparison
     for name, stored in model_data(run).items():
         if name not in run.others or stored.data is None:
             continue
@@ -54,8 +53,8 @@ def tuning_caveats(run: Run) -> dict[str, str]:
         failed = [c for c in _tuning_checks(t) if not c.met]
         if not failed:
             continue
-        row = cmp.loc[name]
-        ok = engine_verdict(row).ok
+        summary = run.summaries[name]
+        ok = engine_verdict(summary).ok
         what = "; ".join(f'<span class="bad">{c.short}</span>' for c in failed)
         text = f"Tuning not met (<code>{esc(stored.path.name)}</code>, {esc(t.date)}): {what}. "
         names = {c.name for c in failed}
@@ -74,7 +73,7 @@ def tuning_caveats(run: Run) -> dict[str, str]:
             bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
             if len(bad):
                 small_limit = float(bad["peak_analytic"].max())
-        ks = float(row["ks_distance"])
+        ks = summary.ks_distance
         if ok:
             text += (
                 f"It does not change this verdict, which is measured on this run's own motions (KS {ks:.3f} "
