@@ -10,25 +10,31 @@ from __future__ import annotations
 
 import subprocess
 
-import pandas as pd
 import pytest
 from shared import run_command
 
+from housner.scenarios.execution.tables import EngineSummary, Estimate
 from housner.scenarios.runs.chaos import ChaosFloor
 from housner.scenarios.runs.verdicts import MIN_RECORDS, engine_verdict
 from housner.statistics.ensemble_stats import KS_MAX
 
 
 def _row(ks, dp, n_ok, n_failed=0, share=0.5, n_paired=None):
-    return pd.Series(
-        {
-            "ks_distance": ks,
-            "overturn_diff": dp,
-            "n_ok": n_ok,
-            "n_failed": n_failed,
-            "agreement_share": share,
-            "n_paired": n_ok if n_paired is None else n_paired,
-        }
+    """An engine's summary with the figures the verdict reads (the rest NaN)."""
+    nan = float("nan")
+    return EngineSummary(
+        n=n_ok + n_failed,
+        n_failed=n_failed,
+        n_ok=n_ok,
+        percentiles={},
+        p_overturn=Estimate(nan, nan, nan),
+        ks_distance=ks,
+        ks_pvalue=nan,
+        wasserstein=nan,
+        overturn_diff=dp,
+        n_paired=float(n_ok if n_paired is None else n_paired),
+        agreement_share=share,
+        verdict_share=nan,
     )
 
 

@@ -348,6 +348,27 @@ def test_compare_engines_matches_the_array_functions():
     assert table.loc["housner", "wall_s_total"] == pytest.approx(1.0)
 
 
+def test_engine_summaries_are_the_table_rows_as_values():
+    """Each row of the comparison table read once into an EngineSummary: every figure as the table has it."""
+    df = results_table(np.random.default_rng(12))
+    table = tables.compare_engines(df, "housner", q=(10, 50, 97.5), n_boot=100, seed=3)
+    summaries = tables.engine_summaries(table)
+    assert list(summaries) == ["housner", "mujoco", "pybullet"]
+    pyb, row = summaries["pybullet"], table.loc["pybullet"]
+    assert (pyb.n, pyb.n_failed, pyb.n_ok) == (100, 2, 98) and isinstance(pyb.n_ok, int)
+    assert sorted(pyb.percentiles) == [10.0, 50.0, 97.5]
+    assert pyb.percentile(97.5) == (row["q97.5"], row["q97.5_low"], row["q97.5_high"])
+    assert pyb.median == (row["q50"], row["q50_low"], row["q50_high"]) and pyb.median.low == row["q50_low"]
+    assert np.isnan(pyb.percentile(25).value)  # a level the table does not hold
+    assert pyb.p_overturn == tuple(row[["p_overturn", "p_overturn_low", "p_overturn_high"]])
+    for name in ("ks_distance", "ks_pvalue", "wasserstein", "overturn_diff", "n_paired", "agreement_share"):
+        assert getattr(pyb, name) == row[name], name
+    assert pyb.verdict_share == row["verdict_share"] and pyb.wall_s_total == pytest.approx(row["wall_s_total"])
+    assert np.isnan(summaries["housner"].ks_distance) and np.isnan(summaries["housner"].n_paired)
+    no_wall = tables.engine_summaries(tables.compare_engines(df.drop(columns="wall_s"), n_boot=0))
+    assert np.isnan(no_wall["mujoco"].wall_s_median)
+
+
 def test_compare_engines_errors():
     df = results_table(np.random.default_rng(13))
     with pytest.raises(ValueError, match="did you mean 'housner'"):

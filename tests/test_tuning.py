@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.integrate import solve_ivp
 from shared import SoftGroundMujoco
@@ -21,6 +23,7 @@ from housner.engines.tuning import (
     SAMPLE_STEPS,
     SMALL_AMPLITUDES,
     THRESHOLD_PULSES,
+    TuningResult,
     decay_motion,
     decay_peaks,
     first_impact_ratio,
@@ -31,6 +34,7 @@ from housner.engines.tuning import (
     pulse_motions,
     tune,
 )
+from housner.engines.tuning.result import DecayCheck, PulseCheck, RatioCheck
 from housner.free_vibration.closed_forms import half_cycle_time
 from housner.model import simulate as housner_simulate
 from housner.reports.tuning_figure import tuning_report_figure
@@ -240,3 +244,20 @@ def test_tuner_validates_its_arguments():
         tune("housner", SEED, sample_steps=(), candidates=[{}])
     with pytest.raises(ValueError, match="unknown engine"):
         tune("mujocco", SEED, candidates=[{}])
+
+
+def test_a_tuning_files_rows_read_as_checks():
+    """Each table of a tuning file reads row by row into its typed check; a column an older file lacks is NaN."""
+    root = Path(__file__).resolve().parents[1]
+    data = json.loads((root / "engines" / "models" / "tuning-pybullet.json").read_text())
+    t = TuningResult.from_json(data)
+    r = RatioCheck.from_row(t.table.iloc[0])
+    assert (r.dt, r.amplitude, r.rel_error) == tuple(data["table"][k][0] for k in ("dt", "amplitude", "rel_error"))
+    d = DecayCheck.from_row(t.decay_table.iloc[-1])
+    assert d.impacts == data["decay_table"]["impacts"][-1] and isinstance(d.impacts, int)
+    assert d.peak_analytic == data["decay_table"]["peak_analytic"][-1]
+    p = PulseCheck.from_row(t.pulse_table.iloc[1])
+    assert p.pulse == data["pulse_table"]["pulse"][1] and p.theta_max_rtol == data["pulse_table"]["theta_max_rtol"][1]
+    old = PulseCheck.from_row(pd.Series({"rel_error": 0.01, "theta_max_rel_error": -0.02, "theta_max_rtol": 0.05}))
+    assert old.pulse == "" and math.isnan(old.dt) and math.isnan(old.peak_engine)
+    assert math.isnan(RatioCheck.from_row(pd.Series({"amplitude": 0.5, "rel_error": 0.0})).r_engine)

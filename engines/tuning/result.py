@@ -13,7 +13,7 @@ import pandas as pd
 from housner._values import JsonValue, json_number
 from housner.engines.tuning.checks import DECAY_RTOL, RTOL, SMALL_WORST_FACTOR
 
-__all__ = ["TuningResult"]
+__all__ = ["DecayCheck", "PulseCheck", "RatioCheck", "TuningResult"]
 
 
 def settings_text(settings: dict) -> str:
@@ -27,6 +27,128 @@ def settings_text(settings: dict) -> str:
         return str(v)
 
     return ", ".join(f"{k}={fmt(v)}" for k, v in settings.items())
+
+
+def _number(row: pd.Series, col: str) -> float:
+    """A row's number in ``col``, NaN where its table has no such column (a file of an earlier version)."""
+    return float(row[col]) if col in row.index else math.nan
+
+
+@dataclass(frozen=True)
+class RatioCheck:
+    """One release from rest of checks 1 and 2: a row of :attr:`TuningResult.table` or
+    :attr:`TuningResult.small_table`.
+
+    Attributes
+    ----------
+    dt : float
+        The sample step [s] (NaN: a file older than the sample steps).
+    amplitude : float
+        The release amplitude theta0/alpha [-].
+    r_engine, r_target : float
+        The energy ratio of the first impact, the engine's and the target [-] (NaN where the file has none).
+    rel_error : float
+        r_engine / r_target - 1 [-].
+    """
+
+    dt: float
+    amplitude: float
+    r_engine: float
+    r_target: float
+    rel_error: float
+
+    @classmethod
+    def from_row(cls, row: pd.Series) -> RatioCheck:
+        """The check of one row of the table (the one place that reads its columns by name)."""
+        return cls(
+            dt=_number(row, "dt"),
+            amplitude=float(row["amplitude"]),
+            r_engine=_number(row, "r_engine"),
+            r_target=_number(row, "r_target"),
+            rel_error=float(row["rel_error"]),
+        )
+
+
+@dataclass(frozen=True)
+class DecayCheck:
+    """One peak of check 3's free decay: a row of :attr:`TuningResult.decay_table`.
+
+    Attributes
+    ----------
+    dt : float
+        The sample step [s] (NaN: a file older than the sample steps).
+    impacts : int
+        Impacts before the peak.
+    peak_engine, peak_analytic : float
+        The peak after that many impacts / alpha, the engine's and the exact sequence's [-].
+    rel_error : float
+        peak_engine / peak_analytic - 1 [-].
+    """
+
+    dt: float
+    impacts: int
+    peak_engine: float
+    peak_analytic: float
+    rel_error: float
+
+    @classmethod
+    def from_row(cls, row: pd.Series) -> DecayCheck:
+        """The check of one row of the table (the one place that reads its columns by name)."""
+        return cls(
+            dt=_number(row, "dt"),
+            impacts=int(row["impacts"]),
+            peak_engine=float(row["peak_engine"]),
+            peak_analytic=float(row["peak_analytic"]),
+            rel_error=float(row["rel_error"]),
+        )
+
+
+@dataclass(frozen=True)
+class PulseCheck:
+    """One one-sine pulse of check 4 at one sample step: a row of :attr:`TuningResult.pulse_table`.
+
+    Attributes
+    ----------
+    dt : float
+        The sample step [s] (NaN: a file older than the sample steps).
+    pulse : str
+        The pulse's name ("" where the file names none).
+    peak_engine, peak_analytic : float
+        The first peak / alpha, the engine's and the analytic model's [-] (NaN where the file has none).
+    rel_error : float
+        peak_engine / peak_analytic - 1 [-].
+    theta_max_engine, theta_max_analytic : float
+        theta_max / alpha, the engine's and the analytic model's [-] (NaN where the file has none).
+    theta_max_rel_error : float
+        theta_max_engine / theta_max_analytic - 1 [-].
+    theta_max_rtol : float
+        Its accepted relative error [-].
+    """
+
+    dt: float
+    pulse: str
+    peak_engine: float
+    peak_analytic: float
+    rel_error: float
+    theta_max_engine: float
+    theta_max_analytic: float
+    theta_max_rel_error: float
+    theta_max_rtol: float
+
+    @classmethod
+    def from_row(cls, row: pd.Series) -> PulseCheck:
+        """The check of one row of the table (the one place that reads its columns by name)."""
+        return cls(
+            dt=_number(row, "dt"),
+            pulse=str(row["pulse"]) if "pulse" in row.index else "",
+            peak_engine=_number(row, "peak_engine"),
+            peak_analytic=_number(row, "peak_analytic"),
+            rel_error=float(row["rel_error"]),
+            theta_max_engine=_number(row, "theta_max_engine"),
+            theta_max_analytic=_number(row, "theta_max_analytic"),
+            theta_max_rel_error=float(row["theta_max_rel_error"]),
+            theta_max_rtol=float(row["theta_max_rtol"]),
+        )
 
 
 @dataclass(frozen=True, eq=False)

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -32,7 +34,15 @@ from housner.statistics.ensemble_stats import (
 )
 from housner.statistics.proportions import ProportionCI, overturn_probability
 
-__all__ = ["REQUIRED_COLUMNS", "compare_engines", "percentile_table", "split_failed"]
+__all__ = [
+    "REQUIRED_COLUMNS",
+    "EngineSummary",
+    "Estimate",
+    "compare_engines",
+    "engine_summaries",
+    "percentile_table",
+    "split_failed",
+]
 
 #: Columns of the results table that these helpers (and every reader of a run) need.
 REQUIRED_COLUMNS = ("engine", "motion_id", "theta_max_over_alpha", "overturned", "status")
@@ -190,10 +200,122 @@ def _distribution_columns(
         pe = PercentileEstimate(qa, nan, nan, nan)
         po = ProportionCI(math.nan, math.nan, math.nan)
     row: dict[str, float] = {}
-    for k, qn in enumerate(f"q{x:g}" for x in qa):
+    for k, qn in enumerate(_percentile_column(x) for x in qa):
         row[qn], row[f"{qn}_low"], row[f"{qn}_high"] = pe.value[k], pe.low[k], pe.high[k]
     row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"] = po
     return row
+
+
+def _percentile_column(q: float) -> str:
+    """The column of :func:`compare_engines` that holds the percentile at level ``q`` [%]: ``q25``, ``q50``..."""
+    return f"q{q:g}"
+
+
+class Estimate(NamedTuple):
+    """A statistic with the two ends of its confidence interval (same units as the statistic)."""
+
+    value: float
+    low: float
+    high: float
+
+
+@dataclass(frozen=True)
+class EngineSummary:
+    """One engine's row of :func:`compare_engines`: its records, its distribution of theta_max/alpha and how far
+    it lies from the reference's.
+
+    Attributes
+    ----------
+    n, n_failed, n_ok : int
+        The engine's records: all, failed, usable.
+    percentiles : dict of float to Estimate
+        theta_max/alpha [-] (+inf: the percentile falls in the overturned records) at each percentile level [%],
+        with its percentile-bootstrap interval (NaN without usable records).
+    p_overturn : Estimate
+        P[overturn] [-] with its interval.
+    ks_distance, ks_pvalue : float
+        Two-sample Kolmogorov-Smirnov distance to the reference's distribution [-] and its p-value [-].
+    wasserstein : float
+        Wasserstein distance W1 to the reference's non-overturned peaks [alpha].
+    overturn_diff : float
+        P[overturn] of the engine minus the reference's [-].
+    n_paired : float
+        Records both the engine and the reference ran (a float: NaN where not compared).
+    agreement_share, verdict_share : float
+        Shares of the paired records that agree in theta_max/alpha, and in overturning or not [-].
+    wall_s_median, wall_s_total : float
+        Wall time per record (median) and in all [s]; NaN when the results table has no ``wall_s``.
+
+    The comparisons with the reference (``ks_distance`` to ``verdict_share``) are NaN on the reference's row and
+    where either engine has no usable record.
+    """
+
+    n: int
+    n_failed: int
+    n_ok: int
+    percentiles: dict[float, Estimate]
+    p_overturn: Estimate
+    ks_distance: float
+    ks_pvalue: float
+    wasserstein: float
+    overturn_diff: float
+    n_paired: float
+    agreement_share: float
+    verdict_share: float
+    wall_s_median: float = math.nan
+    wall_s_total: float = math.nan
+
+    @property
+    def median(self) -> Estimate:
+        """The median theta_max/alpha [-] with its interval (NaN where the table has no 50th percentile)."""
+        return self.percentile(50.0)
+
+    def percentile(self, q: float) -> Estimate:
+        """theta_max/alpha [-] at the percentile level ``q`` [%] with its interval (NaN: a level not computed)."""
+        return self.percentiles.get(float(q), Estimate(math.nan, math.nan, math.nan))
+
+    @classmethod
+    def from_row(cls, row: pd.Series) -> EngineSummary:
+        """The summary of one row of :func:`compare_engines` (the one place that reads its columns by name)."""
+
+        def num(col: str) -> float:
+            return float(row[col]) if col in row.index else math.nan
+
+        def estimate(col: str) -> Estimate:
+            return Estimate(num(col), num(f"{col}_low"), num(f"{col}_high"))
+
+        levels = [float(c[1:]) for c in row.index if _is_percentile_column(str(c), row.index)]
+        return cls(
+            n=int(row["n"]),
+            n_failed=int(row["n_failed"]),
+            n_ok=int(row["n_ok"]),
+            percentiles={q: estimate(_percentile_column(q)) for q in levels},
+            p_overturn=estimate("p_overturn"),
+            ks_distance=num("ks_distance"),
+            ks_pvalue=num("ks_pvalue"),
+            wasserstein=num("wasserstein"),
+            overturn_diff=num("overturn_diff"),
+            n_paired=num("n_paired"),
+            agreement_share=num("agreement_share"),
+            verdict_share=num("verdict_share"),
+            wall_s_median=num("wall_s_median"),
+            wall_s_total=num("wall_s_total"),
+        )
+
+
+def _is_percentile_column(col: str, columns: pd.Index) -> bool:
+    """Whether ``col`` is a percentile's column of :func:`compare_engines` (``q25``, with ``q25_low`` beside it)."""
+    if not (col.startswith("q") and f"{col}_low" in columns):
+        return False
+    try:
+        return _percentile_column(float(col[1:])) == col
+    except ValueError:
+        return False
+
+
+def engine_summaries(table: pd.DataFrame) -> dict[str, EngineSummary]:
+    """Engine -> its :class:`EngineSummary`, for every row of a :func:`compare_engines` table, in its order."""
+    return {str(e): EngineSummary.from_row(row) for e, row in table.iterrows()}
 
 
 def _versus_reference(

@@ -2,7 +2,8 @@
 record-by-record agreement against the chaos floor, combined.
 
 :func:`engine_verdict` judges one engine's row of the run's comparison table
-(:func:`housner.scenarios.execution.tables.compare_engines`) by the rule of ``docs/explanation/verdict.md``:
+(:func:`housner.scenarios.execution.tables.compare_engines`, read as an
+:class:`~housner.scenarios.execution.tables.EngineSummary`) by the rule of ``docs/explanation/verdict.md``:
 the distribution test (:data:`housner.statistics.ensemble_stats.KS_MAX`,
 :data:`housner.statistics.ensemble_stats.OVERTURN_TOL`, no failed record,
 at least :data:`MIN_RECORDS` records: the defaults of
@@ -17,8 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import pandas as pd
-
+from housner.scenarios.execution.tables import EngineSummary
 from housner.scenarios.runs.chaos import floor_check, floor_verdict
 from housner.statistics.ensemble_stats import KS_MAX, OVERTURN_TOL
 
@@ -167,12 +167,13 @@ class EngineVerdict:
         return out
 
 
-def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
-    """The verdict of one engine (its row of the run's comparison table) against the default tolerances.
+def engine_verdict(summary: EngineSummary, floor=None) -> EngineVerdict:
+    """The verdict of one engine (its row of the run's comparison table as a value,
+    :attr:`housner.scenarios.runs.view.Run.summaries`) against the default tolerances.
 
     ``floor`` is the engine's :class:`housner.scenarios.runs.chaos.ChaosFloor`, if the run has one.
     """
-    ks, dp, nf = float(row["ks_distance"]), float(row["overturn_diff"]), int(row["n_failed"])
+    ks, dp, nf = summary.ks_distance, summary.overturn_diff, summary.n_failed
     if math.isnan(ks) or math.isnan(dp):
         return EngineVerdict("no data", ((False, "no usable records to compare"),))
     checks = (
@@ -183,7 +184,7 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
         ),
         (nf == 0, f"{nf} failed record{'s' if nf != 1 else ''}"),
     )
-    n = int(row["n_ok"])
+    n = summary.n_ok
     if n < MIN_RECORDS and nf == 0:  # a failed record fails at any size; the two statistics need records
         status = "inconclusive"
         checks = (
@@ -196,11 +197,11 @@ def engine_verdict(row: pd.Series, floor=None) -> EngineVerdict:
         )
     else:
         status = "PASS" if all(c for c, _ in checks) else "FAIL"
-    paired = float(row.get("n_paired", 0) or 0)
+    paired = summary.n_paired
     if floor is None or not paired > 0:  # (NaN: no paired records)
         return EngineVerdict(status, checks)
     n_pair = int(paired)
-    k = int(round(float(row["agreement_share"]) * n_pair))
+    k = int(round(summary.agreement_share * n_pair))
     lo, hi, below = floor_check(k, n_pair, floor)
     agreement = RecordAgreement(k / n_pair, float(lo), float(hi), float(floor.share_min))
     return EngineVerdict(status, checks, floor_verdict(k, n_pair, floor), below, agreement)

@@ -28,7 +28,7 @@ from housner.errors import DataFileError, EngineError
 from housner.motion import GroundMotion
 from housner.scenarios.execution.run_meta import RunMeta, SpecimenFacts
 from housner.scenarios.execution.rundir import StoredMotions, load_results, read_histories, read_motions
-from housner.scenarios.execution.tables import compare_engines, split_failed
+from housner.scenarios.execution.tables import EngineSummary, compare_engines, engine_summaries, split_failed
 from housner.scenarios.motions.build import MotionFacts, RecordFacts
 from housner.scenarios.motions.records import RECORDS, file_sha256, read_record_file
 from housner.scenarios.runs.campaign_run import (
@@ -211,6 +211,12 @@ class Run:
             atol=0.0,
         )
 
+    @cached_property
+    def summaries(self) -> dict[str, EngineSummary]:
+        """Engine -> its row of :attr:`comparison` as a value (records, percentiles, P[overturn], distances to the
+        reference: :class:`~housner.scenarios.execution.tables.EngineSummary`), the reference first."""
+        return engine_summaries(self.comparison)
+
     def verdicts(self, floors: dict | None = None) -> dict[str, EngineVerdict]:
         """Engine -> its verdict against the reference, for every engine but the series with the scenario's
         [[effects]] (an effect is meant to move the distribution: it gets no verdict).
@@ -220,7 +226,7 @@ class Run:
         """
         floors = self.chaos_floors if floors is None else floors
         skip = set(self.meta.effect_series) | set(self.mesh_engines)
-        return {e: engine_verdict(self.comparison.loc[e], floors.get(e)) for e in self.others if e not in skip}
+        return {e: engine_verdict(self.summaries[e], floors.get(e)) for e in self.others if e not in skip}
 
     @property
     def mesh_engines(self) -> list[str]:

@@ -74,11 +74,11 @@ def agreement_section(run: Run) -> str:
     parts = [_agreement_table(run, floors)]
     lines = []
     for e in run.others:
-        r, fl = run.comparison.loc[e], floors.get(e)
-        if fl is None or not (r["n_paired"] > 0):
+        r, fl = run.summaries[e], floors.get(e)
+        if fl is None or not (r.n_paired > 0):
             continue
-        n = int(r["n_paired"])
-        lines.append(f"{esc(e)}: {esc(floor_verdict(int(round(r['agreement_share'] * n)), n, fl))}.")
+        n = int(r.n_paired)
+        lines.append(f"{esc(e)}: {esc(floor_verdict(int(round(r.agreement_share * n)), n, fl))}.")
     if lines:
         parts.append(html_note("<br>".join(lines)))
     wide = _disagreement(run)
@@ -106,17 +106,17 @@ def _agreement_table(run: Run, floors: dict) -> str:
     ]
     rows = []
     for e in run.others:
-        r = run.comparison.loc[e]
+        r = run.summaries[e]
         rows.append(
             [
                 engine_tag(e, run),
-                fmt_num(r["ks_distance"]),
-                fmt_p(r["ks_pvalue"]),
-                fmt_num(r["wasserstein"]),
-                fmt_num(r["overturn_diff"]),
-                fmt_num(r["n_paired"], 0),
-                fmt_pct(r["verdict_share"]),
-                fmt_pct(r["agreement_share"]),
+                fmt_num(r.ks_distance),
+                fmt_p(r.ks_pvalue),
+                fmt_num(r.wasserstein),
+                fmt_num(r.overturn_diff),
+                fmt_num(r.n_paired, 0),
+                fmt_pct(r.verdict_share),
+                fmt_pct(r.agreement_share),
                 _floor_cell(floors.get(e)),
             ]
         )

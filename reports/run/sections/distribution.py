@@ -29,14 +29,13 @@ from housner.reports.page import (
     view_colors,
 )
 from housner.scenarios.execution.rundir import jsonable
-from housner.scenarios.execution.tables import percentile_table
+from housner.scenarios.execution.tables import EngineSummary, percentile_table
 from housner.scenarios.runs.spread import AmplitudeFactor, RecordGap, Table2Spread
 from housner.scenarios.runs.view import QUARTILES, Run, source_record
 from housner.statistics import ensemble_stats as stats
 
 
 def distribution_section(run: Run) -> str:
-    cmp = run.comparison
     samples = {e: run.values(e) for e in run.engines if run.values(e).size}
     if not samples:
         return html_note("No usable record: nothing to plot.", "warn")
@@ -61,20 +60,17 @@ def distribution_section(run: Run) -> str:
     header += [engine_tag(e, run) for e in run.engines]
     rows = []
     for q in QUARTILES:
-        qn = f"q{q:g}"
         r = [stats.percentile_label(q) if hasattr(stats, "percentile_label") else f"{q:g}th"]
         if paper:
             r.append(fmt_num(paper.get(q, math.nan), 2))
         for e in run.engines:
-            row = cmp.loc[e]
-            r.append(ci_cell(row[qn], row[f"{qn}_low"], row[f"{qn}_high"], 2))
+            r.append(ci_cell(*run.summaries[e].percentile(q), 2))
         rows.append(r)
     r = ["P[overturn]"]
     if paper:
         r.append("&ndash;")
     for e in run.engines:
-        row = cmp.loc[e]
-        r.append(ci_cell(row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"], 2))
+        r.append(ci_cell(*run.summaries[e].p_overturn, 2))
     rows.append(r)
     parts.append(
         html_table(
@@ -121,9 +117,9 @@ def _finite_or_inf(v: float) -> float:
 
 def _table2_gap(run: Run, paper: dict[float, float], spread: Table2Spread | None) -> str:
     """The gap to the paper's Table 2, and its measured cause: the record against its own ensemble."""
-    cmp = run.comparison.loc[run.reference]
+    ref_summary = run.summaries[run.reference]
     ref = run.reference
-    head, gap = _gap_head(run, cmp, paper, spread)
+    head, gap = _gap_head(run, ref_summary, paper, spread)
     parts = [f"<p>{head}</p>"]
     record, why = source_record(run)
     if run.source != "rdk" or record is None or run.motions is None:
@@ -136,8 +132,8 @@ def _table2_gap(run: Run, paper: dict[float, float], spread: Table2Spread | None
         return "".join(parts)
     g = run.record_gap
     x, pct = g.record_theta_max_over_alpha, g.record_percentile
-    rec_line = _record_line(run, g, cmp, paper)
-    ia_line = _intensity_line(g, cmp, paper, gap)
+    rec_line = _record_line(run, g, ref_summary, paper)
+    ia_line = _intensity_line(g, ref_summary, paper, gap)
     spec_line, lo, hi = _spectrum_line(run, g)
     verdict = _gap_verdict(gap, pct, lo, hi, x, paper)
     items = [rec_line, ia_line, spec_line]
@@ -189,10 +185,12 @@ def _gap_verdict(gap: list[float], pct: float, lo: float, hi: float, x: float, p
         return "The paper's percentiles are reproduced within the ensemble's sampling noise."
 
 
-def _gap_head(run: Run, cmp, paper: dict[float, float], spread: Table2Spread | None) -> tuple[str, list[float]]:
+def _gap_head(
+    run: Run, ref_summary: EngineSummary, paper: dict[float, float], spread: Table2Spread | None
+) -> tuple[str, list[float]]:
     """Where the paper's percentiles stand against this run's noise: the sentence, and the levels outside it."""
     qs = [q for q in QUARTILES if q in paper]
-    n = int(cmp["n_ok"])
+    n = ref_summary.n_ok
     ref = run.reference
     summary = {json_number(k): v for k, v in (spread.summary if spread is not None else {}).items()}
     k_spread = spread.n_ensembles if spread is not None else 0
@@ -202,12 +200,12 @@ def _gap_head(run: Run, cmp, paper: dict[float, float], spread: Table2Spread | N
         if q in summary:
             lo, _, hi = (json_number(x) for x in (list(summary[q]) + [math.nan] * 3)[:3])
         else:
-            lo, hi = json_number(cmp[f"q{q:g}_low"]), json_number(cmp[f"q{q:g}_high"])
+            lo, hi = ref_summary.percentile(q).low, ref_summary.percentile(q).high
         ranges[q] = (lo, hi)
         pv = paper[q]
         inside[q] = bool(lo <= pv <= hi) if not math.isnan(pv) else None
     labels = " / ".join(stats.percentile_label(q) for q in qs)
-    ours = " / ".join(fmt_num(cmp[f"q{q:g}"], 2) for q in qs)
+    ours = " / ".join(fmt_num(ref_summary.percentile(q).value, 2) for q in qs)
     paper_txt = " / ".join(fmt_num(paper[q], 2) for q in qs)
     rng = " / ".join(f"{fmt_num(ranges[q][0], 2)}&ndash;{fmt_num(ranges[q][1], 2)}" for q in qs)
     gap = [q for q in qs if inside[q] is False]
@@ -243,10 +241,10 @@ def _gap_head(run: Run, cmp, paper: dict[float, float], spread: Table2Spread | N
     return head, gap
 
 
-def _record_line(run: Run, g: RecordGap, cmp, paper: dict[float, float]) -> str:
+def _record_line(run: Run, g: RecordGap, ref_summary: EngineSummary, paper: dict[float, float]) -> str:
     """Where the record's own response falls in its ensemble."""
     x, pct = g.record_theta_max_over_alpha, g.record_percentile
-    q75 = json_number(cmp["q75"])
+    q75 = ref_summary.percentile(75.0).value
     amp = g.amplitude
     scaled = f" times {amp:g} as the ensemble," if amp != 1.0 else ""
     if pct >= 75:
@@ -263,16 +261,16 @@ def _record_line(run: Run, g: RecordGap, cmp, paper: dict[float, float]) -> str:
     )
 
 
-def _intensity_line(g: RecordGap, cmp, paper: dict[float, float], gap: list[float]) -> str:
+def _intensity_line(g: RecordGap, ref_summary: EngineSummary, paper: dict[float, float], gap: list[float]) -> str:
     """Whether the ensemble's Arias intensity explains the gap."""
     ia, ia_rec = g.arias_ensemble_mean_m_s, g.arias_record_m_s
     ia_lo, ia_hi = g.arias_ensemble_5_95_m_s
     ia_ok = ia_lo <= ia_rec <= ia_hi
     # which way the gap goes: this run's percentiles below the paper's (or above)
     below = [
-        json_number(cmp[f"q{q:g}"]) < _finite_or_inf(paper[q])
+        ref_summary.percentile(q).value < _finite_or_inf(paper[q])
         for q in gap
-        if not math.isnan(json_number(cmp[f"q{q:g}"]))
+        if not math.isnan(ref_summary.percentile(q).value)
     ]
     facts = (
         f"the ensemble's mean Arias intensity is {ia:.2f} m/s against the record's {ia_rec:.2f} m/s (prototype "

@@ -41,7 +41,7 @@ def _moved(run: Run, base: str, series: str) -> str:
     if not (a.size and b.size):
         return "no usable records to compare"
     ks = stats.ks_2samp(a, b)
-    med = [float(run.comparison.loc[n, "q50"]) for n in (base, series)]  # as in the table below
+    med = [run.summaries[n].median.value for n in (base, series)]  # as in the table below
     po = [float(np.mean(np.isinf(v))) for v in (a, b)]
     return (
         f"against {esc(base)} without the effects: median &theta;<sub>max</sub>/&alpha; {fmt_num(med[0], 3)} &rarr; "
@@ -129,14 +129,13 @@ def _verdict_lines(run: Run, verdicts: dict[str, EngineVerdict], caveats: dict[s
 
 def _figures_line(run: Run, name: str, v: EngineVerdict) -> str:
     """The figures behind a verdict, in words: the distribution test's and the record-by-record one."""
-    cmp, ref = run.comparison, run.reference
-    row, rrow = cmp.loc[name], cmp.loc[ref]
-    nf = int(row["n_failed"])
+    s, ref = run.summaries[name], run.summaries[run.reference]
+    nf = s.n_failed
     dist = (
-        f"Distribution: KS distance {fmt_num(row['ks_distance'])} (limit {KS_MAX}); P[overturn] "
-        f"{fmt_num(row['p_overturn'], 2)} against {fmt_num(rrow['p_overturn'], 2)} (limit &plusmn;{OVERTURN_TOL}); "
-        f"median &theta;<sub>max</sub>/&alpha; {fmt_num(row['q50'], 3)} against {fmt_num(rrow['q50'], 3)} "
-        f"(the reference's 90 % interval {fmt_num(rrow['q50_low'], 3)}-{fmt_num(rrow['q50_high'], 3)}); "
+        f"Distribution: KS distance {fmt_num(s.ks_distance)} (limit {KS_MAX}); P[overturn] "
+        f"{fmt_num(s.p_overturn.value, 2)} against {fmt_num(ref.p_overturn.value, 2)} (limit &plusmn;{OVERTURN_TOL}); "
+        f"median &theta;<sub>max</sub>/&alpha; {fmt_num(s.median.value, 3)} against {fmt_num(ref.median.value, 3)} "
+        f"(the reference's 90 % interval {fmt_num(ref.median.low, 3)}-{fmt_num(ref.median.high, 3)}); "
         f"{nf} failed record{'s' if nf != 1 else ''}."
     )
     if v.records_short is None:
@@ -146,7 +145,7 @@ def _figures_line(run: Run, name: str, v: EngineVerdict) -> str:
 
 def _headline_table(run: Run, verdicts: dict[str, EngineVerdict]) -> str:
     """Every engine's records, KS distance, P[overturn], median, record agreement and verdict, the reference first."""
-    cmp, ref = run.comparison, run.reference
+    ref = run.reference
     header = [
         "engine",
         "records<br>ok / failed",
@@ -159,9 +158,9 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict]) -> str:
     ]
     rows = []
     for name in run.engines:
-        row = cmp.loc[name]
+        s = run.summaries[name]
         is_ref = name == ref
-        nf = int(row["n_failed"])
+        nf = s.n_failed
         v = verdicts.get(name)
         if is_ref:
             verdict = "reference"
@@ -173,11 +172,11 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict]) -> str:
         rows.append(
             [
                 engine_tag(name, run) + (" <small>(reference)</small>" if is_ref else ""),
-                f"{int(row['n_ok'])} / " + (f'<span class="bad">{nf}</span>' if nf else "0"),
-                "&ndash;" if is_ref else f"{fmt_num(row['ks_distance'])} (p = {fmt_p(row['ks_pvalue'])})",
-                ci_cell(row["p_overturn"], row["p_overturn_low"], row["p_overturn_high"], 2),
-                "&ndash;" if is_ref else fmt_signed(row["overturn_diff"], 3),
-                ci_cell(row["q50"], row["q50_low"], row["q50_high"], 3),
+                f"{s.n_ok} / " + (f'<span class="bad">{nf}</span>' if nf else "0"),
+                "&ndash;" if is_ref else f"{fmt_num(s.ks_distance)} (p = {fmt_p(s.ks_pvalue)})",
+                ci_cell(*s.p_overturn, 2),
+                "&ndash;" if is_ref else fmt_signed(s.overturn_diff, 3),
+                ci_cell(*s.median, 3),
                 records,
                 verdict,
             ]
@@ -187,8 +186,8 @@ def _headline_table(run: Run, verdicts: dict[str, EngineVerdict]) -> str:
 
 def _rule_text(run: Run) -> str:
     """The one rule behind the verdicts, and how sure a verdict on this many records is."""
-    cmp, ref = run.comparison, run.reference
-    n = int(cmp.loc[ref, "n_ok"]) if ref in cmp.index else 0
+    ref = run.summaries.get(run.reference)
+    n = ref.n_ok if ref is not None else 0
     # Smirnov's asymptotic 5 % critical distance for two samples of n: sqrt(-ln(0.025) / 2) sqrt(2 / n).
     crit = math.sqrt(-math.log(0.025) / 2.0) * math.sqrt(2.0 / n) if n else math.nan
     if n >= MIN_RECORDS:

@@ -20,6 +20,7 @@ import pandas as pd
 from housner import engines
 from housner.engines.base import engine_class
 from housner.engines.tuning import DECAY_RTOL, DECAY_START, SMALL_WORST_FACTOR, TuningResult
+from housner.engines.tuning.result import DecayCheck, PulseCheck, RatioCheck
 from housner.reports import figures
 from housner.reports.page import (
     engine_tag,
@@ -44,7 +45,6 @@ TUNING_DIR: Path | None = None
 def tuning_caveats(run: Run) -> dict[str, str]:
     """engine -> HTML: the tuning checks its tuning file did not meet, by how much, and what that means here."""
     out = {}
-    cmp = run.comparison
     for name, stored in model_data(run).items():
         if name not in run.others or stored.data is None:
             continue
@@ -54,8 +54,8 @@ def tuning_caveats(run: Run) -> dict[str, str]:
         failed = [c for c in _tuning_checks(t) if not c.met]
         if not failed:
             continue
-        row = cmp.loc[name]
-        ok = engine_verdict(row).ok
+        summary = run.summaries[name]
+        ok = engine_verdict(summary).ok
         what = "; ".join(f'<span class="bad">{c.short}</span>' for c in failed)
         text = f"Tuning not met (<code>{esc(stored.path.name)}</code>, {esc(t.date)}): {what}. "
         names = {c.name for c in failed}
@@ -74,7 +74,7 @@ def tuning_caveats(run: Run) -> dict[str, str]:
             bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
             if len(bad):
                 small_limit = float(bad["peak_analytic"].max())
-        ks = float(row["ks_distance"])
+        ks = summary.ks_distance
         if ok:
             text += (
                 f"It does not change this verdict, which is measured on this run's own motions (KS {ks:.3f} "
@@ -182,12 +182,12 @@ def _first_impact_check(t: TuningResult, rtol: float) -> _Check | None:
         table["rel_error"] = table["r_engine"].astype(float) / target - 1.0  # files older than the error column
     if not ({"amplitude", "rel_error"} <= set(table.columns) and len(table)):
         return None
-    w = _worst_row(table, "rel_error")
+    w = RatioCheck.from_row(_worst_row(table, "rel_error"))
     amps = table["amplitude"].to_numpy(float)
     rng = f"{amps.min():g}-{amps.max():g} &alpha;"
     return _Check(
         f"r of the first impact, {rng}",
-        f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); "
+        f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w.dt)}); "
         f"mean {table['rel_error'].mean():+.2%}",
         f"&plusmn;{rtol:.2%}",
         bool(abs(w.rel_error) <= rtol),
@@ -201,7 +201,7 @@ def _small_check(t: TuningResult, rtol: float) -> _Check | None:
     small = _frame(t.small_table)
     if not ({"amplitude", "rel_error"} <= set(small.columns) and len(small)):
         return None
-    w = _worst_row(small, "rel_error")
+    w = RatioCheck.from_row(_worst_row(small, "rel_error"))
     means = small.groupby("dt", dropna=False, sort=False)["rel_error"].mean()
     m = float(means.iloc[int(np.argmax(np.abs(means.to_numpy(float))))])
     amps = small["amplitude"].to_numpy(float)
@@ -209,7 +209,7 @@ def _small_check(t: TuningResult, rtol: float) -> _Check | None:
     tol_w = SMALL_WORST_FACTOR * rtol
     return _Check(
         f"r of the first impact, {rng}",
-        f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w['dt'])}); worst mean {m:+.2%}",
+        f"worst {w.rel_error:+.2%} at {w.amplitude:g} &alpha; ({_step_label(w.dt)}); worst mean {m:+.2%}",
         f"worst &plusmn;{tol_w:.2%}, mean &plusmn;{rtol:.2%}",
         bool(abs(w.rel_error) <= tol_w and abs(m) <= rtol),
         f"r at {rng} worst {w.rel_error:+.2%}, mean {m:+.2%} (accepted &plusmn;{tol_w:.2%} and &plusmn;{rtol:.2%})",
@@ -221,7 +221,7 @@ def _decay_check(t: TuningResult) -> _Check | None:
     decay = _frame(t.decay_table)
     if not ({"impacts", "rel_error", "peak_engine", "peak_analytic"} <= set(decay.columns) and len(decay)):
         return None
-    w = _worst_row(decay, "rel_error")
+    w = DecayCheck.from_row(_worst_row(decay, "rel_error"))
     bad = decay[np.abs(decay["rel_error"].to_numpy(float)) > DECAY_RTOL]
     where = ""
     if len(bad):
@@ -231,12 +231,12 @@ def _decay_check(t: TuningResult) -> _Check | None:
         )
     return _Check(
         "free decay: peaks after " + ", ".join(str(int(k)) for k in sorted(set(decay["impacts"]))) + " impacts",
-        f"worst {w.rel_error:+.1%} after {int(w.impacts)} impacts ({w.peak_engine:.4f} &alpha; against "
-        f"{w.peak_analytic:.4f} &alpha;, {_step_label(w['dt'])}){where}",
+        f"worst {w.rel_error:+.1%} after {w.impacts} impacts ({w.peak_engine:.4f} &alpha; against "
+        f"{w.peak_analytic:.4f} &alpha;, {_step_label(w.dt)}){where}",
         f"&plusmn;{DECAY_RTOL:.0%}",
         bool(abs(w.rel_error) <= DECAY_RTOL),
-        f"a free decay's peak after {int(w.impacts)} impacts is {w.rel_error:+.1%} off the analytic "
-        f"{w.peak_analytic:.4f} &alpha; ({_step_label(w['dt'])}; accepted &plusmn;{DECAY_RTOL:.0%})",
+        f"a free decay's peak after {w.impacts} impacts is {w.rel_error:+.1%} off the analytic "
+        f"{w.peak_analytic:.4f} &alpha; ({_step_label(w.dt)}; accepted &plusmn;{DECAY_RTOL:.0%})",
     )
 
 
@@ -245,15 +245,15 @@ def _pulse_check(t: TuningResult, rtol: float) -> _Check | None:
     pulses = _frame(t.pulse_table)
     if not ({"rel_error", "theta_max_rel_error", "theta_max_rtol"} <= set(pulses.columns) and len(pulses)):
         return None
-    w = _worst_row(pulses, "rel_error")
+    w = PulseCheck.from_row(_worst_row(pulses, "rel_error"))
     scaled = np.abs(pulses["theta_max_rel_error"].to_numpy(float)) / pulses["theta_max_rtol"].to_numpy(float)
     k = int(np.argmax(scaled))
-    wt = pulses.iloc[k]
+    wt = PulseCheck.from_row(pulses.iloc[k])
     n = pulses["pulse"].nunique() if "pulse" in pulses.columns else len(pulses)
     return _Check(
         f"{n} one-sine pulses: first peak and &theta;<sub>max</sub>",
         f"first peak worst {w.rel_error:+.2%}; &theta;<sub>max</sub> worst {wt.theta_max_rel_error:+.2%} "
-        f"({esc(wt.get('pulse', ''))}, {_step_label(wt['dt'])})",
+        f"({esc(wt.pulse)}, {_step_label(wt.dt)})",
         f"first peak &plusmn;{rtol:.2%}; &theta;<sub>max</sub> &plusmn;"
         + ", &plusmn;".join(f"{x:.2%}" for x in sorted(set(pulses["theta_max_rtol"]))),
         bool(abs(w.rel_error) <= rtol and scaled[k] <= 1.0),
