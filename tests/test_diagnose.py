@@ -27,8 +27,8 @@ from housner.reports.diagnosis.document import write_diagnosis_json
 from housner.reports.diagnosis.verdict_text import diagnosis_summary
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
-from housner.scenarios.diagnosis.selection.candidate_trial import PRACTICAL, judge
 from housner.scenarios.diagnosis.selection.fitting import fit_effect
+from housner.scenarios.diagnosis.selection.paired_test import PRACTICAL, judge
 from housner.scenarios.diagnosis.selection.record_scoring import split_records
 
 DEFAULT_CASES = ("none", "rotational_damping", "sensor_offset")

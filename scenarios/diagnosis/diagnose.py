@@ -33,13 +33,7 @@ from housner.scenarios.diagnosis.comparison.pointers import order_drift
 from housner.scenarios.diagnosis.comparison.record_comparison import compare
 from housner.scenarios.diagnosis.economies import FloorLoopStopped
 from housner.scenarios.diagnosis.results import Candidate, Diagnosis, DiagnosisSettings, Step
-from housner.scenarios.diagnosis.selection.candidate_trial import (
-    PRACTICAL,
-    TrialSetup,
-    fmt_params,
-    held_text,
-    try_candidate,
-)
+from housner.scenarios.diagnosis.selection.candidate_trial import TrialSetup, fmt_params, held_text, try_candidate
 from housner.scenarios.diagnosis.selection.crossval import Folds, cross_validation
 from housner.scenarios.diagnosis.selection.fitting import build_model
 from housner.scenarios.diagnosis.selection.free_vibration_check import FreeVibrationCheck
@@ -51,6 +45,7 @@ from housner.scenarios.diagnosis.selection.history_search import (
     greedy,
     start,
 )
+from housner.scenarios.diagnosis.selection.paired_test import PRACTICAL
 from housner.scenarios.diagnosis.selection.probes import PROBES, ProbeFinding
 from housner.scenarios.diagnosis.selection.record_scoring import DEFAULT_FOLDS, check_finite
 from housner.scenarios.diagnosis.sensor_assessment import assess_sensor

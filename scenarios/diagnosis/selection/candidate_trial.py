@@ -45,59 +45,27 @@ from housner.scenarios.diagnosis.selection.fitting import (
     param_dims,
 )
 from housner.scenarios.diagnosis.selection.free_vibration_check import FreeVibrationCheck
+from housner.scenarios.diagnosis.selection.paired_test import PRACTICAL, Judgement, judge, sem
 from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteHistory, Scorer
 
 __all__ = [
-    "PRACTICAL",
     "SCREEN_LEVEL",
     "CurrentModel",
-    "Judgement",
     "Trial",
     "TrialSetup",
     "compatible",
     "fit_records",
     "fmt_params",
     "held_text",
-    "judge",
     "judged_candidate",
     "rank_key",
     "rejected_text",
-    "sem",
     "try_candidate",
     "try_pairs",
 ]
 
-#: An improvement must be at least this fraction of the sensor noise sigma/alpha per record [-]: the
-#: smallest fall taken for physics rather than for the model's own conventions.
-#: Why 0.1: docs/results.md#defaults-trial.
-PRACTICAL = 0.1
 #: One-sided level of the training-record screen a candidate passes before its folds are refitted [-].
 SCREEN_LEVEL = 0.05
-
-
-@dataclass(frozen=True)
-class Judgement:
-    """Whether a held-out fall of the per-record errors is significant (:func:`judge`).
-
-    Attributes
-    ----------
-    significant : bool
-    improvement, improvement_se : float
-        Mean paired fall of the errors [alpha] and its standard error.
-    z : float
-        improvement / improvement_se.
-    pvalue : float
-        One-sided Wilcoxon signed-rank p-value of the paired differences.
-    reason : str
-        Why it is (not) significant, in words.
-    """
-
-    significant: bool
-    improvement: float
-    improvement_se: float
-    z: float
-    pvalue: float
-    reason: str
 
 
 @dataclass(frozen=True)
@@ -173,41 +141,6 @@ class Trial:
     subset_only: bool = False
 
 
-def _paired(base: np.ndarray, new: np.ndarray) -> tuple[float, float]:
-    d = base - new
-    if d.size < 2:
-        return float(d.mean()) if d.size else math.nan, math.nan
-    return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size))
-
-
-def judge(before: np.ndarray, after: np.ndarray, test_level: float, noise_floor: float) -> Judgement:
-    """Is the held-out improvement from ``before`` to ``after`` (per-record errors [alpha]) significant?
-
-    The p-value is the one-sided Wilcoxon signed-rank test of the paired differences (records the
-    change leaves exactly as they were drop out): the differences are heavy-tailed (most records
-    barely change, a few that diverge by chaos change a lot), where a rank test keeps its power
-    and its level and a t-test on the mean does not. ``noise_floor`` is sigma/alpha [-]: the fall
-    must also be :data:`PRACTICAL` of it.
-    """
-    diffs = before - after
-    d, se = _paired(before, after)
-    z = d / se if se > 0 else (math.inf if d > 0 else 0.0)
-    nonzero = diffs[diffs != 0.0]
-    if nonzero.size == 0:
-        return Judgement(False, d, se, z, 1.0, "changes nothing")
-    pval = (
-        float(sps.wilcoxon(nonzero, alternative="greater", zero_method="wilcox").pvalue) if nonzero.size >= 2 else 1.0
-    )
-    need = PRACTICAL * noise_floor
-    if not d > 0:
-        return Judgement(False, d, se, z, pval, "no improvement")
-    if pval > test_level:
-        return Judgement(False, d, se, z, pval, f"within its uncertainty (p = {pval:.2g} > {test_level:.2g})")
-    if d < need:
-        return Judgement(False, d, se, z, pval, f"below a tenth of the sensor noise ({d:.4f} < {need:.4f} alpha)")
-    return Judgement(True, d, se, z, pval, f"p = {pval:.2g} <= {test_level:.2g} and {d:.4f} >= {need:.4f} alpha")
-
-
 def compatible(campaign: Campaign, model_effects: list, name: str) -> str:
     """'' if ``name`` can join the model, else the reason."""
     cls = effect_class(name)
@@ -229,11 +162,6 @@ def compatible(campaign: Campaign, model_effects: list, name: str) -> str:
         if cls.changes_mechanics and e.name in cls.conflicts:
             return f"cannot be combined with {e.name!r}"
     return ""
-
-
-def sem(v: np.ndarray) -> float:
-    """The standard error of the mean of ``v`` (NaN for fewer than two values)."""
-    return float(np.std(v, ddof=1) / math.sqrt(v.size)) if v.size > 1 else math.nan
 
 
 def rank_key(c: Candidate) -> float:

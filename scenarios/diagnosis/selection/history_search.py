@@ -21,7 +21,6 @@ from dataclasses import dataclass, replace
 from housner.scenarios.diagnosis.economies import StepNotSignificant, ThinnedSearch
 from housner.scenarios.diagnosis.results import Candidate, Step, names_label
 from housner.scenarios.diagnosis.selection.candidate_trial import (
-    PRACTICAL,
     CurrentModel,
     Trial,
     TrialSetup,
@@ -29,16 +28,15 @@ from housner.scenarios.diagnosis.selection.candidate_trial import (
     fit_records,
     fmt_params,
     held_text,
-    judge,
     judged_candidate,
     rank_key,
-    sem,
     try_candidate,
     try_pairs,
 )
 from housner.scenarios.diagnosis.selection.crossval import CVModel, add_to_folds, refit_folds
 from housner.scenarios.diagnosis.selection.fitting import build_model, effect_objective, fit_effect, joint_refit
 from housner.scenarios.diagnosis.selection.forward_selection import Round, forward_selection
+from housner.scenarios.diagnosis.selection.paired_test import PRACTICAL, judge, sem
 from housner.scenarios.diagnosis.selection.record_scoring import SEARCH_RATE, NonFiniteHistory
 
 __all__ = [
