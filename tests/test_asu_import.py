@@ -21,6 +21,7 @@ from scipy import signal
 from housner.cli import main
 from housner.errors import DataFileError
 from housner.scenarios.campaigns.asu import ImportResult, import_asu
+from housner.scenarios.campaigns.campaign import load_campaign
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -214,6 +215,29 @@ def _drop_column(data: Path, name: str) -> None:
     ix.drop(columns=[name]).to_csv(data / "index.csv", index=False)
 
 
+def test_each_record_carries_the_ground_motion_it_played_as_its_group(data, tmp_path):
+    ix = pd.read_csv(data / "index.csv", dtype=str, keep_default_na=False)
+    names = {"11": "RSN1_A.AT2", "12": 'RSN2 "B"', "17": "RSN1_A.AT2"}  # a quote: written as a TOML escape
+    ix["record"] = [names.get(t, "RSN9_OTHER") for t in ix["test"]]
+    ix.to_csv(data / "index.csv", index=False)
+    out = tmp_path / "out"
+    import_asu(data, out)
+    assert [(r["id"], r["group"]) for r in _toml(out)["record"]] == [
+        ("Test011", "RSN1_A.AT2"),
+        ("Test012", 'RSN2 "B"'),
+        ("Test017", "RSN1_A.AT2"),
+    ]
+    assert load_campaign(out).outcome_groups == ["RSN1_A.AT2", 'RSN2 "B"', "RSN1_A.AT2"]
+    # without the record column nothing else changes: the same campaign.toml less its group lines
+    _drop_column(data, "record")
+    import_asu(data, tmp_path / "without")
+    with_groups = (out / "campaign.toml").read_text().splitlines()
+    assert (tmp_path / "without" / "campaign.toml").read_text().splitlines() == [
+        ln for ln in with_groups if not ln.startswith("group = ")
+    ]
+    assert load_campaign(tmp_path / "without").outcome_groups == ["Test011", "Test012", "Test017"]
+
+
 @pytest.mark.parametrize(
     ("spoil", "kwargs", "message"),
     [
@@ -268,7 +292,7 @@ def test_cli_bad_flag_column_is_one_line_and_status_2(data, tmp_path, capsys):
 
 @pytest.mark.skipif(not (SHARED / "asu_granite_200hz.npz").is_file(), reason=f"{SHARED} not here")
 def test_shared_data_set(tmp_path):
-    """The whole derived data set: 490 records (92 listed without a file), 187 of them overturned."""
+    """The whole derived data set: 490 records (92 listed without a file), 187 of them overturned, of 56 motions."""
     out = tmp_path / "asu"
     result = import_asu(SHARED, out)
     assert (result.n_records, result.n_overturned, result.n_absent, result.left_out) == (490, 187, 92, ())
@@ -286,3 +310,9 @@ def test_shared_data_set(tmp_path):
     # differences) on the same float32 samples agrees to 4e-6 (6 digits written); the README does not state
     # the filter's order, and a 2nd-order one would differ by up to 6 %: 1e-3 tells the two apart.
     np.testing.assert_allclose([r["pgv"] for r in doc["record"]], ix["pgv_meas_disp_mps"], rtol=1e-3)
+    # each test's group is the ground motion it played, index.csv's record: 490 tests of 56 motions at 2-14
+    # scalings each (counted from index.csv's rows with present == 1)
+    groups = [r["group"] for r in doc["record"]]
+    assert groups == ix["record"].tolist()
+    sizes = pd.Series(groups).value_counts()
+    assert (len(groups), len(sizes), sizes.min(), sizes.max()) == (490, 56, 2, 14)

@@ -195,6 +195,56 @@ def test_campaign_toml_errors_name_the_key_and_line(small, tmp_path, text, needl
         assert n in msg
 
 
+# ----------------------------------------------------------------------------
+# record groups: the records played under one ground motion (issue 48)
+def _group_campaign(d: Path, groups: dict[str, str]) -> Path:
+    """Three outcome records (o1..o3) and two theta records (m1, m2) at 100 Hz; ``groups`` maps an id to the
+    text of its ``group = ...`` line."""
+    t = np.arange(200) * 0.01
+    acc = 0.5 * np.sin(2 * np.pi * t)
+    (d / "records").mkdir(parents=True)
+    recs = []
+    for rid in ("o1", "o2", "o3", "m1", "m2"):
+        theta = rid.startswith("m")
+        cols = [t, acc, 1e-4 * np.sin(7 * t)] if theta else [t, acc]
+        head = "time,ground_acc,theta" if theta else "time,ground_acc"
+        rows = "".join(",".join(f"{v:.6g}" for v in row) + "\n" for row in zip(*cols, strict=True))
+        (d / "records" / f"{rid}.csv").write_text(head + "\n" + rows)
+        recs.append(_REC.format(id=rid, kind="ground_motion") + ("" if theta else "overturned = false\n"))
+        recs[-1] += f"group = {groups[rid]}\n" if rid in groups else ""
+    return _write_toml(d, _GOOD_HEAD + "".join(recs))
+
+
+def test_record_groups_are_read_and_a_record_without_one_is_its_own(tmp_path):
+    d = _group_campaign(tmp_path / "c", {"o1": '"RSN43_LYTLECREEK"', "o3": '"RSN43_LYTLECREEK"', "m2": "'fv set'"})
+    c = load_campaign(d)
+    assert not c.skipped
+    assert [(o.id, o.group) for o in c.outcomes] == [
+        ("o1", "RSN43_LYTLECREEK"),
+        ("o2", None),
+        ("o3", "RSN43_LYTLECREEK"),
+    ]
+    assert [(r.id, r.group) for r in c.records] == [("m1", None), ("m2", "fv set")]
+    assert c.outcome_groups == ["RSN43_LYTLECREEK", "o2", "RSN43_LYTLECREEK"]
+    assert c.record_groups == ["m1", "fv set"]
+
+
+def test_a_campaign_without_groups_gives_each_record_its_id(tmp_path):
+    c = load_campaign(_group_campaign(tmp_path / "c", {}))
+    assert c.outcome_groups == ["o1", "o2", "o3"] and c.record_groups == ["m1", "m2"]
+
+
+@pytest.mark.parametrize("value", ["3", '""', '"  "', "true", '["RSN43"]', "{ name = 'RSN43' }"])
+def test_a_group_that_is_not_a_non_empty_string_refuses_the_campaign_naming_key_and_line(tmp_path, value):
+    d = _group_campaign(tmp_path / "c", {"o2": value})
+    line = (d / "campaign.toml").read_text().splitlines().index(f"group = {value}") + 1
+    with pytest.raises(DataFileError) as err:
+        load_campaign(d)
+    msg = str(err.value)
+    assert f"campaign.toml line {line}: [[record]] #2 'group' must be a non-empty string" in msg
+    assert "\n" not in msg
+
+
 def _to_degrees(d: Path, ids) -> int:
     """Rewrite the theta column of records ``ids`` in degrees (header unchanged); how many leave |theta| <= pi/2."""
     refused = 0

@@ -336,6 +336,7 @@ CASES = [
     Case("campaign-key-unknown", campaign(CAMPAIGN + 'colour = "red"\n'), ["campaign.toml", "colour"]),
     Case("campaign-record-kind", campaign(CAMPAIGN.replace('"ground_motion"', '"earthquake"')), ["earthquake"]),
     Case("campaign-record-no-file", campaign(CAMPAIGN.replace('file = "records/gm01.csv"\n', "")), ["file"]),
+    Case("campaign-record-group", campaign(CAMPAIGN + "group = 3\n"), ["campaign.toml", "line 12", "'group'"]),
     Case(
         "campaign-record-list",
         campaign("record = [1, 2]\n" + CAMPAIGN.split("[[record]]")[0]),

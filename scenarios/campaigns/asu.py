@@ -3,12 +3,12 @@
 The tests of the virtual-shake-robot project (Chen et al. 2024) shook two granite specimens, SP1 and SP2,
 with the same table motions and recorded whether each overturned. :func:`import_asu` writes one specimen's
 tests as a campaign directory (``docs/reference/campaign-format.md``): ``campaign.toml`` (the scan mesh as
-the specimen, one ``[[record]]`` per test in the order of testing, with its outcome and the measured table
-PGV), a copy of the mesh, and ``records/Test###.csv`` with ``time`` [s] and ``ground_acc`` [m/s^2] at
-200 Hz, read from the compact derived data set or from the project's original files, which it processes as
-the data set's README says. The two forms of ``DATA``, how the original files are processed, how the PGV is
-taken and how bad input is refused are in ``docs/how-to/real-shake-table-tests.md`` ("The data", "2. Import
-the tests as a campaign").
+the specimen, one ``[[record]]`` per test in the order of testing, with its outcome, the measured table
+PGV and, as its ``group``, the ground motion it played), a copy of the mesh, and ``records/Test###.csv``
+with ``time`` [s] and ``ground_acc`` [m/s^2] at 200 Hz, read from the compact derived data set or from the
+project's original files, which it processes as the data set's README says. The two forms of ``DATA``, how
+the original files are processed, how the PGV is taken and how bad input is refused are in
+``docs/how-to/real-shake-table-tests.md`` ("The data", "2. Import the tests as a campaign").
 
 References
 ----------
@@ -121,6 +121,7 @@ class _Test:
     present: bool
     outcome: str  # the outcome column's text
     source: str  # file name of its Test###.txt ("" when the column is absent)
+    record: str = ""  # the ground motion it played, the `record` column ("" when absent): the record's group
 
     @property
     def id(self) -> str:
@@ -319,7 +320,7 @@ def _read_index(path: Path, flags: str, *, need_source: bool) -> list[_Test]:
             raise DataFileError(path, f"test {number} is listed twice (also line {seen[number]})", line=line)
         seen[number] = line
         source = Path(cell["source_path"].replace("\\", "/")).name if "source_path" in cell else ""
-        tests.append(_Test(number, line, cell["present"] == "1", cell[flags], source))
+        tests.append(_Test(number, line, cell["present"] == "1", cell[flags], source, cell.get("record", "")))
     return tests
 
 
@@ -558,6 +559,8 @@ def _campaign_toml(data: Path, specimen: str, flags: str, spec: dict, written: l
             f"overturned = {'true' if overturned else 'false'}",
             f"pgv = {float(f'{pgv:.6g}')!r}           # [m/s] measured table PGV, from the displacement channel",
         ]
+        if test.record:  # the ground motion it played: the tests of its other scalings share the group
+            lines.append(f"group = {_toml_str(test.record)}")
     return "\n".join(lines) + "\n"
 
 

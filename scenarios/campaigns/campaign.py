@@ -72,6 +72,18 @@ class Campaign:
         """The ground-motion (shake-table) records."""
         return [r for r in self.records if r.kind == "ground_motion"]
 
+    @property
+    def outcome_groups(self) -> list[str]:
+        """The group of each outcome record, in the order of :attr:`outcomes`: its ``group`` (the ground motion
+        it played), or its id where it has none (a group of its own). Records of one group were shaken by the
+        same motion, so a held-out fold keeps them together."""
+        return _groups(self.outcomes)
+
+    @property
+    def record_groups(self) -> list[str]:
+        """The group of each theta record, in the order of :attr:`records`, as :attr:`outcome_groups`."""
+        return _groups(self.records)
+
     def record(self, rid: str) -> MeasuredRecord:
         """The record with id ``rid`` (ValueError listing the ids when unknown)."""
         for r in self.records:
@@ -155,6 +167,11 @@ def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
     return Campaign(
         name=name, specimen=specimen, records=records, skipped=skipped, path=root, outcomes=outcomes, scan=scan
     )
+
+
+def _groups(records: list) -> list[str]:
+    """Each record's ``group``, or its id where it has none."""
+    return [r.id if r.group is None else r.group for r in records]
 
 
 def _cause(e: DataFileError) -> tuple[str, str]:

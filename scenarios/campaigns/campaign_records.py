@@ -102,6 +102,10 @@ class MeasuredRecord:
     position : int
         The record's place among the campaign's ``[[record]]`` tables, the recording order, counting the
         records that could not be read (-1: not from a campaign file).
+    group : str or None
+        The ground motion the test played, from the record's ``group`` key: records that share a group were
+        shaken by the same motion (one record at several scalings, say), so a held-out fold keeps them
+        together. None: the record is a group of its own.
     """
 
     id: str
@@ -118,6 +122,7 @@ class MeasuredRecord:
     valid: np.ndarray | None = None
     clip: tuple[float, float] = (-math.inf, math.inf)
     position: int = -1
+    group: str | None = None
 
     @property
     def dt(self) -> float:
@@ -164,6 +169,10 @@ class OutcomeRecord:
         Measured residual displacement of the block [m], where measured.
     pgv_measured : float or None
         The measured peak table velocity [m/s] (from a displacement channel), where given.
+    group : str or None
+        The ground motion the test played, from the record's ``group`` key: records that share a group were
+        shaken by the same motion (one record at several scalings, say), so a held-out fold keeps them
+        together. None: the record is a group of its own.
     """
 
     id: str
@@ -174,6 +183,7 @@ class OutcomeRecord:
     theta_max: float | None = None
     residual_displacement: float | None = None
     pgv_measured: float | None = None
+    group: str | None = None
 
     @property
     def dt(self) -> float:
@@ -281,7 +291,8 @@ def read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord | O
     root : pathlib.Path
         The campaign folder; a relative ``file`` is resolved against it.
     rec : dict
-        The record's ``[[record]]`` table, validated (``id``, ``kind``, ``file``, optional outcome keys).
+        The record's ``[[record]]`` table, validated (``id``, ``kind``, ``file``, optional outcome keys and
+        ``group``).
     specimen : Specimen
         The campaign's specimen (a free vibration released beyond its alpha is refused).
 
@@ -350,6 +361,7 @@ def read_record(root: Path, rec: dict, specimen: Specimen) -> MeasuredRecord | O
         overturned=overturned,
         t_offset=t_off,
         hold=np.array(theta_file[:k_rel]),
+        group=rec.get("group"),
     )
 
 
@@ -394,4 +406,5 @@ def _read_outcome_record(path: Path, rec: dict) -> OutcomeRecord:
         theta_max=rec.get("theta_max"),
         residual_displacement=rec.get("residual_displacement"),
         pgv_measured=None if rec.get("pgv") is None else float(rec["pgv"]),
+        group=rec.get("group"),
     )

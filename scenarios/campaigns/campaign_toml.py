@@ -2,8 +2,9 @@
 
 A campaign is a directory with ``campaign.toml``: ``name``, ``description``,
 a ``[specimen]`` table (2H, 2B, depth, mass and an optional p, or a scan
-``mesh``) and one ``[[record]]`` table per test (``id``, ``kind``, ``file``
-and the optional outcome keys), see docs/reference/campaign-format.md.
+``mesh``) and one ``[[record]]`` table per test (``id``, ``kind``, ``file``, the optional
+outcome keys and an optional ``group``: records played under the same ground
+motion share one), see docs/reference/campaign-format.md.
 :func:`read_campaign_toml` reads and checks it; the campaign with its records
 is read by :func:`housner.scenarios.campaigns.campaign.load_campaign`.
 
@@ -49,6 +50,7 @@ _RECORD_KEYS = {
     "theta_max": "[rad] (optional, outcome records)",
     "residual_displacement": "[m] (optional, outcome records)",
     "pgv": "[m/s] (optional, outcome records: the measured peak table velocity)",
+    "group": "str (optional: records of one ground motion, e.g. played at several scalings, share a group)",
 }
 #: The numeric keys of an outcome record: each, where given, a number >= 0 in SI.
 _OUTCOME_KEYS = ("theta_max", "residual_displacement", "pgv")
@@ -310,6 +312,13 @@ def _record_entries(path: Path, text: str, data: dict) -> list[dict]:
                 path,
                 f"{where}'overturned' must be true or false, got {rec['overturned']!r}",
                 line=key_line(text, "overturned", "record", i),
+            )
+        if "group" in rec and (not isinstance(rec["group"], str) or not rec["group"].strip()):
+            raise DataFileError(
+                path,
+                f"{where}'group' must be a non-empty string (the ground motion the record played), "
+                f"got {rec['group']!r}",
+                line=key_line(text, "group", "record", i),
             )
         for key in _OUTCOME_KEYS:
             v = rec.get(key, 0.0)
