@@ -1,16 +1,11 @@
-"""Results as values: the frozen dataclasses that the run and study files are written from and read back into.
+"""Results as values: the frozen dataclasses that every results file is written from and read back into.
 
-A result file of a run or a study (run.json, study.json, fragility.json, the tune, frontier and explain
-JSONs, ...) is written from one value: a frozen dataclass whose fields are the file's keys, typed, its
-nested tables values of their own. :class:`JsonValue` gives such a class its two directions:
-:meth:`JsonValue.to_json` (the fields in order, as plain JSON data) and :meth:`JsonValue.from_json` (the
-fields read back by their type hints, from a file of this version or an earlier one: a missing key takes
-the field's default), and an equality under which a missing number (NaN) equals itself, so that a value
-read back from its own file equals the value written.
-
-Numbers keep their kind: an integer stays an integer and a float a float (a file written again is the
-file it was); a non-finite float may come back as the string of run.json ("inf", "nan") or as null
-(fragility.json): :func:`json_number` reads both.
+A results file (run.json, study.json, fragility.json, the tune, frontier and explain JSONs, the diagnosis and
+outcome diagnosis JSONs, ...) is written from one value, a frozen dataclass whose fields are typed:
+:class:`JsonValue` writes it as plain JSON data (:meth:`JsonValue.to_json`) and reads it back by its fields'
+type hints (:meth:`JsonValue.from_json`, :func:`read_as`: a missing key takes the field's default), with an
+equality under which NaN equals itself. Numbers keep their kind; a non-finite float is written as it is
+(:func:`plain`; the run files write it as a string at their edge) or as null (:func:`to_data`, strict JSON).
 """
 
 from __future__ import annotations
@@ -19,13 +14,24 @@ import math
 import types
 import typing
 from collections.abc import Mapping
-from dataclasses import MISSING, fields
+from dataclasses import MISSING, fields, is_dataclass
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
 import pandas as pd
 
-__all__ = ["JsonValue", "json_number", "plain", "read_as", "same"]
+__all__ = [
+    "JsonValue",
+    "WrittenAsResult",
+    "floats",
+    "json_number",
+    "plain",
+    "read_as",
+    "read_fields",
+    "same",
+    "to_data",
+]
 
 
 def json_number(x: Any) -> float:
@@ -85,6 +91,35 @@ def plain(v: Any) -> Any:
     return v
 
 
+def to_data(value: Any) -> Any:
+    """``value`` as strict JSON data (the diagnosis JSONs'): a value by its :meth:`~JsonValue.to_json`, another
+    dataclass field by field, tuples and arrays as lists, numpy scalars as Python numbers, paths as text, and
+    non-finite floats as None (a file that writes a missing number as null)."""
+    if isinstance(value, JsonValue):
+        return to_data(value.to_json())
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: to_data(getattr(value, f.name)) for f in fields(value)}
+    if isinstance(value, dict):
+        return {str(k): to_data(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [to_data(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def floats(data: Mapping, *keys: str) -> dict[str, float]:
+    """The numbers ``keys`` of ``data`` read as floats (null: NaN), for a ``from_json`` written by hand."""
+    return {k: read_as(float, data[k]) for k in keys}
+
+
 _HINTS: dict[type, dict[str, Any]] = {}
 
 
@@ -105,7 +140,8 @@ def _fits(tp: Any, x: Any) -> bool:
 
 
 def read_as(tp: Any, x: Any) -> Any:
-    """JSON data ``x`` read as type ``tp`` (a field's hint): numbers, words, values, tuples and tables of them.
+    """JSON data ``x`` read as type ``tp`` (a field's hint): numbers, words, values (and other dataclasses, by
+    their ``from_dict`` or :func:`read_fields`), tuples, lists and tables of them.
 
     Lenient, as a reader of earlier files must be: null or a table of another shape gives the type's empty
     value (NaN, "", an empty tuple or table) rather than an error.
@@ -122,6 +158,8 @@ def read_as(tp: Any, x: Any) -> Any:
         return tp.from_json(x)
     if isinstance(tp, type) and hasattr(tp, "from_dict") and not issubclass(tp, (dict, list, tuple)):
         return tp.from_dict(x)
+    if isinstance(tp, type) and is_dataclass(tp):
+        return read_fields(tp, x)
     if tp is float:
         return _number(x)
     if tp is int:
@@ -136,6 +174,8 @@ def read_as(tp: Any, x: Any) -> Any:
         if len(args) == 2 and args[1] is Ellipsis:
             return tuple(read_as(args[0], v) for v in items)
         return tuple(read_as(a, v) for a, v in zip(args, items, strict=False))
+    if origin is list:
+        return [read_as(args[0], v) for v in (x if isinstance(x, (list, tuple)) else [])]
     if origin in (dict, Mapping) or tp in (dict, Mapping):
         d = x if isinstance(x, Mapping) else {}
         if not args:
@@ -190,23 +230,43 @@ class JsonValue:
         field's default, a key of no field goes to ``extra`` when the class keeps one)."""
         if isinstance(data, cls):
             return data
-        data = data if isinstance(data, Mapping) else {}
-        hints = _hints(cls)
-        kwargs, known = {}, set()
-        for f in fields(cls):
-            if f.name == "extra" or not f.init:
-                continue
-            known.add(f.name)
-            if f.name in data:
-                v = data[f.name]
-                if f.name in cls._EMPTY_WHEN_NONE and not v:
-                    kwargs[f.name] = None
-                elif v is None and f.name in cls._NULL_IS_NAN:
-                    kwargs[f.name] = math.nan
-                else:
-                    kwargs[f.name] = read_as(hints[f.name], v)
-            elif f.default is MISSING and f.default_factory is MISSING:
-                kwargs[f.name] = read_as(hints[f.name], None)
-        if "extra" in {f.name for f in fields(cls)}:
-            kwargs["extra"] = {k: v for k, v in data.items() if k not in known}
-        return cls(**kwargs)
+        return read_fields(cls, data)
+
+
+def read_fields(cls: type, data: Any) -> Any:
+    """The dataclass ``cls`` read from JSON data field by field, by the fields' type hints (:func:`read_as`), with
+    the options of :class:`JsonValue` where ``cls`` sets them. A missing key takes the field's default, or the
+    empty value of its type."""
+    data = data if isinstance(data, Mapping) else {}
+    hints = _hints(cls)
+    empty_when_none, null_is_nan = getattr(cls, "_EMPTY_WHEN_NONE", ()), getattr(cls, "_NULL_IS_NAN", ())
+    kwargs, known = {}, set()
+    for f in fields(cls):
+        if f.name == "extra" or not f.init:
+            continue
+        known.add(f.name)
+        if f.name in data:
+            v = data[f.name]
+            if f.name in empty_when_none and not v:
+                kwargs[f.name] = None
+            elif v is None and f.name in null_is_nan:
+                kwargs[f.name] = math.nan
+            else:
+                kwargs[f.name] = read_as(hints[f.name], v)
+        elif f.default is MISSING and f.default_factory is MISSING:
+            kwargs[f.name] = read_as(hints[f.name], None)
+    if "extra" in {f.name for f in fields(cls)}:
+        kwargs["extra"] = {k: v for k, v in data.items() if k not in known}
+    return cls(**kwargs)
+
+
+class WrittenAsResult:
+    """An object whose JSON is that of its value ``result()`` (a :class:`JsonValue`): a computation's outcome that
+    holds more than its file (the records, the comparisons) and writes what its file holds."""
+
+    def result(self) -> JsonValue:
+        raise NotImplementedError
+
+    def to_json(self) -> dict:
+        """The JSON's data (:meth:`result`'s)."""
+        return self.result().to_json()

@@ -132,7 +132,7 @@ def test_diagnosis_finds_a_contact_inside_the_footprint(inside_contact):
     # the plain model misses overturns (its footprint is wider than the contact): the pointer says so
     assert d.pointer.leaning == "missed" and "inside the footprint" in outcome_pointer_text(d.pointer)
     assert d.status in ("explained", "partly_explained")
-    data = json.loads(json.dumps(d.to_dict(), default=float))
+    data = json.loads(json.dumps(d.to_json(), default=float))
     for key in ("accuracy", "f1", "log_loss"):
         assert key in data["outcomes"]
         for name in ("logistic_pga", "logistic_pgv", "logistic_pga_pgv"):
@@ -296,9 +296,13 @@ def test_the_outcome_diagnosis_json_is_written_from_a_typed_value_and_read_back_
 
     _, _, d = inside_contact
     fresh = d.result()
-    assert fresh.to_json() == d.to_json()  # the file is the value's
-    read = OutcomeDiagnosisResult.from_json(fresh.to_json())
+
+    def text(value) -> str:  # the JSON's text, as the file writes it (strict JSON)
+        return json.dumps(value.to_json(), indent=1, allow_nan=False)
+
+    assert text(fresh) == text(d)  # the file is the value's
+    read = OutcomeDiagnosisResult.from_json(json.loads(text(fresh)))
     # every figure survives: the value read back writes the same text and reads back equal to itself
-    assert read.to_json() == fresh.to_json()
-    assert OutcomeDiagnosisResult.from_json(read.to_json()) == read
+    assert text(read) == text(fresh)
+    assert OutcomeDiagnosisResult.from_json(json.loads(text(read))) == read
     assert read.final.scores == d.final.scores and read.baselines == d.baselines and read.misses == tuple(d.misses)

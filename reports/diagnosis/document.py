@@ -1,5 +1,5 @@
 """The diagnosis JSON as the command line writes it: the result's data
-(:meth:`housner.scenarios.diagnosis.results.DiagnosisResult.to_dict`) with its words, the verdict's paragraph, where
+(:meth:`housner.scenarios.diagnosis.results.DiagnosisResult.to_json`) with its words, the verdict's paragraph, where
 the model still differs and the one-paragraph summary (:mod:`housner.reports.diagnosis.verdict_text`)."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def diagnosis_document(diag: Diagnosis) -> dict:
     """The diagnosis JSON's content: the data of :meth:`Diagnosis.result`, the verdict's ``text``, ``where`` and
     ``distribution`` in words, the settings' ``economies`` in words (beside their ``economy_facts``), and the
     ``summary`` (before ``elapsed_s``)."""
-    data = diag.result().to_dict()
+    data = diag.result().to_json()
     v = diag.verdict
     if v is not None:
         words = {
@@ -48,6 +48,6 @@ def diagnosis_document(diag: Diagnosis) -> dict:
 
 def write_diagnosis_json(diag: Diagnosis, path: str | Path, extra: dict | None = None) -> None:
     """Write :func:`diagnosis_document` (with ``extra``'s keys added: a campaign of both kinds adds its outcome
-    diagnosis) to ``path``, strict JSON (no NaN: :meth:`DiagnosisResult.to_dict` wrote null there)."""
+    diagnosis) to ``path``, strict JSON (no NaN: :meth:`DiagnosisResult.to_json` wrote null there)."""
     text = json.dumps({**diagnosis_document(diag), **(extra or {})}, indent=2, allow_nan=False)
     Path(path).write_text(text + "\n")

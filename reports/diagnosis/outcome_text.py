@@ -79,7 +79,7 @@ def outcome_summary(diag: OutcomeDiagnosis) -> str:
 def outcome_document(diag: OutcomeDiagnosis) -> dict:
     """The outcome diagnosis JSON's content: the data of :meth:`OutcomeDiagnosis.result` with its words, the
     ``pointer`` (beside its counts) and the ``summary`` (before ``elapsed_s``)."""
-    data = diag.result().to_dict()
+    data = diag.result().to_json()
     elapsed = data.pop("elapsed_s")
     words = {"pointer": outcome_pointer_text(diag.pointer), "summary": outcome_summary(diag)}
     return {**data, **words, "elapsed_s": elapsed}

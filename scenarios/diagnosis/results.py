@@ -2,7 +2,7 @@
 :mod:`housner.reports.diagnosis.words`).
 
 :class:`Diagnosis` is what :func:`housner.scenarios.diagnosis.diagnose.diagnose` returns; its
-:meth:`Diagnosis.to_json` is strict JSON (NaN and infinities written as null).
+:meth:`Diagnosis.to_json` is strict JSON data (NaN and infinities written as null).
 Errors are time-history errors in units of alpha (see :mod:`housner.scenarios.diagnosis.comparison.record_comparison`).
 """
 
@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
+from housner._values import JsonValue, WrittenAsResult, floats, read_as, read_fields, to_data
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
 from housner.scenarios.diagnosis.economies import Economy, economy_data, economy_from_data
-from housner.scenarios.execution.typed_json import JsonValue, WrittenAsResult, floats, from_data, to_data
 
 __all__ = [
     "Candidate",
@@ -125,7 +125,7 @@ class Candidate:
             **floats(data, *_ERRORS, "z", "pvalue"),
             significant=bool(data["significant"]),
             reason=data["reason"],
-            fold_wins=None if folds is None else np.array([from_data(float, x) for x in folds]),
+            fold_wins=None if folds is None else np.array([read_as(float, x) for x in folds]),
         )
 
 
@@ -259,7 +259,7 @@ class DiagnosisSettings:
         """The settings :meth:`to_dict` wrote."""
         plain = {k: v for k, v in data.items() if k not in ("economies", "economy_facts")}
         economies = tuple(economy_from_data(e) for e in data["economy_facts"])
-        return replace(from_data(cls, {**plain, "economies": []}), economies=economies)
+        return replace(read_fields(cls, {**plain, "economies": []}), economies=economies)
 
 
 @dataclass(frozen=True)
@@ -285,10 +285,10 @@ class FloorSummary:
         return cls(tuple(float(x) for x in floor.mean), dict(floor.perturbation), int(floor.n_replicas))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class DiagnosisResult(JsonValue):
     """What a diagnosis JSON holds, as a value: :meth:`Diagnosis.result` makes it, :meth:`to_json` writes its data and
-    :meth:`from_json` reads it back (:meth:`to_dict` adds the baseline's and the final model's error summaries, which
+    :meth:`from_json` reads it back (:meth:`to_json` adds the baseline's and the final model's error summaries, which
     follow from the ladder). The words the file holds besides (the verdict's text, its summary) are
     :func:`housner.reports.diagnosis.document.diagnosis_document`'s.
 
@@ -337,8 +337,8 @@ class DiagnosisResult(JsonValue):
     localisation: dict
     elapsed_s: float
 
-    def to_dict(self) -> dict:
-        """The diagnosis JSON's keys, in its order."""
+    def to_json(self) -> dict:
+        """The diagnosis JSON's keys, in its order (strict JSON data: NaN and infinities written as null)."""
         base, final = self.ladder[0], self.ladder[-1]
         b = base.heldout_error
         reduction = (b - final.heldout_error) / b if b > 0 else 0.0
@@ -379,7 +379,7 @@ class DiagnosisResult(JsonValue):
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> DiagnosisResult:
+    def from_json(cls, data: dict) -> DiagnosisResult:
         from housner.scenarios.diagnosis.verdict.decision import Verdict  # the verdict reads the results' classes
 
         floor = data.get("floor")
@@ -390,21 +390,21 @@ class DiagnosisResult(JsonValue):
             rounds=tuple(tuple(Candidate.from_dict(c) for c in r) for r in data["rounds"]),
             selected=tuple(data["selected"]),
             added=tuple(data["added"]),
-            noise_floor=from_data(float, data["baseline"]["noise_floor"]),
-            test_level=from_data(float, data["test_level"]),
+            noise_floor=read_as(float, data["baseline"]["noise_floor"]),
+            test_level=read_as(float, data["test_level"]),
             train_ids=tuple(data["train_ids"]),
             heldout_ids=tuple(data["heldout_ids"]),
             skipped=tuple(tuple(x) for x in data["skipped"]),
             settings=DiagnosisSettings.from_dict(data["settings"]),
             folds=tuple(tuple(f) for f in data["folds"]),
-            selection_frequency={k: from_data(float, v) for k, v in data["selection_frequency"].items()},
+            selection_frequency={k: read_as(float, v) for k, v in data["selection_frequency"].items()},
             verdict=None if data.get("verdict") is None else Verdict.from_dict(data["verdict"]),
             sensor=data.get("sensor"),
             floors=None
             if floor is None
-            else (from_data(FloorSummary, floor["baseline"]), from_data(FloorSummary, floor["final"])),
+            else (read_as(FloorSummary, floor["baseline"]), read_as(FloorSummary, floor["final"])),
             localisation=data["localisation"],
-            elapsed_s=from_data(float, data["elapsed_s"]),
+            elapsed_s=read_as(float, data["elapsed_s"]),
         )
 
 
@@ -519,4 +519,4 @@ def _clean(params: dict) -> dict:
 
 def _params_from(data: dict) -> dict:
     """Fitted parameters as a diagnosis JSON holds them (null: no finite value)."""
-    return {k: from_data(float, v) for k, v in data.items()}
+    return {k: read_as(float, v) for k, v in data.items()}

@@ -18,9 +18,9 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 from scipy.stats import kendalltau, norm
 
+from housner._values import read_as
 from housner.scenarios.diagnosis.comparison.localise import METRICS
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
-from housner.scenarios.execution.typed_json import from_data
 
 __all__ = [
     "CLASSES",
@@ -148,8 +148,8 @@ class PointerClass:
         return cls(
             name=data["class"],
             meaning=data["meaning"],
-            z=from_data(float, data["z"]),
-            evidence=from_data(tuple[Evidence, ...], data["evidence"]),
+            z=read_as(float, data["z"]),
+            evidence=read_as(tuple[Evidence, ...], data["evidence"]),
             source=data.get("from"),
         )
 

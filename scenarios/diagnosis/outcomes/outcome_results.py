@@ -7,12 +7,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import ClassVar
 
 import numpy as np
 
+from housner._values import JsonValue, WrittenAsResult, floats, read_as, to_data
 from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores
-from housner.scenarios.execution.typed_json import JsonValue, WrittenAsResult, floats, from_data, to_data
 
 __all__ = [
     "Miss",
@@ -276,13 +275,11 @@ class OutcomeDiagnosis(WrittenAsResult):
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class OutcomeDiagnosisResult(JsonValue):
     """What an outcome diagnosis JSON holds, as a value: :meth:`OutcomeDiagnosis.result` makes it, :meth:`to_json`
     writes the file (its ``outcomes`` table repeats the final model's scores beside the floor and the baselines) and
     :meth:`from_json` reads it back."""
-
-    JSON_INDENT: ClassVar[int] = 1
 
     campaign: str
     status: str
@@ -308,8 +305,8 @@ class OutcomeDiagnosisResult(JsonValue):
         f = self.final
         return None if f.name == "plain" else {"name": f.name, "params": f.params}
 
-    def to_dict(self) -> dict:
-        """The outcome diagnosis JSON's keys, in its order."""
+    def to_json(self) -> dict:
+        """The outcome diagnosis JSON's keys, in its order (strict JSON data: NaN and infinities written as null)."""
         f = self.final
         baselines = {k: v.to_dict() for k, v in self.baselines.items()}
         outcomes = {
@@ -343,7 +340,7 @@ class OutcomeDiagnosisResult(JsonValue):
         )
 
     @classmethod
-    def from_dict(cls, data: dict) -> OutcomeDiagnosisResult:
+    def from_json(cls, data: dict) -> OutcomeDiagnosisResult:
         out = data["outcomes"]
         return cls(
             campaign=data["campaign"],
@@ -354,13 +351,13 @@ class OutcomeDiagnosisResult(JsonValue):
             seed=data["seed"],
             ladder=tuple(OutcomeStep.from_dict(x) for x in data["ladder"]),
             baselines={k: OutcomeScores.from_dict(v) for k, v in data["baselines"].items()},
-            floor=from_data(OutcomeFloor, out["floor"]),
-            calibration=from_data(tuple[CalibrationBin, ...], out["calibration"]),
-            candidates=from_data(tuple[OutcomeCandidate, ...], data["candidates"]),
-            pointer=from_data(OutcomeMisses, data["pointer_counts"]),
-            misses=from_data(tuple[Miss, ...], data["misses"]),
-            geometry=from_data(OutcomeGeometry, data["geometry"]),
-            elapsed_s=from_data(float, data["elapsed_s"]),
+            floor=read_as(OutcomeFloor, out["floor"]),
+            calibration=read_as(tuple[CalibrationBin, ...], out["calibration"]),
+            candidates=read_as(tuple[OutcomeCandidate, ...], data["candidates"]),
+            pointer=read_as(OutcomeMisses, data["pointer_counts"]),
+            misses=read_as(tuple[Miss, ...], data["misses"]),
+            geometry=read_as(OutcomeGeometry, data["geometry"]),
+            elapsed_s=read_as(float, data["elapsed_s"]),
         )
 
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, special
 
-from housner.scenarios.execution.typed_json import from_data, to_data
+from housner._values import read_fields, to_data
 from housner.statistics.proportions import wilson_interval
 
 __all__ = [
@@ -110,7 +110,7 @@ class OutcomeScores:
 
     @classmethod
     def from_dict(cls, data: dict) -> OutcomeScores:
-        return from_data(cls, data)
+        return read_fields(cls, data)
 
 
 @dataclass(frozen=True)

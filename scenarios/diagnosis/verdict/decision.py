@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 from scipy.stats import norm
 
+from housner._values import read_as, to_data
 from housner.scenarios.diagnosis.comparison.pointers import (
     CLASSES,
     MIN_RECORDS,
@@ -44,7 +45,6 @@ from housner.scenarios.diagnosis.verdict.residual_test import (
     Residual,
 )
 from housner.scenarios.diagnosis.verdict.status import status_rule
-from housner.scenarios.execution.typed_json import from_data, to_data
 
 __all__ = [
     "DIST_LEVEL",
@@ -209,7 +209,7 @@ class VerdictFacts:
             selected=tuple(data["selected"]),
             added=tuple(data["added"]),
             model=list(data["model"]),
-            params={n: {k: from_data(float, v) for k, v in p.items()} for n, p in data["params"].items()},
+            params={n: {k: read_as(float, v) for k, v in p.items()} for n, p in data["params"].items()},
             library=tuple(data["library"]),
             drift=None if data["drift"] is None else PointerClass.from_dict(data["drift"]),
             family=data["family"],
@@ -217,8 +217,8 @@ class VerdictFacts:
             final_classes=pointers("final_classes"),
             local_plain=pointers("local_plain"),
             local_final=pointers("local_final"),
-            dist_plain=from_data(list[DistributionMisfit], data["dist_plain"]),
-            dist_final=from_data(list[DistributionMisfit], data["dist_final"]),
+            dist_plain=read_as(list[DistributionMisfit], data["dist_plain"]),
+            dist_final=read_as(list[DistributionMisfit], data["dist_final"]),
             plain_misfit=bool(data["plain_misfit"]),
             final_misfit=bool(data["final_misfit"]),
             powered=bool(data["powered"]),

@@ -19,8 +19,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from housner._values import read_fields
 from housner.scenarios.diagnosis.verdict.correct_model_floor import Floor
-from housner.scenarios.execution.typed_json import from_data
 
 __all__ = ["DETECTABLE_RATIO", "RATIO_MISFIT", "Z_MISFIT", "GroupResidual", "Residual", "residual_test"]
 
@@ -129,7 +129,7 @@ class Residual:
 
     @classmethod
     def from_dict(cls, data: dict) -> Residual:
-        return from_data(cls, data)
+        return read_fields(cls, data)
 
 
 def _trimmed(x: np.ndarray) -> tuple[float, float, float]:
