@@ -16,12 +16,8 @@ from housner.reports.diagnosis.outcome_text import outcome_pointer_text, outcome
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
 from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import Geometry, diagnose_outcomes
-from housner.scenarios.diagnosis.outcomes.outcome_scores import (
-    logistic_oof,
-    outcome_floor,
-    outcome_scores,
-    stratified_folds,
-)
+from housner.scenarios.diagnosis.outcomes.outcome_scores import outcome_floor, outcome_scores
+from housner.scenarios.diagnosis.outcomes.outcome_validation import baseline_oof, grouped_folds
 
 # A slender block like a small rock: 2H = 0.6 m, 2B = 0.06 m (alpha = 0.0997 rad), solid.
 SPEC = Specimen(height=0.6, width=0.06, depth=0.3, mass=50.0)
@@ -79,18 +75,12 @@ def test_scores_match_hand_counts_and_pairwise_auc():
     assert lo <= s.accuracy <= hi
 
 
-def test_stratified_folds_keep_the_share_of_overturns():
-    y = np.r_[np.ones(30, bool), np.zeros(70, bool)]
-    fold = stratified_folds(y, 5, seed=1)
-    for f in range(5):  # 6 overturned and 14 standing in each fold: exact, by construction
-        assert (y[fold == f].sum(), (~y[fold == f]).sum()) == (6, 14)
-
-
 def test_logistic_baseline_recovers_a_logistic_truth():
     rng = np.random.default_rng(3)
     x = rng.normal(size=2000)
     y = rng.random(2000) < 1 / (1 + np.exp(-(0.5 + 2.0 * x)))
-    p = logistic_oof(x, y, stratified_folds(y, 2, 0))
+    fold = grouped_folds(y, np.arange(y.size), 2, 0)  # every record its own group
+    p = baseline_oof("logistic_pga", np.exp(x), np.ones_like(x), y, fold)  # log PGA is x
     # out of fold on 1000 records each: the fitted P within 0.05 of the true P (the slope's standard error is
     # about 0.1, which moves P by at most 0.025 at |x| < 1)
     true = 1 / (1 + np.exp(-(0.5 + 2.0 * x)))
@@ -247,11 +237,16 @@ def test_sp1_diagnosis_beats_every_alternative_on_real_outcomes(tmp_path):
     o = d["outcomes"]
     assert (d["n_records"], d["n_overturned"]) == (490, 187)
     # the rows a user would pick instead (issue 36): VSR's PyBullet model 0.821 / 0.735, the numerical model
-    # stored with the data 0.87 / 0.85, a logistic regression on PGV 0.86 / 0.81
-    assert o["accuracy"] >= 0.90 and o["f1"] >= 0.86
+    # stored with the data 0.87 / 0.85, a logistic regression on PGV 0.86 / 0.81; with folds that keep a ground
+    # motion's scalings together and 5 repeats (issue 48) the model scores 0.898 / 0.866, so 0.88 / 0.85 is above
+    # every one of them
+    assert o["accuracy"] >= 0.88 and o["f1"] >= 0.85
+    seeds = d["ladder"][-1]["over_seeds"]
+    assert seeds["accuracy"]["mean"] >= 0.88 and seeds["accuracy"]["high"] - seeds["accuracy"]["low"] < 0.02
     for name, b in o["baselines"].items():  # the baselines were fitted on the same folds
         assert o["log_loss"] < b["log_loss"], name
         assert o["accuracy"] > b["accuracy"], name
+    assert d["judgement"]["beaten_by"] == [] and d["judgement"]["skill"]  # no baseline predicts better
     # the plain mesh-derived model misses overturns; the effect found is a contact inside the footprint
     assert d["ladder"][0]["scores"]["fn"] > 2 * d["ladder"][0]["scores"]["fp"]
     assert d["effect"]["name"].startswith("contact_inside")

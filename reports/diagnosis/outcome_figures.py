@@ -244,6 +244,8 @@ def calibration_figure(final_rows: list, baseline_rows: list, final_label: str, 
 
 def baseline_label(name: str) -> str:
     """A baseline's name in words: ``logistic_pga_pgv`` -> "logistic on log PGA and log PGV"."""
+    if name == "base_rate":
+        return "base rate (the share of overturns in the training folds)"
     if not name.startswith("logistic_"):
         return name
     feats = [f"log {f.upper()}" for f in name[len("logistic_") :].split("_")]

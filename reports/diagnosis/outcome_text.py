@@ -8,10 +8,20 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 if TYPE_CHECKING:
     from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosis, OutcomeMisses
+    from housner.scenarios.diagnosis.outcomes.outcome_validation import OutcomeJudgement
 
-__all__ = ["outcome_document", "outcome_params_text", "outcome_pointer_text", "outcome_summary", "write_outcome_json"]
+__all__ = [
+    "judgement_text",
+    "outcome_document",
+    "outcome_params_text",
+    "outcome_pointer_text",
+    "outcome_summary",
+    "write_outcome_json",
+]
 
 #: What each leaning of the misses (:attr:`OutcomeMisses.leaning`) points to.
 _LEANING = {
@@ -30,10 +40,18 @@ _LEANING = {
 def outcome_pointer_text(misses: OutcomeMisses) -> str:
     """What the plain model's misses point to, in words, with the counts over PGV/PGA."""
     where = ", ".join(f"{b.name} PGV/PGA: {b.missed} missed overturns, {b.false} false" for b in misses.bands)
-    return (
+    text = (
         f"{misses.missed} overturns missed and {misses.false} predicted that did not happen ({where}): "
         f"{_LEANING[misses.leaning]}"
     )
+    if misses.below_static:
+        text += (
+            f"; and {misses.below_static} records overturned under a peak table acceleration below the block's "
+            f"static threshold g tan(alpha) = {misses.static_threshold_g:.3f} g (its smallest alpha), where a rigid "
+            "block does not even lift off: the recorded table motion (or the geometry) is suspect for them, which "
+            "no effect of the block explains"
+        )
+    return text
 
 
 def outcome_params_text(params: dict) -> str:
@@ -51,24 +69,58 @@ def outcome_params_text(params: dict) -> str:
     return ", ".join(parts)
 
 
+def _spread(step_or_spread, key: str, digits: int = 3) -> str:
+    """A score's mean over the repeats with its range: ``0.899 (seeds 0.896-0.902)``."""
+    v = step_or_spread[key]
+    return f"{v.mean:.{digits}f} (seeds {v.low:.{digits}f}-{v.high:.{digits}f})"
+
+
+def judgement_text(judged: OutcomeJudgement) -> str:
+    """What the held-out log loss says of a model against the baselines and its floor, in words."""
+    parts = []
+    for name, c in judged.against.items():
+        verb = "lower" if c.advantage >= 0 else "higher"
+        parts.append(f"than {name} {verb} by {abs(c.advantage):.3f} +- {c.se:.3f}")
+    said = "; ".join(parts)
+    head = (
+        "the model's held-out log loss against each baseline on the same folds (nats; standard errors clustered by "
+        f"ground motion): {said}"
+    )
+    if judged.beaten_by:
+        names = ", ".join(judged.beaten_by)
+        return f"{head}. A baseline predicts significantly better ({names}): the model is beaten by a regression"
+    if judged.powered and not judged.skill:
+        return f"{head}. The model does not predict significantly better than the base rate: it shows no skill"
+    if not judged.powered:
+        return (
+            f"{head}. Neither the model nor any baseline predicts significantly better than the base rate: these "
+            "records cannot tell a model with skill from one without"
+        )
+    return f"{head}. No baseline predicts better"
+
+
 def outcome_summary(diag: OutcomeDiagnosis) -> str:
-    """The verdict in words: the figures, their intervals, the floor, the baselines, what remains."""
+    """The verdict in words: each score's mean and range over the repeats, the intervals, the baselines, the
+    floor and the judgement the status rests on."""
     f, s = diag.final, diag.final.scores
+    rep = diag.repeats
     best = min(diag.baselines, key=lambda k: diag.baselines[k].log_loss)
-    b = diag.baselines[best]
     eff = "no effect added" if f.name == "plain" else f"effect {f.name} ({outcome_params_text(f.params)})"
+    shares = ", ".join(f"{e} {100 * v:.0f} %" for e, v in rep.selection_share.items())
     floor = diag.floor
     lines = [
-        f"{len(diag.ids)} outcome records ({int(diag.observed.sum())} overturned); {diag.folds}-fold "
-        f"cross-validation (seed {diag.seed}); {eff}.",
-        f"held-out accuracy {s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}], "
-        f"F1 {s.f1:.3f} [{s.f1_ci[0]:.3f}, {s.f1_ci[1]:.3f}], log loss {s.log_loss:.3f} "
-        f"[{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]; plain model: accuracy "
-        f"{diag.steps[0].scores.accuracy:.3f}, F1 {diag.steps[0].scores.f1:.3f}, log loss "
-        f"{diag.steps[0].scores.log_loss:.3f}.",
-        f"best baseline ({best}): accuracy {b.accuracy:.3f}, F1 {b.f1:.3f}, log loss {b.log_loss:.3f} "
-        f"on the same folds: the model is {'ahead' if s.log_loss < b.log_loss else 'NOT ahead'} "
-        "in log loss.",
+        f"{len(diag.ids)} outcome records ({int(diag.observed.sum())} overturned) of "
+        f"{np.unique(diag.groups).size} ground motions; {diag.folds}-fold cross-validation, stratified by outcome, "
+        f"each ground motion's records in one fold, repeated over {len(rep.seeds)} fold seeds "
+        f"({', '.join(str(x) for x in rep.seeds)}); {eff}: the final model of {rep.finals.count(rep.chosen)} of "
+        f"{len(rep.seeds)} repeats (each effect's share of the repeats: {shares}).",
+        f"held-out accuracy {_spread(f.over_seeds, 'accuracy')}, F1 {_spread(f.over_seeds, 'f1')}, log loss "
+        f"{_spread(f.over_seeds, 'log_loss')}; on the repeats' mean probabilities, with intervals that resample "
+        f"whole ground motions: accuracy {s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}], log "
+        f"loss {s.log_loss:.3f} [{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]; plain model: accuracy "
+        f"{_spread(diag.steps[0].over_seeds, 'accuracy')}, log loss {_spread(diag.steps[0].over_seeds, 'log_loss')}.",
+        f"best baseline ({best}): accuracy {_spread(diag.baseline_spread[best], 'accuracy')}, log loss "
+        f"{_spread(diag.baseline_spread[best], 'log_loss')}; {judgement_text(diag.judgement)}.",
         f"floor (a correct model with these probabilities): log loss {floor.log_loss:.3f} "
         f"[{floor.log_loss_ci[0]:.3f}, {floor.log_loss_ci[1]:.3f}], measured {floor.measured_log_loss:.3f} "
         f"(z {floor.z:+.1f}): {'at the floor' if floor.at_floor else 'above the floor: a part is unexplained'}.",

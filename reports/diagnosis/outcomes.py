@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from housner.reports.diagnosis.outcome_figures import baseline_label, calibration_figure, outcome_map_figure
-from housner.reports.diagnosis.outcome_text import outcome_pointer_text
+from housner.reports.diagnosis.outcome_text import judgement_text, outcome_pointer_text
 from housner.reports.page import (
     Section,
     ci_cell,
@@ -45,7 +45,6 @@ from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     SCORE_KEYS,
     OutcomeScores,
     calibration_table,
-    per_record_log_loss,
 )
 
 __all__ = ["MISSES_SHOWN", "STATUS", "render_outcome_report", "step_label", "write_outcome_report"]
@@ -241,9 +240,12 @@ def _verdict(diag, best: str) -> str:
     )
     items = [
         f"<li><b>Final model</b>: {model}</li>",
-        f"<li><b>Held out</b> ({diag.folds} stratified folds, 95 % bootstrap intervals over the records): {held}.</li>",
+        f"<li><b>Held out</b> ({diag.folds} folds stratified by outcome, each ground motion's records in one fold; "
+        f"the repeats' mean probabilities; 95 % bootstrap intervals resampling whole ground motions): {held}.</li>",
         f"<li><b>Floor</b>: {floor}.</li>",
+        f"<li><b>Repeats</b>: {_repeats(diag)}</li>",
         f"<li><b>Best baseline</b>: {_against_baseline(diag, best)}</li>",
+        f"<li><b>Every baseline</b>: {esc(judgement_text(diag.judgement))}.</li>",
         f"<li><b>What remains</b>: {_remains(diag)}</li>",
     ]
     note = html_note(
@@ -256,25 +258,40 @@ def _verdict(diag, best: str) -> str:
 
 
 def _against_baseline(diag, best: str) -> str:
-    """The final model against the best baseline in log loss, with the paired difference and its doubt."""
+    """The final model against the best baseline in log loss: the paired difference on the same folds, with its
+    standard error clustered by ground motion (:attr:`OutcomeDiagnosis.judgement`)."""
     b = diag.baselines[best]
-    ahead = diag.final.scores.log_loss < b.log_loss
-    d = per_record_log_loss(diag.baseline_p[best], diag.observed) - per_record_log_loss(diag.final.p, diag.observed)
-    se = float(np.std(d, ddof=1) / math.sqrt(d.size)) if d.size > 1 else math.nan
-    mean = float(np.mean(d))
+    c = diag.judgement.against[best]
+    ahead = c.advantage > 0
     text = (
         f"{esc(baseline_label(best))} on the same folds, log loss {_ci(b, 'log_loss')} nats, accuracy "
         f"{_ci(b, 'accuracy')}: the model is "
         + ('<span class="ok">ahead</span>' if ahead else '<span class="bad">NOT ahead</span>')
-        + f" in log loss (the baseline's minus the model's, record by record: {fmt_signed(mean, 3)} &plusmn; "
-        f"{fmt_num(se)} nats"
+        + f" in log loss (the baseline's minus the model's, per record over the repeats: {fmt_signed(c.advantage, 3)}"
+        f" &plusmn; {fmt_num(c.se)} nats, clustered by ground motion"
     )
-    if ahead and math.isfinite(se) and mean < 2 * se:
-        text += ", within two standard errors: not a clear lead"
+    if ahead and c.p_better >= LEVEL:
+        text += ", not significant: not a clear lead"
     text += ")."
     if not ahead:
         text += " The measured peaks alone predict these outcomes at least as well as the model does."
     return text
+
+
+def _repeats(diag) -> str:
+    """The repeats of the cross-validation: what each ended in, and each score's spread over them."""
+    rep, f = diag.repeats, diag.final
+    shares = ", ".join(f"<code>{esc(e)}</code> {100 * v:.0f} %" for e, v in rep.selection_share.items())
+    spread = "; ".join(
+        f"{_SCORE_HEADINGS.get(k, esc(k))} {fmt_num(f.over_seeds[k].mean)} "
+        f"<span class=ci>[{fmt_num(f.over_seeds[k].low)}, {fmt_num(f.over_seeds[k].high)}]</span>"
+        for k in ("accuracy", "f1", "log_loss")
+    )
+    return (
+        f"{len(rep.seeds)} repeats of the cross-validation, fold seeds {', '.join(str(x) for x in rep.seeds)}; the "
+        f"final model is the one {rep.finals.count(rep.chosen)} of them ended in; each effect's share of the repeats: "
+        f"{shares}. The final model over the repeats, mean [lowest, highest]: {spread}."
+    )
 
 
 def _remains(diag) -> str:
@@ -314,10 +331,12 @@ def _scores(diag, best: str) -> str:
         ["model"] + [_SCORE_HEADINGS.get(k, esc(k)) for k in SCORE_KEYS],
         rows,
         caption=(
-            f"Out-of-fold scores: every record predicted by the fit without its fold ({diag.folds} stratified folds, "
-            f"seed {diag.seed}), the ladder's steps and the logistic baselines on the same folds; value [95 % "
-            "bootstrap interval over the records]. Accuracy, F1, precision and recall count P &ge; 0.5 as a "
-            "predicted overturn; log loss (nats) and Brier score the probabilities, lower is better."
+            f"Out-of-fold scores: every record predicted by the fit without its fold ({diag.folds} folds stratified "
+            f"by outcome that keep each ground motion's records together, {len(diag.repeats.seeds)} repeats from "
+            f"seed {diag.seed}: the repeats' mean probability), the ladder's steps and the baselines on the same "
+            "folds; value [95 % bootstrap interval resampling whole ground motions]. Accuracy, F1, precision and "
+            "recall count P &ge; 0.5 as a predicted overturn; log loss (nats) and Brier score the probabilities, "
+            "lower is better."
         ),
     )
 

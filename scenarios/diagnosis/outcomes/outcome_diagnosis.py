@@ -25,7 +25,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import stats as sps
 
 from housner.model import theta_max_many
 from housner.rocking_params import RockingParams
@@ -38,15 +37,26 @@ from housner.scenarios.diagnosis.outcomes.outcome_results import (
     OutcomeDiagnosis,
     OutcomeGeometry,
     OutcomeMisses,
+    OutcomeRepeats,
     OutcomeStep,
 )
 from housner.scenarios.diagnosis.outcomes.outcome_scores import (
+    OutcomeScores,
     calibration_table,
-    logistic_oof,
     outcome_floor,
     outcome_scores,
     per_record_log_loss,
-    stratified_folds,
+    point_scores,
+    seed_spread,
+)
+from housner.scenarios.diagnosis.outcomes.outcome_validation import (
+    BASELINES,
+    REPEATS,
+    baseline_oof,
+    compare_log_loss,
+    grouped_folds,
+    judge_outcome_model,
+    repeat_seeds,
 )
 from housner.scenarios.diagnosis.selection.forward_selection import Round, forward_selection
 from housner.scenarios.diagnosis.verdict.status import status_rule
@@ -282,20 +292,6 @@ def _cross_validate(name: str, t: _Tables, y: np.ndarray, fold: np.ndarray) -> t
     return p, fit(t, np.arange(y.size), y), fold_params
 
 
-def _paired_fall(p_old, p_new, y) -> tuple[float, float, float]:
-    """Mean per-record fall of the held-out log loss [nats], its standard error, and the one-sided p-value of
-    "no fall" (Diebold and Mariano's test of equal expected scores: the mean of the paired differences over its
-    standard error, against Student's t with n - 1 degrees of freedom).
-
-    The mean is tested, not the median (a rank test would be): the log loss that is reported and compared is a
-    mean, and a model that improves most records slightly while failing a few badly has not improved it."""
-    d = per_record_log_loss(p_old, y) - per_record_log_loss(p_new, y)
-    mean = float(np.mean(d))
-    se = float(np.std(d, ddof=1) / math.sqrt(d.size))
-    pv = float(sps.t.sf(mean / se, d.size - 1)) if se > 0 else (0.0 if mean > 0 else 1.0)
-    return mean, se, pv
-
-
 # ----------------------------------------------------------------------------
 # where it fails
 def _misses(step: OutcomeStep, ids, y, pga, pgv) -> list[Miss]:
@@ -315,8 +311,9 @@ def _misses(step: OutcomeStep, ids, y, pga, pgv) -> list[Miss]:
     return out
 
 
-def _pointer(step: OutcomeStep, y, pga, pgv) -> OutcomeMisses:
-    """The plain model's misses at P = 0.5, counted over thirds of the records' PGV/PGA."""
+def _pointer(step: OutcomeStep, y, pga, pgv, geo: Geometry) -> OutcomeMisses:
+    """The plain model's misses at P = 0.5, counted over thirds of the records' PGV/PGA, and the overturns below the
+    block's static threshold (which the input contradicts)."""
     pred = step.p >= 0.5
     fn = ~pred & y
     fp = pred & ~y
@@ -327,7 +324,10 @@ def _pointer(step: OutcomeStep, y, pga, pgv) -> OutcomeMisses:
         MissBand(name, int(np.sum(fn & (band == k))), int(np.sum(fp & (band == k))))
         for k, name in enumerate(("short", "middle", "long"))
     )
-    return OutcomeMisses(int(fn.sum()), int(fp.sum()), bands)
+    b_low = min(geo.bracket["pos"][0], geo.bracket["neg"][0], geo.b_pos, geo.b_neg)
+    threshold = b_low / geo.h  # tan(alpha) of the smallest alpha: the uplift threshold in g
+    below = int(np.sum(y & (pga < threshold * G)))
+    return OutcomeMisses(int(fn.sum()), int(fp.sum()), bands, below, float(threshold))
 
 
 # ----------------------------------------------------------------------------
@@ -336,6 +336,7 @@ def diagnose_outcomes(
     *,
     folds: int = 5,
     seed: int = 0,
+    repeats: int = REPEATS,
     progress: Callable[[str], None] | None = None,
 ) -> OutcomeDiagnosis:
     """The mission loop on a campaign's outcome records: plain model, misses, effect, error falling, verdict.
@@ -345,9 +346,14 @@ def diagnose_outcomes(
     campaign : Campaign
         With outcome records (:attr:`Campaign.outcomes`): the table motion and overturned or not.
     folds : int
-        Stratified cross-validation folds [-] (at least 2); the model and the baselines share them.
+        Cross-validation folds [-] (at least 2), stratified by outcome, each ground motion's records (the
+        campaign's groups) in one fold; the model and the baselines share them.
     seed : int
-        Seed of the folds, the bootstrap intervals and the simulated floor.
+        Seed of the first repeat's folds (the others follow it), of the bootstrap intervals and of the simulated
+        floor.
+    repeats : int
+        Repeats of the cross-validation, each on its own folds [-]: each runs the forward selection; the final
+        model is the one most of them end in, and every score is given over them.
     progress : callable, optional
         Receives one line per stage.
 
@@ -370,24 +376,43 @@ def diagnose_outcomes(
     accs = [np.asarray(r.motion.acc, dtype=np.float64) for r in recs]
     dts = np.array([r.dt for r in recs])
     geo = Geometry.of(campaign)
-    fold = stratified_folds(y, folds, seed)
+    groups = np.asarray(campaign.outcome_groups)
+    seeds = repeat_seeds(seed, repeats)
+    fold_of = [grouped_folds(y, groups, folds, s) for s in seeds]
     say(
-        f"{len(recs)} outcome records ({int(y.sum())} overturned), {folds} stratified folds; block h "
-        f"{geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad"
+        f"{len(recs)} outcome records ({int(y.sum())} overturned) of {np.unique(groups).size} ground motions; "
+        f"{folds} folds stratified by outcome that keep a ground motion's records together, {len(seeds)} repeats; "
+        f"block h {geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad"
     )
     tables = _tables(accs, dts, geo, campaign.specimen, say)
-    plain = _step("plain", None, tables, y, fold, seed)
+    runs = []
+    for s, fold in zip(seeds, fold_of, strict=True):
+        plain_r = _step("plain", None, tables, y, fold, s, groups)
+        runs.append(_add_effects(plain_r, tables, y, fold, s, groups, say))
+        say(f"repeat (fold seed {s}): {runs[-1][0][-1].name}")
+    rep = _consensus(seeds, runs)
+    say(f"final model: {rep.chosen} ({rep.finals.count(rep.chosen)} of {len(seeds)} repeats)")
+    ladder = next(steps for steps, _c, _t in runs if steps[-1].name == rep.chosen)
+    steps, prev = [], None
+    for rung in ladder:
+        prev = _over_repeats(rung.name, prev, runs, tables, y, fold_of, seeds, groups)
+        steps.append(prev)
+    plain, final = steps[0], steps[-1]
     say(f"plain model: held-out log loss {plain.scores.log_loss:.3f}, accuracy {plain.scores.accuracy:.3f}")
-    pointer = _pointer(plain, y, pga, pgv)
+    pointer = _pointer(plain, y, pga, pgv, geo)
     say(f"where it fails: {pointer.missed} overturns missed, {pointer.false} predicted that did not happen")
-    steps, candidates = _add_effects(plain, tables, y, fold, seed, say)
-    final = steps[-1]
-    baselines, baseline_p = _baselines(pga, pgv, y, fold, seed)
+    candidates = runs[0][1]
+    base_p = {n: np.array([baseline_oof(n, pga, pgv, y, f) for f in fold_of]) for n in BASELINES}
+    baselines = {n: outcome_scores(p.mean(axis=0), y, groups=groups, seed=seed) for n, p in base_p.items()}
+    spread = {n: seed_spread([point_scores(q, y) for q in p]) for n, p in base_p.items()}
     floor = outcome_floor(final.p, y, seed=seed)
-    # the one status rule of the diagnosis: the outcome floor is the evidence's misfit test (of the final model,
-    # which is the plain one when nothing was added); at least 10 records are checked above
-    misfit = not floor.at_floor
-    status = status_rule(True, len(steps) > 1, misfit, misfit, True)
+    # the one status rule of the diagnosis; an outcome model is a misfit when a baseline fitted on the same folds
+    # predicts better, when it has no skill over the base rate where the records could show one, or when its
+    # probabilities fail their floor (outcome_validation.judge_outcome_model); at least 10 records are checked above
+    judged_plain = judge_outcome_model(plain.p_repeats, base_p, y, groups, outcome_floor(plain.p, y, seed=seed))
+    judged = judge_outcome_model(final.p_repeats, base_p, y, groups, floor) if final is not plain else judged_plain
+    status = status_rule(True, len(steps) > 1, judged_plain.misfit, judged.misfit, judged.powered)
+    baseline_p = {n: p.mean(axis=0) for n, p in base_p.items()}
     misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
     diag = OutcomeDiagnosis(
         campaign=campaign.name,
@@ -407,6 +432,11 @@ def diagnose_outcomes(
         folds=folds,
         seed=seed,
         calibration=calibration_table(final.p, y),
+        groups=groups,
+        repeats=rep,
+        baseline_spread=spread,
+        judgement=judged,
+        judgement_plain=judged_plain,
     )
     diag.elapsed = time.perf_counter() - t_start
     return diag
@@ -433,14 +463,62 @@ def _checked_outcomes(campaign: Campaign, folds: int) -> tuple[list[OutcomeRecor
     return recs, y, folds
 
 
-def _step(name: str, prev: OutcomeStep | None, tables, y, fold, seed: int) -> OutcomeStep:
-    """Model ``name`` cross-validated on the folds: its held-out probabilities and scores, and the paired fall of
-    the held-out log loss from ``prev`` (none for the first model)."""
+def _step(name: str, prev: OutcomeStep | None, tables, y, fold, seed: int, groups) -> OutcomeStep:
+    """Model ``name`` cross-validated on the folds of one repeat: its held-out probabilities and scores, and the
+    paired fall of the held-out log loss from ``prev`` (none for the first model), clustered by ground motion."""
     p, params, fold_params = _cross_validate(name, tables, y, fold)
     if not np.all(np.isfinite(p)):
         raise RuntimeError(f"model {name} gave no probability for {int(np.sum(~np.isfinite(p)))} records")
-    fall = _paired_fall(prev.p, p, y) if prev is not None else (0.0, 0.0, math.nan)
-    return OutcomeStep(name, params, fold_params, p, outcome_scores(p, y, seed=seed), *fall)
+    fall = (0.0, 0.0, math.nan)
+    if prev is not None:
+        c = compare_log_loss(p, prev.p, y, groups)
+        fall = (c.advantage, c.se, c.p_better)
+    return OutcomeStep(name, params, fold_params, p, _quick_scores(p, y), *fall)
+
+
+def _quick_scores(p, y) -> OutcomeScores:
+    """The scores of one repeat's step, without intervals (the reported ladder has them: :func:`_over_repeats`)."""
+    return outcome_scores(p, y, n_boot=0)
+
+
+def _over_repeats(name: str, prev: OutcomeStep | None, runs, tables, y, fold_of, seeds, groups) -> OutcomeStep:
+    """Model ``name`` over every repeat's folds (taken from the repeat where its selection tried it, else
+    cross-validated anew): its mean held-out probabilities, their scores with intervals that resample whole ground
+    motions, each score's mean and range over the repeats, and its paired fall from ``prev``."""
+    ps, first = [], None
+    for (_steps, _c, tried), fold in zip(runs, fold_of, strict=True):
+        step = tried.get(name)
+        p = step.p if step is not None else _cross_validate(name, tables, y, fold)[0]
+        first = first or step
+        ps.append(p)
+    p_rep = np.array(ps)
+    _, params, fold_params = (
+        _cross_validate(name, tables, y, fold_of[0]) if first is None else (None, first.params, first.fold_params)
+    )
+    fall = (0.0, 0.0, math.nan)
+    if prev is not None:
+        c = compare_log_loss(p_rep, prev.p_repeats, y, groups)
+        fall = (c.advantage, c.se, c.p_better)
+    p_mean = p_rep.mean(axis=0)
+    return OutcomeStep(
+        name,
+        params,
+        fold_params,
+        p_mean,
+        outcome_scores(p_mean, y, groups=groups, seed=seeds[0]),
+        *fall,
+        over_seeds=seed_spread([point_scores(q, y) for q in p_rep]),
+        p_repeats=p_rep,
+    )
+
+
+def _consensus(seeds, runs) -> OutcomeRepeats:
+    """The repeats' final models, the share of repeats that hold each effect, and the one most end in."""
+    finals = tuple(steps[-1].name for steps, _c, _t in runs)
+    effects = sorted({e for f in finals if f != "plain" for e in f.split("+")} | set(OUTCOME_EFFECTS))
+    share = {e: sum(e in f.split("+") for f in finals) / len(finals) for e in effects}
+    chosen = max(sorted(set(finals)), key=lambda f: (finals.count(f), -len(f.split("+")) * (f != "plain")))
+    return OutcomeRepeats(tuple(int(s) for s in seeds), finals, share, chosen)
 
 
 #: The outcome candidates of each round: single effects first, then their pair on top of the one added.
@@ -459,6 +537,7 @@ class OutcomeEvidence:
     y: np.ndarray
     fold: np.ndarray
     seed: int
+    groups: np.ndarray
     say: Callable[[str], None]
 
     def pool(self, state: tuple[OutcomeStep, ...], number: int) -> tuple[str, ...]:
@@ -474,7 +553,7 @@ class OutcomeEvidence:
         """Every candidate of the round cross-validated; the chosen one is the lowest held-out log loss among
         those whose fall is significant."""
         cur = state[-1]
-        tried = [_step(n, cur, self.tables, self.y, self.fold, self.seed) for n in rnd.pool]
+        tried = [_step(n, cur, self.tables, self.y, self.fold, self.seed, self.groups) for n in rnd.pool]
         level = LEVEL / max(len(tried), 1)
         for c in tried:
             self.say(
@@ -492,11 +571,12 @@ class OutcomeEvidence:
 
 
 def _add_effects(
-    plain: OutcomeStep, tables, y, fold, seed: int, say
-) -> tuple[list[OutcomeStep], list[OutcomeCandidate]]:
+    plain: OutcomeStep, tables, y, fold, seed: int, groups, say
+) -> tuple[list[OutcomeStep], list[OutcomeCandidate], dict[str, OutcomeStep]]:
     """Forward selection from the plain model through the one selection of the diagnosis, with
-    :class:`OutcomeEvidence`. Returns the models kept (the plain one first) and every candidate tried."""
-    evidence = OutcomeEvidence(tables, y, fold, seed, say)
+    :class:`OutcomeEvidence`, on one repeat's folds. Returns the models kept (the plain one first), every candidate
+    tried, and every model cross-validated, by name."""
+    evidence = OutcomeEvidence(tables, y, fold, seed, groups, say)
     steps, found = forward_selection(evidence, (plain,), len(ROUNDS))
     candidates = [
         OutcomeCandidate(
@@ -511,21 +591,8 @@ def _add_effects(
         for tried in found.rounds
         for c in tried
     ]
-    return list(steps), candidates
-
-
-def _baselines(pga, pgv, y, fold, seed: int) -> tuple[dict, dict]:
-    """The logistic baselines on log PGA, log PGV and both, cross-validated on the same folds: their scores and
-    their held-out probabilities, by name."""
-    baselines, baseline_p = {}, {}
-    for name, X in (
-        ("logistic_pga", np.log(pga)),
-        ("logistic_pgv", np.log(pgv)),
-        ("logistic_pga_pgv", np.column_stack((np.log(pga), np.log(pgv)))),
-    ):
-        baseline_p[name] = logistic_oof(X, y, fold)
-        baselines[name] = outcome_scores(baseline_p[name], y, seed=seed)
-    return baselines, baseline_p
+    tried = {"plain": plain, **{c.name: c for r in found.rounds for c in r}}
+    return list(steps), candidates, tried
 
 
 def _geometry_summary(geo: Geometry) -> OutcomeGeometry:

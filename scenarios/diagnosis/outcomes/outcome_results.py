@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from housner._values import JsonValue, WrittenAsResult, floats, read_as, to_data
-from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores
+from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores, SeedSpread
+from housner.scenarios.diagnosis.outcomes.outcome_validation import OutcomeJudgement
 
 __all__ = [
     "Miss",
@@ -21,6 +22,7 @@ __all__ = [
     "OutcomeDiagnosisResult",
     "OutcomeGeometry",
     "OutcomeMisses",
+    "OutcomeRepeats",
     "OutcomeStep",
 ]
 
@@ -38,14 +40,18 @@ class OutcomeStep:
     fold_params : list of dict
         Fitted without each fold (what scored it).
     p : ndarray
-        Out-of-fold P(overturn) per record [-].
+        Out-of-fold P(overturn) per record, the mean over the repeats of the cross-validation [-].
     scores : OutcomeScores
-        :func:`outcome_scores` of ``p``.
+        :func:`outcome_scores` of ``p`` (the bootstrap resamples whole ground motions).
     improvement : float
         Mean per-record fall of the held-out log loss from the previous rung [nats] (0 for the plain model).
     improvement_se : float
     p_value : float
-        One-sided p-value of that fall (Diebold-Mariano; nan for the plain model).
+        One-sided p-value of that fall (Diebold-Mariano, clustered by ground motion; nan for the plain model).
+    over_seeds : dict of str to SeedSpread
+        Each score's mean and range over the repeats, each scored on its own folds.
+    p_repeats : ndarray
+        Out-of-fold P(overturn) of each repeat, (repeats, records) [-].
     """
 
     name: str
@@ -56,12 +62,15 @@ class OutcomeStep:
     improvement: float = 0.0
     improvement_se: float = 0.0
     p_value: float = math.nan
+    over_seeds: dict[str, SeedSpread] = field(default_factory=dict)
+    p_repeats: np.ndarray = field(compare=False, default=None)
 
     def to_dict(self) -> dict:
         return {
             "name": self.name,
             "params": self.params,
             "scores": self.scores.to_dict(),
+            "over_seeds": to_data(self.over_seeds),
             "improvement": self.improvement,
             "improvement_se": self.improvement_se,
             "p_value": _nan_none(self.p_value),
@@ -77,6 +86,7 @@ class OutcomeStep:
             p=None,
             scores=OutcomeScores.from_dict(data["scores"]),
             **floats(data, "improvement", "improvement_se", "p_value"),
+            over_seeds=read_as(dict[str, SeedSpread], data.get("over_seeds", {})),
         )
 
 
@@ -160,11 +170,19 @@ class OutcomeMisses:
         Overturns missed, and overturns predicted that did not happen.
     bands : tuple of MissBand
         The same over the short, middle and long PGV/PGA thirds of the records.
+    below_static : int
+        Records that overturned under a peak table acceleration below the block's static threshold, g tan(alpha)
+        of its smallest alpha over the specimen's bracket: a rigid block on a rigid base does not even lift off
+        there, so the recorded motion (or the geometry) contradicts the outcome.
+    static_threshold_g : float
+        That threshold [g].
     """
 
     missed: int
     false: int
     bands: tuple[MissBand, ...]
+    below_static: int = 0
+    static_threshold_g: float = math.nan
 
     @property
     def leaning(self) -> str:
@@ -175,6 +193,29 @@ class OutcomeMisses:
         if self.false > 2 * max(self.missed, 1):
             return "false"
         return "both"
+
+
+@dataclass(frozen=True)
+class OutcomeRepeats:
+    """The repeats of an outcome diagnosis' cross-validation, each on its own folds.
+
+    Attributes
+    ----------
+    seeds : tuple of int
+        Their fold seeds.
+    finals : tuple of str
+        The final model each repeat's forward selection ended in (``"plain"``, or effects joined by "+").
+    selection_share : dict of str to float
+        Each candidate effect -> the share of repeats whose final model holds it [-].
+    chosen : str
+        The final model the diagnosis reports: the one most repeats ended in (the one with fewer effects on a
+        tie).
+    """
+
+    seeds: tuple[int, ...]
+    finals: tuple[str, ...]
+    selection_share: dict[str, float]
+    chosen: str
 
 
 @dataclass(frozen=True)
@@ -223,8 +264,18 @@ class OutcomeDiagnosis(WrittenAsResult):
     geometry : OutcomeGeometry
     folds : int
     seed : int
+        The first repeat's fold seed (the others follow it: :func:`repeat_seeds`).
     elapsed : float
         [s]
+    calibration : list of CalibrationBin
+    groups : ndarray
+        The group (ground motion) of every record.
+    repeats : OutcomeRepeats
+        The repeats of the cross-validation: their seeds, each one's final model, each effect's share.
+    baseline_spread : dict
+        Baseline name -> each score's mean and range over the repeats.
+    judgement, judgement_plain : OutcomeJudgement
+        The final and the plain model against the baselines and their floors: what the status rests on.
     """
 
     campaign: str
@@ -245,6 +296,11 @@ class OutcomeDiagnosis(WrittenAsResult):
     seed: int
     elapsed: float = 0.0
     calibration: list = field(default_factory=list)
+    groups: np.ndarray = None
+    repeats: OutcomeRepeats | None = None
+    baseline_spread: dict = field(default_factory=dict)
+    judgement: OutcomeJudgement | None = None
+    judgement_plain: OutcomeJudgement | None = None
 
     @property
     def final(self) -> OutcomeStep:
@@ -271,6 +327,10 @@ class OutcomeDiagnosis(WrittenAsResult):
             pointer=self.pointer,
             misses=tuple(self.misses),
             geometry=self.geometry,
+            repeats=self.repeats,
+            baseline_spread=dict(self.baseline_spread),
+            judgement=self.judgement,
+            judgement_plain=self.judgement_plain,
             elapsed_s=self.elapsed,
         )
 
@@ -295,6 +355,10 @@ class OutcomeDiagnosisResult(JsonValue):
     pointer: OutcomeMisses
     misses: tuple[Miss, ...]
     geometry: OutcomeGeometry
+    repeats: OutcomeRepeats | None
+    baseline_spread: dict[str, dict[str, SeedSpread]]
+    judgement: OutcomeJudgement | None
+    judgement_plain: OutcomeJudgement | None
     elapsed_s: float
 
     @property
@@ -335,6 +399,10 @@ class OutcomeDiagnosisResult(JsonValue):
                 "pointer_counts": to_data(self.pointer),
                 "misses": [to_data(m) for m in self.misses],
                 "geometry": to_data(self.geometry),
+                "repeats": to_data(self.repeats),
+                "baselines_over_seeds": to_data(self.baseline_spread),
+                "judgement": to_data(self.judgement),
+                "judgement_plain": to_data(self.judgement_plain),
                 "elapsed_s": self.elapsed_s,
             }
         )
@@ -357,6 +425,10 @@ class OutcomeDiagnosisResult(JsonValue):
             pointer=read_as(OutcomeMisses, data["pointer_counts"]),
             misses=read_as(tuple[Miss, ...], data["misses"]),
             geometry=read_as(OutcomeGeometry, data["geometry"]),
+            repeats=read_as(OutcomeRepeats | None, data.get("repeats")),
+            baseline_spread=read_as(dict[str, dict[str, SeedSpread]], data.get("baselines_over_seeds", {})),
+            judgement=read_as(OutcomeJudgement | None, data.get("judgement")),
+            judgement_plain=read_as(OutcomeJudgement | None, data.get("judgement_plain")),
             elapsed_s=read_as(float, data["elapsed_s"]),
         )
 

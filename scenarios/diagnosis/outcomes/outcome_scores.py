@@ -1,18 +1,11 @@
-"""Scores of outcome predictions: proper scores and counts with intervals, calibration, the baselines, the floor.
-
-A prediction of an outcome (overturned or not) is a probability. It is scored
-with the proper scores, log loss and Brier, and with the counts a user reads
-(accuracy, precision, recall, F1 at P >= 0.5), and the ROC AUC; every figure
-carries a percentile interval from a bootstrap over the records (seeded).
-
-The baselines are what a user would fit instead of running physics: logistic
-regressions of the outcome on the logarithms of the measured PGA and PGV
-(:func:`logistic_oof`), fitted on the same folds as the model, so that a row
-of the table compares like with like.
-
-The floor is the score a correct model would reach: if the outcomes were
-drawn from the model's own probabilities, its log loss would scatter around
-the mean entropy of those probabilities (:func:`outcome_floor`, simulated).
+"""Scores of outcome predictions: the proper scores (log loss, Brier), the counts a user reads (accuracy, precision,
+recall, F1 at P >= 0.5) and the ROC AUC (scikit-learn's), each with a percentile interval from a bootstrap that
+resamples whole ground motions; their mean and range over the repeats of the cross-validation; calibration; and
+the floor, the log loss a correct model would reach (:func:`outcome_floor`, simulated). The counts and means are
+written out rather than taken from scikit-learn because the bootstrap evaluates them a thousand times per model,
+where its metrics' input checks would cost seconds; :func:`calibration_table` counts its bins itself because
+each bin's Wilson interval needs its count, which ``sklearn.calibration.calibration_curve`` does not return. The
+baselines and the folds are :mod:`housner.scenarios.diagnosis.outcomes.outcome_validation`'s.
 
 References
 ----------
@@ -28,7 +21,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, special
+from sklearn.metrics import roc_auc_score
 
 from housner._values import read_fields, to_data
 from housner.statistics.proportions import wilson_interval
@@ -39,12 +32,13 @@ __all__ = [
     "CalibrationBin",
     "OutcomeFloor",
     "OutcomeScores",
+    "SeedSpread",
     "calibration_table",
-    "logistic_oof",
     "outcome_floor",
     "outcome_scores",
     "per_record_log_loss",
-    "stratified_folds",
+    "point_scores",
+    "seed_spread",
 ]
 
 #: The score keys of every row (model, baselines), in the order tables print them.
@@ -54,8 +48,6 @@ SCORE_KEYS = ("accuracy", "f1", "log_loss", "brier", "precision", "recall", "roc
 P_MIN = 1e-6
 #: Bootstrap resamples of the records for the intervals [-].
 N_BOOT = 1000
-#: Ridge penalty of the logistic baselines (on standardised features) [-]: keeps a separable fold finite.
-_RIDGE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -114,6 +106,31 @@ class OutcomeScores:
 
 
 @dataclass(frozen=True)
+class SeedSpread:
+    """A score over the repeats of the cross-validation (one fold seed each): its mean and its range.
+
+    Attributes
+    ----------
+    mean, low, high : float
+        In the score's unit.
+    """
+
+    mean: float
+    low: float
+    high: float
+
+
+def seed_spread(per_repeat: list[dict[str, float]]) -> dict[str, SeedSpread]:
+    """Each score of :data:`SCORE_KEYS` over the repeats (each repeat's point scores, :func:`point_scores`)."""
+    out = {}
+    for k in SCORE_KEYS:
+        v = np.array([r[k] for r in per_repeat], dtype=float)
+        v = v[np.isfinite(v)]
+        out[k] = SeedSpread(float(v.mean()), float(v.min()), float(v.max())) if v.size else SeedSpread(*[math.nan] * 3)
+    return out
+
+
+@dataclass(frozen=True)
 class CalibrationBin:
     """One bin of the reliability table (:func:`calibration_table`): records whose P lies in [lo, hi).
 
@@ -138,18 +155,6 @@ class CalibrationBin:
     observed_ci: tuple[float, float]
 
 
-def stratified_folds(y, k: int, seed) -> np.ndarray:
-    """Fold index of every record [-]: ``k`` folds, each with the same share of overturns (seeded)."""
-    y = np.asarray(y, dtype=bool)
-    rng = np.random.default_rng(seed)
-    fold = np.empty(y.size, dtype=np.int64)
-    for c in (False, True):
-        idx = np.flatnonzero(y == c)
-        rng.shuffle(idx)
-        fold[idx] = (np.arange(idx.size) + (0 if c else int(np.sum(~y)))) % k
-    return fold
-
-
 def per_record_log_loss(p, y) -> np.ndarray:
     """-log of the probability given to what happened, per record [nats]."""
     p = np.clip(np.asarray(p, dtype=float), P_MIN, 1.0 - P_MIN)
@@ -157,28 +162,8 @@ def per_record_log_loss(p, y) -> np.ndarray:
     return -np.where(y, np.log(p), np.log1p(-p))
 
 
-def _auc(p: np.ndarray, y: np.ndarray) -> float:
-    """ROC AUC: the probability that an overturned record gets the higher P (ties count half) [-]."""
-    pos, neg = p[y], p[~y]
-    if pos.size == 0 or neg.size == 0:
-        return math.nan
-    ranks = _midranks(np.concatenate((pos, neg)))
-    return float((np.sum(ranks[: pos.size]) - pos.size * (pos.size + 1) / 2) / (pos.size * neg.size))
-
-
-def _midranks(x: np.ndarray) -> np.ndarray:
-    order = np.argsort(x, kind="mergesort")
-    xs = x[order]
-    ranks = np.empty(x.size)
-    ranks[order] = np.arange(1, x.size + 1, dtype=float)
-    _, first, counts = np.unique(xs, return_index=True, return_counts=True)
-    for f, c in zip(first, counts, strict=True):
-        if c > 1:
-            ranks[order[f : f + c]] = f + (c + 1) / 2.0
-    return ranks
-
-
-def _point_scores(p: np.ndarray, y: np.ndarray) -> dict[str, float]:
+def point_scores(p: np.ndarray, y: np.ndarray) -> dict[str, float]:
+    """Each score of :data:`SCORE_KEYS` of the probabilities ``p`` on the outcomes ``y``, without an interval."""
     pred = p >= 0.5
     tp = float(np.sum(pred & y))
     n_pred, n_pos = float(np.sum(pred)), float(np.sum(y))
@@ -189,11 +174,11 @@ def _point_scores(p: np.ndarray, y: np.ndarray) -> dict[str, float]:
         "brier": float(np.mean((p - y) ** 2)),
         "precision": tp / n_pred if n_pred > 0 else math.nan,
         "recall": tp / n_pos if n_pos > 0 else math.nan,
-        "roc_auc": _auc(p, y),
+        "roc_auc": float(roc_auc_score(y, p)) if 0 < n_pos < y.size else math.nan,
     }
 
 
-def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> OutcomeScores:
+def outcome_scores(p, y, *, groups=None, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> OutcomeScores:
     """Every score of :data:`SCORE_KEYS` with its bootstrap interval.
 
     Parameters
@@ -202,6 +187,9 @@ def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> O
         Predicted P(overturn) per record [-].
     y : array_like of bool
         Observed outcomes.
+    groups : array_like, optional
+        The group of every record (the records of one ground motion): the bootstrap resamples whole groups, as
+        their records are not independent evidence. Default: every record its own group.
     seed : int
         Seed of the bootstrap.
 
@@ -211,12 +199,14 @@ def outcome_scores(p, y, *, seed=0, n_boot: int = N_BOOT, ci: float = 0.95) -> O
     """
     p = np.asarray(p, dtype=float)
     y = np.asarray(y, dtype=bool)
-    out: dict = _point_scores(p, y)
+    out: dict = point_scores(p, y)
+    _, g = np.unique(np.arange(p.size) if groups is None else np.asarray(groups), return_inverse=True)
+    members = [np.flatnonzero(g == k) for k in range(int(g.max()) + 1)]
     rng = np.random.default_rng(seed)
     boot = {k: np.empty(n_boot) for k in SCORE_KEYS}
     for b in range(n_boot):
-        i = rng.integers(0, p.size, p.size)
-        for k, v in _point_scores(p[i], y[i]).items():
+        i = np.concatenate([members[k] for k in rng.integers(0, len(members), len(members))])
+        for k, v in point_scores(p[i], y[i]).items():
             boot[k][b] = v
     lo, hi = 50.0 * (1.0 - ci), 50.0 * (1.0 + ci)
     for k in SCORE_KEYS:
@@ -259,48 +249,6 @@ def calibration_table(p, y, bins: int = 5) -> list[CalibrationBin]:
             CalibrationBin(float(edges[b]), float(edges[b + 1]), n, float(p[sel].mean()), k / n, (float(lo), float(hi)))
         )
     return rows
-
-
-def _logistic_fit(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Coefficients of a ridge-penalised logistic regression, and the standardisation it was fitted in."""
-    mu, sd = X.mean(axis=0), X.std(axis=0)
-    sd[sd == 0] = 1.0
-    Z = np.column_stack((np.ones(len(X)), (X - mu) / sd))
-    yf = y.astype(float)
-
-    def f(b):
-        z = Z @ b
-        return float(np.sum(np.logaddexp(0.0, z)) - yf @ z + _RIDGE * b[1:] @ b[1:])
-
-    def g(b):
-        grad = Z.T @ (special.expit(Z @ b) - yf)
-        grad[1:] += 2.0 * _RIDGE * b[1:]
-        return grad
-
-    b = optimize.minimize(f, np.zeros(Z.shape[1]), jac=g, method="BFGS").x
-    return b, mu, sd
-
-
-def logistic_oof(X, y, fold) -> np.ndarray:
-    """Out-of-fold P(overturn) of a logistic regression on the features ``X`` [-], one fit per fold.
-
-    Parameters
-    ----------
-    X : array_like, shape (n,) or (n, k)
-        Features (the baselines use log PGA and log PGV).
-    y : array_like of bool
-    fold : array_like of int
-        Fold of every record (:func:`stratified_folds`): each record is predicted by the fit without its fold.
-    """
-    X = np.asarray(X, dtype=float).reshape(len(y), -1)
-    y = np.asarray(y, dtype=bool)
-    fold = np.asarray(fold)
-    p = np.empty(y.size)
-    for f in np.unique(fold):
-        te = fold == f
-        b, mu, sd = _logistic_fit(X[~te], y[~te])
-        p[te] = special.expit(b[0] + ((X[te] - mu) / sd) @ b[1:])
-    return p
 
 
 @dataclass(frozen=True)
