@@ -139,6 +139,27 @@ def test_diagnosis_of_a_right_model_adds_nothing():
     assert d.steps[0].scores.accuracy == 1.0
 
 
+@pytest.mark.parametrize("case", ["base_rate", "shuffled", "regression_wins"])
+def test_outcomes_no_rocking_model_can_explain_are_never_explained(case):
+    """Issue 48's failing cases, through the whole diagnosis: outcomes drawn from a base rate, the model's own
+    outcomes shuffled among the motions, and outcomes a PGV threshold decides (a regression on log PGV knows it, the
+    rocking block does not) never get "explained" or "no misfit"."""
+    accs = _pulses(120, seed=21)
+    rng = np.random.default_rng(22)
+    if case == "base_rate":
+        y = rng.random(len(accs)) < 0.4
+    elif case == "shuffled":
+        _, y, _ = theta_max_many(SPEC, accs, DT)
+        y = rng.permutation(y)
+    else:  # the PGV the baselines read, the campaign's own
+        pgv = np.array([r.pgv for r in _campaign(accs, [False] * len(accs)).outcomes])
+        y = pgv > np.median(pgv)
+    d = diagnose_outcomes(_campaign(accs, y), folds=4, seed=0, repeats=2)
+    assert d.status not in ("explained", "no_misfit"), outcome_summary(d)
+    if case == "regression_wins":
+        assert "logistic_pgv" in d.judgement.beaten_by or not d.judgement.skill, outcome_summary(d)
+
+
 def test_diagnosis_refuses_too_few_or_one_sided_outcomes():
     accs = _pulses(12, seed=1)
     with pytest.raises(ValueError, match="every record stood"):
