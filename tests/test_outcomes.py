@@ -15,7 +15,8 @@ from housner.model import theta_max_many
 from housner.reports.diagnosis.outcome_text import outcome_pointer_text, outcome_summary
 from housner.scenarios.campaigns.campaign import Campaign, load_campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
-from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import Geometry, diagnose_outcomes
+from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import diagnose_outcomes
+from housner.scenarios.diagnosis.outcomes.outcome_models import Geometry
 from housner.scenarios.diagnosis.outcomes.outcome_scores import outcome_floor, outcome_scores
 from housner.scenarios.diagnosis.outcomes.outcome_validation import baseline_oof, grouped_folds
 

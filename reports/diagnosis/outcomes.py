@@ -39,7 +39,8 @@ from housner.reports.page import (
     html_table,
     write_page,
 )
-from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import AMPLITUDE_SPREAD, LEVEL
+from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import LEVEL
+from housner.scenarios.diagnosis.outcomes.outcome_models import AMPLITUDE_SPREAD
 from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeGeometry
 from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     SCORE_KEYS,
