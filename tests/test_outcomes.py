@@ -323,3 +323,56 @@ def test_the_outcome_diagnosis_json_is_written_from_a_typed_value_and_read_back_
     assert text(read) == text(fresh)
     assert OutcomeDiagnosisResult.from_json(json.loads(text(read))) == read
     assert read.final.scores == d.final.scores and read.baselines == d.baselines and read.misses == tuple(d.misses)
+
+
+# ----------------------------------------------------------------------------
+# transfer: a model fitted on one campaign, frozen, scored on another
+@pytest.fixture(scope="module")
+def transferred(inside_contact, tmp_path_factory):
+    """The inside-contact campaign's diagnosis written as its JSON, then a second campaign of the same block (other
+    pulses, the same contact inside the footprint) diagnosed with that model frozen."""
+    from housner.reports.diagnosis.outcome_text import write_outcome_json
+    from housner.scenarios.diagnosis.outcomes.outcome_transfer import read_frozen_model
+
+    _, _, source = inside_contact
+    path = tmp_path_factory.mktemp("transfer") / "source.json"
+    write_outcome_json(source, path)
+    accs = _pulses(120, seed=41)
+    y = _truth(accs, 0.06)
+    return source, diagnose_outcomes(_campaign(accs, y), folds=4, seed=0, repeats=1, model=read_frozen_model(path))
+
+
+def test_a_frozen_model_of_the_right_physics_transfers_and_the_peaks_do_not(transferred):
+    source, d = transferred
+    t = d.transfer
+    assert t.model == source.final.name and t.params == source.final.params  # frozen: nothing refitted
+    # one-sine pulses of random frequency: the peaks alone cannot tell which pulse topples the block, the frozen
+    # contact can. The regressions fitted on the first campaign lose to it by more than 0.05 nats, significantly
+    for name, c in t.against.items():
+        assert c.advantage > 0.05 and c.p_better < 0.05, (name, c)
+    data = json.loads(json.dumps(d.result().to_json(), allow_nan=False))
+    from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosisResult
+
+    read = OutcomeDiagnosisResult.from_json(data)
+    assert read.transfer == t and read.baseline_fits == d.baseline_fits  # the transfer survives its JSON
+
+
+def test_a_file_that_holds_no_fitted_model_is_refused_in_one_line(tmp_path, capsys, inside_contact):
+    from housner.scenarios.diagnosis.outcomes.outcome_transfer import read_frozen_model
+
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(ValueError, match="bad.json: cannot read it"):
+        read_frozen_model(bad)
+    bad.write_text(json.dumps({"kind": "history", "ladder": []}))
+    with pytest.raises(ValueError, match="not the JSON of an outcome diagnosis"):
+        read_frozen_model(bad)
+    old = json.loads(json.dumps(inside_contact[2].result().to_json()))
+    del old["baseline_fits"]
+    bad.write_text(json.dumps(old))
+    with pytest.raises(ValueError, match="holds no fitted baselines"):
+        read_frozen_model(bad)
+    example = Path(__file__).resolve().parents[1] / "examples" / "campaigns" / "pivot-friction"
+    code = main(["diagnose", str(example), "--model", str(bad), "-q"])  # refused before any work
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code != 0 and len(err) == 1 and "--model" in err[0] and "bad.json" in err[0]

@@ -6,7 +6,16 @@ from __future__ import annotations
 import argparse
 import sys
 
-from housner.cli.args import check_campaign, check_effects, folds_int, names_arg, nonneg_int, open_fraction
+from housner.cli.args import (
+    UsageError,
+    check_campaign,
+    check_effects,
+    folds_int,
+    names_arg,
+    nonneg_int,
+    open_fraction,
+    positive_int,
+)
 from housner.cli.command import add_command, plugin_option
 from housner.scenarios.execution.outputs import check_output_file
 
@@ -38,6 +47,18 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
         help="older interface: share of records to fit on, sets folds = 1 / (1 - fraction)",
     )
     d.add_argument("--seed", type=nonneg_int, default=0, help="seed of the fold assignment (0)")
+    d.add_argument(
+        "--repeats",
+        type=positive_int,
+        default=5,
+        help="outcome records: repeats of the cross-validation, each on its own folds from --seed on (5)",
+    )
+    d.add_argument(
+        "--model",
+        metavar="FITTED.json",
+        help="outcome records: also score the model another campaign's diagnosis fitted (its --json), frozen, "
+        "beside that campaign's baselines, frozen too",
+    )
     d.add_argument("--max-effects", type=nonneg_int, default=3, help="most effects the search adds (3)")
     d.add_argument(
         "--allow-outside",
@@ -64,12 +85,15 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.json, "--json")
     if args.report is not None:
         check_output_file(args.report, "--report")
+    frozen = _frozen_model(args.model)
     campaign = load_campaign(args.campaign, allow_outside=args.allow_outside)
+    if frozen is not None and not campaign.outcomes:
+        raise UsageError(f"--model: campaign {campaign.name!r} has no outcome records for a frozen outcome model")
     for rid, file, msg in campaign.skipped:
         print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
     if not args.quiet:
         print(f"{campaign!r}", file=sys.stderr)
-    outcomes = _diagnose_outcomes(args, campaign) if campaign.outcomes else None
+    outcomes = _diagnose_outcomes(args, campaign, frozen) if campaign.outcomes else None
     if not campaign.records:  # outcome records only
         if args.json:
             from housner.reports.diagnosis.outcome_text import write_outcome_json
@@ -140,10 +164,22 @@ def _folds(args: argparse.Namespace) -> int:
     return max(2, int(round(1.0 / (1.0 - args.train_fraction))))
 
 
-def _diagnose_outcomes(args: argparse.Namespace, campaign):
+def _frozen_model(path: str | None):
+    """``--model``'s fitted model, read before the work; a UsageError naming the option and the file."""
+    if path is None:
+        return None
+    from housner.scenarios.diagnosis.outcomes.outcome_transfer import read_frozen_model
+
+    try:
+        return read_frozen_model(path)
+    except ValueError as e:
+        raise UsageError(f"--model: {e}") from None
+
+
+def _diagnose_outcomes(args: argparse.Namespace, campaign, frozen=None):
     """The outcome records' diagnosis
     (:func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes`), printed."""
-    from housner.reports.diagnosis.outcome_text import outcome_summary
+    from housner.reports.diagnosis.outcome_text import outcome_summary, transfer_text
     from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import diagnose_outcomes
     from housner.scenarios.diagnosis.outcomes.outcome_scores import SCORE_KEYS
 
@@ -151,6 +187,8 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign):
         campaign,
         folds=args.folds,
         seed=args.seed,
+        repeats=args.repeats,
+        model=frozen,
         progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
     )
     # a campaign of both kinds prints two verdicts: each line says which records it judges
@@ -164,5 +202,8 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign):
     for name, sc in rows:
         cells = "".join(f"{sc.score(k):>9.3f} [{sc.interval(k)[0]:.3f},{sc.interval(k)[1]:.3f}]" for k in keys)
         print(f"{name[:34]:34s}{cells}")
+    if d.transfer is not None:
+        print()
+        print(transfer_text(d.transfer))
     print(f"{d.elapsed:.1f} s")
     return d

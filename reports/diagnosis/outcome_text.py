@@ -10,8 +10,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from housner.scenarios.diagnosis.outcomes.outcome_validation import LEVEL
+
 if TYPE_CHECKING:
     from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosis, OutcomeMisses
+    from housner.scenarios.diagnosis.outcomes.outcome_transfer import OutcomeTransfer
     from housner.scenarios.diagnosis.outcomes.outcome_validation import OutcomeJudgement
 
 __all__ = [
@@ -20,6 +23,7 @@ __all__ = [
     "outcome_params_text",
     "outcome_pointer_text",
     "outcome_summary",
+    "transfer_text",
     "write_outcome_json",
 ]
 
@@ -126,6 +130,30 @@ def outcome_summary(diag: OutcomeDiagnosis) -> str:
         f"(z {floor.z:+.1f}): {'at the floor' if floor.at_floor else 'above the floor: a part is unexplained'}.",
     ]
     return "\n".join(lines)
+
+
+def transfer_text(t: OutcomeTransfer) -> str:
+    """A model fitted on another campaign, scored here frozen beside that campaign's baselines, in words."""
+    s = t.scores
+    rows = "; ".join(
+        f"than {name} (log loss {t.baselines[name].log_loss:.3f}) {'lower' if c.advantage >= 0 else 'higher'} by "
+        f"{abs(c.advantage):.3f} +- {c.se:.3f}"
+        for name, c in t.against.items()
+    )
+    beaten = [n for n, c in t.against.items() if c.p_worse < LEVEL]
+    ahead = [n for n, c in t.against.items() if c.p_better < LEVEL]
+    if beaten:
+        end = f"a frozen baseline predicts these records better ({', '.join(beaten)}): the model does not transfer"
+    elif len(ahead) == len(t.against):
+        end = "the frozen model predicts these records significantly better than every frozen baseline"
+    else:
+        end = "the frozen model is not significantly better than every frozen baseline"
+    return (
+        f"transfer: {t.model} ({outcome_params_text(t.params)}) fitted on {t.source}, frozen, scores here accuracy "
+        f"{s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}], F1 {s.f1:.3f}, log loss "
+        f"{s.log_loss:.3f} [{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]; its log loss against the baselines "
+        f"fitted on {t.source}, frozen (nats; clustered by ground motion): {rows}; {end}."
+    )
 
 
 def outcome_document(diag: OutcomeDiagnosis) -> dict:

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from housner.reports.diagnosis.outcome_figures import baseline_label, calibration_figure, outcome_map_figure
-from housner.reports.diagnosis.outcome_text import judgement_text, outcome_pointer_text
+from housner.reports.diagnosis.outcome_text import judgement_text, outcome_pointer_text, transfer_text
 from housner.reports.page import (
     Section,
     ci_cell,
@@ -135,6 +135,10 @@ def render_outcome_report(diag) -> str:
         ("candidates", "Candidate effects", _candidates(diag)),
         ("settings", "Geometry and settings", _settings(diag)),
     ]
+    if diag.transfer is not None:
+        sections.insert(
+            2, ("transfer", "Transfer from another campaign", f"<p>{esc(transfer_text(diag.transfer))}</p>")
+        )
     took = time.perf_counter() - t0
     n, k = len(diag.ids), int(np.sum(diag.observed))
     return document(

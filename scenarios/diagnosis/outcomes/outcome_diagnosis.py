@@ -52,9 +52,11 @@ from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     point_scores,
     seed_spread,
 )
+from housner.scenarios.diagnosis.outcomes.outcome_transfer import FrozenOutcomeModel, transfer_outcomes
 from housner.scenarios.diagnosis.outcomes.outcome_validation import (
     BASELINES,
     REPEATS,
+    baseline_fit,
     baseline_oof,
     compare_log_loss,
     grouped_folds,
@@ -127,6 +129,7 @@ def diagnose_outcomes(
     folds: int = 5,
     seed: int = 0,
     repeats: int = REPEATS,
+    model: FrozenOutcomeModel | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> OutcomeDiagnosis:
     """The mission loop on a campaign's outcome records: plain model, misses, effect, error falling, verdict.
@@ -203,6 +206,10 @@ def diagnose_outcomes(
     judged = judge_outcome_model(final.p_repeats, base_p, y, groups, floor) if final is not plain else judged_plain
     status = status_rule(True, len(steps) > 1, judged_plain.misfit, judged.misfit, judged.powered)
     baseline_p = {n: p.mean(axis=0) for n, p in base_p.items()}
+    fits = {n: baseline_fit(n, pga, pgv, y) for n in BASELINES}
+    transfer = None
+    if model is not None:
+        transfer = transfer_outcomes(model, accs, dts, geo, campaign.specimen, y, pga, pgv, groups, seed=seed, say=say)
     misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
     diag = OutcomeDiagnosis(
         campaign=campaign.name,
@@ -227,6 +234,8 @@ def diagnose_outcomes(
         baseline_spread=spread,
         judgement=judged,
         judgement_plain=judged_plain,
+        baseline_fits=fits,
+        transfer=transfer,
     )
     diag.elapsed = time.perf_counter() - t_start
     return diag

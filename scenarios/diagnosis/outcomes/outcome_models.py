@@ -133,7 +133,11 @@ class OverturnTables:
     log_alpha: np.ndarray  # (ALPHA_GRID,)
 
 
-def overturn_tables(accs, dts, geo: Geometry, specimen, say: Callable) -> OverturnTables:
+def overturn_tables(accs, dts, geo: Geometry, specimen, say: Callable, alphas=None) -> OverturnTables:
+    """Every record's overturns over the models' grids: the pivots over their bracket and the table's amplitude
+    (the plain model), the restitution grid, and the effective contact's grid of alpha (default: from
+    :data:`ALPHA_GRID_LOW` of the smaller alpha to the larger, :data:`ALPHA_GRID` points; ``alphas`` [rad]
+    gives another, for a model fitted on another block)."""
     pts = _bracket_points(geo)
     amps = (1.0 - AMPLITUDE_SPREAD, 1.0, 1.0 + AMPLITUDE_SPREAD)
     t0 = time.perf_counter()
@@ -141,12 +145,13 @@ def overturn_tables(accs, dts, geo: Geometry, specimen, say: Callable) -> Overtu
     say(f"plain model: {len(pts)} pivot pairs x {len(amps)} amplitudes, {time.perf_counter() - t0:.1f} s")
     rest = _overturns(accs, dts, geo, specimen, [(bp, bn, r, 1.0) for bp, bn in pts for r in R_GRID])
     rest = rest.reshape(len(accs), len(pts), len(R_GRID))
-    lo = ALPHA_GRID_LOW * min(geo.alpha_pos, geo.alpha_neg)
-    hi = max(geo.alpha_pos, geo.alpha_neg)
-    alphas = np.geomspace(lo, hi, ALPHA_GRID)
+    if alphas is None:
+        lo = ALPHA_GRID_LOW * min(geo.alpha_pos, geo.alpha_neg)
+        alphas = np.geomspace(lo, max(geo.alpha_pos, geo.alpha_neg), ALPHA_GRID)
+    alphas = np.asarray(alphas, dtype=float)
     bs = geo.h * np.tan(alphas)
     contact = _overturns(accs, dts, geo, specimen, [(b, b, r, 1.0) for b in bs for r in (None, *R_GRID)])
-    contact = contact.reshape(len(accs), ALPHA_GRID, 1 + len(R_GRID))
+    contact = contact.reshape(len(accs), alphas.size, 1 + len(R_GRID))
     say(
         f"effect tables: {len(pts) * len(R_GRID) + contact.shape[1] * contact.shape[2]} runs of "
         f"{len(accs)} records, {time.perf_counter() - t0:.1f} s in all"

@@ -6,13 +6,14 @@ ladder of models and the whole diagnosis, as values and their JSON form (their w
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from housner._values import JsonValue, WrittenAsResult, floats, read_as, to_data
 from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores, SeedSpread
-from housner.scenarios.diagnosis.outcomes.outcome_validation import OutcomeJudgement
+from housner.scenarios.diagnosis.outcomes.outcome_transfer import OutcomeTransfer
+from housner.scenarios.diagnosis.outcomes.outcome_validation import BaselineFit, OutcomeJudgement
 
 __all__ = [
     "Miss",
@@ -276,6 +277,10 @@ class OutcomeDiagnosis(WrittenAsResult):
         Baseline name -> each score's mean and range over the repeats.
     judgement, judgement_plain : OutcomeJudgement
         The final and the plain model against the baselines and their floors: what the status rests on.
+    baseline_fits : dict of str to BaselineFit
+        The baselines fitted on every record, for another campaign to score (``--model``).
+    transfer : OutcomeTransfer or None
+        A model fitted on another campaign, scored here frozen (``--model``).
     """
 
     campaign: str
@@ -301,6 +306,8 @@ class OutcomeDiagnosis(WrittenAsResult):
     baseline_spread: dict = field(default_factory=dict)
     judgement: OutcomeJudgement | None = None
     judgement_plain: OutcomeJudgement | None = None
+    baseline_fits: dict = field(default_factory=dict)
+    transfer: OutcomeTransfer | None = None
 
     @property
     def final(self) -> OutcomeStep:
@@ -331,6 +338,8 @@ class OutcomeDiagnosis(WrittenAsResult):
             baseline_spread=dict(self.baseline_spread),
             judgement=self.judgement,
             judgement_plain=self.judgement_plain,
+            baseline_fits=dict(self.baseline_fits),
+            transfer=self.transfer,
             elapsed_s=self.elapsed,
         )
 
@@ -359,6 +368,8 @@ class OutcomeDiagnosisResult(JsonValue):
     baseline_spread: dict[str, dict[str, SeedSpread]]
     judgement: OutcomeJudgement | None
     judgement_plain: OutcomeJudgement | None
+    baseline_fits: dict[str, BaselineFit]
+    transfer: OutcomeTransfer | None
     elapsed_s: float
 
     @property
@@ -403,6 +414,8 @@ class OutcomeDiagnosisResult(JsonValue):
                 "baselines_over_seeds": to_data(self.baseline_spread),
                 "judgement": to_data(self.judgement),
                 "judgement_plain": to_data(self.judgement_plain),
+                "baseline_fits": to_data(self.baseline_fits),
+                "transfer": None if self.transfer is None else to_data(_without_p(self.transfer)),
                 "elapsed_s": self.elapsed_s,
             }
         )
@@ -429,8 +442,15 @@ class OutcomeDiagnosisResult(JsonValue):
             baseline_spread=read_as(dict[str, dict[str, SeedSpread]], data.get("baselines_over_seeds", {})),
             judgement=read_as(OutcomeJudgement | None, data.get("judgement")),
             judgement_plain=read_as(OutcomeJudgement | None, data.get("judgement_plain")),
+            baseline_fits=read_as(dict[str, BaselineFit], data.get("baseline_fits", {})),
+            transfer=read_as(OutcomeTransfer | None, data.get("transfer")),
             elapsed_s=read_as(float, data["elapsed_s"]),
         )
+
+
+def _without_p(t: OutcomeTransfer) -> dict:
+    """A transfer's fields as its JSON holds them: its per-record probabilities are not written."""
+    return {f.name: getattr(t, f.name) for f in fields(t) if f.name != "p"}
 
 
 def _nan_none(v: float):

@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import special
 from scipy import stats as sps
 from sklearn.dummy import DummyClassifier
 from sklearn.linear_model import LogisticRegression
@@ -22,9 +23,11 @@ from housner.scenarios.diagnosis.outcomes.outcome_scores import OutcomeFloor, pe
 __all__ = [
     "BASELINES",
     "LEVEL",
+    "BaselineFit",
     "REPEATS",
     "OutcomeJudgement",
     "PairedComparison",
+    "baseline_fit",
     "baseline_oof",
     "compare_log_loss",
     "grouped_folds",
@@ -71,6 +74,33 @@ def grouped_folds(y, groups, k: int, seed: int) -> np.ndarray:
     return fold
 
 
+def _features(name: str, pga, pgv) -> np.ndarray:
+    """The features of baseline ``name``: none for the base rate, else log PGA, log PGV or both."""
+    pga, pgv = np.asarray(pga, dtype=float), np.asarray(pgv, dtype=float)
+    features = {
+        "base_rate": lambda: np.zeros((pga.size, 1)),
+        "logistic_pga": lambda: np.log(pga)[:, None],
+        "logistic_pgv": lambda: np.log(pgv)[:, None],
+        "logistic_pga_pgv": lambda: np.column_stack((np.log(pga), np.log(pgv))),
+    }
+    if name not in features:
+        raise ValueError(f"unknown baseline {name!r}; the baselines are {', '.join(BASELINES)}")
+    return features[name]()
+
+
+def _fitted(name: str, X: np.ndarray, y: np.ndarray):
+    """Baseline ``name`` fitted on features ``X`` and outcomes ``y`` (scikit-learn)."""
+    if name == "base_rate":
+        model = DummyClassifier(strategy="prior")
+    else:
+        model = make_pipeline(StandardScaler(), LogisticRegression(C=LOGISTIC_C, max_iter=1000))
+    return model.fit(X, y)
+
+
+def _p_true(model, X: np.ndarray) -> np.ndarray:
+    return model.predict_proba(X)[:, list(model.classes_).index(True)]
+
+
 def baseline_oof(name: str, pga, pgv, y, fold) -> np.ndarray:
     """Out-of-fold P(overturn) of baseline ``name`` (:data:`BASELINES`) [-], one fit per fold.
 
@@ -83,25 +113,61 @@ def baseline_oof(name: str, pga, pgv, y, fold) -> np.ndarray:
         Fold of every record: each record is predicted by the fit without its fold.
     """
     y = np.asarray(y, dtype=bool)
-    features = {
-        "base_rate": np.zeros((y.size, 1)),
-        "logistic_pga": np.log(np.asarray(pga, dtype=float))[:, None],
-        "logistic_pgv": np.log(np.asarray(pgv, dtype=float))[:, None],
-        "logistic_pga_pgv": np.column_stack((np.log(pga), np.log(pgv))),
-    }
-    if name not in features:
-        raise ValueError(f"unknown baseline {name!r}; the baselines are {', '.join(BASELINES)}")
-    X, fold = features[name], np.asarray(fold)
+    X, fold = _features(name, pga, pgv), np.asarray(fold)
     p = np.empty(y.size)
     for f in np.unique(fold):
         test = fold == f
-        if name == "base_rate":
-            model = DummyClassifier(strategy="prior")
-        else:
-            model = make_pipeline(StandardScaler(), LogisticRegression(C=LOGISTIC_C, max_iter=1000))
-        model.fit(X[~test], y[~test])
-        p[test] = model.predict_proba(X[test])[:, list(model.classes_).index(True)]
+        p[test] = _p_true(_fitted(name, X[~test], y[~test]), X[test])
     return p
+
+
+@dataclass(frozen=True)
+class BaselineFit:
+    """A baseline fitted on every record of a campaign, frozen, to predict another's.
+
+    Attributes
+    ----------
+    name : str
+        One of :data:`BASELINES`.
+    rate : float
+        The base rate's P(overturn) [-] (NaN for a regression).
+    mean, scale : tuple of float
+        The regression's standardisation of its features (log PGA [log m/s^2], log PGV [log m/s]).
+    coef : tuple of float
+        Its coefficients on the standardised features.
+    intercept : float
+    """
+
+    name: str
+    rate: float = math.nan
+    mean: tuple[float, ...] = ()
+    scale: tuple[float, ...] = ()
+    coef: tuple[float, ...] = ()
+    intercept: float = math.nan
+
+    def predict(self, pga, pgv) -> np.ndarray:
+        """P(overturn) of records with peak table acceleration ``pga`` [m/s^2] and velocity ``pgv`` [m/s]."""
+        X = _features(self.name, pga, pgv)
+        if self.name == "base_rate":
+            return np.full(X.shape[0], self.rate)
+        z = ((X - np.array(self.mean)) / np.array(self.scale)) @ np.array(self.coef) + self.intercept
+        return special.expit(z)
+
+
+def baseline_fit(name: str, pga, pgv, y) -> BaselineFit:
+    """Baseline ``name`` fitted on every record (:class:`BaselineFit`)."""
+    y = np.asarray(y, dtype=bool)
+    model = _fitted(name, _features(name, pga, pgv), y)
+    if name == "base_rate":
+        return BaselineFit(name, rate=float(np.mean(y)))
+    scaler, logistic = model[0], model[-1]
+    return BaselineFit(
+        name,
+        mean=tuple(float(v) for v in scaler.mean_),
+        scale=tuple(float(v) for v in scaler.scale_),
+        coef=tuple(float(v) for v in logistic.coef_[0]),
+        intercept=float(logistic.intercept_[0]),
+    )
 
 
 @dataclass(frozen=True)
