@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import datetime
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -34,6 +34,20 @@ def _number(row: pd.Series, col: str) -> float:
     return float(row[col]) if col in row.index else math.nan
 
 
+def _from_row(cls, row: pd.Series):
+    """A check of a table's row, each field from the column of its name (the one place the columns are read by
+    name): a number NaN, a word "" where the table of an earlier version has no such column."""
+    values = {}
+    for f in fields(cls):
+        if f.type == "str":
+            values[f.name] = str(row[f.name]) if f.name in row.index else ""
+        elif f.type == "int":
+            values[f.name] = int(row[f.name])
+        else:
+            values[f.name] = _number(row, f.name)
+    return cls(**values)
+
+
 @dataclass(frozen=True)
 class RatioCheck:
     """One release from rest of checks 1 and 2: a row of :attr:`TuningResult.table` or
@@ -59,14 +73,8 @@ class RatioCheck:
 
     @classmethod
     def from_row(cls, row: pd.Series) -> RatioCheck:
-        """The check of one row of the table (the one place that reads its columns by name)."""
-        return cls(
-            dt=_number(row, "dt"),
-            amplitude=float(row["amplitude"]),
-            r_engine=_number(row, "r_engine"),
-            r_target=_number(row, "r_target"),
-            rel_error=float(row["rel_error"]),
-        )
+        """The check of one row of the table (:func:`_from_row`)."""
+        return _from_row(cls, row)
 
 
 @dataclass(frozen=True)
@@ -93,14 +101,8 @@ class DecayCheck:
 
     @classmethod
     def from_row(cls, row: pd.Series) -> DecayCheck:
-        """The check of one row of the table (the one place that reads its columns by name)."""
-        return cls(
-            dt=_number(row, "dt"),
-            impacts=int(row["impacts"]),
-            peak_engine=float(row["peak_engine"]),
-            peak_analytic=float(row["peak_analytic"]),
-            rel_error=float(row["rel_error"]),
-        )
+        """The check of one row of the table (:func:`_from_row`)."""
+        return _from_row(cls, row)
 
 
 @dataclass(frozen=True)
@@ -137,18 +139,8 @@ class PulseCheck:
 
     @classmethod
     def from_row(cls, row: pd.Series) -> PulseCheck:
-        """The check of one row of the table (the one place that reads its columns by name)."""
-        return cls(
-            dt=_number(row, "dt"),
-            pulse=str(row["pulse"]) if "pulse" in row.index else "",
-            peak_engine=_number(row, "peak_engine"),
-            peak_analytic=_number(row, "peak_analytic"),
-            rel_error=float(row["rel_error"]),
-            theta_max_engine=_number(row, "theta_max_engine"),
-            theta_max_analytic=_number(row, "theta_max_analytic"),
-            theta_max_rel_error=float(row["theta_max_rel_error"]),
-            theta_max_rtol=float(row["theta_max_rtol"]),
-        )
+        """The check of one row of the table (:func:`_from_row`)."""
+        return _from_row(cls, row)
 
 
 @dataclass(frozen=True, eq=False)
