@@ -73,8 +73,8 @@ def test_both_kinds_of_campaign_go_through_the_one_selection(tmp_path, monkeypat
     info = cg.cached_campaign(tmp_path / "campaigns", "rotational_damping")
     history = diagnose(load_campaign(info["root"]), effects=["rotational_damping"], n_replicas=4)
     accs = to._pulses(60, seed=5)
-    outcomes = diagnose_outcomes(to._campaign(accs, to._truth(accs, 0.06)), folds=3, seed=0)
-    assert seen == ["HistoryEvidence", "OutcomeEvidence"]
+    outcomes = diagnose_outcomes(to._campaign(accs, to._truth(accs, 0.06)), folds=3, seed=0, repeats=2)
+    assert seen == ["HistoryEvidence", "OutcomeEvidence", "OutcomeEvidence"]  # one selection per repeat
     # one status vocabulary
     assert history.status in STATUSES and outcomes.status in STATUSES
     assert history.selected == ["rotational_damping"]
