@@ -1,15 +1,10 @@
-"""Outcome records: predict P(overturn) from an ensemble, find the effect the outcomes need, judge at the floor.
-
-A test whose only measurement is whether the block overturned (and the table motion) is scored as a
-probability. :func:`diagnose_outcomes` runs the mission loop on a campaign's outcome records: the plain model
-(the scan's planar block, its uncertain pivots and table amplitude sampled into an ensemble per record, a
-lapse rate as the outcomes' noise model), where it fails, the effects ``contact_inside`` and ``restitution``
-fitted on the log loss with cross-validation and added by a one-sided Diebold-Mariano test, and the verdict
-against the floor and logistic baselines on PGA and PGV. The ensembles are computed once as tables of
-overturns over a grid of the effects' parameters, which the fits reweight. The method step by step is in
-``docs/explanation/diagnosis.md`` ("Outcome records"); the scores are
-:mod:`housner.scenarios.diagnosis.outcomes.outcome_scores`', the result classes
-:mod:`housner.scenarios.diagnosis.outcomes.outcome_results`'.
+"""Outcome records: predict P(overturn) from an ensemble, find the effect the outcomes need, judge it against the
+baselines and the floor. :func:`diagnose_outcomes` runs the mission loop on a campaign's outcome records: the
+plain model (:mod:`housner.scenarios.diagnosis.outcomes.outcome_models`), where it fails, the effects
+``contact_inside`` and ``restitution`` fitted on the log loss and added by a one-sided Diebold-Mariano test, on
+folds that keep each ground motion's records together, repeated over fold seeds; then the verdict
+(:mod:`housner.scenarios.diagnosis.outcomes.outcome_validation`). The method step by step is in
+``docs/explanation/diagnosis.md`` ("Outcome records").
 
 References
 ----------
