@@ -173,34 +173,16 @@ def diagnose_outcomes(
         f"block h {geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad"
     )
     tables = overturn_tables(accs, dts, geo, campaign.specimen, say)
-    runs = []
-    for s, fold in zip(seeds, fold_of, strict=True):
-        plain_r = _step("plain", None, tables, y, fold, s, groups)
-        runs.append(_add_effects(plain_r, tables, y, fold, s, groups, say))
-        say(f"repeat (fold seed {s}): {runs[-1][0][-1].name}")
-    rep = _consensus(seeds, runs)
-    say(f"final model: {rep.chosen} ({rep.finals.count(rep.chosen)} of {len(seeds)} repeats)")
-    ladder = next(steps for steps, _c, _t in runs if steps[-1].name == rep.chosen)
-    steps, prev = [], None
-    for rung in ladder:
-        prev = _over_repeats(rung.name, prev, runs, tables, y, fold_of, seeds, groups)
-        steps.append(prev)
+    steps, rep, candidates = _repeated_ladder(tables, y, groups, fold_of, seeds, say)
     plain, final = steps[0], steps[-1]
     say(f"plain model: held-out log loss {plain.scores.log_loss:.3f}, accuracy {plain.scores.accuracy:.3f}")
     pointer = _pointer(plain, y, pga, pgv, geo)
     say(f"where it fails: {pointer.missed} overturns missed, {pointer.false} predicted that did not happen")
-    candidates = runs[0][1]
     base_p = {n: np.array([baseline_oof(n, pga, pgv, y, f) for f in fold_of]) for n in BASELINES}
     baselines = {n: outcome_scores(p.mean(axis=0), y, groups=groups, seed=seed) for n, p in base_p.items()}
-    spread = {n: seed_spread([point_scores(q, y) for q in p]) for n, p in base_p.items()}
     floor = outcome_floor(final.p, y, seed=seed)
-    # the one status rule of the diagnosis; an outcome model is a misfit when a baseline fitted on the same folds
-    # predicts better, when it has no skill over the base rate where the records could show one, or when its
-    # probabilities fail their floor (outcome_validation.judge_outcome_model); at least 10 records are checked above
-    judged_plain = judge_outcome_model(plain.p_repeats, base_p, y, groups, outcome_floor(plain.p, y, seed=seed))
-    judged = judge_outcome_model(final.p_repeats, base_p, y, groups, floor) if final is not plain else judged_plain
+    judged_plain, judged = _judged(plain, final, base_p, y, groups, floor, seed)
     status = status_rule(True, len(steps) > 1, judged_plain.misfit, judged.misfit, judged.powered)
-    baseline_p = {n: p.mean(axis=0) for n, p in base_p.items()}
     fits = {n: baseline_fit(n, pga, pgv, y) for n in BASELINES}
     transfer = None
     if model is not None:
@@ -215,7 +197,7 @@ def diagnose_outcomes(
         steps=steps,
         candidates=candidates,
         baselines=baselines,
-        baseline_p=baseline_p,
+        baseline_p={n: p.mean(axis=0) for n, p in base_p.items()},
         floor=floor,
         pointer=pointer,
         misses=misses,
@@ -226,7 +208,7 @@ def diagnose_outcomes(
         calibration=calibration_table(final.p, y),
         groups=groups,
         repeats=rep,
-        baseline_spread=spread,
+        baseline_spread={n: seed_spread([point_scores(q, y) for q in p]) for n, p in base_p.items()},
         judgement=judged,
         judgement_plain=judged_plain,
         baseline_fits=fits,
@@ -234,6 +216,34 @@ def diagnose_outcomes(
     )
     diag.elapsed = time.perf_counter() - t_start
     return diag
+
+
+def _repeated_ladder(tables, y, groups, fold_of, seeds, say) -> tuple[list[OutcomeStep], OutcomeRepeats, list]:
+    """The forward selection on each repeat's folds; the final model most repeats end in; its ladder scored over
+    every repeat (:func:`_over_repeats`); and the first repeat's candidates."""
+    runs = []
+    for s, fold in zip(seeds, fold_of, strict=True):
+        plain_r = _step("plain", None, tables, y, fold, s, groups)
+        runs.append(_add_effects(plain_r, tables, y, fold, s, groups, say))
+        say(f"repeat (fold seed {s}): {runs[-1][0][-1].name}")
+    rep = _consensus(seeds, runs)
+    say(f"final model: {rep.chosen} ({rep.finals.count(rep.chosen)} of {len(seeds)} repeats)")
+    ladder = next(steps for steps, _c, _t in runs if steps[-1].name == rep.chosen)
+    steps, prev = [], None
+    for rung in ladder:
+        prev = _over_repeats(rung.name, prev, runs, tables, y, fold_of, seeds, groups)
+        steps.append(prev)
+    return steps, rep, runs[0][1]
+
+
+def _judged(plain: OutcomeStep, final: OutcomeStep, base_p: dict, y, groups, floor, seed: int):
+    """The plain and the final model judged (:func:`judge_outcome_model`): an outcome model is a misfit when a
+    baseline fitted on the same folds predicts better, when it has no skill over the base rate where the records
+    could show one, or when its probabilities fail their floor; the one status rule reads these."""
+    judged_plain = judge_outcome_model(plain.p_repeats, base_p, y, groups, outcome_floor(plain.p, y, seed=seed))
+    if final is plain:
+        return judged_plain, judged_plain
+    return judged_plain, judge_outcome_model(final.p_repeats, base_p, y, groups, floor)
 
 
 def _checked_outcomes(campaign: Campaign, folds: int) -> tuple[list[OutcomeRecord], np.ndarray, int]:
