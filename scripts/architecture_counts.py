@@ -1,47 +1,7 @@
-"""Architecture counts of issue 39, by AST over the package's source, outside tests.
-
-The source folders are read from ``[tool.setuptools.package-dir]`` in
-``pyproject.toml`` (``housner/`` is ``housner``, ``engines/`` is
-``housner.engines``, ``scenarios/`` is ``housner.scenarios``, ``reports/`` is
-``housner.reports``); every ``*.py`` below them is a module, except folders
-named ``tests`` and files named ``test_*.py`` or ``conftest.py``. Relative
-imports are resolved against the importing module. Only imports of
-``housner`` modules are looked at.
-
-What is counted
----------------
-underscore imports
-    Each name ``_y`` (one leading underscore, not a dunder) in
-    ``from M import _y`` (at any depth of the file, in functions too) where
-    ``M`` is a ``housner`` module and the importing module is not ``M``
-    itself. Allowed, and not counted: a package's ``__init__`` importing from
-    a module of that same package (``housner/effects/__init__.py`` taking
-    ``_y`` from ``housner.effects.terms``), that is the package's own door.
-    ``_y`` may be a private function, class, constant or submodule; each is
-    one count. ``import housner.x._m`` (a private module by attribute path)
-    and ``from housner.x._m import Public`` are not counted: a public name of
-    a private module is the scipy ``_ivp`` way.
-re-exports
-    In a module that is not a package ``__init__``, each module-level name
-    that the module does not define (no ``def``, ``class``, assignment,
-    ``for``/``with`` target or ``global`` binding at module level) and that it
-    either lists in ``__all__``, or binds by a module-level import (anywhere
-    in the module's top-level statements, ``if``/``try`` blocks included) and
-    never reads: no ``Name`` load of it anywhere in the module, no attribute
-    chain starting at it, and no mention in a string annotation. An import
-    used only in ``__all__`` is a re-export by both tests and counted once.
-    Names imported from outside ``housner`` count too (the source is named
-    in the details); ``from __future__`` imports do not.
-long modules
-    Modules over 600 physical lines (``wc -l``).
-long functions
-    ``def`` and ``async def`` over 80 lines, counted from the ``def`` line
-    (decorators excluded) to the last line of its body, docstring included;
-    methods are named ``Class.method``, nested functions
-    ``outer.<locals>.inner``, and each is counted on its own (an outer
-    function's length includes its nested ones).
-legacy
-    Whether ``housner/_legacy.py`` exists.
+"""Architecture counts of issue 39, by AST over the package's source, outside tests: underscore names imported
+across modules, names re-exported by modules that are not a package's ``__init__``, modules over 600 lines,
+functions over 80 lines, and the legacy import hook. What each counts, exactly, is in ``docs/development.md``
+("Architecture counts").
 
 Usage::
 
