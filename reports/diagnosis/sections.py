@@ -24,7 +24,12 @@ from housner.reports.diagnosis.figures import (
     step_label,
     tilt_figure,
 )
-from housner.reports.diagnosis.verdict_text import distribution_text, verdict_paragraph, verdict_text
+from housner.reports.diagnosis.verdict_text import (
+    distribution_text,
+    said_distributions,
+    verdict_paragraph,
+    verdict_text,
+)
 from housner.reports.diagnosis.words import change_text, fmt_pm, params_text, signed_words
 from housner.reports.page import esc, html_figure, html_table
 from housner.scenarios.diagnosis.comparison.localise import METRICS
@@ -94,16 +99,6 @@ def _verdict_text(diag) -> str:
         text = text[len(head) + 1 :].lstrip()
         text = text[:1].upper() + text[1:]
     return text
-
-
-def _distributions_said(v) -> bool:
-    """Whether the verdict's paragraph gives the final model's distribution misfits already."""
-    facts = v.facts
-    if v.status in ("partly_explained", "unexplained"):
-        return True
-    if v.status in ("no_misfit", "explained"):
-        return bool(facts.model) or all(d in facts.dist_plain for d in facts.dist_final)
-    return False
 
 
 def _shows_next(v) -> bool:
@@ -259,7 +254,7 @@ def _verdict_detail(diag) -> str:
         )
         freq = f'<p class="sub">Best candidate of its round, fold by fold ({k} folds): {cells}.</p>'
     dist = ""
-    if v.distribution and not _distributions_said(v):
+    if v.distribution and not all(d in said_distributions(v.facts, v.status) for d in v.distribution):
         dist = '<p class="bad">Distributions: ' + esc("; ".join(distribution_text(d) for d in v.distribution)) + ".</p>"
     return table + dist + nxt + freq
 

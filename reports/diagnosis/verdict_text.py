@@ -43,6 +43,7 @@ __all__ = [
     "distribution_text",
     "economy_text",
     "pointer_text",
+    "said_distributions",
     "verdict_paragraph",
     "verdict_text",
     "where_texts",
@@ -176,6 +177,16 @@ def pointer_text(classes: Sequence[PointerClass], model: Sequence[str] = ()) -> 
     return text
 
 
+def said_distributions(facts: VerdictFacts, status: str) -> list[DistributionMisfit]:
+    """The distribution misfits the verdict's paragraph gives (:func:`verdict_text`): the final model's for a
+    misfit, the judged model's as unusual at the floor, none otherwise."""
+    if status in ("partly_explained", "unexplained"):
+        return list(facts.dist_final)
+    if status in ("no_misfit", "explained"):
+        return list(facts.dist_final if facts.model else facts.dist_plain)
+    return []
+
+
 def verdict_text(facts: VerdictFacts, status: str, *, pointer: bool = True) -> str:
     """The verdict's paragraph: the status in words with its figures (each statistic said once where it first
     appears), what is unusual and, for a misfit, where to look next (``pointer`` False: a reference to the list
@@ -183,9 +194,9 @@ def verdict_text(facts: VerdictFacts, status: str, *, pointer: bool = True) -> s
     text = _status_sentence(facts, status)
     if status in ("no_misfit", "explained"):
         local = facts.local_final if facts.model else facts.local_plain
-        dist = facts.dist_final if facts.model else facts.dist_plain
         who = "the model with " + " + ".join(facts.model) if facts.model else "the plain model"
-        bits = [evidence_text(e, who) for c in local for e in c.evidence[:1]] + [distribution_text(d) for d in dist]
+        bits = [evidence_text(e, who) for c in local for e in c.evidence[:1]]
+        bits += [distribution_text(d) for d in said_distributions(facts, status)]
         if bits:
             text += (
                 f" Unusual, though it does not make a misfit (the residual is at its floor): {'; '.join(bits)}"
@@ -194,9 +205,8 @@ def verdict_text(facts: VerdictFacts, status: str, *, pointer: bool = True) -> s
             )
     if status in ("partly_explained", "unexplained"):
         if facts.dist_final:
-            text += (
-                " The distributions disagree too: " + "; ".join(distribution_text(d) for d in facts.dist_final) + "."
-            )
+            dist = said_distributions(facts, status)
+            text += " The distributions disagree too: " + "; ".join(distribution_text(d) for d in dist) + "."
         if facts.classes:
             text += " " + (
                 pointer_text(facts.classes, facts.model) if pointer else "Where to look: see the list below."
