@@ -377,6 +377,7 @@ def theta_max_many(
     params: RockingParams | Sequence[RockingParams] | None = None,
     rest_tol: float = REST_TOL,
     parallel: bool = True,
+    terms=None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Peak response of many records without building their histories.
 
@@ -401,6 +402,9 @@ def theta_max_many(
         Rest rule threshold [-]; see :func:`simulate`.
     parallel : bool
         Spread the records over numba threads.
+    terms : housner.effects.terms.TermSet, optional
+        The effects' terms (see :func:`simulate`); terms that read the vertical channel cannot run on bare
+        accelerations (ValueError).
 
     Returns
     -------
@@ -429,15 +433,19 @@ def theta_max_many(
     acc_g = np.concatenate(rows) / G
     out = np.empty((n_rec, 6))
     empty = np.empty(0)
-    kern = run_batch_parallel if parallel and n_rec > 1 else run_batch
-    kern(
+    if terms is not None and terms.vertical:
+        raise ValueError("`terms` read the vertical channel, which bare accelerations do not carry; use simulate_many")
+    q = None if terms is None else np.tile(terms.q_array(), (n_rec, 1))
+    _run_kernel(
+        terms or None,
+        parallel and n_rec > 1,
         acc_g,
-        acc_g,
+        acc_g if terms is None else np.zeros_like(acc_g),
         offsets,
         dts,
         ms,
         prm_a,
-        _no_terms(n_rec),
+        q,
         th0,
         thd0,
         tol,

@@ -189,6 +189,7 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign, frozen=None):
         seed=args.seed,
         repeats=args.repeats,
         model=frozen,
+        effects=args.effects,
         progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
     )
     # a campaign of both kinds prints two verdicts: each line says which records it judges

@@ -103,6 +103,20 @@ def judgement_text(judged: OutcomeJudgement) -> str:
     return f"{head}. No baseline predicts better"
 
 
+def left_out_text(left_out) -> str:
+    """The library effects an outcome diagnosis could not test, each with why; empty when none was left out."""
+    why = {
+        "sensor": lambda e: "changes only what a sensor reads, not whether the block falls",
+        "channels": lambda e: f"reads the measured channel {', '.join(e.channels)}, which outcome records lack",
+        "no_grid": lambda e: "has no parameter with a finite range to tabulate",
+        "slow_solver": lambda e: (
+            f"its own equation of motion, run record by record, would take over {e.seconds:.0f} s for its table"
+        ),
+    }
+    parts = [f"{e.name} ({why.get(e.why, lambda e: e.why)(e)})" for e in left_out]
+    return f"not searched on outcome records: {'; '.join(parts)}." if parts else ""
+
+
 def outcome_summary(diag: OutcomeDiagnosis) -> str:
     """The verdict in words: each score's mean and range over the repeats, the intervals, the baselines, the
     floor and the judgement the status rests on."""
@@ -123,6 +137,7 @@ def outcome_summary(diag: OutcomeDiagnosis) -> str:
         f"whole ground motions: accuracy {s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}], log "
         f"loss {s.log_loss:.3f} [{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]; plain model: accuracy "
         f"{_spread(diag.steps[0].over_seeds, 'accuracy')}, log loss {_spread(diag.steps[0].over_seeds, 'log_loss')}.",
+        *([left_out_text(diag.left_out)] if diag.left_out else []),
         f"best baseline ({best}): accuracy {_spread(diag.baseline_spread[best], 'accuracy')}, log loss "
         f"{_spread(diag.baseline_spread[best], 'log_loss')}; {judgement_text(diag.judgement)}.",
         f"floor (a correct model with these probabilities): log loss {floor.log_loss:.3f} "

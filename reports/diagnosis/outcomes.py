@@ -24,7 +24,12 @@ from pathlib import Path
 import numpy as np
 
 from housner.reports.diagnosis.outcome_figures import baseline_label, calibration_figure, outcome_map_figure
-from housner.reports.diagnosis.outcome_text import judgement_text, outcome_pointer_text, transfer_text
+from housner.reports.diagnosis.outcome_text import (
+    judgement_text,
+    left_out_text,
+    outcome_pointer_text,
+    transfer_text,
+)
 from housner.reports.page import (
     Section,
     ci_cell,
@@ -40,6 +45,7 @@ from housner.reports.page import (
     write_page,
 )
 from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import LEVEL
+from housner.scenarios.diagnosis.outcomes.outcome_effects import GRID_SHARES
 from housner.scenarios.diagnosis.outcomes.outcome_models import AMPLITUDE_SPREAD
 from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeGeometry
 from housner.scenarios.diagnosis.outcomes.outcome_scores import (
@@ -177,9 +183,11 @@ def _ci(scores: OutcomeScores, key: str, digits: int = 3) -> str:
     return ci_cell(scores.score(key), ci[0], ci[1], digits)
 
 
-def _param(key: str, value, geometry: OutcomeGeometry, *, long: bool) -> str:
-    """A fitted parameter with its unit; ``long`` says what it is (the verdict), else only its symbol (tables)."""
-    what, sym, unit = _PARAMS.get(key, (key, key, "?"))
+def _param(key: str, value, geometry: OutcomeGeometry, *, long: bool, searched=()) -> str:
+    """A fitted parameter with its unit (a library effect's from its ``searched`` entry); ``long`` says what it is
+    (the verdict), else only its symbol (tables)."""
+    lib = {e.param: (f"{e.name}'s {e.param}", e.param, e.unit) for e in searched}
+    what, sym, unit = _PARAMS.get(key) or lib.get(key, (key, key, "?"))
     if value is None:
         return f"{esc(sym)}: Housner's impact law" + (" (from the geometry)" if long else "")
     text = (f"{esc(what)} " if long else "") + f"{esc(sym)} = {float(value):.4g} " + ("[-]" if unit == "-" else unit)
@@ -195,8 +203,8 @@ def _param(key: str, value, geometry: OutcomeGeometry, *, long: bool) -> str:
     return text
 
 
-def _params(params: dict, geometry: OutcomeGeometry, *, long: bool = False) -> str:
-    return "; ".join(_param(k, v, geometry, long=long) for k, v in params.items()) or "&ndash;"
+def _params(params: dict, geometry: OutcomeGeometry, *, long: bool = False, searched=()) -> str:
+    return "; ".join(_param(k, v, geometry, long=long, searched=searched) for k, v in params.items()) or "&ndash;"
 
 
 def _n(count: int, noun: str, plural: str | None = None) -> str:
@@ -225,7 +233,7 @@ def _verdict(diag, best: str) -> str:
             f"the specimen's bracket and the table amplitude within {spread}."
         )
     else:
-        model = f"{esc(step_label(f.name))}: {_params(f.params, diag.geometry, long=True)}."
+        model = f"{esc(step_label(f.name))}: {_params(f.params, diag.geometry, long=True, searched=diag.searched)}."
     held = f"accuracy {_ci(s, 'accuracy')}, F1 {_ci(s, 'f1')}, log loss {_ci(s, 'log_loss')} nats"
     if f is not diag.steps[0]:
         held += (
@@ -439,12 +447,13 @@ def _where(diag) -> str:
 
 
 def _candidates(diag) -> str:
+    left = f"<p>{esc(left_out_text(diag.left_out))}</p>" if diag.left_out else ""
     if not diag.candidates:
-        return "<p>No candidate effect was tried.</p>"
+        return "<p>No candidate effect was tried.</p>" + left
     rows = [
         [
             _effects(c.name),
-            _params(c.params, diag.geometry),
+            _params(c.params, diag.geometry, searched=diag.searched),
             fmt_num(c.log_loss),
             f"{fmt_signed(c.improvement, 3)} &plusmn; {fmt_num(c.improvement_se)}",
             fmt_p(c.p_value),
@@ -452,23 +461,24 @@ def _candidates(diag) -> str:
         ]
         for c in diag.candidates
     ]
-    return html_table(
-        [
-            "candidate (added to the model of its round)",
-            "fitted parameters (on all records)",
-            "held-out log loss [nats]",
-            "fall of the held-out log loss [nats per record]",
-            "p (one-sided)",
-            "added",
-        ],
-        rows,
-        caption=(
-            "Each candidate is fitted on the training folds by minimising the log loss and scored out of fold on the "
-            "same folds; its fall is the mean paired per-record fall from the model it extends, with its standard "
-            "error. It is added when the fall passes a one-sided Diebold-Mariano test at a family-wise "
-            f"{100 * LEVEL:g} % (Bonferroni over the candidates of its round); the best of those passing is added."
-        ),
+    shares = ", ".join(f"{100 * x:g}" for x in GRID_SHARES)
+    caption = (
+        "Each candidate is fitted on the training folds by minimising the log loss and scored out of fold on the "
+        "same folds; its fall is the mean paired per-record fall from the model it extends, with its standard "
+        "error. It is added when the fall passes a one-sided Diebold-Mariano test at a family-wise "
+        f"{100 * LEVEL:g} % (Bonferroni over the candidates of its round); the best of those passing is added. "
+        f"A library effect is tabulated over a grid of its parameter (the neutral value and {shares} % of the way "
+        "to each bound) and the pivots' bracket; its fit picks the grid value."
     )
+    headings = [
+        "candidate (added to the model of its round)",
+        "fitted parameters (on all records)",
+        "held-out log loss [nats]",
+        "fall of the held-out log loss [nats per record]",
+        "p (one-sided)",
+        "added",
+    ]
+    return html_table(headings, rows, caption=caption) + left
 
 
 def _settings(diag) -> str:

@@ -1,9 +1,10 @@
 """Outcome records: predict P(overturn) from an ensemble, find the effect the outcomes need, judge it against the
 baselines and the floor. :func:`diagnose_outcomes` runs the mission loop on a campaign's outcome records: the
-plain model (:mod:`housner.scenarios.diagnosis.outcomes.outcome_models`), where it fails, the effects
-``contact_inside`` and ``restitution`` fitted on the log loss and added by a one-sided Diebold-Mariano test, on
-folds that keep each ground motion's records together, repeated over fold seeds; then the verdict
-(:mod:`housner.scenarios.diagnosis.outcomes.outcome_validation`). The method step by step is in
+plain model (:mod:`housner.scenarios.diagnosis.outcomes.outcome_models`), where it fails, the effective contact
+``contact_inside`` and every library effect the records can feel
+(:mod:`housner.scenarios.diagnosis.outcomes.outcome_effects`), each fitted on the log loss and added by a
+one-sided Diebold-Mariano test, on folds that keep each ground motion's records together, repeated over fold
+seeds; then the verdict (:mod:`housner.scenarios.diagnosis.outcomes.outcome_validation`). The method step by step is in
 ``docs/explanation/diagnosis.md`` ("Outcome records").
 
 References
@@ -16,13 +17,14 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
+from housner.scenarios.diagnosis.outcomes.outcome_effects import outcome_effects
 from housner.scenarios.diagnosis.outcomes.outcome_models import (
     Geometry,
     OverturnTables,
@@ -63,20 +65,17 @@ from housner.scenarios.diagnosis.verdict.status import status_rule
 from housner.units import G
 
 __all__ = [
+    "CONTACT",
     "LEVEL",
-    "OUTCOME_EFFECTS",
-    "ROUNDS",
     "OutcomeEvidence",
     "diagnose_outcomes",
 ]
 
 #: Family-wise level of the test that adds an effect [-].
 LEVEL = 0.05
-#: The candidate effects of outcome records, and what each stands for.
-OUTCOME_EFFECTS = {
-    "contact_inside": "a contact inside the footprint (a convex or uneven base): an effective alpha, with its spread",
-    "restitution": "the impacts' restitution r, fitted (Housner's law fixes it from the geometry)",
-}
+#: The outcome records' own effect: a contact inside the footprint (a convex or uneven base), an effective alpha
+#: with its spread; it pairs with restitution (its tables hold both).
+CONTACT = "contact_inside"
 
 
 # ----------------------------------------------------------------------------
@@ -125,6 +124,7 @@ def diagnose_outcomes(
     seed: int = 0,
     repeats: int = REPEATS,
     model: FrozenOutcomeModel | None = None,
+    effects: Sequence[str] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> OutcomeDiagnosis:
     """The mission loop on a campaign's outcome records: plain model, misses, effect, error falling, verdict.
@@ -142,6 +142,11 @@ def diagnose_outcomes(
     repeats : int
         Repeats of the cross-validation, each on its own folds [-]: each runs the forward selection; the final
         model is the one most of them end in, and every score is given over them.
+    model : FrozenOutcomeModel, optional
+        A model fitted on another campaign, scored frozen on this one (the transfer).
+    effects : sequence of str, optional
+        The library effects searched, by registry name (default every one; an empty sequence searches none, not
+        even the effective contact). Those the records cannot feel are left out with their reason.
     progress : callable, optional
         Receives one line per stage.
 
@@ -172,8 +177,10 @@ def diagnose_outcomes(
         f"{folds} folds stratified by outcome that keep a ground motion's records together, {len(seeds)} repeats; "
         f"block h {geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad"
     )
-    tables = overturn_tables(accs, dts, geo, campaign.specimen, say)
-    steps, rep, candidates = _repeated_ladder(tables, y, groups, fold_of, seeds, say)
+    searched, left_out = outcome_effects(campaign.specimen, effects)
+    tables = overturn_tables(accs, dts, geo, campaign.specimen, say, effects=searched)
+    rounds = _rounds(tables, effects)
+    steps, rep, candidates = _repeated_ladder(tables, y, groups, fold_of, seeds, rounds, say)
     plain, final = steps[0], steps[-1]
     say(f"plain model: held-out log loss {plain.scores.log_loss:.3f}, accuracy {plain.scores.accuracy:.3f}")
     pointer = _pointer(plain, y, pga, pgv, geo)
@@ -213,20 +220,32 @@ def diagnose_outcomes(
         judgement_plain=judged_plain,
         baseline_fits=fits,
         transfer=transfer,
+        searched=tuple(tables.effects[n].effect for n in tables.effects),
+        left_out=(*left_out, *tables.left_out),
     )
     diag.elapsed = time.perf_counter() - t_start
     return diag
 
 
-def _repeated_ladder(tables, y, groups, fold_of, seeds, say) -> tuple[list[OutcomeStep], OutcomeRepeats, list]:
+def _rounds(tables: OverturnTables, effects) -> tuple[tuple[str, ...], ...]:
+    """The candidates of each round: the effective contact and every tabulated library effect, then the contact's
+    pair with restitution (the one pair with a table of its own)."""
+    if effects is not None and not list(effects):
+        return ()
+    singles = (CONTACT, *tables.effects)
+    pairs = (f"{CONTACT}+restitution",) if "restitution" in tables.effects else ()
+    return (singles, pairs) if pairs else (singles,)
+
+
+def _repeated_ladder(tables, y, groups, fold_of, seeds, rounds, say) -> tuple[list[OutcomeStep], OutcomeRepeats, list]:
     """The forward selection on each repeat's folds; the final model most repeats end in; its ladder scored over
     every repeat (:func:`_over_repeats`); and the first repeat's candidates."""
     runs = []
     for s, fold in zip(seeds, fold_of, strict=True):
         plain_r = _step("plain", None, tables, y, fold, s, groups)
-        runs.append(_add_effects(plain_r, tables, y, fold, s, groups, say))
+        runs.append(_add_effects(plain_r, tables, y, fold, s, groups, rounds, say))
         say(f"repeat (fold seed {s}): {runs[-1][0][-1].name}")
-    rep = _consensus(seeds, runs)
+    rep = _consensus(seeds, runs, rounds[0] if rounds else ())
     say(f"final model: {rep.chosen} ({rep.finals.count(rep.chosen)} of {len(seeds)} repeats)")
     ladder = next(steps for steps, _c, _t in runs if steps[-1].name == rep.chosen)
     steps, prev = [], None
@@ -316,17 +335,13 @@ def _over_repeats(name: str, prev: OutcomeStep | None, runs, tables, y, fold_of,
     )
 
 
-def _consensus(seeds, runs) -> OutcomeRepeats:
-    """The repeats' final models, the share of repeats that hold each effect, and the one most end in."""
+def _consensus(seeds, runs, searched) -> OutcomeRepeats:
+    """The repeats' final models, the share of repeats that hold each effect searched, and the one most end in."""
     finals = tuple(steps[-1].name for steps, _c, _t in runs)
-    effects = sorted({e for f in finals if f != "plain" for e in f.split("+")} | set(OUTCOME_EFFECTS))
+    effects = sorted({e for f in finals if f != "plain" for e in f.split("+")} | set(searched))
     share = {e: sum(e in f.split("+") for f in finals) / len(finals) for e in effects}
     chosen = max(sorted(set(finals)), key=lambda f: (finals.count(f), -len(f.split("+")) * (f != "plain")))
     return OutcomeRepeats(tuple(int(s) for s in seeds), finals, share, chosen)
-
-
-#: The outcome candidates of each round: single effects first, then their pair on top of the one added.
-ROUNDS = (("contact_inside", "restitution"), ("contact_inside+restitution",))
 
 
 @dataclass(frozen=True)
@@ -342,13 +357,14 @@ class OutcomeEvidence:
     fold: np.ndarray
     seed: int
     groups: np.ndarray
+    rounds: tuple[tuple[str, ...], ...]
     say: Callable[[str], None]
 
     def pool(self, state: tuple[OutcomeStep, ...], number: int) -> tuple[str, ...]:
         """Round ``number``'s candidates that extend the current model (never re-tries what is in)."""
-        if number > len(ROUNDS):
+        if number > len(self.rounds):
             return ()
-        return tuple(n for n in ROUNDS[number - 1] if _extends(n, state[-1].name))
+        return tuple(n for n in self.rounds[number - 1] if _extends(n, state[-1].name))
 
     def not_searched(self, state, rnd: Round) -> None:
         return None  # outcomes always leave a log loss to lower
@@ -375,13 +391,13 @@ class OutcomeEvidence:
 
 
 def _add_effects(
-    plain: OutcomeStep, tables, y, fold, seed: int, groups, say
+    plain: OutcomeStep, tables, y, fold, seed: int, groups, rounds, say
 ) -> tuple[list[OutcomeStep], list[OutcomeCandidate], dict[str, OutcomeStep]]:
     """Forward selection from the plain model through the one selection of the diagnosis, with
     :class:`OutcomeEvidence`, on one repeat's folds. Returns the models kept (the plain one first), every candidate
     tried, and every model cross-validated, by name."""
-    evidence = OutcomeEvidence(tables, y, fold, seed, groups, say)
-    steps, found = forward_selection(evidence, (plain,), len(ROUNDS))
+    evidence = OutcomeEvidence(tables, y, fold, seed, groups, rounds, say)
+    steps, found = forward_selection(evidence, (plain,), len(rounds))
     candidates = [
         OutcomeCandidate(
             name=c.name,

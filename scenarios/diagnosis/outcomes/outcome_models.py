@@ -13,8 +13,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from housner.model import theta_max_many
+from housner.motion import GroundMotion
 from housner.rocking_params import RockingParams
 from housner.scenarios.campaigns.campaign import Campaign
+from housner.scenarios.diagnosis.outcomes.outcome_effects import LeftOut, OutcomeEffect, effect_table
 from housner.scenarios.diagnosis.outcomes.outcome_scores import per_record_log_loss
 
 __all__ = [
@@ -28,7 +30,9 @@ __all__ = [
     "Geometry",
     "OverturnTables",
     "cross_validate",
+    "known_model",
     "lapse_mix",
+    "outcome_model",
     "overturn_tables",
 ]
 
@@ -39,7 +43,8 @@ AMPLITUDE_SPREAD = 0.02
 ALPHA_GRID = 28
 #: The grid spans alpha_eff from this share of the plain model's smaller alpha up to its larger alpha [-].
 ALPHA_GRID_LOW = 0.25
-#: Restitution values tried [-] (besides Housner's impact law of each geometry, which needs no parameter).
+#: Restitution values the effective contact is tried with [-] (besides Housner's impact law of each geometry, which
+#: needs no parameter); restitution alone is the library effect's, on its own grid.
 R_GRID = (0.95, 0.9, 0.8, 0.7, 0.6)
 #: Log-normal spreads of alpha_eff the fit chooses from [-] (0.3: alpha known to within about 30 %).
 SPREADS = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.7)
@@ -125,26 +130,42 @@ def _bracket_points(geo: Geometry) -> list[tuple[float, float]]:
 
 @dataclass(frozen=True)
 class OverturnTables:
-    """The overturn tables every model reads."""
+    """The overturn tables every model reads.
 
-    plain: np.ndarray  # (records, bracket points x amplitudes)
-    rest: np.ndarray  # (records, bracket points, len(R_GRID))
-    contact: np.ndarray  # (records, ALPHA_GRID, 1 + len(R_GRID)): Housner's law, then R_GRID
-    log_alpha: np.ndarray  # (ALPHA_GRID,)
+    Attributes
+    ----------
+    plain : ndarray of bool
+        (records, bracket points x amplitudes).
+    contact : ndarray of bool
+        (records, ALPHA_GRID, 1 + len(R_GRID)): Housner's law, then R_GRID.
+    log_alpha : ndarray
+        (ALPHA_GRID,) [log rad].
+    effects : dict of str to EffectTable
+        The library effects tabulated (:mod:`housner.scenarios.diagnosis.outcomes.outcome_effects`), by name.
+    left_out : list of LeftOut
+        The library effects the records cannot test, with the reason.
+    """
+
+    plain: np.ndarray
+    contact: np.ndarray
+    log_alpha: np.ndarray
+    effects: dict = field(default_factory=dict)
+    left_out: list = field(default_factory=list)
 
 
-def overturn_tables(accs, dts, geo: Geometry, specimen, say: Callable, alphas=None) -> OverturnTables:
+def overturn_tables(
+    accs, dts, geo: Geometry, specimen, say: Callable, alphas=None, effects: list[OutcomeEffect] = ()
+) -> OverturnTables:
     """Every record's overturns over the models' grids: the pivots over their bracket and the table's amplitude
-    (the plain model), the restitution grid, and the effective contact's grid of alpha (default: from
+    (the plain model), the restitution grid, the effective contact's grid of alpha (default: from
     :data:`ALPHA_GRID_LOW` of the smaller alpha to the larger, :data:`ALPHA_GRID` points; ``alphas`` [rad]
-    gives another, for a model fitted on another block)."""
+    gives another, for a model fitted on another block), and each library effect of ``effects`` over its grid
+    and the bracket."""
     pts = _bracket_points(geo)
     amps = (1.0 - AMPLITUDE_SPREAD, 1.0, 1.0 + AMPLITUDE_SPREAD)
     t0 = time.perf_counter()
     plain = _overturns(accs, dts, geo, specimen, [(bp, bn, None, a) for bp, bn in pts for a in amps])
     say(f"plain model: {len(pts)} pivot pairs x {len(amps)} amplitudes, {time.perf_counter() - t0:.1f} s")
-    rest = _overturns(accs, dts, geo, specimen, [(bp, bn, r, 1.0) for bp, bn in pts for r in R_GRID])
-    rest = rest.reshape(len(accs), len(pts), len(R_GRID))
     if alphas is None:
         lo = ALPHA_GRID_LOW * min(geo.alpha_pos, geo.alpha_neg)
         alphas = np.geomspace(lo, max(geo.alpha_pos, geo.alpha_neg), ALPHA_GRID)
@@ -153,21 +174,34 @@ def overturn_tables(accs, dts, geo: Geometry, specimen, say: Callable, alphas=No
     contact = _overturns(accs, dts, geo, specimen, [(b, b, r, 1.0) for b in bs for r in (None, *R_GRID)])
     contact = contact.reshape(len(accs), alphas.size, 1 + len(R_GRID))
     say(
-        f"effect tables: {len(pts) * len(R_GRID) + contact.shape[1] * contact.shape[2]} runs of "
+        f"contact tables: {contact.shape[1] * contact.shape[2]} runs of "
         f"{len(accs)} records, {time.perf_counter() - t0:.1f} s in all"
     )
-    return OverturnTables(plain, rest, contact, np.log(alphas))
+    motions = [
+        GroundMotion(np.asarray(a, dtype=float), float(d), name=f"record {i}")
+        for i, (a, d) in enumerate(zip(accs, dts, strict=True))
+    ]
+    starts = [geo.params(bp, bn) for bp, bn in pts]
+    tabled, left = {}, []
+    for eff in effects:
+        t1 = time.perf_counter()
+        got = effect_table(eff, motions, specimen, starts)
+        if isinstance(got, LeftOut):
+            left.append(got)
+            say(f"{eff.name}: left out (its own solver: its table would take over {got.seconds:.0f} s)")
+            continue
+        tabled[eff.name] = got
+        say(
+            f"{eff.name}: {len(eff.values)} values of {eff.param} x {len(pts)} pivot pairs, "
+            f"{time.perf_counter() - t1:.1f} s"
+        )
+    return OverturnTables(plain, contact, np.log(alphas), tabled, left)
 
 
 # ----------------------------------------------------------------------------
 # the models: each maps (tables, records, params) to P, and fits its params on records
 def _p_plain(t: OverturnTables, idx, params) -> np.ndarray:
     return lapse_mix(t.plain[idx].mean(axis=1), params["lapse"])
-
-
-def _p_rest(t: OverturnTables, idx, params) -> np.ndarray:
-    j = R_GRID.index(params["r"])
-    return lapse_mix(t.rest[idx, :, j].mean(axis=1), params["lapse"])
 
 
 def _weights(log_alpha: np.ndarray, mu, sigma: float) -> np.ndarray:
@@ -198,11 +232,6 @@ def _fit_plain(t: OverturnTables, idx, y) -> dict:
     return min(({"lapse": e} for e in LAPSES), key=lambda q: _log_loss(_p_plain(t, idx, q), y[idx]))
 
 
-def _fit_rest(t: OverturnTables, idx, y) -> dict:
-    qs = ({"r": r, "lapse": e} for r in R_GRID for e in LAPSES)
-    return min(qs, key=lambda q: _log_loss(_p_rest(t, idx, q), y[idx]))
-
-
 def _fit_contact(with_r: bool):
     def fit(t: OverturnTables, idx, y) -> dict:
         mus = np.linspace(t.log_alpha[0], t.log_alpha[-1], _MU_POINTS)
@@ -226,18 +255,58 @@ def _fit_contact(with_r: bool):
     return fit
 
 
-#: Model name -> (probabilities, fit); "plain" fits only the lapse.
+#: Model name -> (probabilities, fit) of the models with tables of their own; a library effect's model is
+#: :func:`outcome_model`'s.
 OUTCOME_MODELS = {
     "plain": (_p_plain, _fit_plain),
-    "restitution": (_p_rest, _fit_rest),
     "contact_inside": (_p_contact, _fit_contact(False)),
     "contact_inside+restitution": (_p_contact, _fit_contact(True)),
 }
 
 
+def _p_effect(name: str):
+    def predict(t: OverturnTables, idx, params) -> np.ndarray:
+        table = t.effects[name]
+        j = table.column(params[table.effect.param])
+        return lapse_mix(table.overturned[idx, :, j].mean(axis=1), params["lapse"])
+
+    return predict
+
+
+def _fit_effect(name: str):
+    def fit(t: OverturnTables, idx, y) -> dict:
+        table = t.effects[name]
+        shares = table.overturned[idx].mean(axis=1)  # (records, values)
+        best, best_v = None, math.inf
+        for j, v in enumerate(table.effect.values):
+            for lapse in LAPSES:
+                ll = _log_loss(lapse_mix(shares[:, j], lapse), y[idx])
+                if ll < best_v:
+                    best_v, best = ll, {table.effect.param: float(v), "lapse": lapse}
+        return best
+
+    return fit
+
+
+def known_model(name: str) -> bool:
+    """Whether ``name`` is an outcome model: one with its own tables, or a single registered effect."""
+    if name in OUTCOME_MODELS:
+        return True
+    from housner.effects import available_effects
+
+    return "+" not in name and name in available_effects()
+
+
+def outcome_model(name: str) -> tuple[Callable, Callable]:
+    """(probabilities, fit) of model ``name``: :data:`OUTCOME_MODELS`, or a library effect's on its table."""
+    if name in OUTCOME_MODELS:
+        return OUTCOME_MODELS[name]
+    return _p_effect(name), _fit_effect(name)
+
+
 def cross_validate(name: str, t: OverturnTables, y: np.ndarray, fold: np.ndarray) -> tuple[np.ndarray, dict, list]:
     """Out-of-fold P of model ``name``, its fit on all records, and its fit without each fold."""
-    predict, fit = OUTCOME_MODELS[name]
+    predict, fit = outcome_model(name)
     p = np.empty(y.size)
     fold_params = []
     for f in range(int(fold.max()) + 1):

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from housner._values import JsonValue, WrittenAsResult, floats, read_as, to_data
+from housner.scenarios.diagnosis.outcomes.outcome_effects import LeftOut, OutcomeEffect
 from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores, SeedSpread
 from housner.scenarios.diagnosis.outcomes.outcome_transfer import OutcomeTransfer
 from housner.scenarios.diagnosis.outcomes.outcome_validation import BaselineFit, OutcomeJudgement
@@ -281,6 +282,10 @@ class OutcomeDiagnosis(WrittenAsResult):
         The baselines fitted on every record, for another campaign to score (``--model``).
     transfer : OutcomeTransfer or None
         A model fitted on another campaign, scored here frozen (``--model``).
+    searched : tuple of OutcomeEffect
+        The library effects searched, each with the grid it was tabulated on.
+    left_out : tuple of LeftOut
+        The library effects the records cannot test, each with why.
     """
 
     campaign: str
@@ -308,6 +313,8 @@ class OutcomeDiagnosis(WrittenAsResult):
     judgement_plain: OutcomeJudgement | None = None
     baseline_fits: dict = field(default_factory=dict)
     transfer: OutcomeTransfer | None = None
+    searched: tuple = ()
+    left_out: tuple = ()
 
     @property
     def final(self) -> OutcomeStep:
@@ -340,6 +347,8 @@ class OutcomeDiagnosis(WrittenAsResult):
             judgement_plain=self.judgement_plain,
             baseline_fits=dict(self.baseline_fits),
             transfer=self.transfer,
+            searched=tuple(self.searched),
+            left_out=tuple(self.left_out),
             elapsed_s=self.elapsed,
         )
 
@@ -371,6 +380,8 @@ class OutcomeDiagnosisResult(JsonValue):
     baseline_fits: dict[str, BaselineFit]
     transfer: OutcomeTransfer | None
     elapsed_s: float
+    searched: tuple[OutcomeEffect, ...] = ()
+    left_out: tuple[LeftOut, ...] = ()
 
     @property
     def final(self) -> OutcomeStep:
@@ -416,6 +427,8 @@ class OutcomeDiagnosisResult(JsonValue):
                 "judgement_plain": to_data(self.judgement_plain),
                 "baseline_fits": to_data(self.baseline_fits),
                 "transfer": None if self.transfer is None else to_data(_without_p(self.transfer)),
+                "effects_searched": [to_data(e) for e in self.searched],
+                "effects_left_out": [to_data(e) for e in self.left_out],
                 "elapsed_s": self.elapsed_s,
             }
         )
@@ -445,6 +458,8 @@ class OutcomeDiagnosisResult(JsonValue):
             baseline_fits=read_as(dict[str, BaselineFit], data.get("baseline_fits", {})),
             transfer=read_as(OutcomeTransfer | None, data.get("transfer")),
             elapsed_s=read_as(float, data["elapsed_s"]),
+            searched=read_as(tuple[OutcomeEffect, ...], data.get("effects_searched", [])),
+            left_out=read_as(tuple[LeftOut, ...], data.get("effects_left_out", [])),
         )
 
 

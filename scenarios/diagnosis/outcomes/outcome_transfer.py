@@ -12,10 +12,13 @@ from pathlib import Path
 import numpy as np
 
 from housner._values import read_as
+from housner.scenarios.diagnosis.outcomes.outcome_effects import OutcomeEffect, outcome_effects
 from housner.scenarios.diagnosis.outcomes.outcome_models import (
     ALPHA_GRID,
     OUTCOME_MODELS,
     Geometry,
+    known_model,
+    outcome_model,
     overturn_tables,
 )
 from housner.scenarios.diagnosis.outcomes.outcome_scores import OutcomeScores, outcome_scores
@@ -77,10 +80,19 @@ def read_frozen_model(path: str | Path) -> FrozenOutcomeModel:
     if not isinstance(fits, dict) or set(fits) != set(BASELINES):
         raise ValueError(f"{path}: holds no fitted baselines; diagnose its campaign again with this version")
     final = data["ladder"][-1]
-    if final["name"] not in OUTCOME_MODELS:
-        raise ValueError(f"{path}: its model {final['name']!r} is none of {', '.join(OUTCOME_MODELS)}")
+    if not known_model(final["name"]):
+        raise ValueError(f"{path}: its model {final['name']!r} is no outcome model of this version's effects")
     baselines = {n: read_as(BaselineFit, v) for n, v in fits.items()}
     return FrozenOutcomeModel(str(data.get("campaign", path.stem)), final["name"], dict(final["params"]), baselines)
+
+
+def _frozen_effect(frozen: FrozenOutcomeModel, specimen) -> list[OutcomeEffect]:
+    """The frozen model's library effect, tabulated at its fitted value only (none for the models with tables of
+    their own)."""
+    if frozen.name in OUTCOME_MODELS:
+        return []
+    found, _left = outcome_effects(specimen, [frozen.name])
+    return [e.at(float(frozen.params[e.param])) for e in found if e.param in frozen.params]
 
 
 @dataclass(frozen=True)
@@ -127,8 +139,8 @@ def transfer_outcomes(
         half = SPREADS_COVERED * max(float(params["spread"]), 0.02)
         alphas = float(params["alpha_eff"]) * np.exp(np.linspace(-half, half, ALPHA_GRID))
         alphas = alphas[alphas < math.pi / 2 - 1e-3]
-    tables = overturn_tables(accs, dts, geo, specimen, say, alphas=alphas)
-    predict, _fit = OUTCOME_MODELS[frozen.name]
+    tables = overturn_tables(accs, dts, geo, specimen, say, alphas=alphas, effects=_frozen_effect(frozen, specimen))
+    predict, _fit = outcome_model(frozen.name)
     p = predict(tables, np.arange(len(accs)), params)
     base_p = {n: fit.predict(pga, pgv) for n, fit in frozen.baselines.items()}
     say(f"transfer from {frozen.source}: {frozen.name} frozen")
