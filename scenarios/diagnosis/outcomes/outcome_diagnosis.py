@@ -55,6 +55,7 @@ from housner.scenarios.diagnosis.outcomes.outcome_validation import (
     REPEATS,
     baseline_fit,
     baseline_oof,
+    baselines_show_skill,
     compare_log_loss,
     grouped_folds,
     judge_outcome_model,
@@ -259,10 +260,12 @@ def _judged(plain: OutcomeStep, final: OutcomeStep, base_p: dict, y, groups, flo
     """The plain and the final model judged (:func:`judge_outcome_model`): an outcome model is a misfit when a
     baseline fitted on the same folds predicts better, when it has no skill over the base rate where the records
     could show one, or when its probabilities fail their floor; the one status rule reads these."""
-    judged_plain = judge_outcome_model(plain.p_repeats, base_p, y, groups, outcome_floor(plain.p, y, seed=seed))
+    shown = baselines_show_skill(base_p, y, groups)
+    plain_floor = outcome_floor(plain.p, y, seed=seed)
+    judged_plain = judge_outcome_model(plain.p_repeats, base_p, y, groups, plain_floor, baseline_skill=shown)
     if final is plain:
         return judged_plain, judged_plain
-    return judged_plain, judge_outcome_model(final.p_repeats, base_p, y, groups, floor)
+    return judged_plain, judge_outcome_model(final.p_repeats, base_p, y, groups, floor, baseline_skill=shown)
 
 
 def _checked_outcomes(campaign: Campaign, folds: int) -> tuple[list[OutcomeRecord], np.ndarray, int]:
@@ -305,19 +308,17 @@ def _quick_scores(p, y) -> OutcomeScores:
 
 
 def _over_repeats(name: str, prev: OutcomeStep | None, runs, tables, y, fold_of, seeds, groups) -> OutcomeStep:
-    """Model ``name`` over every repeat's folds (taken from the repeat where its selection tried it, else
-    cross-validated anew): its mean held-out probabilities, their scores with intervals that resample whole ground
-    motions, each score's mean and range over the repeats, and its paired fall from ``prev``."""
-    ps, first = [], None
+    """Model ``name`` over every repeat's folds (taken from the repeats where its selection tried it, else
+    cross-validated anew: a pair is tried only where its first effect was added): its mean held-out probabilities,
+    their scores with intervals that resample whole ground motions, each score's mean and range over the repeats,
+    and its paired fall from ``prev``. Its fit is the one of the first repeat that tried it (the reported ladder is
+    one repeat's own, so one did)."""
+    ps = []
     for (_steps, _c, tried), fold in zip(runs, fold_of, strict=True):
         step = tried.get(name)
-        p = step.p if step is not None else cross_validate(name, tables, y, fold)[0]
-        first = first or step
-        ps.append(p)
+        ps.append(step.p if step is not None else cross_validate(name, tables, y, fold)[0])
+    first = next(tried[name] for _steps, _c, tried in runs if name in tried)
     p_rep = np.array(ps)
-    _, params, fold_params = (
-        cross_validate(name, tables, y, fold_of[0]) if first is None else (None, first.params, first.fold_params)
-    )
     fall = (0.0, 0.0, math.nan)
     if prev is not None:
         c = compare_log_loss(p_rep, prev.p_repeats, y, groups)
@@ -325,8 +326,8 @@ def _over_repeats(name: str, prev: OutcomeStep | None, runs, tables, y, fold_of,
     p_mean = p_rep.mean(axis=0)
     return OutcomeStep(
         name,
-        params,
-        fold_params,
+        first.params,
+        first.fold_params,
         p_mean,
         outcome_scores(p_mean, y, groups=groups, seed=seeds[0]),
         *fall,

@@ -31,6 +31,7 @@ __all__ = [
     "baseline_oof",
     "compare_log_loss",
     "grouped_folds",
+    "baselines_show_skill",
     "judge_outcome_model",
     "repeat_seeds",
 ]
@@ -251,15 +252,25 @@ class OutcomeJudgement:
         return bool(self.beaten_by) or (self.powered and not self.skill) or not self.calibrated
 
 
-def judge_outcome_model(p_model, baselines: dict, y, groups, floor: OutcomeFloor) -> OutcomeJudgement:
+def baselines_show_skill(baselines: dict, y, groups) -> bool:
+    """Whether any baseline but the base rate predicts significantly better than the base rate (name ->
+    held-out probabilities on the same folds): whether the records could show a model's skill."""
+    rate = baselines["base_rate"]
+    return any(
+        compare_log_loss(p, rate, y, groups).p_better < LEVEL for name, p in baselines.items() if name != "base_rate"
+    )
+
+
+def judge_outcome_model(
+    p_model, baselines: dict, y, groups, floor: OutcomeFloor, baseline_skill: bool | None = None
+) -> OutcomeJudgement:
     """The judgement of the held-out probabilities ``p_model`` ((n,) or (repeats, n)) against the baselines'
-    (name -> probabilities on the same folds; ``base_rate`` among them) and the model's outcome ``floor``."""
+    (name -> probabilities on the same folds; ``base_rate`` among them) and the model's outcome ``floor``;
+    ``baseline_skill`` is :func:`baselines_show_skill` of the same baselines where the caller has it already
+    (it depends on the baselines alone)."""
     against = {name: compare_log_loss(p_model, p, y, groups) for name, p in baselines.items()}
     beaten = tuple(name for name, c in against.items() if c.p_worse < LEVEL)
     skill = against["base_rate"].p_better < LEVEL
-    others = [
-        compare_log_loss(p, baselines["base_rate"], y, groups).p_better < LEVEL
-        for name, p in baselines.items()
-        if name != "base_rate"
-    ]
-    return OutcomeJudgement(against, beaten, skill, skill or any(others), floor.at_floor)
+    if baseline_skill is None:
+        baseline_skill = baselines_show_skill(baselines, y, groups)
+    return OutcomeJudgement(against, beaten, skill, skill or baseline_skill, floor.at_floor)
