@@ -436,11 +436,12 @@ def theta_max_many(
     if terms is not None and terms.vertical:
         raise ValueError("`terms` read the vertical channel, which bare accelerations do not carry; use simulate_many")
     q = None if terms is None else np.tile(terms.q_array(), (n_rec, 1))
+    v_g = None if terms is None else np.zeros_like(acc_g)  # the terms read no vertical channel (checked above)
     _run_kernel(
-        terms or None,
+        terms,
         parallel and n_rec > 1,
         acc_g,
-        acc_g if terms is None else np.zeros_like(acc_g),
+        v_g,
         offsets,
         dts,
         ms,

@@ -4,8 +4,8 @@ plain model (:mod:`housner.scenarios.diagnosis.outcomes.outcome_models`), where 
 ``contact_inside`` and every library effect the records can feel
 (:mod:`housner.scenarios.diagnosis.outcomes.outcome_effects`), each fitted on the log loss and added by a
 one-sided Diebold-Mariano test, on folds that keep each ground motion's records together, repeated over fold
-seeds; then the verdict (:mod:`housner.scenarios.diagnosis.outcomes.outcome_validation`). The method step by step is in
-``docs/explanation/diagnosis.md`` ("Outcome records").
+seeds; then the verdict (:mod:`housner.scenarios.diagnosis.outcomes.outcome_validation`). The method step by step
+is in ``docs/explanation/diagnosis.md`` ("Outcome records").
 
 References
 ----------
@@ -167,8 +167,7 @@ def diagnose_outcomes(
     ids = [r.id for r in recs]
     pga = np.array([r.pga for r in recs])
     pgv = np.array([r.pgv for r in recs])
-    accs = [np.asarray(r.motion.acc, dtype=np.float64) for r in recs]
-    dts = np.array([r.dt for r in recs])
+    motions = [r.motion for r in recs]
     geo = Geometry.of(campaign)
     groups = np.asarray(campaign.outcome_groups)
     seeds = repeat_seeds(seed, repeats)
@@ -179,7 +178,7 @@ def diagnose_outcomes(
         f"block h {geo.h:.4f} m, alpha+ {geo.alpha_pos:.4f}, alpha- {geo.alpha_neg:.4f} rad"
     )
     searched, left_out = outcome_effects(campaign.specimen, effects)
-    tables = overturn_tables(accs, dts, geo, campaign.specimen, say, effects=searched)
+    tables = overturn_tables(motions, geo, campaign.specimen, say, effects=searched)
     rounds = _rounds(tables, effects)
     steps, rep, candidates = _repeated_ladder(tables, y, groups, fold_of, seeds, rounds, say)
     plain, final = steps[0], steps[-1]
@@ -194,7 +193,7 @@ def diagnose_outcomes(
     fits = {n: baseline_fit(n, pga, pgv, y) for n in BASELINES}
     transfer = None
     if model is not None:
-        transfer = transfer_outcomes(model, accs, dts, geo, campaign.specimen, y, pga, pgv, groups, seed=seed, say=say)
+        transfer = transfer_outcomes(model, motions, geo, campaign.specimen, y, pga, pgv, groups, seed=seed, say=say)
     misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
     diag = OutcomeDiagnosis(
         campaign=campaign.name,
@@ -221,7 +220,7 @@ def diagnose_outcomes(
         judgement_plain=judged_plain,
         baseline_fits=fits,
         transfer=transfer,
-        searched=tuple(tables.effects[n].effect for n in tables.effects),
+        searched=tuple(t.effect for t in tables.effects.values()),
         left_out=(*left_out, *tables.left_out),
     )
     diag.elapsed = time.perf_counter() - t_start

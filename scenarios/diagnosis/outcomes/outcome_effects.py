@@ -171,11 +171,12 @@ def _plans(effect: OutcomeEffect, specimen, start, motion: GroundMotion):
     return [apply_effects(specimen, motion, [effect.build(specimen, v)], params=start) for v in effect.values]
 
 
-def _record_by_record(plans_of, motions, n_points: int, n_values: int) -> np.ndarray:
-    out = np.empty((len(motions), n_points, n_values), dtype=bool)
+def _record_by_record(effect: OutcomeEffect, specimen, motions, starts) -> np.ndarray:
+    """Overturned or not, (records, starts, values): each record run with the effect's own solver, one plan a run."""
+    out = np.empty((len(motions), len(starts), len(effect.values)), dtype=bool)
     for i, mo in enumerate(motions):
-        for k, plans in enumerate(plans_of(mo)):
-            for j, plan in enumerate(plans):
+        for k, start in enumerate(starts):
+            for j, plan in enumerate(_plans(effect, specimen, start, mo)):
                 out[i, k, j] = plan.run().overturned
     return out
 
@@ -208,7 +209,4 @@ def effect_table(effect: OutcomeEffect, motions: list[GroundMotion], specimen, s
         estimate = spent * len(motions) * len(starts)
         if estimate > SOLVER_BUDGET_S:
             return LeftOut(effect.name, "slow_solver", seconds=float(estimate))
-    return EffectTable(
-        effect,
-        _record_by_record(lambda mo: [_plans(effect, specimen, s, mo) for s in starts], motions, len(starts), n_v),
-    )
+    return EffectTable(effect, _record_by_record(effect, specimen, motions, starts))

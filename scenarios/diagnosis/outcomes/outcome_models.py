@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from housner.effects import available_effects
 from housner.model import theta_max_many
 from housner.motion import GroundMotion
 from housner.rocking_params import RockingParams
@@ -154,13 +155,15 @@ class OverturnTables:
 
 
 def overturn_tables(
-    accs, dts, geo: Geometry, specimen, say: Callable, alphas=None, effects: list[OutcomeEffect] = ()
+    motions: list[GroundMotion], geo: Geometry, specimen, say: Callable, alphas=None, effects: list[OutcomeEffect] = ()
 ) -> OverturnTables:
-    """Every record's overturns over the models' grids: the pivots over their bracket and the table's amplitude
-    (the plain model), the restitution grid, the effective contact's grid of alpha (default: from
-    :data:`ALPHA_GRID_LOW` of the smaller alpha to the larger, :data:`ALPHA_GRID` points; ``alphas`` [rad]
-    gives another, for a model fitted on another block), and each library effect of ``effects`` over its grid
-    and the bracket."""
+    """Every record's overturns (its table motion in ``motions``) over the models' grids: the pivots over their
+    bracket and the table's amplitude (the plain model), the effective contact's grid of alpha with Housner's impact
+    law and :data:`R_GRID` (default: from :data:`ALPHA_GRID_LOW` of the smaller alpha to the larger,
+    :data:`ALPHA_GRID` points; ``alphas`` [rad] gives another, for a model fitted on another block, and an empty
+    one none), and each library effect of ``effects`` over its grid and the bracket."""
+    accs = [mo.acc for mo in motions]
+    dts = np.array([mo.dt for mo in motions])
     pts = _bracket_points(geo)
     amps = (1.0 - AMPLITUDE_SPREAD, 1.0, 1.0 + AMPLITUDE_SPREAD)
     t0 = time.perf_counter()
@@ -177,10 +180,6 @@ def overturn_tables(
         f"contact tables: {contact.shape[1] * contact.shape[2]} runs of "
         f"{len(accs)} records, {time.perf_counter() - t0:.1f} s in all"
     )
-    motions = [
-        GroundMotion(np.asarray(a, dtype=float), float(d), name=f"record {i}")
-        for i, (a, d) in enumerate(zip(accs, dts, strict=True))
-    ]
     starts = [geo.params(bp, bn) for bp, bn in pts]
     tabled, left = {}, []
     for eff in effects:
@@ -292,8 +291,6 @@ def known_model(name: str) -> bool:
     """Whether ``name`` is an outcome model: one with its own tables, or a single registered effect."""
     if name in OUTCOME_MODELS:
         return True
-    from housner.effects import available_effects
-
     return "+" not in name and name in available_effects()
 
 

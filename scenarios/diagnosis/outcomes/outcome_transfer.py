@@ -125,23 +125,25 @@ class OutcomeTransfer:
 
 
 def transfer_outcomes(
-    frozen: FrozenOutcomeModel, accs, dts, geo: Geometry, specimen, y, pga, pgv, groups, *, seed: int, say
+    frozen: FrozenOutcomeModel, motions, geo: Geometry, specimen, y, pga, pgv, groups, *, seed: int, say
 ) -> OutcomeTransfer:
-    """Score ``frozen`` on the records (table accelerations ``accs`` [m/s^2], steps ``dts`` [s], outcomes ``y``,
-    peaks ``pga`` [m/s^2] and ``pgv`` [m/s], ``groups``) of the block ``geo``: nothing is fitted on them.
+    """Score ``frozen`` on the records (table motions ``motions``, outcomes ``y``, peaks ``pga`` [m/s^2] and ``pgv``
+    [m/s], ``groups``) of the block ``geo``: nothing is fitted on them.
 
     The model keeps its parameters: an effective contact keeps its alpha_eff [rad] and spread, run on this
-    block's mass, height and inertia over a grid of alpha around them; the lapse and r stay as fitted.
+    block's mass, height and inertia over a grid of alpha around them; a library effect keeps its value, the
+    lapse and r stay as fitted. Only the frozen model's own tables are run (the plain ensemble, and the contact's
+    or the effect's).
     """
     params = frozen.params
-    alphas = None
+    alphas = np.empty(0)  # no contact table, unless the model has a contact
     if "alpha_eff" in params:
         half = SPREADS_COVERED * max(float(params["spread"]), 0.02)
         alphas = float(params["alpha_eff"]) * np.exp(np.linspace(-half, half, ALPHA_GRID))
         alphas = alphas[alphas < math.pi / 2 - 1e-3]
-    tables = overturn_tables(accs, dts, geo, specimen, say, alphas=alphas, effects=_frozen_effect(frozen, specimen))
+    tables = overturn_tables(motions, geo, specimen, say, alphas=alphas, effects=_frozen_effect(frozen, specimen))
     predict, _fit = outcome_model(frozen.name)
-    p = predict(tables, np.arange(len(accs)), params)
+    p = predict(tables, np.arange(len(motions)), params)
     base_p = {n: fit.predict(pga, pgv) for n, fit in frozen.baselines.items()}
     say(f"transfer from {frozen.source}: {frozen.name} frozen")
     return OutcomeTransfer(
