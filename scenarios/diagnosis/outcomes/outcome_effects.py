@@ -41,9 +41,9 @@ GRID_SHARES = (0.1, 0.3, 0.6, 1.0)
 #: An effect with its own equation of motion (run record by record) is tabulated only where its table's runs are
 #: estimated, from one timed run per grid value on a record of median length after a warm-up, to take at most
 #: this [s]. The estimate is rough (records that rock longer cost more): on 120 short pulse records the flexible
-#: foundation is estimated at 19 s and takes 44 s, and sliding on ASU SP1's 490 records takes about 7 s. A choice
-#: made by timing can differ between a fast and a slow machine: the diagnosis names each effect left out with
-#: its estimate.
+#: foundation is estimated at 19 s and takes 44 s. Sliding on ASU SP1's 490 records is estimated at about 10 s (it
+#: takes about 7 s), at this budget: whether it is searched there depends on the machine and its load, and two
+#: runs of the same diagnosis have differed in it. The diagnosis names each effect it left out, with its estimate.
 SOLVER_BUDGET_S = 10.0
 
 
