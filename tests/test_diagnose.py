@@ -273,3 +273,18 @@ def test_a_small_fall_that_many_records_prove_is_significant_a_negligible_one_is
     # a large but inconsistent change is not significant either
     noisy = cur + rng.normal(0, 0.05, 200)
     assert not judge(cur, noisy, 0.005, floor).significant
+
+
+def test_an_addition_never_narrows_the_floor_of_a_plain_model_at_its_floor(base):
+    """One yardstick across the ladder (issue 51): a correct campaign with a near-neutral effect added by hand.
+    The plain model is at its floor; the final model is judged under the plain model's family of correct
+    integrators or a wider one, and is not turned into a misfit."""
+    from housner.scenarios.diagnosis.verdict.integrator_families import FAMILIES
+
+    camp = load_campaign(cg.cached_campaign(base, "none")["root"])
+    diag = diagnose(camp, effects=(), add=("amplitude_dependent_restitution",), compare_steps=False)
+    facts = diag.verdict.facts
+    order = list(FAMILIES)
+    assert not facts.baseline.misfit
+    assert order.index(facts.family) >= order.index(facts.family_plain), (facts.family, facts.family_plain)
+    assert not facts.final.misfit and diag.status != "partly_explained", diagnosis_summary(diag)

@@ -127,25 +127,34 @@ def conclude(
     }
     steps = tuple(replace(s, comparison=comparisons[i]) if i in comparisons else s for i, s in enumerate(state.steps))
     seed_int = seed if isinstance(seed, int) else 0
-    # Each model's family of correct integrators (housner.scenarios.diagnosis.verdict.integrator_families): the closest
-    # to the
-    # library's conventions at which its ground motions are at the floor (not a misfit, and within RATIO_MISFIT
-    # of it both on the mean, which counts the records chaos carries off, and on the 10 %-trimmed mean, the
-    # typical record), the widest when none is. The plain model runs its own loop, so that it gets the same
-    # floor whatever is added to it (its floor differs from the final model's anyway: a correct model of other
-    # physics leaves another error, as chaos carries its records elsewhere).
+    # Each model's family of correct integrators (housner.scenarios.diagnosis.verdict.integrator_families): the
+    # closest to the library's conventions at which its ground motions are at the floor (not a misfit, and within
+    # RATIO_MISFIT of it both on the mean, which counts the records chaos carries off, and on the 10 %-trimmed
+    # mean, the typical record), the widest when none is. The plain model runs its own loop, so that it gets the
+    # same floor whatever is added to it (its floor differs from the final model's anyway: a correct model of
+    # other physics leaves another error, as chaos carries its records elsewhere). One yardstick across the
+    # ladder: when the plain model is at its floor under a family, the final model's loop starts there, so that
+    # an addition never makes the floor narrower and turns a model at its floor into a misfit (issue 51).
     kinds = [r.kind for r in cv.campaign.records]
     setup.progress("measuring the correct-model floor (parametric bootstrap over correct integrators)")
-    family, floor_final, early = floor_family(
-        setup, state, n_replicas, seed_int, kinds, who="the final model" if final.model.full else "the plain model"
-    )
-    family_plain, floor_plain, _ = (
-        (family, floor_final, early)
-        if not final.model.full
-        else floor_family(
-            setup, state, n_replicas, seed_int, kinds, model=plain, who="the plain model", said_before=early
+    who_final = "the final model" if final.model.full else "the plain model"
+    if not final.model.full:
+        family, floor_final, _early, _at = floor_family(setup, state, n_replicas, seed_int, kinds, who=who_final)
+        family_plain, floor_plain = family, floor_final
+    else:
+        family_plain, floor_plain, early, plain_at = floor_family(
+            setup, state, n_replicas, seed_int, kinds, model=plain, who="the plain model"
         )
-    )
+        family, floor_final, _early, _at = floor_family(
+            setup,
+            state,
+            n_replicas,
+            seed_int,
+            kinds,
+            who=who_final,
+            said_before=early,
+            narrowest=family_plain if plain_at else None,
+        )
     for what, v in (
         ("the plain model's held-out error", plain.heldout_errors),
         ("the final model's held-out error", final.heldout_errors),
@@ -191,9 +200,10 @@ def floor_family(
     model=None,
     who: str = "the final model",
     said_before: bool = False,
-) -> tuple[str, Floor, bool]:
-    """The family of correct integrators of a model's verdict, its floor under it, and whether the loop stopped
-    early.
+    narrowest: str | None = None,
+) -> tuple[str, Floor, bool, bool]:
+    """The family of correct integrators of a model's verdict, its floor under it, whether the loop stopped
+    early, and whether the model is at its floor under that family.
 
     ``model`` is the search's current model (default the final one, ``state.current``; the plain model,
     ``state.plain``, runs the same loop), ``who`` names it in ``economies``; ``said_before``: the other model's loop
@@ -204,9 +214,12 @@ def floor_family(
     :data:`FAMILY_JUMP` x RATIO_MISFIT above their floor, the widest is measured next, and when
     they are not at its floor either, the families between are not measured (they are nested:
     each spans the conventions of the narrower ones, so their floors lie below the widest's, and
-    the answer, the widest, is the one the whole loop gives); ``economies`` says so.
+    the answer, the widest, is the one the whole loop gives); ``economies`` says so. ``narrowest``: the loop
+    starts at that family (the plain model's, where the plain model is at its floor under it).
     """
     families = list(FAMILIES)
+    if narrowest is not None:
+        families = families[families.index(narrowest) :]
     final = state.current if model is None else model
     measured: dict[str, tuple[Floor, bool, float]] = {}
 
@@ -230,7 +243,7 @@ def floor_family(
     for i, family in enumerate(families):
         floor, at_floor, ratio = measure(family)
         if at_floor:
-            return family, floor, False
+            return family, floor, False, True
         if i == 0 and len(families) > 2 and ratio > FAMILY_JUMP * RATIO_MISFIT:
             widest, widest_at_floor, widest_ratio = measure(families[-1])
             if not widest_at_floor:
@@ -250,8 +263,8 @@ def floor_family(
                     f"{families[-1]!r} ({widest_ratio:.2f}x); the families between not "
                     "measured"
                 )
-                return families[-1], widest, True
-    return families[-1], measured[families[-1]][0], False
+                return families[-1], widest, True, False
+    return families[-1], measured[families[-1]][0], False, False
 
 
 def probe(setup: TrialSetup, state: SearchState) -> list[ProbeFinding]:

@@ -57,7 +57,9 @@ __all__ = [
     "fit_records",
     "fmt_params",
     "held_text",
+    "at_neutral",
     "judged_candidate",
+    "neutral_distance",
     "rank_key",
     "rejected_text",
     "try_candidate",
@@ -314,6 +316,7 @@ def _fit_candidate(setup: TrialSetup, current: CurrentModel, name: str, round_no
     with_it = add_to_folds(cv, current.model, name, params, fit_train)
     heldout = setup.scorers.out_of_fold(with_it)
     cand = judged_candidate(setup, current, (name,), params, round_no, train_error, test_level, heldout)
+    cand = _beyond_neutral(setup, cand, with_it, len(current.model.full))
     return Trial(_beyond_kernel(setup, cand, fixed, [(name, params)], heldout, test_level), with_it, (name,))
 
 
@@ -356,6 +359,66 @@ def _mechanics_start(
         cand = judged_candidate(setup, current, (name,), start, round_no, err_fit, test_level, reason=why)
         return start, Trial(cand, None, (name,), subset_only=not on_all)
     return start, None
+
+
+def neutral_distance(specimen, model: CVModel, start: int) -> dict[str, tuple[float, float, float]]:
+    """How far each parameter of the effects ``model.full[start:]`` lies from its neutral value, in its own
+    uncertainty: ``"name.key"`` -> (fitted value, its neutral value, its grouped-jackknife standard error).
+
+    The folds of the cross-validation are a delete-a-group jackknife: fold k's fit leaves group k out, so the
+    standard error of a parameter is sqrt((K - 1) / K sum_k (x_k - mean x)^2) over its K fold refits (Efron &
+    Tibshirani 1993, ch. 11). The fold refits start from the fit on all records and stop after
+    :data:`FOLD_ITERATIONS` local steps, so this can only understate the spread, never overstate it.
+    """
+    out = {}
+    k = len(model.folds)
+    for j in range(start, len(model.full)):
+        name, params = model.full[j]
+        neutral = {d.key: d.neutral for d in param_dims(name, specimen)}
+        for key, value in params.items():
+            xs = np.array([float(f[j][1][key]) for f in model.folds], dtype=float)
+            se = math.sqrt((k - 1) / k * float(np.sum((xs - xs.mean()) ** 2))) if k > 1 else math.nan
+            n = neutral.get(key)
+            out[f"{name}.{key}"] = (float(value), math.nan if n is None else float(n), se)
+    return out
+
+
+def at_neutral(distances: dict[str, tuple[float, float, float]], names: Sequence[str]) -> list[str]:
+    """The effects of ``names`` whose every parameter lies within one standard error of its neutral value (an
+    infinite neutral value, a stiff foundation's, is never within): effects that cannot be told from the plain
+    model (:func:`neutral_distance`'s figures)."""
+    out = []
+    for name in names:
+        mine = [v for key, v in distances.items() if key.split(".", 1)[0] == name]
+        if mine and all(math.isfinite(n) and abs(x - n) <= se for x, n, se in mine):
+            out.append(name)
+    return out
+
+
+def _beyond_neutral(setup: TrialSetup, cand: Candidate, model: CVModel, start: int) -> Candidate:
+    """``cand``, not significant when an effect it adds sits within its uncertainty of its neutral value.
+
+    An effect at its neutral value is the plain model: whatever the held-out error does, it is not evidence
+    of that effect (issue 51). A significant fall then comes from the fit moving within the noise of its
+    parameter, and is said so.
+    """
+    if not cand.significant:
+        return cand
+    dist = neutral_distance(setup.cv.specimen, model, start)
+    names = [n for n, _p in model.full[start:]]
+    idle = at_neutral(dist, names)
+    if not idle:
+        return cand
+    said = "; ".join(
+        f"{key} = {x:.4g} +- {se:.2g} (neutral {n:.4g})"
+        for key, (x, n, se) in dist.items()
+        if key.split(".", 1)[0] in idle
+    )
+    why = (
+        f"at its neutral value within its uncertainty ({said}; the folds' jackknife): the plain model, so "
+        f"its fall of {cand.improvement:+.4f} alpha is the fit moving within its noise, not evidence of the effect"
+    )
+    return replace(cand, significant=False, reason=why)
 
 
 def _beyond_kernel(
@@ -527,6 +590,7 @@ def _pair(setup: TrialSetup, current: CurrentModel, a: Candidate, b: Candidate, 
     )
     heldout = setup.scorers.out_of_fold(with_both)
     cand = judged_candidate(setup, current, pair, params, a.round, train_error, test_level, heldout)
+    cand = _beyond_neutral(setup, cand, with_both, n_before)
     cand = _beyond_kernel(setup, cand, fixed, both[n_before:], heldout, test_level)
     setup.progress(f"round {a.round}: {names_label(pair):32s} {fmt_params(params):40s} {held_text(cand)} (pair)")
     return Trial(cand, with_both, pair)
