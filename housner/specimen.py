@@ -51,6 +51,9 @@ class Specimen:
         construction both attributes hold the derived values.
     name : str
         Free text for reports.
+    g : float
+        The gravity where the block stands [m/s^2] (default standard gravity): p and I0 are related by
+        p^2 = m g R / I0 at this g. A campaign states its own (``docs/reference/campaign-format.md``).
 
     Notes
     -----
@@ -73,6 +76,7 @@ class Specimen:
     p: float | None = None
     I0: float | None = None
     name: str = "specimen"
+    g: float = G
     _I0: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -82,6 +86,8 @@ class Specimen:
         m = _positive("mass", self.mass)
         p = _positive("p", self.p, optional=True)
         i0 = _positive("I0", self.I0, optional=True)
+        g = _positive("g", self.g)
+        object.__setattr__(self, "g", g)
         for key, value in (("height", h), ("width", w), ("depth", d), ("mass", m), ("p", p), ("I0", i0)):
             object.__setattr__(self, key, value)
         R = math.hypot(h / 2.0, w / 2.0)
@@ -93,9 +99,9 @@ class Specimen:
                 stacklevel=3,
             )
         if i0 is None:
-            i0 = m * G * R / p**2 if p is not None else 4.0 / 3.0 * m * R**2
+            i0 = m * g * R / p**2 if p is not None else 4.0 / 3.0 * m * R**2
         elif p is not None:
-            i0_from_p = m * G * R / p**2
+            i0_from_p = m * g * R / p**2
             if abs(i0_from_p - i0) > _P_I0_RTOL * i0:
                 raise ValueError(
                     f"`p` = {p} 1/s and `I0` = {i0} kg m^2 disagree: p implies I0 = {i0_from_p:.6g} kg m^2 "
@@ -105,12 +111,12 @@ class Specimen:
             # Parallel-axis theorem: I0 = I_cm + m R^2 >= m R^2.
             raise ValueError(
                 f"`{'p' if p is not None else 'I0'}` is impossible: I0 = {i0:.6g} kg m^2 is below "
-                f"m R^2 = {m * R**2:.6g} kg m^2 (so p must be at most sqrt(g/R) = {math.sqrt(G / R):.6g} 1/s)"
+                f"m R^2 = {m * R**2:.6g} kg m^2 (so p must be at most sqrt(g/R) = {math.sqrt(g / R):.6g} 1/s)"
             )
         object.__setattr__(self, "_I0", i0)
         # After validation, ``p`` and ``I0`` always hold the derived values.
         object.__setattr__(self, "I0", i0)
-        object.__setattr__(self, "p", math.sqrt(m * G * R / i0))
+        object.__setattr__(self, "p", math.sqrt(m * g * R / i0))
 
     # --- geometry -------------------------------------------------------
     @property
@@ -147,12 +153,12 @@ class Specimen:
     @property
     def frequency_parameter(self) -> float:
         """Frequency parameter p = sqrt(m g R / I0) [1/s]."""
-        return math.sqrt(self.mass * G * self.R / self._I0)
+        return math.sqrt(self.mass * self.g * self.R / self._I0)
 
     @property
     def uplift_acceleration(self) -> float:
         """Ground acceleration magnitude that starts rocking, g tan(alpha) [m/s^2]."""
-        return G * self.tan_alpha
+        return self.g * self.tan_alpha
 
     @property
     def r_housner(self) -> float:
@@ -182,6 +188,7 @@ class Specimen:
             mass=m,
             I0=ratio * m * R**2,
             name=f"{self.name} x{S:g}",
+            g=self.g,
         )
 
     def with_p(self, p: float) -> Specimen:

@@ -94,6 +94,10 @@ is byte-identical to one written before they existed.
   1 / sqrt(scale) (the same random numbers drawn), so that omega / p, and with the PGA kept at 1.0-2.5
   g tan(alpha) the block's dimensionless response, are those of the seed block's campaign (the envelope, the
   pulse's timing and the durations are not scaled).
+* ``g`` [m/s^2]: the gravity of the generator's world (default standard gravity, 9.80665): the block rocks
+  under it (its inertia kept, so its true p is P_STATED sqrt(g / 9.80665), which the [specimen] states, as a
+  laboratory would measure it), and campaign.toml states ``g`` unless ``state_g`` is False (a campaign from
+  code that does not say which g it took). The ground motions are drawn as at standard gravity.
 * Sensor noise on theta (:func:`sensor_noise`; given any of these keys it replaces the white 0.8 mrad):
   ``noise_white`` [rad] white Gaussian sd (default :data:`NOISE`); ``noise_ou`` [rad] the stationary sd of an
   Ornstein-Uhlenbeck part of correlation time ``noise_tau`` [s] (exact AR(1) discretisation, started from its
@@ -286,6 +290,8 @@ _INPUT_KEYS = (
     "vertical_channel",
     "dt",
     "scale",
+    "g",
+    "state_g",
     *_SENSOR_KEYS,
     *_FAULT_KEYS,
 )
@@ -355,13 +361,14 @@ class Truth:
     foundation_zeta: float = 0.0
     mass: float = MASS
     height: float = H_COM
+    g: float = G
 
     def side(self, s: int) -> tuple[float, float, float, float]:
         """(alpha [rad], R [m], I0 [kg m^2], p [1/s]) of the corner of side s (+1: +x)."""
         b = self.b_pos if s > 0 else self.b_neg
         rr = math.hypot(b, self.height)
         i0 = self.i_c + self.mass * rr * rr
-        return math.atan2(b, self.height), rr, i0, math.sqrt(self.mass * G * rr / i0)
+        return math.atan2(b, self.height), rr, i0, math.sqrt(self.mass * self.g * rr / i0)
 
     def rho_for(self, record_index: int) -> tuple[float, float]:
         """(rho_pn, rho_np) of record ``record_index`` (recording order), with the drift if any."""
@@ -435,15 +442,17 @@ def stated_specimen(case: str, *, options: dict | None = None) -> dict[str, floa
     block's true one (alpha and Housner's r are those of the seed specimen). ``options`` overrides the case's
     options as in :func:`write_campaign`.
     """
-    scale = float(campaign_options(case, options).get("scale", 1.0))
+    opts = campaign_options(case, options)
+    scale = float(opts.get("scale", 1.0))
+    at_g = math.sqrt(float(opts.get("g", G)) / G)  # the same block rocks with p ~ sqrt(g) where g is another
     if scale == 1.0:
-        return {"height": HEIGHT, "width": WIDTH, "depth": DEPTH, "mass": MASS, "p": P_STATED}
+        return {"height": HEIGHT, "width": WIDTH, "depth": DEPTH, "mass": MASS, "p": P_STATED * at_g}
     return {
         "height": HEIGHT * scale,
         "width": WIDTH * scale,
         "depth": DEPTH * scale,
         "mass": MASS * scale**3,
-        "p": P_STATED / math.sqrt(scale),
+        "p": P_STATED / math.sqrt(scale) * at_g,
     }
 
 
@@ -488,7 +497,7 @@ def truth_for(case: str, n_records: int = 0, *, options: dict | None = None) -> 
     first (:func:`stated_specimen`); ``p`` and ``e`` then act on the scaled block (``e`` in metres).
     """
     kw = {k: v for k, v in case_parameters(case).items() if k not in _INPUT_KEYS}
-    truth = Truth()
+    truth = Truth(g=float(campaign_options(case, options).get("g", G)))
     scale = float(campaign_options(case, options).get("scale", 1.0))
     if scale != 1.0:
         # lengths x scale, mass x scale^3, inertia about a pivot x scale^5: p -> p / sqrt(scale), same alpha, r
@@ -1059,7 +1068,14 @@ def _run(kind, acc, av, dt, held, q, y_init, out, imp):
 
 def _constants(truth: Truth, rho: tuple[float, float]) -> np.ndarray:
     q = np.zeros(N_Q)
-    q[Q_M], q[Q_G], q[Q_H], q[Q_BP], q[Q_BN], q[Q_IC] = truth.mass, G, truth.height, truth.b_pos, truth.b_neg, truth.i_c
+    q[Q_M], q[Q_G], q[Q_H], q[Q_BP], q[Q_BN], q[Q_IC] = (
+        truth.mass,
+        truth.g,
+        truth.height,
+        truth.b_pos,
+        truth.b_neg,
+        truth.i_c,
+    )
     q[Q_C], q[Q_MF], q[Q_MU] = truth.c, truth.pivot_moment, truth.mu
     if math.isfinite(truth.foundation_freq):
         omega = 2 * math.pi * truth.foundation_freq
@@ -1458,7 +1474,7 @@ def write_campaign(
             f"width = {WIDTH}",
             f"depth = {DEPTH}",
             f"mass = {MASS}",
-            f"p = {P_STATED}",
+            f"p = {P_STATED}" if spec["p"] == P_STATED else f"p = {_toml_number(spec['p'])}",
         ]
     else:
         lines = [
@@ -1466,6 +1482,8 @@ def write_campaign(
             "[specimen]",
             *(f"{k} = {_toml_number(v)}" for k, v in spec.items()),
         ]
+    if "g" in kw and kw.get("state_g", True):  # the local gravity, stated before [specimen]
+        lines.insert(1, f"g = {_toml_number(kw['g'])}")
     for k, (rid, kind, i) in enumerate(order):
         ss = _seed(seed, 1 if kind == "ground_motion" else 0, i)
         # the first three children are those of the first generator's ss.spawn(3); the fourth draws the faults

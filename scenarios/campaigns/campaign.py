@@ -23,6 +23,7 @@ from housner.errors import DataFileError, unknown_choice
 from housner.scenarios.campaigns.campaign_records import MeasuredRecord, OutcomeRecord, read_record
 from housner.scenarios.campaigns.campaign_toml import key_line, path_outside, read_campaign_toml
 from housner.specimen import Specimen
+from housner.units import G
 
 __all__ = ["Campaign", "load_campaign"]
 
@@ -50,6 +51,9 @@ class Campaign:
     sensor : housner.scenarios.diagnosis.sensor_assessment.SensorReport or None
         What the assessment of the theta sensor found (its noise, its faults and what was done about them);
         None until :func:`housner.scenarios.diagnosis.sensor_assessment.assess_sensor` ran.
+    g : float
+        The local gravity where it was measured [m/s^2] (campaign.toml's ``g``; standard gravity by default). The
+        records' table accelerations are kept as the model reads them (:func:`at_standard_gravity`).
     """
 
     name: str
@@ -60,6 +64,7 @@ class Campaign:
     outcomes: list[OutcomeRecord] = field(default_factory=list)
     scan: object = None
     sensor: object = None
+    g: float = G
     _cache: dict = field(default_factory=dict, init=False, repr=False)
 
     @property
@@ -154,7 +159,7 @@ def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
                     f"record {rec['id']!r}: file {rec['file']!r} {outside}",
                     line=key_line(text, "file", "record", i),
                 )
-            r = read_record(root, rec, specimen)
+            r = at_standard_gravity(read_record(root, rec, specimen), checked.g)
             if isinstance(r, MeasuredRecord):
                 r = replace(r, position=i)
         except DataFileError as e:
@@ -165,7 +170,29 @@ def load_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
     if 2 * len(skipped) > len(entries):
         raise DataFileError(toml, _unreadable_message(name, len(entries), skipped, errors))
     return Campaign(
-        name=name, specimen=specimen, records=records, skipped=skipped, path=root, outcomes=outcomes, scan=scan
+        name=name,
+        specimen=specimen,
+        records=records,
+        skipped=skipped,
+        path=root,
+        outcomes=outcomes,
+        scan=scan,
+        g=checked.g,
+    )
+
+
+def at_standard_gravity(record, g: float):
+    """``record`` with its table accelerations as the model reads them: x G / g, so that a_g / G, the ratio the
+    model's equation of motion feels (with p stated), is the measured a_g / g of the campaign's local ``g``
+    [m/s^2]. The block's rocking under a table motion depends on g only through that ratio and through p
+    (``docs/reference/campaign-format.md``, "Local gravity")."""
+    if g == G:
+        return record
+    k = G / g
+    mo = record.motion
+    return replace(
+        record,
+        motion=replace(mo, acc=mo.acc * k, channels={c: a * k for c, a in mo.channels.items()}),
     )
 
 

@@ -20,12 +20,13 @@ import difflib
 import math
 import re
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from housner.errors import DataFileError
 from housner.scenarios.campaigns.campaign_records import KINDS
 from housner.specimen import Specimen
+from housner.units import G
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -54,7 +55,10 @@ _RECORD_KEYS = {
 }
 #: The numeric keys of an outcome record: each, where given, a number >= 0 in SI.
 _OUTCOME_KEYS = ("theta_max", "residual_displacement", "pgv")
-_TOP_KEYS = {"name", "description", "specimen", "record"}
+_TOP_KEYS = {"name", "description", "g", "specimen", "record"}
+#: The local gravity a campaign may state [m/s^2]: the Earth's surface spans 9.76-9.84 (poles to equator,
+#: sea level to mountain laboratories); a value outside is a unit slip or a typo.
+G_RANGE = (9.7, 9.9)
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +79,8 @@ class CampaignFile:
         The scan-mesh derivation when ``[specimen]`` names a ``mesh``.
     records : list of dict
         The ``[[record]]`` tables, checked, in the file's order.
+    g : float
+        The local gravity where the campaign was measured [m/s^2] (``g``; default standard gravity).
     """
 
     path: Path
@@ -83,6 +89,7 @@ class CampaignFile:
     specimen: Specimen
     scan: object
     records: list[dict]
+    g: float = G
 
 
 def read_campaign_toml(toml: Path, allow_outside: bool = False) -> CampaignFile:
@@ -113,9 +120,35 @@ def read_campaign_toml(toml: Path, allow_outside: bool = False) -> CampaignFile:
         v = data.get(key, "")
         if not isinstance(v, str):
             raise DataFileError(toml, f"{key!r} must be a string, got {v!r}", line=key_line(text, key))
+    g = _gravity(toml, text, data)
     specimen, scan = _specimen(toml, text, data, allow_outside)
+    if g != G:
+        if scan is not None:
+            raise DataFileError(
+                toml,
+                f"`g` = {g} m/s^2 with a [specimen] mesh: a scan-mesh specimen is derived at standard gravity "
+                f"({G} m/s^2) only; leave `g` out",
+                line=key_line(text, "g"),
+            )
+        # p and I0 related at the campaign's g, p^2 = m g R / I0 (a stated p was measured there): Housner's r,
+        # which depends on I0, is the block's own
+        specimen = replace(specimen, g=g, p=specimen.p if "p" in data["specimen"] else None, I0=None)
     entries = _record_entries(toml, text, data)
-    return CampaignFile(path=toml, text=text, name=name, specimen=specimen, scan=scan, records=entries)
+    return CampaignFile(path=toml, text=text, name=name, specimen=specimen, scan=scan, records=entries, g=g)
+
+
+def _gravity(path: Path, text: str, data: dict) -> float:
+    """The campaign's ``g`` [m/s^2], within :data:`G_RANGE`; standard gravity when not given."""
+    if "g" not in data:
+        return G
+    v = data["g"]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not (G_RANGE[0] <= v <= G_RANGE[1]):
+        raise DataFileError(
+            path,
+            f"`g` must be the local gravity in m/s^2, between {G_RANGE[0]} and {G_RANGE[1]}, got {v!r}",
+            line=key_line(text, "g"),
+        )
+    return float(v)
 
 
 def _table_line(text: str, table: str, index: int = 0) -> int | None:
