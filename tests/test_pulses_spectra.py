@@ -256,3 +256,53 @@ def test_plot(tmp_path):
     import matplotlib.pyplot as plt
 
     plt.close(ax.figure)
+
+
+# ----------------------------------------------------------------------------
+# Mavroeidis-Papageorgiou near-fault pulses (issue 51, item 7)
+def test_the_mp_pulse_is_the_derivative_of_its_velocity_pulse():
+    """The acceleration integrates back to Mavroeidis & Papageorgiou's velocity pulse (eq. 4) scaled to peak a_p;
+    the ground is at rest after it (the envelope closes: v = 0 at both ends). Trapezoid on 1e5 samples per pulse
+    width: error O(dt^2), below 1e-7 of the peak velocity."""
+    import math
+
+    from housner.pulse_response.pulses import mavroeidis_papageorgiou, mp_velocity
+
+    a_p, omega_p, gamma, nu = 3.0, 2 * math.pi * 1.5, 2.3, 0.7
+    width = gamma / 1.5
+    dt = width / 100_000
+    g = mavroeidis_papageorgiou(a_p, omega_p, dt=dt, gamma=gamma, nu=nu, duration=1.2 * width)
+    t = np.arange(g.acc.size) * dt
+    v = np.concatenate([[0.0], np.cumsum(0.5 * (g.acc[1:] + g.acc[:-1]) * dt)])
+    unit = mp_velocity(t, 1.5, gamma, nu, width / 2)
+    scale = v[np.argmax(np.abs(unit))] / unit[np.argmax(np.abs(unit))]
+    assert np.max(np.abs(v - scale * unit)) < 1e-7 * np.max(np.abs(v))
+    assert abs(v[-1]) < 1e-7 * np.max(np.abs(v))  # at rest after the pulse
+    # the peak acceleration is a_p (the grid's peak within its sampling: 1e-9 relative)
+    assert np.max(np.abs(g.acc)) == pytest.approx(a_p, rel=1e-6)
+    with pytest.raises(ValueError, match="gamma"):
+        mavroeidis_papageorgiou(a_p, omega_p, dt=0.002, gamma=1.0)
+
+
+def test_the_near_fault_scenario_builds_its_grid_of_pulses(tmp_path):
+    """The catalogue's near-fault scenario: one pulse per grid point, each peaking at its a_p/(g tan alpha);
+    the shape keys are refused on another pulse."""
+    from housner.scenarios.catalogue import ScenarioError
+    from housner.scenarios.catalogue.scenario import load_scenario
+    from housner.scenarios.motions.build import build_motions
+
+    sc = load_scenario("near-fault-pulses")
+    motions, meta = build_motions(sc)
+    assert len(motions) == 64 and meta["pulse"] == "mavroeidis_papageorgiou" and meta["gamma"] == 2.0
+    a_up = sc.specimen.uplift_acceleration
+    peaks = np.array([np.max(np.abs(m.acc)) for m in motions]) / a_up
+    # sampled at dt, a peak is missed by at most a_p (omega_p dt)^2 / 2 (a cosine's top; 3e-3 at the grid's fastest
+    # pulse, omega_p = 8 p) and never exceeded
+    target = np.array(meta["accel_ratio"])
+    miss = 0.5 * (np.array(meta["omega_ratio"]) * sc.specimen.p * 0.002) ** 2
+    assert np.all(peaks <= target * (1 + 1e-12)) and np.all(peaks >= target * (1 - miss))
+    text = sc.path.read_text().replace('pulse = "mavroeidis_papageorgiou"', 'pulse = "one_sine"')
+    bad = tmp_path / "x.toml"
+    bad.write_text(text)
+    with pytest.raises(ScenarioError, match="gamma"):
+        load_scenario(bad)

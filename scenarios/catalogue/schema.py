@@ -26,7 +26,7 @@ from housner.specimen import Specimen
 
 SPECIMEN_PRESETS = {"bachmann2017": Specimen.bachmann2017}
 MOTION_SOURCES = ("rdk", "record", "records", "pulses", "free_vibration")
-PULSES = ("symmetric_ricker", "antisymmetric_ricker", "one_sine")
+PULSES = ("symmetric_ricker", "antisymmetric_ricker", "one_sine", "mavroeidis_papageorgiou")
 
 # Allowed keys per table: key -> expected type(s). Unknown keys get "did you mean".
 _SCHEMA: dict[str, dict[str, Any]] = {
@@ -66,6 +66,8 @@ _SCHEMA: dict[str, dict[str, Any]] = {
         "duration": float,
         "dt": float,
         "pulse": str,
+        "gamma": float,
+        "nu": float,
         "omega_ratio": (list, dict),
         "accel_ratio": (list, dict),
     },
@@ -256,6 +258,15 @@ def check_motions(f: ScenarioFile, mot: dict) -> None:
         if key in mot and src not in sources:
             use = " or ".join(f"source = {s!r}" for s in sources)
             raise f.error("motions", key, f"[motions] {key!r} applies to {use}, not to source {src!r}")
+    for key in ("gamma", "nu"):  # the shape of a Mavroeidis-Papageorgiou pulse
+        if key in mot and not (src == "pulses" and mot.get("pulse") == "mavroeidis_papageorgiou"):
+            raise f.error(
+                "motions", key, f"[motions] {key!r} applies to pulse = 'mavroeidis_papageorgiou' (source = 'pulses')"
+            )
+    if "gamma" in mot and not mot["gamma"] > 1.0:
+        raise f.error(
+            "motions", "gamma", f"[motions] 'gamma' must exceed 1 (cycles under the envelope), got {mot['gamma']!r}"
+        )
     if src == "records" and "records" not in mot:
         raise f.error(
             "motions", None, "[motions] source 'records' needs key 'records' (a folder, or a list of .AT2 / .csv files)"

@@ -286,12 +286,17 @@ def _pulse_motions(scenario, meta: dict) -> list[GroundMotion]:
     for w, a in zip(W, A, strict=True):
         if kind == "one_sine":
             g = pulses.one_sine(a * a_up, w * p, dt=dt, p=p)
+        elif kind == "mavroeidis_papageorgiou":
+            shape = {k: float(m[k]) for k in ("gamma", "nu") if k in m}
+            g = pulses.mavroeidis_papageorgiou(a * a_up, w * p, dt=dt, p=p, **shape)
         else:
             g = pulses.ricker(a * a_up, w * p, kind=kind.split("_")[0], dt=dt, p=p)
         motions.append(
             GroundMotion(g.acc, g.dt, f"{kind} w/p={w:.3g} a/gtan={a:.3g}", g.provenance, g.theta0, g.theta_dot0)
         )
     meta.update({"pulse": kind, "omega_ratio": W.tolist(), "accel_ratio": A.tolist()})
+    if kind == "mavroeidis_papageorgiou":
+        meta.update({k: float(m[k]) for k in ("gamma", "nu") if k in m})
     return motions
 
 
