@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from housner.cli import main
+from housner.reports.explain_text import maps_remains_text, remains_text
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.runs.explain import AMPLITUDES, REACH_MARGIN, Explanation, explain_engine
@@ -37,13 +38,13 @@ def test_the_analytic_engine_explains_itself(control):
     # the issue's criterion: at the floor within REACH_MARGIN (5 points)
     assert expl.agreement >= expl.floor - REACH_MARGIN and expl.reaches_floor
     # the time histories: white noise at EXPLAIN_SIGMA on the model's own samples is what a correct model leaves
-    assert expl.diagnosis.status == "no_misfit", expl.diagnosis.text
+    assert expl.diagnosis.status == "no_misfit", remains_text(expl)
     # the chaos floor of an engine without r and p errors is whole (its p error is the sampled crossing, ~1e-11);
     # the model-form floor is not: a 0.1 % amplitude or a held input moves most records' peaks by more than 3 %
     assert expl.floor_parts.chaos == 1.0
     assert 0.0 < expl.floor_parts.model_form < 1.0 and expl.floor == expl.floor_parts.model_form
     assert expl.details.model_form_floor.shares["substeps x2"] == 1.0  # the analytic solver is converged
-    assert expl.n_records == 12 and "Nothing beyond the floor" in expl.remains
+    assert expl.n_records == 12 and "Nothing beyond the floor" in remains_text(expl)
     d = expl.to_dict()
     assert json.loads(json.dumps(d))["effects"] == [] and set(d["floor_parts"]) == {"chaos", "model_form"}
     # the explain JSON is the explanation written: read back, it is the explanation, and writes the same JSON
@@ -59,7 +60,8 @@ def test_the_analytic_engine_explains_itself(control):
     assert np.all(np.abs(ratios[np.isfinite(ratios)] - 1.0) < 1e-6)
     # the maps' rounding (ratios 1 +- 1e-11) moves the peaks by ~1e-10: the two-sample KS distance, a step function
     # of the ordering, then reads one record's step (1/12) where two equal samples read 0
-    assert expl.ks.with_maps <= 1.0 / expl.n_records + 1e-12 and "explained by what was measured" in m.remains
+    assert expl.ks.with_maps <= 1.0 / expl.n_records + 1e-12
+    assert "explained by what was measured" in maps_remains_text(expl)
 
 
 def test_the_campaign_orders_and_flags_its_records(control):

@@ -210,6 +210,9 @@ def test_report_section_shows_the_decomposition_and_the_frontier(tmp_path, monke
     html = engines_explained(Run.load(run_dir))
     assert "28% &rarr; 31%" in html and "viscous_damping" in html and "zeta = 0.0012" in html
     assert "chaos floor 67%" in html and "below it" in html
+    # what remains, in the page's words from the file's figures (its own "remains" sentence is not read)
+    assert "31% of the records, 18 points below the reachable agreement of 49%." in html
+    assert "18% below the floor" not in html
     assert "swept from, knee" in html and "data:image/png;base64," in html
     assert "NOT met" in html  # the cheap point that fails a check
 

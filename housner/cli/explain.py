@@ -4,7 +4,6 @@ run)."""
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -80,12 +79,14 @@ def run(args: argparse.Namespace) -> int:
         maps=not args.no_maps,
         **common,
     )
-    print(expl.summary())
+    from housner.reports.explain_text import explanation_summary, write_explain_json
+
+    print(explanation_summary(expl))
     print(f"wall time {expl.wall_s['total']:.1f} s")
     if args.workdir:
         print(f"campaign: {expl.details.campaign}")
     if args.json:
-        Path(args.json).write_text(json.dumps(expl.to_dict(), indent=2))
+        write_explain_json(expl, args.json)
         print(f"json:   {args.json}")
     if args.figure and expl.maps is not None:
         from housner.reports.impact_map_figure import maps_figure, save_figure

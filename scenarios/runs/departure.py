@@ -33,6 +33,7 @@ from housner.statistics.ensemble_stats import ks_2samp, per_record_agreement
 
 __all__ = [
     "DEPART_TOL",
+    "PHASES",
     "SMALL_ROCKING",
     "DepartureSummary",
     "ImpactsBefore",
@@ -55,6 +56,8 @@ DEPART_TOL = 0.05
 #: A half-cycle below this amplitude [alpha] is small rocking (the engines' impact maps depart from Housner's
 #: constant ratio below about 0.05 alpha of release; ``docs/results.md#impacts``).
 SMALL_ROCKING = 0.1
+#: Where two histories part (:attr:`Departure.phase`), in the order the summary counts them.
+PHASES = ("uplift", "small rocking", "rocking", "never")
 #: |theta| above which a sign change counts as an impact in :func:`departure` [alpha] (the shared rocking
 #: threshold, :data:`housner.engines._planar.ROCKING_TOL`).
 _IMPACT_TOL = 5e-3
@@ -177,15 +180,14 @@ class DepartureSummary(JsonValue):
     impacts_before : ImpactsBefore
     records : dict
         Phase -> the first records (ids) that part in it.
-    text : str
-        The summary in one sentence ("" for no record).
+
+    Its words are :func:`housner.reports.explain_text.departures_text`'s.
     """
 
     n: int = 0
     by_phase: dict[str, int] = field(default_factory=dict)
     impacts_before: ImpactsBefore = field(default_factory=ImpactsBefore)
     records: dict[str, tuple[int, ...]] = field(default_factory=dict)
-    text: str = ""
 
 
 def summarise(deps: list[Departure], max_named: int = 8) -> DepartureSummary:
@@ -195,47 +197,17 @@ def summarise(deps: list[Departure], max_named: int = 8) -> DepartureSummary:
     -------
     DepartureSummary
         ``n``, ``by_phase`` {phase: count}, ``impacts_before`` (``median``, ``q25``, ``q75``) over the records
-        that part after an impact, ``records`` {phase: ids, at most ``max_named``}, and ``text``: one sentence.
+        that part after an impact, and ``records`` {phase: ids, at most ``max_named``}.
     """
-    phases = ("uplift", "small rocking", "rocking", "never")
-    by = {ph: [d for d in deps if d.phase == ph] for ph in phases}
+    by = {ph: [d for d in deps if d.phase == ph] for ph in PHASES}
     after = np.array([d.impacts_before for d in deps if d.impacts_before > 0], dtype=float)
     q = {
         k: (float(np.percentile(after, p)) if after.size else math.nan)
         for k, p in (("q25", 25), ("median", 50), ("q75", 75))
     }
-    n = len(deps)
-    parts = [f"{len(by[ph])} {'part' if len(by[ph]) != 1 else 'parts'} {_where[ph]}" for ph in phases[:3] if by[ph]]
-    if by["never"]:
-        parts.append(
-            f"{len(by['never'])} never part by {DEPART_TOL:g} alpha (they differ only in the peak's last few per cent)"
-        )
-    text = (
-        (
-            f"Of the {n} records where they disagree, "
-            + "; ".join(parts)
-            + "."
-            + (
-                f" Those that part after an impact do so after a median {q['median']:.0f} impacts "
-                f"(quartiles {q['q25']:.0f}-{q['q75']:.0f})."
-                if after.size
-                else ""
-            )
-        )
-        if n
-        else ""
-    )
     return DepartureSummary(
-        n=n,
-        by_phase={ph: len(by[ph]) for ph in phases},
+        n=len(deps),
+        by_phase={ph: len(by[ph]) for ph in PHASES},
         impacts_before=ImpactsBefore(**q),
-        records={ph: tuple(d.record for d in by[ph][:max_named]) for ph in phases},
-        text=text,
+        records={ph: tuple(d.record for d in by[ph][:max_named]) for ph in PHASES},
     )
-
-
-_where = {
-    "uplift": "before the first impact (at uplift or in the first half-cycle)",
-    "small rocking": f"in small rocking (below {SMALL_ROCKING:g} alpha) after an impact",
-    "rocking": f"in rocking above {SMALL_ROCKING:g} alpha after an impact",
-}

@@ -27,6 +27,7 @@ from housner.effects import available_effects, make_effect
 from housner.errors import unknown_choice
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.catalogue.scenario import Scenario
+from housner.scenarios.diagnosis.comparison.pointers import Evidence, PointerClass
 from housner.scenarios.diagnosis.diagnose import diagnose
 from housner.scenarios.execution.options import RunOptions
 from housner.scenarios.execution.outputs import check_output_dir
@@ -73,8 +74,6 @@ __all__ = [
 EXPLAIN_SIGMA = 1e-5
 #: The agreement reaches the floor when it is at least the floor minus this [-] (issue 25's criterion).
 REACH_MARGIN = 0.05
-#: Diagnosis statuses that leave nothing for an effect to explain.
-_DONE = ("explained", "no_misfit")
 
 
 # ----------------------------------------------------------------------------
@@ -97,13 +96,16 @@ class HeldoutError(JsonValue):
 
 @dataclass(frozen=True, eq=False)
 class DiagnosisSummary(JsonValue):
-    """The diagnosis of the engine's campaign: its ``status``, its verdict's ``text``, the held-out error and the
-    residual ratio [-] (the held-out error over the correct-model floor)."""
+    """The diagnosis of the engine's campaign: its ``status``, the held-out error, the residual ratio [-] (the
+    held-out error over the correct-model floor), the physical classes its verdict points to (``next``,
+    strongest first) and the localisation quantities where its final model still differs (``where``). Its words
+    are :mod:`housner.reports.explain_text`'s."""
 
     status: str = ""
-    text: str = ""
     heldout_error: HeldoutError = field(default_factory=HeldoutError)
     residual_ratio: float = math.nan
+    next: tuple[PointerClass, ...] = ()
+    where: tuple[Evidence, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,9 +190,8 @@ class Explanation(JsonValue):
     reaches_floor : bool or None
         ``agreement >= floor - REACH_MARGIN`` (None: a file that does not say).
     diagnosis : DiagnosisSummary
-        ``status``, ``text``, ``heldout_error`` (``before``, ``after`` [alpha]) and ``residual_ratio`` [-].
-    remains : str
-        What is left and where, in one sentence or two.
+        ``status``, ``heldout_error`` (``before``, ``after`` [alpha]), ``residual_ratio`` [-], ``next`` and
+        ``where``.
     n_records : int or None
         Ground motions on which both the engine and the analytic model ran.
     ks : KsDistances or None
@@ -201,7 +202,7 @@ class Explanation(JsonValue):
         Housner + the engine's measured impact and flight maps (:mod:`housner.scenarios.runs.explain_maps`):
         ``agreement`` [-], ``reaches_floor``, ``n_records``, ``overturned``, ``departures`` and
         ``departures_plain`` (where the records that disagree part: phase of the motion, impacts before,
-        the records), ``remains`` (one sentence) and ``maps`` (the maps, :class:`EngineMaps`). None when
+        the records) and ``maps`` (the maps, :class:`EngineMaps`). None when
         the step did not run (written as an empty table). Also ``scatter_floor`` (the agreement the maps' mean
         law keeps with an engine whose impacts scatter as measured,
         :func:`~housner.scenarios.runs.explain_maps.scatter_floor`) and ``reaches_scatter_floor``.
@@ -220,7 +221,6 @@ class Explanation(JsonValue):
     floor_parts: FloorParts
     reaches_floor: bool | None
     diagnosis: DiagnosisSummary
-    remains: str
     n_records: int | None
     ks: KsDistances | None = None
     maps: MapsExplained | None = None
@@ -234,77 +234,6 @@ class Explanation(JsonValue):
     def to_dict(self) -> dict:
         """Plain data for JSON (NaN as None): the explain JSON."""
         return jsonable(self.to_json(), nonfinite="null")
-
-    def summary(self) -> str:
-        """A few lines: effects, agreement before and after beside the floor, reaching it, what remains."""
-        eff = (
-            "; ".join(f"{e.name} ({', '.join(f'{k} = {v:.4g}' for k, v in e.params.items())})" for e in self.effects)
-            or "none"
-        )
-        fp = self.floor_parts
-        d = self.diagnosis
-        ks = self.ks or KsDistances()
-        return "\n".join(
-            [
-                f"{self.engine} on {self.scenario} ({self.n_records} ground motions): diagnosis {d.status}",
-                f"effects: {eff}",
-                f"agreement with {self.engine}: plain Housner {self.agreement_plain:.0%} -> with the effects "
-                f"{self.agreement:.0%}; floor {self.floor:.0%} (the lower of chaos {fp.chaos:.0%} and model form "
-                f"{fp.model_form:.0%})",
-                f"reaches the floor (within {REACH_MARGIN:.0%}): {'yes' if self.reaches_floor else 'no'}",
-                f"KS distance from {self.engine}: plain {ks.plain:.3f} -> with the effects {ks.with_effects:.3f}",
-                f"held-out error {d.heldout_error.before:.4f} -> {d.heldout_error.after:.4f} alpha, "
-                f"residual ratio {d.residual_ratio:.2f}",
-                f"remains: {self.remains}",
-                *self._maps_lines(),
-            ]
-        )
-
-    def _maps_lines(self) -> list[str]:
-        m = self.maps
-        if m is None:
-            return []
-        with_maps = self.ks.with_maps if self.ks is not None and self.ks.with_maps is not None else math.nan
-        return [
-            f"with {self.engine}'s measured impact and flight maps: agreement {m.agreement:.0%} "
-            f"(plain {self.agreement_plain:.0%}, floor {self.floor:.0%}), KS {with_maps:.3f}; "
-            f"reaches the floor: {'yes' if m.reaches_floor else 'no'}",
-            f"remains with the maps: {m.remains}",
-        ]
-
-
-def _where(verdict) -> str:
-    """The verdict's pointer (:func:`~housner.reports.diagnosis.verdict_text.pointer_text`), else the misfit that
-    remains, else the first localisation item where the model differs."""
-    from housner.reports.diagnosis.verdict_text import pointer_text, where_texts  # the diagnosis' words
-
-    if verdict.next:
-        return pointer_text(verdict.next)
-    if verdict.status == "partly_explained":
-        return f"A misfit of {verdict.residual.ratio:.2f}x the floor (the worse group of records) remains."
-    where = where_texts(verdict)
-    return f"it differs in {where[0]}." if where else ""
-
-
-def _remains(engine: str, names: list[str], agreement: float, floor: float, reaches: bool, diag) -> str:
-    model = " + ".join(["Housner", *names])
-    head = f"{model} agrees with {engine} on {agreement:.0%} of the records"
-    v = diag.verdict
-    if reaches and v.status in _DONE:
-        return (
-            f"Nothing beyond the floor: {head}, against a floor of {floor:.0%}, and the diagnosis finds "
-            f"{v.status.replace('_', ' ')} in the time histories."
-        )
-    gap = f"{floor - agreement:.0%} below the floor of {floor:.0%}" if not reaches else f"at the floor of {floor:.0%}"
-    if v.status in _DONE:
-        return (
-            f"{head}, {gap}, though the diagnosis finds {v.status.replace('_', ' ')} in the time histories: "
-            "what remains shows in the records' peaks and overturns, not in the errors a correct model leaves."
-        )
-    return (
-        f"{head}, {gap}; the diagnosis is {v.status.replace('_', ' ')} (residual ratio "
-        f"{v.residual.ratio:.2f} against the correct-model floor). {_where(v)}"
-    ).strip()
 
 
 def explain_engine(
@@ -382,8 +311,6 @@ def _explain(
         camp, effects=effects, seed=seed, engine_settings=runs.settings["housner"], compare_steps=False, progress=say
     )
     t2 = time.perf_counter()
-    from housner.reports.diagnosis.verdict_text import verdict_paragraph  # the diagnosis' words, for explain.json
-
     final = [(n, dict(p)) for n, p in d.final.effects]
     n_fv = len(runs.releases)
     eng_theta = record_thetas(runs.results, engine, n_fv)
@@ -409,7 +336,6 @@ def _explain(
     t4 = time.perf_counter()
     mp, maps_theta = compare_with_maps(engine, runs, eng_theta, options, say) if with_maps else (None, None)
     v = d.verdict
-    names = [nm for nm, _ in final]
     return Explanation(
         engine=engine,
         scenario=sc.name,
@@ -421,18 +347,18 @@ def _explain(
         reaches_floor=reaches,
         diagnosis=DiagnosisSummary(
             status=v.status,
-            text=verdict_paragraph(d),
             heldout_error=HeldoutError(before=d.baseline.heldout_error, after=d.final.heldout_error),
             residual_ratio=v.residual.ratio,
+            next=tuple(v.next),
+            where=tuple(v.where),
         ),
-        remains=_remains(engine, names, with_eff, floor, reaches, d),
         n_records=int(n),
         ks=KsDistances(
             plain=record_ks(eng_theta, plain_theta),
             with_effects=record_ks(eng_theta, eff_theta),
             with_maps=record_ks(eng_theta, maps_theta) if mp else None,
         ),
-        maps=_maps_part(engine, mp, floor),
+        maps=_maps_part(mp, floor),
         details=ExplainDetails(
             chaos_floor=chaos,
             model_form_floor=mform,
@@ -462,34 +388,11 @@ def _explain(
     )
 
 
-def _maps_part(engine: str, mp: MapsExplained | None, floor: float) -> MapsExplained | None:
-    """The Explanation's ``maps``: the comparison with its verdict, whether it reaches the floor (the extended
-    floor, or the scatter floor of the maps' own measured scatter) and what remains (None when the step did not
-    run)."""
+def _maps_part(mp: MapsExplained | None, floor: float) -> MapsExplained | None:
+    """The Explanation's ``maps``: the comparison with whether it reaches the floor (the extended floor, or the
+    scatter floor of the maps' own measured scatter); None when the step did not run."""
     if mp is None:
         return None
     reaches = bool(mp.agreement >= floor - REACH_MARGIN)
-    sf = mp.scatter_floor.share
-    reaches_scatter = bool(mp.agreement >= sf - REACH_MARGIN)
-    head = f"Housner + {engine}'s measured maps agrees with {engine} on {mp.agreement:.0%} of the records"
-    small, large = mp.maps.at(0.05), mp.maps.at(0.5)
-    spread = (
-        f"standard deviation of r/r_housner {small['ratio_spread']:.3f} at x = 0.05 and "
-        f"{large['ratio_spread']:.3f} at x = 0.5, the band of the maps' figure"
-    )
-    if reaches:
-        remains = f"{head}, at the floor of {floor:.0%}: the departure is explained by what was measured."
-    elif reaches_scatter:
-        remains = (
-            f"{head}, {floor - mp.agreement:.0%} below the floor of {floor:.0%}, but as many as the maps' mean keeps "
-            f"with an engine whose impacts scatter as {engine}'s were measured to ({spread}): {sf:.0%} (the "
-            f"scatter floor). The departure is explained by what was measured, the mean impact law and its "
-            f"scatter; no model with one law per impact can follow it record by record. {mp.departures.text}"
-        )
-    else:
-        remains = (
-            f"{head}, {floor - mp.agreement:.0%} below the floor of {floor:.0%} and below the {sf:.0%} the maps' "
-            f"mean keeps with an engine whose impacts scatter as measured ({spread}): something else departs. "
-            f"{mp.departures.text}"
-        )
-    return replace(mp, reaches_floor=reaches, reaches_scatter_floor=reaches_scatter, remains=remains.strip())
+    reaches_scatter = bool(mp.agreement >= mp.scatter_floor.share - REACH_MARGIN)
+    return replace(mp, reaches_floor=reaches, reaches_scatter_floor=reaches_scatter)

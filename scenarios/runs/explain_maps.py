@@ -54,7 +54,8 @@ class MapsExplained(JsonValue):
     """Housner + the engine's measured impact and flight maps against the engine (explain.json's ``maps``).
 
     :func:`compare_with_maps` measures it; :mod:`housner.scenarios.runs.explain` sets its verdict against the
-    extended floor (``reaches_floor``, ``reaches_scatter_floor``, ``remains``).
+    extended floor (``reaches_floor``, ``reaches_scatter_floor``); :mod:`housner.reports.explain_text` says what
+    remains.
 
     Attributes
     ----------
@@ -75,8 +76,6 @@ class MapsExplained(JsonValue):
     reaches_floor, reaches_scatter_floor : bool
         Whether the agreement reaches the extended floor, or the scatter floor (within
         :data:`housner.scenarios.runs.explain.REACH_MARGIN`).
-    remains : str
-        What is left, in one sentence or two.
     maps : EngineMaps
         The measured maps.
     """
@@ -90,7 +89,6 @@ class MapsExplained(JsonValue):
     overturned: int = 0
     reaches_floor: bool = False
     reaches_scatter_floor: bool = False
-    remains: str = ""
     maps: EngineMaps | None = None
 
 

@@ -18,8 +18,8 @@ Both were measured on a named scenario, not on this run; the section says which.
 from __future__ import annotations
 
 import math
-import re
 
+from housner.reports.explain_text import page_maps_remains_text, page_remains_text
 from housner.reports.frontier_figure import frontier_figure
 from housner.reports.impact_map_figure import maps_figure
 from housner.reports.page import engine_tag, esc, fmt_g, html_note, html_stored_figure, html_table, status_badge
@@ -81,10 +81,10 @@ def _decomposition(run: Run, found: dict[str, StoredFile]) -> str:
                 f"{_pct(d.floor)} <small>(chaos floor {_pct(parts.chaos)}, "
                 f"model-form limit {_pct(parts.model_form)})</small>",
                 status_badge(d.reaches_floor, "reaches it", "below it") if d.reaches_floor is not None else "&ndash;",
-                esc(plain_remains(d.remains))
+                esc(page_remains_text(d))
                 + (
-                    f"<br><small>With its maps: {esc(plain_remains(maps.remains))}</small>"
-                    if maps is not None and maps.remains
+                    f"<br><small>With its maps: {esc(page_maps_remains_text(d))}</small>"
+                    if maps is not None and maps.maps is not None
                     else ""
                 ),
             ]
@@ -111,30 +111,6 @@ def _decomposition(run: Run, found: dict[str, StoredFile]) -> str:
         " the agreement that model keeps with an engine whose impacts also scatter as measured (three "
         "realisations).",
     )
-
-
-def plain_remains(text: str) -> str:
-    """A stored explanation's "what remains" in the page's words: its floor called the reachable agreement (the
-    page has one floor, the chaos floor), and the diagnosis' test statistics (residual ratios, z-scores, which
-    the page does not explain) left out; its figures in words are kept."""
-    text = re.sub(r" \(residual ratio [0-9.]+ against the correct-model floor\)", "", text)
-    text = re.sub(r"(\d+)% below the floor of", r"\1 points below the floor of", text)
-    text = text.replace("the floor of", "the reachable agreement of").replace(
-        "Nothing beyond the floor", "Nothing beyond the reachable agreement"
-    )
-    out, depth, start = [], 0, 0
-    for i, c in enumerate(text):  # drop each outermost bracket that holds a z-score
-        if c == "(":
-            if depth == 0:
-                start = i
-            depth += 1
-        elif c == ")" and depth:
-            depth -= 1
-            if depth == 0 and "z = " in text[start : i + 1]:
-                out.append((start, i + 1))
-    for a, b in reversed(out):
-        text = text[:a].rstrip() + text[b:]
-    return text
 
 
 def _maps_cell(maps: MapsExplained | None, ks: KsDistances | None) -> str:

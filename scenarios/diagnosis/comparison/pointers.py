@@ -113,6 +113,9 @@ class Evidence:
     def is_probe(self) -> bool:
         return self.metric.startswith("probe:")
 
+    def to_dict(self) -> dict:
+        return asdict(self)
+
 
 @dataclass(frozen=True)
 class PointerClass:
