@@ -6,6 +6,7 @@ Run from the repository root::
     python benchmarks/bench_diagnose.py --hidden none --report /tmp/d.html
     python benchmarks/bench_diagnose.py --slowest          # the slowest kind (below)
     python benchmarks/bench_diagnose.py --slowest --profile /tmp/d.prof   # and where the time goes
+    python benchmarks/bench_diagnose.py --independent pulse_time_lag+frequency_parameter   # 1000 Hz pulses
 
 The campaign is synthetic (tests/campaign_generators.py: the seed specimen,
 500 Hz, 0.8 mrad noise, 6 s filtered-noise and pulse records, one hidden
@@ -24,6 +25,10 @@ floor's family loop runs far: 3 free vibrations of 30 s and 100 ground
 motions of 20 s at 2000 Hz (four times the default's rate, 13x its samples),
 the hidden effect ``pivot_friction`` (a Coulomb moment at the pivot, which no
 effect of the library has). The same target holds.
+
+``--independent CASE``: a campaign of the second, independent generator (tests/independent_campaigns.py),
+its case's own block, rate and records; the near-fault pulse cases (``PULSE_CASES``: a slender block under
+pulse records at 1000 Hz, issue 51) among them. The same target holds.
 
 Baseline in the same run: one plain comparison of the campaign with the
 Housner model (every record simulated once, errors and localisation). The
@@ -47,6 +52,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 import campaign_generators as cg  # noqa: E402
+import independent_campaigns as ic  # noqa: E402
 
 from housner.scenarios.campaigns.campaign import load_campaign  # noqa: E402
 from housner.scenarios.diagnosis.comparison.record_comparison import compare  # noqa: E402
@@ -75,6 +81,12 @@ def main(argv=None) -> int:
     ap.add_argument("--rate", type=float, help="sample rate [Hz] (default 500; --slowest: 2000)")
     ap.add_argument("--gm-duration", type=float, help="ground-motion length [s] (default 6; --slowest: 20)")
     ap.add_argument("--fv-duration", type=float, help="free-vibration length [s] (default 12; --slowest: 30)")
+    ap.add_argument(
+        "--independent",
+        metavar="CASE",
+        choices=sorted([*ic.CASES, *ic.PULSE_CASES]),
+        help="a campaign of the second generator instead (its case's block, rate and records)",
+    )
     ap.add_argument("--profile", help="also profile the diagnosis (cProfile) and write its statistics here")
     ap.add_argument("--report", help="also write the HTML report here (timed separately)")
     args = ap.parse_args(argv)
@@ -90,7 +102,12 @@ def main(argv=None) -> int:
         gen["fv_duration"] = fv_dur
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        info = cg.write_campaign(Path(tmp) / "c", hidden, n_ground=args.records - 3, seed=args.seed, **gen)
+        if args.independent:
+            info = ic.write_campaign(Path(tmp) / "c", args.independent, n_ground=args.records - 3, seed=args.seed)
+            hidden, rate = args.independent, 1.0 / info["dt"]
+            gm_dur, fv_dur = ic.GM_DURATION, ic.FV_DURATION
+        else:
+            info = cg.write_campaign(Path(tmp) / "c", hidden, n_ground=args.records - 3, seed=args.seed, **gen)
         t_gen = time.perf_counter() - t0
         t0 = time.perf_counter()
         camp = load_campaign(info["root"])
