@@ -230,3 +230,21 @@ def run_command(out, engines: str, n_motions: int, *options: str, scenario: str 
 def run_housner(*args: str, timeout: float, **kwargs) -> subprocess.CompletedProcess:
     """``housner ARGS`` run in a subprocess (``kwargs`` to :func:`subprocess.run`: env, cwd), its output as text."""
     return subprocess.run(housner_command(*args), capture_output=True, text=True, timeout=timeout, **kwargs)
+
+
+def assert_strict_json_fixed_point(result, fresh, indent: int = 2):
+    """A diagnosis result as its file is written (strict JSON): ``fresh`` (the result computed again) writes the
+    same text as ``result``, and read back it writes that text again and reads back equal to itself (a number
+    without a finite value is written null and read as NaN: only a value read once is a fixed point). Returns the
+    value read."""
+    import json
+
+    def text(value) -> str:
+        return json.dumps(value.to_json(), indent=indent, allow_nan=False)
+
+    cls = type(fresh)
+    assert text(fresh) == text(result)  # the file is the value's
+    read = cls.from_json(json.loads(text(fresh)))
+    assert text(read) == text(fresh)
+    assert cls.from_json(json.loads(text(read))) == read
+    return read

@@ -9,10 +9,10 @@ motions, cannot rot without this test failing.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
+from shared import assert_strict_json_fixed_point
 
 from housner.effects import load_plugin
 from housner.reports.diagnosis.verdict_text import verdict_paragraph
@@ -60,19 +60,9 @@ def test_the_example_effect_added_by_hand_explains_it(campaign):
 
 
 def test_the_diagnosis_json_is_written_from_a_typed_value_and_read_back_whole(campaign):
-    from housner.scenarios.diagnosis.results import DiagnosisResult
-
     d = diagnose(campaign, effects=["restitution"], max_effects=1, n_replicas=4)
     fresh = d.result()
 
-    def text(value) -> str:  # the JSON's text, as the file writes it (strict JSON)
-        return json.dumps(value.to_json(), indent=2, allow_nan=False)
-
-    assert text(fresh) == text(d)  # the file is the value's
-    read = DiagnosisResult.from_json(json.loads(text(fresh)))
-    # the JSON holds every figure: read back, the value writes the same text, and reads back equal to itself
-    # (a number without a finite value is written null and read as NaN: only a value read once is a fixed point)
-    assert text(read) == text(fresh)
-    assert DiagnosisResult.from_json(json.loads(text(read))) == read
+    read = assert_strict_json_fixed_point(d, fresh, indent=2)
     assert read.verdict.status == d.status and read.verdict.next == d.verdict.next
     assert read.ladder[-1].names == d.final.names and read.settings == d.settings

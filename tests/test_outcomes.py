@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import assert_strict_json_fixed_point
 
 from housner import GroundMotion, Specimen
 from housner.cli import main
@@ -309,19 +310,10 @@ def test_a_campaign_of_both_kinds_gets_both_diagnoses(tmp_path, capsys):
 
 
 def test_the_outcome_diagnosis_json_is_written_from_a_typed_value_and_read_back_whole(inside_contact):
-    from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosisResult
-
     _, _, d = inside_contact
     fresh = d.result()
 
-    def text(value) -> str:  # the JSON's text, as the file writes it (strict JSON)
-        return json.dumps(value.to_json(), indent=1, allow_nan=False)
-
-    assert text(fresh) == text(d)  # the file is the value's
-    read = OutcomeDiagnosisResult.from_json(json.loads(text(fresh)))
-    # every figure survives: the value read back writes the same text and reads back equal to itself
-    assert text(read) == text(fresh)
-    assert OutcomeDiagnosisResult.from_json(json.loads(text(read))) == read
+    read = assert_strict_json_fixed_point(d, fresh, indent=1)
     assert read.final.scores == d.final.scores and read.baselines == d.baselines and read.misses == tuple(d.misses)
 
 

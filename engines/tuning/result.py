@@ -34,22 +34,26 @@ def _number(row: pd.Series, col: str) -> float:
     return float(row[col]) if col in row.index else math.nan
 
 
-def _from_row(cls, row: pd.Series):
-    """A check of a table's row, each field from the column of its name (the one place the columns are read by
-    name): a number NaN, a word "" where the table of an earlier version has no such column."""
-    values = {}
-    for f in fields(cls):
-        if f.type == "str":
-            values[f.name] = str(row[f.name]) if f.name in row.index else ""
-        elif f.type == "int":
-            values[f.name] = int(row[f.name])
-        else:
-            values[f.name] = _number(row, f.name)
-    return cls(**values)
+class _TableRow:
+    """A check that is one row of a table of :class:`TuningResult`, each field read from the column of its name."""
+
+    @classmethod
+    def from_row(cls, row: pd.Series):
+        """The check of one row of the table (the one place the columns are read by name): a number NaN, a word
+        "" where the table of an earlier version has no such column."""
+        values = {}
+        for f in fields(cls):
+            if f.type == "str":
+                values[f.name] = str(row[f.name]) if f.name in row.index else ""
+            elif f.type == "int":
+                values[f.name] = int(row[f.name])
+            else:
+                values[f.name] = _number(row, f.name)
+        return cls(**values)
 
 
 @dataclass(frozen=True)
-class RatioCheck:
+class RatioCheck(_TableRow):
     """One release from rest of checks 1 and 2: a row of :attr:`TuningResult.table` or
     :attr:`TuningResult.small_table`.
 
@@ -71,14 +75,9 @@ class RatioCheck:
     r_target: float
     rel_error: float
 
-    @classmethod
-    def from_row(cls, row: pd.Series) -> RatioCheck:
-        """The check of one row of the table (:func:`_from_row`)."""
-        return _from_row(cls, row)
-
 
 @dataclass(frozen=True)
-class DecayCheck:
+class DecayCheck(_TableRow):
     """One peak of check 3's free decay: a row of :attr:`TuningResult.decay_table`.
 
     Attributes
@@ -99,14 +98,9 @@ class DecayCheck:
     peak_analytic: float
     rel_error: float
 
-    @classmethod
-    def from_row(cls, row: pd.Series) -> DecayCheck:
-        """The check of one row of the table (:func:`_from_row`)."""
-        return _from_row(cls, row)
-
 
 @dataclass(frozen=True)
-class PulseCheck:
+class PulseCheck(_TableRow):
     """One one-sine pulse of check 4 at one sample step: a row of :attr:`TuningResult.pulse_table`.
 
     Attributes
@@ -136,11 +130,6 @@ class PulseCheck:
     theta_max_analytic: float
     theta_max_rel_error: float
     theta_max_rtol: float
-
-    @classmethod
-    def from_row(cls, row: pd.Series) -> PulseCheck:
-        """The check of one row of the table (:func:`_from_row`)."""
-        return _from_row(cls, row)
 
 
 @dataclass(frozen=True, eq=False)
