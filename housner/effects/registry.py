@@ -181,6 +181,10 @@ class Effect:
         True for an effect whose ``modify_params`` realises the same physics as its
         ``terms`` (faster, batched with the plain kernel): it is the default route, and
         ``apply_effects(..., prefer_terms=True)`` takes the terms instead.
+    solver_step_cost : float
+        For an effect with its own solver: the cost of one of its steps relative to a step of the sliding
+        kernel's (about 20 ns on 2 cores), measured once; what the outcome tables count their work in
+        (:data:`housner.scenarios.diagnosis.outcomes.outcome_effects.SOLVER_BUDGET_STEPS`). 1 by default.
 
     Notes
     -----
@@ -202,6 +206,7 @@ class Effect:
     probe: ClassVar[bool] = False
     probe_summary: ClassVar[str] = ""
     fast_path: ClassVar[bool] = False
+    solver_step_cost: ClassVar[float] = 1.0
 
     def __post_init__(self) -> None:
         for key, spec in self.param_specs.items():

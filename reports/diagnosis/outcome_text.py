@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from housner.scenarios.diagnosis.outcomes.outcome_effects import SOLVER_BUDGET_STEPS
 from housner.scenarios.diagnosis.outcomes.outcome_validation import LEVEL
 
 if TYPE_CHECKING:
@@ -110,7 +111,8 @@ def left_out_text(left_out) -> str:
         "channels": lambda e: f"reads the measured channel {', '.join(e.channels)}, which outcome records lack",
         "no_grid": lambda e: "has no parameter with a finite range to tabulate",
         "slow_solver": lambda e: (
-            f"its own equation of motion, run record by record, would take over {e.seconds:.0f} s for its table"
+            f"its own equation of motion, run record by record, would take over {e.steps:.2g} solver steps for its "
+            f"table (the outcome tables take at most {SOLVER_BUDGET_STEPS:.0e})"
         ),
     }
     parts = [f"{e.name} ({why.get(e.why, lambda e: e.why)(e)})" for e in left_out]

@@ -7,13 +7,13 @@ effect at each value of its grid, over the same bracket of pivots as the plain m
 included, unless the records cannot feel it: an effect of the sensor stage changes only what a sensor reads, an
 effect that reads a measured channel needs a channel outcome records do not carry, an effect without a finite
 range has no grid, and an effect with its own equation of motion runs record by record, so it is tabulated only
-where that takes at most :data:`SOLVER_BUDGET_S` (each is left out with its reason, :class:`LeftOut`).
+where that takes at most :data:`SOLVER_BUDGET_STEPS` solver steps (each is left out with its reason,
+:class:`LeftOut`).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,7 +26,7 @@ from housner.motion import GroundMotion
 
 __all__ = [
     "GRID_SHARES",
-    "SOLVER_BUDGET_S",
+    "SOLVER_BUDGET_STEPS",
     "EffectTable",
     "LeftOut",
     "OutcomeEffect",
@@ -38,13 +38,15 @@ __all__ = [
 #: outside the bounds (an infinitely stiff foundation) gives instead 2 len(GRID_SHARES) + 1 points spaced over the
 #: bounds (logarithmically where both are positive).
 GRID_SHARES = (0.1, 0.3, 0.6, 1.0)
-#: An effect with its own equation of motion (run record by record) is tabulated only where its table's runs are
-#: estimated, from one timed run per grid value on a record of median length after a warm-up, to take at most
-#: this [s]. The estimate is rough (records that rock longer cost more): on 120 short pulse records the flexible
-#: foundation is estimated at 19 s and takes 44 s. Sliding on ASU SP1's 490 records is estimated at about 10 s (it
-#: takes about 7 s), at this budget: whether it is searched there depends on the machine and its load, and two
-#: runs of the same diagnosis have differed in it. The diagnosis names each effect it left out, with its estimate.
-SOLVER_BUDGET_S = 10.0
+#: An effect with its own equation of motion (run record by record) is tabulated only where its table takes at most
+#: this many solver steps, in steps of the sliding kernel: the samples of a record of median length times the
+#: solver's substeps, summed over the grid (each value run once on that record), times the records and the bracket
+#: points, times the effect's ``solver_step_cost`` (a flexible foundation's step costs 6.5 of sliding's). A count
+#: of work, not a timing, so that the same campaign searches the same effects on every machine and at any load.
+#: Measured on 2 cores (2026-11-29): sliding on ASU SP1's 490 records takes 3.9e8 steps in 7-10 s (about 20 ns a
+#: step), so the budget is about 25 s; the flexible foundation would take over 1.9e11 there, and 3.9e9 on 200 short
+#: pulse records (101 s measured).
+SOLVER_BUDGET_STEPS = 1.0e9
 
 
 @dataclass(frozen=True)
@@ -93,16 +95,17 @@ class LeftOut(JsonValue):
     why : str
         ``"sensor"`` (it changes only what a sensor reads), ``"channels"`` (it reads measured channels the
         records lack: ``channels``), ``"no_grid"`` (no finite range for any parameter, or a parameter without a
-        default) or ``"slow_solver"`` (its own equation of motion, estimated at ``seconds`` for its table).
+        default) or ``"slow_solver"`` (its own equation of motion, whose table would take ``steps``).
     channels : tuple of str
-    seconds : float
-        The estimated time of its table [s] (``"slow_solver"``; nan otherwise).
+    steps : float
+        The solver steps its table would take (``"slow_solver"``; nan otherwise), against
+        :data:`SOLVER_BUDGET_STEPS`.
     """
 
     name: str
     why: str
     channels: tuple[str, ...] = ()
-    seconds: float = math.nan
+    steps: float = math.nan
 
 
 def _grid(lo: float, hi: float, neutral: float) -> tuple[float, ...]:
@@ -153,10 +156,14 @@ class EffectTable:
     effect : OutcomeEffect
     overturned : ndarray of bool
         (records, bracket points, len(effect.values)).
+    steps : float
+        The solver steps its table took, counted as :data:`SOLVER_BUDGET_STEPS` counts them (NaN: all records run
+        in one compiled call per value).
     """
 
     effect: OutcomeEffect
     overturned: np.ndarray = field(repr=False)
+    steps: float = math.nan
 
     def column(self, value: float) -> int:
         """The grid index of ``value`` [unit]; KeyError when the grid does not hold it."""
@@ -185,8 +192,8 @@ def effect_table(effect: OutcomeEffect, motions: list[GroundMotion], specimen, s
     """``effect`` tabulated on the records' ``motions`` at each of the pivots' ``starts`` (RockingParams, one per
     bracket point). Effects that only change the rocking parameters or bring kernel terms run all records in one
     compiled call per value; one with its own solver, or one that changes the input, runs record by record, and
-    is left out (:class:`LeftOut` ``"slow_solver"``, with the time estimated so far: a lower bound) when timed runs
-    on one record say its table would take more than :data:`SOLVER_BUDGET_S`."""
+    is left out (:class:`LeftOut` ``"slow_solver"``, with its count) when its table would take more than
+    :data:`SOLVER_BUDGET_STEPS` solver steps, counted on a record of median length."""
     probe = apply_effects(specimen, motions[0], [effect.build(specimen, effect.values[0])], params=starts[0])
     per_record = probe.solver is not None or type(probe.effects[0]).transform_input is not Effect.transform_input
     n_v = len(effect.values)
@@ -198,15 +205,11 @@ def effect_table(effect: OutcomeEffect, motions: list[GroundMotion], specimen, s
             for j, plan in enumerate(_plans(effect, specimen, start, motions[0])):
                 out[:, k, j] = theta_max_many(specimen, accs, dts, params=plan.params, terms=plan.terms)[1]
         return EffectTable(effect, out)
-    typical = motions[int(np.argsort([mo.n for mo in motions])[len(motions) // 2])]  # a median-length record
-    plans = _plans(effect, specimen, starts[0], typical)
-    plans[0].run()  # a warm-up: the first run may compile the solver
-    spent = 0.0
-    for plan in reversed(plans):  # the far end of the grid first: a stiff foundation costs the most there
-        t0 = time.perf_counter()
-        plan.run()
-        spent += time.perf_counter() - t0
-        estimate = spent * len(motions) * len(starts)
-        if estimate > SOLVER_BUDGET_S:
-            return LeftOut(effect.name, "slow_solver", seconds=float(estimate))
-    return EffectTable(effect, _record_by_record(effect, specimen, motions, starts))
+    typical = motions[int(np.argsort([mo.n for mo in motions], kind="stable")[len(motions) // 2])]  # median length
+    per_record, cost = 0.0, float(type(probe.effects[0]).solver_step_cost)
+    for plan in reversed(_plans(effect, specimen, starts[0], typical)):  # the stiff end first: it needs the most
+        per_record += cost * typical.n * max(int(plan.run().info.get("substeps", 1) or 1), 1)
+        steps = per_record * len(motions) * len(starts)
+        if steps > SOLVER_BUDGET_STEPS:
+            return LeftOut(effect.name, "slow_solver", steps=steps)
+    return EffectTable(effect, _record_by_record(effect, specimen, motions, starts), steps=steps)

@@ -187,11 +187,12 @@ def overturn_tables(
         got = effect_table(eff, motions, specimen, starts)
         if isinstance(got, LeftOut):
             left.append(got)
-            say(f"{eff.name}: left out (its own solver: its table would take over {got.seconds:.0f} s)")
+            say(f"{eff.name}: left out (its own solver: its table would take over {got.steps:.2g} steps)")
             continue
         tabled[eff.name] = got
+        solver = f", {got.steps:.2g} solver steps" if got.steps == got.steps else ""
         say(
-            f"{eff.name}: {len(eff.values)} values of {eff.param} x {len(pts)} pivot pairs, "
+            f"{eff.name}: {len(eff.values)} values of {eff.param} x {len(pts)} pivot pairs{solver}, "
             f"{time.perf_counter() - t1:.1f} s"
         )
     return OverturnTables(plain, contact, np.log(alphas), tabled, left)
