@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 
+from housner.reports.explain_text import departures_text
 from housner.scenarios.runs.departure import DEPART_TOL, SMALL_ROCKING, departure, summarise
 
 ALPHA = 0.15
@@ -70,8 +71,11 @@ def test_summary_counts_phases_and_names_records():
     assert s.by_phase == {"uplift": 1, "small rocking": 0, "rocking": 1, "never": 1}
     assert s.records["uplift"] == (0,) and s.records["rocking"] == (1,)
     assert s.impacts_before.median == 2
-    assert "Of the 3 records" in s.text and "1 parts before the first impact" in s.text
-    assert summarise([]).text == ""
+    # its words, rendered from those figures in reports (the summary holds no sentence)
+    text = departures_text(s)
+    assert "Of the 3 records" in text and "1 parts before the first impact" in text
+    assert "after a median 2 impacts" in text
+    assert departures_text(summarise([])) == ""
 
 
 def test_disagreeing_applies_the_per_record_rule_and_agrees_with_record_agreement():
