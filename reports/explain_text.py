@@ -13,7 +13,6 @@ from pathlib import Path
 
 from housner.reports.diagnosis.verdict_text import pointer_text
 from housner.reports.diagnosis.words import evidence_text
-from housner.scenarios.execution.rundir import jsonable
 from housner.scenarios.runs.departure import DEPART_TOL, SMALL_ROCKING, DepartureSummary
 from housner.scenarios.runs.explain import REACH_MARGIN, Explanation, KsDistances
 from housner.scenarios.runs.explain_maps import MapsExplained
@@ -80,8 +79,11 @@ def remains_text(e: Explanation) -> str:
             f"Nothing beyond the floor: {head}, against a floor of {e.floor:.0%}, and the diagnosis finds "
             f"{status} in the time histories."
         )
-    gap = f"{e.floor - e.agreement:.0%} below the floor of {e.floor:.0%}" if not e.reaches_floor else None
-    gap = gap or f"at the floor of {e.floor:.0%}"
+    gap = (
+        f"{e.floor - e.agreement:.0%} below the floor of {e.floor:.0%}"
+        if not e.reaches_floor
+        else f"at the floor of {e.floor:.0%}"
+    )
     if e.diagnosis.status in _DONE:
         return (
             f"{head}, {gap}, though the diagnosis finds {status} in the time histories: "
@@ -117,14 +119,16 @@ def page_remains_text(e: Explanation) -> str:
     return f"{head}, {gap}{said}.{look}"
 
 
-def _maps_parts(engine: str, mp: MapsExplained) -> tuple[str, str]:
-    head = f"Housner + {engine}'s measured maps agrees with {engine} on {mp.agreement:.0%} of the records"
+def _maps_head(engine: str, mp: MapsExplained) -> str:
+    return f"Housner + {engine}'s measured maps agrees with {engine} on {mp.agreement:.0%} of the records"
+
+
+def _maps_spread(mp: MapsExplained) -> str:
     small, large = mp.maps.at(0.05), mp.maps.at(0.5)
-    spread = (
+    return (
         f"standard deviation of r/r_housner {small['ratio_spread']:.3f} at x = 0.05 and "
         f"{large['ratio_spread']:.3f} at x = 0.5, the band of the maps' figure"
     )
-    return head, spread
 
 
 def maps_remains_text(e: Explanation) -> str:
@@ -132,7 +136,7 @@ def maps_remains_text(e: Explanation) -> str:
     mp = e.maps
     if mp is None or mp.maps is None:
         return ""
-    head, spread = _maps_parts(e.engine, mp)
+    head, spread = _maps_head(e.engine, mp), _maps_spread(mp)
     floor, sf, where = e.floor, mp.scatter_floor.share, departures_text(mp.departures)
     if mp.reaches_floor:
         return f"{head}, at the floor of {floor:.0%}: the departure is explained by what was measured."
@@ -154,7 +158,7 @@ def page_maps_remains_text(e: Explanation) -> str:
     mp = e.maps
     if mp is None or mp.maps is None:
         return ""
-    head = f"Housner + {e.engine}'s measured maps agrees with {e.engine} on {mp.agreement:.0%} of the records"
+    head = _maps_head(e.engine, mp)
     if mp.reaches_floor:
         return f"{head}, at the reachable agreement: the departure is explained by what was measured."
     below = f"{(e.floor - mp.agreement) * 100:.0f} points below the reachable agreement of {e.floor:.0%}"
@@ -200,7 +204,7 @@ def explain_document(e: Explanation) -> dict:
     """The explain JSON's content: the value's data (NaN as null) with its words: ``remains``, the diagnosis'
     ``text`` (what remains in its terms: status, residual ratio, where to look) and, with the maps, the maps'
     ``remains`` and each departure summary's ``text``."""
-    data = jsonable(e.to_json(), nonfinite="null")
+    data = e.to_dict()
     data["remains"] = remains_text(e)
     data["diagnosis"]["text"] = _where(e)
     if e.maps is not None and data.get("maps"):

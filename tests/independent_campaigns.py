@@ -538,17 +538,12 @@ def truth_for(case: str, n_records: int = 0, *, options: dict | None = None) -> 
     """
     kw = {k: v for k, v in case_parameters(case).items() if k not in _INPUT_KEYS}
     truth = _block(campaign_options(case, options))
-    scale = 1.0 if truth.height == H_COM and truth.b_pos == B_HALF else 0.0  # 1.0: the seed block's geometry
     if "p" in kw:
         # the block rocks with another p than the stated one: its inertia about a pivot follows from that p,
         # its impacts keep the stated specimen's r (the mis-stated p is then the only thing wrong)
-        if scale == 1.0:
-            i0 = MASS * G * R_STATED / kw.pop("p") ** 2
-            truth = replace(truth, i_c=i0 - MASS * R_STATED**2)
-        else:
-            rr = math.hypot(truth.b_pos, truth.height)
-            i0 = truth.mass * G * rr / kw.pop("p") ** 2
-            truth = replace(truth, i_c=i0 - truth.mass * rr**2)
+        rr = math.hypot(truth.b_pos, truth.height)
+        i0 = truth.mass * truth.g * rr / kw.pop("p") ** 2
+        truth = replace(truth, i_c=i0 - truth.mass * rr**2)
     if "e" in kw:
         e = kw.pop("e")
         b_pos, b_neg = truth.b_pos - e, truth.b_neg + e

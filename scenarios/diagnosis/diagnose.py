@@ -137,9 +137,10 @@ def conclude(
     # an addition never makes the floor narrower and turns a model at its floor into a misfit (issue 51).
     kinds = [r.kind for r in cv.campaign.records]
     setup.progress("measuring the correct-model floor (parametric bootstrap over correct integrators)")
-    who_final = "the final model" if final.model.full else "the plain model"
     if not final.model.full:
-        family, floor_final, _early, _at = floor_family(setup, state, n_replicas, seed_int, kinds, who=who_final)
+        family, floor_final, _early, _at = floor_family(
+            setup, state, n_replicas, seed_int, kinds, who="the plain model"
+        )
         family_plain, floor_plain = family, floor_final
     else:
         family_plain, floor_plain, early, plain_at = floor_family(
@@ -151,7 +152,6 @@ def conclude(
             n_replicas,
             seed_int,
             kinds,
-            who=who_final,
             said_before=early,
             narrowest=family_plain if plain_at else None,
         )

@@ -208,7 +208,7 @@ def effect_table(effect: OutcomeEffect, motions: list[GroundMotion], specimen, s
     typical = motions[int(np.argsort([mo.n for mo in motions], kind="stable")[len(motions) // 2])]  # median length
     per_record, cost = 0.0, float(type(probe.effects[0]).solver_step_cost)
     for plan in reversed(_plans(effect, specimen, starts[0], typical)):  # the stiff end first: it needs the most
-        per_record += cost * typical.n * max(int(plan.run().info.get("substeps", 1) or 1), 1)
+        per_record += cost * typical.n * max(int(plan.run().info.get("substeps") or 1), 1)
         steps = per_record * len(motions) * len(starts)
         if steps > SOLVER_BUDGET_STEPS:
             return LeftOut(effect.name, "slow_solver", steps=steps)

@@ -190,7 +190,7 @@ def overturn_tables(
             say(f"{eff.name}: left out (its own solver: its table would take over {got.steps:.2g} steps)")
             continue
         tabled[eff.name] = got
-        solver = f", {got.steps:.2g} solver steps" if got.steps == got.steps else ""
+        solver = "" if math.isnan(got.steps) else f", {got.steps:.2g} solver steps"
         say(
             f"{eff.name}: {len(eff.values)} values of {eff.param} x {len(pts)} pivot pairs{solver}, "
             f"{time.perf_counter() - t1:.1f} s"
