@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from housner.reports.diagnosis.sensor_text import noise_text, sensor_text
 from housner.scenarios.campaigns.sensor_noise import WHITE, estimate_sensor_noise
 from housner.scenarios.diagnosis.comparison.history_error import record_error
 from housner.scenarios.diagnosis.sensor_assessment import _dropouts, _saturation, _spikes, _trend
@@ -70,7 +71,7 @@ def test_correlated_noise_is_measured_with_its_variance_and_its_correlation():
 
 def test_too_few_quiet_samples_leave_the_noise_white_and_unmeasured():
     sn = estimate_sensor_noise([("rest", np.zeros(100))], DT)
-    assert sn.white and sn.n_samples == 0 and "not measured" in sn.describe()
+    assert sn.white and sn.n_samples == 0 and "not measured" in noise_text(sn)
 
 
 def test_flat_tops_spikes_and_dropouts_are_found_where_they_are():
@@ -178,7 +179,7 @@ def test_the_block_is_seen_at_rest_under_noise_that_wanders(indep):
 @pytest.mark.parametrize("case", ["saturation", "gain_drift", "spikes_dropouts", "none", "restitution_drift"])
 def test_sensor_faults_are_named_where_they_are_and_only_there(indep, case):
     ic, _raw, c = indep(case)
-    assert set(c.sensor.fault_kinds) == set(ic.expected_faults(case)), c.sensor.text()
+    assert set(c.sensor.fault_kinds) == set(ic.expected_faults(case)), sensor_text(c.sensor)
     if case == "gain_drift":
         f = c.sensor.faults[0].figures
         # the truth drifts by +25 % over the order; 21 first excursions pin it to ~1 %
@@ -214,3 +215,22 @@ def test_the_report_shows_the_sensor(indep, tmp_path):
     i = page.index('id="sensor"')
     part = page[i : page.index("</section>", i)]
     assert "gain drift" in part and "white" in part and "<img" in part
+
+
+def test_sensor_words_are_read_from_the_values_alone():
+    # The assessment returns figures; the words (reports.diagnosis.sensor_text) are built from them alone.
+    from housner.reports.diagnosis.sensor_text import fault_text, sensor_document, sensor_verdict_sentence
+    from housner.scenarios.diagnosis.sensor_assessment import SensorFault, SensorReport
+
+    sat = SensorFault("saturation", ("a", "b"), 12, {"low": -math.inf, "high": 0.12, "alpha": 0.15})
+    assert fault_text(sat).startswith("saturation: 2 record(s) flat-topped at +0.12 rad (+0.80 alpha), the sensor's")
+    gain = SensorFault("gain_drift", ("a",), 0, {"relative_change": 0.25, "t": 6.04, "n": 9})
+    assert "reads +25.0 % more from the first record to the last (t = +6.0 over 9 ground motions" in fault_text(gain)
+    report = SensorReport(faults=(sat, gain), unseen_releases=("fv1",), mixed_rates=True)
+    sentence = sensor_verdict_sentence(report)
+    assert sentence.startswith(" The sensor, not the physics: saturation, gain drift. Saturation: 2 record(s)")
+    assert "1 free vibration(s) (fv1) start beyond the sensor's range" in sentence
+    assert "different sample rates" in sentence
+    doc = sensor_document(report)
+    assert [f["text"] for f in doc["faults"]] == [fault_text(sat), fault_text(gain)] and len(doc["notes"]) == 2
+    assert sensor_verdict_sentence(SensorReport()) == ""  # a white, faultless sensor adds nothing

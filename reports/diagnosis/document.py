@@ -8,6 +8,8 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from housner._values import to_data
+from housner.reports.diagnosis.sensor_text import sensor_document
 from housner.reports.diagnosis.verdict_text import (
     diagnosis_summary,
     distribution_text,
@@ -27,6 +29,9 @@ def diagnosis_document(diag: Diagnosis) -> dict:
     ``distribution`` in words, the settings' ``economies`` in words (beside their ``economy_facts``), and the
     ``summary`` (before ``elapsed_s``)."""
     data = diag.result().to_json()
+    sensor = getattr(diag.campaign, "sensor", None)
+    if sensor is not None:
+        data["sensor"] = to_data(sensor_document(sensor))
     v = diag.verdict
     if v is not None:
         words = {

@@ -24,6 +24,7 @@ from housner.reports.diagnosis.figures import (
     step_label,
     tilt_figure,
 )
+from housner.reports.diagnosis.sensor_text import fault_text, noise_text, sensor_notes
 from housner.reports.diagnosis.verdict_text import (
     distribution_text,
     said_distributions,
@@ -481,15 +482,15 @@ def sensor_section(diag) -> str:
         return "<p>The sensor was not assessed.</p>"
     n = sensor.noise
     rows = [
-        ["noise", esc(n.describe())],
+        ["noise", esc(noise_text(n))],
         [
             "records' sigma",
             f"mean {sensor.sigma_before * 1e3:.3g} mrad from differences, {sensor.sigma_after * 1e3:.3g} mrad as used",
         ],
         ["quiet samples", esc(", ".join(f"{k}: {v}" for k, v in n.sources.items()) or "none")],
     ]
-    rows += [[esc(f"fault: {f.kind.replace('_', ' ')}"), esc(f.text)] for f in sensor.faults]
-    rows += [["note", esc(t)] for t in sensor.notes]
+    rows += [[esc(f"fault: {f.kind.replace('_', ' ')}"), esc(fault_text(f))] for f in sensor.faults]
+    rows += [["note", esc(t)] for t in sensor_notes(sensor)]
     out = html_table(
         ["", ""],
         rows,

@@ -7,6 +7,7 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from housner.reports.diagnosis.sensor_text import noise_text, sensor_verdict_sentence
 from housner.reports.diagnosis.words import (
     Z_LEGEND,
     Z_LOCAL_LEGEND,
@@ -60,7 +61,7 @@ def verdict_paragraph(diag: Diagnosis, *, pointer: bool = True) -> str:
     text = verdict_text(v.facts, v.status, pointer=pointer)
     sensor = getattr(diag.campaign, "sensor", None)
     if sensor is not None:
-        text += sensor.verdict_sentence()
+        text += sensor_verdict_sentence(sensor)
     if diag.settings.economies:
         text += " How it was computed: " + " ".join(economy_text(e) for e in diag.settings.economies)
     return text
@@ -422,7 +423,7 @@ def diagnosis_summary(diag: Diagnosis) -> str:
             )
     sensor = getattr(diag.campaign, "sensor", None)
     if sensor is not None and sensor.noise.white and not sensor.faults:
-        parts.append(f"Sensor noise: {sensor.noise.describe()}.")  # else the verdict's text says it
+        parts.append(f"Sensor noise: {noise_text(sensor.noise)}.")  # else the verdict's text says it
     k = diag.settings.folds
     parts.append(
         f"({k}-fold cross-validation: every record held out once; sensor noise sigma/alpha {diag.noise_floor:.2g}.)"

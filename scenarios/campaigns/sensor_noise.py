@@ -139,21 +139,6 @@ class SensorNoise:
             cache[key] = lam * (m / lam.sum())  # unit variance after clipping the few negative ordinates
         return cache[key]
 
-    def describe(self) -> str:
-        """One line: what the noise is."""
-        if self.n_samples == 0:
-            return "not measured (no quiet part of the records): white noise of the difference-based sigma assumed"
-        if self.white:
-            return (
-                f"white (Ljung-Box p = {self.pvalue:.2g} on {self.n_samples} quiet samples), sigma "
-                f"{self.sigma * 1e3:.3g} mrad"
-            )
-        return (
-            f"correlated in time: sigma {self.sigma * 1e3:.3g} mrad, {self.diff_ratio:.2f}x the estimate from "
-            f"differences, correlation time {self.correlation_time * 1e3:.3g} ms (measured on "
-            f"{self.n_samples} quiet samples; Ljung-Box p = {self.pvalue:.2g})"
-        )
-
     def to_dict(self) -> dict:
         return {
             "sigma": self.sigma,
@@ -165,7 +150,6 @@ class SensorNoise:
             "max_lag": self.max_lag,
             "rho_first": [float(v) for v in self.rho[:11]],
             "sources": dict(self.sources),
-            "text": self.describe(),
         }
 
 

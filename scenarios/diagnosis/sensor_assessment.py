@@ -14,7 +14,7 @@ test looks for, and its thresholds (:data:`SPIKE_SIGMAS`, :data:`DROPOUT_RUN`, :
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -73,13 +73,18 @@ GAIN_MIN_SIGMAS = 10.0
 @dataclass(frozen=True)
 class SensorFault:
     """One sensor fault: ``kind`` (saturation, spikes, dropouts, offset_drift, gain_drift), the records it
-    touched, the samples masked, the figures that named it and one sentence."""
+    touched, the samples masked and the figures that named it (in words: :mod:`housner.reports.diagnosis.sensor_text`).
+
+    ``figures`` by kind: saturation ``low``, ``high`` (the sensor's range [rad]) and ``alpha`` [rad]; spikes
+    ``sigmas`` [-]; dropouts ``run`` [-]; offset drift ``slope_per_record`` [rad], ``change`` [rad], ``t`` [-] and
+    ``n`` (rest levels used); gain drift ``gain_first`` [-], ``slope_per_record`` [-], ``relative_change`` [-],
+    ``t`` [-] and ``n`` (ground motions used).
+    """
 
     kind: str
     records: tuple[str, ...]
     samples: int
     figures: dict
-    text: str
 
     def to_dict(self) -> dict:
         return {
@@ -87,54 +92,25 @@ class SensorFault:
             "records": list(self.records),
             "samples": self.samples,
             "figures": dict(self.figures),
-            "text": self.text,
         }
 
 
 @dataclass(frozen=True)
 class SensorReport:
-    """What :func:`assess_sensor` found: the noise, the faults (what was masked or corrected)."""
+    """What :func:`assess_sensor` found: the noise, the faults (what was masked or corrected), the free vibrations
+    left out because their release was beyond the sensor's range, and whether the records' sample rates differ
+    (the noise is then taken as white)."""
 
     noise: SensorNoise = WHITE
     faults: tuple[SensorFault, ...] = ()
     sigma_before: float = math.nan
     sigma_after: float = math.nan
-    notes: tuple[str, ...] = field(default_factory=tuple)
+    unseen_releases: tuple[str, ...] = ()
+    mixed_rates: bool = False
 
     @property
     def fault_kinds(self) -> list[str]:
         return [f.kind for f in self.faults]
-
-    def text(self) -> str:
-        """One paragraph: the noise, then each fault and what was done."""
-        out = f"Sensor noise: {self.noise.describe()}."
-        if not self.noise.white and math.isfinite(self.sigma_before):
-            out += (
-                f" Each record's sigma is the difference-based estimate times {self.noise.diff_ratio:.2f} "
-                f"(mean {self.sigma_before * 1e3:.3g} -> {self.sigma_after * 1e3:.3g} mrad), and the floor's "
-                "replicas draw noise of this correlation."
-            )
-        for f in self.faults:
-            out += " Sensor fault: " + f.text
-        for n in self.notes:
-            out += " " + n
-        return out
-
-    def verdict_sentence(self) -> str:
-        """What the verdict adds about the sensor: its faults and what was done, and a noise that is not white
-        ('' when the sensor is white and faultless)."""
-        bits = [f.text for f in self.faults]
-        if not self.noise.white:
-            bits.append(
-                f"the sensor's noise is correlated in time ({self.noise.describe()}); the floor was measured "
-                "with noise of that correlation"
-            )
-        bits += list(self.notes)
-        if not bits:
-            return ""
-        names = ", ".join(f.kind.replace("_", " ") for f in self.faults)
-        head = f" The sensor, not the physics: {names}." if self.faults else ""
-        return head + " " + " ".join(b[0].upper() + b[1:] + ("" if b.endswith(".") else ".") for b in bits)
 
     def to_dict(self) -> dict:
         return {
@@ -142,8 +118,8 @@ class SensorReport:
             "faults": [f.to_dict() for f in self.faults],
             "sigma_before": self.sigma_before,
             "sigma_after": self.sigma_after,
-            "notes": list(self.notes),
-            "text": self.text(),
+            "unseen_releases": list(self.unseen_releases),
+            "mixed_rates": self.mixed_rates,
         }
 
 
@@ -297,7 +273,7 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
     alpha = campaign.specimen.alpha
     # 1. faults on samples, and the free vibrations whose release the sensor did not see
     recs, faults = _sample_faults(list(campaign.records), alpha)
-    recs, skipped, notes = _unseen_releases(recs, list(campaign.skipped))
+    recs, skipped, unseen = _unseen_releases(recs, list(campaign.skipped))
     # 2. the plain model: where the block is surely still, and each first excursion
     res = simulate_records(campaign.specimen, recs, "housner", (), engine_settings)
     models = [
@@ -314,9 +290,9 @@ def assess_sensor(campaign: Campaign, engine_settings: dict | None = None) -> Ca
             faults.append(fault)
     # 4. the noise, on the quiet samples
     before = float(np.mean([r.noise for r in recs]))
-    recs, noise, more = _measured_noise(recs, tails, level_of)
+    recs, noise, mixed_rates = _measured_noise(recs, tails, level_of)
     after = float(np.mean([r.noise for r in recs]))
-    report = SensorReport(noise, tuple(faults), before, after, tuple(notes + more))
+    report = SensorReport(noise, tuple(faults), before, after, unseen, mixed_rates)
     return replace(campaign, records=recs, sensor=report, skipped=skipped)
 
 
@@ -349,42 +325,13 @@ def _sample_faults(recs: list[MeasuredRecord], alpha: float) -> tuple[list[Measu
         hi = [v for v in sat_levels if v > 0]
         lo = [v for v in sat_levels if v < 0]
         clip = (max(lo) if lo else -math.inf, min(hi) if hi else math.inf)
-        rng_txt = " and ".join(f"{v:+.4g} rad ({v / alpha:+.2f} alpha)" for v in (clip[0], clip[1]) if math.isfinite(v))
         faults.append(
-            SensorFault(
-                "saturation",
-                tuple(sat_ids),
-                sat_n,
-                {"low": clip[0], "high": clip[1]},
-                f"saturation: {len(sat_ids)} record(s) flat-topped at {rng_txt}, the sensor's "
-                f"range; their {sat_n} samples at it are left out of every error, and models "
-                "are read through the same range.",
-            )
+            SensorFault("saturation", tuple(sat_ids), sat_n, {"low": clip[0], "high": clip[1], "alpha": alpha})
         )
     if spk_ids:
-        faults.append(
-            SensorFault(
-                "spikes",
-                tuple(spk_ids),
-                spk_n,
-                {"sigmas": SPIKE_SIGMAS},
-                f"spikes: {spk_n} single samples in {len(spk_ids)} record(s) lie more than "
-                f"{SPIKE_SIGMAS:g} robust sigmas off both neighbours; they are left out of the "
-                "errors and bridged for the impact and peak detections.",
-            )
-        )
+        faults.append(SensorFault("spikes", tuple(spk_ids), spk_n, {"sigmas": SPIKE_SIGMAS}))
     if drop_ids:
-        faults.append(
-            SensorFault(
-                "dropouts",
-                tuple(drop_ids),
-                drop_n,
-                {"run": DROPOUT_RUN},
-                f"dropouts: {drop_n} samples in {len(drop_ids)} record(s) repeat the value before "
-                f"them {DROPOUT_RUN} or more times in a row, which noise cannot do; they are left "
-                "out of the errors and bridged.",
-            )
-        )
+        faults.append(SensorFault("dropouts", tuple(drop_ids), drop_n, {"run": DROPOUT_RUN}))
     recs = [
         replace(r, theta=th, valid=None if m.all() else m, clip=clip)
         for r, th, m in zip(recs, thetas, masks, strict=True)
@@ -392,8 +339,9 @@ def _sample_faults(recs: list[MeasuredRecord], alpha: float) -> tuple[list[Measu
     return recs, faults
 
 
-def _unseen_releases(recs: list[MeasuredRecord], skipped: list) -> tuple[list[MeasuredRecord], list, list[str]]:
-    """A free vibration released beyond the sensor's range has no measured release angle: left out, and said so."""
+def _unseen_releases(recs: list[MeasuredRecord], skipped: list) -> tuple[list[MeasuredRecord], list, tuple[str, ...]]:
+    """A free vibration released beyond the sensor's range has no measured release angle: left out (the records,
+    the skipped list with each, and their ids)."""
     lost = [r for r in recs if r.kind == "free_vibration" and r.valid is not None and not r.valid[:3].all()]
     for r in lost:
         skipped.append(
@@ -405,13 +353,7 @@ def _unseen_releases(recs: list[MeasuredRecord], skipped: list) -> tuple[list[Me
                 "or r; left out",
             )
         )
-    if not lost:
-        return recs, skipped, []
-    note = (
-        f"{len(lost)} free vibration(s) ({', '.join(r.id for r in lost)}) start beyond the sensor's range, so "
-        "their release angle was not measured: left out."
-    )
-    return [r for r in recs if r not in lost], skipped, [note]
+    return [r for r in recs if r not in lost], skipped, tuple(r.id for r in lost)
 
 
 def _rest_tails(recs, models, alpha: float) -> tuple[list[tuple[int, int]], dict[int, float]]:
@@ -441,15 +383,8 @@ def _offset_drift(recs, models, order, tails, level_of):
         return recs, level_of, None
     change = b * (order[-1] - order[0])
     offsets = b * (order - order[0])  # relative to the first record
-    fault = SensorFault(
-        "offset_drift",
-        tuple(r.id for r in recs),
-        0,
-        {"slope_per_record": b, "change": change, "t": t},
-        f"offset drift: the rest level after each record's motion moves by {change * 1e3:+.3g} mrad "
-        f"from the first record to the last (t = {t:+.1f} over {len(tails)} records); theta is "
-        "corrected to the first record's offset.",
-    )
+    figures = {"slope_per_record": b, "change": change, "t": t, "n": len(tails)}
+    fault = SensorFault("offset_drift", tuple(r.id for r in recs), 0, figures)
     recs = [_corrected(r, lambda x, i=i: x - offsets[i]) for i, r in enumerate(recs)]
     return recs, {i: v - offsets[i] for i, v in level_of.items()}, fault
 
@@ -478,24 +413,15 @@ def _gain_drift(recs, models, order, tails, level_of):
         return recs, level_of, None
     rel = (a + b * order) / g0  # the gain relative to the first record's
     change = float(rel[-1] - 1.0)
-    fault = SensorFault(
-        "gain_drift",
-        tuple(r.id for r in recs),
-        0,
-        {"gain_first": g0, "slope_per_record": b, "relative_change": change, "t": t},
-        f"gain drift: the first large excursion of each ground motion against the plain model's "
-        f"reads {change * 100:+.1f} % more from the first record to the last (t = {t:+.1f} over "
-        f"{len(gains)} ground motions, each before any impact large enough for an impact law to "
-        "matter); theta is corrected to the first record's gain.",
-    )
+    figures = {"gain_first": g0, "slope_per_record": b, "relative_change": change, "t": t, "n": len(gains)}
+    fault = SensorFault("gain_drift", tuple(r.id for r in recs), 0, figures)
     recs = [_corrected(r, lambda x, i=i: x / rel[i], rel[i]) for i, r in enumerate(recs)]
     return recs, {i: v / rel[i] for i, v in level_of.items()}, fault
 
 
-def _measured_noise(recs, tails, level_of) -> tuple[list[MeasuredRecord], SensorNoise, list[str]]:
+def _measured_noise(recs, tails, level_of) -> tuple[list[MeasuredRecord], SensorNoise, bool]:
     """The noise on the quiet samples (:func:`estimate_sensor_noise`): the records with their sigma and its
-    correlation where it is not white, the noise, notes."""
-    notes: list[str] = []
+    correlation where it is not white, the noise, and whether the sample rates differ (then it is white)."""
     dt = float(np.median([r.dt for r in recs]))
     segs, lev = [], []
     rest = float(np.median(list(level_of.values()))) if level_of else 0.0
@@ -512,8 +438,6 @@ def _measured_noise(recs, tails, level_of) -> tuple[list[MeasuredRecord], Sensor
             lev.append(float(np.mean(r.hold)))
     same_rate = all(abs(r.dt - dt) <= 1e-9 * dt for r in recs)
     noise = estimate_sensor_noise(segs, dt, lev) if same_rate else WHITE
-    if not same_rate:
-        notes.append("The records have different sample rates: the noise is treated as white.")
     if not noise.white and math.isfinite(noise.diff_ratio) and noise.diff_ratio > 0:
         recs = [
             replace(
@@ -523,4 +447,4 @@ def _measured_noise(recs, tails, level_of) -> tuple[list[MeasuredRecord], Sensor
             )
             for r in recs
         ]
-    return recs, noise, notes
+    return recs, noise, not same_rate
