@@ -73,50 +73,41 @@ def _head(e: Explanation) -> str:
 
 def remains_text(e: Explanation) -> str:
     """What is left and where, in one sentence or two, in the diagnosis' terms."""
-    head, status = _head(e), e.diagnosis.status.replace("_", " ")
-    if e.reaches_floor and e.diagnosis.status in _DONE:
-        return (
-            f"Nothing beyond the floor: {head}, against a floor of {e.floor:.0%}, and the diagnosis finds "
-            f"{status} in the time histories."
-        )
-    gap = (
-        f"{e.floor - e.agreement:.0%} below the floor of {e.floor:.0%}"
-        if not e.reaches_floor
-        else f"at the floor of {e.floor:.0%}"
-    )
-    if e.diagnosis.status in _DONE:
-        return (
-            f"{head}, {gap}, though the diagnosis finds {status} in the time histories: "
-            "what remains shows in the records' peaks and overturns, not in the errors a correct model leaves."
-        )
-    return (
-        f"{head}, {gap}; the diagnosis is {status} (residual ratio {e.diagnosis.residual_ratio:.2f} against the "
-        f"correct-model floor). {_where(e)}"
-    ).strip()
+    return _remains(e, page=False)
 
 
 def page_remains_text(e: Explanation) -> str:
     """What is left, in the run report's words: the floor called the reachable agreement, the gap in points, the
     diagnosis' status without its test statistics, and the class to look at first."""
+    return _remains(e, page=True)
+
+
+def _remains(e: Explanation, *, page: bool) -> str:
+    """:func:`remains_text` (the diagnosis' terms) or, ``page``, :func:`page_remains_text` (the run report's): the
+    same sentences, the floor named and the gap counted in each reader's words."""
+    floor = "reachable agreement" if page else "floor"
     head, status = _head(e), e.diagnosis.status.replace("_", " ")
     if e.reaches_floor and e.diagnosis.status in _DONE:
         return (
-            f"Nothing beyond the reachable agreement: {head}, against a reachable agreement of {e.floor:.0%}, "
-            f"and the diagnosis finds {status} in the time histories."
+            f"Nothing beyond the {floor}: {head}, against a {floor} of {e.floor:.0%}, and the diagnosis finds "
+            f"{status} in the time histories."
         )
-    gap = (
-        f"{(e.floor - e.agreement) * 100:.0f} points below the reachable agreement of {e.floor:.0%}"
-        if not e.reaches_floor
-        else f"at the reachable agreement of {e.floor:.0%}"
-    )
+    short = f"{(e.floor - e.agreement) * 100:.0f} points" if page else f"{e.floor - e.agreement:.0%}"
+    gap = f"{short} below the {floor} of {e.floor:.0%}" if not e.reaches_floor else f"at the {floor} of {e.floor:.0%}"
     if e.diagnosis.status in _DONE:
+        leaves = "" if page else ", not in the errors a correct model leaves"
         return (
             f"{head}, {gap}, though the diagnosis finds {status} in the time histories: what remains shows in the "
-            "records' peaks and overturns."
+            f"records' peaks and overturns{leaves}."
         )
-    look = f" Where to look first: {e.diagnosis.next[0].meaning}." if e.diagnosis.next else ""
-    said = f"; the diagnosis is {status}" if status else ""  # a file without its diagnosis says none
-    return f"{head}, {gap}{said}.{look}"
+    if page:
+        look = f" Where to look first: {e.diagnosis.next[0].meaning}." if e.diagnosis.next else ""
+        said = f"; the diagnosis is {status}" if status else ""  # a file without its diagnosis says none
+        return f"{head}, {gap}{said}.{look}"
+    return (
+        f"{head}, {gap}; the diagnosis is {status} (residual ratio {e.diagnosis.residual_ratio:.2f} against the "
+        f"correct-model floor). {_where(e)}"
+    ).strip()
 
 
 def _maps_head(engine: str, mp: MapsExplained) -> str:
