@@ -309,91 +309,23 @@ def _turn(ph_h, tau, fr, q, sig):
 
 
 @njit(cache=True)
-def run_batch(
-    acc_g,
-    v_g,
-    offsets,
-    dts,
-    ms,
-    prm,
-    q,
-    theta0s,
-    theta_dot0s,
-    rest_tol,
-    record,
-    theta,
-    theta_dot,
-    impacts,
-    imp_offsets,
-    out,
-):
-    """Serial batch over records i with samples acc_g[offsets[i]:offsets[i+1]]; ``q`` [n_rec, n_q]: their terms.
+def run_batch(*batch):
+    """Serial batch over records i with samples acc_g[offsets[i]:offsets[i+1]].
 
-    ``out`` [n_rec, 6] receives (theta_max, overturned, t_over, t_uplift, n_imp, guard).
+    ``batch`` is (acc_g, v_g, offsets, dts, ms, prm, q, theta0s, theta_dot0s, rest_tol, record, theta, theta_dot,
+    impacts, imp_offsets, out), :func:`_one_of_batch`'s arguments after the record's index; ``q`` [n_rec, n_q]:
+    the records' terms. ``out`` [n_rec, 6] receives (theta_max, overturned, t_over, t_uplift, n_imp, guard).
     When ``record`` is False, ``theta`` and ``theta_dot`` may be empty.
     """
-    for i in range(offsets.size - 1):
-        _one_of_batch(
-            i,
-            acc_g,
-            v_g,
-            offsets,
-            dts,
-            ms,
-            prm,
-            q,
-            theta0s,
-            theta_dot0s,
-            rest_tol,
-            record,
-            theta,
-            theta_dot,
-            impacts,
-            imp_offsets,
-            out,
-        )
+    for i in range(batch[2].size - 1):  # batch[2]: offsets
+        _one_of_batch(i, *batch)
 
 
 @njit(cache=True, parallel=True)
-def run_batch_parallel(
-    acc_g,
-    v_g,
-    offsets,
-    dts,
-    ms,
-    prm,
-    q,
-    theta0s,
-    theta_dot0s,
-    rest_tol,
-    record,
-    theta,
-    theta_dot,
-    impacts,
-    imp_offsets,
-    out,
-):
+def run_batch_parallel(*batch):
     """:func:`run_batch` with the records spread over threads (numba ``prange``)."""
-    for i in prange(offsets.size - 1):
-        _one_of_batch(
-            i,
-            acc_g,
-            v_g,
-            offsets,
-            dts,
-            ms,
-            prm,
-            q,
-            theta0s,
-            theta_dot0s,
-            rest_tol,
-            record,
-            theta,
-            theta_dot,
-            impacts,
-            imp_offsets,
-            out,
-        )
+    for i in prange(batch[2].size - 1):
+        _one_of_batch(i, *batch)
 
 
 @njit(cache=True)

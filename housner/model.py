@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict
+from typing import NamedTuple
 
 import numpy as np
 
@@ -249,34 +250,45 @@ def _vertical(motions, terms) -> np.ndarray:
     return np.concatenate([mo.channels[VERTICAL] for mo in motions]) / G
 
 
-def _run_kernel(
-    terms,
-    parallel: bool,
-    acc_g,
-    v_g,
-    offsets,
-    dts,
-    ms,
-    prm_a,
-    q,
-    th0,
-    thd0,
-    rest_tol,
-    record,
-    theta,
-    theta_dot,
-    impacts,
-    imp_off,
-    out,
-) -> None:
-    """Run the plain kernel (``terms`` None: no v_g nor q) or the one generated for ``terms``."""
+class _Records(NamedTuple):
+    """The records of one kernel call, one after another: the kernel's arguments before ``rest_tol``
+    (:func:`housner._kernel.run_batch`); ``v_g`` and ``q`` are None without terms."""
+
+    acc_g: np.ndarray  # ground acceleration over g [-], all the records' samples
+    v_g: np.ndarray | None  # vertical table acceleration over g [-], the same samples (terms only)
+    offsets: np.ndarray  # record i's samples: offsets[i]:offsets[i + 1]
+    dts: np.ndarray  # sample steps [s], one per record
+    ms: np.ndarray  # RK4 substeps per sample, one per record
+    prm: np.ndarray  # parameter vectors, one row per record
+    q: np.ndarray | None  # the terms' parameters, one row per record (terms only)
+    th0: np.ndarray  # initial rotations [rad]
+    thd0: np.ndarray  # initial angular velocities [rad/s]
+
+    def one(self, i: int) -> _Records:
+        """Record i alone."""
+        ab, row = slice(self.offsets[i], self.offsets[i + 1]), slice(i, i + 1)
+        return _Records(
+            self.acc_g[ab],
+            None if self.v_g is None else self.v_g[ab],
+            np.array([0, self.offsets[i + 1] - self.offsets[i]], dtype=np.int64),
+            self.dts[row],
+            self.ms[row],
+            self.prm[row],
+            None if self.q is None else self.q[row],
+            self.th0[row],
+            self.thd0[row],
+        )
+
+
+def _run_kernel(terms, parallel: bool, recs: _Records, rest_tol, record, theta, theta_dot, impacts, imp_off, out):
+    """Run the plain kernel (``terms`` None: no v_g nor q) or the one generated for ``terms`` on ``recs``."""
     if terms is None:
         kern = run_batch_parallel if parallel else run_batch
-        v_g, q = acc_g, _no_terms(dts.size)
+        recs = recs._replace(v_g=recs.acc_g, q=_no_terms(recs.dts.size))
     else:
         mod = terms.kernel()
         kern = mod.run_batch_parallel if parallel else mod.run_batch
-    kern(acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0, rest_tol, record, theta, theta_dot, impacts, imp_off, out)
+    kern(*recs, rest_tol, record, theta, theta_dot, impacts, imp_off, out)
 
 
 def _no_terms(n_rec: int) -> np.ndarray:
@@ -305,53 +317,17 @@ def _simulate_batch(specimen, motions, inits, prm: RockingParams, ms, rest_tol: 
     np.cumsum(caps, out=imp_off[1:])
     impacts = np.empty(imp_off[-1])
     out = np.empty((n_rec, 6))
-    _run_kernel(
-        terms,
-        parallel and n_rec > 1,
-        acc_g,
-        v_g,
-        offsets,
-        dts,
-        ms_a,
-        prm_a,
-        q,
-        th0,
-        thd0,
-        rest_tol,
-        True,
-        theta,
-        theta_dot,
-        impacts,
-        imp_off,
-        out,
-    )
+    recs = _Records(acc_g, v_g, offsets, dts, ms_a, prm_a, q, th0, thd0)
+    _run_kernel(terms, parallel and n_rec > 1, recs, rest_tol, True, theta, theta_dot, impacts, imp_off, out)
     results = []
     prm_d = asdict(prm)  # once: a record's info holds its own shallow copy (the values are numbers)
     for i, mo in enumerate(motions):
         n_imp = int(out[i, 4])
         if n_imp > caps[i]:
             imp_i = np.empty(n_imp)
-            one = np.array([0, mo.n], dtype=np.int64)
-            ab = slice(offsets[i], offsets[i + 1])
+            imp_off_i = np.array([0, n_imp], dtype=np.int64)
             _run_kernel(
-                terms,
-                False,
-                acc_g[ab],
-                None if v_g is None else v_g[ab],
-                one,
-                dts[i : i + 1],
-                ms_a[i : i + 1],
-                prm_a[i : i + 1],
-                None if q is None else q[i : i + 1],
-                th0[i : i + 1],
-                thd0[i : i + 1],
-                rest_tol,
-                False,
-                theta[:0],
-                theta_dot[:0],
-                imp_i,
-                np.array([0, n_imp], dtype=np.int64),
-                np.empty((1, 6)),
+                terms, False, recs.one(i), rest_tol, False, theta[:0], theta_dot[:0], imp_i, imp_off_i, np.empty((1, 6))
             )
         else:
             imp_i = impacts[imp_off[i] : imp_off[i] + n_imp].copy()
@@ -437,25 +413,9 @@ def theta_max_many(
         raise ValueError("`terms` read the vertical channel, which bare accelerations do not carry; use simulate_many")
     q = None if terms is None else np.tile(terms.q_array(), (n_rec, 1))
     v_g = None if terms is None else np.zeros_like(acc_g)  # the terms read no vertical channel (checked above)
+    recs = _Records(acc_g, v_g, offsets, dts, ms, prm_a, q, th0, thd0)
     _run_kernel(
-        terms,
-        parallel and n_rec > 1,
-        acc_g,
-        v_g,
-        offsets,
-        dts,
-        ms,
-        prm_a,
-        q,
-        th0,
-        thd0,
-        tol,
-        False,
-        empty,
-        empty,
-        empty,
-        np.zeros(n_rec + 1, np.int64),
-        out,
+        terms, parallel and n_rec > 1, recs, tol, False, empty, empty, empty, np.zeros(n_rec + 1, np.int64), out
     )
     overturned = out[:, 1] != 0.0
     ratio = np.where(overturned, np.inf, out[:, 0] / specimen.alpha)

@@ -260,11 +260,13 @@ def _sl_leave_rest(g0, g1, tau, dt, s, sig, fric, jam, tan_p, tan_n, q):
 
 
 @njit(cache=True)
-def _sl_impact(s, sig, fric, jam, w, xd, g_now, wrest2_p, wrest2_n, tan_p, tan_n, q):
-    """Housner's impact law on theta' at ground acc g_now [g]; the slip velocity xd [m/s] is kept.
+def _sl_impact(s, sig, fric, jam, w, xd, g_now, piv, q):
+    """Housner's impact law on theta' at ground acc g_now [g]; the slip velocity xd [m/s] is kept; ``piv`` is
+    (tan_p, tan_n, wrest2_p, wrest2_n) (:func:`housner._kernel_parts.pivot_constants`).
 
     Returns (mode, s, sig, fric, jam, w, xd, n_jam) after the impact (the block lands on the other corner, phi = 0).
     """
+    tan_p, tan_n, wrest2_p, wrest2_n = piv
     alpha, _rr, _i0, p2 = _sl_side(q, s)
     w = restitution(-w, q[S_R], q[S_REXP], p2, alpha)
     s = -s
@@ -311,100 +313,54 @@ def _sl_regime(mode, s, sig, fric, jam, phi, w, xd, a_now, q):
 
 @njit(cache=True, inline="always")
 def _sl_start(theta0, theta_dot0, acc0, q):
-    """The regime of a block released at theta0 [rad], theta_dot0 [rad/s] under ground acc acc0 [g], its pivot
-    not slipping: (mode, s, sig, jam, phi, w, t_uplift, t_slide) (t_slide 0 when it slips at once, else NaN)."""
+    """The state of a block released at theta0 [rad], theta_dot0 [rad/s] under ground acc acc0 [g], its pivot
+    not slipping: (block, tally) as :func:`_sl_sample` takes them (t_slide 0 when it slips at once, else NaN)."""
     at_rest, s, phi, w, t_uplift = initial_state(theta0, theta_dot0)
     mode, sig, jam, t_slide = REST, 0.0, False, math.nan
     if not at_rest:
         mode, sig, jam = _sl_rock_or_slip(s, phi, w, s * acc0, q)
         if mode == SLIDE_ROCK:
             t_slide = 0.0
-    return mode, s, sig, jam, phi, w, t_uplift, t_slide
+    return (mode, s, sig, True, jam, phi, w, 0.0, 0.0), (abs(theta0), 0.0, math.nan, t_uplift, t_slide, 0.0, 0, 0, 0)
 
 
 @njit(cache=True, inline="always")
-def _sl_event(
-    mode,
-    s,
-    sig,
-    fric,
-    jam,
-    phi,
-    w,
-    xd,
-    tau,
-    t_k,
-    dt,
-    g0,
-    g1,
-    a_now,
-    wrest2_p,
-    wrest2_n,
-    tan_p,
-    tan_n,
-    q,
-    impacts,
-    n_imp,
-):
+def _sl_event(mode, s, sig, fric, jam, phi, w, xd, tau, t_k, dt, g0, g1, a_now, piv, q, impacts, n_imp):
     """The regime after a step of :func:`run_sliding` cut at local time tau [s] (not by an overturn).
 
     A sliding block's slip stops (rest, or slip again); a rocking one lands (an impact at phi < 0, its
     time t_k + tau stored in ``impacts``) or changes regime (:func:`_sl_regime`). ``a_now`` is the
-    reduced ground acceleration at tau [-].
+    reduced ground acceleration at tau [-], ``piv`` the pivot constants (tan_p, tan_n, wrest2_p, wrest2_n).
 
     Returns (mode, s, sig, fric, jam, phi, w, xd, n_imp, n_jam, slipped): the new state, the impacts
     counted so far, the jams this event counts and whether it starts a slip.
     """
     if mode == SLIDE:
+        tan_p, tan_n, _wrest2_p, _wrest2_n = piv
         mode, s, sig, fric = _sl_slip_stops(s, sig, fric, a_now, tan_p, tan_n, q)
         return mode, s, sig, fric, jam, phi, w, 0.0, n_imp, 0, False
     if phi < 0.0:  # impact
         if n_imp < impacts.size:
             impacts[n_imp] = t_k + tau
         g_now = g0 + (g1 - g0) * (tau / dt)
-        mode, s, sig, fric, jam, w, xd, dj = _sl_impact(
-            s, sig, fric, jam, w, xd, g_now, wrest2_p, wrest2_n, tan_p, tan_n, q
-        )
+        mode, s, sig, fric, jam, w, xd, dj = _sl_impact(s, sig, fric, jam, w, xd, g_now, piv, q)
         return mode, s, sig, fric, jam, 0.0, w, xd, n_imp + 1, dj, False
     mode, sig, fric, jam, xd, dj, slipped = _sl_regime(mode, s, sig, fric, jam, phi, w, xd, a_now, q)
     return mode, s, sig, fric, jam, phi, w, xd, n_imp, dj, slipped
 
 
 @njit(cache=True, inline="always")
-def _sl_sample(
-    t_k,
-    g0,
-    g1,
-    dt,
-    msub,
-    mode,
-    s,
-    sig,
-    fric,
-    jam,
-    phi,
-    w,
-    x,
-    xd,
-    theta_max,
-    x_max,
-    t_over,
-    t_uplift,
-    t_slide,
-    t_lift,
-    n_imp,
-    n_jam,
-    guard,
-    tan_p,
-    tan_n,
-    wrest2_p,
-    wrest2_n,
-    q,
-    impacts,
-):
+def _sl_sample(t_k, g0, g1, dt, msub, block, tally, piv, q, impacts):
     """:func:`run_sliding` through the sample interval from t_k [s] (ground acc g0 -> g1 [g]) in ``msub`` RK4
-    substeps, each cut at the regime's events; returns the state and the running results at its end, in the
-    order of the arguments from ``mode`` to ``guard``."""
+    substeps, each cut at the regime's events.
+
+    ``block`` is the block's state (mode, s, sig, fric, jam, phi, w, x, xd), ``tally`` the running results
+    (theta_max, x_max, t_over, t_uplift, t_slide, t_lift, n_imp, n_jam, guard), ``piv`` the pivot constants
+    (tan_p, tan_n, wrest2_p, wrest2_n); returns (block, tally) at the interval's end.
+    """
+    mode, s, sig, fric, jam, phi, w, x, xd = block
+    theta_max, x_max, t_over, t_uplift, t_slide, t_lift, n_imp, n_jam, guard = tally
+    tan_p, tan_n, _wrest2_p, _wrest2_n = piv
     tau, j, n_ev = 0.0, 0, 0
     while mode != OVERTURNED:
         if mode == REST:
@@ -447,50 +403,12 @@ def _sl_sample(
             mode, t_over, theta_max = OVERTURNED, t_k + tau, HALF_PI
             continue
         mode, s, sig, fric, jam, phi, w, xd, n_imp, dj, slipped = _sl_event(
-            mode,
-            s,
-            sig,
-            fric,
-            jam,
-            phi,
-            w,
-            xd,
-            tau,
-            t_k,
-            dt,
-            g0,
-            g1,
-            a0 + slope * tau,
-            wrest2_p,
-            wrest2_n,
-            tan_p,
-            tan_n,
-            q,
-            impacts,
-            n_imp,
+            mode, s, sig, fric, jam, phi, w, xd, tau, t_k, dt, g0, g1, a0 + slope * tau, piv, q, impacts, n_imp
         )
         n_jam += dj
         t_slide = t_k + tau if slipped and math.isnan(t_slide) else t_slide
-    return (
-        mode,
-        s,
-        sig,
-        fric,
-        jam,
-        phi,
-        w,
-        x,
-        xd,
-        theta_max,
-        x_max,
-        t_over,
-        t_uplift,
-        t_slide,
-        t_lift,
-        n_imp,
-        n_jam,
-        guard,
-    )
+    block = (mode, s, sig, fric, jam, phi, w, x, xd)
+    return block, (theta_max, x_max, t_over, t_uplift, t_slide, t_lift, n_imp, n_jam, guard)
 
 
 @njit(cache=True, nogil=True)
@@ -523,72 +441,22 @@ def run_sliding(acc_g, dt, msub, q, theta0, theta_dot0, rest_tol, record, th_out
     the number of Painleve jams, and t_lift the time spent with a negative
     normal-force demand [s].
     """
-    tan_p, tan_n, wrest2_p, wrest2_n = pivot_constants(q[S_ALPHA_P], q[S_ALPHA_N], q[S_P2_P], q[S_P2_N], rest_tol)
-    mode, s, sig, jam, phi, w, t_uplift, t_slide = _sl_start(theta0, theta_dot0, acc_g[0], q)
-    fric, x, xd = True, 0.0, 0.0
-    theta_max, x_max, t_over, t_lift = abs(theta0), 0.0, math.nan, 0.0
-    n_imp, n_jam, guard = 0, 0, 0
+    piv = pivot_constants(q[S_ALPHA_P], q[S_ALPHA_N], q[S_P2_P], q[S_P2_N], rest_tol)
+    block, tally = _sl_start(theta0, theta_dot0, acc_g[0], q)
     if record:
         th_out[0] = theta0
         thd_out[0] = theta_dot0
         x_out[0] = 0.0
-        reg_out[0] = mode
+        reg_out[0] = block[0]
 
     for k in range(acc_g.size - 1):
-        if mode == OVERTURNED and not record:
+        if block[0] == OVERTURNED and not record:  # block[0]: the regime
             break
-        (
-            mode,
-            s,
-            sig,
-            fric,
-            jam,
-            phi,
-            w,
-            x,
-            xd,
-            theta_max,
-            x_max,
-            t_over,
-            t_uplift,
-            t_slide,
-            t_lift,
-            n_imp,
-            n_jam,
-            guard,
-        ) = _sl_sample(
-            k * dt,
-            acc_g[k],
-            acc_g[k + 1],
-            dt,
-            msub,
-            mode,
-            s,
-            sig,
-            fric,
-            jam,
-            phi,
-            w,
-            x,
-            xd,
-            theta_max,
-            x_max,
-            t_over,
-            t_uplift,
-            t_slide,
-            t_lift,
-            n_imp,
-            n_jam,
-            guard,
-            tan_p,
-            tan_n,
-            wrest2_p,
-            wrest2_n,
-            q,
-            impacts,
-        )
+        block, tally = _sl_sample(k * dt, acc_g[k], acc_g[k + 1], dt, msub, block, tally, piv, q, impacts)
         if record:
+            mode, s, _sig, _fric, _jam, phi, w, x, _xd = block
             x_out[k + 1] = x
             reg_out[k + 1] = mode
             store(th_out, thd_out, k + 1, s, phi, w, mode == ROCK or mode == SLIDE_ROCK, mode == OVERTURNED)
-    return theta_max, mode == OVERTURNED, t_over, t_uplift, n_imp, guard, x_max, t_slide, n_jam, t_lift
+    theta_max, x_max, t_over, t_uplift, t_slide, t_lift, n_imp, n_jam, guard = tally
+    return theta_max, block[0] == OVERTURNED, t_over, t_uplift, n_imp, guard, x_max, t_slide, n_jam, t_lift
