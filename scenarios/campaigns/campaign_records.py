@@ -41,7 +41,15 @@ from housner.readers.measured_data import (
 from housner.scenarios.campaigns.sensor_noise import WHITE, SensorNoise
 from housner.specimen import Specimen
 
-__all__ = ["KINDS", "OVERTURN_ANGLE", "MeasuredRecord", "OutcomeRecord", "estimate_release", "read_record"]
+__all__ = [
+    "KINDS",
+    "OVERTURN_ANGLE",
+    "CampaignRecord",
+    "MeasuredRecord",
+    "OutcomeRecord",
+    "estimate_release",
+    "read_record",
+]
 
 #: Record kinds of the format.
 KINDS = ("free_vibration", "ground_motion")
@@ -58,21 +66,45 @@ _RELEASE_MIN_SIGMAS = 10.0
 
 
 @dataclass(frozen=True, eq=False)
-class MeasuredRecord:
-    """One measured test.
+class CampaignRecord:
+    """What every record of a campaign holds (:class:`MeasuredRecord`, :class:`OutcomeRecord`): the test, its file,
+    its table motion and the ground motion it played.
 
     Attributes
     ----------
     id : str
         Record id from campaign.toml.
     kind : str
-        ``"free_vibration"`` or ``"ground_motion"``.
+        One of :data:`KINDS` (an outcome record's is ``"ground_motion"``).
     file : pathlib.Path
         The CSV file.
     motion : GroundMotion
-        The measured ground acceleration [m/s^2] on the record's sample grid.
-        A free-vibration record starts at the release: ``theta0`` is the
-        measured initial angle [rad] and ``theta_dot0`` = 0.
+        The measured table acceleration [m/s^2] on the record's sample grid.
+    group : str or None
+        The ground motion the test played, from the record's ``group`` key: records that share a group were
+        shaken by the same motion (one record at several scalings, say), so a held-out fold keeps them
+        together. None: the record is a group of its own. A keyword-only field.
+    """
+
+    id: str
+    kind: str
+    file: Path
+    motion: GroundMotion
+    group: str | None = field(default=None, kw_only=True)
+
+    @property
+    def dt(self) -> float:
+        """Sample step [s]."""
+        return self.motion.dt
+
+
+@dataclass(frozen=True, eq=False)
+class MeasuredRecord(CampaignRecord):
+    """One measured test: a :class:`CampaignRecord` with its theta history. A free-vibration record starts at the
+    release: its motion's ``theta0`` is the measured initial angle [rad] and its ``theta_dot0`` 0.
+
+    Attributes
+    ----------
     t : ndarray
         Sample times [s], starting at 0 (at the release for a free-vibration
         record whose file starts with a hold; see ``t_offset``).
@@ -102,16 +134,8 @@ class MeasuredRecord:
     position : int
         The record's place among the campaign's ``[[record]]`` tables, the recording order, counting the
         records that could not be read (-1: not from a campaign file).
-    group : str or None
-        The ground motion the test played, from the record's ``group`` key: records that share a group were
-        shaken by the same motion (one record at several scalings, say), so a held-out fold keeps them
-        together. None: the record is a group of its own.
     """
 
-    id: str
-    kind: str
-    file: Path
-    motion: GroundMotion
     t: np.ndarray
     theta: np.ndarray
     noise: float
@@ -122,12 +146,6 @@ class MeasuredRecord:
     valid: np.ndarray | None = None
     clip: tuple[float, float] = (-math.inf, math.inf)
     position: int = -1
-    group: str | None = None
-
-    @property
-    def dt(self) -> float:
-        """Sample step [s]."""
-        return self.motion.dt
 
     @property
     def theta_max(self) -> float:
@@ -150,17 +168,12 @@ class MeasuredRecord:
 
 
 @dataclass(frozen=True, eq=False)
-class OutcomeRecord:
-    """One test of which only the table motion and the outcome were measured (no theta channel).
+class OutcomeRecord(CampaignRecord):
+    """One test of which only the table motion and the outcome were measured (no theta channel): a
+    :class:`CampaignRecord` with its outcome.
 
     Attributes
     ----------
-    id : str
-    kind : str
-        ``"ground_motion"``.
-    file : pathlib.Path
-    motion : GroundMotion
-        The measured table acceleration [m/s^2].
     overturned : bool
         The observed outcome.
     theta_max : float or None
@@ -169,26 +182,12 @@ class OutcomeRecord:
         Measured residual displacement of the block [m], where measured.
     pgv_measured : float or None
         The measured peak table velocity [m/s] (from a displacement channel), where given.
-    group : str or None
-        The ground motion the test played, from the record's ``group`` key: records that share a group were
-        shaken by the same motion (one record at several scalings, say), so a held-out fold keeps them
-        together. None: the record is a group of its own.
     """
 
-    id: str
-    kind: str
-    file: Path
-    motion: GroundMotion
     overturned: bool
     theta_max: float | None = None
     residual_displacement: float | None = None
     pgv_measured: float | None = None
-    group: str | None = None
-
-    @property
-    def dt(self) -> float:
-        """Sample step [s]."""
-        return self.motion.dt
 
     @property
     def pga(self) -> float:

@@ -568,21 +568,7 @@ def analyse(results: pd.DataFrame, study: Study, engines: list[str], reference: 
                     seed=study.seed,
                     ci=compare_ci(study.ci),
                 )
-                comps.append(
-                    StudyComparison(
-                        engine=e,
-                        reference=reference,
-                        size=size,
-                        S=S,
-                        median_ratio=c.median_ratio,
-                        ratio_low=c.ratio_low,
-                        ratio_high=c.ratio_high,
-                        beta_diff=c.beta_diff,
-                        diff_low=c.diff_low,
-                        diff_high=c.diff_high,
-                        disagree=bool(c.disagree),
-                    )
-                )
+                comps.append(StudyComparison.of(c, e, reference, size, S))
     ex_cols = ["engine", "size", "S", "stripe", "intensity", "threshold", "n", "k", "p", "p_low", "p_high"]
     return {
         "fragility": pd.concat(frag, ignore_index=True),

@@ -8,9 +8,13 @@ writes :class:`StudyFits` (NaN as null) and :func:`~housner.scenarios.studies.st
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
 from housner._values import JsonValue
+
+if TYPE_CHECKING:
+    from housner.scenarios.studies.fragility import FitComparison
 
 __all__ = ["StudyComparison", "StudyFit", "StudyFits"]
 
@@ -91,6 +95,13 @@ class StudyComparison(JsonValue):
     diff_low: float = math.nan
     diff_high: float = math.nan
     disagree: bool | None = None
+
+    @classmethod
+    def of(cls, comparison: FitComparison, engine: str, reference: str, size: float, S: float) -> StudyComparison:
+        """The row of ``comparison`` (:func:`~housner.scenarios.studies.fragility.compare_fits`) of ``engine``
+        against ``reference`` at one size: its figures and verdict under the same names."""
+        figures = comparison._asdict()
+        return cls(engine, reference, size, S, **{f.name: figures[f.name] for f in fields(cls) if f.name in figures})
 
 
 @dataclass(frozen=True, eq=False)

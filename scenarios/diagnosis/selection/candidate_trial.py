@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from scipy import stats as sps
@@ -217,12 +217,7 @@ def judged_candidate(
         train_error=train_error,
         heldout_error=error,
         heldout_se=se,
-        improvement=judged.improvement,
-        improvement_se=judged.improvement_se,
-        z=judged.z,
-        pvalue=judged.pvalue,
-        significant=judged.significant,
-        reason=judged.reason,
+        **asdict(judged),  # improvement, its se, z, pvalue, significant and reason, under the same names
         heldout_errors=heldout,
         fold_wins=wins,
     )

@@ -116,16 +116,8 @@ class Residual:
     records_needed: int
 
     def to_dict(self) -> dict:
-        return {
-            "error": self.error,
-            "floor": self.floor,
-            "ratio": self.ratio,
-            "z": self.z,
-            "misfit": self.misfit,
-            "groups": {k: asdict(g) for k, g in self.groups.items()},
-            "detectable_ratio": self.detectable_ratio,
-            "records_needed": self.records_needed,
-        }
+        """The fields as plain data, each group's residual as its fields."""
+        return asdict(self)
 
     @classmethod
     def from_dict(cls, data: dict) -> Residual:
