@@ -264,7 +264,7 @@ def test_a_small_fall_that_many_records_prove_is_significant_a_negligible_one_is
     cur = floor + rng.normal(0, 1e-4, 200)
     # every record better by 0.05 sigma: overwhelming statistics, but below the practical margin
     j = judge(cur, cur - 0.5 * PRACTICAL * floor, 0.005, floor)
-    assert j.pvalue < 1e-10 and not j.significant and "tenth of the sensor noise" in j.reason
+    assert j.pvalue < 1e-10 and not j.significant and j.reason.kind == "below_practical"
     # a 12 ms sensor lag's fall (0.0046 alpha, less than one sigma per record) over 100 records that
     # scatter by 0.01 alpha: z ~ 4.6, significant (the old one-sigma gate dropped it)
     cur100 = floor + np.abs(rng.normal(0, 0.01, 100))

@@ -23,10 +23,12 @@ import housner.scenarios.diagnosis.verdict.decision as verdict_mod
 import housner.scenarios.diagnosis.verdict.residual_test as residual_mod
 from housner.reports.diagnosis import history_records, render_diagnosis
 from housner.reports.diagnosis.figures import histories_figure
+from housner.reports.diagnosis.reason_text import reason_text, reason_words
 from housner.reports.diagnosis.verdict_text import diagnosis_summary, verdict_paragraph
-from housner.reports.diagnosis.words import change_text, fmt_pm, params_text, signed_words
+from housner.reports.diagnosis.words import change_text, fmt_pm, params_text
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
+from housner.scenarios.diagnosis.selection.reasons import Reason
 
 #: The documentation page that explains the verdict (it was the README's "Measurements" section).
 DIAGNOSIS_DOC = Path(__file__).resolve().parents[1] / "docs" / "explanation" / "diagnosis.md"
@@ -76,11 +78,16 @@ def test_fmt_pm_gives_the_error_two_significant_digits_and_the_value_its_decimal
 def test_changes_are_said_with_a_positive_figure():
     assert change_text(-0.05, 0.011) == "rises by 0.050 +- 0.011"
     assert change_text(0.0863, 0.0331) == "falls by 0.086 +- 0.033"
-    assert signed_words("training error falls by -0.0012 < 0.005") == "training error rises by 0.0012 < 0.005"
-    assert signed_words("falls by +0.0012 <") == "falls by 0.0012 <"
-    assert signed_words("the best point lowers the error on all records by -0.002 <") == (
-        "the best point raises the error on all records by 0.002 <"
+    # a reason keeps its signed figure in the JSON, and is said in words on the page
+    small = Reason("training_fall_small", {"fall": -0.0012, "margin": 0.005})
+    assert reason_text(small).startswith("training error falls by -0.0012 < 0.0050 alpha")
+    assert reason_words(small).startswith("training error rises by 0.0012 < 0.0050 alpha")
+    assert reason_words(replace(small, figures={"fall": 0.0012, "margin": 0.005})).startswith(
+        "training error falls by 0.0012 <"
     )
+    subset = Reason("subset_fall_small", {"records": 0, "fall": -0.002, "margin": 0.005})
+    assert reason_text(subset).startswith("the subset's best point lowers the error on all records by -0.0020 <")
+    assert reason_words(subset).startswith("the subset's best point raises the error on all records by 0.0020 <")
     assert params_text("rotational_damping", {"c": 0.59991}) == "c = 0.5999 1/s"
     assert params_text("restitution", {"r": 0.88}) == "r = 0.8800 [-]"
 
@@ -180,10 +187,7 @@ def _risen(diag):
         ),
     ]
     d.rounds = [
-        [
-            replace(c, reason="training error falls by -0.0012 < 0.0054 alpha (noise floor): not held out")
-            for c in diag.rounds[0]
-        ]
+        [replace(c, reason=Reason("training_fall_small", {"fall": -0.0012, "margin": 0.0054})) for c in diag.rounds[0]]
     ]
     return d
 

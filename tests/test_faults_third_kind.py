@@ -24,8 +24,10 @@ import pytest
 from housner import Specimen
 from housner.cli import main
 from housner.effects import EFFECTS, load_plugin, make_effect
+from housner.reports.diagnosis.reason_text import reason_text
 from housner.scenarios.campaigns.campaign import load_campaign
 from housner.scenarios.diagnosis.diagnose import diagnose
+from housner.scenarios.diagnosis.selection.reasons import Reason
 from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteHistory, NonFiniteScore, Scorer, check_finite
 from housner.scenarios.execution.run_meta import RunMeta
 from housner.scenarios.execution.rundir import (
@@ -114,7 +116,8 @@ def test_nan_candidate_is_rejected_in_its_round(nan_plugin):
     diag = diagnose(CAMPAIGN, effects=["nan_always"], compare_steps=False, n_replicas=2, progress=lines.append)
     (cand,) = diag.rounds[0]
     assert cand.effect == "nan_always" and not cand.significant and math.isnan(cand.heldout_error)
-    assert cand.reason.startswith("rejected: its theta history is not finite on record 'fv01'")
+    assert cand.reason == Reason("rejected_not_finite", {"record": "fv01"})
+    assert reason_text(cand.reason).startswith("rejected: its theta history is not finite on record 'fv01'")
     assert any("nan_always" in ln and "rejected" in ln for ln in lines)  # a line of the progress
     assert diag.selected == [] and diag.status != "explained"
     assert all(np.all(np.isfinite(f.mean)) for f in diag.floors)

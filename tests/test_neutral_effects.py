@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from housner.reports.diagnosis.reason_text import reason_text
 from housner.scenarios.diagnosis.results import Candidate
 from housner.scenarios.diagnosis.selection.candidate_trial import _beyond_neutral, at_neutral, neutral_distance
 from housner.scenarios.diagnosis.selection.crossval import CVModel
@@ -30,7 +31,7 @@ def _candidate(effects: tuple, params: dict, significant: bool = True) -> Candid
         z=3.5,
         pvalue=2e-4,
         significant=significant,
-        reason="",
+        reason=None,
         heldout_errors=np.full(8, 0.0107),
         fold_wins=np.full(5, 0.007),
     )
@@ -58,7 +59,11 @@ def test_a_near_neutral_exponent_adds_nothing_and_claims_nothing():
     setup = SimpleNamespace(cv=SimpleNamespace(specimen=SPEC))
     cand = _beyond_neutral(setup, _candidate(("amplitude_dependent_restitution",), {"exponent": 0.002}), model, 0)
     assert not cand.significant
-    assert "neutral" in cand.reason and "exponent" in cand.reason
+    assert (
+        cand.reason.kind == "at_neutral"
+        and cand.reason.figures["params"][0][0] == "amplitude_dependent_restitution.exponent"
+    )
+    assert "exponent = 0.002 +- 0.011 (neutral 0)" in reason_text(cand.reason)
 
 
 def test_an_effect_told_from_its_neutral_value_stays():

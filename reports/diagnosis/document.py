@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from housner._values import to_data
+from housner.reports.diagnosis.reason_text import reason_text
 from housner.reports.diagnosis.sensor_text import sensor_document
 from housner.reports.diagnosis.verdict_text import (
     diagnosis_summary,
@@ -19,7 +20,7 @@ from housner.reports.diagnosis.verdict_text import (
 )
 
 if TYPE_CHECKING:
-    from housner.scenarios.diagnosis.results import Diagnosis
+    from housner.scenarios.diagnosis.results import Candidate, Diagnosis
 
 __all__ = ["diagnosis_document", "write_diagnosis_json"]
 
@@ -47,8 +48,23 @@ def diagnosis_document(diag: Diagnosis) -> dict:
         "economies": [economy_text(e) for e in diag.settings.economies],
         "economy_facts": facts,
     }
+    data["candidates"] = [_with_reason(c, d) for c, d in zip(diag.candidates, data["candidates"], strict=True)]
+    data["rounds"] = [
+        [_with_reason(c, d) for c, d in zip(r, rd, strict=True)]
+        for r, rd in zip(diag.rounds, data["rounds"], strict=True)
+    ]
     elapsed = data.pop("elapsed_s")
     return {**data, "summary": diagnosis_summary(diag), "elapsed_s": elapsed}
+
+
+def _with_reason(c: Candidate, data: dict) -> dict:
+    """A candidate's data with its reason in words (``reason``) before its figures (``reason_facts``)."""
+    out = {}
+    for k, v in data.items():
+        if k == "reason_facts":
+            out["reason"] = reason_text(c.reason)
+        out[k] = v
+    return out
 
 
 def write_diagnosis_json(diag: Diagnosis, path: str | Path, extra: dict | None = None) -> None:

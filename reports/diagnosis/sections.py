@@ -24,6 +24,7 @@ from housner.reports.diagnosis.figures import (
     step_label,
     tilt_figure,
 )
+from housner.reports.diagnosis.reason_text import reason_words
 from housner.reports.diagnosis.sensor_text import fault_text, noise_text, sensor_notes
 from housner.reports.diagnosis.verdict_text import (
     distribution_text,
@@ -31,7 +32,7 @@ from housner.reports.diagnosis.verdict_text import (
     verdict_paragraph,
     verdict_text,
 )
-from housner.reports.diagnosis.words import change_text, fmt_pm, params_text, signed_words
+from housner.reports.diagnosis.words import change_text, fmt_pm, params_text
 from housner.reports.page import esc, html_figure, html_table
 from housner.scenarios.diagnosis.comparison.localise import METRICS
 from housner.scenarios.diagnosis.verdict import decision as verdict
@@ -329,7 +330,7 @@ def candidates_section(diag) -> str:
                 _change(c.improvement, c.improvement_se),
                 _f(c.pvalue, 2),
                 ('<span class="ok">yes</span>' if c.significant else "no")
-                + f" <span class=muted>({esc(signed_words(c.reason))})</span>",
+                + f" <span class=muted>({esc(reason_words(c.reason))})</span>",
             ]
             for c in rnd
         ]

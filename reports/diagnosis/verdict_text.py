@@ -7,6 +7,7 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from housner.reports.diagnosis.reason_text import reason_words
 from housner.reports.diagnosis.sensor_text import noise_text, sensor_verdict_sentence
 from housner.reports.diagnosis.words import (
     Z_LEGEND,
@@ -16,7 +17,6 @@ from housner.reports.diagnosis.words import (
     family_text,
     fmt_pm,
     params_text,
-    signed_words,
     step_params,
     z_text,
 )
@@ -419,7 +419,7 @@ def diagnosis_summary(diag: Diagnosis) -> str:
             verb = "lower" if best.improvement >= 0 else "raise"
             parts.append(
                 f"The best candidate, {best.effect}, would {verb} the held-out error by "
-                f"{fmt_pm(abs(best.improvement), best.improvement_se)} alpha ({signed_words(best.reason)})."
+                f"{fmt_pm(abs(best.improvement), best.improvement_se)} alpha ({reason_words(best.reason)})."
             )
     sensor = getattr(diag.campaign, "sensor", None)
     if sensor is not None and sensor.noise.white and not sensor.faults:

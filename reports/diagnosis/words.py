@@ -5,7 +5,6 @@ evidence and the floors' families, said so that a reader needs nothing else
 from __future__ import annotations
 
 import math
-import re
 from typing import TYPE_CHECKING
 
 from housner.effects import effect_class
@@ -25,7 +24,6 @@ __all__ = [
     "g4",
     "param_unit",
     "params_text",
-    "signed_words",
     "step_params",
     "z_text",
 ]
@@ -155,20 +153,6 @@ def change_text(improvement: float, se: float, *, sep: str = " +- ") -> str:
     if not math.isfinite(d):
         return "does not change measurably"
     return f"{'falls' if d >= 0 else 'rises'} by {fmt_pm(abs(d), se, sep=sep)}"
-
-
-_NUM = r"(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)"
-_FALLS = re.compile(r"\bfalls by ([-+])" + _NUM)
-_LOWERS = re.compile(r"\blowers (the [\w ]+?) by ([-+])" + _NUM)
-
-
-def signed_words(text: str) -> str:
-    """Rewrite signed changes in words: "falls by -0.05" -> "rises by 0.05", "falls by +0.05" -> "falls by 0.05".
-
-    For the reasons the search gives (:mod:`housner.scenarios.diagnosis.diagnose`), written with a sign.
-    """
-    text = _FALLS.sub(lambda m: f"{'rises' if m.group(1) == '-' else 'falls'} by {m.group(2)}", text)
-    return _LOWERS.sub(lambda m: f"{'raises' if m.group(2) == '-' else 'lowers'} {m.group(1)} by {m.group(3)}", text)
 
 
 def param_unit(name: str, key: str) -> str:

@@ -18,6 +18,7 @@ from housner._values import JsonValue, WrittenAsResult, floats, read_as, read_fi
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
 from housner.scenarios.diagnosis.economies import Economy, economy_data, economy_from_data
+from housner.scenarios.diagnosis.selection.reasons import Reason
 
 __all__ = [
     "Candidate",
@@ -66,8 +67,9 @@ class Candidate:
     significant : bool
         Step 4 of ``docs/explanation/diagnosis.md``, "The search, step by step" (p-value below the Bonferroni
         level and improvement above the noise floor).
-    reason : str
-        Why it is (not) significant, in words.
+    reason : Reason or None
+        The rule that decided whether it is significant, with its figures (in words:
+        :mod:`housner.reports.diagnosis.reason_text`).
     heldout_errors : ndarray
         Per record, out of fold [alpha] (None when not held out).
     fold_wins : ndarray
@@ -86,7 +88,7 @@ class Candidate:
     z: float
     pvalue: float
     significant: bool
-    reason: str
+    reason: Reason | None
     heldout_errors: np.ndarray = field(repr=False, compare=False, default=None)
     fold_wins: np.ndarray = field(repr=False, compare=False, default=None)
 
@@ -109,7 +111,7 @@ class Candidate:
             "z": self.z,
             "pvalue": self.pvalue,
             "significant": self.significant,
-            "reason": self.reason,
+            "reason_facts": None if self.reason is None else self.reason.to_dict(),
             "fold_improvements": None if self.fold_wins is None else [float(x) for x in self.fold_wins],
         }
 
@@ -124,7 +126,7 @@ class Candidate:
             round=int(data["round"]),
             **floats(data, *_ERRORS, "z", "pvalue"),
             significant=bool(data["significant"]),
-            reason=data["reason"],
+            reason=None if data.get("reason_facts") is None else Reason.from_dict(data["reason_facts"]),
             fold_wins=None if folds is None else np.array([read_as(float, x) for x in folds]),
         )
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import stats as sps
@@ -46,6 +46,7 @@ from housner.scenarios.diagnosis.selection.fitting import (
 )
 from housner.scenarios.diagnosis.selection.free_vibration_check import FreeVibrationCheck
 from housner.scenarios.diagnosis.selection.paired_test import PRACTICAL, Judgement, judge, sem
+from housner.scenarios.diagnosis.selection.reasons import Reason
 from housner.scenarios.diagnosis.selection.record_scoring import NonFiniteHistory, Scorer
 
 __all__ = [
@@ -61,7 +62,7 @@ __all__ = [
     "judged_candidate",
     "neutral_distance",
     "rank_key",
-    "rejected_text",
+    "not_finite",
     "try_candidate",
     "try_pairs",
 ]
@@ -179,16 +180,16 @@ def fmt_params(p: dict) -> str:
 def held_text(c: Candidate, held_out: bool = True) -> str:
     """A candidate's held-out result in a line of progress (its reason when it was not held out)."""
     if not held_out:
-        return c.reason
+        return c.reason.line() if c.reason is not None else ""
     return (
         f"held-out {c.heldout_error:.4f} improvement {c.improvement:+.4f} +- {c.improvement_se:.4f} "
         f"{'*' if c.significant else ' '}"
     )
 
 
-def rejected_text(e: NonFiniteHistory) -> str:
+def not_finite(e: NonFiniteHistory) -> Reason:
     """A rejected candidate's reason: its history is not finite on a record."""
-    return f"rejected: its theta history is not finite on record {e.record!r} (no score is made of NaN)"
+    return Reason("rejected_not_finite", {"record": e.record})
 
 
 def judged_candidate(
@@ -200,7 +201,7 @@ def judged_candidate(
     train_error: float,
     test_level: float,
     heldout: np.ndarray | None = None,
-    reason: str = "",
+    reason: Reason | None = None,
 ) -> Candidate:
     """The candidate ``effects`` of round ``round_no``, judged on its out-of-fold errors ``heldout`` against
     the current model's (None: not held out, for ``reason``)."""
@@ -217,7 +218,7 @@ def judged_candidate(
         train_error=train_error,
         heldout_error=error,
         heldout_se=se,
-        **asdict(judged),  # improvement, its se, z, pvalue, significant and reason, under the same names
+        **vars(judged),  # improvement, its se, z, pvalue, significant and reason, under the same names
         heldout_errors=heldout,
         fold_wins=wins,
     )
@@ -267,9 +268,7 @@ def try_candidate(setup: TrialSetup, current: CurrentModel, name: str, round_no:
     try:
         return _fit_candidate(setup, current, name, round_no, test_level)
     except NonFiniteHistory as e:
-        rejected = judged_candidate(
-            setup, current, (name,), {}, round_no, math.nan, test_level, reason=rejected_text(e)
-        )
+        rejected = judged_candidate(setup, current, (name,), {}, round_no, math.nan, test_level, reason=not_finite(e))
         return Trial(rejected, None, (name,))
 
 
@@ -335,10 +334,7 @@ def _mechanics_start(
     start, err_grid, _n = fit_effect(name, effect_objective(grid, fixed, []), cv.specimen, pinned=cv.pinned)
     gain_grid = grid.loss(fixed) - err_grid
     if not gain_grid > margin:
-        why = (
-            f"error on {len(grid.records)} records falls by {gain_grid:+.4f} < "
-            f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"
-        )
+        why = Reason("grid_fall_small", {"records": len(grid.records), "fall": gain_grid, "margin": margin})
         cand = judged_candidate(setup, current, (name,), start, round_no, err_grid, test_level, reason=why)
         return start, Trial(cand, None, (name,), subset_only=True)
     # the basin found on the subset must carry over to every record before the (costly) local fit
@@ -346,11 +342,8 @@ def _mechanics_start(
     err_fit = fit_scorer.loss([*fixed, make_effect(name, **start)])
     before = current.train_loss if on_all else fit_scorer.loss(fixed)
     if not before - err_fit > margin:
-        on = "all records" if on_all else f"the {len(fit_scorer.records)} records it is fitted on"
-        why = (
-            f"the subset's best point lowers the error on {on} by {before - err_fit:+.4f} < "
-            f"{margin:.4f} alpha (a tenth of the sensor noise): not fitted further"
-        )
+        on = 0 if on_all else len(fit_scorer.records)
+        why = Reason("subset_fall_small", {"records": on, "fall": before - err_fit, "margin": margin})
         cand = judged_candidate(setup, current, (name,), start, round_no, err_fit, test_level, reason=why)
         return start, Trial(cand, None, (name,), subset_only=not on_all)
     return start, None
@@ -404,15 +397,8 @@ def _beyond_neutral(setup: TrialSetup, cand: Candidate, model: CVModel, start: i
     idle = at_neutral(dist, names)
     if not idle:
         return cand
-    said = "; ".join(
-        f"{key} = {x:.4g} +- {se:.2g} (neutral {n:.4g})"
-        for key, (x, n, se) in dist.items()
-        if key.split(".", 1)[0] in idle
-    )
-    why = (
-        f"at its neutral value within its uncertainty ({said}; the folds' jackknife): the plain model, so "
-        f"its fall of {cand.improvement:+.4f} alpha is the fit moving within its noise, not evidence of the effect"
-    )
+    rows = [(key, x, n, se) for key, (x, n, se) in dist.items() if key.split(".", 1)[0] in idle]
+    why = Reason("at_neutral", {"params": rows, "fall": cand.improvement})
     return replace(cand, significant=False, reason=why)
 
 
@@ -448,8 +434,10 @@ def _faded_params(name: str, specimen) -> dict:
     return faded
 
 
-def _kernel_control(setup: TrialSetup, fixed: list, members: list, heldout: np.ndarray, test_level: float) -> str:
-    """'' when ``members`` (name, params) beat their own kernel with their physics faded out, else why not.
+def _kernel_control(
+    setup: TrialSetup, fixed: list, members: list, heldout: np.ndarray, test_level: float
+) -> Reason | None:
+    """None when ``members`` (name, params) beat their own kernel with their physics faded out, else why not.
 
     A mechanics effect fades at the end of its fit bounds nearest its neutral value (its own kernel
     stays in use); an effect that brings kernel terms (a probe, a user's term) fades to a millionth
@@ -464,21 +452,18 @@ def _kernel_control(setup: TrialSetup, fixed: list, members: list, heldout: np.n
         control = [*fixed, *[make_effect(m, **(faded if i == k else p)) for i, (m, p) in enumerate(members)]]
         judged = judge(setup.scorers.every_record.errors(control), heldout, test_level, setup.cv.noise_floor)
         if not judged.significant:
-            return (
-                f"its kernel's numerics, not its physics: the same kernel with {name} faded out "
-                f"({fmt_params(faded)}) does as well (p = {judged.pvalue:.2g})"
-            )
-    return ""
+            return Reason("kernel_numerics", {"effect": name, "faded": faded, "p": judged.pvalue})
+    return None
 
 
 def _not_held_out(
     setup: TrialSetup, current: CurrentModel, name: str, params: dict, fixed: list, train_error: float
-) -> str:
-    """Why a candidate fitted on all records is not held out ('' when it is)."""
+) -> Reason | None:
+    """Why a candidate fitted on all records is not held out (None when it is)."""
     margin = PRACTICAL * setup.cv.noise_floor
     gain = current.train_loss - train_error
     if not gain > margin:
-        return f"training error falls by {gain:+.4f} < {margin:.4f} alpha (a tenth of the sensor noise): not held out"
+        return Reason("training_fall_small", {"fall": gain, "margin": margin})
     bad = setup.free_vibrations.reason([*fixed, make_effect(name, **params)])
     if bad:
         return bad
@@ -491,18 +476,12 @@ def _not_held_out(
     falls = current.heldout_errors - setup.scorers.every_record.errors([*fixed, make_effect(name, **params)])
     mean_fall = float(np.mean(falls))
     if not mean_fall > margin:
-        return (
-            f"even on the records it was fitted to, the mean error per record falls by {mean_fall:+.4f} < "
-            f"{margin:.4f} alpha (a tenth of the sensor noise): not held out"
-        )
+        return Reason("fitted_fall_small", {"fall": mean_fall, "margin": margin})
     nonzero = falls[falls != 0.0]
     p_fitted = float(sps.wilcoxon(nonzero, alternative="greater").pvalue) if nonzero.size >= 2 else 1.0
     if p_fitted > SCREEN_LEVEL:
-        return (
-            f"even on the records it was fitted to, its fall is within its uncertainty (p = {p_fitted:.2g} > "
-            f"{SCREEN_LEVEL}): not held out"
-        )
-    return ""
+        return Reason("fitted_within_uncertainty", {"p": p_fitted, "level": SCREEN_LEVEL})
+    return None
 
 
 def try_pairs(setup: TrialSetup, current: CurrentModel, trials: Sequence[Trial], test_level: float) -> list[Trial]:
@@ -527,8 +506,8 @@ def try_pairs(setup: TrialSetup, current: CurrentModel, trials: Sequence[Trial],
         try:
             out.append(_pair(setup, current, a, b, test_level))
         except NonFiniteHistory as e:
-            pair, why = (a.effect, b.effect), rejected_text(e)
-            setup.progress(f"round {a.round}: {names_label(pair):32s} {why} (pair)")
+            pair, why = (a.effect, b.effect), not_finite(e)
+            setup.progress(f"round {a.round}: {names_label(pair):32s} {why.line()} (pair)")
             rejected = judged_candidate(setup, current, pair, {}, a.round, math.nan, test_level, reason=why)
             out.append(Trial(rejected, None, pair))
     return out

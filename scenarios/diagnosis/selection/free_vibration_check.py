@@ -15,6 +15,7 @@ import math
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.diagnosis.comparison.localise import features
 from housner.scenarios.diagnosis.comparison.record_comparison import observe, on_grid, simulate_records
+from housner.scenarios.diagnosis.selection.reasons import Reason
 
 __all__ = ["FV_CHECK", "FV_Z", "FreeVibrationCheck", "fv_metrics"]
 
@@ -77,13 +78,10 @@ class FreeVibrationCheck:
         """Each quantity of :data:`FV_CHECK`: the model's distance from the measured value [standard errors]."""
         return _fv_z(fv_metrics(self.campaign, model_effects, self.engine_settings), self.measured)
 
-    def reason(self, model_effects: list) -> str:
-        """Why a model contradicts the free vibrations (:data:`FV_CHECK` beyond :data:`FV_Z`), '' if it does not."""
+    def reason(self, model_effects: list) -> Reason | None:
+        """Why a model contradicts the free vibrations (:data:`FV_CHECK` beyond :data:`FV_Z`), None if it does not."""
         for k, v in self.z(model_effects).items():
             if abs(v) > FV_Z and abs(v) > abs(self.plain_z.get(k, 0.0)):
                 m = self.measured[k]
-                return (
-                    f"contradicts the free vibrations: {k} is {v:+.1f} standard errors from the measured "
-                    f"{m.value:.4g} +- {m.se:.2g}"
-                )
-        return ""
+                return Reason("free_vibrations", {"quantity": k, "z": v, "measured": m.value, "se": m.se})
+        return None

@@ -37,6 +37,7 @@ from housner.scenarios.diagnosis.selection.crossval import CVModel, add_to_folds
 from housner.scenarios.diagnosis.selection.fitting import build_model, effect_objective, fit_effect, joint_refit
 from housner.scenarios.diagnosis.selection.forward_selection import Round, forward_selection
 from housner.scenarios.diagnosis.selection.paired_test import PRACTICAL, judge, sem
+from housner.scenarios.diagnosis.selection.reasons import Reason
 from housner.scenarios.diagnosis.selection.record_scoring import SEARCH_RATE, NonFiniteHistory
 
 __all__ = [
@@ -236,13 +237,9 @@ class HistoryEvidence:
         train_loss = state.current.train_loss
         if train_loss - state.noise_loss > margin:
             return None
-        why = (
-            f"the training error {train_loss:.4f} alpha is within {margin:.4f} of "
-            f"the sensor noise ({state.noise_loss:.4f}): nothing is left for an effect to lower by a "
-            "tenth of the noise; not searched"
-        )
+        why = Reason("at_noise", {"train": train_loss, "margin": margin, "noise": state.noise_loss})
         level = setup.level_for(len(rnd.pool))
-        setup.progress(f"round {rnd.number}: {why}")
+        setup.progress(f"round {rnd.number}: {why.line()}")
         return [
             judged_candidate(setup, state.current, (n,), {}, rnd.number, math.nan, level, reason=why) for n in rnd.pool
         ]

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats as sps
 
+from housner.scenarios.diagnosis.selection.reasons import Reason
+
 __all__ = ["PRACTICAL", "Judgement", "judge", "sem"]
 
 #: An improvement must be at least this fraction of the sensor noise sigma/alpha per record [-]: the
@@ -30,8 +32,8 @@ class Judgement:
         improvement / improvement_se.
     pvalue : float
         One-sided Wilcoxon signed-rank p-value of the paired differences.
-    reason : str
-        Why it is (not) significant, in words.
+    reason : Reason
+        The rule that decided it, with its figures.
     """
 
     significant: bool
@@ -39,7 +41,7 @@ class Judgement:
     improvement_se: float
     z: float
     pvalue: float
-    reason: str
+    reason: Reason
 
 
 def _paired(base: np.ndarray, new: np.ndarray) -> tuple[float, float]:
@@ -63,18 +65,20 @@ def judge(before: np.ndarray, after: np.ndarray, test_level: float, noise_floor:
     z = d / se if se > 0 else (math.inf if d > 0 else 0.0)
     nonzero = diffs[diffs != 0.0]
     if nonzero.size == 0:
-        return Judgement(False, d, se, z, 1.0, "changes nothing")
+        return Judgement(False, d, se, z, 1.0, Reason("changes_nothing"))
     pval = (
         float(sps.wilcoxon(nonzero, alternative="greater", zero_method="wilcox").pvalue) if nonzero.size >= 2 else 1.0
     )
     need = PRACTICAL * noise_floor
     if not d > 0:
-        return Judgement(False, d, se, z, pval, "no improvement")
+        return Judgement(False, d, se, z, pval, Reason("no_improvement"))
     if pval > test_level:
-        return Judgement(False, d, se, z, pval, f"within its uncertainty (p = {pval:.2g} > {test_level:.2g})")
+        return Judgement(False, d, se, z, pval, Reason("within_uncertainty", {"p": pval, "level": test_level}))
     if d < need:
-        return Judgement(False, d, se, z, pval, f"below a tenth of the sensor noise ({d:.4f} < {need:.4f} alpha)")
-    return Judgement(True, d, se, z, pval, f"p = {pval:.2g} <= {test_level:.2g} and {d:.4f} >= {need:.4f} alpha")
+        return Judgement(False, d, se, z, pval, Reason("below_practical", {"fall": d, "need": need}))
+    return Judgement(
+        True, d, se, z, pval, Reason("significant", {"p": pval, "level": test_level, "fall": d, "need": need})
+    )
 
 
 def sem(v: np.ndarray) -> float:
