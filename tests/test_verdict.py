@@ -264,3 +264,24 @@ def test_verdict_matrix_table(base, capsys):
     with capsys.disabled():
         print("\n" + "\n".join(lines))
     assert all(stable)
+
+
+def test_a_probes_figure_is_a_value_and_its_words_are_the_reports():
+    # The pointer carries the probe's figures (its fitted parameters, the held-out errors with and without it);
+    # reports.diagnosis.words says them, with the probe's own summary.
+    from housner.reports.diagnosis.words import evidence_text, probe_words
+    from housner.scenarios.diagnosis.selection.probes import ProbeFinding
+    from housner.scenarios.diagnosis.verdict.decision import pointer_classes
+
+    found = ProbeFinding(
+        "vertical_coupling", "vertical_input", {"k": 0.31, "delay": 0.004}, 0.08, 0.05, 0.03, 0.007, 4.2, 1e-5
+    )
+    (cls,) = pointer_classes([], [], [found], None)
+    (ev,) = cls.evidence
+    assert cls.name == "vertical_input" and ev.metric == "probe:vertical_coupling" and ev.label == ""
+    assert ev.params == {"k": 0.31, "delay": 0.004} and (ev.measured, ev.model, ev.z) == (0.05, 0.08, 4.2)
+    text = evidence_text(ev)
+    said = probe_words("vertical_coupling")
+    assert said != "vertical_coupling"  # the probe declares its summary
+    assert text.startswith(f"a trial of physics outside the library (the probe vertical_coupling: {said}; k = 0.31, ")
+    assert "held-out error 0.05 alpha against 0.08 without it (z = +4.2: the fall in standard errors" in text

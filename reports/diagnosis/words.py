@@ -23,6 +23,8 @@ __all__ = [
     "fmt_pm",
     "g4",
     "param_unit",
+    "probe_label",
+    "probe_words",
     "params_text",
     "step_params",
     "z_text",
@@ -49,10 +51,30 @@ def z_text(z: float) -> str:
     return f"z > {Z_SHOWN:g}" if z > 0 else f"z < -{Z_SHOWN:g}"
 
 
+def probe_words(name: str) -> str:
+    """What a probe (:mod:`housner.scenarios.diagnosis.selection.probes`) adds, in words: its ``probe_summary``
+    (its name where it declares none)."""
+    try:
+        return effect_class(name).probe_summary or name
+    except (KeyError, ValueError):
+        return name
+
+
+def probe_label(ev: Evidence) -> str:
+    """A probe's figure in words: what it adds, its fitted parameters and the held-out errors with and without it."""
+    name = ev.metric.removeprefix("probe:")
+    params = ", ".join(f"{k} = {v:.3g}" for k, v in ev.params.items())
+    return (
+        f"a trial of physics outside the library (the probe {name}: {probe_words(name)}; {params}), fitted on top "
+        f"of the final model and held out as a candidate is: held-out error {ev.measured:.4g} alpha against "
+        f"{ev.model:.4g} without it"
+    )
+
+
 def evidence_text(ev: Evidence, model: str = "model") -> str:
     """One piece of a pointer's evidence in words: the measured value, the model's (named ``model``) and z."""
     if ev.is_probe:
-        return f"{ev.label} ({z_text(ev.z)}: the fall in standard errors of the paired differences)"
+        return f"{probe_label(ev)} ({z_text(ev.z)}: the fall in standard errors of the paired differences)"
     return (
         f"{ev.label}: measured {g4(ev.measured)} +- {g4(ev.measured_se)}, {model} {g4(ev.model)} "
         f"+- {g4(ev.model_se)} ({z_text(ev.z)})"

@@ -92,13 +92,16 @@ class Evidence:
         The quantity's key (a localisation metric, ``error_order``, ``energy_ratio_order``, ``flight_share``,
         or ``probe:NAME`` for a probe of physics outside the library).
     label : str
-        What it is, in words.
+        What it is, in words ("" for a probe: :func:`housner.reports.diagnosis.words.evidence_text` says it from
+        ``params`` and the errors).
     measured, measured_se : float
         The measurement's value and its standard error (a probe: the error with it [alpha]).
     model, model_se : float
         The model's (a probe: the error without it [alpha]).
     z : float
         Their difference over its standard error [-].
+    params : dict
+        A probe's fitted parameters (empty for every other figure).
     """
 
     metric: str
@@ -108,6 +111,7 @@ class Evidence:
     model: float
     model_se: float
     z: float
+    params: dict = field(default_factory=dict)
 
     @property
     def is_probe(self) -> bool:

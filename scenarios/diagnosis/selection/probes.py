@@ -32,10 +32,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import njit
 
-from housner.effects import Effect, MomentTerm, ParamSpec, effect_class, register_effect
+from housner.effects import Effect, MomentTerm, ParamSpec, register_effect
 from housner.motion import VERTICAL
 
-__all__ = ["PROBES", "ProbeFinding", "VerticalCoupling", "probe_words"]
+__all__ = ["PROBES", "ProbeFinding", "VerticalCoupling"]
 
 
 @dataclass(frozen=True)
@@ -109,12 +109,3 @@ class VerticalCoupling(Effect):
 
 #: Probe name -> the physical class of housner.scenarios.diagnosis.comparison.pointers.CLASSES it stands for.
 PROBES: dict[str, str] = {"vertical_coupling": "vertical_input"}
-
-
-def probe_words(name: str) -> str:
-    """What a probe (:mod:`housner.scenarios.diagnosis.selection.probes`) adds, in words: its ``probe_summary``
-    (its name where it declares none)."""
-    try:
-        return effect_class(name).probe_summary or name
-    except (KeyError, ValueError):
-        return name

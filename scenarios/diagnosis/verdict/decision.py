@@ -38,7 +38,7 @@ from housner.scenarios.diagnosis.comparison.pointers import (
     physical_classes,
 )
 from housner.scenarios.diagnosis.comparison.record_comparison import Comparison
-from housner.scenarios.diagnosis.selection.probes import ProbeFinding, probe_words
+from housner.scenarios.diagnosis.selection.probes import ProbeFinding
 from housner.scenarios.diagnosis.verdict.residual_test import (
     DETECTABLE_RATIO,
     RATIO_MISFIT,
@@ -409,17 +409,13 @@ def pointer_classes(
     for found in sorted(probes, key=lambda p: p.z):
         evidence = Evidence(
             metric=f"probe:{found.probe}",
-            label=f"a trial of physics outside the library (the probe {found.probe}: "
-            + probe_words(found.probe)
-            + "; "
-            + ", ".join(f"{k} = {v:.3g}" for k, v in found.params.items())
-            + "), fitted on top of the final model and held out as a candidate is: held-out error "
-            + f"{found.error_with:.4g} alpha against {found.error:.4g} without it",
+            label="",
             measured=found.error_with,
             measured_se=found.se,
             model=found.error,
             model_se=0.0,
             z=found.z,
+            params=dict(found.params),
         )
         old = [c for c in classes if c.name == found.class_name]
         entry = PointerClass(
