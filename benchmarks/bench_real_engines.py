@@ -12,11 +12,18 @@ folder, and ``--n`` of its tests are taken, evenly spaced over the recording ord
 engine's, cold, with its own start-up (model building, compilation). The analytic model runs in the same
 process first; each line gives an engine's seconds per test and its ratio to the analytic model's. Issue 50's
 target: every engine on the 490 tests in 10 minutes on 2 cores, so the sum of the lines times 490 / n.
+
+``--profile DIR`` runs each engine under cProfile (the runner runs the records in this process, one worker) and
+writes ``DIR/<engine>.prof`` (``python -m pstats``); under each engine's line, its five most expensive functions
+by their own time and their share of the engine's run: the engine's step (its C or C++ call), then the Python
+around it. The profiler slows the Python calls of every step, so the rates printed with it are 5-10 % high.
 """
 
 from __future__ import annotations
 
 import argparse
+import cProfile
+import pstats
 import sys
 import tempfile
 import time
@@ -34,6 +41,7 @@ def main(argv=None) -> int:
     ap.add_argument("--data", default=str(DATA), help=f"the ASU data folder ({DATA})")
     ap.add_argument("--n", type=int, default=50, help="tests, evenly spaced over the 490 (default 50)")
     ap.add_argument("--engines", default=",".join(ENGINES), help="comma-separated engines (default: all eight)")
+    ap.add_argument("--profile", metavar="DIR", help="write a cProfile of each engine's run to DIR/<engine>.prof")
     args = ap.parse_args(argv)
     data = Path(args.data)
     if not (data / "index.csv").is_file():
@@ -55,15 +63,23 @@ def main(argv=None) -> int:
         print(f"ASU SP1: {n} of {len(camp.outcomes)} tests (every {k}th), one worker, cache off")
         secs = {}
         for e in ["housner", *engines]:
+            prof = cProfile.Profile() if args.profile else None
             t0 = time.perf_counter()
             try:
+                if prof is not None:
+                    prof.enable()
                 run_campaign(sub, engines=[e], out=Path(tmp) / f"run-{e}", jobs=1, use_cache=False, progress=False)
             except Exception as err:  # an engine that is not installed, or fails: said, the others still timed
                 print(f"{e:12s} failed: {str(err).splitlines()[0]}")
                 continue
+            finally:
+                if prof is not None:
+                    prof.disable()
             secs[e] = time.perf_counter() - t0
             ratio = secs[e] / secs["housner"] if "housner" in secs else float("nan")
             print(f"{e:12s} {secs[e]:8.1f} s   {secs[e] / n:7.3f} s per test   {ratio:8.0f} x the analytic model")
+            if prof is not None:
+                print_profile(prof, Path(args.profile) / f"{e}.prof", secs[e])
     total = sum(secs.values()) / n * len(camp.outcomes)
     verdict = "MET" if total <= TARGET_ALL_S else "MISSED"
     print(
@@ -71,6 +87,20 @@ def main(argv=None) -> int:
         f"target <= {TARGET_ALL_S:.0f} s: {verdict}"
     )
     return 0
+
+
+def print_profile(prof: cProfile.Profile, path: Path, total: float, top: int = 5) -> None:
+    """Write ``prof`` to ``path`` and print its ``top`` functions by their own time, with their share of ``total``
+    [s] (the engine's run)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    prof.dump_stats(path)
+    # (file, line, function) -> (primitive calls, calls, own s, cumulative s, callers)
+    stats = pstats.Stats(str(path)).stats
+    rows = sorted(stats.items(), key=lambda kv: kv[1][2], reverse=True)[:top]
+    for (file, line, func), (_, calls, own, _, _) in rows:
+        where = func if file == "~" else f"{Path(file).name}:{line}({func})"
+        print(f"    {own:8.2f} s {100.0 * own / total:5.1f} %  {calls:9d} calls  {where}")
+    print(f"    profile: {path}")
 
 
 if __name__ == "__main__":

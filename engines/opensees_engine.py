@@ -350,9 +350,10 @@ class OpenSeesEngine(PlanarEngine):
         last, overturned, retried, loose = n - 1, False, 0, 0
         analyze, disp, vel = ops.analyze, ops.nodeDisp, ops.nodeVel
         law = self.impact_law(specimen, effects, h, motion.theta0)
+        with_law = law.active
         try:
             for i in range(1, n):
-                if law.active:
+                if with_law:
                     stage = self._steps_with_law(ops, motion, i, k, h, law)
                 elif analyze(k, h) == 0:
                     stage = 0
