@@ -118,7 +118,11 @@ class Evidence:
         return self.metric.startswith("probe:")
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The fields as plain data; ``params`` only for a probe (the other figures have none)."""
+        data = asdict(self)
+        if not self.params:
+            del data["params"]
+        return data
 
 
 @dataclass(frozen=True)
@@ -145,7 +149,12 @@ class PointerClass:
     source: str | None = None
 
     def to_dict(self) -> dict:
-        out = {"class": self.name, "meaning": self.meaning, "z": self.z, "evidence": [asdict(e) for e in self.evidence]}
+        out = {
+            "class": self.name,
+            "meaning": self.meaning,
+            "z": self.z,
+            "evidence": [e.to_dict() for e in self.evidence],
+        }
         if self.source is not None:
             out["from"] = self.source
         return out
