@@ -15,7 +15,12 @@ same 10 000 records simulated in one loop of ``simulate_many`` in this process,
 nothing else; the second ratio adds to the loop the fit of the ensemble's model
 (matched RDK), which the study pays once before its first record. Memory: the peak resident
 size of the study's process for 2 000 records (one size) and for 10 000 (five): flat means the second is not five
-times the first (histories are off, one size is in memory at a time).
+times the first (histories are off, one size is in memory at a time). Disk: the CPU time to create an empty file
+in the study's temporary folder just before the 10 000-record study, which writes one cache entry (one new file)
+per record. It is a property of the disk at that moment, not of the runner: on an ext4 file system without a
+journal, creating a file first scans the inodes deleted in the last few minutes in its block group
+(``recently_deleted``), so that after a run (this benchmark's own previous one, a test suite) removed thousands of
+files a creation costs 0.5-1 ms of CPU instead of 20-50 us, up to 10 s of the study's CPU that the loop never pays.
 
 ``dask``: an engine-bound study (``--engine``, default MuJoCo; 4 stripes x 1 size
 x ``--n`` motions) on a local Dask cluster of one worker, then of two (one
@@ -92,6 +97,15 @@ def _run_child(toml: Path, out: Path, cache: Path, jobs: int) -> dict:
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
+def _file_creation_us(folder: Path, n: int = 200) -> float:
+    """CPU time [us] to create one empty file in ``folder`` now (the files stay, for the folder's removal)."""
+    folder.mkdir(parents=True)
+    t0 = time.process_time()
+    for i in range(n):
+        os.close(os.open(folder / f"probe{i}", os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+    return (time.process_time() - t0) / n * 1e6
+
+
 def part_scale(jobs: int) -> None:
     from housner.engines import get_engine
     from housner.scenarios.catalogue.scenario import load_scenario
@@ -105,6 +119,7 @@ def part_scale(jobs: int) -> None:
         small = _write(tmp, 100, ["housner"], levels, heights[:1])
         r_small = _run_child(small, tmp / "small", tmp / "cache-small", jobs)
         big = _write(tmp, 100, ["housner"], levels, heights)
+        create_us = _file_creation_us(tmp / "probe")
         r_big = _run_child(big, tmp / "big", tmp / "cache-big", jobs)
         # baseline: the same records in one plain loop in this process
         scen = load_scenario(big)
@@ -129,6 +144,11 @@ def part_scale(jobs: int) -> None:
     print(
         f"  with the ensemble's fit on both sides ({fit:.1f} s, once per scenario and process, not per record): "
         f"study / (fit + loop) = {r_big['wall_s'] / (fit + loop):.2f}"
+    )
+    print(
+        f"  creating a file in the study's folder just before it: {create_us:.0f} us of CPU (one per record: "
+        f"{create_us * r_big['records'] / 1e6:.1f} s of the study's CPU; 20-50 us on a disk that no mass deletion "
+        "of the last minutes slows, see the module notes)"
     )
     print(
         f"  peak RSS of the study process: {r_small['peak_rss_mb']:.0f} MB for {r_small['records']} records, "

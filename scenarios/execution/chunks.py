@@ -128,12 +128,37 @@ def store_entry(path: str | Path, key: str, row: dict) -> None:
     _write_entry(os.fspath(path), key, row)
 
 
+#: .npy headers by dtype and shape: a C-ordered array's header is its dtype's and shape's alone.
+_NPY_HEADERS: dict[tuple[np.dtype, tuple[int, ...]], bytes] = {}
+
+
 def _npy(a: np.ndarray) -> bytes:
+    """``a`` as ``np.save`` writes it: a header, then the samples in C order.
+
+    The header is made by numpy once per dtype and shape (an entry's theta has its record's length,
+    its row the length of its text), then reused: making it was half the time an entry's bytes took to make.
+    """
+    if a.dtype.hasobject or (a.flags.f_contiguous and not a.flags.c_contiguous):
+        return _npy_by_numpy(a)  # written otherwise (pickled, or in Fortran order): numpy's alone
+    key = (a.dtype, a.shape)
+    head = _NPY_HEADERS.get(key)
+    if head is None:
+        data = _npy_by_numpy(a)
+        if len(_NPY_HEADERS) >= 4096:
+            _NPY_HEADERS.clear()
+        _NPY_HEADERS[key] = data[: len(data) - a.nbytes]
+        return data
+    return head + a.tobytes()
+
+
+def _npy_by_numpy(a: np.ndarray) -> bytes:
     buf = io.BytesIO()
     np.lib.format.write_array(buf, a, allow_pickle=False)
     return buf.getvalue()
 
 
+#: How an entry's temporary file is opened: as ``open(path, "wb")`` opens it (os.open adds O_CLOEXEC).
+_NEW_FILE = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0)
 _ZIP_DATE = (1 << 5) | 1  # 1980-01-01 as a DOS date: the date np.savez gives its members
 
 
@@ -179,8 +204,13 @@ def _write_entry(path: str, key: str, row: dict) -> None:
     data = _zip_stored([("theta.npy", _npy(theta)), ("row.npy", _npy(np.array(json.dumps(meta))))])
     tmp = f"{path}.{os.getpid()}.tmp"
     try:
-        with open(tmp, "wb") as f:
-            f.write(data)
+        fd = os.open(tmp, _NEW_FILE, 0o666)  # what open(tmp, "wb") does, without its buffer and checks
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view) :]
+        finally:
+            os.close(fd)
         os.replace(tmp, path)
     except BaseException:
         with suppress(OSError):
