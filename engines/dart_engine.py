@@ -134,16 +134,11 @@ class DartEngine(PlanarEngine):
         after = self.impact_law(specimen, effects, h, motion.theta0).step_hook
 
         def advance(i: int) -> np.ndarray:
-            if after is None:
-                for gxi in gx_rows[i - 1]:
-                    set_gravity(gxi, 0.0, gz)
-                    step()
-            else:
-                for gxi in gx_rows[i - 1]:
-                    set_gravity(gxi, 0.0, gz)
-                    step()
-                    if (c := after(block.getPosition(2), block.getVelocity(2))) is not None:
-                        block.setVelocities(c * block.getVelocities())
+            for gxi in gx_rows[i - 1]:
+                set_gravity(gxi, 0.0, gz)
+                step()
+                if after is not None and (c := after(block.getPosition(2), block.getVelocity(2))) is not None:
+                    block.setVelocities(c * block.getVelocities())
             q = states[i, :3] = block.getPositions()
             states[i, 3:] = block.getVelocities()
             return q

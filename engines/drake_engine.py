@@ -263,18 +263,12 @@ class DrakeEngine(PlanarEngine):
 
         def advance(i: int) -> np.ndarray:
             try:
-                if after is None:
-                    for fx in fx_rows[i - 1]:
-                        force_xyz[1] = fx
-                        calc(ctx, update)
-                        store(update)
-                else:
-                    for fx in fx_rows[i - 1]:
-                        force_xyz[1] = fx
-                        calc(ctx, update)
-                        store(update)
-                        if (c := after(state().GetAtIndex(2), state().GetAtIndex(5))) is not None:
-                            plant.SetVelocities(ctx, c * plant.GetVelocities(ctx))
+                for fx in fx_rows[i - 1]:
+                    force_xyz[1] = fx
+                    calc(ctx, update)
+                    store(update)
+                    if after is not None and (c := after(state().GetAtIndex(2), state().GetAtIndex(5))) is not None:
+                        plant.SetVelocities(ctx, c * plant.GetVelocities(ctx))
             except RuntimeError as e:  # the contact solver did not converge
                 raise EngineError(
                     f"Drake failed on motion {motion.name!r} at t = {i * motion.dt:.6g} s: {e}; "

@@ -404,17 +404,12 @@ class PybulletEngine(PlanarEngine):
         overturned = False
         after = self.impact_law(specimen, effects, h, th0).step_hook
         for i in range(1, n):
-            if after is None:
-                for gxi in gx_rows[i - 1]:
-                    set_gravity(gxi, 0.0, g, cid)
-                    step(cid)
-            else:
-                for gxi in gx_rows[i - 1]:
-                    set_gravity(gxi, 0.0, g, cid)
-                    step(cid)
-                    if (c := after(*pb.getJointState(body, 2, physicsClientId=cid)[:2])) is not None:
-                        for j, (q, v, *_) in zip(joints, get_states(body, joints, physicsClientId=cid), strict=True):
-                            pb.resetJointState(body, j, q, c * v, physicsClientId=cid)
+            for gxi in gx_rows[i - 1]:
+                set_gravity(gxi, 0.0, g, cid)
+                step(cid)
+                if after is not None and (c := after(*pb.getJointState(body, 2, physicsClientId=cid)[:2])) is not None:
+                    for j, (q, v, *_) in zip(joints, get_states(body, joints, physicsClientId=cid), strict=True):
+                        pb.resetJointState(body, j, q, c * v, physicsClientId=cid)
             (q0, v0, *_), (q1, v1, *_), (q2, v2, *_) = get_states(body, joints, cid)
             states[i] = (q0, q1, q2, v0, v1, v2)
             if not (abs(q0) < RUNAWAY_M and abs(q1) < RUNAWAY_M and math.isfinite(q2) and math.isfinite(v2)):
