@@ -1,6 +1,8 @@
 """Whether a 3D scan-mesh engine's outcomes converge in its time step (issue 48): every outcome record of a campaign
 run at ``timestep`` and at half of it, and the share of records whose outcome (overturned or not) flips between the
-two, with each step's accuracy against the measured outcomes.
+two, with each step's accuracy against the measured outcomes. Beside it, the outcomes' own sensitivity: the share
+that flips at ``timestep`` when the table acceleration is scaled by 1 + :data:`NUDGE` (a change far below any
+accelerometer's calibration), the floor under which no step can bring the flips.
 
 Usage::
 
@@ -21,14 +23,22 @@ import numpy as np
 from housner.engines import get_engine
 from housner.scenarios.campaigns.campaign import load_campaign
 
+#: Relative change of the table acceleration [-] whose flips measure the outcomes' own sensitivity.
+NUDGE = 1e-3
+
 
 def _outcomes(args) -> tuple[list[bool], float]:
-    """The overturns of the records ``idx`` of the campaign at one step, and the CPU time they took [s]."""
-    root, engine, settings, idx = args
+    """The overturns of the records ``idx`` of the campaign at one step, with the table acceleration scaled by
+    ``scale``, and the CPU time they took [s]."""
+    root, engine, settings, idx, scale = args
     campaign = load_campaign(root, allow_outside=True)
     eng = get_engine(engine, **settings)
     cpu0 = time.process_time()
-    out = [bool(eng.simulate(campaign.specimen, campaign.outcomes[i].motion).overturned) for i in idx]
+    out = []
+    for i in idx:
+        mo = campaign.outcomes[i].motion
+        mo = mo if scale == 1.0 else mo.scaled(scale)
+        out.append(bool(eng.simulate(campaign.specimen, mo).overturned))
     return out, time.process_time() - cpu0
 
 
@@ -41,22 +51,27 @@ def main(root: str, engine: str = "mujoco-3d", timestep: float = 5e-4, n: int | 
     chunks = [list(range(k, n, 2)) for k in range(2)]
     got = {}
     with ProcessPoolExecutor(2) as pool:
-        for dt in (timestep, timestep / 2):
-            runs = list(pool.map(_outcomes, [(root, engine, {**base, "timestep": dt}, c) for c in chunks]))
+        for dt, scale in ((timestep, 1.0), (timestep / 2, 1.0), (timestep, 1.0 + NUDGE)):
+            runs = list(pool.map(_outcomes, [(root, engine, {**base, "timestep": dt}, c, scale) for c in chunks]))
             ov = np.empty(n, dtype=bool)
             for c, (o, _cpu) in zip(chunks, runs, strict=True):
                 ov[c] = o
-            got[dt] = ov
+            got[dt, scale] = ov
             cpu = sum(c for _o, c in runs)
             print(
-                f"{engine} timestep {dt:g} s: {int(ov.sum())} of {n} overturn, accuracy {np.mean(ov == y):.3f}, "
-                f"{cpu:.0f} CPU s"
+                f"{engine} timestep {dt:g} s, table acceleration x {scale:g}: {int(ov.sum())} of {n} overturn, "
+                f"accuracy {np.mean(ov == y):.3f}, {cpu:.0f} CPU s"
             )
-    a, b = got[timestep], got[timestep / 2]
-    flips = int(np.sum(a != b))
-    print(f"outcomes that flip between {timestep:g} s and {timestep / 2:g} s: {flips} of {n} ({100 * flips / n:.1f} %)")
-    if flips:
-        print("flipped records:", ", ".join(campaign.outcomes[i].id for i in np.flatnonzero(a != b)))
+    a = got[timestep, 1.0]
+    for key, what in (
+        ((timestep / 2, 1.0), f"between {timestep:g} s and {timestep / 2:g} s"),
+        ((timestep, 1.0 + NUDGE), f"at {timestep:g} s when the table acceleration changes by {NUDGE:g}"),
+    ):
+        b = got[key]
+        flips = int(np.sum(a != b))
+        print(f"outcomes that flip {what}: {flips} of {n} ({100 * flips / n:.1f} %)")
+        if flips:
+            print("  flipped records:", ", ".join(campaign.outcomes[i].id for i in np.flatnonzero(a != b)))
 
 
 if __name__ == "__main__":

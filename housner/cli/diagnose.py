@@ -59,6 +59,24 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
         help="outcome records: also score the model another campaign's diagnosis fitted (its --json), frozen, "
         "beside that campaign's baselines, frozen too",
     )
+    d.add_argument(
+        "--engine-model",
+        metavar="ENGINE",
+        help="outcome records of a scan-mesh campaign: also score this 3D engine (mujoco-3d, pybullet-3d) as a "
+        "model, P(overturn) from its runs over the unrecorded azimuth and friction, on the same folds (cached runs)",
+    )
+    d.add_argument(
+        "--engine-azimuths",
+        type=positive_int,
+        default=8,
+        help="with --engine-model: azimuths evenly spaced from the campaign's own (8; 1: the campaign's alone)",
+    )
+    d.add_argument(
+        "--engine-frictions",
+        type=_frictions,
+        default=(0.7,),
+        help="with --engine-model: friction coefficients, comma-separated, each run at every azimuth (0.7)",
+    )
     d.add_argument("--max-effects", type=nonneg_int, default=3, help="most effects the search adds (3)")
     d.add_argument(
         "--allow-outside",
@@ -89,11 +107,12 @@ def run(args: argparse.Namespace) -> int:
     campaign = load_campaign(args.campaign, allow_outside=args.allow_outside)
     if frozen is not None and not campaign.outcomes:
         raise UsageError(f"--model: campaign {campaign.name!r} has no outcome records for a frozen outcome model")
+    ensemble = _engine_ensemble(args, campaign)
     for rid, file, msg in campaign.skipped:
         print(f"skipped record {rid} ({file}): {msg}", file=sys.stderr)
     if not args.quiet:
         print(f"{campaign!r}", file=sys.stderr)
-    outcomes = _diagnose_outcomes(args, campaign, frozen) if campaign.outcomes else None
+    outcomes = _diagnose_outcomes(args, campaign, frozen, ensemble) if campaign.outcomes else None
     if not campaign.records:  # outcome records only
         if args.json:
             from housner.reports.diagnosis.outcome_text import write_outcome_json
@@ -176,12 +195,37 @@ def _frozen_model(path: str | None):
         raise UsageError(f"--model: {e}") from None
 
 
-def _diagnose_outcomes(args: argparse.Namespace, campaign, frozen=None):
+def _frictions(text: str) -> tuple[float, ...]:
+    """``--engine-frictions``' comma-separated numbers."""
+    try:
+        return tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+
+
+def _engine_ensemble(args: argparse.Namespace, campaign):
+    """``--engine-model``'s ensemble, checked before the work; a UsageError naming the option."""
+    if args.engine_model is None:
+        return None
+    if not campaign.outcomes:
+        raise UsageError(f"--engine-model: campaign {campaign.name!r} has no outcome records to score a 3D engine on")
+    from housner.scenarios.diagnosis.outcomes.engine_ensemble import engine_ensemble
+
+    try:
+        return engine_ensemble(
+            campaign, args.engine_model, azimuths=args.engine_azimuths, frictions=args.engine_frictions
+        )
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+
+
+def _diagnose_outcomes(args: argparse.Namespace, campaign, frozen=None, ensemble=None):
     """The outcome records' diagnosis
     (:func:`housner.scenarios.diagnosis.outcomes.outcome_diagnosis.diagnose_outcomes`), printed."""
-    from housner.reports.diagnosis.outcome_text import outcome_summary, transfer_text
+    from housner.reports.diagnosis.outcome_text import engine_model_text, outcome_summary, transfer_text
     from housner.scenarios.diagnosis.outcomes.outcome_diagnosis import diagnose_outcomes
     from housner.scenarios.diagnosis.outcomes.outcome_scores import SCORE_KEYS
+    from housner.scenarios.execution.options import RunOptions
 
     d = diagnose_outcomes(
         campaign,
@@ -190,6 +234,8 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign, frozen=None):
         repeats=args.repeats,
         model=frozen,
         effects=args.effects,
+        engine_model=ensemble,
+        run_options=RunOptions(progress=not args.quiet),
         progress=None if args.quiet else (lambda line: print(line, file=sys.stderr)),
     )
     # a campaign of both kinds prints two verdicts: each line says which records it judges
@@ -206,5 +252,8 @@ def _diagnose_outcomes(args: argparse.Namespace, campaign, frozen=None):
     if d.transfer is not None:
         print()
         print(transfer_text(d.transfer))
+    if d.engine_model is not None:
+        print()
+        print(engine_model_text(d.engine_model))
     print(f"{d.elapsed:.1f} s")
     return d

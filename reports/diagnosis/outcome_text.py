@@ -14,11 +14,13 @@ from housner.scenarios.diagnosis.outcomes.outcome_effects import SOLVER_BUDGET_S
 from housner.scenarios.diagnosis.outcomes.outcome_validation import LEVEL
 
 if TYPE_CHECKING:
+    from housner.scenarios.diagnosis.outcomes.engine_ensemble import EngineModelScore
     from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeDiagnosis, OutcomeMisses
     from housner.scenarios.diagnosis.outcomes.outcome_transfer import OutcomeTransfer
     from housner.scenarios.diagnosis.outcomes.outcome_validation import OutcomeJudgement
 
 __all__ = [
+    "engine_model_text",
     "judgement_text",
     "outcome_document",
     "outcome_params_text",
@@ -170,6 +172,37 @@ def transfer_text(t: OutcomeTransfer) -> str:
         f"{s.accuracy:.3f} [{s.accuracy_ci[0]:.3f}, {s.accuracy_ci[1]:.3f}], F1 {s.f1:.3f}, log loss "
         f"{s.log_loss:.3f} [{s.log_loss_ci[0]:.3f}, {s.log_loss_ci[1]:.3f}]; its log loss against the baselines "
         f"fitted on {t.source}, frozen (nats; clustered by ground motion): {rows}; {end}."
+    )
+
+
+def engine_model_text(e: EngineModelScore) -> str:
+    """A 3D engine's ensemble scored as an outcome model, against the planar final model, in words."""
+    ens, c = e.ensemble, e.against_final
+    frictions = ", ".join(f"{f:g}" for f in ens.frictions)
+    step = "its default step" if ens.timestep is None else f"step {ens.timestep:g} s"
+    if c.p_better < LEVEL:
+        end = (
+            f"the planar model misses the third dimension: the engine's ensemble predicts these records better by "
+            f"{c.advantage:.3f} +- {c.se:.3f} nats (p {c.p_better:.2g})"
+        )
+    elif c.p_worse < LEVEL:
+        end = (
+            f"the planar final model predicts these records better, by {-c.advantage:.3f} +- {c.se:.3f} nats "
+            f"(p {c.p_worse:.2g}): the engine's third dimension does not replace the fitted contact"
+        )
+    else:
+        end = (
+            f"no difference shown with the planar final model ({c.advantage:+.3f} +- {c.se:.3f} nats, positive: the "
+            "engine better)"
+        )
+    return (
+        f"3D engine {ens.engine}: {ens.size} runs per record ({len(ens.azimuths)} azimuths from "
+        f"{ens.azimuths[0]:g} deg, friction {frictions}, {step}), P(overturn) the share that overturn, only the "
+        f"lapse fitted ({e.lapse:g}); held out on the same folds: accuracy {_spread(e.over_seeds, 'accuracy')}, F1 "
+        f"{_spread(e.over_seeds, 'f1')}, log loss {_spread(e.over_seeds, 'log_loss')}; {judgement_text(e.judgement)}; "
+        f"its runs disagree on {100 * e.flip_share:.1f} % of records"
+        + (f", {e.failed_runs} runs failed" if e.failed_runs else "")
+        + f"; {end}."
     )
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from housner.reports.diagnosis.outcome_figures import baseline_label, calibration_figure, outcome_map_figure
 from housner.reports.diagnosis.outcome_text import (
+    engine_model_text,
     judgement_text,
     left_out_text,
     outcome_pointer_text,
@@ -144,6 +145,10 @@ def render_outcome_report(diag) -> str:
     if diag.transfer is not None:
         sections.insert(
             2, ("transfer", "Transfer from another campaign", f"<p>{esc(transfer_text(diag.transfer))}</p>")
+        )
+    if diag.engine_model is not None:
+        sections.insert(
+            2, ("engine", "A 3D engine as the model", f"<p>{esc(engine_model_text(diag.engine_model))}</p>")
         )
     took = time.perf_counter() - t0
     n, k = len(diag.ids), int(np.sum(diag.observed))

@@ -24,6 +24,7 @@ import numpy as np
 
 from housner.scenarios.campaigns.campaign import Campaign
 from housner.scenarios.campaigns.campaign_records import OutcomeRecord
+from housner.scenarios.diagnosis.outcomes.engine_ensemble import EngineEnsemble, ScoringRuns, score_engine_model
 from housner.scenarios.diagnosis.outcomes.outcome_effects import outcome_effects
 from housner.scenarios.diagnosis.outcomes.outcome_models import (
     Geometry,
@@ -126,6 +127,8 @@ def diagnose_outcomes(
     repeats: int = REPEATS,
     model: FrozenOutcomeModel | None = None,
     effects: Sequence[str] | None = None,
+    engine_model: EngineEnsemble | None = None,
+    run_options=None,
     progress: Callable[[str], None] | None = None,
 ) -> OutcomeDiagnosis:
     """The mission loop on a campaign's outcome records: plain model, misses, effect, error falling, verdict.
@@ -148,6 +151,11 @@ def diagnose_outcomes(
     effects : sequence of str, optional
         The library effects searched, by registry name (default every one; an empty sequence searches none, not
         even the effective contact). Those the records cannot feel are left out with their reason.
+    engine_model : EngineEnsemble, optional
+        A 3D engine's ensemble (:func:`~housner.scenarios.diagnosis.outcomes.engine_ensemble.engine_ensemble`), run
+        on the records and scored as an outcome model on the same folds, beside the planar final model.
+    run_options : RunOptions, optional
+        How the engine's runs execute (workers, cache); the default runner's otherwise.
     progress : callable, optional
         Receives one line per stage.
 
@@ -194,6 +202,11 @@ def diagnose_outcomes(
     transfer = None
     if model is not None:
         transfer = transfer_outcomes(model, motions, geo, campaign.specimen, y, pga, pgv, groups, seed=seed, say=say)
+    engine = None
+    if engine_model is not None:
+        shown = baselines_show_skill(base_p, y, groups)
+        runs = ScoringRuns(y, groups, fold_of, seed, plain, final, base_p, shown)
+        engine = score_engine_model(campaign, engine_model, recs, tables, runs, run_options, say)
     misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
     diag = OutcomeDiagnosis(
         campaign=campaign.name,
@@ -220,6 +233,7 @@ def diagnose_outcomes(
         judgement_plain=judged_plain,
         baseline_fits=fits,
         transfer=transfer,
+        engine_model=engine,
         searched=tuple(t.effect for t in tables.effects.values()),
         left_out=(*left_out, *tables.left_out),
     )

@@ -24,6 +24,7 @@ __all__ = [
     "ALPHA_GRID",
     "ALPHA_GRID_LOW",
     "AMPLITUDE_SPREAD",
+    "ENGINE_PREFIX",
     "LAPSES",
     "OUTCOME_MODELS",
     "R_GRID",
@@ -51,6 +52,8 @@ R_GRID = (0.95, 0.9, 0.8, 0.7, 0.6)
 SPREADS = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.7)
 #: Lapse rates the fit chooses from [-]: the share of outcomes the model does not decide (:func:`lapse_mix`).
 LAPSES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.25)
+#: The name of a 3D engine's ensemble as an outcome model is this prefix and the engine's name.
+ENGINE_PREFIX = "engine:"
 #: Points of the finer grid of log(alpha_eff) the fit searches (the weights interpolate between the runs) [-].
 _MU_POINTS = 80
 
@@ -145,6 +148,9 @@ class OverturnTables:
         The library effects tabulated (:mod:`housner.scenarios.diagnosis.outcomes.outcome_effects`), by name.
     left_out : list of LeftOut
         The library effects the records cannot test, with the reason.
+    engines : dict of str to ndarray
+        A 3D engine's ensemble (:mod:`housner.scenarios.diagnosis.outcomes.engine_ensemble`), by engine name:
+        (records, members), 1.0 overturned, 0.0 stood, NaN a run that failed.
     """
 
     plain: np.ndarray
@@ -152,6 +158,7 @@ class OverturnTables:
     log_alpha: np.ndarray
     effects: dict = field(default_factory=dict)
     left_out: list = field(default_factory=list)
+    engines: dict = field(default_factory=dict)
 
 
 def overturn_tables(
@@ -288,6 +295,23 @@ def _fit_effect(name: str):
     return fit
 
 
+def _p_engine(name: str):
+    def predict(t: OverturnTables, idx, params) -> np.ndarray:
+        return lapse_mix(np.nanmean(t.engines[name][idx], axis=1), params["lapse"])
+
+    return predict
+
+
+def _fit_engine(name: str):
+    """A 3D engine's ensemble fits only its lapse, as the plain model: nothing of the engine is fitted."""
+
+    def fit(t: OverturnTables, idx, y) -> dict:
+        share = np.nanmean(t.engines[name][idx], axis=1)
+        return min(({"lapse": e} for e in LAPSES), key=lambda q: _log_loss(lapse_mix(share, q["lapse"]), y[idx]))
+
+    return fit
+
+
 def known_model(name: str) -> bool:
     """Whether ``name`` is an outcome model: one with its own tables, or a single registered effect."""
     if name in OUTCOME_MODELS:
@@ -296,9 +320,13 @@ def known_model(name: str) -> bool:
 
 
 def outcome_model(name: str) -> tuple[Callable, Callable]:
-    """(probabilities, fit) of model ``name``: :data:`OUTCOME_MODELS`, or a library effect's on its table."""
+    """(probabilities, fit) of model ``name``: :data:`OUTCOME_MODELS`, a 3D engine's ensemble (``engine:NAME``), or a
+    library effect's on its table."""
     if name in OUTCOME_MODELS:
         return OUTCOME_MODELS[name]
+    if name.startswith(ENGINE_PREFIX):
+        engine = name.removeprefix(ENGINE_PREFIX)
+        return _p_engine(engine), _fit_engine(engine)
     return _p_effect(name), _fit_effect(name)
 
 

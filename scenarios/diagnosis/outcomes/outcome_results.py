@@ -11,6 +11,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from housner._values import JsonValue, WrittenAsResult, floats, read_as, to_data
+from housner.scenarios.diagnosis.outcomes.engine_ensemble import EngineModelScore
 from housner.scenarios.diagnosis.outcomes.outcome_effects import LeftOut, OutcomeEffect
 from housner.scenarios.diagnosis.outcomes.outcome_scores import CalibrationBin, OutcomeFloor, OutcomeScores, SeedSpread
 from housner.scenarios.diagnosis.outcomes.outcome_transfer import OutcomeTransfer
@@ -282,6 +283,8 @@ class OutcomeDiagnosis(WrittenAsResult):
         The baselines fitted on every record, for another campaign to score (``--model``).
     transfer : OutcomeTransfer or None
         A model fitted on another campaign, scored here frozen (``--model``).
+    engine_model : EngineModelScore or None
+        A 3D engine's ensemble scored as an outcome model on the same folds (``--engine-model``).
     searched : tuple of OutcomeEffect
         The library effects searched, each with the grid it was tabulated on.
     left_out : tuple of LeftOut
@@ -313,6 +316,7 @@ class OutcomeDiagnosis(WrittenAsResult):
     judgement_plain: OutcomeJudgement | None = None
     baseline_fits: dict = field(default_factory=dict)
     transfer: OutcomeTransfer | None = None
+    engine_model: EngineModelScore | None = None
     searched: tuple = ()
     left_out: tuple = ()
 
@@ -347,6 +351,7 @@ class OutcomeDiagnosis(WrittenAsResult):
             judgement_plain=self.judgement_plain,
             baseline_fits=dict(self.baseline_fits),
             transfer=self.transfer,
+            engine_model=self.engine_model,
             searched=tuple(self.searched),
             left_out=tuple(self.left_out),
             elapsed_s=self.elapsed,
@@ -382,6 +387,7 @@ class OutcomeDiagnosisResult(JsonValue):
     elapsed_s: float
     searched: tuple[OutcomeEffect, ...] = ()
     left_out: tuple[LeftOut, ...] = ()
+    engine_model: EngineModelScore | None = None
 
     @property
     def final(self) -> OutcomeStep:
@@ -429,6 +435,7 @@ class OutcomeDiagnosisResult(JsonValue):
                 "transfer": None if self.transfer is None else to_data(_without_p(self.transfer)),
                 "effects_searched": [to_data(e) for e in self.searched],
                 "effects_left_out": [to_data(e) for e in self.left_out],
+                **({} if self.engine_model is None else {"engine_model": to_data(self.engine_model)}),
                 "elapsed_s": self.elapsed_s,
             }
         )
@@ -460,6 +467,7 @@ class OutcomeDiagnosisResult(JsonValue):
             elapsed_s=read_as(float, data["elapsed_s"]),
             searched=read_as(tuple[OutcomeEffect, ...], data.get("effects_searched", [])),
             left_out=read_as(tuple[LeftOut, ...], data.get("effects_left_out", [])),
+            engine_model=read_as(EngineModelScore | None, data.get("engine_model")),
         )
 
 
