@@ -103,6 +103,11 @@ def test_an_ensemble_over_azimuths_spreads_where_the_box_is_wider(box_campaign, 
     at = dict(zip(e.ensemble.azimuths, e.member_overturns, strict=True))
     assert abs(at[0.0] - at[180.0]) <= 1 and at[90.0] < at[0.0] and at[270.0] < at[0.0]
     assert 0.0 < e.flip_share < 1.0
+    # the outcomes are the box's at azimuth 0: the orientation fit finds it (or 180 deg, the same box), and
+    # predicts better than the ensemble that weighs the wide orientations alike
+    assert set(e.azimuths) <= {0.0, 180.0}
+    assert e.over_seeds["log_loss"].mean < e.uniform_over_seeds["log_loss"].mean
+    assert e.uniform_against_final.n_groups == N // 2
 
 
 def test_engine_model_options_are_checked_before_the_work(box_campaign, tmp_path, capsys):

@@ -175,34 +175,40 @@ def transfer_text(t: OutcomeTransfer) -> str:
     )
 
 
+def _engine_against(c, what: str) -> str:
+    """The engine's model against the planar final model (a PairedComparison), in words."""
+    if c.p_better < LEVEL:
+        return (
+            f"{what} predicts these records better than the planar final model by {c.advantage:.3f} +- {c.se:.3f} "
+            f"nats (p {c.p_better:.2g}): the planar model misses the third dimension"
+        )
+    if c.p_worse < LEVEL:
+        return (
+            f"the planar final model predicts these records better than {what}, by {-c.advantage:.3f} +- "
+            f"{c.se:.3f} nats (p {c.p_worse:.2g})"
+        )
+    return f"{what} and the planar final model differ by {c.advantage:+.3f} +- {c.se:.3f} nats (not significant)"
+
+
 def engine_model_text(e: EngineModelScore) -> str:
     """A 3D engine's ensemble scored as an outcome model, against the planar final model, in words."""
-    ens, c = e.ensemble, e.against_final
+    ens = e.ensemble
     frictions = ", ".join(f"{f:g}" for f in ens.frictions)
     step = "its default step" if ens.timestep is None else f"step {ens.timestep:g} s"
-    if c.p_better < LEVEL:
-        end = (
-            f"the planar model misses the third dimension: the engine's ensemble predicts these records better by "
-            f"{c.advantage:.3f} +- {c.se:.3f} nats (p {c.p_better:.2g})"
-        )
-    elif c.p_worse < LEVEL:
-        end = (
-            f"the planar final model predicts these records better, by {-c.advantage:.3f} +- {c.se:.3f} nats "
-            f"(p {c.p_worse:.2g}): the engine's third dimension does not replace the fitted contact"
-        )
-    else:
-        end = (
-            f"no difference shown with the planar final model ({c.advantage:+.3f} +- {c.se:.3f} nats, positive: the "
-            "engine better)"
-        )
+    az = ", ".join(f"{a:g}" for a in e.azimuths)
+    u = e.uniform_over_seeds
     return (
         f"3D engine {ens.engine}: {ens.size} runs per record ({len(ens.azimuths)} azimuths from "
-        f"{ens.azimuths[0]:g} deg, friction {frictions}, {step}), P(overturn) the share that overturn, only the "
-        f"lapse fitted ({e.lapse:g}); held out on the same folds: accuracy {_spread(e.over_seeds, 'accuracy')}, F1 "
-        f"{_spread(e.over_seeds, 'f1')}, log loss {_spread(e.over_seeds, 'log_loss')}; {judgement_text(e.judgement)}; "
-        f"its runs disagree on {100 * e.flip_share:.1f} % of records"
+        f"{ens.azimuths[0]:g} deg, friction {frictions}, {step}), P(overturn) the share that overturn; its runs "
+        f"disagree on {100 * e.flip_share:.1f} % of records"
         + (f", {e.failed_runs} runs failed" if e.failed_runs else "")
-        + f"; {end}."
+        + f". With the rock's orientation fitted on the training folds (azimuth {az} deg on every record, chosen "
+        f"by {100 * e.fold_agreement:.0f} % of the fold fits; lapse {e.lapse:g}), held out: accuracy "
+        f"{_spread(e.over_seeds, 'accuracy')}, F1 {_spread(e.over_seeds, 'f1')}, log loss "
+        f"{_spread(e.over_seeds, 'log_loss')}; {judgement_text(e.judgement)}; "
+        f"{_engine_against(e.against_final, 'the engine')}. With every azimuth alike (the orientation unknown): "
+        f"accuracy {_spread(u, 'accuracy')}, log loss {_spread(u, 'log_loss')}; "
+        f"{_engine_against(e.uniform_against_final, 'the engine so')}."
     )
 
 

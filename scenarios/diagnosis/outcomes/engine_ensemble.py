@@ -1,20 +1,21 @@
 """A 3D scan-mesh engine as an outcome model: each record's P(overturn) is the share of an ensemble of the engine's
 runs that overturn, the ensemble spanning what the campaign does not record (the rock's azimuth on the table, the
-friction), scored on the diagnosis's own folds with nothing fitted but the lapse. The runs go through the runner, so
-they are cached, run in parallel and a failed record is kept and named. The method is in
-``docs/explanation/diagnosis.md`` ("A 3D engine as an outcome model")."""
+friction), scored on the diagnosis's own folds with nothing of the engine's physics fitted (only the lapse, and
+which of the unrecorded orientations the rock stood in). The runs go through the runner, so they are cached, run in
+parallel and a failed record is kept and named. The method is in ``docs/explanation/diagnosis.md`` ("A 3D engine
+as an outcome model")."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from housner._values import JsonValue
 from housner.scenarios.campaigns.campaign import Campaign
-from housner.scenarios.diagnosis.outcomes.outcome_models import ENGINE_PREFIX, cross_validate
+from housner.scenarios.diagnosis.outcomes.outcome_models import ENGINE_PREFIX, UNIFORM, EngineRuns, cross_validate
 from housner.scenarios.diagnosis.outcomes.outcome_scores import (
     OutcomeScores,
     SeedSpread,
@@ -166,15 +167,22 @@ def engine_table(
 
 @dataclass(frozen=True, eq=False)
 class EngineModelScore(JsonValue):
-    """A 3D engine's ensemble scored as an outcome model on the diagnosis's folds.
+    """A 3D engine's ensemble scored as an outcome model on the diagnosis's folds, twice: with the rock's
+    orientation fitted on the training folds (which of the ensemble's azimuths it stood in), and with every
+    azimuth weighed alike (the orientation unknown).
 
     Attributes
     ----------
     ensemble : EngineEnsemble
+    azimuths : tuple of float
+        The orientation fitted on every record [deg]: the ensemble's azimuths whose runs make P.
     lapse : float
-        The lapse fitted on every record [-] (each fold's own scored it).
+        The lapse fitted on every record with it [-] (each fold's own fits scored it).
+    fold_agreement : float
+        Share of the fits without one fold (every repeat) that chose the same azimuths [-].
     scores : OutcomeScores
-        Of the held-out P, the mean over the repeats (intervals resample whole ground motions).
+        Of the held-out P (orientation fitted), the mean over the repeats (intervals resample whole ground
+        motions).
     over_seeds : dict of str to SeedSpread
         Each score's mean and range over the repeats.
     against_final, against_plain : PairedComparison
@@ -182,10 +190,14 @@ class EngineModelScore(JsonValue):
         ground motion (positive advantage: the engine predicts better).
     judgement : OutcomeJudgement
         The engine against the baselines and its floor, by the rule that judges the planar model.
+    uniform_over_seeds : dict of str to SeedSpread
+        The scores with every azimuth weighed alike (only the lapse fitted).
+    uniform_against_final : PairedComparison
+        That model against the planar final model.
     member_overturns : tuple of int
         Records each member overturns [count], in :meth:`EngineEnsemble.members` order.
     flip_share : float
-        Share of records whose members disagree [-]: the spread the unrecorded azimuth and friction leave.
+        Share of records whose runs disagree [-]: the spread the unrecorded azimuth and friction leave.
     failed_runs : int
         Runs of the ensemble that failed [count] (their records scored on the other members).
     wall_s : float
@@ -193,12 +205,16 @@ class EngineModelScore(JsonValue):
     """
 
     ensemble: EngineEnsemble
+    azimuths: tuple[float, ...]
     lapse: float
+    fold_agreement: float
     scores: OutcomeScores
     over_seeds: dict[str, SeedSpread]
     against_final: PairedComparison
     against_plain: PairedComparison
     judgement: OutcomeJudgement
+    uniform_over_seeds: dict[str, SeedSpread]
+    uniform_against_final: PairedComparison
     member_overturns: tuple[int, ...]
     flip_share: float
     failed_runs: int
@@ -231,35 +247,40 @@ def score_engine_model(
 ) -> EngineModelScore:
     """``ensemble`` run on ``records`` (:func:`engine_table`) and scored as an outcome model on the folds of every
     repeat of ``runs``, beside the planar models and the baselines scored on the same folds."""
-    from dataclasses import replace
-
     say = say or (lambda line: None)
     table, wall = engine_table(campaign, ensemble, records, options, say)
-    name = ENGINE_PREFIX + ensemble.engine
-    t = replace(tables, engines={**tables.engines, ensemble.engine: table})
+    azimuth = np.array([m["azimuth"] for m in ensemble.members()])
+    t = replace(tables, engines={**tables.engines, ensemble.engine: EngineRuns(table, azimuth)})
     y, groups = runs.y, runs.groups
-    p_rep = np.array([cross_validate(name, t, y, fold)[0] for fold in runs.fold_of])
-    _p, params, _fp = cross_validate(name, t, y, runs.fold_of[0])
+    fitted, uniform = ENGINE_PREFIX + ensemble.engine, ENGINE_PREFIX + ensemble.engine + UNIFORM
+    cv = [cross_validate(fitted, t, y, fold) for fold in runs.fold_of]
+    p_rep = np.array([p for p, _q, _fq in cv])
+    params = cv[0][1]
+    chosen = [q["azimuths"] for _p, _q, fq in cv for q in fq]
+    u_rep = np.array([cross_validate(uniform, t, y, fold)[0] for fold in runs.fold_of])
     p = p_rep.mean(axis=0)
     floor = outcome_floor(p, y, seed=runs.seed)
-    ran = ~np.isnan(table)
     share = np.nanmean(table, axis=1)
     score = EngineModelScore(
         ensemble=ensemble,
+        azimuths=tuple(params["azimuths"]),
         lapse=float(params["lapse"]),
+        fold_agreement=float(np.mean([c == params["azimuths"] for c in chosen])),
         scores=outcome_scores(p, y, groups=groups, seed=runs.seed),
         over_seeds=seed_spread([point_scores(q, y) for q in p_rep]),
         against_final=compare_log_loss(p_rep, runs.final.p_repeats, y, groups),
         against_plain=compare_log_loss(p_rep, runs.plain.p_repeats, y, groups),
         judgement=judge_outcome_model(p_rep, runs.baseline_p, y, groups, floor, baseline_skill=runs.baseline_skill),
+        uniform_over_seeds=seed_spread([point_scores(q, y) for q in u_rep]),
+        uniform_against_final=compare_log_loss(u_rep, runs.final.p_repeats, y, groups),
         member_overturns=tuple(int(v) for v in np.nansum(table, axis=0)),
         flip_share=float(np.mean((share > 0.0) & (share < 1.0))),
-        failed_runs=int(np.sum(~ran)),
+        failed_runs=int(np.sum(np.isnan(table))),
         wall_s=wall,
     )
     say(
-        f"{name}: held-out log loss {score.scores.log_loss:.3f}, accuracy {score.scores.accuracy:.3f} "
-        f"(planar final {runs.final.scores.log_loss:.3f}); its runs disagree on {100 * score.flip_share:.1f} % of "
-        "records"
+        f"{fitted}: held-out log loss {score.scores.log_loss:.3f} with its orientation fitted "
+        f"({', '.join(f'{a:g}' for a in score.azimuths)} deg), {score.uniform_over_seeds['log_loss'].mean:.3f} with "
+        f"every azimuth alike (planar final {runs.final.scores.log_loss:.3f})"
     )
     return score

@@ -25,10 +25,12 @@ __all__ = [
     "ALPHA_GRID_LOW",
     "AMPLITUDE_SPREAD",
     "ENGINE_PREFIX",
+    "UNIFORM",
     "LAPSES",
     "OUTCOME_MODELS",
     "R_GRID",
     "SPREADS",
+    "EngineRuns",
     "Geometry",
     "OverturnTables",
     "cross_validate",
@@ -54,6 +56,8 @@ SPREADS = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.7)
 LAPSES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.25)
 #: The name of a 3D engine's ensemble as an outcome model is this prefix and the engine's name.
 ENGINE_PREFIX = "engine:"
+#: The suffix of an engine model whose orientation is not fitted: every azimuth of its ensemble weighs alike.
+UNIFORM = "@uniform"
 #: Points of the finer grid of log(alpha_eff) the fit searches (the weights interpolate between the runs) [-].
 _MU_POINTS = 80
 
@@ -148,9 +152,8 @@ class OverturnTables:
         The library effects tabulated (:mod:`housner.scenarios.diagnosis.outcomes.outcome_effects`), by name.
     left_out : list of LeftOut
         The library effects the records cannot test, with the reason.
-    engines : dict of str to ndarray
-        A 3D engine's ensemble (:mod:`housner.scenarios.diagnosis.outcomes.engine_ensemble`), by engine name:
-        (records, members), 1.0 overturned, 0.0 stood, NaN a run that failed.
+    engines : dict of str to EngineRuns
+        A 3D engine's ensemble on the records, by engine name.
     """
 
     plain: np.ndarray
@@ -295,19 +298,65 @@ def _fit_effect(name: str):
     return fit
 
 
+@dataclass(frozen=True)
+class EngineRuns:
+    """A 3D engine's ensemble on the records (:mod:`housner.scenarios.diagnosis.outcomes.engine_ensemble`).
+
+    Attributes
+    ----------
+    overturned : ndarray
+        (records, members): 1.0 overturned, 0.0 stood, NaN a run that failed.
+    azimuth : ndarray
+        (members,) [deg]: the azimuth each member ran at.
+    """
+
+    overturned: np.ndarray
+    azimuth: np.ndarray
+
+    def orientations(self) -> list[tuple[float, ...]]:
+        """The sets of azimuths an orientation fit chooses from [deg]: all of them (the orientation unknown), each
+        alone, and each with the opposite one (the same rock shaken the other way first)."""
+        az = sorted(set(self.azimuth.tolist()))
+        pairs = [(a, a + 180.0) for a in az if a < 180.0 and a + 180.0 in az]
+        return [tuple(az), *((a,) for a in az), *pairs] if len(az) > 1 else [tuple(az)]
+
+    def share(self, idx, azimuths) -> np.ndarray:
+        """P(overturn) of records ``idx``: the share of their runs at ``azimuths`` [deg] that overturn [-]."""
+        cols = np.isin(self.azimuth, np.asarray(azimuths, dtype=float))
+        return np.nanmean(self.overturned[np.asarray(idx)][:, cols], axis=1)
+
+
+def _engine_of(name: str) -> tuple[str, bool]:
+    """(engine, fitted orientation?) of the model ``engine:NAME`` or ``engine:NAME@uniform``."""
+    engine = name.removeprefix(ENGINE_PREFIX)
+    return engine.removesuffix(UNIFORM), not engine.endswith(UNIFORM)
+
+
 def _p_engine(name: str):
+    engine, _fitted = _engine_of(name)
+
     def predict(t: OverturnTables, idx, params) -> np.ndarray:
-        return lapse_mix(np.nanmean(t.engines[name][idx], axis=1), params["lapse"])
+        return lapse_mix(t.engines[engine].share(idx, params["azimuths"]), params["lapse"])
 
     return predict
 
 
 def _fit_engine(name: str):
-    """A 3D engine's ensemble fits only its lapse, as the plain model: nothing of the engine is fitted."""
+    """A 3D engine's ensemble fits its lapse and, unless ``@uniform``, which of the unrecorded orientations the
+    rock stood in (:meth:`EngineRuns.orientations`): nothing of the engine's physics is fitted."""
+    engine, fitted = _engine_of(name)
 
     def fit(t: OverturnTables, idx, y) -> dict:
-        share = np.nanmean(t.engines[name][idx], axis=1)
-        return min(({"lapse": e} for e in LAPSES), key=lambda q: _log_loss(lapse_mix(share, q["lapse"]), y[idx]))
+        runs = t.engines[engine]
+        options = runs.orientations() if fitted else runs.orientations()[:1]
+        best, best_v = None, math.inf
+        for az in options:
+            share = runs.share(idx, az)
+            for lapse in LAPSES:
+                ll = _log_loss(lapse_mix(share, lapse), y[idx])
+                if ll < best_v:
+                    best_v, best = ll, {"azimuths": list(az), "lapse": lapse}
+        return best
 
     return fit
 
@@ -320,13 +369,12 @@ def known_model(name: str) -> bool:
 
 
 def outcome_model(name: str) -> tuple[Callable, Callable]:
-    """(probabilities, fit) of model ``name``: :data:`OUTCOME_MODELS`, a 3D engine's ensemble (``engine:NAME``), or a
-    library effect's on its table."""
+    """(probabilities, fit) of model ``name``: :data:`OUTCOME_MODELS`, a 3D engine's ensemble (``engine:NAME``, its
+    orientation fitted; ``engine:NAME@uniform``, not), or a library effect's on its table."""
     if name in OUTCOME_MODELS:
         return OUTCOME_MODELS[name]
     if name.startswith(ENGINE_PREFIX):
-        engine = name.removeprefix(ENGINE_PREFIX)
-        return _p_engine(engine), _fit_engine(engine)
+        return _p_engine(name), _fit_engine(name)
     return _p_effect(name), _fit_effect(name)
 
 
