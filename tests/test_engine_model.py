@@ -115,6 +115,9 @@ def test_engine_model_options_are_checked_before_the_work(box_campaign, tmp_path
     assert main(["diagnose", str(root), "--engine-model", "mujoco", "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--engine-model" in err[0] and "3D scan-mesh engine" in err[0]
+    assert main(["diagnose", str(root), "--engine-model", "mujoco-3d", "--engine-amplitudes", "0.1", "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--engine-amplitudes" in err[0] and "[0.5, 2]" in err[0]
     plain = tmp_path / "plain"
     (plain / "records").mkdir(parents=True)
     (plain / "records" / "a.csv").write_text("time,ground_acc\n" + "".join(f"{k * DT:.3f},0.5\n" for k in range(40)))

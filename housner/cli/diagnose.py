@@ -73,9 +73,16 @@ def add_parser(sub, names: dict) -> argparse.ArgumentParser:
     )
     d.add_argument(
         "--engine-frictions",
-        type=_frictions,
+        type=_numbers,
         default=(0.7,),
         help="with --engine-model: friction coefficients, comma-separated, each run at every azimuth (0.7)",
+    )
+    d.add_argument(
+        "--engine-amplitudes",
+        type=_numbers,
+        default=(1.0,),
+        help="with --engine-model: factors on the table acceleration, comma-separated, each run at every azimuth "
+        "and friction (1)",
     )
     d.add_argument("--max-effects", type=nonneg_int, default=3, help="most effects the search adds (3)")
     d.add_argument(
@@ -195,8 +202,8 @@ def _frozen_model(path: str | None):
         raise UsageError(f"--model: {e}") from None
 
 
-def _frictions(text: str) -> tuple[float, ...]:
-    """``--engine-frictions``' comma-separated numbers."""
+def _numbers(text: str) -> tuple[float, ...]:
+    """Comma-separated numbers (``--engine-frictions``, ``--engine-amplitudes``)."""
     try:
         return tuple(float(v) for v in text.split(","))
     except ValueError:
@@ -213,7 +220,11 @@ def _engine_ensemble(args: argparse.Namespace, campaign):
 
     try:
         return engine_ensemble(
-            campaign, args.engine_model, azimuths=args.engine_azimuths, frictions=args.engine_frictions
+            campaign,
+            args.engine_model,
+            azimuths=args.engine_azimuths,
+            frictions=args.engine_frictions,
+            amplitudes=args.engine_amplitudes,
         )
     except ValueError as e:
         raise UsageError(str(e)) from None

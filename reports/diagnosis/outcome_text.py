@@ -195,6 +195,8 @@ def engine_model_text(e: EngineModelScore) -> str:
     ens = e.ensemble
     frictions = ", ".join(f"{f:g}" for f in ens.frictions)
     step = "its default step" if ens.timestep is None else f"step {ens.timestep:g} s"
+    if ens.amplitudes != (1.0,):
+        step += ", table acceleration x " + ", ".join(f"{k:g}" for k in ens.amplitudes)
     az = ", ".join(f"{a:g}" for a in e.azimuths)
     u = e.uniform_over_seeds
     return (

@@ -65,21 +65,31 @@ class EngineEnsemble(JsonValue):
         Coulomb friction coefficients rock/table [-].
     timestep : float or None
         The engine's largest step [s] (None: its default).
+    amplitudes : tuple of float
+        Factors on the table acceleration [-]: an outcome near its threshold flips under a change of the input far
+        below any accelerometer's calibration, so P samples it as the planar model's ensemble does.
     """
 
     engine: str
     azimuths: tuple[float, ...]
     frictions: tuple[float, ...]
     timestep: float | None = None
+    amplitudes: tuple[float, ...] = (1.0,)
 
     @property
     def size(self) -> int:
-        return len(self.azimuths) * len(self.frictions)
+        return len(self.azimuths) * len(self.frictions) * len(self.amplitudes)
 
     def members(self) -> list[dict]:
-        """Each run's settings over the campaign's mesh settings: azimuth-major, then friction."""
+        """Each run's settings over the campaign's mesh settings (azimuth-major, then friction) and the factor on
+        the table acceleration it runs at (``amplitude``, not an engine setting), innermost."""
         step = {} if self.timestep is None else {"timestep": self.timestep}
-        return [{"azimuth": a, "friction": f, **step} for a in self.azimuths for f in self.frictions]
+        return [
+            {"azimuth": a, "friction": f, **step, "amplitude": k}
+            for a in self.azimuths
+            for f in self.frictions
+            for k in self.amplitudes
+        ]
 
 
 def engine_ensemble(
@@ -89,10 +99,12 @@ def engine_ensemble(
     azimuths: int = AZIMUTHS,
     frictions: Sequence[float] = FRICTIONS,
     timestep: float | None = None,
+    amplitudes: Sequence[float] = (1.0,),
 ) -> EngineEnsemble:
     """The ensemble of ``engine`` on ``campaign``'s scan mesh: ``azimuths`` directions evenly spaced from the
     campaign's own (1: the campaign's azimuth alone, for a campaign that records it), each with every friction of
-    ``frictions``. ValueError in one line for a campaign without a mesh, a planar engine or a bad count."""
+    ``frictions`` and every factor on the table acceleration of ``amplitudes``. ValueError in one line for a campaign
+    without a mesh, a planar engine or a bad count."""
     from housner.scenarios.runs.campaign_run import campaign_input, check_campaign_engines, is_mesh_engine
 
     if campaign.scan is None:
@@ -106,16 +118,20 @@ def engine_ensemble(
     fr = tuple(float(f) for f in frictions)
     if not fr or not all(0.0 < f <= 10.0 for f in fr):
         raise ValueError(f"--engine-frictions must be numbers in (0, 10], got {list(frictions)!r}")
+    amps = tuple(float(k) for k in amplitudes)
+    if not amps or not all(0.5 <= k <= 2.0 for k in amps):
+        raise ValueError(f"--engine-amplitudes must be factors in [0.5, 2], got {list(amplitudes)!r}")
     a0 = float(campaign.scan.azimuth)
     az = tuple(round((a0 + 360.0 * k / azimuths) % 360.0, 9) for k in range(int(azimuths)))
-    ens = EngineEnsemble(engine, az, fr, None if timestep is None else float(timestep))
+    ens = EngineEnsemble(engine, az, fr, None if timestep is None else float(timestep), amps)
     inp = campaign_input(campaign)
     base = check_campaign_engines(inp, [engine])[engine]
     from housner.engines.base import engine_class
 
     for member in ens.members():  # every member's settings refused before any run
+        settings = {k: v for k, v in member.items() if k != "amplitude"}
         try:
-            engine_class(engine)(**{**base, **member})
+            engine_class(engine)(**{**base, **settings})
         except (TypeError, ValueError) as e:
             raise ValueError(f"--engine-model {engine}: {' '.join(str(e).split())}") from None
     return ens
@@ -147,15 +163,20 @@ def engine_table(
     out = np.full((len(motions), ensemble.size), np.nan)
     for j, member in enumerate(ensemble.members()):
         t1 = time.perf_counter()
+        settings = {k: v for k, v in member.items() if k != "amplitude"}
+        amp = member["amplitude"]
+        runs_on = motions if amp == 1.0 else [mo.scaled(amp) for mo in motions]
         res, _hist, _info = run_engines(
-            inp.specimen, motions, {ensemble.engine: {**base, **member}}, opts, histories=False
+            inp.specimen, runs_on, {ensemble.engine: {**base, **settings}}, opts, histories=False
         )
         res = res.sort_values("motion_id")
         ok = (res["status"] != "failed").to_numpy()
         out[ok, j] = res["overturned"].to_numpy()[ok].astype(float)
         failed = [records[i].id for i in np.flatnonzero(~ok)]
         say(
-            f"{ensemble.engine} azimuth {member['azimuth']:g} deg, friction {member['friction']:g}: "
+            f"{ensemble.engine} azimuth {member['azimuth']:g} deg, friction {member['friction']:g}"
+            + (f", table acceleration x {amp:g}" if amp != 1.0 else "")
+            + ": "
             f"{int(np.nansum(out[:, j]))} of {len(motions)} overturn, {time.perf_counter() - t1:.1f} s"
             + (f"; failed: {', '.join(failed)}" if failed else "")
         )
