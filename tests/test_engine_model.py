@@ -108,6 +108,11 @@ def test_an_ensemble_over_azimuths_spreads_where_the_box_is_wider(box_campaign, 
     assert set(e.azimuths) <= {0.0, 180.0}
     assert e.over_seeds["log_loss"].mean < e.uniform_over_seeds["log_loss"].mean
     assert e.uniform_against_final.n_groups == N // 2
+    from housner.reports.diagnosis.outcomes import render_outcome_report
+
+    page = render_outcome_report(d)
+    section = page[page.index('<section id="engine">') :]
+    assert "<img" in section[: section.index("</section>")]  # the azimuth figure drew
 
 
 def test_engine_model_options_are_checked_before_the_work(box_campaign, tmp_path, capsys):

@@ -23,7 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from housner.reports.diagnosis.outcome_figures import baseline_label, calibration_figure, outcome_map_figure
+from housner.reports.diagnosis.outcome_figures import (
+    baseline_label,
+    calibration_figure,
+    engine_azimuth_figure,
+    outcome_map_figure,
+)
 from housner.reports.diagnosis.outcome_text import (
     engine_model_text,
     judgement_text,
@@ -147,9 +152,7 @@ def render_outcome_report(diag) -> str:
             2, ("transfer", "Transfer from another campaign", f"<p>{esc(transfer_text(diag.transfer))}</p>")
         )
     if diag.engine_model is not None:
-        sections.insert(
-            2, ("engine", "A 3D engine as the model", f"<p>{esc(engine_model_text(diag.engine_model))}</p>")
-        )
+        sections.insert(2, ("engine", "A 3D engine as the model", _engine(diag)))
     took = time.perf_counter() - t0
     n, k = len(diag.ids), int(np.sum(diag.observed))
     return document(
@@ -414,6 +417,25 @@ def _calibration(diag, best: str) -> str:
         "diagonal; a model whose probabilities are all near 0 or 1 puts every record in the end bins.",
         "calibration curve",
     )
+
+
+def _engine(diag) -> str:
+    e = diag.engine_model
+    az = np.array([m["azimuth"] for m in e.ensemble.members()])
+    counts = np.array(e.member_overturns, dtype=float)
+    at = sorted(set(az.tolist()))
+    mean = [float(counts[az == a].mean()) for a in at]
+
+    def figure() -> str:
+        fig = engine_azimuth_figure(at, mean, int(np.sum(diag.observed)), e.azimuths, e.ensemble.engine)
+        return html_figure(
+            fig,
+            "Records whose runs overturn at each azimuth of the ensemble (the mean over its frictions and amplitudes), "
+            "against the tests that overturned; the dark bars are the orientation the fit chose on every record.",
+            "3D engine overturns by azimuth",
+        )
+
+    return f"<p>{esc(engine_model_text(e))}</p>" + guarded("The azimuth figure", figure)
 
 
 def _where(diag) -> str:
