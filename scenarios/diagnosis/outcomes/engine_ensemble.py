@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,6 +32,9 @@ from housner.scenarios.diagnosis.outcomes.outcome_validation import (
     judge_outcome_model,
 )
 from housner.scenarios.execution.options import RunOptions
+
+if TYPE_CHECKING:
+    from housner.scenarios.diagnosis.outcomes.outcome_results import OutcomeStep
 
 __all__ = [
     "AZIMUTHS",
@@ -251,8 +255,8 @@ class ScoringRuns:
     groups: np.ndarray
     fold_of: list
     seed: int
-    plain: object
-    final: object
+    plain: OutcomeStep
+    final: OutcomeStep
     baseline_p: dict
     baseline_skill: bool
 

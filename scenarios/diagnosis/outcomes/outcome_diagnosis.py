@@ -64,6 +64,7 @@ from housner.scenarios.diagnosis.outcomes.outcome_validation import (
 )
 from housner.scenarios.diagnosis.selection.forward_selection import Round, forward_selection
 from housner.scenarios.diagnosis.verdict.status import status_rule
+from housner.scenarios.execution.options import RunOptions
 from housner.units import G
 
 __all__ = [
@@ -128,7 +129,7 @@ def diagnose_outcomes(
     model: FrozenOutcomeModel | None = None,
     effects: Sequence[str] | None = None,
     engine_model: EngineEnsemble | None = None,
-    run_options=None,
+    run_options: RunOptions | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> OutcomeDiagnosis:
     """The mission loop on a campaign's outcome records: plain model, misses, effect, error falling, verdict.
