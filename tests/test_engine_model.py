@@ -98,6 +98,7 @@ def test_an_ensemble_over_azimuths_spreads_where_the_box_is_wider(box_campaign, 
     d = _diagnose(root, cache, azimuths=4)
     e = d.engine_model
     assert e.ensemble.azimuths == (0.0, 90.0, 180.0, 270.0)
+    assert e.ensemble.member_azimuths == tuple(m["azimuth"] for m in e.ensemble.members())
     # the box is symmetric: 180 deg is the same rock (to the engine's round-off), 90 and 270 deg rock about the
     # 0.4 m side (alpha 0.38 against 0.20 rad), so they topple under fewer pulses
     at = dict(zip(e.ensemble.azimuths, e.member_overturns, strict=True))

@@ -421,7 +421,7 @@ def _calibration(diag, best: str) -> str:
 
 def _engine(diag) -> str:
     e = diag.engine_model
-    az = np.array([m["azimuth"] for m in e.ensemble.members()])
+    az = np.array(e.ensemble.member_azimuths)
     counts = np.array(e.member_overturns, dtype=float)
     at = sorted(set(az.tolist()))
     mean = [float(counts[az == a].mean()) for a in at]

@@ -84,6 +84,11 @@ class EngineEnsemble(JsonValue):
     def size(self) -> int:
         return len(self.azimuths) * len(self.frictions) * len(self.amplitudes)
 
+    @property
+    def member_azimuths(self) -> tuple[float, ...]:
+        """The azimuth of each member [deg], in :meth:`members` order."""
+        return tuple(a for a in self.azimuths for _f in self.frictions for _k in self.amplitudes)
+
     def members(self) -> list[dict]:
         """Each run's settings over the campaign's mesh settings (azimuth-major, then friction) and the factor on
         the table acceleration it runs at (``amplitude``, not an engine setting), innermost."""
@@ -274,7 +279,7 @@ def score_engine_model(
     repeat of ``runs``, beside the planar models and the baselines scored on the same folds."""
     say = say or (lambda line: None)
     table, wall = engine_table(campaign, ensemble, records, options, say)
-    azimuth = np.array([m["azimuth"] for m in ensemble.members()])
+    azimuth = np.array(ensemble.member_azimuths)
     t = replace(tables, engines={**tables.engines, ensemble.engine: EngineRuns(table, azimuth)})
     y, groups = runs.y, runs.groups
     fitted, uniform = ENGINE_PREFIX + ensemble.engine, ENGINE_PREFIX + ensemble.engine + UNIFORM
