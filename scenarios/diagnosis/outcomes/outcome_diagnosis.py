@@ -197,7 +197,8 @@ def diagnose_outcomes(
     base_p = {n: np.array([baseline_oof(n, pga, pgv, y, f) for f in fold_of]) for n in BASELINES}
     baselines = {n: outcome_scores(p.mean(axis=0), y, groups=groups, seed=seed) for n, p in base_p.items()}
     floor = outcome_floor(final.p, y, seed=seed)
-    judged_plain, judged = _judged(plain, final, base_p, y, groups, floor, seed)
+    shown = baselines_show_skill(base_p, y, groups)
+    judged_plain, judged = _judged(plain, final, base_p, y, groups, floor, seed, shown)
     status = status_rule(True, len(steps) > 1, judged_plain.misfit, judged.misfit, judged.powered)
     fits = {n: baseline_fit(n, pga, pgv, y) for n in BASELINES}
     transfer = None
@@ -205,7 +206,6 @@ def diagnose_outcomes(
         transfer = transfer_outcomes(model, motions, geo, campaign.specimen, y, pga, pgv, groups, seed=seed, say=say)
     engine = None
     if engine_model is not None:
-        shown = baselines_show_skill(base_p, y, groups)
         runs = ScoringRuns(y, groups, fold_of, seed, plain, final, base_p, shown)
         engine = score_engine_model(campaign, engine_model, recs, tables, runs, run_options, say)
     misses = _misses(plain, ids, y, pga, pgv) + (_misses(final, ids, y, pga, pgv) if final is not plain else [])
@@ -270,11 +270,11 @@ def _repeated_ladder(tables, y, groups, fold_of, seeds, rounds, say) -> tuple[li
     return steps, rep, runs[0][1]
 
 
-def _judged(plain: OutcomeStep, final: OutcomeStep, base_p: dict, y, groups, floor, seed: int):
+def _judged(plain: OutcomeStep, final: OutcomeStep, base_p: dict, y, groups, floor, seed: int, shown: bool):
     """The plain and the final model judged (:func:`judge_outcome_model`): an outcome model is a misfit when a
     baseline fitted on the same folds predicts better, when it has no skill over the base rate where the records
-    could show one, or when its probabilities fail their floor; the one status rule reads these."""
-    shown = baselines_show_skill(base_p, y, groups)
+    could show one, or when its probabilities fail their floor; the one status rule reads these. ``shown`` is
+    :func:`baselines_show_skill` of the baselines (whether the records could show a model's skill)."""
     plain_floor = outcome_floor(plain.p, y, seed=seed)
     judged_plain = judge_outcome_model(plain.p_repeats, base_p, y, groups, plain_floor, baseline_skill=shown)
     if final is plain:

@@ -317,8 +317,8 @@ class EngineRuns:
         """The sets of azimuths an orientation fit chooses from [deg]: all of them (the orientation unknown), each
         alone, and each with the opposite one (the same rock shaken the other way first)."""
         az = sorted(set(self.azimuth.tolist()))
-        pairs = [(a, a + 180.0) for a in az if a < 180.0 and a + 180.0 in az]
-        return [tuple(az), *((a,) for a in az), *pairs] if len(az) > 1 else [tuple(az)]
+        options = [tuple(az), *((a,) for a in az), *((a, a + 180.0) for a in az if a < 180.0 and a + 180.0 in az)]
+        return list(dict.fromkeys(options))  # one option once: with two opposite azimuths, their pair is all of them
 
     def share(self, idx, azimuths) -> np.ndarray:
         """P(overturn) of records ``idx``: the share of their runs at ``azimuths`` [deg] that overturn [-]."""
